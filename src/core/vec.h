@@ -1,0 +1,65 @@
+/* Small value types and their arithmetic: vec2, vec3, rgb. All inline. */
+#ifndef HAZE_CORE_VEC_H
+#define HAZE_CORE_VEC_H
+
+#include <math.h>
+#include <stdbool.h>
+
+#define HZ_PI 3.14159265358979323846
+#define HZ_INV_PI 0.31830988618379067154
+
+typedef struct { double x, y; } vec2;
+typedef struct { double x, y, z; } vec3;
+/* Linear (scene-referred) RGB in the sRGB/Rec.709 primaries. */
+typedef struct { double r, g, b; } rgb;
+
+static inline vec2 v2(double x, double y) { return (vec2){x, y}; }
+static inline vec3 v3(double x, double y, double z) { return (vec3){x, y, z}; }
+static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
+static inline vec3 v3_scale(vec3 a, double s) { return v3(a.x * s, a.y * s, a.z * s); }
+static inline vec3 v3_neg(vec3 a) { return v3(-a.x, -a.y, -a.z); }
+static inline double v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline vec3 v3_cross(vec3 a, vec3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double v3_length_sq(vec3 a) { return v3_dot(a, a); }
+static inline double v3_length(vec3 a) { return sqrt(v3_dot(a, a)); }
+static inline vec3 v3_normalize(vec3 a) { return v3_scale(a, 1.0 / v3_length(a)); }
+static inline vec3 v3_lerp(double t, vec3 a, vec3 b)
+{
+    return v3_add(v3_scale(a, 1.0 - t), v3_scale(b, t));
+}
+static inline double v3_max_component(vec3 a)
+{
+    return fmax(a.x, fmax(a.y, a.z));
+}
+static inline vec3 v3_abs(vec3 a) { return v3(fabs(a.x), fabs(a.y), fabs(a.z)); }
+static inline bool v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
+/* Builds an orthonormal basis (b1, b2) around unit vector n (Duff et al. 2017). */
+static inline void v3_basis(vec3 n, vec3 *b1, vec3 *b2)
+{
+    double sign = copysign(1.0, n.z);
+    double a = -1.0 / (sign + n.z);
+    double b = n.x * n.y * a;
+    *b1 = v3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    *b2 = v3(b, sign + n.y * n.y * a, -n.y);
+}
+
+static inline rgb rgb_make(double r, double g, double b) { return (rgb){r, g, b}; }
+static inline rgb rgb_grey(double v) { return (rgb){v, v, v}; }
+static inline rgb rgb_add(rgb a, rgb b) { return (rgb){a.r + b.r, a.g + b.g, a.b + b.b}; }
+static inline rgb rgb_mul(rgb a, rgb b) { return (rgb){a.r * b.r, a.g * b.g, a.b * b.b}; }
+static inline rgb rgb_scale(rgb a, double s) { return (rgb){a.r * s, a.g * s, a.b * s}; }
+static inline bool rgb_is_black(rgb a) { return a.r == 0.0 && a.g == 0.0 && a.b == 0.0; }
+static inline double rgb_max(rgb a) { return fmax(a.r, fmax(a.g, a.b)); }
+/* Rec.709 luminance. */
+static inline double rgb_luminance(rgb a) { return 0.2126 * a.r + 0.7152 * a.g + 0.0722 * a.b; }
+
+static inline double hz_clamp(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
+static inline double hz_lerp(double t, double a, double b) { return (1.0 - t) * a + t * b; }
+static inline double hz_radians(double deg) { return deg * (HZ_PI / 180.0); }
+
+#endif

@@ -1,0 +1,48 @@
+/* The film: pixel bounds, per-pixel filter-weighted accumulation (pbrt-v4's
+ * RGBFilm: each sample lands in its own pixel with weight f/pdf), and output. */
+#ifndef HAZE_FILM_FILM_H
+#define HAZE_FILM_FILM_H
+
+#include <stdbool.h>
+
+#include "core/error.h"
+#include "core/vec.h"
+#include "scene/scene_desc.h"
+
+typedef struct {
+    int x0, y0, x1, y1; /* half-open: [x0, x1) x [y0, y1) */
+} pixel_bounds;
+
+typedef struct {
+    int xres, yres;            /* full resolution (display window) */
+    pixel_bounds bounds;       /* pixels rendered (data window), from cropwindow/pixelbounds */
+    char filename[4096];       /* "pbrt.exr" by default; -o overrides */
+    bool savefp16;
+    double iso;                /* 100 by default; imaging ratio = exposure time * iso / 100 */
+    bool write_z;              /* haze extension: "bool writedepth" adds a Z channel */
+} film_params;
+
+/* Reads Film "rgb" (xresolution yresolution filename cropwindow pixelbounds
+ * savefp16 iso, and haze's writedepth); other types are errors. */
+hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *err);
+
+typedef struct film film;
+
+film *film_create(const film_params *p, hz_error *err);
+void film_destroy(film *f);
+const film_params *film_get_params(const film *f);
+/* (px, py) absolute raster pixel inside bounds. Not thread-safe for the same
+ * pixel; tiles own disjoint pixels. `depth` is the first-hit distance (or INFINITY). */
+void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth);
+/* Final pixel value = imaging_ratio * sum(w L) / sum(w) (0 when sum(w) == 0). */
+rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio);
+/* Number of non-finite sample values that were dropped (counted, never stored). */
+long film_nonfinite_count(const film *f);
+/* Writes R G B A (+ Z when requested) float32, or half with savefp16, data
+ * window = bounds, display window = full resolution; written to a temporary
+ * file in the same directory, then renamed over `path`. */
+hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err);
+/* Tonemapped (clamp, sRGB transfer) 8-bit PNG of the pixel bounds; atomic too. */
+hz_status film_write_png(const film *f, const char *path, double imaging_ratio, hz_error *err);
+
+#endif

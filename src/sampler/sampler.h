@@ -1,0 +1,43 @@
+/* Pixel samplers. Each (pixel, sample index, seed) has its own deterministic
+ * stream, so images do not depend on the thread count or tile order. */
+#ifndef HAZE_SAMPLER_SAMPLER_H
+#define HAZE_SAMPLER_SAMPLER_H
+
+#include <stdint.h>
+
+#include "core/error.h"
+#include "core/vec.h"
+#include "scene/scene_desc.h"
+
+typedef enum { SAMPLER_INDEPENDENT, SAMPLER_STRATIFIED, SAMPLER_SOBOL } sampler_kind;
+
+typedef struct {
+    sampler_kind kind;
+    int spp;               /* samples per pixel (stratified: xsamples*ysamples) */
+    int xsamples, ysamples;
+    bool jitter;
+    uint64_t seed;
+    char warning[256];     /* non-empty: print once (e.g. "halton renders with sobol") */
+} sampler;
+
+/* Sampler "independent" (pixelsamples 16, seed), "stratified" (xsamples 4,
+ * ysamples 4, jitter true, seed), "zsobol"/"sobol" (pixelsamples 16, seed,
+ * randomization "owen"); "halton"/"paddedsobol"/"pmj02bn" become sobol with a warning.
+ * `seed` is the default for a missing "integer seed" (the --seed option). */
+hz_status sampler_from_entity(scene_entity *e, uint64_t seed, sampler *out, hz_error *err);
+/* --spp override: stratified picks the most square xsamples*ysamples == spp. */
+void sampler_set_spp(sampler *s, int spp);
+
+typedef struct {
+    const sampler *s;
+    int px, py, index, dim;
+    uint64_t hash; /* of (px, py, seed) */
+} sampler_state;
+
+void sampler_start(const sampler *s, int px, int py, int sample_index, sampler_state *st);
+double sampler_1d(sampler_state *st);
+vec2 sampler_2d(sampler_state *st);
+/* The film position sample: the first 2D dimension, stratified across the pixel's samples. */
+vec2 sampler_pixel_2d(sampler_state *st);
+
+#endif

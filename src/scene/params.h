@@ -1,0 +1,89 @@
+/* Typed parameter lists of pbrt-v4 scene directives ("float fov" 45).
+ *
+ * Factories read what they accept with the getters (which mark a parameter used
+ * and return the default when it is absent), then call params_finish(): it
+ * reports the first problem met by a getter (wrong type, wrong count, bad value)
+ * or the first parameter nobody read, always with its file:line:column.
+ * This is how misspelled or misplaced parameters become errors, as in pbrt-v4. */
+#ifndef HAZE_SCENE_PARAMS_H
+#define HAZE_SCENE_PARAMS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "core/error.h"
+#include "core/vec.h"
+
+typedef enum {
+    PARAM_INTEGER,
+    PARAM_FLOAT,
+    PARAM_BOOL,
+    PARAM_STRING,
+    PARAM_POINT2,
+    PARAM_VECTOR2,
+    PARAM_POINT3,
+    PARAM_VECTOR3,
+    PARAM_NORMAL,
+    PARAM_RGB,
+    PARAM_SPECTRUM, /* converted to rgb at parse time (see docs/scene-format.md) */
+    PARAM_BLACKBODY /* converted to rgb at parse time */
+} param_type;
+
+const char *param_type_name(param_type t);
+
+typedef struct {
+    param_type type;
+    char *name;
+    file_loc loc;   /* where the parameter's declaration string starts */
+    size_t count;   /* number of scalar values: numbers, strings or bools */
+    double *nums;   /* integer, float, point*, vector*, normal, rgb (spectrum/blackbody become 3 rgb numbers) */
+    char **strs;    /* string */
+    bool *bools;    /* bool */
+    bool used;
+} param;
+
+typedef struct {
+    param *items;
+    size_t count, capacity;
+    file_loc loc;       /* the directive these parameters belong to */
+    bool failed;        /* a getter met a problem; `error` holds it */
+    hz_error error;
+} param_list;
+
+void params_init(param_list *pl, file_loc directive);
+void params_free(param_list *pl);
+/* Deep copy (used when entities outlive the parser's graphics state). */
+void params_copy(param_list *dst, const param_list *src);
+/* Takes ownership of p's arrays. Returns HZ_ERROR if the name is repeated. */
+hz_status params_add(param_list *pl, param p, hz_error *err);
+
+/* Getters: the default when absent; on a type or count mismatch they record an
+ * error in pl (reported by params_finish) and return the default. */
+double params_float(param_list *pl, const char *name, double def);
+int params_int(param_list *pl, const char *name, int def);
+bool params_bool(param_list *pl, const char *name, bool def);
+const char *params_string(param_list *pl, const char *name, const char *def);
+vec3 params_point3(param_list *pl, const char *name, vec3 def);
+vec3 params_vector3(param_list *pl, const char *name, vec3 def);
+/* Accepts rgb, spectrum and blackbody parameters. */
+rgb params_rgb(param_list *pl, const char *name, rgb def);
+/* Arrays: NULL and *n = 0 when absent. For point3/normal/vector3/point2 *n counts
+ * tuples, not scalars. */
+const double *params_floats(param_list *pl, const char *name, size_t *n);
+const double *params_ints(param_list *pl, const char *name, size_t *n);
+const double *params_point3s(param_list *pl, const char *name, size_t *n);
+const double *params_normals(param_list *pl, const char *name, size_t *n);
+const double *params_point2s(param_list *pl, const char *name, size_t *n);
+/* True when a parameter of this name is present (does not mark it used). */
+bool params_has(const param_list *pl, const char *name);
+/* The location of a parameter (its directive's location when absent), for
+ * factories that reject a value: hz_fail_at(err, params_loc(pl, "fov"), ...). */
+file_loc params_loc(const param_list *pl, const char *name);
+/* Records an error about parameter `name` (e.g. a value out of range). */
+void params_reject(param_list *pl, const char *name, const char *fmt, ...) HZ_PRINTF(3, 4);
+
+/* Reports the first recorded problem, else the first unused parameter:
+ * "file:line:col: unused parameter "float fvo" for Camera "perspective"". */
+hz_status params_finish(const param_list *pl, const char *what, hz_error *err);
+
+#endif

@@ -1,0 +1,31 @@
+/* Shape factories: turn a shape_entity's parameters into object-space geometry.
+ * "trianglemesh" (indices P N uv), "plymesh" (filename, relative to the scene
+ * file that names it), "sphere" (radius), "disk" (height radius innerradius),
+ * "bilinearmesh" (indices P N uv, each quad split into two triangles). */
+#ifndef HAZE_SCENE_SHAPE_H
+#define HAZE_SCENE_SHAPE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/error.h"
+#include "scene/scene_desc.h"
+
+typedef enum { GEOMETRY_TRIANGLES, GEOMETRY_SPHERE } geometry_kind;
+
+typedef struct {
+    geometry_kind kind;
+    /* triangles, in object space */
+    size_t vertex_count, triangle_count;
+    double *p;          /* 3 * vertex_count */
+    double *n;          /* 3 * vertex_count, or NULL */
+    double *uv;         /* 2 * vertex_count, or NULL */
+    uint32_t *indices;  /* 3 * triangle_count */
+    /* sphere, centred at the object-space origin */
+    double radius;
+} shape_geometry;
+
+hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error *err);
+void shape_geometry_free(shape_geometry *g);
+
+#endif

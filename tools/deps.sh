@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs the Debian packages haze needs, and only those that are missing.
+# Idempotent: when everything is present it does nothing and needs no root.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  libembree-dev      # surfaces (Embree 3 C API)
+  libopenexr-dev     # images (OpenEXRCore C API)
+  libpng-dev         # --preview PNG
+  libcmocka-dev      # test framework
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+[[ ${#missing[@]} -eq 0 ]] && exit 0
+
+echo "haze: installing missing Debian packages: ${missing[*]}"
+sudo_cmd=()
+if [[ $(id -u) -ne 0 ]]; then
+  command -v sudo >/dev/null || { echo "haze: need root or sudo to install ${missing[*]}" >&2; exit 1; }
+  sudo_cmd=(sudo)
+fi
+export DEBIAN_FRONTEND=noninteractive
+# A stale package list makes install fail; refresh once and retry.
+if ! "${sudo_cmd[@]}" apt-get install -y --no-install-recommends "${missing[@]}"; then
+  "${sudo_cmd[@]}" apt-get update
+  "${sudo_cmd[@]}" apt-get install -y --no-install-recommends "${missing[@]}"
+fi
