@@ -41,6 +41,37 @@ typedef struct {
     int xres, yres;               /* full film resolution */
 } camera;
 
+/* Everything camera_create reads from the scene, already interpreted: the
+ * inner constructor's input, so the camera can be built (and tested) without
+ * a parsed scene. Physical-lens parameters (focallength, fstop) are resolved
+ * into fov and lens_radius by camera_create (see camera/lens.h). */
+typedef struct {
+    camera_kind kind;
+    transform camera_from_world;
+    double shutter_open, shutter_close;
+    double screen_window[4];      /* xmin xmax ymin ymax */
+    double lens_radius, focal_distance;
+    double fov;                   /* degrees across the screen window's shorter extent (perspective) */
+    int blades;                   /* 0 = round aperture, >= 3 = regular polygon */
+    double blade_rotation;        /* degrees */
+    int xres, yres;
+} camera_config;
+
+/* pbrt-v4's defaults for a film of xres x yres: identity transform, shutter
+ * [0, 1], fov 90, no lens, focal distance 1e6, screen window from the aspect
+ * ratio (see camera_screen_window_from_frame). */
+camera_config camera_config_default(camera_kind kind, int xres, int yres);
+/* pbrt-v4's default screen window for frame aspect ratio `frame` (x over y):
+ * [-frame, frame] x [-1, 1] when frame > 1, else [-1, 1] x [-1/frame, 1/frame]. */
+void camera_screen_window_from_frame(double frame, double out[4]);
+/* Checks a configuration. On failure fills err (no location) and returns the
+ * name of the scene parameter at fault ("fov", "screenwindow", ...), so a
+ * caller holding the parameter list can point at its place; NULL when valid. */
+const char *camera_config_check(const camera_config *cfg, hz_error *err);
+/* The inner constructor: validates cfg (camera_config_check) and builds the
+ * transforms. out->medium is -1. */
+hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err);
+
 /* Reads the Camera's parameters (see docs/cameras.md), with the film's
  * resolution for the screen window. */
 hz_status camera_create(camera_entity *e, const film_params *film, camera *out, hz_error *err);

@@ -3,6 +3,7 @@
 #define HAZE_FILM_EXR_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "core/error.h"
 
@@ -24,15 +25,27 @@ typedef struct {
     char (*attribute_values)[256];
 } exr_image;
 
-/* Allocates channels (zeroed); names are set by the caller. */
+/* Allocates channels (zeroed); names are set by the caller. The display
+ * window is set to the data size; data_x0/y0 to 0. */
 hz_status exr_image_alloc(exr_image *img, int width, int height, int channel_count, hz_error *err);
+/* Frees the channels and the attribute arrays (which must be heap memory:
+ * add attributes with exr_image_add_attribute). */
 void exr_image_free(exr_image *img);
+/* Appends a string attribute (name < 64 bytes, value < 256 bytes). */
+hz_status exr_image_add_attribute(exr_image *img, const char *name, const char *value, hz_error *err);
 const exr_channel *exr_find_channel(const exr_image *img, const char *name);
 
 /* Scanline, ZIP-compressed; written to "path.tmp-XXXXXX" in the same directory
  * and renamed, so a failure never leaves a broken file at `path`. */
 hz_status exr_write(const char *path, const exr_image *img, hz_error *err);
-/* Reads every channel (half or float; uint channels are refused) into float. */
+/* Reads the first part's channels (half or float; uint, subsampled and deep
+ * data are refused) into float; scanline files and the full-resolution level
+ * of tiled files. data_x0/y0 are relative to the display window's origin.
+ * String attributes are returned; other attribute types are skipped. */
 hz_status exr_read(const char *path, exr_image *out, hz_error *err);
+
+/* IEEE half <-> float; float to half rounds to nearest, ties to even. */
+uint16_t exr_half_from_float(float f);
+float exr_half_to_float(uint16_t h);
 
 #endif

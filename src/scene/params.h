@@ -40,6 +40,7 @@ typedef struct {
     char **strs;    /* string */
     bool *bools;    /* bool */
     bool used;
+    bool optional;  /* a default from Attribute: never reported as unused (pbrt-v4's mayBeUnused) */
 } param;
 
 typedef struct {
@@ -54,11 +55,22 @@ void params_init(param_list *pl, file_loc directive);
 void params_free(param_list *pl);
 /* Deep copy (used when entities outlive the parser's graphics state). */
 void params_copy(param_list *dst, const param_list *src);
-/* Takes ownership of p's arrays. Returns HZ_ERROR if the name is repeated. */
+/* Takes ownership of p's arrays (freed here on error too). Returns HZ_ERROR if
+ * the name is repeated, naming the place of the repetition. */
 hz_status params_add(param_list *pl, param p, hz_error *err);
+/* Adds a deep copy of every parameter of `defaults` whose name pl lacks, marked
+ * optional (Attribute "shape" etc. semantics). Only fails when out of memory. */
+hz_status params_add_defaults(param_list *pl, const param_list *defaults, hz_error *err);
+/* Removes parameter `name` (if present) and frees it. */
+void params_remove(param_list *pl, const char *name);
+void param_free(param *p);
 
 /* Getters: the default when absent; on a type or count mismatch they record an
- * error in pl (reported by params_finish) and return the default. */
+ * error in pl (reported by params_finish) and return the default. Types are
+ * strict as in pbrt-v4 (params_float does not read an "integer" parameter);
+ * asking for a name that exists with another type records
+ * "parameter "fov" must be float, not integer". Single-value getters want
+ * exactly one value (three for point3/vector3/rgb). */
 double params_float(param_list *pl, const char *name, double def);
 int params_int(param_list *pl, const char *name, int def);
 bool params_bool(param_list *pl, const char *name, bool def);

@@ -1,0 +1,290 @@
+/* pbrt-v4's ProjectiveCamera, PerspectiveCamera and OrthographicCamera
+ * (cameras.h, cameras.cpp) with camera-world render space. One deliberate
+ * difference: the orthographic thin lens offsets the lens point by the ray's
+ * film position (pbrt-v4 places every lens ray around the optical axis, the
+ * bug reported as mmp/pbrt-v3#315 and carried into v4). */
+#include "camera/camera.h"
+
+#include <assert.h>
+#include <math.h>
+
+#include "camera/lens.h"
+
+/* pbrt-v4's clip planes: they set screen z, which no ray uses, but keep
+ * camera_from_raster identical to pbrt-v4's. */
+#define PERSPECTIVE_NEAR 1e-2
+#define PERSPECTIVE_FAR 1000.0
+
+void camera_screen_window_from_frame(double frame, double out[4])
+{
+    if (frame > 1.0) {
+        out[0] = -frame;
+        out[1] = frame;
+        out[2] = -1.0;
+        out[3] = 1.0;
+    } else {
+        out[0] = -1.0;
+        out[1] = 1.0;
+        out[2] = -1.0 / frame;
+        out[3] = 1.0 / frame;
+    }
+}
+
+camera_config camera_config_default(camera_kind kind, int xres, int yres)
+{
+    camera_config c = {
+        .kind = kind,
+        .camera_from_world = transform_identity(),
+        .shutter_open = 0.0,
+        .shutter_close = 1.0,
+        .lens_radius = 0.0,
+        .focal_distance = 1e6,
+        .fov = 90.0,
+        .blades = 0,
+        .blade_rotation = 0.0,
+        .xres = xres,
+        .yres = yres,
+    };
+    camera_screen_window_from_frame((double)xres / (double)yres, c.screen_window);
+    return c;
+}
+
+static bool mat4_is_finite(const mat4 *m)
+{
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            if (!isfinite(m->m[i][j]))
+                return false;
+    return true;
+}
+
+const char *camera_config_check(const camera_config *c, hz_error *err)
+{
+    if (c->kind != CAMERA_PERSPECTIVE && c->kind != CAMERA_ORTHOGRAPHIC) {
+        hz_fail(err, "unknown camera kind %d", (int)c->kind);
+        return "";
+    }
+    if (c->xres < 1 || c->yres < 1) {
+        hz_fail(err, "film resolution %dx%d must be at least 1x1", c->xres, c->yres);
+        return "";
+    }
+    if (!mat4_is_finite(&c->camera_from_world.m) || !mat4_is_finite(&c->camera_from_world.m_inv)) {
+        hz_fail(err, "the camera transform is not finite or not invertible");
+        return "";
+    }
+    if (!isfinite(c->shutter_open)) {
+        hz_fail(err, "\"shutteropen\" must be finite, got %g", c->shutter_open);
+        return "shutteropen";
+    }
+    if (!isfinite(c->shutter_close)) {
+        hz_fail(err, "\"shutterclose\" must be finite, got %g", c->shutter_close);
+        return "shutterclose";
+    }
+    /* pbrt-v4 swaps the two with a warning; a reversed shutter is far more
+     * likely a typo than an intent, and it silently changes the exposure. */
+    if (c->shutter_open > c->shutter_close) {
+        hz_fail(err, "\"shutteropen\" %g is after \"shutterclose\" %g", c->shutter_open,
+                c->shutter_close);
+        return "shutteropen";
+    }
+    const double *w = c->screen_window;
+    for (int i = 0; i < 4; ++i) {
+        if (!isfinite(w[i])) {
+            hz_fail(err, "\"screenwindow\" values must be finite");
+            return "screenwindow";
+        }
+    }
+    if (!(w[1] > w[0]) || !(w[3] > w[2]) || !isfinite(w[1] - w[0]) || !isfinite(w[3] - w[2])) {
+        hz_fail(err,
+                "\"screenwindow\" [%g %g %g %g] has an empty extent (need xmin < xmax and "
+                "ymin < ymax)",
+                w[0], w[1], w[2], w[3]);
+        return "screenwindow";
+    }
+    if (!isfinite(c->lens_radius) || c->lens_radius < 0.0) {
+        hz_fail(err, "\"lensradius\" must be finite and >= 0, got %g", c->lens_radius);
+        return "lensradius";
+    }
+    if (!isfinite(c->focal_distance) || c->focal_distance <= 0.0) {
+        hz_fail(err, "\"focaldistance\" must be finite and > 0, got %g", c->focal_distance);
+        return "focaldistance";
+    }
+    if (c->kind == CAMERA_PERSPECTIVE && !(c->fov > 0.0 && c->fov < 180.0)) {
+        hz_fail(err, "\"fov\" must be in (0, 180) degrees, got %g", c->fov);
+        return "fov";
+    }
+    if (c->blades < 0 || c->blades == 1 || c->blades == 2) {
+        hz_fail(err, "\"blades\" must be 0 (round aperture) or at least 3, got %d", c->blades);
+        return "blades";
+    }
+    if (!isfinite(c->blade_rotation)) {
+        hz_fail(err, "\"bladerotation\" must be finite, got %g", c->blade_rotation);
+        return "bladerotation";
+    }
+    return NULL;
+}
+
+/* pbrt-v4 ProjectiveCamera: screen -> NDC ([0,1]^2, y flipped so raster y grows
+ * downwards from the top-left corner) -> raster. */
+static transform raster_from_screen(const double w[4], int xres, int yres)
+{
+    transform ndc_from_screen =
+        transform_compose(transform_scale(v3(1.0 / (w[1] - w[0]), 1.0 / (w[3] - w[2]), 1.0)),
+                          transform_translate(v3(-w[0], -w[3], 0.0)));
+    transform raster_from_ndc = transform_scale(v3((double)xres, -(double)yres, 1.0));
+    return transform_compose(raster_from_ndc, ndc_from_screen);
+}
+
+hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err)
+{
+    if (camera_config_check(cfg, err))
+        return HZ_ERROR;
+    camera c = {0};
+    c.kind = cfg->kind;
+    c.shutter_open = cfg->shutter_open;
+    c.shutter_close = cfg->shutter_close;
+    c.medium = -1;
+
+    /* Camera-world render space: world translated so the camera sits at the
+     * origin. Both factors are exact here (the translation cancels the camera
+     * position bit for bit), so a camera far from the world origin gets the
+     * same render-space rays as one at the origin. */
+    transform world_from_camera = transform_inverse(cfg->camera_from_world);
+    vec3 p_camera = transform_point(&world_from_camera, v3(0.0, 0.0, 0.0));
+    c.world_from_render = transform_translate(p_camera);
+    c.render_from_camera =
+        transform_compose(transform_inverse(c.world_from_render), world_from_camera);
+
+    for (int i = 0; i < 4; ++i)
+        c.screen_window[i] = cfg->screen_window[i];
+    c.lens_radius = cfg->lens_radius;
+    c.focal_distance = cfg->focal_distance;
+    c.fov = cfg->kind == CAMERA_PERSPECTIVE ? cfg->fov : 0.0;
+    c.blades = cfg->blades;
+    c.blade_rotation = hz_radians(cfg->blade_rotation);
+    c.xres = cfg->xres;
+    c.yres = cfg->yres;
+
+    c.screen_from_camera = cfg->kind == CAMERA_PERSPECTIVE
+                               ? transform_perspective(cfg->fov, PERSPECTIVE_NEAR, PERSPECTIVE_FAR)
+                               : transform_orthographic(0.0, 1.0);
+    transform screen_from_raster =
+        transform_inverse(raster_from_screen(c.screen_window, c.xres, c.yres));
+    c.camera_from_raster =
+        transform_compose(transform_inverse(c.screen_from_camera), screen_from_raster);
+    c.raster_from_camera = transform_inverse(c.camera_from_raster);
+
+    vec3 p0 = transform_point(&c.camera_from_raster, v3(0.0, 0.0, 0.0));
+    c.dx_camera = v3_sub(transform_point(&c.camera_from_raster, v3(1.0, 0.0, 0.0)), p0);
+    c.dy_camera = v3_sub(transform_point(&c.camera_from_raster, v3(0.0, 1.0, 0.0)), p0);
+
+    if (!mat4_is_finite(&c.camera_from_raster.m) || !v3_is_finite(c.dx_camera) ||
+        !v3_is_finite(c.dy_camera))
+        return hz_fail(err, "the camera's projection is degenerate (fov %g, screen window "
+                            "[%g %g %g %g], %dx%d)",
+                       cfg->fov, c.screen_window[0], c.screen_window[1], c.screen_window[2],
+                       c.screen_window[3], c.xres, c.yres);
+    *out = c;
+    return HZ_OK;
+}
+
+double camera_imaging_ratio(const camera *c, const film_params *film)
+{
+    return (c->shutter_close - c->shutter_open) * film->iso / 100.0;
+}
+
+/* The camera-space ray, pbrt-v4's GenerateRay before RenderFromCamera. Also
+ * hands back the film point and lens point the differentials reuse. */
+static void camera_space_ray(const camera *c, camera_sample s, vec3 *o, vec3 *d, vec3 *p_camera,
+                             vec2 *p_lens)
+{
+    *p_camera = transform_point(&c->camera_from_raster, v3(s.p_film.x, s.p_film.y, 0.0));
+    switch (c->kind) {
+    case CAMERA_PERSPECTIVE:
+        *o = v3(0.0, 0.0, 0.0);
+        *d = v3_normalize(*p_camera);
+        break;
+    case CAMERA_ORTHOGRAPHIC:
+        *o = *p_camera;
+        *d = v3(0.0, 0.0, 1.0);
+        break;
+    }
+    /* Branch rather than scale by a zero radius: lensradius 0 stays exactly the
+     * pinhole ray (and skips the aperture sample). */
+    if (c->lens_radius > 0.0) {
+        *p_lens = lens_sample_aperture(c->lens_radius, c->blades, c->blade_rotation, s.p_lens);
+        double ft = c->focal_distance / d->z;
+        vec3 p_focus = v3_add(*o, v3_scale(*d, ft));
+        *o = c->kind == CAMERA_PERSPECTIVE
+                 ? v3(p_lens->x, p_lens->y, 0.0)
+                 : v3(p_camera->x + p_lens->x, p_camera->y + p_lens->y, 0.0);
+        *d = v3_normalize(v3_sub(p_focus, *o));
+    }
+}
+
+static ray render_ray(const camera *c, vec3 o, vec3 d, double time)
+{
+    ray r;
+    r.o = transform_point(&c->render_from_camera, o);
+    r.d = v3_normalize(transform_vector(&c->render_from_camera, d));
+    r.time = hz_lerp(time, c->shutter_open, c->shutter_close);
+    r.medium = c->medium;
+    return r;
+}
+
+bool camera_generate_ray(const camera *c, camera_sample s, ray *out)
+{
+    vec3 o, d, p_camera;
+    vec2 p_lens;
+    camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);
+    *out = render_ray(c, o, d, s.time);
+    return true;
+}
+
+/* The ray through film point p_camera + delta and the same lens point. */
+static void shifted_ray(const camera *c, vec3 p_camera, vec3 delta, vec2 p_lens, vec3 o_main,
+                        vec3 d_main, vec3 *o, vec3 *d)
+{
+    vec3 p = v3_add(p_camera, delta);
+    switch (c->kind) {
+    case CAMERA_PERSPECTIVE:
+        if (c->lens_radius > 0.0) {
+            vec3 dir = v3_normalize(p);
+            vec3 p_focus = v3_scale(dir, c->focal_distance / dir.z);
+            *o = v3(p_lens.x, p_lens.y, 0.0);
+            *d = v3_normalize(v3_sub(p_focus, *o));
+        } else {
+            *o = o_main;
+            *d = v3_normalize(p);
+        }
+        break;
+    case CAMERA_ORTHOGRAPHIC:
+        if (c->lens_radius > 0.0) {
+            vec3 p_focus = v3_add(p, v3(0.0, 0.0, c->focal_distance));
+            *o = v3(p.x + p_lens.x, p.y + p_lens.y, 0.0);
+            *d = v3_normalize(v3_sub(p_focus, *o));
+        } else {
+            *o = v3_add(o_main, delta);
+            *d = d_main;
+        }
+        break;
+    }
+}
+
+bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_differential *out)
+{
+    vec3 o, d, p_camera;
+    vec2 p_lens = v2(0.0, 0.0);
+    camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);
+    out->r = render_ray(c, o, d, s.time);
+
+    vec3 ox, dx, oy, dy;
+    shifted_ray(c, p_camera, c->dx_camera, p_lens, o, d, &ox, &dx);
+    shifted_ray(c, p_camera, c->dy_camera, p_lens, o, d, &oy, &dy);
+    out->rx_o = transform_point(&c->render_from_camera, ox);
+    out->rx_d = v3_normalize(transform_vector(&c->render_from_camera, dx));
+    out->ry_o = transform_point(&c->render_from_camera, oy);
+    out->ry_d = v3_normalize(transform_vector(&c->render_from_camera, dy));
+    out->has_differentials = true;
+    return true;
+}

@@ -1,0 +1,582 @@
+/* EXR through OpenEXRCore. Half <-> float conversion is done here rather
+ * than by the library's pack/unpack routines so that the rounding (to
+ * nearest, ties to even) is ours and testable, and the codec only ever moves
+ * native-typed data. */
+#define _POSIX_C_SOURCE 200809L
+
+#include "film/exr.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <openexr.h>
+
+/* ---- half floats ---------------------------------------------------- */
+
+uint16_t exr_half_from_float(float f)
+{
+    uint32_t x;
+    memcpy(&x, &f, sizeof x);
+    uint32_t sign = (x >> 16) & 0x8000u;
+    uint32_t a = x & 0x7fffffffu;
+    if (a >= 0x7f800000u) /* inf, nan (keep a quiet nan) */
+        return (uint16_t)(sign | 0x7c00u | (a > 0x7f800000u ? 0x200u | ((a >> 13) & 0x3ffu) : 0u));
+    if (a >= 0x477ff000u) /* >= 65520 rounds to infinity */
+        return (uint16_t)(sign | 0x7c00u);
+    if (a < 0x38800000u) { /* below 2^-14: half subnormal, units of 2^-24 */
+        if (a < 0x33000000u)
+            return (uint16_t)sign;
+        uint32_t e = a >> 23;
+        uint32_t m = (a & 0x7fffffu) | 0x800000u;
+        uint32_t shift = 126u - e; /* 14..24 */
+        uint32_t q = m >> shift;
+        uint32_t rem = m & ((1u << shift) - 1u);
+        uint32_t halfway = 1u << (shift - 1u);
+        if (rem > halfway || (rem == halfway && (q & 1u)))
+            q++;
+        return (uint16_t)(sign | q);
+    }
+    uint32_t h = (a - 0x38000000u) >> 13; /* rebias 127 -> 15 */
+    uint32_t rem = a & 0x1fffu;
+    if (rem > 0x1000u || (rem == 0x1000u && (h & 1u)))
+        h++; /* a carry into the exponent is the correct rounding */
+    return (uint16_t)(sign | h);
+}
+
+float exr_half_to_float(uint16_t h)
+{
+    uint32_t sign = (uint32_t)(h & 0x8000u) << 16;
+    uint32_t e = (h >> 10) & 0x1fu;
+    uint32_t m = h & 0x3ffu;
+    uint32_t x;
+    if (e == 0) {
+        float v = (float)m * 5.9604644775390625e-8f; /* exact: m * 2^-24 */
+        return sign ? -v : v;
+    }
+    if (e == 31)
+        x = sign | 0x7f800000u | (m << 13);
+    else
+        x = sign | ((e + 112u) << 23) | (m << 13);
+    float f;
+    memcpy(&f, &x, sizeof f);
+    return f;
+}
+
+/* ---- image helpers -------------------------------------------------- */
+
+hz_status exr_image_alloc(exr_image *img, int width, int height, int channel_count, hz_error *err)
+{
+    memset(img, 0, sizeof *img);
+    if (width < 1 || height < 1 || channel_count < 1)
+        return hz_fail(err, "exr: invalid image size %dx%d with %d channels", width, height,
+                       channel_count);
+    size_t n = (size_t)width * (size_t)height;
+    img->channels = calloc((size_t)channel_count, sizeof *img->channels);
+    if (!img->channels)
+        return hz_fail(err, "exr: out of memory");
+    img->channel_count = channel_count;
+    img->width = width;
+    img->height = height;
+    img->display_width = width;
+    img->display_height = height;
+    for (int c = 0; c < channel_count; c++) {
+        img->channels[c].pixels = calloc(n, sizeof(float));
+        if (!img->channels[c].pixels) {
+            exr_image_free(img);
+            return hz_fail(err, "exr: out of memory for a %dx%d image (%zu MiB per channel)", width,
+                           height, n * sizeof(float) >> 20);
+        }
+    }
+    return HZ_OK;
+}
+
+void exr_image_free(exr_image *img)
+{
+    if (!img)
+        return;
+    for (int c = 0; c < img->channel_count; c++)
+        free(img->channels[c].pixels);
+    free(img->channels);
+    free(img->attribute_names);
+    free(img->attribute_values);
+    memset(img, 0, sizeof *img);
+}
+
+const exr_channel *exr_find_channel(const exr_image *img, const char *name)
+{
+    for (int c = 0; c < img->channel_count; c++)
+        if (strcmp(img->channels[c].name, name) == 0)
+            return &img->channels[c];
+    return NULL;
+}
+
+hz_status exr_image_add_attribute(exr_image *img, const char *name, const char *value, hz_error *err)
+{
+    if (!name[0] || strlen(name) >= sizeof img->attribute_names[0] ||
+        strlen(value) >= sizeof img->attribute_values[0])
+        return hz_fail(err, "exr: attribute \"%s\" name or value too long", name);
+    int n = img->attribute_count + 1;
+    char(*names)[64] = realloc(img->attribute_names, (size_t)n * sizeof *names);
+    if (!names)
+        return hz_fail(err, "exr: out of memory");
+    img->attribute_names = names;
+    char(*values)[256] = realloc(img->attribute_values, (size_t)n * sizeof *values);
+    if (!values)
+        return hz_fail(err, "exr: out of memory");
+    img->attribute_values = values;
+    snprintf(names[n - 1], sizeof names[n - 1], "%s", name);
+    snprintf(values[n - 1], sizeof values[n - 1], "%s", value);
+    img->attribute_count = n;
+    return HZ_OK;
+}
+
+/* ---- context plumbing ----------------------------------------------- */
+
+/* Per-call state reachable from OpenEXRCore callbacks through user_data, so
+ * no message ever goes to stderr and nothing is global. */
+typedef struct {
+    int fd;             /* write: the temporary file */
+    char message[512];  /* first detailed message from the library */
+} exr_io;
+
+static void exr_error_handler(exr_const_context_t ctxt, exr_result_t code, const char *msg)
+{
+    void *ud = NULL;
+    if (exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud)
+        return;
+    exr_io *io = ud;
+    if (!io->message[0])
+        snprintf(io->message, sizeof io->message, "%s", msg ? msg : exr_get_default_error_message(code));
+}
+
+static int64_t exr_write_fd(exr_const_context_t ctxt, void *userdata, const void *buffer, uint64_t sz,
+                            uint64_t offset, exr_stream_error_func_ptr_t error_cb)
+{
+    exr_io *io = userdata;
+    const char *p = buffer;
+    uint64_t done = 0;
+    while (done < sz) {
+        ssize_t n = pwrite(io->fd, p + done, (size_t)(sz - done), (off_t)(offset + done));
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            error_cb(ctxt, EXR_ERR_WRITE_IO, "write failed: %s", strerror(errno));
+            return -1;
+        }
+        done += (uint64_t)n;
+    }
+    return (int64_t)done;
+}
+
+static hz_status exr_fail_code(hz_error *err, const char *path, const char *what, exr_result_t rv,
+                               const exr_io *io)
+{
+    return hz_fail(err, "%s: cannot %s EXR: %s", path, what,
+                   io->message[0] ? io->message : exr_get_default_error_message(rv));
+}
+
+/* ---- writing -------------------------------------------------------- */
+
+static int cmp_channel_name(const void *a, const void *b)
+{
+    const exr_channel *const *ca = a, *const *cb = b;
+    return strcmp((*ca)->name, (*cb)->name);
+}
+
+static hz_status exr_validate(const char *path, const exr_image *img, hz_error *err)
+{
+    if (img->width < 1 || img->height < 1 || img->channel_count < 1 || !img->channels)
+        return hz_fail(err, "%s: cannot write an empty EXR image (%dx%d, %d channels)", path,
+                       img->width, img->height, img->channel_count);
+    if (img->display_width < 1 || img->display_height < 1)
+        return hz_fail(err, "%s: invalid EXR display window %dx%d", path, img->display_width,
+                       img->display_height);
+    if ((int64_t)img->data_x0 + img->width - 1 > INT32_MAX ||
+        (int64_t)img->data_y0 + img->height - 1 > INT32_MAX)
+        return hz_fail(err, "%s: EXR data window out of range", path);
+    for (int c = 0; c < img->channel_count; c++) {
+        const exr_channel *ch = &img->channels[c];
+        if (!ch->name[0] || !memchr(ch->name, 0, sizeof ch->name) || !ch->pixels)
+            return hz_fail(err, "%s: EXR channel %d has no name or no pixels", path, c);
+        for (int d = 0; d < c; d++)
+            if (strcmp(ch->name, img->channels[d].name) == 0)
+                return hz_fail(err, "%s: EXR channel \"%s\" appears twice", path, ch->name);
+    }
+    return HZ_OK;
+}
+
+/* Writes the whole file into io->fd. `sorted` lists the channels in the order
+ * OpenEXRCore keeps them; half channels are converted into `half_buf`. */
+static hz_status exr_write_context(const char *path, const char *tmp, const exr_image *img,
+                                   exr_io *io, hz_error *err)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = exr_error_handler;
+    init.write_fn = exr_write_fd;
+    init.user_data = io;
+    exr_context_t ctx = NULL;
+    exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (rv != EXR_ERR_SUCCESS)
+        return exr_fail_code(err, path, "start writing", rv, io);
+
+    int nc = img->channel_count;
+    size_t npix = (size_t)img->width * (size_t)img->height;
+    const exr_channel **sorted = calloc((size_t)nc, sizeof *sorted);
+    uint16_t **halfs = calloc((size_t)nc, sizeof *halfs);
+    hz_status st = HZ_ERROR;
+    exr_encode_pipeline_t enc;
+    bool enc_init = false;
+    if (!sorted || !halfs) {
+        hz_fail(err, "exr: out of memory");
+        goto done;
+    }
+    for (int c = 0; c < nc; c++)
+        sorted[c] = &img->channels[c];
+    qsort(sorted, (size_t)nc, sizeof *sorted, cmp_channel_name);
+
+    int part = 0;
+    exr_attr_box2i_t dispw = {{{0, 0}}, {{img->display_width - 1, img->display_height - 1}}};
+    exr_attr_box2i_t dataw = {{{img->data_x0, img->data_y0}},
+                              {{img->data_x0 + img->width - 1, img->data_y0 + img->height - 1}}};
+    exr_attr_v2f_t swc = {{{0.f, 0.f}}};
+    if ((rv = exr_add_part(ctx, "main", EXR_STORAGE_SCANLINE, &part)) ||
+        (rv = exr_initialize_required_attr(ctx, part, &dispw, &dataw, 1.f, &swc, 1.f,
+                                           EXR_LINEORDER_INCREASING_Y, EXR_COMPRESSION_ZIP))) {
+        exr_fail_code(err, path, "set up", rv, io);
+        goto done;
+    }
+    for (int c = 0; c < nc; c++) {
+        rv = exr_add_channel(ctx, part, sorted[c]->name,
+                             sorted[c]->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
+                             EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+        if (rv) {
+            exr_fail_code(err, path, "add a channel to", rv, io);
+            goto done;
+        }
+        if (sorted[c]->half) {
+            halfs[c] = malloc(npix * sizeof(uint16_t));
+            if (!halfs[c]) {
+                hz_fail(err, "exr: out of memory");
+                goto done;
+            }
+            for (size_t i = 0; i < npix; i++)
+                halfs[c][i] = exr_half_from_float(sorted[c]->pixels[i]);
+        }
+    }
+    for (int a = 0; a < img->attribute_count; a++) {
+        if ((rv = exr_attr_set_string(ctx, part, img->attribute_names[a], img->attribute_values[a]))) {
+            exr_fail_code(err, path, "set an attribute of", rv, io);
+            goto done;
+        }
+    }
+    if ((rv = exr_write_header(ctx))) {
+        exr_fail_code(err, path, "write the header of", rv, io);
+        goto done;
+    }
+    int32_t lines = 1;
+    if ((rv = exr_get_scanlines_per_chunk(ctx, part, &lines)) || lines < 1) {
+        exr_fail_code(err, path, "write", rv, io);
+        goto done;
+    }
+    for (int y0 = 0; y0 < img->height; y0 += lines) {
+        exr_chunk_info_t ci;
+        if ((rv = exr_write_scanline_chunk_info(ctx, part, img->data_y0 + y0, &ci)))
+            break;
+        rv = enc_init ? exr_encoding_update(ctx, part, &ci, &enc)
+                      : exr_encoding_initialize(ctx, part, &ci, &enc);
+        if (rv)
+            break;
+        for (int16_t k = 0; k < enc.channel_count; k++) {
+            exr_coding_channel_info_t *cc = &enc.channels[k];
+            int c = 0;
+            while (c < nc && strcmp(sorted[c]->name, cc->channel_name) != 0)
+                c++;
+            if (c == nc) { /* cannot happen: we declared every channel */
+                rv = EXR_ERR_INVALID_ARGUMENT;
+                break;
+            }
+            size_t off = (size_t)y0 * (size_t)img->width;
+            if (sorted[c]->half) {
+                cc->encode_from_ptr = (const uint8_t *)(halfs[c] + off);
+                cc->user_bytes_per_element = 2;
+                cc->user_data_type = EXR_PIXEL_HALF;
+            } else {
+                cc->encode_from_ptr = (const uint8_t *)(sorted[c]->pixels + off);
+                cc->user_bytes_per_element = 4;
+                cc->user_data_type = EXR_PIXEL_FLOAT;
+            }
+            cc->user_pixel_stride = cc->user_bytes_per_element;
+            cc->user_line_stride = cc->user_bytes_per_element * img->width;
+        }
+        if (rv)
+            break;
+        if (!enc_init) {
+            enc_init = true;
+            if ((rv = exr_encoding_choose_default_routines(ctx, part, &enc)))
+                break;
+        }
+        if ((rv = exr_encoding_run(ctx, part, &enc)))
+            break;
+    }
+    if (rv) {
+        exr_fail_code(err, path, "write pixels of", rv, io);
+        goto done;
+    }
+    st = HZ_OK;
+done:
+    if (enc_init)
+        exr_encoding_destroy(ctx, &enc);
+    rv = exr_finish(&ctx); /* writes the chunk offset table */
+    if (st == HZ_OK && rv != EXR_ERR_SUCCESS)
+        st = exr_fail_code(err, path, "finish", rv, io);
+    if (halfs)
+        for (int c = 0; c < nc; c++)
+            free(halfs[c]);
+    free(halfs);
+    free(sorted);
+    return st;
+}
+
+hz_status exr_write(const char *path, const exr_image *img, hz_error *err)
+{
+    if (exr_validate(path, img, err) != HZ_OK)
+        return HZ_ERROR;
+    size_t len = strlen(path);
+    char *tmp = malloc(len + 16);
+    if (!tmp)
+        return hz_fail(err, "exr: out of memory");
+    memcpy(tmp, path, len);
+    memcpy(tmp + len, ".tmp-XXXXXX", 12);
+    exr_io io = {.fd = mkstemp(tmp)};
+    if (io.fd < 0) {
+        hz_status st = hz_fail(err, "%s: cannot create a temporary file next to it: %s", path,
+                               strerror(errno));
+        free(tmp);
+        return st;
+    }
+    /* mkstemp makes the file private; give it the mode of the file it
+     * replaces, or an ordinary image's. */
+    struct stat old;
+    mode_t mode = stat(path, &old) == 0 ? (old.st_mode & 07777) : 0644;
+    hz_status st = HZ_OK;
+    if (fchmod(io.fd, mode) != 0)
+        st = hz_fail(err, "%s: cannot set permissions: %s", path, strerror(errno));
+    if (st == HZ_OK)
+        st = exr_write_context(path, tmp, img, &io, err);
+    if (st == HZ_OK && fsync(io.fd) != 0)
+        st = hz_fail(err, "%s: cannot flush EXR to disk: %s", path, strerror(errno));
+    if (close(io.fd) != 0 && st == HZ_OK)
+        st = hz_fail(err, "%s: cannot close EXR: %s", path, strerror(errno));
+    if (st == HZ_OK && rename(tmp, path) != 0)
+        st = hz_fail(err, "%s: cannot rename the temporary EXR into place: %s", path, strerror(errno));
+    if (st != HZ_OK)
+        unlink(tmp);
+    free(tmp);
+    return st;
+}
+
+/* ---- reading -------------------------------------------------------- */
+
+/* Where decoded data goes: float channels straight into the image, half
+ * channels into a staging buffer converted at the end. */
+typedef struct {
+    exr_image *img;
+    uint16_t **halfs;
+} exr_read_target;
+
+static exr_result_t exr_decode_chunk(exr_context_t ctx, const exr_chunk_info_t *ci, int x0, int y0,
+                                     exr_read_target *t, exr_decode_pipeline_t *dec, bool *dec_init)
+{
+    exr_image *img = t->img;
+    if (x0 < 0 || y0 < 0 || ci->width < 1 || ci->height < 1 || x0 + ci->width > img->width ||
+        y0 + ci->height > img->height)
+        return EXR_ERR_BAD_CHUNK_LEADER;
+    exr_result_t rv = *dec_init ? exr_decoding_update(ctx, 0, ci, dec)
+                                : exr_decoding_initialize(ctx, 0, ci, dec);
+    if (rv)
+        return rv;
+    bool first = !*dec_init;
+    *dec_init = true;
+    for (int16_t k = 0; k < dec->channel_count; k++) {
+        exr_coding_channel_info_t *cc = &dec->channels[k];
+        int c = 0;
+        while (c < img->channel_count && strcmp(img->channels[c].name, cc->channel_name) != 0)
+            c++;
+        if (c == img->channel_count)
+            return EXR_ERR_INVALID_ARGUMENT;
+        size_t off = (size_t)y0 * (size_t)img->width + (size_t)x0;
+        if (img->channels[c].half) {
+            cc->decode_to_ptr = (uint8_t *)(t->halfs[c] + off);
+            cc->user_bytes_per_element = 2;
+            cc->user_data_type = EXR_PIXEL_HALF;
+        } else {
+            cc->decode_to_ptr = (uint8_t *)(img->channels[c].pixels + off);
+            cc->user_bytes_per_element = 4;
+            cc->user_data_type = EXR_PIXEL_FLOAT;
+        }
+        cc->user_pixel_stride = cc->user_bytes_per_element;
+        cc->user_line_stride = cc->user_bytes_per_element * img->width;
+    }
+    if (first && (rv = exr_decoding_choose_default_routines(ctx, 0, dec)))
+        return rv;
+    return exr_decoding_run(ctx, 0, dec);
+}
+
+static exr_result_t exr_read_pixels(exr_context_t ctx, exr_storage_t storage, exr_attr_box2i_t dw,
+                                    exr_read_target *t)
+{
+    exr_decode_pipeline_t dec;
+    memset(&dec, 0, sizeof dec);
+    bool dec_init = false;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    exr_chunk_info_t ci;
+    if (storage == EXR_STORAGE_SCANLINE) {
+        int32_t lines = 1;
+        if ((rv = exr_get_scanlines_per_chunk(ctx, 0, &lines)))
+            return rv;
+        if (lines < 1)
+            return EXR_ERR_INVALID_ATTR;
+        for (int64_t y = dw.min.y; y <= dw.max.y && !rv; y += lines) {
+            if ((rv = exr_read_scanline_chunk_info(ctx, 0, (int)y, &ci)))
+                break;
+            rv = exr_decode_chunk(ctx, &ci, 0, ci.start_y - dw.min.y, t, &dec, &dec_init);
+        }
+    } else {
+        /* Tiled: the full-resolution level only (mip levels are not images). */
+        uint32_t tw = 0, th = 0;
+        exr_tile_level_mode_t lm;
+        exr_tile_round_mode_t rm;
+        if ((rv = exr_get_tile_descriptor(ctx, 0, &tw, &th, &lm, &rm)))
+            return rv;
+        if (tw < 1 || th < 1)
+            return EXR_ERR_INVALID_ATTR;
+        int64_t nx = ((int64_t)t->img->width + tw - 1) / tw;
+        int64_t ny = ((int64_t)t->img->height + th - 1) / th;
+        for (int64_t ty = 0; ty < ny && !rv; ty++)
+            for (int64_t tx = 0; tx < nx && !rv; tx++) {
+                if ((rv = exr_read_tile_chunk_info(ctx, 0, (int)tx, (int)ty, 0, 0, &ci)))
+                    break;
+                rv = exr_decode_chunk(ctx, &ci, (int)(tx * tw), (int)(ty * th), t, &dec, &dec_init);
+            }
+    }
+    if (dec_init)
+        exr_decoding_destroy(ctx, &dec);
+    return rv;
+}
+
+/* Reads the header description into `out` (allocating its pixels). */
+static hz_status exr_read_header(const char *path, exr_context_t ctx, exr_io *io, exr_image *out,
+                                 exr_storage_t *storage, exr_attr_box2i_t *dw, hz_error *err)
+{
+    exr_result_t rv;
+    int parts = 0;
+    exr_attr_box2i_t disp;
+    const exr_attr_chlist_t *chl = NULL;
+    if ((rv = exr_get_count(ctx, &parts)) || (rv = exr_get_storage(ctx, 0, storage)) ||
+        (rv = exr_get_data_window(ctx, 0, dw)) || (rv = exr_get_display_window(ctx, 0, &disp)) ||
+        (rv = exr_get_channels(ctx, 0, &chl)))
+        return exr_fail_code(err, path, "read the header of", rv, io);
+    if (*storage != EXR_STORAGE_SCANLINE && *storage != EXR_STORAGE_TILED)
+        return hz_fail(err, "%s: deep EXR images are not supported", path);
+    int64_t w = (int64_t)dw->max.x - dw->min.x + 1, h = (int64_t)dw->max.y - dw->min.y + 1;
+    int64_t dspw = (int64_t)disp.max.x - disp.min.x + 1, dsph = (int64_t)disp.max.y - disp.min.y + 1;
+    if (w < 1 || h < 1 || w > INT32_MAX || h > INT32_MAX || dspw < 1 || dsph < 1 ||
+        dspw > INT32_MAX || dsph > INT32_MAX)
+        return hz_fail(err, "%s: invalid EXR data or display window", path);
+    if (!chl || chl->num_channels < 1)
+        return hz_fail(err, "%s: EXR image has no channels", path);
+    /* Refuse before allocating: a corrupt header must not cause a huge allocation. */
+    if ((double)w * (double)h * chl->num_channels * 4.0 > 16.0 * 1024 * 1024 * 1024)
+        return hz_fail(err, "%s: EXR image %lldx%lld with %d channels is too large to read", path,
+                       (long long)w, (long long)h, chl->num_channels);
+    for (int c = 0; c < chl->num_channels; c++) {
+        const exr_attr_chlist_entry_t *e = &chl->entries[c];
+        if (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)
+            return hz_fail(err, "%s: EXR channel \"%s\" is not half or float (uint is not supported)",
+                           path, e->name.str);
+        if (e->x_sampling != 1 || e->y_sampling != 1)
+            return hz_fail(err, "%s: EXR channel \"%s\" is subsampled, which is not supported", path,
+                           e->name.str);
+        if (e->name.length < 1 || e->name.length >= (int)sizeof out->channels[0].name)
+            return hz_fail(err, "%s: EXR channel name \"%s\" is empty or too long", path, e->name.str);
+    }
+    if (exr_image_alloc(out, (int)w, (int)h, chl->num_channels, err) != HZ_OK)
+        return HZ_ERROR;
+    /* exr_image's display window starts at 0: express the data window relative to it. */
+    out->display_width = (int)dspw;
+    out->display_height = (int)dsph;
+    out->data_x0 = (int)((int64_t)dw->min.x - disp.min.x);
+    out->data_y0 = (int)((int64_t)dw->min.y - disp.min.y);
+    for (int c = 0; c < chl->num_channels; c++) {
+        memcpy(out->channels[c].name, chl->entries[c].name.str, (size_t)chl->entries[c].name.length);
+        out->channels[c].half = chl->entries[c].pixel_type == EXR_PIXEL_HALF;
+    }
+    int32_t nattr = 0;
+    if ((rv = exr_get_attribute_count(ctx, 0, &nattr)))
+        return exr_fail_code(err, path, "read the header of", rv, io);
+    for (int32_t a = 0; a < nattr; a++) {
+        const exr_attribute_t *attr = NULL;
+        if ((rv = exr_get_attribute_by_index(ctx, 0, EXR_ATTR_LIST_FILE_ORDER, a, &attr)))
+            return exr_fail_code(err, path, "read the header of", rv, io);
+        if (attr->type != EXR_ATTR_STRING || !attr->string || !attr->string->str)
+            continue;
+        /* Names and values that do not fit are skipped, not truncated. */
+        if (strlen(attr->name) >= sizeof out->attribute_names[0] ||
+            (size_t)attr->string->length >= sizeof out->attribute_values[0])
+            continue;
+        if (exr_image_add_attribute(out, attr->name, attr->string->str, err) != HZ_OK)
+            return HZ_ERROR;
+    }
+    return HZ_OK;
+}
+
+hz_status exr_read(const char *path, exr_image *out, hz_error *err)
+{
+    memset(out, 0, sizeof *out);
+    exr_io io = {.fd = -1};
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = exr_error_handler;
+    init.user_data = &io;
+    exr_context_t ctx = NULL;
+    exr_result_t rv = exr_start_read(&ctx, path, &init);
+    if (rv != EXR_ERR_SUCCESS) {
+        exr_finish(&ctx);
+        return exr_fail_code(err, path, "read", rv, &io);
+    }
+    exr_storage_t storage = EXR_STORAGE_SCANLINE;
+    exr_attr_box2i_t dw;
+    hz_status st = exr_read_header(path, ctx, &io, out, &storage, &dw, err);
+    uint16_t **halfs = NULL;
+    if (st == HZ_OK) {
+        size_t npix = (size_t)out->width * (size_t)out->height;
+        halfs = calloc((size_t)out->channel_count, sizeof *halfs);
+        if (!halfs)
+            st = hz_fail(err, "exr: out of memory");
+        for (int c = 0; st == HZ_OK && c < out->channel_count; c++)
+            if (out->channels[c].half && !(halfs[c] = calloc(npix, sizeof(uint16_t))))
+                st = hz_fail(err, "exr: out of memory");
+        if (st == HZ_OK) {
+            exr_read_target t = {out, halfs};
+            if ((rv = exr_read_pixels(ctx, storage, dw, &t)))
+                st = exr_fail_code(err, path, "read pixels of", rv, &io);
+        }
+        for (int c = 0; st == HZ_OK && c < out->channel_count; c++)
+            if (halfs[c])
+                for (size_t i = 0; i < npix; i++)
+                    out->channels[c].pixels[i] = exr_half_to_float(halfs[c][i]);
+    }
+    if (halfs)
+        for (int c = 0; c < out->channel_count; c++)
+            free(halfs[c]);
+    free(halfs);
+    exr_finish(&ctx);
+    if (st != HZ_OK)
+        exr_image_free(out);
+    return st;
+}

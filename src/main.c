@@ -1,0 +1,218 @@
+/* haze: command line. Exit status 0 on success, 1 on scene or render errors,
+ * 2 on usage errors. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include "render/progress.h"
+#include "render/render_scene.h"
+#include "render/renderer.h"
+#include "scene/scene_desc.h"
+
+enum { EXIT_SCENE = 1, EXIT_USAGE = 2 };
+
+static const char usage_text[] =
+    "usage: haze render SCENE.pbrt [options]\n"
+    "       haze --help | --version\n"
+    "\n"
+    "render options:\n"
+    "  -o, --output FILE.exr   write the image here (overrides the Film's filename)\n"
+    "  --spp N                 samples per pixel (overrides the Sampler's count)\n"
+    "  --threads N             render threads (default: all cores)\n"
+    "  --seed N                random seed (default 0; a Sampler's \"integer seed\" wins)\n"
+    "  --preview FILE.png      also write a tonemapped sRGB PNG\n"
+    "  --quiet                 no progress bar and no summary\n";
+
+typedef struct {
+    const char *scene;
+    const char *output;
+    const char *preview;
+    int spp, threads;
+    unsigned long long seed;
+    int quiet;
+} cli;
+
+static int usage_error(const char *fmt, const char *arg)
+{
+    fprintf(stderr, "haze: ");
+    fprintf(stderr, fmt, arg);
+    fprintf(stderr, "\nTry 'haze --help'.\n");
+    return EXIT_USAGE;
+}
+
+static int parse_count(const char *s, long lo, long hi, long *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (errno || end == s || *end != '\0' || v < lo || v > hi)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+/* Returns -1 on success, else the exit status. */
+static int parse_render_args(int argc, char **argv, cli *c)
+{
+    for (int i = 2; i < argc; ++i) {
+        const char *a = argv[i];
+        const char *val = i + 1 < argc ? argv[i + 1] : NULL;
+        long n;
+        if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--spp") ||
+            !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview")) {
+            if (!val)
+                return usage_error("option %s needs a value", a);
+            ++i;
+            if (!strcmp(a, "-o") || !strcmp(a, "--output"))
+                c->output = val;
+            else if (!strcmp(a, "--preview"))
+                c->preview = val;
+            else if (!strcmp(a, "--spp")) {
+                if (parse_count(val, 1, 1 << 24, &n))
+                    return usage_error("--spp needs an integer in [1, 16777216], not '%s'", val);
+                c->spp = (int)n;
+            } else if (!strcmp(a, "--threads")) {
+                if (parse_count(val, 1, 4096, &n))
+                    return usage_error("--threads needs an integer in [1, 4096], not '%s'", val);
+                c->threads = (int)n;
+            } else {
+                if (parse_count(val, 0, LONG_MAX, &n))
+                    return usage_error("--seed needs a non-negative integer, not '%s'", val);
+                c->seed = (unsigned long long)n;
+            }
+        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
+            c->quiet = 1;
+        } else if (a[0] == '-' && a[1] != '\0') {
+            return usage_error("unknown option '%s'", a);
+        } else if (!c->scene) {
+            c->scene = a;
+        } else {
+            return usage_error("more than one scene given ('%s')", a);
+        }
+    }
+    if (!c->scene)
+        return usage_error("%s", "render needs a scene file");
+    return -1;
+}
+
+/* Fails early, before minutes of rendering, when the output cannot be written. */
+static int check_output_dir(const char *path, hz_error *err)
+{
+    char dir[PATH_MAX];
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == path)
+        snprintf(dir, sizeof dir, "/");
+    else
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    if (access(dir, W_OK) != 0) {
+        hz_fail(err, "cannot write '%s': directory '%s' %s", path, dir,
+                errno == ENOENT ? "does not exist" : "is not writable");
+        return -1;
+    }
+    return 0;
+}
+
+static double peak_memory_mib(void)
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0)
+        return 0.0;
+    return ru.ru_maxrss / 1024.0;
+}
+
+static int run_render(const cli *c)
+{
+    hz_error err = {{0}};
+    scene_desc sd;
+    if (scene_parse_file(c->scene, &sd, &err) != HZ_OK) {
+        fprintf(stderr, "haze: %s\n", err.message);
+        return EXIT_SCENE;
+    }
+    render_options ro = {.seed = c->seed, .spp = c->spp, .output = c->output};
+    render_scene *rs = NULL;
+    hz_status st = render_scene_create(&sd, &ro, stderr, &rs, &err);
+    if (st != HZ_OK) {
+        fprintf(stderr, "haze: %s\n", err.message);
+        scene_desc_free(&sd);
+        return EXIT_SCENE;
+    }
+    film *f = render_scene_film(rs);
+    const film_params *fp = film_get_params(f);
+    int exit_code = 0;
+    if (check_output_dir(fp->filename, &err) != 0 ||
+        (c->preview && check_output_dir(c->preview, &err) != 0)) {
+        fprintf(stderr, "haze: %s\n", err.message);
+        exit_code = EXIT_SCENE;
+        goto done;
+    }
+
+    renderer_options opt = {.threads = c->threads,
+                            .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL};
+    render_stats stats;
+    if (renderer_run(rs, &opt, &stats, &err) != HZ_OK) {
+        fprintf(stderr, "haze: %s\n", err.message);
+        exit_code = EXIT_SCENE;
+        goto done;
+    }
+    double ratio = camera_imaging_ratio(render_scene_camera(rs), fp);
+    if (film_write_exr(f, fp->filename, ratio, &err) != HZ_OK ||
+        (c->preview && film_write_png(f, c->preview, ratio, &err) != HZ_OK)) {
+        fprintf(stderr, "haze: %s\n", err.message);
+        exit_code = EXIT_SCENE;
+        goto done;
+    }
+    long bad = film_nonfinite_count(f);
+    if (bad > 0)
+        fprintf(stderr, "haze: warning: %ld non-finite sample values were dropped\n", bad);
+    if (!c->quiet) {
+        char wall[32];
+        progress_format_duration(stats.wall_seconds, wall, sizeof wall);
+        double rays = (double)(stats.camera_rays + stats.shadow_rays);
+        printf("%s: %dx%d (%d x %d pixels rendered), %d spp, %d threads, %s, "
+               "%.2f Mrays/s (%llu camera + %llu shadow), peak memory %.1f MiB\n",
+               fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,
+               fp->bounds.y1 - fp->bounds.y0, stats.spp, stats.threads, wall,
+               stats.wall_seconds > 0 ? rays / stats.wall_seconds * 1e-6 : 0.0,
+               (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
+               peak_memory_mib());
+    }
+done:
+    render_scene_destroy(rs);
+    scene_desc_free(&sd);
+    return exit_code;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2)
+        return usage_error("%s", "no command given");
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h") || !strcmp(cmd, "help")) {
+        fputs(usage_text, stdout);
+        return 0;
+    }
+    if (!strcmp(cmd, "--version")) {
+        printf("haze %s\n", HAZE_VERSION);
+        return 0;
+    }
+    if (!strcmp(cmd, "render")) {
+        cli c = {0};
+        for (int i = 2; i < argc; ++i)
+            if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+                fputs(usage_text, stdout);
+                return 0;
+            }
+        int rc = parse_render_args(argc, argv, &c);
+        if (rc >= 0)
+            return rc;
+        return run_render(&c);
+    }
+    return usage_error("unknown command '%s' (commands: render)", cmd);
+}

@@ -1,0 +1,48 @@
+/* The renderable scene: everything the factories built from a scene_desc
+ * (camera, film, sampler, filter, Embree geometry, lights, materials), in
+ * render space, plus the integrator that computes radiance along a camera ray. */
+#ifndef HAZE_RENDER_RENDER_SCENE_H
+#define HAZE_RENDER_RENDER_SCENE_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "camera/camera.h"
+#include "core/error.h"
+#include "core/ray.h"
+#include "film/film.h"
+#include "film/filter.h"
+#include "sampler/sampler.h"
+#include "scene/scene_desc.h"
+
+typedef struct {
+    uint64_t seed;             /* default for the Sampler's "integer seed" (--seed) */
+    int spp;                   /* > 0 overrides the sampler's count (--spp) */
+    const char *output;        /* non-NULL overrides the Film's filename (-o) */
+} render_options;
+
+typedef struct render_scene render_scene;
+
+/* Runs every factory; errors name the file:line:column of the offending entity.
+ * Warnings (e.g. an unsupported sampler replaced by sobol) are written to `warn`
+ * (one per line) when it is not NULL. */
+hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *warn,
+                              render_scene **out, hz_error *err);
+void render_scene_destroy(render_scene *rs);
+
+const camera *render_scene_camera(const render_scene *rs);
+film *render_scene_film(render_scene *rs);
+const sampler *render_scene_sampler(const render_scene *rs);
+const filter *render_scene_filter(const render_scene *rs);
+
+/* Per-thread counters, summed by the renderer for the summary. */
+typedef struct {
+    uint64_t camera_rays, shadow_rays;
+} render_counters;
+
+/* Radiance arriving along the camera ray `r`. `depth` receives the distance to the
+ * first surface hit (INFINITY when none). Thread-safe; allocates nothing. */
+rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
+                    double *depth, render_counters *counters);
+
+#endif

@@ -1,0 +1,168 @@
+#define _POSIX_C_SOURCE 200809L
+#include "render/renderer.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "render/progress.h"
+
+enum { TILE_SIZE = 16 };
+
+typedef struct {
+    render_scene *rs;
+    pixel_bounds bounds;
+    int tiles_x, tile_count;
+    int spp;
+    double diff_scale;
+    atomic_int next_tile;
+    atomic_int tiles_done;
+    render_counters *counters; /* one per thread */
+} render_job;
+
+typedef struct {
+    render_job *job;
+    int index;
+} worker_arg;
+
+static void render_pixel(render_job *job, int px, int py, render_counters *counters)
+{
+    const camera *cam = render_scene_camera(job->rs);
+    const sampler *smp = render_scene_sampler(job->rs);
+    const filter *flt = render_scene_filter(job->rs);
+    film *f = render_scene_film(job->rs);
+
+    for (int i = 0; i < job->spp; ++i) {
+        sampler_state st;
+        sampler_start(smp, px, py, i, &st);
+        /* pbrt-v4's GetCameraSample order: film position, time, lens. */
+        filter_sample fs = filter_sample_offset(flt, sampler_pixel_2d(&st));
+        camera_sample cs;
+        cs.p_film = v2(px + 0.5 + fs.p.x, py + 0.5 + fs.p.y);
+        cs.time = sampler_1d(&st);
+        cs.p_lens = sampler_2d(&st);
+        cs.filter_weight = fs.weight;
+
+        ray_differential rd;
+        if (!camera_generate_ray_differential(cam, cs, &rd))
+            continue;
+        if (rd.has_differentials) {
+            /* As pbrt-v4: narrow the footprint with the sample count. */
+            rd.rx_o = v3_add(rd.r.o, v3_scale(v3_sub(rd.rx_o, rd.r.o), job->diff_scale));
+            rd.ry_o = v3_add(rd.r.o, v3_scale(v3_sub(rd.ry_o, rd.r.o), job->diff_scale));
+            rd.rx_d = v3_add(rd.r.d, v3_scale(v3_sub(rd.rx_d, rd.r.d), job->diff_scale));
+            rd.ry_d = v3_add(rd.r.d, v3_scale(v3_sub(rd.ry_d, rd.r.d), job->diff_scale));
+        }
+        double depth = INFINITY;
+        counters->camera_rays++;
+        rgb L = render_scene_li(job->rs, &rd, &st, &depth, counters);
+        film_add_sample(f, px, py, L, cs.filter_weight, depth);
+    }
+}
+
+static void *worker_main(void *p)
+{
+    worker_arg *arg = p;
+    render_job *job = arg->job;
+    render_counters *counters = &job->counters[arg->index];
+    for (;;) {
+        int t = atomic_fetch_add(&job->next_tile, 1);
+        if (t >= job->tile_count)
+            break;
+        int x0 = job->bounds.x0 + (t % job->tiles_x) * TILE_SIZE;
+        int y0 = job->bounds.y0 + (t / job->tiles_x) * TILE_SIZE;
+        int x1 = x0 + TILE_SIZE < job->bounds.x1 ? x0 + TILE_SIZE : job->bounds.x1;
+        int y1 = y0 + TILE_SIZE < job->bounds.y1 ? y0 + TILE_SIZE : job->bounds.y1;
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x)
+                render_pixel(job, x, y, counters);
+        atomic_fetch_add(&job->tiles_done, 1);
+    }
+    return NULL;
+}
+
+int renderer_default_threads(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : (int)n;
+}
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
+                       hz_error *err)
+{
+    const film_params *fp = film_get_params(render_scene_film(rs));
+    render_job job;
+    memset(&job, 0, sizeof job);
+    job.rs = rs;
+    job.bounds = fp->bounds;
+    int w = fp->bounds.x1 - fp->bounds.x0, h = fp->bounds.y1 - fp->bounds.y0;
+    job.tiles_x = (w + TILE_SIZE - 1) / TILE_SIZE;
+    job.tile_count = job.tiles_x * ((h + TILE_SIZE - 1) / TILE_SIZE);
+    job.spp = render_scene_sampler(rs)->spp;
+    job.diff_scale = fmax(0.125, 1.0 / sqrt((double)job.spp));
+    atomic_init(&job.next_tile, 0);
+    atomic_init(&job.tiles_done, 0);
+
+    int threads = opt->threads > 0 ? opt->threads : renderer_default_threads();
+    if (threads > job.tile_count)
+        threads = job.tile_count > 0 ? job.tile_count : 1;
+    job.counters = calloc((size_t)threads, sizeof *job.counters);
+    pthread_t *tids = calloc((size_t)threads, sizeof *tids);
+    worker_arg *args = calloc((size_t)threads, sizeof *args);
+    if (!job.counters || !tids || !args) {
+        free(job.counters);
+        free(tids);
+        free(args);
+        return hz_fail(err, "out of memory starting %d render threads", threads);
+    }
+
+    double t0 = now_seconds();
+    int started = 0;
+    for (; started < threads; ++started) {
+        args[started] = (worker_arg){&job, started};
+        if (pthread_create(&tids[started], NULL, worker_main, &args[started]) != 0)
+            break;
+    }
+    hz_status status = HZ_OK;
+    if (started == 0) {
+        status = hz_fail(err, "could not start any render thread");
+    } else {
+        progress_bar bar;
+        progress_begin(&bar, opt->progress, job.tile_count, t0);
+        while (atomic_load(&job.tiles_done) < job.tile_count) {
+            progress_update(&bar, atomic_load(&job.tiles_done), now_seconds());
+            struct timespec nap = {0, 100 * 1000 * 1000};
+            nanosleep(&nap, NULL);
+        }
+        progress_end(&bar, now_seconds());
+    }
+    for (int i = 0; i < started; ++i)
+        pthread_join(tids[i], NULL);
+
+    if (stats) {
+        memset(stats, 0, sizeof *stats);
+        stats->threads = started;
+        stats->spp = job.spp;
+        stats->pixels = (long)w * h;
+        stats->wall_seconds = now_seconds() - t0;
+        for (int i = 0; i < threads; ++i) {
+            stats->camera_rays += job.counters[i].camera_rays;
+            stats->shadow_rays += job.counters[i].shadow_rays;
+        }
+    }
+    free(job.counters);
+    free(tids);
+    free(args);
+    return status;
+}

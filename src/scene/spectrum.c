@@ -1,0 +1,77 @@
+#include "scene/spectrum.h"
+
+#include <math.h>
+
+#define LAMBDA_MIN 360.0
+#define LAMBDA_MAX 830.0
+
+/* Piecewise Gaussian with different widths left and right of the mean. */
+static double lobe(double x, double mu, double sigma_left, double sigma_right)
+{
+    double t = (x - mu) / (x < mu ? sigma_left : sigma_right);
+    return exp(-0.5 * t * t);
+}
+
+vec3 spectrum_cie_xyz(double l)
+{
+    double x = 1.056 * lobe(l, 599.8, 37.9, 31.0) + 0.362 * lobe(l, 442.0, 16.0, 26.7) -
+               0.065 * lobe(l, 501.1, 20.4, 26.2);
+    double y = 0.821 * lobe(l, 568.8, 46.9, 40.5) + 0.286 * lobe(l, 530.9, 16.3, 31.1);
+    double z = 1.217 * lobe(l, 437.0, 11.8, 36.0) + 0.681 * lobe(l, 459.0, 26.0, 13.8);
+    return v3(x, y, z);
+}
+
+rgb spectrum_srgb_from_xyz(vec3 c)
+{
+    return rgb_make(3.2404542 * c.x - 1.5371385 * c.y - 0.4985314 * c.z,
+                    -0.9692660 * c.x + 1.8760108 * c.y + 0.0415560 * c.z,
+                    0.0556434 * c.x - 0.2040259 * c.y + 1.0572252 * c.z);
+}
+
+static double sample_piecewise(const double *lambda, const double *value, size_t n, double l)
+{
+    if (l < lambda[0] || l > lambda[n - 1])
+        return 0.0;
+    if (n == 1)
+        return value[0];
+    size_t i = 0;
+    while (i + 2 < n && l > lambda[i + 1])
+        ++i;
+    double t = (l - lambda[i]) / (lambda[i + 1] - lambda[i]);
+    return hz_lerp(t, value[i], value[i + 1]);
+}
+
+/* 1 nm steps (trapezoid ends ignored: the CMFs are ~0 there). */
+static vec3 integrate_xyz(const double *lambda, const double *value, size_t n)
+{
+    vec3 sum = v3(0, 0, 0);
+    for (double l = LAMBDA_MIN; l <= LAMBDA_MAX; l += 1.0) {
+        double s = lambda ? sample_piecewise(lambda, value, n, l) : 1.0;
+        sum = v3_add(sum, v3_scale(spectrum_cie_xyz(l), s));
+    }
+    return sum;
+}
+
+rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n)
+{
+    rgb white = spectrum_srgb_from_xyz(integrate_xyz(NULL, NULL, 0));
+    rgb c = spectrum_srgb_from_xyz(integrate_xyz(lambda, value, n));
+    return rgb_make(c.r / white.r, c.g / white.g, c.b / white.b);
+}
+
+static double planck(double lambda_nm, double kelvin)
+{
+    const double c = 299792458.0, h = 6.62606957e-34, kb = 1.3806488e-23;
+    double l = lambda_nm * 1e-9;
+    return (2.0 * h * c * c) / (pow(l, 5) * (exp((h * c) / (l * kb * kelvin)) - 1.0));
+}
+
+rgb spectrum_blackbody_to_rgb(double kelvin)
+{
+    vec3 xyz = v3(0, 0, 0);
+    for (double l = LAMBDA_MIN; l <= LAMBDA_MAX; l += 1.0)
+        xyz = v3_add(xyz, v3_scale(spectrum_cie_xyz(l), planck(l, kelvin)));
+    if (!(xyz.y > 0.0) || !v3_is_finite(xyz))
+        return rgb_grey(0.0); /* too cold to emit visible light in double precision */
+    return spectrum_srgb_from_xyz(v3_scale(xyz, 1.0 / xyz.y));
+}

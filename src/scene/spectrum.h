@@ -1,0 +1,32 @@
+/* Spectra to linear sRGB, because haze renders in RGB.
+ *
+ * Rules (also in the README's list of differences from pbrt-v4):
+ * - Sampled spectra ((lambda nm, value) pairs, piecewise linear, zero outside
+ *   the given range, as pbrt-v4's PiecewiseLinearSpectrum) are integrated over
+ *   360..830 nm against the CIE 1931 2-degree colour matching functions
+ *   (Wyman, Sloan & Shirley 2013 multi-lobe Gaussian fit) to XYZ, converted to
+ *   linear sRGB, then divided per channel by the rgb of the constant spectrum 1,
+ *   so a constant spectrum c gives rgb (c, c, c). This makes reflectances and
+ *   grey media behave as their rgb equivalents.
+ * - A blackbody of temperature T (kelvin) gives the linear sRGB of Planck's law,
+ *   scaled to luminance Y = 1. pbrt-v4 normalises a blackbody to peak 1 and then
+ *   every light divides by the spectrum's luminance (SpectrumToPhotometric), so
+ *   a "blackbody L" light with scale 1 has luminance 1, as an rgb (1,1,1) light
+ *   does: the renderer gets the same radiance as pbrt-v4. */
+#ifndef HAZE_SCENE_SPECTRUM_H
+#define HAZE_SCENE_SPECTRUM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#include "core/vec.h"
+
+/* Wavelengths must be strictly increasing (checked by the caller); n >= 1. */
+rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n);
+/* T > 0. */
+rgb spectrum_blackbody_to_rgb(double kelvin);
+/* CIE 1931 colour matching functions (the analytic fit), lambda in nm. */
+vec3 spectrum_cie_xyz(double lambda);
+rgb spectrum_srgb_from_xyz(vec3 xyz);
+
+#endif

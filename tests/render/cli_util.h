@@ -1,0 +1,64 @@
+/* Helpers for tests that run the haze executable. */
+#ifndef HAZE_TESTS_CLI_UTIL_H
+#define HAZE_TESTS_CLI_UTIL_H
+
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/wait.h>
+
+/* Runs `haze ARGS` (a shell fragment), captures stdout+stderr into out (if not
+ * NULL) and returns the exit status (-1 if it did not exit normally). */
+static inline int run_haze(const char *args, char *out, size_t out_size)
+{
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", HAZE_BIN, args);
+    FILE *p = popen(cmd, "r");
+    if (!p)
+        return -1;
+    size_t n = 0;
+    char buf[4096];
+    size_t got;
+    while ((got = fread(buf, 1, sizeof buf, p)) > 0) {
+        if (out && n + 1 < out_size) {
+            size_t take = got < out_size - n - 1 ? got : out_size - n - 1;
+            memcpy(out + n, buf, take);
+            n += take;
+        }
+    }
+    if (out && out_size)
+        out[n] = '\0';
+    int status = pclose(p);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+static inline void write_text_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    if (!f)
+        abort();
+    fputs(text, f);
+    fclose(f);
+}
+
+/* Reads a whole file; returns malloc'd bytes (caller frees) or NULL. */
+static inline unsigned char *read_whole_file(const char *path, size_t *size)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *buf = malloc(n > 0 ? (size_t)n : 1);
+    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) {
+        free(buf);
+        buf = NULL;
+    }
+    fclose(f);
+    *size = (size_t)n;
+    return buf;
+}
+
+#endif

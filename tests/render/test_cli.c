@@ -1,0 +1,158 @@
+#define _POSIX_C_SOURCE 200809L
+/* The command line as users meet it: exit codes, one-line errors with
+ * file:line:column, outputs, and thread-count independence. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include "cli_util.h"
+
+#include <unistd.h>
+
+static const char small_scene[] =
+    "LookAt 0 1 -3  0 0.5 0  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 50\n"
+    "Film \"rgb\" \"integer xresolution\" 48 \"integer yresolution\" 32\n"
+    "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
+    "WorldBegin\n"
+    "LightSource \"point\" \"point3 from\" [1 2 -1] \"rgb I\" [3 3 3]\n"
+    "AttributeBegin\n"
+    "  AreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\n"
+    "  Shape \"trianglemesh\" \"integer indices\" [0 1 2]\n"
+    "    \"point3 P\" [-0.5 1.5 0.5  0.5 1.5 0.5  0 1.5 1]\n"
+    "AttributeEnd\n"
+    "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+    "  \"point3 P\" [-2 0 -2  2 0 -2  2 0 2  -2 0 2]\n"
+    "Shape \"sphere\" \"float radius\" 0.4\n";
+
+static char scene_path[1024];
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(scene_path, sizeof scene_path, "%s/cli_small.pbrt", HAZE_TMP);
+    write_text_file(scene_path, small_scene);
+    return 0;
+}
+
+static void test_version_and_help(void **state)
+{
+    (void)state;
+    char out[4096];
+    assert_int_equal(run_haze("--version", out, sizeof out), 0);
+    assert_non_null(strstr(out, "haze "));
+    assert_int_equal(run_haze("--help", out, sizeof out), 0);
+    assert_non_null(strstr(out, "haze render"));
+}
+
+static void test_usage_errors_exit_2(void **state)
+{
+    (void)state;
+    char out[4096];
+    assert_int_equal(run_haze("", out, sizeof out), 2);
+    assert_int_equal(run_haze("frobnicate", out, sizeof out), 2);
+    assert_int_equal(run_haze("render", out, sizeof out), 2);
+    assert_int_equal(run_haze("render x.pbrt --spp", out, sizeof out), 2);
+    assert_int_equal(run_haze("render x.pbrt --spp zero", out, sizeof out), 2);
+    assert_non_null(strstr(out, "--spp"));
+    assert_int_equal(run_haze("render x.pbrt --threads 0", out, sizeof out), 2);
+    assert_int_equal(run_haze("render x.pbrt --bogus", out, sizeof out), 2);
+    assert_non_null(strstr(out, "--bogus"));
+}
+
+static void test_missing_scene_exit_1(void **state)
+{
+    (void)state;
+    char out[4096];
+    assert_int_equal(run_haze("render /nonexistent/nothing.pbrt", out, sizeof out), 1);
+    assert_non_null(strstr(out, "nothing.pbrt"));
+}
+
+static void test_scene_error_names_place(void **state)
+{
+    (void)state;
+    char path[1024], args[2048], out[4096], expect[1200];
+    snprintf(path, sizeof path, "%s/cli_bad.pbrt", HAZE_TMP);
+    write_text_file(path, "Camera \"perspective\"\nWorldBegin\n  Shpe \"sphere\"\n");
+    snprintf(args, sizeof args, "render '%s' -o '%s/bad.exr'", path, HAZE_TMP);
+    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    snprintf(expect, sizeof expect, "%s:3:3:", path);
+    assert_non_null(strstr(out, expect));
+    /* One line. */
+    assert_non_null(strchr(out, '\n'));
+    assert_null(strchr(strchr(out, '\n') + 1, '\n'));
+
+    /* Unused parameter: named with its place. */
+    write_text_file(path, "Camera \"perspective\" \"float fvo\" 30\nWorldBegin\n");
+    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    snprintf(expect, sizeof expect, "%s:1:22:", path);
+    assert_non_null(strstr(out, expect));
+    assert_non_null(strstr(out, "fvo"));
+}
+
+static void test_threads_bit_identical(void **state)
+{
+    (void)state;
+    char a[1024], b[1024], args[4096], out[4096];
+    snprintf(a, sizeof a, "%s/cli_t1.exr", HAZE_TMP);
+    snprintf(b, sizeof b, "%s/cli_t2.exr", HAZE_TMP);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --threads 1 --quiet", scene_path, a);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --threads 2 --quiet", scene_path, b);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    size_t na, nb;
+    unsigned char *da = read_whole_file(a, &na), *db = read_whole_file(b, &nb);
+    assert_non_null(da);
+    assert_non_null(db);
+    assert_true(na > 1000);
+    assert_int_equal(na, nb);
+    assert_memory_equal(da, db, na);
+    free(da);
+    free(db);
+}
+
+static void test_output_dir_missing_exit_1(void **state)
+{
+    (void)state;
+    char args[4096], out[4096];
+    snprintf(args, sizeof args, "render '%s' -o /nonexistent-dir/x.exr --quiet", scene_path);
+    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    assert_non_null(strstr(out, "/nonexistent-dir"));
+}
+
+static void test_summary_and_preview(void **state)
+{
+    (void)state;
+    char exr[1024], png[1024], args[4096], out[8192];
+    snprintf(exr, sizeof exr, "%s/cli_sum.exr", HAZE_TMP);
+    snprintf(png, sizeof png, "%s/cli_sum.png", HAZE_TMP);
+    unlink(png);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --preview '%s' --spp 2", scene_path, exr, png);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "48x32"));
+    assert_non_null(strstr(out, "2 spp"));
+    assert_non_null(strstr(out, "Mrays/s"));
+    assert_non_null(strstr(out, "peak memory"));
+    size_t n;
+    unsigned char *d = read_whole_file(png, &n);
+    assert_non_null(d);
+    assert_true(n > 8);
+    assert_memory_equal(d, "\x89PNG", 4);
+    free(d);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_version_and_help),
+        cmocka_unit_test(test_usage_errors_exit_2),
+        cmocka_unit_test(test_missing_scene_exit_1),
+        cmocka_unit_test(test_scene_error_names_place),
+        cmocka_unit_test(test_threads_bit_identical),
+        cmocka_unit_test(test_output_dir_missing_exit_1),
+        cmocka_unit_test(test_summary_and_preview),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}
