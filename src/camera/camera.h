@@ -51,7 +51,7 @@ typedef struct {
     double shutter_open, shutter_close;
     double screen_window[4];      /* xmin xmax ymin ymax */
     double lens_radius, focal_distance;
-    double fov;                   /* degrees across the screen window's shorter extent (perspective) */
+    double fov;                   /* degrees, perspective: spans the window's shorter extent */
     int blades;                   /* 0 = round aperture, >= 3 = regular polygon */
     double blade_rotation;        /* degrees */
     int xres, yres;

@@ -36,7 +36,10 @@ vec3 sample_cosine_hemisphere(vec2 u);
 static inline double cosine_hemisphere_pdf(double cos_theta) { return cos_theta * HZ_INV_PI; }
 /* Uniform over the cone of directions around +z with cos(theta) >= cos_max. */
 vec3 sample_uniform_cone(vec2 u, double cos_max);
-static inline double uniform_cone_pdf(double cos_max) { return 1.0 / (2.0 * HZ_PI * (1.0 - cos_max)); }
+static inline double uniform_cone_pdf(double cos_max)
+{
+    return 1.0 / (2.0 * HZ_PI * (1.0 - cos_max));
+}
 
 /* Exponential distance with rate a (pdf a e^{-a x}); u in [0,1). */
 double sample_exponential(double u, double a);

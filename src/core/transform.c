@@ -104,8 +104,13 @@ transform transform_compose(transform a_from_b, transform b_from_c)
 
 bool transform_is_identity(transform t)
 {
-    mat4 id = mat4_identity();
-    return memcmp(&t.m, &id, sizeof id) == 0;
+    /* Compare values, not bytes: products of exact transforms leave -0.0 entries
+     * (e.g. Scale(-1,1,1) twice), which are still the identity. */
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            if (t.m.m[i][j] != (i == j ? 1.0 : 0.0))
+                return false;
+    return true;
 }
 
 transform transform_translate(vec3 d)

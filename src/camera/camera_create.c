@@ -1,0 +1,151 @@
+/* camera_create: reads a Camera directive's parameters into a camera_config
+ * (pbrt-v4's PerspectiveCamera::Create / OrthographicCamera::Create plus haze's
+ * physical-lens parameters) and reports every problem at its file:line:column. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "camera/camera.h"
+#include "camera/lens.h"
+#include "scene/params.h"
+
+/* Fails at the parameter's own place (the directive's when it is absent). */
+static hz_status fail_param(hz_error *err, const scene_entity *ent, const char *name,
+                            const char *message)
+{
+    file_loc loc = name[0] && params_has(&ent->params, name) ? params_loc(&ent->params, name)
+                                                             : ent->loc;
+    return hz_fail_at(err, loc, "%s", message);
+}
+
+static bool positive_finite(double v) { return isfinite(v) && v > 0.0; }
+
+/* Physical lens (haze extension): focallength [mm], sensorwidth [mm] along the
+ * frame's longer axis and fstop give fov and the lens radius in metres. */
+static hz_status read_physical_lens(scene_entity *ent, double frame, camera_config *cfg,
+                                    hz_error *err)
+{
+    param_list *pl = &ent->params;
+    char msg[256];
+    if (params_has(pl, "fov"))
+        return fail_param(err, ent, "fov",
+                          "give either \"fov\" or \"focallength\" for a perspective camera, "
+                          "not both");
+    double fl = params_float(pl, "focallength", 50.0);
+    double sensor = params_float(pl, "sensorwidth", 36.0);
+    if (!positive_finite(fl)) {
+        snprintf(msg, sizeof msg, "\"focallength\" must be finite and > 0 (millimetres), got %g",
+                 fl);
+        return fail_param(err, ent, "focallength", msg);
+    }
+    if (!positive_finite(sensor)) {
+        snprintf(msg, sizeof msg, "\"sensorwidth\" must be finite and > 0 (millimetres), got %g",
+                 sensor);
+        return fail_param(err, ent, "sensorwidth", msg);
+    }
+    cfg->fov = lens_fov_from_focal_length(fl, sensor, frame);
+    if (!(cfg->fov > 0.0 && cfg->fov < 180.0)) {
+        snprintf(msg, sizeof msg,
+                 "\"focallength\" %g mm with sensor width %g mm gives an unusable field of "
+                 "view (%g degrees)",
+                 fl, sensor, cfg->fov);
+        return fail_param(err, ent, "focallength", msg);
+    }
+    if (params_has(pl, "fstop")) {
+        if (params_has(pl, "lensradius"))
+            return fail_param(err, ent, "fstop",
+                              "give either \"lensradius\" or \"fstop\", not both");
+        double fstop = params_float(pl, "fstop", 0.0);
+        if (!positive_finite(fstop)) {
+            snprintf(msg, sizeof msg, "\"fstop\" must be finite and > 0, got %g", fstop);
+            return fail_param(err, ent, "fstop", msg);
+        }
+        cfg->lens_radius = lens_radius_from_fstop(fl, fstop);
+    }
+    return HZ_OK;
+}
+
+hz_status camera_create(camera_entity *e, const film_params *film, camera *out, hz_error *err)
+{
+    scene_entity *ent = &e->entity;
+    param_list *pl = &ent->params;
+    camera_kind kind;
+    if (strcmp(ent->type, "perspective") == 0)
+        kind = CAMERA_PERSPECTIVE;
+    else if (strcmp(ent->type, "orthographic") == 0)
+        kind = CAMERA_ORTHOGRAPHIC;
+    else
+        return hz_fail_at(err, ent->loc,
+                          "camera type \"%s\" is not supported (haze supports \"perspective\" "
+                          "and \"orthographic\")",
+                          ent->type);
+    if (film->xres < 1 || film->yres < 1)
+        return hz_fail_at(err, ent->loc, "film resolution %dx%d must be at least 1x1",
+                          film->xres, film->yres);
+
+    /* Motion blur is a separate issue; until then an animated camera is refused
+     * rather than silently rendered at its start position. */
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j)
+            if (e->camera_from_world.m.m[i][j] != e->camera_from_world_end.m.m[i][j])
+                return hz_fail_at(err, ent->loc,
+                                  "animated camera transforms (TransformTimes/ActiveTransform) "
+                                  "are not supported yet");
+
+    char msg[256];
+    camera_config cfg = camera_config_default(kind, film->xres, film->yres);
+    cfg.camera_from_world = e->camera_from_world;
+    cfg.shutter_open = params_float(pl, "shutteropen", cfg.shutter_open);
+    cfg.shutter_close = params_float(pl, "shutterclose", cfg.shutter_close);
+    cfg.lens_radius = params_float(pl, "lensradius", cfg.lens_radius);
+    cfg.focal_distance = params_float(pl, "focaldistance", cfg.focal_distance);
+    double frame = params_float(pl, "frameaspectratio", (double)film->xres / (double)film->yres);
+    if (!positive_finite(frame)) {
+        snprintf(msg, sizeof msg, "\"frameaspectratio\" must be finite and > 0, got %g", frame);
+        return fail_param(err, ent, "frameaspectratio", msg);
+    }
+    camera_screen_window_from_frame(frame, cfg.screen_window);
+    size_t n = 0;
+    const double *sw = params_floats(pl, "screenwindow", &n);
+    if (sw) {
+        if (n != 4) {
+            snprintf(msg, sizeof msg,
+                     "\"screenwindow\" takes four values (xmin xmax ymin ymax), got %zu", n);
+            return fail_param(err, ent, "screenwindow", msg);
+        }
+        memcpy(cfg.screen_window, sw, sizeof cfg.screen_window);
+    }
+
+    bool physical = kind == CAMERA_PERSPECTIVE && params_has(pl, "focallength");
+    if (kind == CAMERA_PERSPECTIVE) {
+        if (physical) {
+            if (read_physical_lens(ent, frame, &cfg, err))
+                return HZ_ERROR;
+        } else if (params_has(pl, "fstop")) {
+            return fail_param(err, ent, "fstop", "\"fstop\" needs \"focallength\"");
+        } else {
+            cfg.fov = params_float(pl, "fov", cfg.fov);
+        }
+    }
+    cfg.blades = params_int(pl, "blades", cfg.blades);
+    cfg.blade_rotation = params_float(pl, "bladerotation", cfg.blade_rotation);
+
+    char what[160];
+    snprintf(what, sizeof what, "Camera \"%s\"", ent->type);
+    if (params_finish(pl, what, err))
+        return HZ_ERROR;
+
+    hz_error why;
+    const char *bad = camera_config_check(&cfg, &why);
+    if (bad) {
+        /* Values derived from the physical lens are blamed on what the user wrote. */
+        if (physical && strcmp(bad, "fov") == 0)
+            bad = "focallength";
+        if (physical && strcmp(bad, "lensradius") == 0 && params_has(pl, "fstop"))
+            bad = "fstop";
+        return fail_param(err, ent, bad, why.message);
+    }
+    if (camera_init(&cfg, out, &why))
+        return hz_fail_at(err, ent->loc, "%s", why.message);
+    return HZ_OK;
+}

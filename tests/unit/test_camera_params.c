@@ -1,0 +1,466 @@
+/* camera_create: reading a Camera directive's parameters through the param API,
+ * pbrt-v4's defaults, haze's physical-lens parameters, and errors that name
+ * file:line:column. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "camera/camera.h"
+#include "scene/params.h"
+
+static void assert_near(double got, double want, double tol)
+{
+    if (!(fabs(got - want) <= tol))
+        fail_msg("got %.17g, want %.17g (tolerance %g)", got, want, tol);
+}
+
+static char *dup(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    assert_non_null(d);
+    memcpy(d, s, n);
+    return d;
+}
+
+typedef struct {
+    camera_entity e;
+    char type[32];
+} fixture;
+
+static void fixture_init(fixture *f, const char *type)
+{
+    memset(f, 0, sizeof *f);
+    strcpy(f->type, type);
+    f->e.entity.type = f->type;
+    f->e.entity.loc = (file_loc){"scene.pbrt", 3, 1};
+    params_init(&f->e.entity.params, f->e.entity.loc);
+    f->e.camera_from_world = transform_identity();
+    f->e.camera_from_world_end = transform_identity();
+    f->e.medium = NULL;
+}
+
+/* Adds a numeric parameter declared at scene.pbrt:line:column. */
+static void add_nums(fixture *f, param_type type, const char *name, int line, int column,
+                     size_t count, const double *values)
+{
+    param p;
+    memset(&p, 0, sizeof p);
+    p.type = type;
+    p.name = dup(name);
+    p.loc = (file_loc){"scene.pbrt", line, column};
+    p.count = count;
+    p.nums = malloc(count * sizeof *p.nums);
+    assert_non_null(p.nums);
+    memcpy(p.nums, values, count * sizeof *p.nums);
+    hz_error err;
+    assert_int_equal(params_add(&f->e.entity.params, p, &err), HZ_OK);
+}
+
+static void add_float(fixture *f, const char *name, int line, int column, double v)
+{
+    add_nums(f, PARAM_FLOAT, name, line, column, 1, &v);
+}
+
+static void add_int(fixture *f, const char *name, int line, int column, int v)
+{
+    double d = v;
+    add_nums(f, PARAM_INTEGER, name, line, column, 1, &d);
+}
+
+static film_params film_of(int xres, int yres)
+{
+    film_params fp;
+    memset(&fp, 0, sizeof fp);
+    fp.xres = xres;
+    fp.yres = yres;
+    fp.bounds = (pixel_bounds){0, 0, xres, yres};
+    fp.iso = 100;
+    return fp;
+}
+
+static camera create_ok(fixture *f, film_params fp)
+{
+    camera c;
+    hz_error err = {{0}};
+    if (camera_create(&f->e, &fp, &c, &err) != HZ_OK)
+        fail_msg("camera_create: %s", err.message);
+    params_free(&f->e.entity.params);
+    return c;
+}
+
+static void expect_error(fixture *f, film_params fp, const char *want)
+{
+    camera c;
+    hz_error err = {{0}};
+    assert_int_equal(camera_create(&f->e, &fp, &c, &err), HZ_ERROR);
+    if (strcmp(err.message, want) != 0)
+        fail_msg("message\n  \"%s\"\nwanted\n  \"%s\"", err.message, want);
+    params_free(&f->e.entity.params);
+}
+
+static void test_defaults_are_pbrt_v4s(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "perspective");
+    camera c = create_ok(&f, film_of(200, 100));
+    assert_int_equal(c.kind, CAMERA_PERSPECTIVE);
+    assert_near(c.fov, 90, 0);
+    assert_near(c.lens_radius, 0, 0);
+    assert_near(c.focal_distance, 1e6, 0);
+    assert_near(c.shutter_open, 0, 0);
+    assert_near(c.shutter_close, 1, 0);
+    assert_int_equal(c.medium, -1);
+    assert_int_equal(c.blades, 0);
+    const double w[4] = {-2, 2, -1, 1};
+    for (int i = 0; i < 4; ++i)
+        assert_near(c.screen_window[i], w[i], 0);
+    assert_int_equal(c.xres, 200);
+    assert_int_equal(c.yres, 100);
+
+    fixture_init(&f, "orthographic");
+    c = create_ok(&f, film_of(100, 400));
+    assert_int_equal(c.kind, CAMERA_ORTHOGRAPHIC);
+    const double wp[4] = {-1, 1, -4, 4};
+    for (int i = 0; i < 4; ++i)
+        assert_near(c.screen_window[i], wp[i], 0);
+}
+
+static void test_every_parameter_is_read(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "perspective");
+    add_float(&f, "fov", 4, 5, 30);
+    add_float(&f, "lensradius", 5, 5, 0.1);
+    add_float(&f, "focaldistance", 6, 5, 4);
+    add_float(&f, "shutteropen", 7, 5, 0.2);
+    add_float(&f, "shutterclose", 8, 5, 0.7);
+    add_nums(&f, PARAM_FLOAT, "screenwindow", 9, 5, 4, (const double[]){-1, 3, -0.5, 0.25});
+    add_int(&f, "blades", 10, 5, 5);
+    add_float(&f, "bladerotation", 11, 5, 30);
+    transform cfw;
+    assert_true(transform_look_at(v3(1, 2, 3), v3(1, 2, 4), v3(0, 1, 0), &cfw));
+    f.e.camera_from_world = cfw;
+    f.e.camera_from_world_end = cfw;
+    film_params fp = film_of(64, 64);
+    fp.iso = 400;
+    camera c = create_ok(&f, fp);
+    assert_near(c.fov, 30, 0);
+    assert_near(c.lens_radius, 0.1, 0);
+    assert_near(c.focal_distance, 4, 0);
+    assert_near(c.shutter_open, 0.2, 0);
+    assert_near(c.shutter_close, 0.7, 0);
+    const double w[4] = {-1, 3, -0.5, 0.25};
+    for (int i = 0; i < 4; ++i)
+        assert_near(c.screen_window[i], w[i], 0);
+    assert_int_equal(c.blades, 5);
+    assert_near(c.blade_rotation, HZ_PI / 6, 1e-15);
+    assert_near(camera_imaging_ratio(&c, &fp), 0.5 * 4, 1e-15);
+    /* Render space: the camera at (1,2,3) is the origin. */
+    vec3 o = transform_point(&c.world_from_render, v3(0, 0, 0));
+    assert_near(o.x, 1, 0);
+    assert_near(o.y, 2, 0);
+    assert_near(o.z, 3, 0);
+}
+
+static void test_frame_aspect_ratio(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "perspective");
+    add_float(&f, "frameaspectratio", 4, 5, 0.5);
+    camera c = create_ok(&f, film_of(200, 100));
+    const double w[4] = {-1, 1, -2, 2};
+    for (int i = 0; i < 4; ++i)
+        assert_near(c.screen_window[i], w[i], 0);
+}
+
+static void test_physical_lens(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "perspective");
+    add_float(&f, "focallength", 4, 5, 50);
+    add_float(&f, "fstop", 5, 5, 2);
+    camera c = create_ok(&f, film_of(300, 200));
+    /* 36 mm along 300 px, so 24 mm along the shorter 200 px. */
+    assert_near(c.fov, 2 * atan(12.0 / 50.0) * 180 / HZ_PI, 1e-12);
+    assert_near(c.lens_radius, 0.0125, 1e-16);
+
+    fixture_init(&f, "perspective");
+    add_float(&f, "focallength", 4, 5, 35);
+    add_float(&f, "sensorwidth", 5, 5, 24);
+    add_float(&f, "lensradius", 6, 5, 0.01);
+    c = create_ok(&f, film_of(100, 200)); /* portrait: 12 mm along x */
+    assert_near(c.fov, 2 * atan(6.0 / 35.0) * 180 / HZ_PI, 1e-12);
+    assert_near(c.lens_radius, 0.01, 0);
+
+    fixture_init(&f, "perspective");
+    add_float(&f, "focallength", 4, 5, 35);
+    c = create_ok(&f, film_of(100, 100));
+    assert_near(c.lens_radius, 0, 0); /* a pinhole unless told otherwise */
+}
+
+static void test_physical_lens_errors(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "perspective");
+    add_float(&f, "fov", 4, 5, 40);
+    add_float(&f, "focallength", 5, 7, 50);
+    expect_error(&f, film_of(10, 10),
+                 "scene.pbrt:4:5: give either \"fov\" or \"focallength\" for a perspective "
+                 "camera, not both");
+
+    fixture_init(&f, "perspective");
+    add_float(&f, "fstop", 6, 2, 2.8);
+    expect_error(&f, film_of(10, 10), "scene.pbrt:6:2: \"fstop\" needs \"focallength\"");
+
+    fixture_init(&f, "perspective");
+    add_float(&f, "focallength", 5, 7, 50);
+    add_float(&f, "fstop", 6, 2, 2.8);
+    add_float(&f, "lensradius", 7, 2, 0.1);
+    expect_error(&f, film_of(10, 10),
+                 "scene.pbrt:6:2: give either \"lensradius\" or \"fstop\", not both");
+
+    fixture_init(&f, "perspective");
+    add_float(&f, "focallength", 5, 7, -50);
+    expect_error(&f, film_of(10, 10),
+                 "scene.pbrt:5:7: \"focallength\" must be finite and > 0 (millimetres), got -50");
+
+    fixture_init(&f, "perspective");
+    add_float(&f, "focallength", 5, 7, 50);
+    add_float(&f, "fstop", 6, 2, 0);
+    expect_error(&f, film_of(10, 10), "scene.pbrt:6:2: \"fstop\" must be finite and > 0, got 0");
+
+    fixture_init(&f, "perspective");
+    add_float(&f, "focallength", 5, 7, 50);
+    add_float(&f, "sensorwidth", 8, 3, 0);
+    expect_error(&f, film_of(10, 10),
+                 "scene.pbrt:8:3: \"sensorwidth\" must be finite and > 0 (millimetres), got 0");
+
+    /* sensorwidth means nothing without a focal length. */
+    fixture_init(&f, "perspective");
+    add_float(&f, "sensorwidth", 8, 3, 24);
+    expect_error(
+        &f, film_of(10, 10),
+        "scene.pbrt:8:3: unused parameter \"float sensorwidth\" for Camera \"perspective\"");
+}
+
+static void test_unsupported_type(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "realistic");
+    expect_error(&f, film_of(10, 10),
+                 "scene.pbrt:3:1: camera type \"realistic\" is not supported (haze supports "
+                 "\"perspective\" and \"orthographic\")");
+    fixture_init(&f, "spherical");
+    expect_error(&f, film_of(10, 10),
+                 "scene.pbrt:3:1: camera type \"spherical\" is not supported (haze supports "
+                 "\"perspective\" and \"orthographic\")");
+}
+
+static void test_illegal_values_name_their_place(void **state)
+{
+    (void)state;
+    struct {
+        const char *name;
+        double value;
+        const char *want;
+    } cases[] = {
+        {"fov", 0, "scene.pbrt:12:9: \"fov\" must be in (0, 180) degrees, got 0"},
+        {"fov", 180, "scene.pbrt:12:9: \"fov\" must be in (0, 180) degrees, got 180"},
+        {"fov", -3, "scene.pbrt:12:9: \"fov\" must be in (0, 180) degrees, got -3"},
+        {"fov", INFINITY, "scene.pbrt:12:9: \"fov\" must be in (0, 180) degrees, got inf"},
+        {"lensradius", -0.5, "scene.pbrt:12:9: \"lensradius\" must be finite and >= 0, got -0.5"},
+        {"focaldistance", 0, "scene.pbrt:12:9: \"focaldistance\" must be finite and > 0, got 0"},
+        {"focaldistance", -2, "scene.pbrt:12:9: \"focaldistance\" must be finite and > 0, got -2"},
+        {"focaldistance", NAN,
+         "scene.pbrt:12:9: \"focaldistance\" must be finite and > 0, got nan"},
+        {"frameaspectratio", 0,
+         "scene.pbrt:12:9: \"frameaspectratio\" must be finite and > 0, got 0"},
+        {"shutteropen", 2, "scene.pbrt:12:9: \"shutteropen\" 2 is after \"shutterclose\" 1"},
+        {"bladerotation", NAN, "scene.pbrt:12:9: \"bladerotation\" must be finite, got nan"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
+        fixture f;
+        fixture_init(&f, "perspective");
+        add_float(&f, cases[i].name, 12, 9, cases[i].value);
+        expect_error(&f, film_of(32, 32), cases[i].want);
+    }
+    const int bad_blades[] = {1, 2, -1};
+    for (size_t i = 0; i < 3; ++i) {
+        fixture f;
+        fixture_init(&f, "orthographic");
+        add_int(&f, "blades", 14, 3, bad_blades[i]);
+        char want[200];
+        snprintf(want, sizeof want,
+                 "scene.pbrt:14:3: \"blades\" must be 0 (round aperture) or at least 3, got %d",
+                 bad_blades[i]);
+        expect_error(&f, film_of(32, 32), want);
+    }
+}
+
+static void test_screen_window_errors(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "orthographic");
+    add_nums(&f, PARAM_FLOAT, "screenwindow", 9, 5, 3, (const double[]){-1, 1, 0});
+    expect_error(&f, film_of(32, 32),
+                 "scene.pbrt:9:5: \"screenwindow\" takes four values (xmin xmax ymin ymax), got 3");
+    fixture_init(&f, "orthographic");
+    add_nums(&f, PARAM_FLOAT, "screenwindow", 9, 5, 4, (const double[]){1, 1, -1, 1});
+    expect_error(&f, film_of(32, 32),
+                 "scene.pbrt:9:5: \"screenwindow\" [1 1 -1 1] has an empty extent (need xmin < "
+                 "xmax and ymin < ymax)");
+    fixture_init(&f, "perspective");
+    add_nums(&f, PARAM_FLOAT, "screenwindow", 9, 5, 4, (const double[]){-1, 1, 1, -1});
+    expect_error(&f, film_of(32, 32),
+                 "scene.pbrt:9:5: \"screenwindow\" [-1 1 1 -1] has an empty extent (need xmin < "
+                 "xmax and ymin < ymax)");
+}
+
+static void test_unknown_and_mistyped_parameters(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "perspective");
+    add_float(&f, "fvo", 4, 9, 40);
+    expect_error(&f, film_of(32, 32),
+                 "scene.pbrt:4:9: unused parameter \"float fvo\" for Camera \"perspective\"");
+    /* pbrt-v4 dropped pbrt-v3's "halffov". */
+    fixture_init(&f, "perspective");
+    add_float(&f, "halffov", 4, 9, 20);
+    expect_error(&f, film_of(32, 32),
+                 "scene.pbrt:4:9: unused parameter \"float halffov\" for Camera \"perspective\"");
+    /* An orthographic camera has no field of view. */
+    fixture_init(&f, "orthographic");
+    add_float(&f, "fov", 4, 9, 20);
+    expect_error(&f, film_of(32, 32),
+                 "scene.pbrt:4:9: unused parameter \"float fov\" for Camera \"orthographic\"");
+    /* Types are strict, as in pbrt-v4; the message is the param module's. */
+    fixture_init(&f, "perspective");
+    add_int(&f, "fov", 4, 9, 20);
+    camera c;
+    hz_error err = {{0}};
+    film_params fp = film_of(32, 32);
+    assert_int_equal(camera_create(&f.e, &fp, &c, &err), HZ_ERROR);
+    if (!strstr(err.message, "scene.pbrt:4:9: ") || !strstr(err.message, "fov"))
+        fail_msg("unexpected message \"%s\"", err.message);
+    params_free(&f.e.entity.params);
+}
+
+static void test_created_camera_makes_rays(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "perspective");
+    add_float(&f, "fov", 4, 5, 60);
+    transform cfw;
+    assert_true(transform_look_at(v3(5e6, 0, 0), v3(5e6, 0, 10), v3(0, 1, 0), &cfw));
+    f.e.camera_from_world = cfw;
+    f.e.camera_from_world_end = cfw;
+    camera c = create_ok(&f, film_of(100, 50));
+    ray r;
+    assert_true(camera_generate_ray(&c, (camera_sample){v2(50, 0), v2(0.5, 0.5), 0.5, 1}, &r));
+    assert_near(r.o.x, 0, 0);
+    assert_near(atan2(r.d.y, r.d.z) * 180 / HZ_PI, 30, 1e-9);
+}
+
+/* Through the real parser: the places are those of the scene text. */
+static hz_status create_from_text(const char *text, int xres, int yres, camera *c, hz_error *err)
+{
+    scene_desc sd;
+    if (scene_parse_string(text, "t.pbrt", &sd, err) != HZ_OK)
+        fail_msg("parse: %s", err->message);
+    film_params fp = film_of(xres, yres);
+    hz_status st = camera_create(&sd.camera, &fp, c, err);
+    scene_desc_free(&sd);
+    return st;
+}
+
+static void test_from_scene_text(void **state)
+{
+    (void)state;
+    camera c;
+    hz_error err = {{0}};
+    assert_int_equal(create_from_text("LookAt 0 0 -5  0 0 0  0 1 0\n"
+                                      "Camera \"perspective\"\n"
+                                      "  \"float fov\" [ 0 ]\n"
+                                      "WorldBegin\n",
+                                      10, 10, &c, &err),
+                     HZ_ERROR);
+    assert_string_equal(err.message, "t.pbrt:3:3: \"fov\" must be in (0, 180) degrees, got 0");
+
+    assert_int_equal(create_from_text("Camera \"realistic\" \"string lensfile\" \"x.dat\"\n"
+                                      "WorldBegin\n",
+                                      10, 10, &c, &err),
+                     HZ_ERROR);
+    assert_string_equal(err.message, "t.pbrt:1:1: camera type \"realistic\" is not supported "
+                                     "(haze supports \"perspective\" and \"orthographic\")");
+
+    assert_int_equal(create_from_text("Camera \"orthographic\" \"float lensradius\" 0.5\n"
+                                      "    \"float focaldistance\" -1\nWorldBegin\n",
+                                      10, 10, &c, &err),
+                     HZ_ERROR);
+    assert_string_equal(err.message,
+                        "t.pbrt:2:5: \"focaldistance\" must be finite and > 0, got -1");
+
+    assert_int_equal(create_from_text("ActiveTransform EndTime\nTranslate 1 0 0\n"
+                                      "ActiveTransform All\nCamera \"perspective\"\n"
+                                      "WorldBegin\n",
+                                      10, 10, &c, &err),
+                     HZ_ERROR);
+    assert_string_equal(err.message, "t.pbrt:4:1: animated camera transforms "
+                                     "(TransformTimes/ActiveTransform) are not supported yet");
+
+    /* A LookAt camera far from the origin, with a physical lens. */
+    assert_int_equal(create_from_text("LookAt 1e7 0 0  1e7 0 1  0 1 0\n"
+                                      "Camera \"perspective\" \"float focallength\" 50\n"
+                                      "  \"float fstop\" 4 \"integer blades\" 6\n"
+                                      "WorldBegin\n",
+                                      300, 200, &c, &err),
+                     HZ_OK);
+    assert_near(c.fov, 2 * atan(12.0 / 50.0) * 180 / HZ_PI, 1e-12);
+    assert_near(c.lens_radius, 0.00625, 1e-16);
+    assert_int_equal(c.blades, 6);
+    assert_near(transform_point(&c.world_from_render, v3(0, 0, 0)).x, 1e7, 0);
+    ray r;
+    camera_generate_ray(&c, (camera_sample){v2(150, 100), v2(0.5, 0.5), 0.5, 1}, &r);
+    /* Through the image centre: the lens ray starts on the hexagon and aims at
+     * the optical axis at the default focal distance 1e6. */
+    assert_true(hypot(r.o.x, r.o.y) <= 0.00625 * (1 + 1e-12));
+    assert_near(r.o.z, 0, 1e-12);
+    vec3 focus = ray_at(&r, (1e6 - r.o.z) / r.d.z);
+    assert_near(focus.x, 0, 1e-6);
+    assert_near(focus.y, 0, 1e-6);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults_are_pbrt_v4s),
+        cmocka_unit_test(test_every_parameter_is_read),
+        cmocka_unit_test(test_frame_aspect_ratio),
+        cmocka_unit_test(test_physical_lens),
+        cmocka_unit_test(test_physical_lens_errors),
+        cmocka_unit_test(test_unsupported_type),
+        cmocka_unit_test(test_illegal_values_name_their_place),
+        cmocka_unit_test(test_screen_window_errors),
+        cmocka_unit_test(test_unknown_and_mistyped_parameters),
+        cmocka_unit_test(test_created_camera_makes_rays),
+        cmocka_unit_test(test_from_scene_text),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
