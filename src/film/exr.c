@@ -241,11 +241,19 @@ static hz_status exr_write_context(const char *path, const char *tmp, const exr_
     qsort(sorted, (size_t)nc, sizeof *sorted, cmp_channel_name);
 
     int part = 0;
-    exr_attr_box2i_t dispw = {{{0, 0}}, {{img->display_width - 1, img->display_height - 1}}};
-    exr_attr_box2i_t dataw = {{{img->data_x0, img->data_y0}},
-                              {{img->data_x0 + img->width - 1, img->data_y0 + img->height - 1}}};
-    exr_attr_v2f_t swc = {{{0.f, 0.f}}};
-    if ((rv = exr_add_part(ctx, "main", EXR_STORAGE_SCANLINE, &part)) ||
+    exr_attr_box2i_t dispw, dataw;
+    exr_attr_v2f_t swc;
+    dispw.min.x = 0;
+    dispw.min.y = 0;
+    dispw.max.x = img->display_width - 1;
+    dispw.max.y = img->display_height - 1;
+    dataw.min.x = img->data_x0;
+    dataw.min.y = img->data_y0;
+    dataw.max.x = img->data_x0 + img->width - 1;
+    dataw.max.y = img->data_y0 + img->height - 1;
+    swc.x = 0.f;
+    swc.y = 0.f;
+    if ((rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part)) ||
         (rv = exr_initialize_required_attr(ctx, part, &dispw, &dataw, 1.f, &swc, 1.f,
                                            EXR_LINEORDER_INCREASING_Y, EXR_COMPRESSION_ZIP))) {
         exr_fail_code(err, path, "set up", rv, io);
@@ -525,6 +533,9 @@ static hz_status exr_read_header(const char *path, exr_context_t ctx, exr_io *io
         if ((rv = exr_get_attribute_by_index(ctx, 0, EXR_ATTR_LIST_FILE_ORDER, a, &attr)))
             return exr_fail_code(err, path, "read the header of", rv, io);
         if (attr->type != EXR_ATTR_STRING || !attr->string || !attr->string->str)
+            continue;
+        /* "type" and "name" describe the part's structure, not the image. */
+        if (strcmp(attr->name, "type") == 0 || strcmp(attr->name, "name") == 0)
             continue;
         /* Names and values that do not fit are skipped, not truncated. */
         if (strlen(attr->name) >= sizeof out->attribute_names[0] ||

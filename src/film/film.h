@@ -20,10 +20,19 @@ typedef struct {
     bool savefp16;
     double iso;                /* 100 by default; imaging ratio = exposure time * iso / 100 */
     bool write_z;              /* haze extension: "bool writedepth" adds a Z channel */
+    double max_component_value; /* pbrt-v4 "maxcomponentvalue": INFINITY = no clamp */
+    double diagonal;           /* pbrt-v4 "diagonal" (mm, default 35), for physical cameras */
 } film_params;
 
+/* Fills pbrt-v4's defaults (1280x720, full bounds, "pbrt.exr", iso 100, float32). */
+void film_params_default(film_params *p);
+
 /* Reads Film "rgb" (xresolution yresolution filename cropwindow pixelbounds
- * savefp16 iso, and haze's writedepth); other types are errors. */
+ * savefp16 iso maxcomponentvalue diagonal, "sensor" "cie1931" and
+ * whitebalance 0 only, and haze's writedepth); other types are errors. Bounds
+ * follow pbrt-v4: ceil(res * crop); "pixelbounds" [x0 x1 y0 y1] overrides
+ * "cropwindow" and must be a non-empty part of the image. Films needing more
+ * than 64 GiB are refused. */
 hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *err);
 
 typedef struct film film;
@@ -32,13 +41,21 @@ film *film_create(const film_params *p, hz_error *err);
 void film_destroy(film *f);
 const film_params *film_get_params(const film *f);
 /* (px, py) absolute raster pixel inside bounds. Not thread-safe for the same
- * pixel; tiles own disjoint pixels. `depth` is the first-hit distance (or INFINITY). */
+ * pixel; tiles own disjoint pixels. `depth` is the first-hit distance (or INFINITY).
+ * A sample whose L or weight is not finite is counted and dropped. As pbrt-v4,
+ * L * imaging ratio is scaled down so its largest component is at most
+ * max_component_value (see film_set_imaging_ratio). Z is the mean of the
+ * finite depths weighted by |weight|, +INFINITY where no sample hit. */
 void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth);
+/* The imaging ratio that maxcomponentvalue clamping assumes (default 1); pass
+ * the same ratio to the output functions. */
+void film_set_imaging_ratio(film *f, double imaging_ratio);
 /* Final pixel value = imaging_ratio * sum(w L) / sum(w) (0 when sum(w) == 0). */
 rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio);
 /* Number of non-finite sample values that were dropped (counted, never stored). */
 long film_nonfinite_count(const film *f);
-/* Writes R G B A (+ Z when requested) float32, or half with savefp16, data
+/* Writes R G B A (+ Z when requested) float32, or half with savefp16 (Z stays
+ * float), A = 1 where any weight was accumulated, data
  * window = bounds, display window = full resolution; written to a temporary
  * file in the same directory, then renamed over `path`. */
 hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err);

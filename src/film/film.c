@@ -1,0 +1,327 @@
+/* The RGB film (pbrt-v4's RGBFilm without the sensor model: haze renders in
+ * linear sRGB already). Per pixel, double sums of w*L and w; the pixel is
+ * their ratio, so the filter needs no normalisation and negative lobes work. */
+#define _POSIX_C_SOURCE 200809L
+
+#include "film/film.h"
+
+#include <assert.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "film/exr.h"
+#include "film/png.h"
+#include "scene/params.h"
+
+/* Refuse films whose buffers would need more than this. */
+#define FILM_MAX_BYTES (64.0 * 1024 * 1024 * 1024)
+
+typedef struct {
+    double r, g, b, w;
+} film_pixel;
+
+typedef struct {
+    double sum, w; /* |weight|-weighted finite depths */
+} film_depth;
+
+struct film {
+    film_params p;
+    int width, height; /* of the bounds */
+    film_pixel *pixels;
+    film_depth *depth; /* NULL unless write_z */
+    double clamp_ratio;
+    atomic_long nonfinite; /* tiles run in parallel; only this is shared */
+};
+
+void film_params_default(film_params *p)
+{
+    memset(p, 0, sizeof *p);
+    p->xres = 1280;
+    p->yres = 720;
+    p->bounds = (pixel_bounds){0, 0, 1280, 720};
+    snprintf(p->filename, sizeof p->filename, "pbrt.exr");
+    p->savefp16 = false; /* haze default; pbrt-v4 writes half by default */
+    p->iso = 100.0;
+    p->max_component_value = INFINITY;
+    p->diagonal = 35.0;
+}
+
+/* Bytes per bounds pixel: accumulation, optional depth, and the output image. */
+static double film_bytes(const film_params *p)
+{
+    double area = (double)(p->bounds.x1 - p->bounds.x0) * (double)(p->bounds.y1 - p->bounds.y0);
+    double per = sizeof(film_pixel) + 4.0 * sizeof(float) +
+                 (p->write_z ? sizeof(film_depth) + sizeof(float) : 0.0);
+    return area * per;
+}
+
+static bool ends_with_exr(const char *s)
+{
+    size_t n = strlen(s);
+    return n > 4 && strcasecmp(s + n - 4, ".exr") == 0;
+}
+
+/* Bounds from cropwindow / pixelbounds, as pbrt-v4's FilmBaseParameters. */
+static void film_read_bounds(param_list *pl, film_params *p)
+{
+    size_t ncrop = 0, npb = 0;
+    const double *crop = params_floats(pl, "cropwindow", &ncrop);
+    const double *pb = params_ints(pl, "pixelbounds", &npb);
+    p->bounds = (pixel_bounds){0, 0, p->xres, p->yres};
+    if (pb) {
+        if (npb != 4) {
+            params_reject(pl, "pixelbounds", "\"integer pixelbounds\" needs 4 values [x0 x1 y0 y1], got %zu",
+                          npb);
+            return;
+        }
+        if (!(pb[0] >= 0 && pb[1] <= p->xres && pb[2] >= 0 && pb[3] <= p->yres && pb[0] < pb[1] &&
+              pb[2] < pb[3])) {
+            params_reject(pl, "pixelbounds",
+                          "\"integer pixelbounds\" [%g %g %g %g] must be a non-empty part of the "
+                          "%dx%d image (x0 < x1 <= %d, y0 < y1 <= %d)",
+                          pb[0], pb[1], pb[2], pb[3], p->xres, p->yres, p->xres, p->yres);
+            return;
+        }
+        p->bounds = (pixel_bounds){(int)pb[0], (int)pb[2], (int)pb[1], (int)pb[3]};
+        return; /* overrides cropwindow (which counts as read) */
+    }
+    if (!crop)
+        return;
+    if (ncrop != 4) {
+        params_reject(pl, "cropwindow", "\"float cropwindow\" needs 4 values [x0 x1 y0 y1], got %zu", ncrop);
+        return;
+    }
+    for (int i = 0; i < 4; i++)
+        if (!(crop[i] >= 0.0 && crop[i] <= 1.0)) {
+            params_reject(pl, "cropwindow", "\"float cropwindow\" values must lie in [0, 1], got %g", crop[i]);
+            return;
+        }
+    if (!(crop[0] < crop[1] && crop[2] < crop[3])) {
+        params_reject(pl, "cropwindow", "\"float cropwindow\" [%g %g %g %g] needs x0 < x1 and y0 < y1",
+                      crop[0], crop[1], crop[2], crop[3]);
+        return;
+    }
+    pixel_bounds b = {(int)ceil(p->xres * crop[0]), (int)ceil(p->yres * crop[2]),
+                      (int)ceil(p->xres * crop[1]), (int)ceil(p->yres * crop[3])};
+    if (b.x0 >= b.x1 || b.y0 >= b.y1) {
+        params_reject(pl, "cropwindow", "\"float cropwindow\" [%g %g %g %g] covers no pixel of the %dx%d image",
+                      crop[0], crop[1], crop[2], crop[3], p->xres, p->yres);
+        return;
+    }
+    p->bounds = b;
+}
+
+hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *err)
+{
+    film_params_default(out);
+    const char *type = e->type ? e->type : "";
+    if (strcmp(type, "rgb") != 0)
+        return hz_fail_at(err, e->loc, "Film \"%s\" is not supported (haze supports only \"rgb\")", type);
+    param_list *pl = &e->params;
+    film_params *p = out;
+    p->xres = params_int(pl, "xresolution", 1280);
+    p->yres = params_int(pl, "yresolution", 720);
+    bool res_ok = true;
+    if (p->xres < 1 || p->xres > (1 << 24)) {
+        params_reject(pl, "xresolution", "\"integer xresolution\" must be in [1, %d], got %d", 1 << 24, p->xres);
+        res_ok = false;
+    }
+    if (p->yres < 1 || p->yres > (1 << 24)) {
+        params_reject(pl, "yresolution", "\"integer yresolution\" must be in [1, %d], got %d", 1 << 24, p->yres);
+        res_ok = false;
+    }
+    if (res_ok)
+        film_read_bounds(pl, p);
+    const char *name = params_string(pl, "filename", "pbrt.exr");
+    if (!ends_with_exr(name))
+        params_reject(pl, "filename", "Film \"string filename\" \"%s\" must end in .exr", name);
+    else if (strlen(name) >= sizeof p->filename)
+        params_reject(pl, "filename", "Film \"string filename\" is too long");
+    else
+        snprintf(p->filename, sizeof p->filename, "%s", name);
+    p->savefp16 = params_bool(pl, "savefp16", false);
+    p->write_z = params_bool(pl, "writedepth", false);
+    p->iso = params_float(pl, "iso", 100.0);
+    if (!(p->iso > 0.0 && isfinite(p->iso)))
+        params_reject(pl, "iso", "\"float iso\" must be positive, got %g", p->iso);
+    p->max_component_value = params_float(pl, "maxcomponentvalue", INFINITY);
+    if (!(p->max_component_value > 0.0)) /* INFINITY is the default and allowed */
+        params_reject(pl, "maxcomponentvalue", "\"float maxcomponentvalue\" must be positive, got %g",
+                      p->max_component_value);
+    p->diagonal = params_float(pl, "diagonal", 35.0);
+    if (!(p->diagonal > 0.0 && isfinite(p->diagonal)))
+        params_reject(pl, "diagonal", "\"float diagonal\" must be positive, got %g", p->diagonal);
+    const char *sensor = params_string(pl, "sensor", "cie1931");
+    if (strcmp(sensor, "cie1931") != 0)
+        params_reject(pl, "sensor",
+                      "Film \"string sensor\" \"%s\" is not supported: haze renders RGB, only \"cie1931\" is",
+                      sensor);
+    double wb = params_float(pl, "whitebalance", 0.0);
+    if (wb != 0.0)
+        params_reject(pl, "whitebalance", "Film \"float whitebalance\" is not supported (only 0, no white balance)");
+    if (params_finish(pl, "Film \"rgb\"", err) != HZ_OK)
+        return HZ_ERROR;
+    double bytes = film_bytes(p);
+    if (bytes > FILM_MAX_BYTES)
+        return hz_fail_at(err, e->loc, "Film of %dx%d pixels would need %.1f GiB of memory (limit %.0f GiB)",
+                          p->bounds.x1 - p->bounds.x0, p->bounds.y1 - p->bounds.y0,
+                          bytes / (1024.0 * 1024 * 1024), FILM_MAX_BYTES / (1024.0 * 1024 * 1024));
+    return HZ_OK;
+}
+
+film *film_create(const film_params *p, hz_error *err)
+{
+    pixel_bounds b = p->bounds;
+    if (p->xres < 1 || p->yres < 1 || b.x0 < 0 || b.y0 < 0 || b.x1 > p->xres || b.y1 > p->yres ||
+        b.x0 >= b.x1 || b.y0 >= b.y1) {
+        hz_fail(err, "film: invalid pixel bounds [%d,%d)x[%d,%d) for a %dx%d image", b.x0, b.x1, b.y0,
+                b.y1, p->xres, p->yres);
+        return NULL;
+    }
+    double bytes = film_bytes(p);
+    if (bytes > FILM_MAX_BYTES) {
+        hz_fail(err, "film: %dx%d pixels would need %.1f GiB of memory", b.x1 - b.x0, b.y1 - b.y0,
+                bytes / (1024.0 * 1024 * 1024));
+        return NULL;
+    }
+    film *f = calloc(1, sizeof *f);
+    if (!f) {
+        hz_fail(err, "film: out of memory");
+        return NULL;
+    }
+    f->p = *p;
+    f->width = b.x1 - b.x0;
+    f->height = b.y1 - b.y0;
+    f->clamp_ratio = 1.0;
+    atomic_init(&f->nonfinite, 0);
+    size_t n = (size_t)f->width * (size_t)f->height;
+    f->pixels = calloc(n, sizeof *f->pixels);
+    if (p->write_z)
+        f->depth = calloc(n, sizeof *f->depth);
+    if (!f->pixels || (p->write_z && !f->depth)) {
+        hz_fail(err, "film: out of memory for %dx%d pixels (%.1f MiB)", f->width, f->height,
+                bytes / (1024.0 * 1024));
+        film_destroy(f);
+        return NULL;
+    }
+    return f;
+}
+
+void film_destroy(film *f)
+{
+    if (!f)
+        return;
+    free(f->pixels);
+    free(f->depth);
+    free(f);
+}
+
+const film_params *film_get_params(const film *f) { return &f->p; }
+
+void film_set_imaging_ratio(film *f, double imaging_ratio) { f->clamp_ratio = imaging_ratio; }
+
+long film_nonfinite_count(const film *f)
+{
+    return atomic_load_explicit(&((film *)f)->nonfinite, memory_order_relaxed);
+}
+
+static size_t film_index(const film *f, int px, int py)
+{
+    assert(px >= f->p.bounds.x0 && px < f->p.bounds.x1 && py >= f->p.bounds.y0 && py < f->p.bounds.y1);
+    return (size_t)(py - f->p.bounds.y0) * (size_t)f->width + (size_t)(px - f->p.bounds.x0);
+}
+
+void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth)
+{
+    if (!isfinite(L.r) || !isfinite(L.g) || !isfinite(L.b) || !isfinite(weight)) {
+        atomic_fetch_add_explicit(&f->nonfinite, 1, memory_order_relaxed);
+        return;
+    }
+    /* pbrt-v4 clamps the sensor value, i.e. after the imaging ratio. */
+    double m = rgb_max(L) * f->clamp_ratio;
+    if (m > f->p.max_component_value)
+        L = rgb_scale(L, f->p.max_component_value / m);
+    size_t i = film_index(f, px, py);
+    film_pixel *p = &f->pixels[i];
+    p->r += weight * L.r;
+    p->g += weight * L.g;
+    p->b += weight * L.b;
+    p->w += weight;
+    if (f->depth && isfinite(depth)) {
+        f->depth[i].sum += fabs(weight) * depth;
+        f->depth[i].w += fabs(weight);
+    }
+}
+
+rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio)
+{
+    const film_pixel *p = &f->pixels[film_index(f, px, py)];
+    if (p->w == 0.0)
+        return rgb_grey(0.0);
+    double s = imaging_ratio / p->w;
+    return rgb_make(p->r * s, p->g * s, p->b * s);
+}
+
+static double film_get_depth(const film *f, int px, int py)
+{
+    const film_depth *d = &f->depth[film_index(f, px, py)];
+    return d->w > 0.0 ? d->sum / d->w : INFINITY;
+}
+
+hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err)
+{
+    exr_image img;
+    int nc = f->depth ? 5 : 4;
+    if (exr_image_alloc(&img, f->width, f->height, nc, err) != HZ_OK)
+        return HZ_ERROR;
+    static const char *names[] = {"R", "G", "B", "A", "Z"};
+    for (int c = 0; c < nc; c++) {
+        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
+        img.channels[c].half = f->p.savefp16 && c < 4; /* depth needs float precision */
+    }
+    img.data_x0 = f->p.bounds.x0;
+    img.data_y0 = f->p.bounds.y0;
+    img.display_width = f->p.xres;
+    img.display_height = f->p.yres;
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++) {
+            int px = x + f->p.bounds.x0, py = y + f->p.bounds.y0;
+            size_t i = (size_t)y * (size_t)f->width + (size_t)x;
+            rgb v = film_get_pixel(f, px, py, imaging_ratio);
+            img.channels[0].pixels[i] = (float)v.r;
+            img.channels[1].pixels[i] = (float)v.g;
+            img.channels[2].pixels[i] = (float)v.b;
+            img.channels[3].pixels[i] = f->pixels[i].w != 0.0 ? 1.0f : 0.0f;
+            if (f->depth)
+                img.channels[4].pixels[i] = (float)film_get_depth(f, px, py);
+        }
+    hz_status st = exr_image_add_attribute(&img, "software", "haze " HAZE_VERSION, err);
+    if (st == HZ_OK)
+        st = exr_write(path, &img, err);
+    exr_image_free(&img);
+    return st;
+}
+
+hz_status film_write_png(const film *f, const char *path, double imaging_ratio, hz_error *err)
+{
+    size_t n = (size_t)f->width * (size_t)f->height;
+    uint8_t *buf = malloc(n * 3);
+    if (!buf)
+        return hz_fail(err, "%s: out of memory for the PNG", path);
+    for (int y = 0; y < f->height; y++)
+        for (int x = 0; x < f->width; x++) {
+            rgb v = film_get_pixel(f, x + f->p.bounds.x0, y + f->p.bounds.y0, imaging_ratio);
+            uint8_t *o = buf + ((size_t)y * (size_t)f->width + (size_t)x) * 3;
+            o[0] = png_out_srgb8(v.r);
+            o[1] = png_out_srgb8(v.g);
+            o[2] = png_out_srgb8(v.b);
+        }
+    hz_status st = png_out_write_rgb8(path, f->width, f->height, buf, err);
+    free(buf);
+    return st;
+}

@@ -1,0 +1,406 @@
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sampler/sampler.h"
+#include "sampler/sampler_math.h"
+#include "scene/params.h"
+
+/* Builds scene entities the way the parser does, without parsing. */
+static inline char *dup_str(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    assert_non_null(d);
+    memcpy(d, s, n);
+    return d;
+}
+
+static inline void entity_init(scene_entity *e, const char *type)
+{
+    memset(e, 0, sizeof *e);
+    e->type = dup_str(type);
+    e->loc = (file_loc){"test.pbrt", 3, 1};
+    params_init(&e->params, e->loc);
+}
+
+static inline void entity_free(scene_entity *e)
+{
+    params_free(&e->params);
+    free(e->type);
+}
+
+static inline void add_nums(scene_entity *e, param_type t, const char *name, const double *v, size_t n)
+{
+    param p;
+    memset(&p, 0, sizeof p);
+    p.type = t;
+    p.name = dup_str(name);
+    p.loc = (file_loc){"test.pbrt", 3, 10};
+    p.count = n;
+    p.nums = malloc(n * sizeof *p.nums);
+    assert_non_null(p.nums);
+    memcpy(p.nums, v, n * sizeof *v);
+    assert_int_equal(params_add(&e->params, p, NULL), HZ_OK);
+}
+
+static inline void add_int(scene_entity *e, const char *name, double v) { add_nums(e, PARAM_INTEGER, name, &v, 1); }
+
+static inline void add_string(scene_entity *e, const char *name, const char *v)
+{
+    param p;
+    memset(&p, 0, sizeof p);
+    p.type = PARAM_STRING;
+    p.name = dup_str(name);
+    p.loc = (file_loc){"test.pbrt", 3, 10};
+    p.count = 1;
+    p.strs = malloc(sizeof *p.strs);
+    assert_non_null(p.strs);
+    p.strs[0] = dup_str(v);
+    assert_int_equal(params_add(&e->params, p, NULL), HZ_OK);
+}
+
+static inline void add_bool(scene_entity *e, const char *name, bool v)
+{
+    param p;
+    memset(&p, 0, sizeof p);
+    p.type = PARAM_BOOL;
+    p.name = dup_str(name);
+    p.loc = (file_loc){"test.pbrt", 3, 10};
+    p.count = 1;
+    p.bools = malloc(sizeof *p.bools);
+    assert_non_null(p.bools);
+    p.bools[0] = v;
+    assert_int_equal(params_add(&e->params, p, NULL), HZ_OK);
+}
+
+static sampler make(sampler_kind kind, int spp, uint64_t seed)
+{
+    sampler s;
+    memset(&s, 0, sizeof s);
+    s.kind = kind;
+    s.seed = seed;
+    s.jitter = true;
+    s.spp = s.xsamples = s.ysamples = 1;
+    sampler_set_spp(&s, spp);
+    return s;
+}
+
+static void test_permutation(void **state)
+{
+    (void)state;
+    static const uint32_t ns[] = {1, 2, 3, 7, 16, 100, 1000};
+    for (size_t k = 0; k < sizeof ns / sizeof ns[0]; k++) {
+        uint32_t n = ns[k];
+        for (uint32_t p = 0; p < 20; p++) {
+            char *seen = calloc(n, 1);
+            assert_non_null(seen);
+            for (uint32_t i = 0; i < n; i++) {
+                uint32_t v = smp_permutation_element(i, n, (uint32_t)smp_mix64(p));
+                assert_true(v < n);
+                assert_false(seen[v]);
+                seen[v] = 1;
+            }
+            free(seen);
+        }
+    }
+    /* Owen scrambling permutes every aligned block of 2^k values. */
+    for (uint32_t k = 0; k <= 8; k++) {
+        uint32_t n = 1u << k;
+        char seen[256] = {0};
+        for (uint32_t i = 0; i < n; i++) {
+            uint32_t v = smp_owen_scramble(i, 0x12345678u);
+            uint32_t v0 = smp_owen_scramble(0, 0x12345678u);
+            assert_int_equal(v >> k, v0 >> k);
+            assert_false(seen[v & (n - 1)]);
+            seen[v & (n - 1)] = 1;
+        }
+    }
+    assert_int_equal(smp_sobol1(1), 0x80000000u);
+    assert_int_equal(smp_sobol1(2), 0xc0000000u);
+    assert_int_equal(smp_sobol1(3), 0x40000000u);
+    assert_int_equal(smp_sobol0(1), 0x80000000u);
+    assert_int_equal(smp_sobol0(2), 0x40000000u);
+}
+
+static void test_range_and_determinism(void **state)
+{
+    (void)state;
+    for (int kind = 0; kind < 3; kind++) {
+        sampler s = make((sampler_kind)kind, 16, 7);
+        double first[10] = {0};
+        sampler_state st;
+        sampler_start(&s, 3, 5, 7, &st);
+        vec2 p0 = sampler_pixel_2d(&st);
+        for (int d = 0; d < 10; d += 2) {
+            first[d] = sampler_1d(&st);
+            vec2 v = sampler_2d(&st);
+            first[d + 1] = v.x + 2 * v.y;
+        }
+        /* Many other pixels and samples, in any order: all in [0, 1). */
+        for (int py = 9; py >= -3; py--)
+            for (int px = -2; px < 12; px++)
+                for (int i = 0; i < 16; i++) {
+                    sampler_start(&s, px, py, i, &st);
+                    for (int d = 0; d < 12; d++) {
+                        double u = sampler_1d(&st);
+                        vec2 v = sampler_2d(&st);
+                        vec2 p = sampler_pixel_2d(&st);
+                        assert_true(u >= 0.0 && u < 1.0);
+                        assert_true(v.x >= 0.0 && v.x < 1.0 && v.y >= 0.0 && v.y < 1.0);
+                        assert_true(p.x >= 0.0 && p.x < 1.0 && p.y >= 0.0 && p.y < 1.0);
+                    }
+                }
+        /* Same inputs, same values; the pixel sample does not depend on when it is asked. */
+        sampler_start(&s, 3, 5, 7, &st);
+        for (int d = 0; d < 10; d += 2) {
+            assert_true(sampler_1d(&st) == first[d]);
+            vec2 v = sampler_2d(&st);
+            assert_true(v.x + 2 * v.y == first[d + 1]);
+        }
+        vec2 p1 = sampler_pixel_2d(&st);
+        assert_true(p0.x == p1.x && p0.y == p1.y);
+        /* Another seed gives another stream. */
+        sampler t = make((sampler_kind)kind, 16, 8);
+        sampler_start(&t, 3, 5, 7, &st);
+        vec2 q = sampler_pixel_2d(&st);
+        assert_false(q.x == p0.x && q.y == p0.y);
+    }
+}
+
+static void test_stratified_strata(void **state)
+{
+    (void)state;
+    sampler s = make(SAMPLER_STRATIFIED, 12, 3);
+    assert_int_equal(s.xsamples, 4);
+    assert_int_equal(s.ysamples, 3);
+    for (int jitter = 0; jitter < 2; jitter++) {
+        s.jitter = jitter;
+        for (int px = 0; px < 5; px++) {
+            int hits_pixel[12] = {0}, hits_2d[4][12] = {{0}}, hits_1d[4][12] = {{0}};
+            for (int i = 0; i < 12; i++) {
+                sampler_state st;
+                sampler_start(&s, px, 2 * px, i, &st);
+                vec2 p = sampler_pixel_2d(&st);
+                hits_pixel[(int)(p.y * 3) * 4 + (int)(p.x * 4)]++;
+                if (!jitter) { /* centre of the stratum */
+                    assert_float_equal(fmod(p.x * 4, 1.0), 0.5, 1e-12);
+                    assert_float_equal(fmod(p.y * 3, 1.0), 0.5, 1e-12);
+                }
+                for (int d = 0; d < 4; d++) {
+                    hits_1d[d][(int)(sampler_1d(&st) * 12)]++;
+                    vec2 v = sampler_2d(&st);
+                    hits_2d[d][(int)(v.y * 3) * 4 + (int)(v.x * 4)]++;
+                }
+            }
+            for (int k = 0; k < 12; k++) {
+                assert_int_equal(hits_pixel[k], 1);
+                for (int d = 0; d < 4; d++) {
+                    assert_int_equal(hits_2d[d][k], 1);
+                    assert_int_equal(hits_1d[d][k], 1);
+                }
+            }
+        }
+    }
+    sampler_set_spp(&s, 7);
+    assert_true(s.xsamples == 7 && s.ysamples == 1 && s.spp == 7);
+    sampler_set_spp(&s, 16);
+    assert_true(s.xsamples == 4 && s.ysamples == 4);
+}
+
+/* Every elementary interval [a 2^-i, (a+1) 2^-i) x [b 2^-j, (b+1) 2^-j) with
+ * i + j = k holds exactly one of the 2^k points. */
+static void assert_net(const vec2 *p, int k)
+{
+    int n = 1 << k;
+    int *count = calloc((size_t)n, sizeof *count);
+    assert_non_null(count);
+    for (int i = 0; i <= k; i++) {
+        int j = k - i;
+        memset(count, 0, (size_t)n * sizeof *count);
+        for (int s = 0; s < n; s++) {
+            int a = (int)(p[s].x * (1 << i)), b = (int)(p[s].y * (1 << j));
+            count[b * (1 << i) + a]++;
+        }
+        for (int c = 0; c < n; c++)
+            if (count[c] != 1)
+                fail_msg("2^%d points: interval shape 2^-%d x 2^-%d has %d points", k, i, j, count[c]);
+    }
+    free(count);
+}
+
+static void test_sobol_nets(void **state)
+{
+    (void)state;
+    vec2 *pix = malloc(1024 * sizeof *pix), *dim[3];
+    double *one = malloc(1024 * sizeof *one);
+    for (int d = 0; d < 3; d++)
+        dim[d] = malloc(1024 * sizeof *dim[d]);
+    assert_true(pix && one);
+    for (int k = 0; k <= 10; k++) {
+        sampler s = make(SAMPLER_SOBOL, 1 << k, 11);
+        assert_int_equal(s.spp, 1 << k);
+        assert_string_equal(s.warning, "");
+        for (int px = 0; px < 4; px++) {
+            for (int i = 0; i < s.spp; i++) {
+                sampler_state st;
+                sampler_start(&s, px, 17, i, &st);
+                pix[i] = sampler_pixel_2d(&st);
+                one[i] = sampler_1d(&st);
+                for (int d = 0; d < 3; d++)
+                    dim[d][i] = sampler_2d(&st);
+            }
+            assert_net(pix, k);
+            for (int d = 0; d < 3; d++)
+                assert_net(dim[d], k);
+            /* 1D dimensions: one sample per 1/spp stratum. */
+            char *seen = calloc((size_t)s.spp, 1);
+            for (int i = 0; i < s.spp; i++) {
+                int c = (int)(one[i] * s.spp);
+                assert_false(seen[c]);
+                seen[c] = 1;
+            }
+            free(seen);
+        }
+    }
+    for (int d = 0; d < 3; d++)
+        free(dim[d]);
+    free(pix);
+    free(one);
+    /* Not a power of two: rounded up with a warning. */
+    sampler s = make(SAMPLER_SOBOL, 10, 1);
+    assert_int_equal(s.spp, 16);
+    assert_non_null(strstr(s.warning, "16"));
+}
+
+/* RMS error of the per-pixel estimate of a smooth integral. */
+static double rms_error(sampler_kind kind, int spp, bool pixel_dim)
+{
+    sampler s = make(kind, spp, 5);
+    const double exact = (sqrt(HZ_PI) / 2 * erf(1.0)) * (sqrt(HZ_PI) / 2 * erf(1.0)); /* ∫∫ e^-(x²+y²) */
+    double se = 0.0;
+    const int pixels = 256;
+    for (int p = 0; p < pixels; p++) {
+        double sum = 0.0;
+        for (int i = 0; i < spp; i++) {
+            sampler_state st;
+            sampler_start(&s, p % 16, p / 16, i, &st);
+            vec2 u;
+            if (pixel_dim)
+                u = sampler_pixel_2d(&st);
+            else {
+                sampler_1d(&st);
+                sampler_2d(&st);
+                u = sampler_2d(&st); /* a padded dimension */
+            }
+            sum += exp(-(u.x * u.x + u.y * u.y));
+        }
+        double e = sum / spp - exact;
+        se += e * e;
+    }
+    return sqrt(se / pixels);
+}
+
+static void test_integration_error(void **state)
+{
+    (void)state;
+    double ind = rms_error(SAMPLER_INDEPENDENT, 256, true);
+    double sob = rms_error(SAMPLER_SOBOL, 256, true);
+    double sob_pad = rms_error(SAMPLER_SOBOL, 256, false);
+    double str = rms_error(SAMPLER_STRATIFIED, 256, true);
+    print_message("RMS error at 256 spp: independent %.3g, stratified %.3g, sobol %.3g (padded dim %.3g)\n",
+                  ind, str, sob, sob_pad);
+    /* Independent: sigma/sqrt(256) with sigma ~ 0.2. */
+    assert_true(ind > 0.005 && ind < 0.03);
+    assert_true(sob < 0.25 * ind);
+    assert_true(sob_pad < 0.25 * ind);
+    assert_true(str < 0.25 * ind);
+}
+
+static void test_from_entity(void **state)
+{
+    (void)state;
+    scene_entity e;
+    sampler s;
+    hz_error err = {{0}};
+    entity_init(&e, "zsobol");
+    assert_int_equal(sampler_from_entity(&e, 42, &s, &err), HZ_OK);
+    assert_int_equal(s.kind, SAMPLER_SOBOL);
+    assert_int_equal(s.spp, 16);
+    assert_true(s.seed == 42);
+    assert_string_equal(s.warning, "");
+    entity_free(&e);
+
+    entity_init(&e, "independent");
+    add_int(&e, "pixelsamples", 5);
+    add_int(&e, "seed", 9);
+    assert_int_equal(sampler_from_entity(&e, 42, &s, &err), HZ_OK);
+    assert_true(s.kind == SAMPLER_INDEPENDENT && s.spp == 5 && s.seed == 9);
+    entity_free(&e);
+
+    entity_init(&e, "stratified");
+    add_int(&e, "xsamples", 3);
+    add_int(&e, "ysamples", 2);
+    add_bool(&e, "jitter", false);
+    assert_int_equal(sampler_from_entity(&e, 0, &s, &err), HZ_OK);
+    assert_true(s.kind == SAMPLER_STRATIFIED && s.spp == 6 && s.xsamples == 3 && !s.jitter);
+    entity_free(&e);
+
+    entity_init(&e, "stratified");
+    assert_int_equal(sampler_from_entity(&e, 0, &s, &err), HZ_OK);
+    assert_true(s.spp == 16 && s.xsamples == 4 && s.ysamples == 4 && s.jitter);
+    entity_free(&e);
+
+    entity_init(&e, "halton");
+    add_int(&e, "pixelsamples", 100);
+    assert_int_equal(sampler_from_entity(&e, 0, &s, &err), HZ_OK);
+    assert_true(s.kind == SAMPLER_SOBOL && s.spp == 128);
+    assert_non_null(strstr(s.warning, "halton"));
+    assert_non_null(strstr(s.warning, "128"));
+    entity_free(&e);
+
+    entity_init(&e, "sobol");
+    add_string(&e, "randomization", "owen");
+    assert_int_equal(sampler_from_entity(&e, 0, &s, &err), HZ_OK);
+    entity_free(&e);
+
+    const char *bad[][2] = {{"lowdiscrepancy", "stratified"}, {"independent", "pixelsamples"},
+                            {"zsobol", "pixelsamples"}, {"sobol", "randomization"},
+                            {"stratified", "xsamples"}, {"zsobol", "xsamples"}};
+    for (int k = 0; k < 6; k++) {
+        entity_init(&e, bad[k][0]);
+        if (k == 1 || k == 2)
+            add_int(&e, "pixelsamples", 0);
+        if (k == 3)
+            add_string(&e, "randomization", "shuffled");
+        if (k == 4)
+            add_int(&e, "xsamples", -2);
+        if (k == 5)
+            add_int(&e, "xsamples", 4); /* not a sobol parameter: unused */
+        err.message[0] = 0;
+        assert_int_equal(sampler_from_entity(&e, 0, &s, &err), HZ_ERROR);
+        if (!strstr(err.message, bad[k][1]) || !strstr(err.message, "test.pbrt:3:"))
+            fail_msg("error \"%s\" should mention \"%s\"", err.message, bad[k][1]);
+        entity_free(&e);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_permutation),
+        cmocka_unit_test(test_range_and_determinism),
+        cmocka_unit_test(test_stratified_strata),
+        cmocka_unit_test(test_sobol_nets),
+        cmocka_unit_test(test_integration_error),
+        cmocka_unit_test(test_from_entity), /* needs scene/params: last */
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
