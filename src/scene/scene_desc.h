@@ -2,7 +2,15 @@
  * with every entity's type name, typed parameters and transform, but before
  * any factory has interpreted the parameters. Factories (camera, film, sampler,
  * filter, shapes, lights, materials) read their own parameters from here and
- * report errors at the entity's place. */
+ * report errors at the entity's place.
+ *
+ * Ownership: every `char *` below (entity types, names, media) points into
+ * scene_desc.strings, as does every file_loc.file; param lists are owned by
+ * their entity. scene_desc_free releases all of it.
+ *
+ * Motion: pbrt-v4 keeps two current transforms (TransformTimes/ActiveTransform).
+ * The `*_end` transforms are the end-time ones; they equal the start ones
+ * unless the scene used ActiveTransform EndTime/StartTime. */
 #ifndef HAZE_SCENE_SCENE_DESC_H
 #define HAZE_SCENE_SCENE_DESC_H
 
@@ -21,6 +29,7 @@ typedef struct {
 typedef struct {
     scene_entity entity;
     transform camera_from_world; /* the CTM at Camera (start time) */
+    transform camera_from_world_end; /* the CTM at Camera (end time) */
     char *medium;                /* outside medium current at Camera, "" = vacuum */
 } camera_entity;
 
@@ -31,7 +40,8 @@ typedef struct {
 
 typedef struct {
     scene_entity entity;         /* shape type and its parameters */
-    transform world_from_object;
+    transform world_from_object; /* inside ObjectBegin/End: instance_from_object */
+    transform world_from_object_end;
     bool reverse_orientation;
     int material;                /* index into scene_desc.materials, -1 = default diffuse 0.5 */
     bool has_area_light;
@@ -42,6 +52,7 @@ typedef struct {
 typedef struct {
     scene_entity entity;
     transform world_from_light;
+    transform world_from_light_end;
     char *medium;                /* outside medium at the LightSource */
 } light_entity;
 
@@ -53,14 +64,15 @@ typedef struct {
 
 typedef struct {
     size_t object;               /* index into scene_desc.objects */
-    transform world_from_instance;
+    transform world_from_instance; /* world_from_object of a shape = this * its own */
+    transform world_from_instance_end;
     file_loc loc;
 } instance_entity;
 
 typedef struct {
     char *name;
     scene_entity entity;         /* "homogeneous", "nanovdb", ... */
-    transform world_from_medium;
+    transform world_from_medium; /* pbrt-v4 uses only the start transform of media */
 } medium_entity;
 
 typedef struct {
@@ -84,12 +96,24 @@ typedef struct {
     medium_entity *media;
     size_t medium_count;
 
+    /* TransformTimes (defaults 0 and 1). */
+    double transform_start_time, transform_end_time;
+    /* Option directives ("bool disablepixeljitter" true, "integer seed" 3...):
+     * typed parameters with pbrt-v4's option names; the renderer reads those it
+     * honours with the params getters. */
+    param_list options;
+
     /* Owned strings (file names, names) that file_loc.file and others point to. */
     char **strings;
-    size_t string_count;
+    size_t string_count, string_capacity;
 } scene_desc;
 
-/* Parses `path` (and everything it includes). On error fills err with
+/* Parses `path` (and everything it includes). Follows pbrt-v4: shapes, lights,
+ * materials, AttributeBegin/End and objects only after WorldBegin; Camera, Film,
+ * Sampler, PixelFilter, Integrator and TransformTimes only before it, once each;
+ * a file without WorldBegin is an error. Include and Import both read the file
+ * in place with the current graphics state (haze does not isolate Import's
+ * state as pbrt-v4 does); paths are relative to the including file. On error fills err with
  * "file:line:column: message" and returns HZ_ERROR; *out is then empty. */
 hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err);
 /* Parses text held in memory; `name` is used in diagnostics and as the base for

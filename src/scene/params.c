@@ -1,0 +1,330 @@
+#include "scene/params.h"
+
+#include <limits.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "scene/mem.h"
+
+const char *param_type_name(param_type t)
+{
+    switch (t) {
+    case PARAM_INTEGER: return "integer";
+    case PARAM_FLOAT: return "float";
+    case PARAM_BOOL: return "bool";
+    case PARAM_STRING: return "string";
+    case PARAM_POINT2: return "point2";
+    case PARAM_VECTOR2: return "vector2";
+    case PARAM_POINT3: return "point3";
+    case PARAM_VECTOR3: return "vector3";
+    case PARAM_NORMAL: return "normal";
+    case PARAM_RGB: return "rgb";
+    case PARAM_SPECTRUM: return "spectrum";
+    case PARAM_BLACKBODY: return "blackbody";
+    }
+    return "?";
+}
+
+void params_init(param_list *pl, file_loc directive)
+{
+    memset(pl, 0, sizeof *pl);
+    pl->loc = directive;
+}
+
+void param_free(param *p)
+{
+    if (p->strs)
+        for (size_t i = 0; i < p->count; ++i)
+            free(p->strs[i]);
+    free(p->strs);
+    free(p->nums);
+    free(p->bools);
+    free(p->name);
+    p->strs = NULL;
+    p->nums = NULL;
+    p->bools = NULL;
+    p->name = NULL;
+}
+
+void params_free(param_list *pl)
+{
+    for (size_t i = 0; i < pl->count; ++i)
+        param_free(&pl->items[i]);
+    free(pl->items);
+    pl->items = NULL;
+    pl->count = pl->capacity = 0;
+}
+
+static param param_copy(const param *s)
+{
+    param d = *s;
+    d.name = scene_xstrdup(s->name);
+    d.nums = NULL;
+    d.strs = NULL;
+    d.bools = NULL;
+    if (s->nums) {
+        d.nums = scene_xarray(s->count, sizeof *d.nums);
+        memcpy(d.nums, s->nums, s->count * sizeof *d.nums);
+    }
+    if (s->bools) {
+        d.bools = scene_xarray(s->count, sizeof *d.bools);
+        memcpy(d.bools, s->bools, s->count * sizeof *d.bools);
+    }
+    if (s->strs) {
+        d.strs = scene_xarray(s->count, sizeof *d.strs);
+        for (size_t i = 0; i < s->count; ++i)
+            d.strs[i] = scene_xstrdup(s->strs[i]);
+    }
+    return d;
+}
+
+void params_copy(param_list *dst, const param_list *src)
+{
+    *dst = *src;
+    dst->items = NULL;
+    dst->count = dst->capacity = 0;
+    if (src->count) {
+        dst->items = scene_xarray(src->count, sizeof *dst->items);
+        dst->capacity = src->count;
+        for (size_t i = 0; i < src->count; ++i)
+            dst->items[i] = param_copy(&src->items[i]);
+        dst->count = src->count;
+    }
+}
+
+static param *find(const param_list *pl, const char *name)
+{
+    for (size_t i = 0; i < pl->count; ++i)
+        if (strcmp(pl->items[i].name, name) == 0)
+            return &pl->items[i];
+    return NULL;
+}
+
+static void push(param_list *pl, param p)
+{
+    pl->items = scene_grow(pl->items, &pl->capacity, pl->count, sizeof *pl->items);
+    pl->items[pl->count++] = p;
+}
+
+hz_status params_add(param_list *pl, param p, hz_error *err)
+{
+    const param *old = find(pl, p.name);
+    if (old) {
+        hz_status st = hz_fail_at(err, p.loc, "parameter \"%s\" given twice (first at line %d)",
+                                  p.name, old->loc.line);
+        param_free(&p);
+        return st;
+    }
+    push(pl, p);
+    return HZ_OK;
+}
+
+hz_status params_add_defaults(param_list *pl, const param_list *defaults, hz_error *err)
+{
+    (void)err;
+    for (size_t i = 0; i < defaults->count; ++i) {
+        if (find(pl, defaults->items[i].name))
+            continue;
+        param p = param_copy(&defaults->items[i]);
+        p.used = false;
+        p.optional = true;
+        push(pl, p);
+    }
+    return HZ_OK;
+}
+
+void params_remove(param_list *pl, const char *name)
+{
+    param *p = find(pl, name);
+    if (!p)
+        return;
+    size_t i = (size_t)(p - pl->items);
+    param_free(p);
+    memmove(&pl->items[i], &pl->items[i + 1], (pl->count - i - 1) * sizeof *pl->items);
+    --pl->count;
+}
+
+static void record(param_list *pl, file_loc loc, const char *fmt, ...) HZ_PRINTF(3, 4);
+static void record(param_list *pl, file_loc loc, const char *fmt, ...)
+{
+    if (pl->failed)
+        return; /* the first problem is the one reported */
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    hz_fail_at(&pl->error, loc, "%s", msg);
+    pl->failed = true;
+}
+
+/* The parameter `name` if it has one of the accepted types; otherwise NULL,
+ * recording a type error when the name exists with another type. */
+static param *lookup(param_list *pl, const char *name, const param_type *types, size_t ntypes)
+{
+    param *p = find(pl, name);
+    if (!p)
+        return NULL;
+    p->used = true;
+    for (size_t i = 0; i < ntypes; ++i)
+        if (p->type == types[i])
+            return p;
+    record(pl, p->loc, "parameter \"%s\" must be %s, not %s", name, param_type_name(types[0]),
+           param_type_name(p->type));
+    return NULL;
+}
+
+static param *lookup_one(param_list *pl, const char *name, param_type type, size_t want)
+{
+    param *p = lookup(pl, name, &type, 1);
+    if (p && p->count != want) {
+        record(pl, p->loc, "parameter \"%s %s\" takes %zu value%s, got %zu", param_type_name(type),
+               name, want, want == 1 ? "" : "s", p->count);
+        return NULL;
+    }
+    return p;
+}
+
+double params_float(param_list *pl, const char *name, double def)
+{
+    param *p = lookup_one(pl, name, PARAM_FLOAT, 1);
+    return p ? p->nums[0] : def;
+}
+
+int params_int(param_list *pl, const char *name, int def)
+{
+    param *p = lookup_one(pl, name, PARAM_INTEGER, 1);
+    if (!p)
+        return def;
+    if (p->nums[0] < INT_MIN || p->nums[0] > INT_MAX) {
+        record(pl, p->loc, "parameter \"integer %s\" is out of range", name);
+        return def;
+    }
+    return (int)p->nums[0];
+}
+
+bool params_bool(param_list *pl, const char *name, bool def)
+{
+    param *p = lookup_one(pl, name, PARAM_BOOL, 1);
+    return p ? p->bools[0] : def;
+}
+
+const char *params_string(param_list *pl, const char *name, const char *def)
+{
+    param *p = lookup_one(pl, name, PARAM_STRING, 1);
+    return p ? p->strs[0] : def;
+}
+
+static vec3 get3(param_list *pl, const char *name, param_type type, vec3 def)
+{
+    param *p = lookup_one(pl, name, type, 3);
+    return p ? v3(p->nums[0], p->nums[1], p->nums[2]) : def;
+}
+
+vec3 params_point3(param_list *pl, const char *name, vec3 def)
+{
+    return get3(pl, name, PARAM_POINT3, def);
+}
+
+vec3 params_vector3(param_list *pl, const char *name, vec3 def)
+{
+    return get3(pl, name, PARAM_VECTOR3, def);
+}
+
+rgb params_rgb(param_list *pl, const char *name, rgb def)
+{
+    static const param_type types[] = {PARAM_RGB, PARAM_SPECTRUM, PARAM_BLACKBODY};
+    param *p = lookup(pl, name, types, 3);
+    if (!p)
+        return def;
+    if (p->count != 3) {
+        record(pl, p->loc, "parameter \"%s %s\" takes 3 values, got %zu", param_type_name(p->type),
+               name, p->count);
+        return def;
+    }
+    return rgb_make(p->nums[0], p->nums[1], p->nums[2]);
+}
+
+static const double *get_array(param_list *pl, const char *name, param_type type, size_t tuple,
+                               size_t *n)
+{
+    *n = 0;
+    param *p = lookup(pl, name, &type, 1);
+    if (!p)
+        return NULL;
+    if (p->count % tuple != 0) { /* the parser checks this; kept for hand-built lists */
+        record(pl, p->loc, "parameter \"%s %s\" needs a multiple of %zu values, got %zu",
+               param_type_name(type), name, tuple, p->count);
+        return NULL;
+    }
+    *n = p->count / tuple;
+    return p->nums;
+}
+
+const double *params_floats(param_list *pl, const char *name, size_t *n)
+{
+    return get_array(pl, name, PARAM_FLOAT, 1, n);
+}
+
+const double *params_ints(param_list *pl, const char *name, size_t *n)
+{
+    return get_array(pl, name, PARAM_INTEGER, 1, n);
+}
+
+const double *params_point3s(param_list *pl, const char *name, size_t *n)
+{
+    return get_array(pl, name, PARAM_POINT3, 3, n);
+}
+
+const double *params_normals(param_list *pl, const char *name, size_t *n)
+{
+    return get_array(pl, name, PARAM_NORMAL, 3, n);
+}
+
+const double *params_point2s(param_list *pl, const char *name, size_t *n)
+{
+    return get_array(pl, name, PARAM_POINT2, 2, n);
+}
+
+bool params_has(const param_list *pl, const char *name)
+{
+    return find(pl, name) != NULL;
+}
+
+file_loc params_loc(const param_list *pl, const char *name)
+{
+    const param *p = find(pl, name);
+    return p ? p->loc : pl->loc;
+}
+
+void params_reject(param_list *pl, const char *name, const char *fmt, ...)
+{
+    param *p = find(pl, name);
+    if (p)
+        p->used = true;
+    if (pl->failed)
+        return;
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    hz_fail_at(&pl->error, p ? p->loc : pl->loc, "%s", msg);
+    pl->failed = true;
+}
+
+hz_status params_finish(const param_list *pl, const char *what, hz_error *err)
+{
+    if (pl->failed) {
+        if (err)
+            *err = pl->error;
+        return HZ_ERROR;
+    }
+    for (size_t i = 0; i < pl->count; ++i) {
+        const param *p = &pl->items[i];
+        if (!p->used && !p->optional)
+            return hz_fail_at(err, p->loc, "unused parameter \"%s %s\" for %s",
+                              param_type_name(p->type), p->name, what);
+    }
+    return HZ_OK;
+}

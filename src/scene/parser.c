@@ -1,0 +1,306 @@
+/* Scene parser driver: files, the token stream, Include/Import, and the public
+ * entry points. What directives mean lives in parser_directives.c. */
+/* realpath() is an XSI function: _POSIX_C_SOURCE alone does not declare it. */
+#define _XOPEN_SOURCE 700
+
+#include "scene/parser.h"
+
+#include <errno.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene/mem.h"
+
+/* Deep enough for any real scene, shallow enough that the C stack is safe. */
+#define MAX_INCLUDE_DEPTH 64
+
+const char *parser_intern(parser *ps, const char *s)
+{
+    scene_desc *sd = ps->sd;
+    /* Strings are few per entity; reuse the most recent ones (types, media
+     * names repeat in runs) without a hash table. */
+    size_t look = sd->string_count < 8 ? sd->string_count : 8;
+    for (size_t i = 0; i < look; ++i) {
+        char *c = sd->strings[sd->string_count - 1 - i];
+        if (strcmp(c, s) == 0)
+            return c;
+    }
+    sd->strings = scene_grow(sd->strings, &sd->string_capacity, sd->string_count,
+                             sizeof *sd->strings);
+    sd->strings[sd->string_count++] = scene_xstrdup(s);
+    return sd->strings[sd->string_count - 1];
+}
+
+hz_status parser_next(parser *ps, token *tok, hz_error *err)
+{
+    if (ps->has_peek) {
+        *tok = ps->peek;
+        ps->has_peek = false;
+        return HZ_OK;
+    }
+    return lexer_next(ps->lx, tok, err);
+}
+
+hz_status parser_peek(parser *ps, token *tok, hz_error *err)
+{
+    if (!ps->has_peek) {
+        if (lexer_next(ps->lx, &ps->peek, err) != HZ_OK)
+            return HZ_ERROR;
+        ps->has_peek = true;
+    }
+    *tok = ps->peek;
+    return HZ_OK;
+}
+
+static const char *directive_name(const token *d, char *buf, size_t n)
+{
+    snprintf(buf, n, "%.*s", (int)(d->len < 40 ? d->len : 40), d->text);
+    return buf;
+}
+
+hz_status parser_string_arg(parser *ps, const token *directive, const char **out, hz_error *err)
+{
+    token t;
+    if (parser_next(ps, &t, err) != HZ_OK)
+        return HZ_ERROR;
+    if (t.kind != TOK_STRING) {
+        char name[48], got[48];
+        token_describe(&t, got, sizeof got);
+        return hz_fail_at(err, t.loc, "%s expects a quoted string, found %s",
+                          directive_name(directive, name, sizeof name), got);
+    }
+    char *s = token_string_dup(&t);
+    *out = parser_intern(ps, s ? s : "");
+    free(s);
+    return HZ_OK;
+}
+
+hz_status parser_numbers(parser *ps, const token *directive, double *out, int n, bool brackets_ok,
+                         hz_error *err)
+{
+    token t;
+    char name[48], got[48];
+    directive_name(directive, name, sizeof name);
+    if (parser_peek(ps, &t, err) != HZ_OK)
+        return HZ_ERROR;
+    bool bracketed = brackets_ok && t.kind == TOK_LBRACKET;
+    file_loc open = t.loc;
+    if (bracketed)
+        parser_next(ps, &t, err);
+    for (int i = 0; i < n; ++i) {
+        if (parser_next(ps, &t, err) != HZ_OK)
+            return HZ_ERROR;
+        if (t.kind != TOK_NUMBER) {
+            token_describe(&t, got, sizeof got);
+            return hz_fail_at(err, t.loc, "%s expects %d numbers, found %s after %d", name, n, got,
+                              i);
+        }
+        out[i] = t.num;
+    }
+    if (bracketed) {
+        if (parser_next(ps, &t, err) != HZ_OK)
+            return HZ_ERROR;
+        if (t.kind != TOK_RBRACKET) {
+            token_describe(&t, got, sizeof got);
+            return hz_fail_at(err, open, "%s: '[' is not closed after %d numbers (found %s)", name,
+                              n, got);
+        }
+    }
+    return HZ_OK;
+}
+
+/* Reads a whole file; NUL bytes are kept (the lexer reports them). */
+static hz_status read_file(const char *path, char **text, size_t *len, int *error_number)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        *error_number = errno;
+        return HZ_ERROR;
+    }
+    size_t cap = 1 << 16, n = 0;
+    char *buf = scene_xmalloc(cap);
+    for (;;) {
+        if (n == cap) {
+            cap *= 2;
+            buf = scene_xrealloc(buf, cap);
+        }
+        size_t got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0)
+            break;
+    }
+    int failed = ferror(f);
+    *error_number = failed ? (errno ? errno : EIO) : 0;
+    fclose(f);
+    if (failed) {
+        free(buf);
+        return HZ_ERROR;
+    }
+    *text = buf;
+    *len = n;
+    return HZ_OK;
+}
+
+/* The canonical name used for cycle detection; falls back to the name itself
+ * for in-memory scenes whose name is not a file. */
+static char *canonical(const char *path)
+{
+    char *r = realpath(path, NULL);
+    return r ? r : scene_xstrdup(path);
+}
+
+static void chain_push(parser *ps, char *canon)
+{
+    ps->chain = scene_grow(ps->chain, &ps->chain_cap, ps->chain_len, sizeof *ps->chain);
+    ps->chain[ps->chain_len++] = canon;
+}
+
+static hz_status parse_text(parser *ps, const char *text, size_t len, const char *file,
+                            file_loc *end, hz_error *err)
+{
+    lexer lx;
+    lexer_init(&lx, text, len, file);
+    lexer *saved_lx = ps->lx;
+    token saved_peek = ps->peek;
+    bool saved_has = ps->has_peek;
+    ps->lx = &lx;
+    ps->has_peek = false;
+    hz_status st = HZ_OK;
+    for (;;) {
+        token t;
+        if ((st = parser_next(ps, &t, err)) != HZ_OK)
+            break;
+        if (t.kind == TOK_EOF) {
+            if (end)
+                *end = t.loc;
+            break;
+        }
+        if (t.kind != TOK_IDENT) {
+            char got[48];
+            token_describe(&t, got, sizeof got);
+            st = hz_fail_at(err, t.loc, "expected a directive, found %s", got);
+            break;
+        }
+        if ((st = parser_directive(ps, &t, err)) != HZ_OK)
+            break;
+    }
+    ps->lx = saved_lx;
+    ps->peek = saved_peek;
+    ps->has_peek = saved_has;
+    return st;
+}
+
+static char *join_relative(const char *base_file, const char *path)
+{
+    const char *slash = strrchr(base_file, '/');
+    if (path[0] == '/' || !slash)
+        return scene_xstrdup(path);
+    size_t dir = (size_t)(slash - base_file) + 1;
+    size_t n = strlen(path);
+    char *out = scene_xmalloc(dir + n + 1);
+    memcpy(out, base_file, dir);
+    memcpy(out + dir, path, n + 1);
+    return out;
+}
+
+hz_status parser_include(parser *ps, const token *directive, const char *path, hz_error *err)
+{
+    char name[48];
+    directive_name(directive, name, sizeof name);
+    char *full = join_relative(directive->loc.file, path);
+    char *canon = realpath(full, NULL);
+    if (!canon) {
+        hz_status st = hz_fail_at(err, directive->loc, "%s: cannot open \"%s\": %s", name, full,
+                                  strerror(errno));
+        free(full);
+        return st;
+    }
+    for (size_t i = 0; i < ps->chain_len; ++i) {
+        if (strcmp(ps->chain[i], canon) != 0)
+            continue;
+        char chain[700] = "";
+        for (size_t j = i; j < ps->chain_len; ++j) {
+            const char *base = strrchr(ps->chain[j], '/');
+            size_t used = strlen(chain);
+            snprintf(chain + used, sizeof chain - used, "%s -> ", base ? base + 1 : ps->chain[j]);
+        }
+        const char *base = strrchr(canon, '/');
+        size_t used = strlen(chain);
+        snprintf(chain + used, sizeof chain - used, "%s", base ? base + 1 : canon);
+        hz_status st = hz_fail_at(err, directive->loc, "%s cycle: %s", name, chain);
+        free(full);
+        free(canon);
+        return st;
+    }
+    if (ps->chain_len >= MAX_INCLUDE_DEPTH) {
+        free(full);
+        free(canon);
+        return hz_fail_at(err, directive->loc, "%s: files nested more than %d deep", name,
+                          MAX_INCLUDE_DEPTH);
+    }
+    char *text;
+    size_t len;
+    int en;
+    if (read_file(full, &text, &len, &en) != HZ_OK) {
+        hz_status st = hz_fail_at(err, directive->loc, "%s: cannot read \"%s\": %s", name, full,
+                                  strerror(en));
+        free(full);
+        free(canon);
+        return st;
+    }
+    const char *file = parser_intern(ps, full);
+    free(full);
+    chain_push(ps, canon);
+    hz_status st = parse_text(ps, text, len, file, NULL, err);
+    free(ps->chain[--ps->chain_len]);
+    free(text);
+    return st;
+}
+
+static hz_status parse_root(const char *text, size_t len, const char *name, scene_desc *out,
+                            hz_error *err)
+{
+    memset(out, 0, sizeof *out);
+    parser ps;
+    memset(&ps, 0, sizeof ps);
+    ps.sd = out;
+    scene_desc_init(out, name);
+    const char *file = out->camera.entity.loc.file;
+    ps.gs.ctm[0] = ps.gs.ctm[1] = transform_identity();
+    ps.gs.active = 3;
+    ps.gs.material = -1;
+    ps.gs.inside = ps.gs.outside = parser_intern(&ps, "");
+    for (int i = 0; i < ATTR_COUNT; ++i)
+        params_init(&ps.gs.attrs[i], (file_loc){file, 1, 1});
+    ps.current_object = -1;
+    chain_push(&ps, canonical(name));
+
+    file_loc end = {file, 1, 1};
+    hz_status st = parse_text(&ps, text, len, file, &end, err);
+    if (st == HZ_OK)
+        st = parser_finish(&ps, end, err);
+    parser_state_free(&ps);
+    if (st != HZ_OK)
+        scene_desc_free(out);
+    return st;
+}
+
+hz_status scene_parse_string(const char *text, const char *name, scene_desc *out, hz_error *err)
+{
+    return parse_root(text, strlen(text), name ? name : "<string>", out, err);
+}
+
+hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err)
+{
+    char *text;
+    size_t len;
+    int en;
+    memset(out, 0, sizeof *out);
+    if (read_file(path, &text, &len, &en) != HZ_OK)
+        return hz_fail(err, "%s: cannot read scene: %s", path, strerror(en));
+    hz_status st = parse_root(text, len, path, out, err);
+    free(text);
+    return st;
+}

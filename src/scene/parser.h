@@ -1,0 +1,90 @@
+/* Internals of the scene parser, shared by parser.c (files, tokens, Include),
+ * parser_params.c (typed parameter lists) and parser_directives.c (what each
+ * directive does to the graphics state and the scene_desc). The public entry
+ * points are scene_parse_file/scene_parse_string in scene_desc.h. */
+#ifndef HAZE_SCENE_PARSER_H
+#define HAZE_SCENE_PARSER_H
+
+#include <stdbool.h>
+
+#include "scene/lexer.h"
+#include "scene/scene_desc.h"
+
+enum { ATTR_SHAPE, ATTR_LIGHT, ATTR_MATERIAL, ATTR_MEDIUM, ATTR_COUNT };
+
+/* pbrt-v4's GraphicsState: what AttributeBegin saves and AttributeEnd restores. */
+typedef struct {
+    transform ctm[2];          /* start and end time */
+    unsigned active;           /* ActiveTransform: bit 0 start, bit 1 end */
+    bool reverse_orientation;
+    int material;
+    bool has_area_light;
+    scene_entity area_light;   /* owns its params when has_area_light */
+    const char *inside, *outside; /* interned medium names */
+    param_list attrs[ATTR_COUNT]; /* Attribute defaults */
+    char kind;                 /* for pushed states: 'a' AttributeBegin, 'o' ObjectBegin */
+    file_loc pushed_at;
+} gstate;
+
+typedef struct {
+    const char *name;
+    transform ctm[2];
+} named_coordsys;
+
+typedef struct {
+    scene_desc *sd;
+    gstate gs;
+    gstate *stack;
+    size_t depth, stack_cap;
+    named_coordsys *coords;
+    size_t coord_count, coord_cap;
+    bool in_world;
+    file_loc seen_camera, seen_film, seen_sampler, seen_filter, seen_integrator;
+    long current_object;      /* index being defined, -1 outside ObjectBegin */
+
+    /* The token stream of the file being read; one token of lookahead. */
+    lexer *lx;
+    token peek;
+    bool has_peek;
+    /* Canonical paths of the files being read, outermost first (cycles). */
+    char **chain;
+    size_t chain_len, chain_cap;
+} parser;
+
+/* parser.c */
+const char *parser_intern(parser *ps, const char *s);
+hz_status parser_next(parser *ps, token *tok, hz_error *err);
+hz_status parser_peek(parser *ps, token *tok, hz_error *err);
+/* Next token must be a string: returns it decoded and interned. */
+hz_status parser_string_arg(parser *ps, const token *directive, const char **out, hz_error *err);
+/* Next n tokens must be numbers (optionally all inside one pair of brackets
+ * when `brackets_ok`). */
+hz_status parser_numbers(parser *ps, const token *directive, double *out, int n, bool brackets_ok,
+                         hz_error *err);
+hz_status parser_include(parser *ps, const token *directive, const char *path, hz_error *err);
+
+/* parser_params.c: reads `"type name" value...` pairs until the next directive. */
+hz_status parser_params(parser *ps, param_list *out, file_loc directive, hz_error *err);
+
+/* parser_directives.c */
+hz_status parser_directive(parser *ps, const token *tok, hz_error *err);
+hz_status parser_finish(parser *ps, file_loc end, hz_error *err);
+hz_status parser_need_world(parser *ps, const token *d, const char *name, hz_error *err);
+/* `seen` (may be NULL) detects a second Camera, Film... */
+hz_status parser_need_options(parser *ps, const token *d, const char *name, file_loc *seen,
+                              hz_error *err);
+void parser_push_state(parser *ps, char kind, file_loc at);
+void parser_pop_state(parser *ps);
+void parser_set_coordsys(parser *ps, const char *name, const transform ctm[2]);
+
+/* parser_entities.c: directives that create entities or change what later
+ * entities get (materials, media, area lights, objects). *handled is false
+ * when `d` is none of them. */
+hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_error *err);
+void parser_state_free(parser *ps);
+void gstate_free(gstate *g);
+
+/* scene_desc.c */
+void scene_desc_init(scene_desc *sd, const char *file);
+
+#endif

@@ -1,0 +1,453 @@
+/* Directives that create entities (Camera, Shape, LightSource, materials,
+ * media, objects) or set what later entities receive (NamedMaterial,
+ * AreaLightSource, MediumInterface, Attribute). pbrt-v4 semantics. */
+#include <stdio.h>
+#include <string.h>
+
+#include "scene/mem.h"
+#include "scene/parser.h"
+
+#define ATTR_NONE (-1)
+
+/* `Directive "type" params...`; attribute defaults of kind `attr` are merged in. */
+static hz_status read_entity(parser *ps, const token *d, int attr, scene_entity *e, hz_error *err)
+{
+    const char *type;
+    memset(e, 0, sizeof *e);
+    params_init(&e->params, d->loc);
+    if (parser_string_arg(ps, d, &type, err) != HZ_OK)
+        return HZ_ERROR;
+    e->type = (char *)type;
+    e->loc = d->loc;
+    if (parser_params(ps, &e->params, d->loc, err) != HZ_OK) {
+        params_free(&e->params);
+        return HZ_ERROR;
+    }
+    if (attr != ATTR_NONE)
+        params_add_defaults(&e->params, &ps->gs.attrs[attr], err);
+    return HZ_OK;
+}
+
+/* `Directive "name" params...` where the type is the "string type" parameter. */
+static hz_status read_named(parser *ps, const token *d, const char *what, int attr,
+                            const char **name, scene_entity *e, hz_error *err)
+{
+    memset(e, 0, sizeof *e);
+    params_init(&e->params, d->loc);
+    if (parser_string_arg(ps, d, name, err) != HZ_OK)
+        return HZ_ERROR;
+    e->loc = d->loc;
+    if (parser_params(ps, &e->params, d->loc, err) != HZ_OK)
+        goto fail;
+    params_add_defaults(&e->params, &ps->gs.attrs[attr], err);
+    const char *type = params_string(&e->params, "type", NULL);
+    if (e->params.failed) {
+        *err = e->params.error;
+        goto fail;
+    }
+    if (!type) {
+        hz_fail_at(err, d->loc, "%s \"%s\" has no \"string type\" parameter", what, *name);
+        goto fail;
+    }
+    e->type = (char *)parser_intern(ps, type);
+    /* The factory must not see "type" as an unused parameter. */
+    params_remove(&e->params, "type");
+    return HZ_OK;
+fail:
+    params_free(&e->params);
+    return HZ_ERROR;
+}
+
+static hz_status d_options_entity(parser *ps, const token *d, const char *what, file_loc *seen,
+                                  scene_entity *slot, hz_error *err)
+{
+    scene_entity e;
+    if (parser_need_options(ps, d, what, seen, err) != HZ_OK ||
+        read_entity(ps, d, ATTR_NONE, &e, err) != HZ_OK)
+        return HZ_ERROR;
+    params_free(&slot->params);
+    *slot = e;
+    return HZ_OK;
+}
+
+static hz_status d_camera(parser *ps, const token *d, hz_error *err)
+{
+    camera_entity *c = &ps->sd->camera;
+    if (d_options_entity(ps, d, "Camera", &ps->seen_camera, &c->entity, err) != HZ_OK)
+        return HZ_ERROR;
+    c->camera_from_world = ps->gs.ctm[0];
+    c->camera_from_world_end = ps->gs.ctm[1];
+    c->medium = (char *)ps->gs.outside;
+    /* pbrt-v4: namedCoordinateSystems["camera"] = Inverse(cameraFromWorld). */
+    transform world_from_camera[2] = {transform_inverse(ps->gs.ctm[0]),
+                                      transform_inverse(ps->gs.ctm[1])};
+    parser_set_coordsys(ps, "camera", world_from_camera);
+    return HZ_OK;
+}
+
+static hz_status d_shape(parser *ps, const token *d, hz_error *err)
+{
+    scene_desc *sd = ps->sd;
+    shape_entity s;
+    memset(&s, 0, sizeof s);
+    if (parser_need_world(ps, d, "Shape", err) != HZ_OK)
+        return HZ_ERROR;
+    if (ps->gs.has_area_light && ps->current_object >= 0)
+        return hz_fail_at(err, d->loc,
+                          "area lights are not supported inside ObjectBegin/ObjectEnd (the "
+                          "AreaLightSource at %s:%d:%d applies here)",
+                          ps->gs.area_light.loc.file, ps->gs.area_light.loc.line,
+                          ps->gs.area_light.loc.column);
+    if (read_entity(ps, d, ATTR_SHAPE, &s.entity, err) != HZ_OK)
+        return HZ_ERROR;
+    s.world_from_object = ps->gs.ctm[0];
+    s.world_from_object_end = ps->gs.ctm[1];
+    s.reverse_orientation = ps->gs.reverse_orientation;
+    s.material = ps->gs.material;
+    s.has_area_light = ps->gs.has_area_light;
+    if (s.has_area_light) {
+        s.area_light = ps->gs.area_light;
+        params_copy(&s.area_light.params, &ps->gs.area_light.params);
+    }
+    s.inside_medium = (char *)ps->gs.inside;
+    s.outside_medium = (char *)ps->gs.outside;
+    if (ps->current_object >= 0) {
+        sd->object_shapes = scene_grow_implicit(sd->object_shapes, sd->object_shape_count,
+                                                sizeof *sd->object_shapes);
+        sd->object_shapes[sd->object_shape_count++] = s;
+        sd->objects[ps->current_object].shape_count++;
+    } else {
+        sd->shapes = scene_grow_implicit(sd->shapes, sd->shape_count, sizeof *sd->shapes);
+        sd->shapes[sd->shape_count++] = s;
+    }
+    return HZ_OK;
+}
+
+static hz_status d_light(parser *ps, const token *d, hz_error *err)
+{
+    scene_desc *sd = ps->sd;
+    light_entity l;
+    memset(&l, 0, sizeof l);
+    if (parser_need_world(ps, d, "LightSource", err) != HZ_OK ||
+        read_entity(ps, d, ATTR_LIGHT, &l.entity, err) != HZ_OK)
+        return HZ_ERROR;
+    l.world_from_light = ps->gs.ctm[0];
+    l.world_from_light_end = ps->gs.ctm[1];
+    l.medium = (char *)ps->gs.outside;
+    sd->lights = scene_grow_implicit(sd->lights, sd->light_count, sizeof *sd->lights);
+    sd->lights[sd->light_count++] = l;
+    return HZ_OK;
+}
+
+static hz_status d_area_light(parser *ps, const token *d, hz_error *err)
+{
+    scene_entity e;
+    if (parser_need_world(ps, d, "AreaLightSource", err) != HZ_OK ||
+        read_entity(ps, d, ATTR_LIGHT, &e, err) != HZ_OK)
+        return HZ_ERROR;
+    if (ps->gs.has_area_light)
+        params_free(&ps->gs.area_light.params);
+    ps->gs.area_light = e;
+    ps->gs.has_area_light = true;
+    return HZ_OK;
+}
+
+static int add_material(parser *ps, material_entity m)
+{
+    scene_desc *sd = ps->sd;
+    sd->materials = scene_grow_implicit(sd->materials, sd->material_count, sizeof *sd->materials);
+    sd->materials[sd->material_count] = m;
+    return (int)sd->material_count++;
+}
+
+static hz_status d_material(parser *ps, const token *d, hz_error *err)
+{
+    material_entity m;
+    memset(&m, 0, sizeof m);
+    if (parser_need_world(ps, d, "Material", err) != HZ_OK ||
+        read_entity(ps, d, ATTR_MATERIAL, &m.entity, err) != HZ_OK)
+        return HZ_ERROR;
+    ps->gs.material = add_material(ps, m);
+    return HZ_OK;
+}
+
+static long find_named_material(const scene_desc *sd, const char *name)
+{
+    for (size_t i = 0; i < sd->material_count; ++i)
+        if (sd->materials[i].name && strcmp(sd->materials[i].name, name) == 0)
+            return (long)i;
+    return -1;
+}
+
+static hz_status d_make_named_material(parser *ps, const token *d, hz_error *err)
+{
+    material_entity m;
+    const char *name;
+    memset(&m, 0, sizeof m);
+    if (parser_need_world(ps, d, "MakeNamedMaterial", err) != HZ_OK ||
+        read_named(ps, d, "MakeNamedMaterial", ATTR_MATERIAL, &name, &m.entity, err) != HZ_OK)
+        return HZ_ERROR;
+    long old = find_named_material(ps->sd, name);
+    if (old >= 0) {
+        file_loc at = ps->sd->materials[old].entity.loc;
+        params_free(&m.entity.params);
+        return hz_fail_at(err, d->loc, "named material \"%s\" redefined (first at %s:%d:%d)", name,
+                          at.file, at.line, at.column);
+    }
+    m.name = (char *)name;
+    add_material(ps, m);
+    return HZ_OK;
+}
+
+static hz_status d_named_material(parser *ps, const token *d, hz_error *err)
+{
+    const char *name;
+    if (parser_need_world(ps, d, "NamedMaterial", err) != HZ_OK ||
+        parser_string_arg(ps, d, &name, err) != HZ_OK)
+        return HZ_ERROR;
+    long i = find_named_material(ps->sd, name);
+    if (i < 0)
+        return hz_fail_at(err, d->loc, "NamedMaterial \"%s\" is not defined (MakeNamedMaterial "
+                                       "must come first)", name);
+    ps->gs.material = (int)i;
+    return HZ_OK;
+}
+
+static hz_status d_make_named_medium(parser *ps, const token *d, hz_error *err)
+{
+    scene_desc *sd = ps->sd;
+    medium_entity m;
+    const char *name;
+    memset(&m, 0, sizeof m);
+    if (read_named(ps, d, "MakeNamedMedium", ATTR_MEDIUM, &name, &m.entity, err) != HZ_OK)
+        return HZ_ERROR;
+    for (size_t i = 0; i < sd->medium_count; ++i) {
+        if (strcmp(sd->media[i].name, name) == 0) {
+            file_loc at = sd->media[i].entity.loc;
+            params_free(&m.entity.params);
+            return hz_fail_at(err, d->loc, "named medium \"%s\" redefined (first at %s:%d:%d)",
+                              name, at.file, at.line, at.column);
+        }
+    }
+    if (name[0] == '\0') {
+        params_free(&m.entity.params);
+        return hz_fail_at(err, d->loc, "a medium cannot be named \"\" (that means vacuum)");
+    }
+    m.name = (char *)name;
+    m.world_from_medium = ps->gs.ctm[0];
+    sd->media = scene_grow_implicit(sd->media, sd->medium_count, sizeof *sd->media);
+    sd->media[sd->medium_count++] = m;
+    return HZ_OK;
+}
+
+static hz_status d_medium_interface(parser *ps, const token *d, hz_error *err)
+{
+    const char *inside, *outside;
+    token t;
+    if (parser_string_arg(ps, d, &inside, err) != HZ_OK || parser_peek(ps, &t, err) != HZ_OK)
+        return HZ_ERROR;
+    outside = inside;
+    if (t.kind == TOK_STRING && parser_string_arg(ps, d, &outside, err) != HZ_OK)
+        return HZ_ERROR;
+    ps->gs.inside = inside;
+    ps->gs.outside = outside;
+    return HZ_OK;
+}
+
+static hz_status d_reverse_orientation(parser *ps, const token *d, hz_error *err)
+{
+    if (parser_need_world(ps, d, "ReverseOrientation", err) != HZ_OK)
+        return HZ_ERROR;
+    ps->gs.reverse_orientation = !ps->gs.reverse_orientation;
+    return HZ_OK;
+}
+
+static long find_object(const scene_desc *sd, const char *name)
+{
+    for (size_t i = 0; i < sd->object_count; ++i)
+        if (strcmp(sd->objects[i].name, name) == 0)
+            return (long)i;
+    return -1;
+}
+
+static hz_status d_object_begin(parser *ps, const token *d, hz_error *err)
+{
+    scene_desc *sd = ps->sd;
+    const char *name;
+    if (parser_need_world(ps, d, "ObjectBegin", err) != HZ_OK ||
+        parser_string_arg(ps, d, &name, err) != HZ_OK)
+        return HZ_ERROR;
+    if (ps->current_object >= 0) {
+        file_loc at = sd->objects[ps->current_object].loc;
+        return hz_fail_at(err, d->loc, "ObjectBegin inside the definition of \"%s\" (%s:%d:%d)",
+                          sd->objects[ps->current_object].name, at.file, at.line, at.column);
+    }
+    if (find_object(sd, name) >= 0)
+        return hz_fail_at(err, d->loc, "object \"%s\" redefined", name);
+    sd->objects = scene_grow_implicit(sd->objects, sd->object_count, sizeof *sd->objects);
+    sd->objects[sd->object_count] = (object_entity){(char *)name, d->loc, sd->object_shape_count, 0};
+    ps->current_object = (long)sd->object_count++;
+    parser_push_state(ps, 'o', d->loc);
+    return HZ_OK;
+}
+
+static hz_status d_object_end(parser *ps, const token *d, hz_error *err)
+{
+    if (parser_need_world(ps, d, "ObjectEnd", err) != HZ_OK)
+        return HZ_ERROR;
+    if (ps->current_object < 0)
+        return hz_fail_at(err, d->loc, "ObjectEnd without a matching ObjectBegin");
+    const gstate *top = &ps->stack[ps->depth - 1];
+    if (top->kind != 'o')
+        return hz_fail_at(err, d->loc, "ObjectEnd inside the AttributeBegin at %s:%d:%d",
+                          top->pushed_at.file, top->pushed_at.line, top->pushed_at.column);
+    parser_pop_state(ps);
+    ps->current_object = -1;
+    return HZ_OK;
+}
+
+static hz_status d_object_instance(parser *ps, const token *d, hz_error *err)
+{
+    scene_desc *sd = ps->sd;
+    const char *name;
+    if (parser_need_world(ps, d, "ObjectInstance", err) != HZ_OK ||
+        parser_string_arg(ps, d, &name, err) != HZ_OK)
+        return HZ_ERROR;
+    if (ps->current_object >= 0)
+        return hz_fail_at(err, d->loc, "ObjectInstance inside the definition of object \"%s\"",
+                          sd->objects[ps->current_object].name);
+    long obj = find_object(sd, name);
+    if (obj < 0)
+        return hz_fail_at(err, d->loc, "ObjectInstance: no object named \"%s\"", name);
+    sd->instances = scene_grow_implicit(sd->instances, sd->instance_count, sizeof *sd->instances);
+    sd->instances[sd->instance_count++] =
+        (instance_entity){(size_t)obj, ps->gs.ctm[0], ps->gs.ctm[1], d->loc};
+    return HZ_OK;
+}
+
+static hz_status d_attribute(parser *ps, const token *d, hz_error *err)
+{
+    static const char *const targets[ATTR_COUNT] = {"shape", "light", "material", "medium"};
+    const char *target;
+    if (parser_string_arg(ps, d, &target, err) != HZ_OK)
+        return HZ_ERROR;
+    int k = -1;
+    for (int i = 0; i < ATTR_COUNT; ++i)
+        if (strcmp(targets[i], target) == 0)
+            k = i;
+    if (k < 0)
+        return hz_fail_at(err, d->loc,
+                          "Attribute target \"%s\" is not supported; use \"shape\", \"light\", "
+                          "\"material\" or \"medium\"",
+                          target);
+    param_list pl;
+    if (parser_params(ps, &pl, d->loc, err) != HZ_OK) {
+        params_free(&pl);
+        return HZ_ERROR;
+    }
+    /* A later Attribute overrides an earlier one of the same name. */
+    param_list *dst = &ps->gs.attrs[k];
+    for (size_t i = 0; i < pl.count; ++i) {
+        params_remove(dst, pl.items[i].name);
+        params_add(dst, pl.items[i], err); /* cannot fail: the name was just removed */
+    }
+    free(pl.items);
+    return HZ_OK;
+}
+
+static hz_status d_option(parser *ps, const token *d, hz_error *err)
+{
+    static const struct {
+        const char *name;
+        param_type type;
+    } known[] = {
+        {"disablepixeljitter", PARAM_BOOL}, {"disabletexturefiltering", PARAM_BOOL},
+        {"disablewavelengthjitter", PARAM_BOOL}, {"displacementedgescale", PARAM_FLOAT},
+        {"msereferenceimage", PARAM_STRING}, {"msereferenceout", PARAM_STRING},
+        {"seed", PARAM_INTEGER}, {"forcediffuse", PARAM_BOOL}, {"pixelstats", PARAM_BOOL},
+        {"wavefront", PARAM_BOOL},
+    };
+    param_list pl;
+    if (parser_params(ps, &pl, d->loc, err) != HZ_OK) {
+        params_free(&pl);
+        return HZ_ERROR;
+    }
+    hz_status st = HZ_OK;
+    if (pl.count != 1) {
+        st = hz_fail_at(err, d->loc, "Option takes one parameter (\"bool disablepixeljitter\" true)");
+    } else {
+        param *p = &pl.items[0];
+        size_t i = 0, n = sizeof known / sizeof known[0];
+        while (i < n && strcmp(known[i].name, p->name) != 0)
+            ++i;
+        if (i == n)
+            st = hz_fail_at(err, p->loc, "unknown option \"%s\"", p->name);
+        else if (known[i].type != p->type || p->count != 1)
+            st = hz_fail_at(err, p->loc, "option \"%s\" takes one %s value", p->name,
+                            param_type_name(known[i].type));
+        else {
+            st = params_add(&ps->sd->options, *p, err);
+            pl.count = 0; /* ownership moved (or freed by params_add) */
+        }
+    }
+    params_free(&pl);
+    return st;
+}
+
+static hz_status d_color_space(parser *ps, const token *d, hz_error *err)
+{
+    const char *name;
+    if (parser_string_arg(ps, d, &name, err) != HZ_OK)
+        return HZ_ERROR;
+    if (strcmp(name, "srgb") != 0)
+        return hz_fail_at(err, d->loc, "ColorSpace \"%s\" is not supported; haze renders in \"srgb\"",
+                          name);
+    return HZ_OK;
+}
+
+#define OPTION_ENTITY(fn, label, seen_field, slot)                                               \
+    static hz_status fn(parser *ps, const token *d, hz_error *err)                              \
+    {                                                                                             \
+        return d_options_entity(ps, d, label, &ps->seen_field, &ps->sd->slot, err);               \
+    }
+OPTION_ENTITY(d_film, "Film", seen_film, film)
+OPTION_ENTITY(d_sampler, "Sampler", seen_sampler, sampler)
+OPTION_ENTITY(d_filter, "PixelFilter", seen_filter, filter)
+OPTION_ENTITY(d_integrator, "Integrator", seen_integrator, integrator)
+
+hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_error *err)
+{
+    static const struct {
+        const char *name;
+        hz_status (*fn)(parser *, const token *, hz_error *);
+    } table[] = {
+        {"Camera", d_camera},
+        {"Film", d_film},
+        {"Sampler", d_sampler},
+        {"PixelFilter", d_filter},
+        {"Integrator", d_integrator},
+        {"Shape", d_shape},
+        {"LightSource", d_light},
+        {"AreaLightSource", d_area_light},
+        {"Material", d_material},
+        {"MakeNamedMaterial", d_make_named_material},
+        {"NamedMaterial", d_named_material},
+        {"MakeNamedMedium", d_make_named_medium},
+        {"MediumInterface", d_medium_interface},
+        {"ReverseOrientation", d_reverse_orientation},
+        {"ObjectBegin", d_object_begin},
+        {"ObjectEnd", d_object_end},
+        {"ObjectInstance", d_object_instance},
+        {"Attribute", d_attribute},
+        {"Option", d_option},
+        {"ColorSpace", d_color_space},
+    };
+    for (size_t i = 0; i < sizeof table / sizeof table[0]; ++i) {
+        if (token_is(d, table[i].name)) {
+            *handled = true;
+            return table[i].fn(ps, d, err);
+        }
+    }
+    *handled = false;
+    return HZ_OK;
+}

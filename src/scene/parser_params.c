@@ -1,0 +1,312 @@
+/* Typed parameter lists: `"type name" value` or `"type name" [values]`, with
+ * pbrt-v4's type names and aliases. Values are checked against the type here,
+ * so factories only see well-formed lists; spectrum and blackbody values are
+ * converted to rgb (rules in spectrum.h). */
+#include <stdio.h>
+#include <string.h>
+
+#include "scene/mem.h"
+#include "scene/parser.h"
+#include "scene/spectrum.h"
+
+static const struct {
+    const char *name;
+    param_type type;
+} type_names[] = {
+    {"integer", PARAM_INTEGER}, {"float", PARAM_FLOAT},     {"bool", PARAM_BOOL},
+    {"string", PARAM_STRING},   {"point2", PARAM_POINT2},   {"vector2", PARAM_VECTOR2},
+    {"point3", PARAM_POINT3},   {"point", PARAM_POINT3},    {"vector3", PARAM_VECTOR3},
+    {"vector", PARAM_VECTOR3},  {"normal", PARAM_NORMAL},   {"normal3", PARAM_NORMAL},
+    {"rgb", PARAM_RGB},         {"color", PARAM_RGB},       {"spectrum", PARAM_SPECTRUM},
+    {"blackbody", PARAM_BLACKBODY},
+};
+
+/* Splits "type name" into its two words. */
+static hz_status split_decl(const char *decl, file_loc loc, char *type, char *name, size_t size,
+                            hz_error *err)
+{
+    char words[3][128];
+    int n = 0;
+    const char *p = decl;
+    while (*p) {
+        while (*p == ' ' || *p == '\t')
+            ++p;
+        if (!*p)
+            break;
+        size_t len = strcspn(p, " \t");
+        if (n == 3 || len >= sizeof words[0]) {
+            n = 3;
+            break;
+        }
+        memcpy(words[n], p, len);
+        words[n][len] = '\0';
+        ++n;
+        p += len;
+    }
+    if (n != 2)
+        return hz_fail_at(err, loc, "parameter declaration \"%.60s\" must be \"type name\"", decl);
+    snprintf(type, size, "%s", words[0]);
+    snprintf(name, size, "%s", words[1]);
+    return HZ_OK;
+}
+
+static hz_status lookup_type(const char *type, file_loc loc, param_type *out, hz_error *err)
+{
+    for (size_t i = 0; i < sizeof type_names / sizeof type_names[0]; ++i) {
+        if (strcmp(type_names[i].name, type) == 0) {
+            *out = type_names[i].type;
+            return HZ_OK;
+        }
+    }
+    if (strcmp(type, "texture") == 0)
+        return hz_fail_at(err, loc, "texture parameters are not supported (haze has no textures)");
+    return hz_fail_at(err, loc,
+                      "unknown parameter type \"%.60s\"; expected integer, float, bool, string, "
+                      "point2, vector2, point3, vector3, normal, rgb, spectrum or blackbody",
+                      type);
+}
+
+static int is_value(const token *t)
+{
+    return t->kind == TOK_NUMBER || t->kind == TOK_STRING || token_is(t, "true") ||
+           token_is(t, "false");
+}
+
+/* Collects the value tokens of one parameter (one bare value or a bracket). */
+static hz_status read_values(parser *ps, const char *decl, file_loc decl_loc, token **vals,
+                             size_t *count, hz_error *err)
+{
+    token t;
+    size_t cap = 0;
+    *vals = NULL;
+    *count = 0;
+    if (parser_next(ps, &t, err) != HZ_OK)
+        return HZ_ERROR;
+    char got[48];
+    if (t.kind != TOK_LBRACKET) {
+        if (!is_value(&t)) {
+            token_describe(&t, got, sizeof got);
+            return hz_fail_at(err, decl_loc, "parameter \"%.60s\" has no value (found %s)", decl,
+                              got);
+        }
+        *vals = scene_xmalloc(sizeof **vals);
+        (*vals)[0] = t;
+        *count = 1;
+        return HZ_OK;
+    }
+    file_loc open = t.loc;
+    for (;;) {
+        if (parser_next(ps, &t, err) != HZ_OK)
+            return HZ_ERROR;
+        if (t.kind == TOK_RBRACKET)
+            return HZ_OK;
+        if (!is_value(&t)) {
+            token_describe(&t, got, sizeof got);
+            return hz_fail_at(err, open, "'[' is not closed (found %s at line %d, column %d)", got,
+                              t.loc.line, t.loc.column);
+        }
+        *vals = scene_grow(*vals, &cap, *count, sizeof **vals);
+        (*vals)[(*count)++] = t;
+    }
+}
+
+static const char *kind_name(const token *t)
+{
+    switch (t->kind) {
+    case TOK_NUMBER: return "number";
+    case TOK_STRING: return "string";
+    default: return "bool";
+    }
+}
+
+/* Fails unless every value is a number. */
+static hz_status want_numbers(const param *p, const token *vals, size_t n, hz_error *err)
+{
+    for (size_t i = 0; i < n; ++i) {
+        if (vals[i].kind != TOK_NUMBER) {
+            char got[48];
+            token_describe(&vals[i], got, sizeof got);
+            return hz_fail_at(err, vals[i].loc, "parameter \"%s %s\" expects numbers, got %s %s",
+                              param_type_name(p->type), p->name, kind_name(&vals[i]), got);
+        }
+    }
+    return HZ_OK;
+}
+
+static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_error *err)
+{
+    if (vals[0].kind == TOK_STRING)
+        return hz_fail_at(err, vals[0].loc,
+                          "parameter \"spectrum %s\": named spectra and spectrum files are not "
+                          "supported; use rgb",
+                          p->name);
+    if (want_numbers(p, vals, n, err) != HZ_OK)
+        return HZ_ERROR;
+    rgb c;
+    if (n == 1) {
+        c = rgb_grey(vals[0].num);
+    } else {
+        if (n % 2 != 0)
+            return hz_fail_at(err, p->loc,
+                              "parameter \"spectrum %s\" needs (wavelength, value) pairs, got %zu "
+                              "values",
+                              p->name, n);
+        size_t pairs = n / 2;
+        double *lambda = scene_xarray(pairs, sizeof *lambda);
+        double *value = scene_xarray(pairs, sizeof *value);
+        for (size_t i = 0; i < pairs; ++i) {
+            lambda[i] = vals[2 * i].num;
+            value[i] = vals[2 * i + 1].num;
+            if (i > 0 && !(lambda[i] > lambda[i - 1])) {
+                free(lambda);
+                free(value);
+                return hz_fail_at(err, vals[2 * i].loc,
+                                  "parameter \"spectrum %s\": wavelengths must increase", p->name);
+            }
+        }
+        c = spectrum_sampled_to_rgb(lambda, value, pairs);
+        free(lambda);
+        free(value);
+    }
+    p->count = 3;
+    p->nums = scene_xarray(3, sizeof *p->nums);
+    p->nums[0] = c.r;
+    p->nums[1] = c.g;
+    p->nums[2] = c.b;
+    return HZ_OK;
+}
+
+static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
+{
+    if (n == 0)
+        return hz_fail_at(err, p->loc, "parameter \"%s %s\" has no values",
+                          param_type_name(p->type), p->name);
+    size_t tuple = 1;
+    switch (p->type) {
+    case PARAM_STRING:
+        p->strs = scene_xarray(n, sizeof *p->strs);
+        for (size_t i = 0; i < n; ++i)
+            p->strs[i] = NULL;
+        p->count = n;
+        for (size_t i = 0; i < n; ++i) {
+            if (vals[i].kind != TOK_STRING) {
+                char got[48];
+                token_describe(&vals[i], got, sizeof got);
+                return hz_fail_at(err, vals[i].loc, "parameter \"string %s\" expects strings, got %s",
+                                  p->name, got);
+            }
+            p->strs[i] = token_string_dup(&vals[i]);
+        }
+        return HZ_OK;
+    case PARAM_BOOL:
+        p->bools = scene_xarray(n, sizeof *p->bools);
+        p->count = n;
+        for (size_t i = 0; i < n; ++i) {
+            /* pbrt-v4 takes true/false bare or quoted. */
+            const token *v = &vals[i];
+            bool bare = v->kind == TOK_IDENT;
+            bool quoted_t = v->kind == TOK_STRING && v->len == 4 && !memcmp(v->text, "true", 4);
+            bool quoted_f = v->kind == TOK_STRING && v->len == 5 && !memcmp(v->text, "false", 5);
+            if (!bare && !quoted_t && !quoted_f) {
+                char got[48];
+                token_describe(v, got, sizeof got);
+                return hz_fail_at(err, v->loc, "parameter \"bool %s\" expects true or false, got %s",
+                                  p->name, got);
+            }
+            p->bools[i] = quoted_t || token_is(v, "true");
+        }
+        return HZ_OK;
+    case PARAM_SPECTRUM:
+        return convert_spectrum(p, vals, n, err);
+    case PARAM_BLACKBODY:
+        if (want_numbers(p, vals, n, err) != HZ_OK)
+            return HZ_ERROR;
+        if (n != 1)
+            return hz_fail_at(err, p->loc, "parameter \"blackbody %s\" takes 1 value (kelvin), got %zu",
+                              p->name, n);
+        if (!(vals[0].num > 0.0))
+            return hz_fail_at(err, vals[0].loc, "parameter \"blackbody %s\": temperature must be > 0",
+                              p->name);
+        {
+            rgb c = spectrum_blackbody_to_rgb(vals[0].num);
+            p->count = 3;
+            p->nums = scene_xarray(3, sizeof *p->nums);
+            p->nums[0] = c.r;
+            p->nums[1] = c.g;
+            p->nums[2] = c.b;
+        }
+        return HZ_OK;
+    case PARAM_POINT2:
+    case PARAM_VECTOR2:
+        tuple = 2;
+        break;
+    case PARAM_POINT3:
+    case PARAM_VECTOR3:
+    case PARAM_NORMAL:
+        tuple = 3;
+        break;
+    case PARAM_RGB:
+    case PARAM_INTEGER:
+    case PARAM_FLOAT:
+        break;
+    }
+    if (want_numbers(p, vals, n, err) != HZ_OK)
+        return HZ_ERROR;
+    if (p->type == PARAM_RGB && n != 3)
+        return hz_fail_at(err, p->loc, "parameter \"rgb %s\" takes 3 values, got %zu", p->name, n);
+    if (n % tuple != 0)
+        return hz_fail_at(err, p->loc, "parameter \"%s %s\" needs a multiple of %zu values, got %zu",
+                          param_type_name(p->type), p->name, tuple, n);
+    for (size_t i = 0; p->type == PARAM_INTEGER && i < n; ++i)
+        if (vals[i].num != (double)(long long)vals[i].num || vals[i].num > 2147483647.0 ||
+            vals[i].num < -2147483648.0)
+            return hz_fail_at(err, vals[i].loc, "parameter \"integer %s\" expects integers, got %.*s",
+                              p->name, (int)(vals[i].len < 30 ? vals[i].len : 30), vals[i].text);
+    p->nums = scene_xarray(n, sizeof *p->nums);
+    p->count = n;
+    for (size_t i = 0; i < n; ++i)
+        p->nums[i] = vals[i].num;
+    return HZ_OK;
+}
+
+static hz_status parse_one(parser *ps, const token *decl_tok, param_list *out, hz_error *err)
+{
+    char *decl = token_string_dup(decl_tok);
+    char type[128], name[128];
+    param p;
+    memset(&p, 0, sizeof p);
+    p.loc = decl_tok->loc;
+    token *vals = NULL;
+    size_t n = 0;
+    hz_status st = split_decl(decl, p.loc, type, name, sizeof type, err);
+    if (st == HZ_OK)
+        st = lookup_type(type, p.loc, &p.type, err);
+    if (st == HZ_OK)
+        st = read_values(ps, decl, p.loc, &vals, &n, err);
+    if (st == HZ_OK) {
+        p.name = scene_xstrdup(name);
+        st = convert(&p, vals, n, err);
+        if (st == HZ_OK)
+            st = params_add(out, p, err); /* frees p on failure */
+        else
+            param_free(&p);
+    }
+    free(vals);
+    free(decl);
+    return st;
+}
+
+hz_status parser_params(parser *ps, param_list *out, file_loc directive, hz_error *err)
+{
+    params_init(out, directive);
+    for (;;) {
+        token t;
+        if (parser_peek(ps, &t, err) != HZ_OK)
+            return HZ_ERROR;
+        if (t.kind != TOK_STRING)
+            return HZ_OK;
+        parser_next(ps, &t, err);
+        if (parse_one(ps, &t, out, err) != HZ_OK)
+            return HZ_ERROR;
+    }
+}

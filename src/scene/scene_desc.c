@@ -1,0 +1,76 @@
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene/mem.h"
+#include "scene/parser.h"
+
+static const char *own(scene_desc *sd, const char *s)
+{
+    sd->strings = scene_grow(sd->strings, &sd->string_capacity, sd->string_count,
+                             sizeof *sd->strings);
+    sd->strings[sd->string_count++] = scene_xstrdup(s);
+    return sd->strings[sd->string_count - 1];
+}
+
+static scene_entity default_entity(scene_desc *sd, const char *type, file_loc loc)
+{
+    scene_entity e;
+    e.type = (char *)own(sd, type);
+    e.loc = loc;
+    params_init(&e.params, loc);
+    return e;
+}
+
+void scene_desc_init(scene_desc *sd, const char *file)
+{
+    memset(sd, 0, sizeof *sd);
+    file_loc start = {own(sd, file), 1, 1};
+    sd->camera.entity = default_entity(sd, "perspective", start);
+    sd->camera.camera_from_world = transform_identity();
+    sd->camera.camera_from_world_end = transform_identity();
+    sd->camera.medium = (char *)own(sd, "");
+    sd->film = default_entity(sd, "rgb", start);
+    sd->sampler = default_entity(sd, "zsobol", start);
+    sd->filter = default_entity(sd, "gaussian", start);
+    sd->integrator = default_entity(sd, "volpath", start);
+    sd->transform_start_time = 0.0;
+    sd->transform_end_time = 1.0;
+    params_init(&sd->options, start);
+}
+
+static void free_shapes(shape_entity *s, size_t n)
+{
+    for (size_t i = 0; i < n; ++i) {
+        params_free(&s[i].entity.params);
+        if (s[i].has_area_light)
+            params_free(&s[i].area_light.params);
+    }
+    free(s);
+}
+
+void scene_desc_free(scene_desc *sd)
+{
+    params_free(&sd->camera.entity.params);
+    params_free(&sd->film.params);
+    params_free(&sd->sampler.params);
+    params_free(&sd->filter.params);
+    params_free(&sd->integrator.params);
+    params_free(&sd->options);
+    free_shapes(sd->shapes, sd->shape_count);
+    free_shapes(sd->object_shapes, sd->object_shape_count);
+    free(sd->objects);
+    free(sd->instances);
+    for (size_t i = 0; i < sd->material_count; ++i)
+        params_free(&sd->materials[i].entity.params);
+    free(sd->materials);
+    for (size_t i = 0; i < sd->light_count; ++i)
+        params_free(&sd->lights[i].entity.params);
+    free(sd->lights);
+    for (size_t i = 0; i < sd->medium_count; ++i)
+        params_free(&sd->media[i].entity.params);
+    free(sd->media);
+    for (size_t i = 0; i < sd->string_count; ++i)
+        free(sd->strings[i]);
+    free(sd->strings);
+    memset(sd, 0, sizeof *sd);
+}

@@ -1,0 +1,229 @@
+/* Shape factories. Every error names the parameter's (or the Shape's)
+ * file:line:column; params_finish makes unknown parameters errors. */
+#include "scene/shape.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "scene/mem.h"
+#include "scene/ply.h"
+
+/* A disk becomes a fan (or ring) of this many segments: the chord error is
+ * r(1 - cos(pi/256)) < 8e-5 r, far below a pixel for any sensible framing. */
+#define DISK_SEGMENTS 256
+
+void shape_geometry_free(shape_geometry *g)
+{
+    free(g->p);
+    free(g->n);
+    free(g->uv);
+    free(g->indices);
+    memset(g, 0, sizeof *g);
+}
+
+static hz_status finish(shape_entity *se, hz_error *err)
+{
+    char what[96];
+    snprintf(what, sizeof what, "Shape \"%.60s\"", se->entity.type);
+    return params_finish(&se->entity.params, what, err);
+}
+
+static double *dup_doubles(const double *src, size_t n)
+{
+    double *d = scene_xarray(n, sizeof *d);
+    memcpy(d, src, n * sizeof *d);
+    return d;
+}
+
+/* trianglemesh (tri_verts 3) and bilinearmesh (4: pbrt's p00 p10 p01 p11 order). */
+static hz_status create_mesh(shape_entity *se, int per_face, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    size_t np, ni, nn, nuv;
+    const double *P = params_point3s(pl, "P", &np);
+    const double *idx = params_ints(pl, "indices", &ni);
+    const double *N = params_normals(pl, "N", &nn);
+    const double *uv = params_point2s(pl, "uv", &nuv);
+    if (finish(se, err) != HZ_OK)
+        return HZ_ERROR;
+    const char *type = se->entity.type;
+    if (!P)
+        return hz_fail_at(err, se->entity.loc, "%s needs \"point3 P\"", type);
+    if (np > UINT32_MAX)
+        return hz_fail_at(err, params_loc(pl, "P"), "%s has too many vertices", type);
+    static const double implicit[4] = {0, 1, 2, 3};
+    if (!idx) {
+        if (np != (size_t)per_face)
+            return hz_fail_at(err, se->entity.loc,
+                              "%s without \"integer indices\" must have exactly %d vertices, has %zu",
+                              type, per_face, np);
+        idx = implicit;
+        ni = (size_t)per_face;
+    }
+    if (ni % (size_t)per_face != 0)
+        return hz_fail_at(err, params_loc(pl, "indices"),
+                          "%s \"indices\" must be a multiple of %d, got %zu values", type, per_face,
+                          ni);
+    for (size_t i = 0; i < ni; ++i)
+        if (idx[i] < 0 || idx[i] >= (double)np)
+            return hz_fail_at(err, params_loc(pl, "indices"),
+                              "%s index %.0f (value %zu) is out of range [0, %zu)", type, idx[i],
+                              i, np);
+    if (N && nn != np)
+        return hz_fail_at(err, params_loc(pl, "N"), "%s has %zu normals for %zu vertices", type, nn,
+                          np);
+    if (uv && nuv != np)
+        return hz_fail_at(err, params_loc(pl, "uv"), "%s has %zu uvs for %zu vertices", type, nuv,
+                          np);
+    size_t faces = ni / (size_t)per_face;
+    if (faces == 0)
+        return hz_fail_at(err, se->entity.loc, "%s has no faces", type);
+    g->kind = GEOMETRY_TRIANGLES;
+    g->vertex_count = np;
+    g->p = dup_doubles(P, 3 * np);
+    g->n = N ? dup_doubles(N, 3 * np) : NULL;
+    g->uv = uv ? dup_doubles(uv, 2 * np) : NULL;
+    g->triangle_count = faces * (size_t)(per_face - 2);
+    g->indices = scene_xarray(g->triangle_count, 3 * sizeof *g->indices);
+    static const int tri[1][3] = {{0, 1, 2}};
+    static const int quad[2][3] = {{0, 1, 3}, {0, 3, 2}}; /* p00 p10 p11, p00 p11 p01 */
+    size_t o = 0;
+    for (size_t f = 0; f < faces; ++f) {
+        const double *v = idx + f * (size_t)per_face;
+        for (int t = 0; t < per_face - 2; ++t)
+            for (int c = 0; c < 3; ++c)
+                g->indices[o++] = (uint32_t)v[per_face == 3 ? tri[t][c] : quad[t][c]];
+    }
+    return HZ_OK;
+}
+
+static hz_status create_plymesh(shape_entity *se, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    const char *name = params_string(pl, "filename", NULL);
+    if (finish(se, err) != HZ_OK)
+        return HZ_ERROR;
+    if (!name)
+        return hz_fail_at(err, se->entity.loc, "plymesh needs \"string filename\"");
+    /* Relative to the directory of the scene file that names it. */
+    const char *base = se->entity.loc.file ? se->entity.loc.file : "";
+    const char *slash = strrchr(base, '/');
+    size_t dir = (name[0] != '/' && slash) ? (size_t)(slash - base) + 1 : 0;
+    size_t n = strlen(name);
+    char *path = scene_xmalloc(dir + n + 1);
+    memcpy(path, base, dir);
+    memcpy(path + dir, name, n + 1);
+    hz_error perr;
+    hz_status st = ply_read(path, g, &perr);
+    free(path);
+    if (st != HZ_OK)
+        return hz_fail_at(err, params_loc(pl, "filename"), "plymesh: %s", perr.message);
+    return HZ_OK;
+}
+
+/* Partial spheres and disks are refused rather than silently rendered whole. */
+static void only_default(param_list *pl, const char *name, double def)
+{
+    if (!params_has(pl, name))
+        return;
+    double v = params_float(pl, name, def);
+    if (v != def)
+        params_reject(pl, name, "\"%s\" other than its default (%g) is not supported", name, def);
+}
+
+static hz_status create_sphere(shape_entity *se, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    double r = params_float(pl, "radius", 1.0);
+    if (!(r > 0.0))
+        params_reject(pl, "radius", "sphere \"radius\" must be > 0, got %g", r);
+    only_default(pl, "zmin", -r);
+    only_default(pl, "zmax", r);
+    only_default(pl, "phimax", 360.0);
+    if (finish(se, err) != HZ_OK)
+        return HZ_ERROR;
+    g->kind = GEOMETRY_SPHERE;
+    g->radius = r;
+    return HZ_OK;
+}
+
+static hz_status create_disk(shape_entity *se, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    double h = params_float(pl, "height", 0.0);
+    double r = params_float(pl, "radius", 1.0);
+    double ri = params_float(pl, "innerradius", 0.0);
+    only_default(pl, "phimax", 360.0);
+    if (!(r > 0.0))
+        params_reject(pl, "radius", "disk \"radius\" must be > 0, got %g", r);
+    else if (!(ri >= 0.0 && ri < r))
+        params_reject(pl, "innerradius", "disk \"innerradius\" must be in [0, radius), got %g", ri);
+    if (finish(se, err) != HZ_OK)
+        return HZ_ERROR;
+    /* Two rings of DISK_SEGMENTS + 1 vertices (the seam is duplicated so u
+     * runs 0..1 as pbrt's phi / phimax); the inner ring collapses to the
+     * centre when innerradius is 0. Triangles wind counter-clockwise seen from
+     * +z and carry the normal (0,0,1), as pbrt-v4's Disk. */
+    size_t ring = DISK_SEGMENTS + 1;
+    g->kind = GEOMETRY_TRIANGLES;
+    g->vertex_count = 2 * ring;
+    g->p = scene_xarray(g->vertex_count, 3 * sizeof *g->p);
+    g->n = scene_xarray(g->vertex_count, 3 * sizeof *g->n);
+    g->uv = scene_xarray(g->vertex_count, 2 * sizeof *g->uv);
+    for (size_t k = 0; k < 2; ++k) {
+        double rad = k == 0 ? r : ri;
+        for (size_t i = 0; i < ring; ++i) {
+            double u = (double)i / DISK_SEGMENTS, phi = 2.0 * HZ_PI * u;
+            size_t v = k * ring + i;
+            g->p[3 * v] = i == DISK_SEGMENTS ? rad : rad * cos(phi);
+            g->p[3 * v + 1] = i == DISK_SEGMENTS ? 0.0 : rad * sin(phi);
+            g->p[3 * v + 2] = h;
+            g->n[3 * v] = 0.0;
+            g->n[3 * v + 1] = 0.0;
+            g->n[3 * v + 2] = 1.0;
+            g->uv[2 * v] = u;
+            g->uv[2 * v + 1] = (r - rad) / (r - ri);
+        }
+    }
+    g->triangle_count = ri > 0.0 ? 2 * DISK_SEGMENTS : DISK_SEGMENTS;
+    g->indices = scene_xarray(g->triangle_count, 3 * sizeof *g->indices);
+    size_t o = 0;
+    for (uint32_t i = 0; i < DISK_SEGMENTS; ++i) {
+        uint32_t a = i, b = i + 1, c = (uint32_t)ring + i, d = (uint32_t)ring + i + 1;
+        uint32_t t1[3] = {a, b, d};
+        for (int j = 0; j < 3; ++j)
+            g->indices[o++] = t1[j];
+        if (ri > 0.0) {
+            uint32_t t2[3] = {a, d, c};
+            for (int j = 0; j < 3; ++j)
+                g->indices[o++] = t2[j];
+        }
+    }
+    return HZ_OK;
+}
+
+hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const char *type = se->entity.type;
+    hz_status st;
+    if (strcmp(type, "trianglemesh") == 0)
+        st = create_mesh(se, 3, out, err);
+    else if (strcmp(type, "bilinearmesh") == 0)
+        st = create_mesh(se, 4, out, err);
+    else if (strcmp(type, "plymesh") == 0)
+        st = create_plymesh(se, out, err);
+    else if (strcmp(type, "sphere") == 0)
+        st = create_sphere(se, out, err);
+    else if (strcmp(type, "disk") == 0)
+        st = create_disk(se, out, err);
+    else
+        st = hz_fail_at(err, se->entity.loc,
+                        "unknown shape \"%.60s\"; supported: trianglemesh plymesh sphere disk "
+                        "bilinearmesh",
+                        type);
+    if (st != HZ_OK)
+        shape_geometry_free(out);
+    return st;
+}

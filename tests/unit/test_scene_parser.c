@@ -1,0 +1,538 @@
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "scene/scene_desc.h"
+
+static void parse_ok(const char *src, scene_desc *sd)
+{
+    hz_error err;
+    if (scene_parse_string(src, "t.pbrt", sd, &err) != HZ_OK)
+        fail_msg("unexpected error: %s", err.message);
+}
+
+static void parse_err(const char *src, const char *want)
+{
+    scene_desc sd;
+    hz_error err;
+    if (scene_parse_string(src, "t.pbrt", &sd, &err) == HZ_OK) {
+        scene_desc_free(&sd);
+        fail_msg("expected error \"%s\"", want);
+    }
+    if (!strstr(err.message, want))
+        fail_msg("got \"%s\", want \"%s\"", err.message, want);
+    assert_int_equal(sd.shape_count, 0);
+    assert_null(sd.strings);
+}
+
+static void assert_mat(const mat4 *m, const double want[4][4])
+{
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c)
+            if (fabs(m->m[r][c] - want[r][c]) > 1e-12)
+                fail_msg("m[%d][%d] = %g, want %g", r, c, m->m[r][c], want[r][c]);
+}
+
+static void assert_point(const transform *t, vec3 p, vec3 want)
+{
+    vec3 q = transform_point(t, p);
+    if (v3_length(v3_sub(q, want)) > 1e-12)
+        fail_msg("got (%g %g %g), want (%g %g %g)", q.x, q.y, q.z, want.x, want.y, want.z);
+}
+
+static void test_defaults(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin", &sd);
+    assert_string_equal(sd.camera.entity.type, "perspective");
+    assert_string_equal(sd.film.type, "rgb");
+    assert_string_equal(sd.sampler.type, "zsobol");
+    assert_string_equal(sd.filter.type, "gaussian");
+    assert_string_equal(sd.integrator.type, "volpath");
+    assert_true(transform_is_identity(sd.camera.camera_from_world));
+    assert_string_equal(sd.camera.medium, "");
+    assert_string_equal(sd.film.loc.file, "t.pbrt");
+    assert_int_equal(sd.film.loc.line, 1);
+    assert_int_equal(sd.camera.entity.params.count, 0);
+    assert_true(sd.transform_start_time == 0.0 && sd.transform_end_time == 1.0);
+    scene_desc_free(&sd);
+}
+
+static void test_look_at(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("LookAt 2 0 0  3 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\nWorldBegin", &sd);
+    /* dir = +x, right = up x dir = (0,0,-1), up' = dir x right = (0,1,0);
+     * camera_from_world rows are right, up', dir; translation -R eye. */
+    const double want[4][4] = {{0, 0, -1, 0}, {0, 1, 0, 0}, {1, 0, 0, -2}, {0, 0, 0, 1}};
+    assert_mat(&sd.camera.camera_from_world.m, want);
+    assert_point(&sd.camera.camera_from_world, v3(3, 0, 0), v3(0, 0, 1));
+    assert_int_equal(sd.camera.entity.loc.line, 2);
+    assert_int_equal(sd.camera.entity.loc.column, 1);
+    assert_int_equal(sd.camera.entity.params.count, 1);
+    assert_true(params_float(&sd.camera.entity.params, "fov", 90) == 45.0);
+    scene_desc_free(&sd);
+}
+
+static void test_transform_is_transposed(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("Transform [1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1]\nCamera \"orthographic\"\n"
+             "WorldBegin\nConcatTransform [2 0 0 0 0 2 0 0 0 0 2 0 1 0 0 1]\nShape \"sphere\"",
+             &sd);
+    const double want[4][4] = {{1, 0, 0, 5}, {0, 1, 0, 6}, {0, 0, 1, 7}, {0, 0, 0, 1}};
+    assert_mat(&sd.camera.camera_from_world.m, want);
+    assert_int_equal(sd.shape_count, 1);
+    assert_point(&sd.shapes[0].world_from_object, v3(1, 1, 1), v3(3, 2, 2));
+    scene_desc_free(&sd);
+}
+
+static void test_composition_order(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin\n"
+             "AttributeBegin Translate 1 0 0 Scale 2 2 2 Shape \"sphere\" AttributeEnd\n"
+             "AttributeBegin Rotate 90 0 0 1 Translate 1 0 0 Shape \"sphere\" AttributeEnd\n"
+             "Shape \"sphere\"\n",
+             &sd);
+    assert_int_equal(sd.shape_count, 3);
+    /* ctm = T * S: the scale applies first. */
+    assert_point(&sd.shapes[0].world_from_object, v3(1, 0, 0), v3(3, 0, 0));
+    /* ctm = R * T: translate, then rotate about z. */
+    assert_point(&sd.shapes[1].world_from_object, v3(0, 0, 0), v3(0, 1, 0));
+    assert_true(transform_is_identity(sd.shapes[2].world_from_object));
+    scene_desc_free(&sd);
+}
+
+static void test_attribute_restore(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin\nMaterial \"diffuse\"\n"
+             "AttributeBegin\n  Translate 0 0 1\n  ReverseOrientation\n  Material \"interface\"\n"
+             "  MediumInterface \"fog\" \"\"\n  AreaLightSource \"diffuse\" \"rgb L\" [1 2 3]\n"
+             "  Shape \"sphere\"\nAttributeEnd\nShape \"sphere\"\n",
+             &sd);
+    assert_int_equal(sd.shape_count, 2);
+    assert_int_equal(sd.material_count, 2);
+    const shape_entity *a = &sd.shapes[0], *b = &sd.shapes[1];
+    assert_true(a->reverse_orientation);
+    assert_int_equal(a->material, 1);
+    assert_string_equal(sd.materials[1].entity.type, "interface");
+    assert_string_equal(a->inside_medium, "fog");
+    assert_string_equal(a->outside_medium, "");
+    assert_true(a->has_area_light);
+    assert_string_equal(a->area_light.type, "diffuse");
+    rgb L = params_rgb((param_list *)&a->area_light.params, "L", rgb_grey(0));
+    assert_true(L.r == 1 && L.g == 2 && L.b == 3);
+    assert_point(&a->world_from_object, v3(0, 0, 0), v3(0, 0, 1));
+    assert_false(b->reverse_orientation);
+    assert_int_equal(b->material, 0);
+    assert_false(b->has_area_light);
+    assert_string_equal(b->inside_medium, "");
+    assert_true(transform_is_identity(b->world_from_object));
+    scene_desc_free(&sd);
+}
+
+static void test_default_material(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin Shape \"sphere\"", &sd);
+    assert_int_equal(sd.shapes[0].material, -1);
+    scene_desc_free(&sd);
+}
+
+static void test_coordsys(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("Translate 0 0 5\nCoordinateSystem \"five\"\nIdentity\nCamera \"perspective\"\n"
+             "WorldBegin\nCoordSysTransform \"five\"\nShape \"sphere\"\n"
+             "CoordSysTransform \"camera\"\nShape \"sphere\"\n"
+             "CoordSysTransform \"world\"\nShape \"sphere\"\n",
+             &sd);
+    assert_point(&sd.shapes[0].world_from_object, v3(0, 0, 0), v3(0, 0, 5));
+    assert_true(transform_is_identity(sd.shapes[1].world_from_object));
+    assert_true(transform_is_identity(sd.shapes[2].world_from_object));
+    scene_desc_free(&sd);
+
+    parse_ok("LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+             "CoordSysTransform \"camera\"\nShape \"sphere\"",
+             &sd);
+    /* "camera" is world_from_camera: the camera's origin lands at the eye. */
+    assert_point(&sd.shapes[0].world_from_object, v3(0, 0, 0), v3(0, 0, -3));
+    assert_point(&sd.shapes[0].world_from_object, v3(0, 0, 1), v3(0, 0, -2));
+    scene_desc_free(&sd);
+    parse_err("WorldBegin\nCoordSysTransform \"nope\"",
+              "t.pbrt:2:1: CoordSysTransform: no coordinate system named \"nope\"");
+}
+
+static void test_active_transform(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("TransformTimes 0 2\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n"
+             "Camera \"perspective\"\nWorldBegin",
+             &sd);
+    assert_true(transform_is_identity(sd.camera.camera_from_world));
+    assert_point(&sd.camera.camera_from_world_end, v3(0, 0, 0), v3(1, 0, 0));
+    assert_true(sd.transform_end_time == 2.0);
+    scene_desc_free(&sd);
+    parse_err("ActiveTransform Sometimes WorldBegin", "t.pbrt:1:17: ActiveTransform expects");
+}
+
+static void test_named_material(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin\nMakeNamedMaterial \"grey\" \"string type\" \"diffuse\" "
+             "\"rgb reflectance\" [.5 .5 .5]\nMaterial \"interface\"\nShape \"sphere\"\n"
+             "NamedMaterial \"grey\"\nShape \"sphere\"\n",
+             &sd);
+    assert_int_equal(sd.material_count, 2);
+    assert_string_equal(sd.materials[0].name, "grey");
+    assert_string_equal(sd.materials[0].entity.type, "diffuse");
+    assert_false(params_has(&sd.materials[0].entity.params, "type"));
+    assert_true(params_has(&sd.materials[0].entity.params, "reflectance"));
+    assert_null(sd.materials[1].name);
+    assert_int_equal(sd.shapes[0].material, 1);
+    assert_int_equal(sd.shapes[1].material, 0);
+    scene_desc_free(&sd);
+    parse_err("WorldBegin\n  NamedMaterial \"nope\"", "t.pbrt:2:3: NamedMaterial \"nope\" is not defined");
+    parse_err("WorldBegin\nMakeNamedMaterial \"a\" \"float x\" 1",
+              "t.pbrt:2:1: MakeNamedMaterial \"a\" has no \"string type\" parameter");
+    parse_err("WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n"
+              "MakeNamedMaterial \"a\" \"string type\" \"diffuse\"",
+              "t.pbrt:3:1: named material \"a\" redefined (first at t.pbrt:2:1)");
+}
+
+static void test_media(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("Translate 1 0 0\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\" "
+             "\"rgb sigma_s\" [1 1 1]\nIdentity\nMediumInterface \"fog\"\nCamera \"perspective\"\n"
+             "WorldBegin\nMediumInterface \"\" \"fog\"\nLightSource \"point\" \"rgb I\" [1 1 1]\n",
+             &sd);
+    assert_int_equal(sd.medium_count, 1);
+    assert_string_equal(sd.media[0].name, "fog");
+    assert_string_equal(sd.media[0].entity.type, "homogeneous");
+    assert_point(&sd.media[0].world_from_medium, v3(0, 0, 0), v3(1, 0, 0));
+    assert_string_equal(sd.camera.medium, "fog");
+    assert_int_equal(sd.light_count, 1);
+    assert_string_equal(sd.lights[0].medium, "fog");
+    assert_string_equal(sd.lights[0].entity.type, "point");
+    scene_desc_free(&sd);
+    parse_err("MakeNamedMedium \"a\" \"string type\" \"homogeneous\"\n"
+              "MakeNamedMedium \"a\" \"string type\" \"homogeneous\"\nWorldBegin",
+              "t.pbrt:2:1: named medium \"a\" redefined");
+}
+
+static void test_objects(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin\nObjectBegin \"two\"\n Translate 1 0 0\n Shape \"sphere\"\n"
+             " Shape \"disk\"\nObjectEnd\nShape \"sphere\"\nTranslate 0 5 0\n"
+             "ObjectInstance \"two\"\n",
+             &sd);
+    assert_int_equal(sd.object_count, 1);
+    assert_string_equal(sd.objects[0].name, "two");
+    assert_int_equal(sd.objects[0].first_shape, 0);
+    assert_int_equal(sd.objects[0].shape_count, 2);
+    assert_int_equal(sd.object_shape_count, 2);
+    assert_string_equal(sd.object_shapes[1].entity.type, "disk");
+    assert_point(&sd.object_shapes[0].world_from_object, v3(0, 0, 0), v3(1, 0, 0));
+    assert_int_equal(sd.shape_count, 1);
+    /* ObjectEnd restored the CTM: the top-level shape is untransformed. */
+    assert_true(transform_is_identity(sd.shapes[0].world_from_object));
+    assert_int_equal(sd.instance_count, 1);
+    assert_int_equal(sd.instances[0].object, 0);
+    assert_int_equal(sd.instances[0].loc.line, 9);
+    assert_point(&sd.instances[0].world_from_instance, v3(0, 0, 0), v3(0, 5, 0));
+    scene_desc_free(&sd);
+
+    parse_err("WorldBegin\nObjectInstance \"x\"", "t.pbrt:2:1: ObjectInstance: no object named \"x\"");
+    parse_err("WorldBegin\nObjectBegin \"a\"\nObjectBegin \"b\"",
+              "t.pbrt:3:1: ObjectBegin inside the definition of \"a\"");
+    parse_err("WorldBegin\nObjectBegin \"a\"\nObjectInstance \"a\"",
+              "t.pbrt:3:1: ObjectInstance inside the definition of object \"a\"");
+    parse_err("WorldBegin\nAreaLightSource \"diffuse\"\nObjectBegin \"a\"\nShape \"sphere\"",
+              "t.pbrt:4:1: area lights are not supported inside ObjectBegin");
+    parse_err("WorldBegin\nObjectEnd", "t.pbrt:2:1: ObjectEnd without a matching ObjectBegin");
+    parse_err("WorldBegin\nObjectBegin \"a\"\nAttributeBegin\nObjectEnd",
+              "t.pbrt:4:1: ObjectEnd inside the AttributeBegin at t.pbrt:3:1");
+    parse_err("WorldBegin\n  ObjectBegin \"a\"\n", "t.pbrt:2:3: ObjectBegin is never closed");
+}
+
+static void test_attribute_defaults(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin\nAttributeBegin\nAttribute \"shape\" \"float radius\" 2\n"
+             "Shape \"sphere\"\nShape \"sphere\" \"float radius\" 3\nAttributeEnd\nShape \"sphere\"",
+             &sd);
+    assert_true(params_float(&sd.shapes[0].entity.params, "radius", 1) == 2.0);
+    assert_true(params_float(&sd.shapes[1].entity.params, "radius", 1) == 3.0);
+    assert_false(params_has(&sd.shapes[2].entity.params, "radius"));
+    scene_desc_free(&sd);
+    /* A default nobody reads is not an error (pbrt-v4's mayBeUnused); a
+     * parameter given on the Shape itself is. */
+    parse_ok("WorldBegin\nAttribute \"shape\" \"float zz\" 2\nShape \"sphere\"\n"
+             "Shape \"sphere\" \"float yy\" 1",
+             &sd);
+    hz_error err;
+    assert_int_equal(params_finish(&sd.shapes[0].entity.params, "Shape", &err), HZ_OK);
+    assert_int_equal(params_finish(&sd.shapes[1].entity.params, "Shape \"sphere\"", &err),
+                     HZ_ERROR);
+    assert_string_equal(err.message, "t.pbrt:4:16: unused parameter \"float yy\" for Shape \"sphere\"");
+    scene_desc_free(&sd);
+    parse_err("Attribute \"texture\" \"float x\" 1", "t.pbrt:1:1: Attribute target \"texture\" is not supported");
+}
+
+static void test_options_and_colorspace(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("Option \"bool disablepixeljitter\" true\nOption \"integer seed\" 7\n"
+             "ColorSpace \"srgb\"\nWorldBegin",
+             &sd);
+    assert_true(params_bool(&sd.options, "disablepixeljitter", false));
+    assert_int_equal(params_int(&sd.options, "seed", 0), 7);
+    scene_desc_free(&sd);
+    parse_err("Option \"bool nosuch\" true", "t.pbrt:1:8: unknown option \"nosuch\"");
+    parse_err("Option \"float seed\" 1", "t.pbrt:1:8: option \"seed\" takes one integer value");
+    parse_err("ColorSpace \"aces2065-1\"", "t.pbrt:1:1: ColorSpace \"aces2065-1\" is not supported");
+}
+
+static void test_structure_errors(void **state)
+{
+    (void)state;
+    parse_err("WorldBegin\n  Frobnicate 1", "t.pbrt:2:3: unknown directive 'Frobnicate'; supported: LookAt");
+    parse_err("WorldBegin\nWorldEnd", "t.pbrt:2:1: WorldEnd does not exist in pbrt-v4");
+    parse_err("WorldBegin\nCamera \"perspective\"", "t.pbrt:2:1: Camera must come before WorldBegin");
+    parse_err("Film \"rgb\"\n Film \"rgb\"", "t.pbrt:2:2: Film given twice (first at t.pbrt:1:1)");
+    parse_err("Shape \"sphere\"", "t.pbrt:1:1: Shape is only allowed after WorldBegin");
+    parse_err("Material \"diffuse\"", "t.pbrt:1:1: Material is only allowed after WorldBegin");
+    parse_err("LightSource \"point\"", "t.pbrt:1:1: LightSource is only allowed after WorldBegin");
+    parse_err("WorldBegin\nAttributeEnd", "t.pbrt:2:1: AttributeEnd without a matching AttributeBegin");
+    parse_err("WorldBegin\nAttributeBegin\n  AttributeBegin\nAttributeEnd\n",
+              "t.pbrt:2:1: AttributeBegin is never closed");
+    parse_err("Camera \"perspective\"\n", "t.pbrt:2:1: end of input before WorldBegin");
+    parse_err("", "t.pbrt:1:1: end of input before WorldBegin");
+    parse_err("WorldBegin WorldBegin", "t.pbrt:1:12: WorldBegin must come before WorldBegin");
+    parse_err("\"Shape\"", "t.pbrt:1:1: expected a directive, found \"Shape\"");
+    parse_err("Translate 1 2", "t.pbrt:1:14: Translate expects 3 numbers, found end of file after 2");
+}
+
+static void test_transform_errors(void **state)
+{
+    (void)state;
+    parse_err("Transform [1 0 0 0 0 1 0 0 0 0 0 0 0 0 0 1]", "t.pbrt:1:1: Transform matrix is singular");
+    parse_err("Transform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0]\nWorldBegin",
+              "t.pbrt:1:41: Transform expects 16 numbers, found ']' after 15");
+    parse_err("Transform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 1]",
+              "t.pbrt:1:11: Transform: '[' is not closed after 16 numbers");
+    parse_err("Translate 1 \"2\" 3", "t.pbrt:1:13: Translate expects 3 numbers, found \"2\" after 1");
+    parse_err("Scale 1 0 1", "t.pbrt:1:1: Scale by zero");
+    parse_err("Rotate 30 0 0 0", "t.pbrt:1:1: Rotate axis is zero");
+    parse_err("LookAt 0 0 0  0 0 0  0 1 0", "t.pbrt:1:1: LookAt is degenerate");
+    parse_err("LookAt 0 0 0  0 1 0  0 1 0", "t.pbrt:1:1: LookAt is degenerate");
+}
+
+static void test_param_errors(void **state)
+{
+    (void)state;
+    parse_err("Camera \"perspective\" \"float fov\" \"abc\"",
+              "t.pbrt:1:34: parameter \"float fov\" expects numbers, got string \"abc\"");
+    parse_err("WorldBegin\nLightSource \"point\" \"rgb I\" [1 1]",
+              "t.pbrt:2:21: parameter \"rgb I\" takes 3 values, got 2");
+    parse_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1]",
+              "t.pbrt:2:22: parameter \"point3 P\" needs a multiple of 3 values, got 4");
+    parse_err("Camera \"perspective\" \"float fov\" 30\n   \"float fov\" 40",
+              "t.pbrt:2:4: parameter \"fov\" given twice (first at line 1)");
+    parse_err("Camera \"perspective\" \"quaternion q\" 1",
+              "t.pbrt:1:22: unknown parameter type \"quaternion\"");
+    parse_err("Camera \"perspective\" \"fov\" 1",
+              "t.pbrt:1:22: parameter declaration \"fov\" must be \"type name\"");
+    parse_err("Camera \"perspective\" \"float fov\" [ 1 2\nWorldBegin",
+              "t.pbrt:1:34: '[' is not closed (found 'WorldBegin' at line 2, column 1)");
+    parse_err("Camera \"perspective\" \"float fov\" [ 1 2", "t.pbrt:1:34: '[' is not closed (found end of file");
+    parse_err("Camera \"perspective\" \"float fov\"\nWorldBegin",
+              "t.pbrt:1:22: parameter \"float fov\" has no value (found 'WorldBegin')");
+    parse_err("Camera \"perspective\" \"integer n\" 1.5", "t.pbrt:1:34: parameter \"integer n\" expects integers");
+    parse_err("Camera \"perspective\" \"bool b\" 1", "t.pbrt:1:31: parameter \"bool b\" expects true or false");
+    parse_err("Camera \"perspective\" \"float f\" []", "t.pbrt:1:22: parameter \"float f\" has no values");
+    parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"metal-Cu-eta\"",
+              "t.pbrt:2:43: parameter \"spectrum reflectance\": named spectra and spectrum files are "
+              "not supported; use rgb");
+    parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum r\" [400 1 500]",
+              "needs (wavelength, value) pairs, got 3 values");
+    parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum r\" [500 1 400 1]",
+              "t.pbrt:2:40: parameter \"spectrum r\": wavelengths must increase");
+    parse_err("WorldBegin\nLightSource \"point\" \"blackbody I\" [0]", "temperature must be > 0");
+    parse_err("WorldBegin\nLightSource \"point\" \"blackbody I\" [5000 1]",
+              "t.pbrt:2:21: parameter \"blackbody I\" takes 1 value (kelvin), got 2");
+    parse_err("WorldBegin\nMaterial \"diffuse\" \"texture reflectance\" \"checks\"",
+              "t.pbrt:2:20: texture parameters are not supported");
+}
+
+static void test_param_values(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("Camera \"perspective\" \"bool a\" true \"bool b\" \"false\" \"point p\" [1 2 3]\n"
+             "\"color c\" [.1 .2 .3] \"normal n\" [0 0 1] \"string s\" \"x\\\"y\" \"vector2 v\" [1 2]\n"
+             "WorldBegin",
+             &sd);
+    param_list *pl = &sd.camera.entity.params;
+    assert_true(params_bool(pl, "a", false));
+    assert_false(params_bool(pl, "b", true));
+    vec3 p = params_point3(pl, "p", v3(0, 0, 0));
+    assert_true(p.x == 1 && p.y == 2 && p.z == 3);
+    rgb c = params_rgb(pl, "c", rgb_grey(0));
+    assert_true(c.r == 0.1 && c.b == 0.3);
+    size_t n;
+    assert_non_null(params_normals(pl, "n", &n));
+    assert_int_equal(n, 1);
+    assert_string_equal(params_string(pl, "s", ""), "x\"y");
+    assert_int_equal(pl->items[6].type, PARAM_VECTOR2);
+    assert_int_equal(pl->items[0].loc.column, 22);
+    hz_error err;
+    pl->items[6].used = true;
+    assert_int_equal(params_finish(pl, "Camera \"perspective\"", &err), HZ_OK);
+    scene_desc_free(&sd);
+}
+
+static void write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+}
+
+static void test_include(void **state)
+{
+    (void)state;
+    char dir[512], sub[600], path[700];
+    snprintf(dir, sizeof dir, "%s/scene_include", HAZE_TMP);
+    snprintf(sub, sizeof sub, "%s/sub", dir);
+    mkdir(dir, 0755);
+    mkdir(sub, 0755);
+    snprintf(path, sizeof path, "%s/main.pbrt", dir);
+    write_file(path, "WorldBegin\nInclude \"sub/a.pbrt\"\nShape \"disk\"\n");
+    snprintf(path, sizeof path, "%s/sub/a.pbrt", dir);
+    write_file(path, "# a\nImport \"b.pbrt\"\n");
+    snprintf(path, sizeof path, "%s/sub/b.pbrt", dir);
+    write_file(path, "\n  Shape \"sphere\"\n");
+    snprintf(path, sizeof path, "%s/main.pbrt", dir);
+    scene_desc sd;
+    hz_error err;
+    if (scene_parse_file(path, &sd, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(sd.shape_count, 2);
+    assert_non_null(strstr(sd.shapes[0].entity.loc.file, "sub/b.pbrt"));
+    assert_int_equal(sd.shapes[0].entity.loc.line, 2);
+    assert_int_equal(sd.shapes[0].entity.loc.column, 3);
+    assert_string_equal(sd.shapes[1].entity.loc.file, path);
+    scene_desc_free(&sd);
+
+    /* A cycle through two files, reported at the Include that closes it. */
+    snprintf(path, sizeof path, "%s/sub/b.pbrt", dir);
+    write_file(path, "Include \"a.pbrt\"\n");
+    snprintf(path, sizeof path, "%s/main.pbrt", dir);
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "sub/b.pbrt:1:1: Include cycle: a.pbrt -> b.pbrt -> a.pbrt"));
+
+    /* Missing file: the error names the Include. */
+    write_file(path, "WorldBegin\n\n   Include \"nothere.pbrt\"\n");
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "main.pbrt:3:4: Include: cannot open"));
+    assert_non_null(strstr(err.message, "nothere.pbrt"));
+
+    /* Self-include. */
+    write_file(path, "Include \"main.pbrt\"\n");
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "main.pbrt:1:1: Include cycle: main.pbrt -> main.pbrt"));
+
+    assert_int_equal(scene_parse_file("/nonexistent/x.pbrt", &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "/nonexistent/x.pbrt: cannot read scene"));
+}
+
+/* Garbage must give an error or a scene, never a crash, hang or leak (run
+ * under ASan): random bytes, and random mutations of a valid scene. */
+static void test_garbage(void **state)
+{
+    (void)state;
+    const char *valid =
+        "LookAt 0 0 -5 0 0 0 0 1 0\nCamera \"perspective\" \"float fov\" [45]\n"
+        "MakeNamedMedium \"f\" \"string type\" \"homogeneous\"\nWorldBegin\n"
+        "AttributeBegin\nMaterial \"diffuse\" \"spectrum reflectance\" [400 .5 700 .5]\n"
+        "AreaLightSource \"diffuse\" \"blackbody L\" 5500\nShape \"trianglemesh\" "
+        "\"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\nAttributeEnd\n"
+        "ObjectBegin \"o\" Shape \"sphere\" ObjectEnd ObjectInstance \"o\"\n";
+    size_t n = strlen(valid);
+    char buf[1024];
+    uint32_t rng = 12345;
+    const char alphabet[] = "[]\"#\\ \n0123456789.-eAWSLMOabc";
+    for (int iter = 0; iter < 3000; ++iter) {
+        memcpy(buf, valid, n + 1);
+        int edits = 1 + iter % 8;
+        for (int e = 0; e < edits; ++e) {
+            rng = rng * 1664525u + 1013904223u;
+            size_t at = (rng >> 8) % n;
+            rng = rng * 1664525u + 1013904223u;
+            if (iter % 3 == 0)
+                buf[at] = (char)(1 + (rng >> 8) % 255);
+            else if (iter % 3 == 1)
+                buf[at] = alphabet[(rng >> 8) % (sizeof alphabet - 1)];
+            else
+                buf[at] = '\0'; /* truncation */
+        }
+        scene_desc sd;
+        hz_error err;
+        if (scene_parse_string(buf, "g.pbrt", &sd, &err) == HZ_OK)
+            scene_desc_free(&sd);
+        else
+            assert_true(strlen(err.message) > 0);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_look_at),
+        cmocka_unit_test(test_transform_is_transposed),
+        cmocka_unit_test(test_composition_order),
+        cmocka_unit_test(test_attribute_restore),
+        cmocka_unit_test(test_default_material),
+        cmocka_unit_test(test_coordsys),
+        cmocka_unit_test(test_active_transform),
+        cmocka_unit_test(test_named_material),
+        cmocka_unit_test(test_media),
+        cmocka_unit_test(test_objects),
+        cmocka_unit_test(test_attribute_defaults),
+        cmocka_unit_test(test_options_and_colorspace),
+        cmocka_unit_test(test_structure_errors),
+        cmocka_unit_test(test_transform_errors),
+        cmocka_unit_test(test_param_errors),
+        cmocka_unit_test(test_param_values),
+        cmocka_unit_test(test_include),
+        cmocka_unit_test(test_garbage),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

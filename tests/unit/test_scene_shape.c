@@ -1,0 +1,169 @@
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <string.h>
+
+#include "scene/shape.h"
+
+/* Parses "WorldBegin <shape>" and builds the first shape's geometry. */
+static hz_status build(const char *shape, const char *name, shape_geometry *g, hz_error *err)
+{
+    char src[1024];
+    snprintf(src, sizeof src, "WorldBegin\n%s", shape);
+    scene_desc sd;
+    if (scene_parse_string(src, name, &sd, err) != HZ_OK)
+        fail_msg("parse: %s", err->message);
+    hz_status st = shape_geometry_create(&sd.shapes[0], g, err);
+    scene_desc_free(&sd);
+    return st;
+}
+
+static void expect_error(const char *shape, const char *want)
+{
+    shape_geometry g;
+    hz_error err;
+    assert_int_equal(build(shape, "s.pbrt", &g, &err), HZ_ERROR);
+    if (!strstr(err.message, want))
+        fail_msg("got \"%s\", want \"%s\"", err.message, want);
+    assert_null(g.p);
+}
+
+static void test_trianglemesh(void **state)
+{
+    (void)state;
+    shape_geometry g;
+    hz_error err;
+    assert_int_equal(build("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 1 1 0 0 1 0]\n"
+                           "\"integer indices\" [0 1 2 0 2 3] \"normal N\" [0 0 1 0 0 1 0 0 1 0 0 1]\n"
+                           "\"point2 uv\" [0 0 1 0 1 1 0 1]",
+                           "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.vertex_count, 4);
+    assert_int_equal(g.triangle_count, 2);
+    assert_int_equal(g.indices[5], 3);
+    assert_true(g.p[3 * 2 + 1] == 1.0);
+    assert_true(g.n[3 * 3 + 2] == 1.0);
+    assert_true(g.uv[2 * 2] == 1.0);
+    shape_geometry_free(&g);
+
+    /* Indices may be omitted for a single triangle. */
+    assert_int_equal(build("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]", "s.pbrt", &g,
+                           &err),
+                     HZ_OK);
+    assert_int_equal(g.triangle_count, 1);
+    assert_null(g.n);
+    shape_geometry_free(&g);
+}
+
+static void test_trianglemesh_errors(void **state)
+{
+    (void)state;
+    expect_error("Shape \"trianglemesh\" \"integer indices\" [0 1 2]",
+                 "s.pbrt:2:1: trianglemesh needs \"point3 P\"");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 1]",
+                 "s.pbrt:2:1: trianglemesh without \"integer indices\" must have exactly 3 vertices, has 4");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n \"integer indices\" [0 1]",
+                 "s.pbrt:3:2: trianglemesh \"indices\" must be a multiple of 3, got 2 values");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n \"integer indices\" [0 1 3]",
+                 "s.pbrt:3:2: trianglemesh index 3 (value 2) is out of range [0, 3)");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n \"integer indices\" [0 -1 2]",
+                 "out of range");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n \"normal N\" [0 0 1]",
+                 "s.pbrt:3:2: trianglemesh has 1 normals for 3 vertices");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n \"point2 uv\" [0 0 1 1]",
+                 "s.pbrt:3:2: trianglemesh has 2 uvs for 3 vertices");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0]\n \"float Pp\" 1",
+                 "s.pbrt:3:2: unused parameter \"float Pp\" for Shape \"trianglemesh\"");
+    expect_error("Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"float indices\" [0 1 2]",
+                 "parameter \"indices\" must be integer, not float");
+    expect_error("Shape \"cone\"", "s.pbrt:2:1: unknown shape \"cone\"; supported:");
+}
+
+static void test_sphere_disk_bilinear(void **state)
+{
+    (void)state;
+    shape_geometry g;
+    hz_error err;
+    assert_int_equal(build("Shape \"sphere\" \"float radius\" 2 \"float zmax\" 2", "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.kind, GEOMETRY_SPHERE);
+    assert_true(g.radius == 2.0);
+    shape_geometry_free(&g);
+    expect_error("Shape \"sphere\" \"float zmax\" 0.5",
+                 "s.pbrt:2:16: \"zmax\" other than its default (1) is not supported");
+    expect_error("Shape \"sphere\" \"float radius\" 0", "s.pbrt:2:16: sphere \"radius\" must be > 0");
+
+    assert_int_equal(build("Shape \"disk\" \"float height\" 1 \"float radius\" 2", "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.triangle_count, 256);
+    double area = 0;
+    for (size_t t = 0; t < g.triangle_count; ++t) {
+        const double *a = &g.p[3 * g.indices[3 * t]], *b = &g.p[3 * g.indices[3 * t + 1]],
+                     *c = &g.p[3 * g.indices[3 * t + 2]];
+        double cz = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        assert_true(cz > 0); /* counter-clockwise seen from +z */
+        assert_true(a[2] == 1.0);
+        area += 0.5 * cz;
+    }
+    assert_float_equal(area, HZ_PI * 4.0, 1e-3 * HZ_PI * 4.0);
+    shape_geometry_free(&g);
+    assert_int_equal(build("Shape \"disk\" \"float innerradius\" 0.5", "s.pbrt", &g, &err), HZ_OK);
+    assert_int_equal(g.triangle_count, 512);
+    shape_geometry_free(&g);
+    expect_error("Shape \"disk\" \"float innerradius\" 2", "s.pbrt:2:14: disk \"innerradius\" must be in [0, radius)");
+
+    assert_int_equal(build("Shape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]", "s.pbrt",
+                           &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.triangle_count, 2);
+    /* pbrt's vertex order p00 p10 p01 p11: the quad's diagonal is 0-3. */
+    const uint32_t want[6] = {0, 1, 3, 0, 3, 2};
+    assert_memory_equal(g.indices, want, sizeof want);
+    shape_geometry_free(&g);
+}
+
+static void test_plymesh_relative_path(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof path, "%s/shape_tri.ply", HAZE_TMP);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+          "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+          "0 0 0 1 0 0 0 1 0\n3 0 1 2\n",
+          f);
+    fclose(f);
+    char scene[512];
+    snprintf(scene, sizeof scene, "%s/some.pbrt", HAZE_TMP);
+    shape_geometry g;
+    hz_error err;
+    if (build("Shape \"plymesh\" \"string filename\" \"shape_tri.ply\"", scene, &g, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(g.triangle_count, 1);
+    shape_geometry_free(&g);
+    assert_int_equal(build("Shape \"plymesh\" \"string filename\" \"missing.ply\"", scene, &g, &err),
+                     HZ_ERROR);
+    assert_non_null(strstr(err.message, "some.pbrt:2:17: plymesh: "));
+    assert_non_null(strstr(err.message, "missing.ply: cannot open"));
+    assert_int_equal(build("Shape \"plymesh\" \"string filename\" \"shape_tri.ply\" \"float "
+                           "displacement\" 1",
+                           scene, &g, &err),
+                     HZ_ERROR);
+    assert_non_null(strstr(err.message, "unused parameter \"float displacement\""));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_trianglemesh),
+        cmocka_unit_test(test_trianglemesh_errors),
+        cmocka_unit_test(test_sphere_disk_bilinear),
+        cmocka_unit_test(test_plymesh_relative_path),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
