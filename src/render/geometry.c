@@ -1,0 +1,540 @@
+#include "render/geometry.h"
+
+#include <assert.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <embree3/rtcore.h>
+
+typedef struct {
+    RTCScene scene;
+    geom_shape *shapes;
+    size_t shape_count;
+} prototype;
+
+typedef struct {
+    transform render_from_instance;
+    size_t object;
+} instance;
+
+struct geometry {
+    RTCDevice device;
+    RTCScene scene;
+    geom_shape *shapes;       /* top-level; Embree geomID = index */
+    size_t shape_count;
+    prototype *objects;
+    size_t object_count;
+    instance *instances;      /* Embree geomID = shape_count + index */
+    size_t instance_count;
+};
+
+/* ---- spheres: Embree user geometry solved in object space, in double ---- */
+
+static void sphere_bounds(const struct RTCBoundsFunctionArguments *args)
+{
+    const geom_shape *s = args->geometryUserPtr;
+    /* Transform the 8 corners of the object-space box: conservative for any
+     * affine transform. Widen by a few float ULPs since Embree stores floats. */
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < 8; ++i) {
+        vec3 c = v3(i & 1 ? s->radius : -s->radius, i & 2 ? s->radius : -s->radius,
+                    i & 4 ? s->radius : -s->radius);
+        vec3 p = transform_point(&s->space_from_object, c);
+        double q[3] = {p.x, p.y, p.z};
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = fmin(lo[k], q[k]);
+            hi[k] = fmax(hi[k], q[k]);
+        }
+    }
+    struct RTCBounds *b = args->bounds_o;
+    float pad[3];
+    for (int k = 0; k < 3; ++k)
+        pad[k] = (float)(1e-6 * fmax(fabs(lo[k]), fabs(hi[k])));
+    b->lower_x = (float)lo[0] - pad[0];
+    b->lower_y = (float)lo[1] - pad[1];
+    b->lower_z = (float)lo[2] - pad[2];
+    b->upper_x = (float)hi[0] + pad[0];
+    b->upper_y = (float)hi[1] + pad[1];
+    b->upper_z = (float)hi[2] + pad[2];
+}
+
+/* Nearest root of |o + t d| = r in (tnear, tfar), or -1. pbrt-v4's
+ * formulation: the discriminant from the closest-approach vector avoids the
+ * cancellation of b^2 - 4ac for distant origins. */
+static double sphere_hit_t(const geom_shape *s, vec3 o_space, vec3 d_space, double tnear,
+                           double tfar)
+{
+    transform object_from_space = transform_inverse(s->space_from_object);
+    vec3 o = transform_point(&object_from_space, o_space);
+    vec3 d = transform_vector(&object_from_space, d_space);
+    double a = v3_dot(d, d);
+    double b = 2.0 * v3_dot(d, o);
+    double c = v3_dot(o, o) - s->radius * s->radius;
+    vec3 v = v3_sub(o, v3_scale(d, b / (2.0 * a)));
+    double len = v3_length(v);
+    double disc = 4.0 * a * (s->radius + len) * (s->radius - len);
+    if (disc < 0.0)
+        return -1.0;
+    double root = sqrt(disc);
+    double q = b < 0.0 ? -0.5 * (b - root) : -0.5 * (b + root);
+    double t0 = q / a, t1 = c / q;
+    if (t0 > t1) {
+        double t = t0;
+        t0 = t1;
+        t1 = t;
+    }
+    if (t0 > tnear && t0 < tfar)
+        return t0;
+    if (t1 > tnear && t1 < tfar)
+        return t1;
+    return -1.0;
+}
+
+static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    assert(args->N == 1);
+    if (!args->valid[0])
+        return;
+    const geom_shape *s = args->geometryUserPtr;
+    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
+    vec3 o = v3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z);
+    vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
+    double t = sphere_hit_t(s, o, d, rh->ray.tnear, rh->ray.tfar);
+    if (t < 0.0)
+        return;
+    rh->ray.tfar = (float)t;
+    rh->hit.u = rh->hit.v = 0.0f;
+    rh->hit.Ng_x = rh->hit.Ng_y = rh->hit.Ng_z = 0.0f; /* recomputed in double later */
+    rh->hit.primID = args->primID;
+    rh->hit.geomID = args->geomID;
+    rh->hit.instID[0] = args->context->instID[0];
+}
+
+static void sphere_occluded(const struct RTCOccludedFunctionNArguments *args)
+{
+    assert(args->N == 1);
+    if (!args->valid[0])
+        return;
+    const geom_shape *s = args->geometryUserPtr;
+    if (s->material->kind == MATERIAL_INTERFACE)
+        return;
+    struct RTCRay *r = (struct RTCRay *)args->ray;
+    vec3 o = v3(r->org_x, r->org_y, r->org_z);
+    vec3 d = v3(r->dir_x, r->dir_y, r->dir_z);
+    if (sphere_hit_t(s, o, d, r->tnear, r->tfar) >= 0.0)
+        r->tfar = -INFINITY;
+}
+
+/* Shadow rays pass through interfaces (they bound media, not surfaces). */
+static void reject_occlusion(const struct RTCFilterFunctionNArguments *args)
+{
+    for (unsigned i = 0; i < args->N; ++i)
+        args->valid[i] = 0;
+}
+
+/* ---- building ---- */
+
+static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
+                             shape_entity *se, transform space_from_world, const material *materials,
+                             size_t material_count, const material *default_material,
+                             geom_shape *out, hz_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->area_light = -1;
+    out->material = default_material;
+    if (se->material >= 0) {
+        if ((size_t)se->material >= material_count)
+            return hz_fail_at(err, se->entity.loc, "shape names material %d of %zu",
+                              se->material, material_count);
+        out->material = &materials[se->material];
+    }
+
+    shape_geometry g;
+    if (shape_geometry_create(se, &g, err) != HZ_OK)
+        return HZ_ERROR;
+    transform space_from_object = transform_compose(space_from_world, se->world_from_object);
+    out->kind = g.kind;
+    out->flip_normal = se->reverse_orientation ^ transform_swaps_handedness(&space_from_object);
+    bool interface = out->material->kind == MATERIAL_INTERFACE;
+
+    RTCGeometry geom = NULL;
+    if (g.kind == GEOMETRY_SPHERE) {
+        out->radius = g.radius;
+        out->space_from_object = space_from_object;
+        geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+        rtcSetGeometryUserPrimitiveCount(geom, 1);
+        rtcSetGeometryUserData(geom, out);
+        rtcSetGeometryBoundsFunction(geom, sphere_bounds, NULL);
+        rtcSetGeometryIntersectFunction(geom, sphere_intersect);
+        rtcSetGeometryOccludedFunction(geom, sphere_occluded);
+    } else if (g.triangle_count > 0) {
+        geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        float *p = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                           3 * sizeof(float), g.vertex_count);
+        unsigned *idx = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                3 * sizeof(unsigned), g.triangle_count);
+        if (!p || !idx) {
+            rtcReleaseGeometry(geom);
+            shape_geometry_free(&g);
+            return hz_fail_at(err, se->entity.loc, "out of memory for a mesh of %zu triangles",
+                              g.triangle_count);
+        }
+        /* Transform in double, round once: render space keeps float precision
+         * near the camera however far the scene is from the world origin. */
+        for (size_t i = 0; i < g.vertex_count; ++i) {
+            vec3 q = transform_point(&space_from_object,
+                                     v3(g.p[3 * i], g.p[3 * i + 1], g.p[3 * i + 2]));
+            p[3 * i] = (float)q.x;
+            p[3 * i + 1] = (float)q.y;
+            p[3 * i + 2] = (float)q.z;
+        }
+        for (size_t i = 0; i < 3 * g.triangle_count; ++i) {
+            if (g.indices[i] >= g.vertex_count) {
+                rtcReleaseGeometry(geom);
+                shape_geometry_free(&g);
+                return hz_fail_at(err, se->entity.loc, "vertex index %u out of range (%zu vertices)",
+                                  g.indices[i], g.vertex_count);
+            }
+            idx[i] = g.indices[i];
+        }
+        if (g.n) {
+            out->n = malloc(3 * g.vertex_count * sizeof(double));
+            if (!out->n) {
+                rtcReleaseGeometry(geom);
+                shape_geometry_free(&g);
+                return hz_fail(err, "out of memory");
+            }
+            /* pbrt-v4's TriangleMesh flips given normals with ReverseOrientation
+             * only (not with the handedness of the transform). */
+            for (size_t i = 0; i < g.vertex_count; ++i) {
+                vec3 n = transform_normal(&space_from_object,
+                                          v3(g.n[3 * i], g.n[3 * i + 1], g.n[3 * i + 2]));
+                if (se->reverse_orientation)
+                    n = v3_neg(n);
+                out->n[3 * i] = n.x;
+                out->n[3 * i + 1] = n.y;
+                out->n[3 * i + 2] = n.z;
+            }
+        }
+        out->vertex_count = g.vertex_count;
+        out->triangle_count = g.triangle_count;
+        out->p = p;
+        out->indices = idx;
+    }
+    shape_geometry_free(&g);
+    if (!geom)
+        return HZ_OK; /* an empty mesh: nothing to intersect */
+    if (interface)
+        rtcSetGeometryOccludedFilterFunction(geom, reject_occlusion);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(scene, geom, geom_id);
+    rtcReleaseGeometry(geom); /* the scene keeps it (and its buffers) alive */
+    return HZ_OK;
+}
+
+static hz_status check_device(RTCDevice device, hz_error *err)
+{
+    enum RTCError e = rtcGetDeviceError(device);
+    if (e != RTC_ERROR_NONE)
+        return hz_fail(err, "Embree error %d while building the scene", (int)e);
+    return HZ_OK;
+}
+
+static RTCScene new_scene(RTCDevice device)
+{
+    RTCScene s = rtcNewScene(device);
+    /* Robust mode makes the triangle test watertight against edges and
+     * vertices; the cost is small and leaks between triangles are worse. */
+    rtcSetSceneFlags(s, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
+    return s;
+}
+
+static hz_status build_objects(geometry *g, scene_desc *sd, const material *materials,
+                               size_t material_count, const material *default_material,
+                               hz_error *err)
+{
+    g->objects = calloc(sd->object_count ? sd->object_count : 1, sizeof *g->objects);
+    if (!g->objects)
+        return hz_fail(err, "out of memory");
+    g->object_count = sd->object_count;
+    for (size_t o = 0; o < sd->object_count; ++o) {
+        object_entity *oe = &sd->objects[o];
+        prototype *pr = &g->objects[o];
+        pr->scene = new_scene(g->device);
+        pr->shapes = calloc(oe->shape_count ? oe->shape_count : 1, sizeof *pr->shapes);
+        if (!pr->shapes)
+            return hz_fail(err, "out of memory");
+        pr->shape_count = oe->shape_count;
+        for (size_t i = 0; i < oe->shape_count; ++i) {
+            shape_entity *se = &sd->object_shapes[oe->first_shape + i];
+            if (se->has_area_light)
+                return hz_fail_at(err, se->entity.loc,
+                                  "area lights inside object instances are not supported "
+                                  "(pbrt-v4 refuses them too)");
+            /* Prototype space = the object's world space; instances carry
+             * render_from_world to the instance transform. */
+            if (build_shape(g->device, pr->scene, (unsigned)i, se, transform_identity(), materials,
+                            material_count, default_material, &pr->shapes[i], err) != HZ_OK)
+                return HZ_ERROR;
+        }
+        rtcCommitScene(pr->scene);
+        if (check_device(g->device, err) != HZ_OK)
+            return HZ_ERROR;
+    }
+    return HZ_OK;
+}
+
+static hz_status build_instances(geometry *g, scene_desc *sd, transform render_from_world,
+                                 hz_error *err)
+{
+    g->instances = calloc(sd->instance_count ? sd->instance_count : 1, sizeof *g->instances);
+    if (!g->instances)
+        return hz_fail(err, "out of memory");
+    g->instance_count = sd->instance_count;
+    for (size_t i = 0; i < sd->instance_count; ++i) {
+        instance_entity *ie = &sd->instances[i];
+        if (ie->object >= g->object_count)
+            return hz_fail_at(err, ie->loc, "instance of unknown object %zu", ie->object);
+        instance *in = &g->instances[i];
+        in->object = ie->object;
+        in->render_from_instance = transform_compose(render_from_world, ie->world_from_instance);
+        float xfm[12];
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 4; ++c)
+                xfm[4 * r + c] = (float)in->render_from_instance.m.m[r][c];
+        RTCGeometry geom = rtcNewGeometry(g->device, RTC_GEOMETRY_TYPE_INSTANCE);
+        rtcSetGeometryInstancedScene(geom, g->objects[ie->object].scene);
+        rtcSetGeometryTimeStepCount(geom, 1);
+        rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometryByID(g->scene, geom, (unsigned)(g->shape_count + i));
+        rtcReleaseGeometry(geom);
+    }
+    return HZ_OK;
+}
+
+static RTCDevice new_device(void)
+{
+    /* Pin the ISA: different ISAs change the last bits of hit distances, and
+     * regression images must not depend on the machine. Fall back to
+     * Embree's choice on a CPU without SSE4.2. */
+    RTCDevice d = rtcNewDevice("isa=sse4.2");
+    return d ? d : rtcNewDevice(NULL);
+}
+
+hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
+                          size_t material_count, const material *default_material,
+                          geometry **out, hz_error *err)
+{
+    *out = NULL;
+    geometry *g = calloc(1, sizeof *g);
+    if (!g)
+        return hz_fail(err, "out of memory");
+    g->device = new_device();
+    if (!g->device) {
+        free(g);
+        return hz_fail(err, "cannot create the Embree device (error %d)",
+                       (int)rtcGetDeviceError(NULL));
+    }
+    g->scene = new_scene(g->device);
+    g->shapes = calloc(sd->shape_count ? sd->shape_count : 1, sizeof *g->shapes);
+    if (!g->shapes) {
+        geometry_destroy(g);
+        return hz_fail(err, "out of memory");
+    }
+    g->shape_count = sd->shape_count;
+    for (size_t i = 0; i < sd->shape_count; ++i) {
+        if (build_shape(g->device, g->scene, (unsigned)i, &sd->shapes[i], render_from_world,
+                        materials, material_count, default_material, &g->shapes[i],
+                        err) != HZ_OK) {
+            geometry_destroy(g);
+            return HZ_ERROR;
+        }
+    }
+    if (build_objects(g, sd, materials, material_count, default_material, err) != HZ_OK ||
+        build_instances(g, sd, render_from_world, err) != HZ_OK) {
+        geometry_destroy(g);
+        return HZ_ERROR;
+    }
+    rtcCommitScene(g->scene);
+    if (check_device(g->device, err) != HZ_OK) {
+        geometry_destroy(g);
+        return HZ_ERROR;
+    }
+    *out = g;
+    return HZ_OK;
+}
+
+void geometry_destroy(geometry *g)
+{
+    if (!g)
+        return;
+    for (size_t i = 0; i < g->shape_count; ++i)
+        free(g->shapes[i].n);
+    free(g->shapes);
+    for (size_t o = 0; o < g->object_count; ++o) {
+        for (size_t i = 0; i < g->objects[o].shape_count; ++i)
+            free(g->objects[o].shapes[i].n);
+        free(g->objects[o].shapes);
+        if (g->objects[o].scene)
+            rtcReleaseScene(g->objects[o].scene);
+    }
+    free(g->objects);
+    free(g->instances);
+    if (g->scene)
+        rtcReleaseScene(g->scene);
+    if (g->device)
+        rtcReleaseDevice(g->device);
+    free(g);
+}
+
+size_t geometry_shape_count(const geometry *g) { return g->shape_count; }
+geom_shape *geometry_shape(geometry *g, size_t i) { return &g->shapes[i]; }
+
+/* ---- queries ---- */
+
+static vec3 vertex(const geom_shape *s, uint32_t i)
+{
+    return v3(s->p[3 * i], s->p[3 * i + 1], s->p[3 * i + 2]);
+}
+
+/* Fills p, ng, ns in the shape's own space (render or prototype), for the
+ * ray o + t d of that space; d = 0 asks for the point at barycentrics (u, v). */
+static void surface_at(const geom_shape *s, unsigned prim, double u, double v, vec3 o, vec3 d,
+                       double t, geom_hit *hit)
+{
+    if (s->kind == GEOMETRY_SPHERE) {
+        transform object_from_space = transform_inverse(s->space_from_object);
+        vec3 po = transform_point(&object_from_space, v3_add(o, v3_scale(d, t)));
+        /* Reproject onto the sphere, as pbrt-v4 does, to remove the error of t. */
+        po = v3_scale(po, s->radius / v3_length(po));
+        hit->p = transform_point(&s->space_from_object, po);
+        vec3 n = v3_normalize(transform_normal(&s->space_from_object, po));
+        hit->ng = hit->ns = s->flip_normal ? v3_neg(n) : n;
+        return;
+    }
+    const uint32_t *tri = &s->indices[3 * prim];
+    vec3 p0 = vertex(s, tri[0]), p1 = vertex(s, tri[1]), p2 = vertex(s, tri[2]);
+    double b0 = 1.0 - u - v;
+    vec3 n = v3_cross(v3_sub(p0, p2), v3_sub(p1, p2));
+    double dn = v3_dot(d, n);
+    if (dn != 0.0) {
+        /* Intersect the plane of Embree's float vertices in double: the
+         * point lies on the surface Embree tested and on the double ray.
+         * Embree's float barycentrics would be off by ~1e-6 of the
+         * triangle's size, which shows on large triangles. */
+        hit->p = v3_add(o, v3_scale(d, v3_dot(v3_sub(p2, o), n) / dn));
+    } else {
+        hit->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, u)), v3_scale(p2, v));
+    }
+    vec3 ng = v3_normalize(n);
+    if (s->flip_normal)
+        ng = v3_neg(ng);
+    hit->ng = hit->ns = ng;
+    if (s->n) {
+        const double *n = s->n;
+        vec3 ns = v3_add(v3_add(v3_scale(v3(n[3 * tri[0]], n[3 * tri[0] + 1], n[3 * tri[0] + 2]), b0),
+                                v3_scale(v3(n[3 * tri[1]], n[3 * tri[1] + 1], n[3 * tri[1] + 2]), u)),
+                         v3_scale(v3(n[3 * tri[2]], n[3 * tri[2] + 1], n[3 * tri[2] + 2]), v));
+        if (v3_length_sq(ns) > 0.0) {
+            hit->ns = v3_normalize(ns);
+            /* pbrt-v4: given normals are authoritative for orientation. */
+            if (v3_dot(hit->ng, hit->ns) < 0.0)
+                hit->ng = v3_neg(hit->ng);
+        }
+    }
+}
+
+void geometry_triangle_point(const geom_shape *s, unsigned prim, double u, double v,
+                             geom_hit *out)
+{
+    assert(s->kind == GEOMETRY_TRIANGLES);
+    out->shape = s;
+    out->prim = prim;
+    out->t = 0.0;
+    surface_at(s, prim, u, v, v3(0, 0, 0), v3(0, 0, 0), 0.0, out);
+}
+
+static void init_ray(struct RTCRay *r, vec3 o, vec3 d, double tmax)
+{
+    r->org_x = (float)o.x;
+    r->org_y = (float)o.y;
+    r->org_z = (float)o.z;
+    r->tnear = 0.0f;
+    r->dir_x = (float)d.x;
+    r->dir_y = (float)d.y;
+    r->dir_z = (float)d.z;
+    r->time = 0.0f;
+    r->tfar = tmax >= (double)INFINITY ? INFINITY : (float)tmax;
+    r->mask = 0xFFFFFFFFu;
+    r->id = 0;
+    r->flags = 0;
+}
+
+bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax,
+                        geom_hit *hit)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRayHit rh;
+    init_ray(&rh.ray, o, d, tmax);
+    rh.ray.tnear = (float)tmin;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(g->scene, &ctx, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
+        return false;
+
+    hit->t = rh.ray.tfar;
+    hit->prim = rh.hit.primID;
+    if (rh.hit.instID[0] == RTC_INVALID_GEOMETRY_ID) {
+        const geom_shape *s = &g->shapes[rh.hit.geomID];
+        hit->shape = s;
+        surface_at(s, rh.hit.primID, rh.hit.u, rh.hit.v, o, d, rh.ray.tfar, hit);
+        return true;
+    }
+    const instance *in = &g->instances[rh.hit.instID[0] - g->shape_count];
+    const geom_shape *s = &g->objects[in->object].shapes[rh.hit.geomID];
+    hit->shape = s;
+    transform instance_from_render = transform_inverse(in->render_from_instance);
+    surface_at(s, rh.hit.primID, rh.hit.u, rh.hit.v, transform_point(&instance_from_render, o),
+               transform_vector(&instance_from_render, d), rh.ray.tfar, hit);
+    hit->p = transform_point(&in->render_from_instance, hit->p);
+    hit->ng = v3_normalize(transform_normal(&in->render_from_instance, hit->ng));
+    hit->ns = v3_normalize(transform_normal(&in->render_from_instance, hit->ns));
+    return true;
+}
+
+bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    struct RTCRay r;
+    init_ray(&r, o, d, tmax);
+    rtcOccluded1(g->scene, &ctx, &r);
+    return r.tfar == -INFINITY;
+}
+
+static float offset_coord(float p, float n)
+{
+    const float origin = 1.0f / 32.0f, float_scale = 1.0f / 65536.0f, int_scale = 256.0f;
+    if (fabsf(p) < origin)
+        return p + float_scale * n;
+    int32_t of = (int32_t)(int_scale * n);
+    int32_t bits;
+    memcpy(&bits, &p, sizeof bits);
+    bits += p < 0.0f ? -of : of;
+    float r;
+    memcpy(&r, &bits, sizeof r);
+    return r;
+}
+
+vec3 geometry_offset_origin(vec3 p, vec3 n, vec3 w)
+{
+    if (v3_dot(n, w) < 0.0)
+        n = v3_neg(n);
+    return v3(offset_coord((float)p.x, (float)n.x), offset_coord((float)p.y, (float)n.y),
+              offset_coord((float)p.z, (float)n.z));
+}

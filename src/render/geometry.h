@@ -1,0 +1,80 @@
+/* Surfaces in render space, intersected by Embree: triangle meshes as Embree
+ * triangles (vertices baked to float in render space), spheres as user
+ * geometry solved in object space in double precision, ObjectBegin/End
+ * prototypes as Embree instances. Hits come back with pbrt-v4's normal
+ * orientation rules applied. */
+#ifndef HAZE_RENDER_GEOMETRY_H
+#define HAZE_RENDER_GEOMETRY_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/error.h"
+#include "core/transform.h"
+#include "render/material.h"
+#include "scene/scene_desc.h"
+#include "scene/shape.h"
+
+/* One shape as the renderer sees it. Top-level shapes live in render space,
+ * shapes of an object (ObjectBegin) in that object's prototype space. */
+typedef struct {
+    geometry_kind kind;
+    const material *material; /* never NULL (the default material when none is named) */
+    int area_light;           /* index into the scene's lights, -1 = not an emitter */
+    /* pbrt-v4: ReverseOrientation XOR a handedness-swapping transform flips
+     * the geometric normal (triangles and spheres alike). */
+    bool flip_normal;
+    /* triangles: Embree's own buffers, so sampling and hit points use exactly
+     * the surface Embree intersects */
+    size_t vertex_count, triangle_count;
+    const float *p;           /* 3 per vertex */
+    const uint32_t *indices;  /* 3 per triangle */
+    double *n;                /* 3 per vertex, shading normals in this space, or NULL */
+    /* sphere */
+    double radius;
+    transform space_from_object; /* render (or prototype) space from object space */
+} geom_shape;
+
+typedef struct {
+    double t;                 /* along the (unnormalised) query direction */
+    vec3 p;                   /* render space */
+    vec3 ng;                  /* unit geometric normal, pbrt-v4 orientation */
+    vec3 ns;                  /* unit shading normal (equals ng without mesh normals) */
+    const geom_shape *shape;
+    unsigned prim;            /* triangle index */
+} geom_hit;
+
+typedef struct geometry geometry;
+
+/* Builds every shape of `sd` (top level and objects, then instances).
+ * `materials` are indexed by shape_entity.material; `default_material` is used
+ * for -1. Errors name the shape's file:line:column. */
+hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
+                          size_t material_count, const material *default_material,
+                          geometry **out, hz_error *err);
+void geometry_destroy(geometry *g);
+
+/* Top-level shapes, in scene_desc.shapes order (index = shape index). */
+size_t geometry_shape_count(const geometry *g);
+geom_shape *geometry_shape(geometry *g, size_t i);
+
+/* Closest hit of o + t d for t in (tmin, tmax). Interface surfaces are hit
+ * too (the integrator steps through them by raising tmin, which keeps the
+ * ray's line exact). Thread-safe. */
+bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax,
+                        geom_hit *hit);
+/* Any non-interface surface on o + t d, t in (0, tmax). Thread-safe. */
+bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax);
+
+/* The point at barycentrics (u, v) of triangle `prim` (u weights its second
+ * vertex, v its third) with pbrt-v4's normals, in the shape's own space. */
+void geometry_triangle_point(const geom_shape *s, unsigned prim, double u, double v,
+                             geom_hit *out);
+
+/* Moves a surface point off the surface along the side of `n` that `w`
+ * points to, by a few hundred float ULPs per coordinate (Wächter & Binder,
+ * Ray Tracing Gems ch. 6): scale-invariant, so no scene-size epsilon. */
+vec3 geometry_offset_origin(vec3 p, vec3 n, vec3 w);
+
+#endif

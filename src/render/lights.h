@@ -1,0 +1,73 @@
+/* Lights in render space: a closed set dispatched with a switch. Radiometry
+ * follows pbrt-v4 for RGB values: `rgb I [1 1 1]` is radiant intensity 1 per
+ * channel, `rgb L [1 1 1]` radiance 1 (pbrt-v4's photometric normalisation of
+ * an RGB illuminant divides by the colour space illuminant only, which is
+ * exactly what turns its spectra back into these RGB values). */
+#ifndef HAZE_RENDER_LIGHTS_H
+#define HAZE_RENDER_LIGHTS_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "core/error.h"
+#include "core/transform.h"
+#include "render/geometry.h"
+#include "scene/scene_desc.h"
+
+typedef enum { LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_INFINITE, LIGHT_AREA } light_kind;
+
+typedef struct {
+    light_kind kind;
+    rgb emit; /* I (point, spot) or L (distant, infinite, area), scale and power applied */
+    union {
+        struct {
+            vec3 p;
+        } point;
+        struct {
+            vec3 p;
+            transform light_from_render; /* +z is the spot axis */
+            double cos_falloff_start, cos_falloff_end;
+        } spot;
+        struct {
+            vec3 w; /* unit direction toward the light */
+        } distant;
+        struct {
+            const geom_shape *shape; /* top-level, render space */
+            bool two_sided;
+            double area;             /* render space */
+            double *cdf;             /* triangles: cumulative areas / area (triangle_count) */
+        } area;
+    };
+} light;
+
+/* LightSource "point", "spot", "distant", "infinite" (constant L only). */
+hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
+                            hz_error *err);
+/* AreaLightSource "diffuse" on a (top-level) shape already in render space. */
+hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
+                                 hz_error *err);
+void light_free(light *l);
+
+/* Incident radiance sample at reference point `p`. `wi` is unit; `pdf` is
+ * per solid angle (1 for delta lights). The shadow ray must test the segment
+ * from the offset origin to `p_light` (or to infinity when `infinite`). */
+typedef struct {
+    rgb L;
+    vec3 wi;
+    double pdf;
+    vec3 p_light, n_light; /* area lights: point and normal on the emitter */
+    double dist;           /* distance to the light point (INFINITY for distant/infinite) */
+    bool infinite;
+} light_sample;
+
+/* `n` is the unit normal of the surface at `p` on the side radiance is wanted
+ * (used for cosine sampling of the infinite light). Returns false when the
+ * sample carries no light. `u` in [0,1)^2 (ignored by delta lights). */
+bool light_sample_li(const light *l, vec3 p, vec3 n, vec2 u, light_sample *out);
+
+/* Radiance leaving an area light's surface point with unit normal `n` toward `w`. */
+rgb light_area_le(const light *l, vec3 n, vec3 w);
+
+bool light_is_delta(const light *l);
+
+#endif

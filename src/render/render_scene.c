@@ -1,0 +1,216 @@
+/* The scene builder: runs every factory in order and owns what they build. */
+#include "render/render_scene.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/geometry.h"
+#include "render/integrator.h"
+#include "render/lights.h"
+#include "render/material.h"
+
+struct render_scene {
+    camera cam;
+    film *film;
+    sampler smp;
+    filter *filt;
+    material *materials;
+    size_t material_count;
+    material default_material;
+    geometry *geom;
+    light *lights;
+    size_t light_count;
+    integrator_scene isc;
+};
+
+/* "volpath" is pbrt-v4's default; haze computes direct lighting and single
+ * scattering only, so its parameters are read (not to be reported unused)
+ * and a depth other than 1 is worth one warning. */
+static hz_status integrator_check(scene_entity *e, FILE *warn, hz_error *err)
+{
+    param_list *pl = &e->params;
+    const char *type = e->type ? e->type : "volpath";
+    if (strcmp(type, "volpath") == 0) {
+        bool has_depth = params_has(pl, "maxdepth");
+        int maxdepth = params_int(pl, "maxdepth", 5);
+        params_bool(pl, "regularize", false);
+        params_string(pl, "lightsampler", "bvh");
+        if (has_depth && maxdepth != 1 && warn)
+            fprintf(warn,
+                    "%s:%d:%d: warning: Integrator \"volpath\" \"maxdepth\" %d: haze computes "
+                    "direct lighting and single scattering only (as maxdepth 1)\n",
+                    e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, maxdepth);
+        return params_finish(pl, "Integrator \"volpath\"", err);
+    }
+    if (strcmp(type, "singlescatter") == 0)
+        return params_finish(pl, "Integrator \"singlescatter\"", err);
+    return hz_fail_at(err, e->loc,
+                      "Integrator \"%s\" is not supported (supported: \"volpath\", "
+                      "\"singlescatter\")",
+                      type);
+}
+
+static bool animated(const transform *start, const transform *end)
+{
+    return memcmp(&start->m, &end->m, sizeof start->m) != 0;
+}
+
+/* Motion blur of geometry is a later step (Embree time steps): until then an
+ * animated shape or instance is an error rather than a silently static
+ * image. Lights follow pbrt-v4, which warns and uses the start transform. */
+static hz_status check_static(scene_desc *sd, FILE *warn, hz_error *err)
+{
+    for (size_t i = 0; i < sd->shape_count; ++i)
+        if (animated(&sd->shapes[i].world_from_object, &sd->shapes[i].world_from_object_end))
+            return hz_fail_at(err, sd->shapes[i].entity.loc,
+                              "animated shape transforms (motion blur) are not supported yet");
+    for (size_t i = 0; i < sd->object_shape_count; ++i)
+        if (animated(&sd->object_shapes[i].world_from_object,
+                     &sd->object_shapes[i].world_from_object_end))
+            return hz_fail_at(err, sd->object_shapes[i].entity.loc,
+                              "animated shape transforms (motion blur) are not supported yet");
+    for (size_t i = 0; i < sd->instance_count; ++i)
+        if (animated(&sd->instances[i].world_from_instance, &sd->instances[i].world_from_instance_end))
+            return hz_fail_at(err, sd->instances[i].loc,
+                              "animated object instances (motion blur) are not supported yet");
+    for (size_t i = 0; i < sd->light_count; ++i) {
+        light_entity *l = &sd->lights[i];
+        if (warn && animated(&l->world_from_light, &l->world_from_light_end))
+            fprintf(warn, "%s:%d:%d: warning: animated lights are not supported; using the start "
+                          "transform (as pbrt-v4)\n",
+                    l->entity.loc.file ? l->entity.loc.file : "<input>", l->entity.loc.line,
+                    l->entity.loc.column);
+    }
+    return HZ_OK;
+}
+
+static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_error *err)
+{
+    rs->default_material = material_default();
+    rs->materials = calloc(sd->material_count ? sd->material_count : 1, sizeof *rs->materials);
+    if (!rs->materials)
+        return hz_fail(err, "out of memory");
+    rs->material_count = sd->material_count;
+    for (size_t i = 0; i < sd->material_count; ++i)
+        if (material_from_entity(&sd->materials[i], &rs->materials[i], err) != HZ_OK)
+            return HZ_ERROR;
+    return HZ_OK;
+}
+
+static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render_from_world,
+                              hz_error *err)
+{
+    size_t n = sd->light_count;
+    for (size_t i = 0; i < sd->shape_count; ++i)
+        n += sd->shapes[i].has_area_light;
+    rs->lights = calloc(n ? n : 1, sizeof *rs->lights);
+    if (!rs->lights)
+        return hz_fail(err, "out of memory");
+    for (size_t i = 0; i < sd->light_count; ++i) {
+        if (light_from_entity(&sd->lights[i], render_from_world, &rs->lights[rs->light_count],
+                              err) != HZ_OK)
+            return HZ_ERROR;
+        rs->light_count++;
+    }
+    for (size_t i = 0; i < sd->shape_count; ++i) {
+        if (!sd->shapes[i].has_area_light)
+            continue;
+        geom_shape *gs = geometry_shape(rs->geom, i);
+        if (light_area_from_entity(&sd->shapes[i].area_light, gs, &rs->lights[rs->light_count],
+                                   err) != HZ_OK)
+            return HZ_ERROR;
+        gs->area_light = (int)rs->light_count++;
+    }
+    return HZ_OK;
+}
+
+static hz_status build(render_scene *rs, scene_desc *sd, const render_options *opt, FILE *warn,
+                       hz_error *err)
+{
+    film_params fp;
+    if (film_params_from_entity(&sd->film, &fp, err) != HZ_OK)
+        return HZ_ERROR;
+    if (opt && opt->output) {
+        if (strlen(opt->output) >= sizeof fp.filename)
+            return hz_fail(err, "output file name too long: %s", opt->output);
+        snprintf(fp.filename, sizeof fp.filename, "%s", opt->output);
+    }
+    rs->filt = filter_create(&sd->filter, err);
+    if (!rs->filt)
+        return HZ_ERROR;
+    if (sampler_from_entity(&sd->sampler, opt ? opt->seed : 0, &rs->smp, err) != HZ_OK)
+        return HZ_ERROR;
+    if (opt && opt->spp > 0)
+        sampler_set_spp(&rs->smp, opt->spp);
+    if (rs->smp.warning[0] && warn)
+        fprintf(warn, "warning: %s\n", rs->smp.warning);
+    if (camera_create(&sd->camera, &fp, &rs->cam, err) != HZ_OK)
+        return HZ_ERROR;
+    rs->film = film_create(&fp, err);
+    if (!rs->film)
+        return HZ_ERROR;
+    /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
+    film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
+    if (integrator_check(&sd->integrator, warn, err) != HZ_OK)
+        return HZ_ERROR;
+    if (sd->medium_count > 0)
+        return hz_fail_at(err, sd->media[0].entity.loc, "media are not supported yet");
+    rs->cam.medium = -1;
+
+    if (check_static(sd, warn, err) != HZ_OK)
+        return HZ_ERROR;
+    if (build_materials(rs, sd, err) != HZ_OK)
+        return HZ_ERROR;
+    /* Render space: the world translated so the camera sits at the origin. */
+    transform render_from_world = transform_inverse(rs->cam.world_from_render);
+    if (geometry_create(sd, render_from_world, rs->materials, rs->material_count,
+                        &rs->default_material, &rs->geom, err) != HZ_OK)
+        return HZ_ERROR;
+    if (build_lights(rs, sd, render_from_world, err) != HZ_OK)
+        return HZ_ERROR;
+    rs->isc = (integrator_scene){rs->geom, rs->lights, rs->light_count};
+    return HZ_OK;
+}
+
+hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *warn,
+                              render_scene **out, hz_error *err)
+{
+    *out = NULL;
+    render_scene *rs = calloc(1, sizeof *rs);
+    if (!rs)
+        return hz_fail(err, "out of memory");
+    if (build(rs, sd, opt, warn, err) != HZ_OK) {
+        render_scene_destroy(rs);
+        return HZ_ERROR;
+    }
+    *out = rs;
+    return HZ_OK;
+}
+
+void render_scene_destroy(render_scene *rs)
+{
+    if (!rs)
+        return;
+    for (size_t i = 0; i < rs->light_count; ++i)
+        light_free(&rs->lights[i]);
+    free(rs->lights);
+    geometry_destroy(rs->geom);
+    free(rs->materials);
+    if (rs->film)
+        film_destroy(rs->film);
+    if (rs->filt)
+        filter_destroy(rs->filt);
+    free(rs);
+}
+
+const camera *render_scene_camera(const render_scene *rs) { return &rs->cam; }
+film *render_scene_film(render_scene *rs) { return rs->film; }
+const sampler *render_scene_sampler(const render_scene *rs) { return &rs->smp; }
+const filter *render_scene_filter(const render_scene *rs) { return rs->filt; }
+
+rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
+                    double *depth, render_counters *counters)
+{
+    return integrator_li(&rs->isc, &r->r, s, depth, counters);
+}

@@ -1,0 +1,117 @@
+/* Helpers shared by the analytic render tests: build a render_scene from scene
+ * text and evaluate the integrator for the camera ray through a pixel centre,
+ * returning the radiance and the world-space point it hit. */
+#ifndef HAZE_TESTS_RENDER_TEST_UTIL_H
+#define HAZE_TESTS_RENDER_TEST_UTIL_H
+
+#include <math.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "render/render_scene.h"
+
+static inline render_scene *build_scene_or_fail(const char *text, render_options *opt)
+{
+    scene_desc sd;
+    hz_error err = {{0}};
+    if (scene_parse_string(text, "test.pbrt", &sd, &err) != HZ_OK) {
+        print_error("parse: %s\n", err.message);
+        fail();
+    }
+    render_options def = {0, 0, NULL};
+    render_scene *rs = NULL;
+    hz_status st = render_scene_create(&sd, opt ? opt : &def, NULL, &rs, &err);
+    scene_desc_free(&sd);
+    if (st != HZ_OK) {
+        print_error("build: %s\n", err.message);
+        fail();
+    }
+    return rs;
+}
+
+/* Builds and expects failure; returns the message in `msg`. */
+static inline void build_scene_expect_error(const char *text, char *msg, size_t n)
+{
+    scene_desc sd;
+    hz_error err = {{0}};
+    msg[0] = '\0';
+    if (scene_parse_string(text, "test.pbrt", &sd, &err) != HZ_OK) {
+        snprintf(msg, n, "%s", err.message);
+        return;
+    }
+    render_options def = {0, 0, NULL};
+    render_scene *rs = NULL;
+    hz_status st = render_scene_create(&sd, &def, NULL, &rs, &err);
+    scene_desc_free(&sd);
+    if (st == HZ_OK) {
+        render_scene_destroy(rs);
+        print_error("expected an error, scene built fine\n");
+        fail();
+    }
+    snprintf(msg, n, "%s", err.message);
+}
+
+typedef struct {
+    rgb L;
+    bool hit;
+    vec3 p_world;  /* hit point (world space) when hit */
+    double depth;
+} pixel_eval;
+
+/* Mean of `spp` samples of the ray through the centre of pixel (px, py). */
+static inline pixel_eval eval_pixel(const render_scene *rs, double fx, double fy, int spp)
+{
+    const camera *cam = render_scene_camera(rs);
+    camera_sample cs = {v2(fx, fy), v2(0.5, 0.5), 0.5, 1.0};
+    ray_differential rd;
+    pixel_eval out = {rgb_grey(0.0), false, v3(0, 0, 0), INFINITY};
+    if (!camera_generate_ray_differential(cam, cs, &rd)) {
+        print_error("no camera ray at %g %g\n", fx, fy);
+        fail();
+    }
+    render_counters counters = {0, 0};
+    rgb sum = rgb_grey(0.0);
+    for (int i = 0; i < spp; ++i) {
+        sampler_state st;
+        sampler_start(render_scene_sampler(rs), (int)fx, (int)fy, i, &st);
+        double depth;
+        rgb L = render_scene_li(rs, &rd, &st, &depth, &counters);
+        sum = rgb_add(sum, L);
+        out.depth = depth;
+    }
+    out.L = rgb_scale(sum, 1.0 / spp);
+    out.hit = isfinite(out.depth);
+    if (out.hit) {
+        vec3 d = v3_normalize(rd.r.d);
+        vec3 p_render = v3_add(rd.r.o, v3_scale(d, out.depth));
+        out.p_world = transform_point(&cam->world_from_render, p_render);
+    }
+    return out;
+}
+
+static inline void expect_close(double got, double want, double rel, double abs_tol,
+                                const char *what, double fx, double fy)
+{
+    double tol = fmax(rel * fabs(want), abs_tol);
+    if (!(fabs(got - want) <= tol)) {
+        print_error("%s at pixel (%g, %g): got %.9g, want %.9g (tolerance %.3g)\n", what, fx, fy,
+                    got, want, tol);
+        fail();
+    }
+}
+
+static inline void expect_rgb_close(rgb got, rgb want, double rel, double abs_tol,
+                                    const char *what, double fx, double fy)
+{
+    expect_close(got.r, want.r, rel, abs_tol, what, fx, fy);
+    expect_close(got.g, want.g, rel, abs_tol, what, fx, fy);
+    expect_close(got.b, want.b, rel, abs_tol, what, fx, fy);
+}
+
+#endif
