@@ -136,7 +136,8 @@ static void reject_occlusion(const struct RTCFilterFunctionNArguments *args)
 /* ---- building ---- */
 
 static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
-                             shape_entity *se, transform space_from_world, const material *materials,
+                             shape_entity *se, transform space_from_world,
+                             const material *materials,
                              size_t material_count, const material *default_material,
                              geom_shape *out, hz_error *err)
 {
@@ -193,8 +194,9 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
             if (g.indices[i] >= g.vertex_count) {
                 rtcReleaseGeometry(geom);
                 shape_geometry_free(&g);
-                return hz_fail_at(err, se->entity.loc, "vertex index %u out of range (%zu vertices)",
-                                  g.indices[i], g.vertex_count);
+                return hz_fail_at(err, se->entity.loc,
+                                  "vertex index %u out of range (%zu vertices)", g.indices[i],
+                                  g.vertex_count);
             }
             idx[i] = g.indices[i];
         }
@@ -434,10 +436,10 @@ static void surface_at(const geom_shape *s, unsigned prim, double u, double v, v
         ng = v3_neg(ng);
     hit->ng = hit->ns = ng;
     if (s->n) {
-        const double *n = s->n;
-        vec3 ns = v3_add(v3_add(v3_scale(v3(n[3 * tri[0]], n[3 * tri[0] + 1], n[3 * tri[0] + 2]), b0),
-                                v3_scale(v3(n[3 * tri[1]], n[3 * tri[1] + 1], n[3 * tri[1] + 2]), u)),
-                         v3_scale(v3(n[3 * tri[2]], n[3 * tri[2] + 1], n[3 * tri[2] + 2]), v));
+        const double *n0 = &s->n[3 * tri[0]], *n1 = &s->n[3 * tri[1]], *n2 = &s->n[3 * tri[2]];
+        vec3 ns = v3_add(v3_add(v3_scale(v3(n0[0], n0[1], n0[2]), b0),
+                                v3_scale(v3(n1[0], n1[1], n1[2]), u)),
+                         v3_scale(v3(n2[0], n2[1], n2[2]), v));
         if (v3_length_sq(ns) > 0.0) {
             hit->ns = v3_normalize(ns);
             /* pbrt-v4: given normals are authoritative for orientation. */

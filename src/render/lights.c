@@ -161,7 +161,8 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
         return hz_fail_at(err, e->loc,
                           "AreaLightSource \"%s\" is not supported (supported: \"diffuse\")",
                           type);
-    if (refuse(pl, "filename", "image area lights (\"filename\") are not supported yet", err) != HZ_OK ||
+    if (refuse(pl, "filename", "image area lights (\"filename\") are not supported yet",
+               err) != HZ_OK ||
         refuse(pl, "power",
                "\"power\" on area lights is not supported yet (pbrt-v4 applies it per "
                "triangle); use \"rgb L\" and \"scale\"",
@@ -192,7 +193,8 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
     }
     out->area.area = sum;
     for (size_t t = 0; t < shape->triangle_count; ++t)
-        out->area.cdf[t] = sum > 0.0 ? out->area.cdf[t] / sum : (double)(t + 1) / (double)shape->triangle_count;
+        out->area.cdf[t] = sum > 0.0 ? out->area.cdf[t] / sum
+                                     : (double)(t + 1) / (double)shape->triangle_count;
     return HZ_OK;
 }
 
@@ -329,8 +331,9 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, vec2 u, light_sample *out)
     case LIGHT_AREA: {
         vec3 pl, nl;
         double pdf_area;
-        bool ok = l->area.shape->kind == GEOMETRY_SPHERE ? sample_sphere(l, u, &pl, &nl, &pdf_area)
-                                                         : sample_triangles(l, u, &pl, &nl, &pdf_area);
+        bool ok = l->area.shape->kind == GEOMETRY_SPHERE
+                      ? sample_sphere(l, u, &pl, &nl, &pdf_area)
+                      : sample_triangles(l, u, &pl, &nl, &pdf_area);
         if (!ok)
             return false;
         vec3 d = v3_sub(pl, p);

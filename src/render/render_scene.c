@@ -71,7 +71,8 @@ static hz_status check_static(scene_desc *sd, FILE *warn, hz_error *err)
             return hz_fail_at(err, sd->object_shapes[i].entity.loc,
                               "animated shape transforms (motion blur) are not supported yet");
     for (size_t i = 0; i < sd->instance_count; ++i)
-        if (animated(&sd->instances[i].world_from_instance, &sd->instances[i].world_from_instance_end))
+        if (animated(&sd->instances[i].world_from_instance,
+                     &sd->instances[i].world_from_instance_end))
             return hz_fail_at(err, sd->instances[i].loc,
                               "animated object instances (motion blur) are not supported yet");
     for (size_t i = 0; i < sd->light_count; ++i) {

@@ -101,10 +101,7 @@ static double now_seconds(void)
 hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
                        hz_error *err)
 {
-    film *f = render_scene_film(rs);
-    const film_params *fp = film_get_params(f);
-    /* The film clamps samples (maxcomponentvalue) after exposure, as pbrt-v4. */
-    film_set_imaging_ratio(f, camera_imaging_ratio(render_scene_camera(rs), fp));
+    const film_params *fp = film_get_params(render_scene_film(rs));
     render_job job;
     memset(&job, 0, sizeof job);
     job.rs = rs;

@@ -1,0 +1,62 @@
+/* The bridge to OpenVDB/NanoVDB (the one C++ file in src/): reads a grid from a
+ * .vdb file (through OpenVDB, converted to NanoVDB with node statistics) or from
+ * a .nvdb file, and hands C an owned NanoVDB buffer that PNanoVDB can read.
+ * Every failure (missing file, not a VDB file, truncated file, missing grid, wrong
+ * value type) becomes one line of text in `err`; no C++ exception escapes. */
+#ifndef HAZE_MEDIA_VDB_LOAD_H
+#define HAZE_MEDIA_VDB_LOAD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core/error.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* One NanoVDB grid (header, tree, nodes, statistics) in a single allocation.
+ * `data` is 32-byte aligned (as NanoVDB requires) and must be released with
+ * vdb_buffer_free. `size` is the grid's size in bytes. */
+typedef struct {
+    void *data;
+    size_t size;
+} vdb_buffer;
+
+void vdb_buffer_free(vdb_buffer *b);
+
+/* Loads the grid called `gridname` from `path` (a .vdb or .nvdb file, told apart
+ * by its magic number, not its extension). Only float grids load; any other value
+ * type is an error naming the type. On failure `out` is left empty and `err`
+ * (of `err_size` bytes, may be NULL) holds the message. */
+hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out, char *err,
+                        size_t err_size);
+
+/* What `haze info` shows about one grid. Strings are valid during the callback only.
+ * index_min/max is the active voxel bounding box (inclusive); world_min/max bounds
+ * the world-space cells of those voxels ([min - 1/2, max + 1/2] in index space,
+ * mapped through the grid's transform). min/max_value are over active values:
+ * the values themselves for scalar grids, vector lengths for vector grids, absent
+ * (has_range = 0) for other types. */
+typedef struct {
+    const char *name;
+    const char *type; /* OpenVDB's value type name: "float", "vec3s", ... */
+    uint64_t active_voxels;
+    int32_t index_min[3], index_max[3];
+    double world_min[3], world_max[3];
+    double voxel_size[3];
+    int has_range;
+    double min_value, max_value;
+} vdb_grid_info;
+
+typedef void (*vdb_grid_callback)(const vdb_grid_info *info, void *user);
+
+/* Calls `cb` once per grid in the file, in file order. */
+hz_status vdb_list_grids(const char *path, vdb_grid_callback cb, void *user, char *err,
+                         size_t err_size);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
