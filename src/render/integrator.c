@@ -89,6 +89,8 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
         L = light_area_le(&sc->lights[h.shape->area_light], h.ng, wo);
     switch (h.shape->material->kind) {
     case MATERIAL_DIFFUSE:
+        if (rgb_is_black(h.shape->material->reflectance))
+            break;
         L = rgb_add(L, direct_diffuse(sc, &h, wo, h.shape->material->reflectance, st, counters));
         break;
     case MATERIAL_INTERFACE:

@@ -58,7 +58,6 @@ static void render_pixel(render_job *job, int px, int py, render_counters *count
             rd.ry_d = v3_add(rd.r.d, v3_scale(v3_sub(rd.ry_d, rd.r.d), job->diff_scale));
         }
         double depth = INFINITY;
-        counters->camera_rays++;
         rgb L = render_scene_li(job->rs, &rd, &st, &depth, counters);
         film_add_sample(f, px, py, L, cs.filter_weight, depth);
     }
