@@ -9,6 +9,9 @@ packages=(
   libopenexr-dev     # images (OpenEXRCore C API)
   libpng-dev         # --preview PNG
   libcmocka-dev      # test framework
+  libopenvdb-dev libnanovdb-dev  # volumes (OpenVDB 10 + NanoVDB)
+  libboost-iostreams-dev         # needed by OpenVDB's headers, not pulled in by libopenvdb-dev
+  libopenvdb-tools libnanovdb-tools  # vdb_print, nanovdb_print/convert for checking data
 )
 
 missing=()

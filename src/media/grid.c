@@ -1,0 +1,392 @@
+#include "media/grid.h"
+
+#include <assert.h>
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define FLOAT_GRID PNANOVDB_GRID_TYPE_FLOAT
+
+struct grid {
+    vdb_buffer owned;
+    pnanovdb_buf_t buf;
+    pnanovdb_grid_handle_t handle;
+    pnanovdb_root_handle_t root;
+    float background, min_value, max_value;
+    bool empty;
+    grid_ibox bounds;
+    /* Trilinear lookups outside [min - 1, max + 1] are background: skip the tree. */
+    vec3 support_lo, support_hi;
+    transform world_from_index, index_from_world;
+    char name[256];
+};
+
+static const char *nanovdb_type_name(uint32_t type)
+{
+    static const char *names[] = {"unknown", "float", "double", "int16",  "int32", "int64", "vec3f",
+                                  "vec3d",   "mask",  "half",   "uint32", "bool",  "rgba8", "fp4",
+                                  "fp8",     "fp16",  "fpn",    "vec4f",  "vec4d", "index"};
+    return type < sizeof names / sizeof names[0] ? names[type] : "unknown";
+}
+
+static pnanovdb_coord_t coord(int32_t i, int32_t j, int32_t k)
+{
+    pnanovdb_coord_t c;
+    c.x = i;
+    c.y = j;
+    c.z = k;
+    return c;
+}
+
+/* Reads the map as double precision affine transforms (NanoVDB stores the 3x3
+ * row-major: world = M index + t, index = M^-1 (world - t)). */
+static void read_transforms(grid *g)
+{
+    pnanovdb_map_handle_t map = pnanovdb_grid_get_map(g->buf, g->handle);
+    mat4 m = mat4_identity(), m_inv = mat4_identity();
+    double t[3];
+    for (int r = 0; r < 3; ++r)
+        t[r] = pnanovdb_map_get_vecd(g->buf, map, (uint32_t)r);
+    for (int r = 0; r < 3; ++r) {
+        m.m[r][3] = t[r];
+        double inv_t = 0.0;
+        for (int c = 0; c < 3; ++c) {
+            m.m[r][c] = pnanovdb_map_get_matd(g->buf, map, (uint32_t)(3 * r + c));
+            m_inv.m[r][c] = pnanovdb_map_get_invmatd(g->buf, map, (uint32_t)(3 * r + c));
+            inv_t -= m_inv.m[r][c] * t[c];
+        }
+        m_inv.m[r][3] = inv_t;
+    }
+    g->world_from_index = (transform){m, m_inv};
+    g->index_from_world = (transform){m_inv, m};
+}
+
+static hz_status validate(const vdb_buffer *b, const char *name, hz_error *err)
+{
+    if (!b || !b->data || b->size < PNANOVDB_GRID_SIZE + PNANOVDB_TREE_SIZE)
+        return hz_fail(err, "grid \"%s\": buffer too small to hold a NanoVDB grid", name);
+    if ((uintptr_t)b->data % 32 != 0)
+        return hz_fail(err, "grid \"%s\": NanoVDB buffer is not 32-byte aligned", name);
+    pnanovdb_buf_t buf = pnanovdb_make_buf((uint32_t *)b->data, b->size / 4);
+    pnanovdb_grid_handle_t h = {pnanovdb_address_null()};
+    if (pnanovdb_grid_get_magic(buf, h) != PNANOVDB_MAGIC_NUMBER)
+        return hz_fail(err, "grid \"%s\": not a NanoVDB grid (bad magic number)", name);
+    uint32_t version = pnanovdb_grid_get_version(buf, h);
+    if (pnanovdb_version_get_major(version) != PNANOVDB_MAJOR_VERSION_NUMBER)
+        return hz_fail(err, "grid \"%s\": NanoVDB version %u.%u, expected %u.x", name,
+                       pnanovdb_version_get_major(version), pnanovdb_version_get_minor(version),
+                       PNANOVDB_MAJOR_VERSION_NUMBER);
+    if (pnanovdb_grid_get_grid_size(buf, h) > b->size)
+        return hz_fail(err, "grid \"%s\": NanoVDB grid larger than its buffer", name);
+    uint32_t type = pnanovdb_grid_get_grid_type(buf, h);
+    if (type != FLOAT_GRID)
+        return hz_fail(err, "grid \"%s\" is %s, expected float", name, nanovdb_type_name(type));
+    return HZ_OK;
+}
+
+hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out, hz_error *err)
+{
+    *out = NULL;
+    if (!name)
+        name = "";
+    if (validate(buf, name, err) != HZ_OK)
+        return HZ_ERROR;
+    grid *g = calloc(1, sizeof *g);
+    if (!g)
+        return hz_fail(err, "grid \"%s\": out of memory", name);
+    g->owned = *buf;
+    snprintf(g->name, sizeof g->name, "%s", name);
+    g->buf = pnanovdb_make_buf((uint32_t *)g->owned.data, g->owned.size / 4);
+    g->handle.address = pnanovdb_address_null();
+    g->root = pnanovdb_tree_get_root(g->buf, pnanovdb_grid_get_tree(g->buf, g->handle));
+    g->background = pnanovdb_read_float(
+        g->buf, pnanovdb_address_offset(g->root.address,
+                                        PNANOVDB_GRID_TYPE_GET(FLOAT_GRID, root_off_background)));
+    g->min_value =
+        pnanovdb_read_float(g->buf, pnanovdb_root_get_min_address(FLOAT_GRID, g->buf, g->root));
+    g->max_value =
+        pnanovdb_read_float(g->buf, pnanovdb_root_get_max_address(FLOAT_GRID, g->buf, g->root));
+    pnanovdb_coord_t lo = pnanovdb_root_get_bbox_min(g->buf, g->root);
+    pnanovdb_coord_t hi = pnanovdb_root_get_bbox_max(g->buf, g->root);
+    g->empty =
+        pnanovdb_tree_get_voxel_count(g->buf, pnanovdb_grid_get_tree(g->buf, g->handle)) == 0 ||
+        lo.x > hi.x || lo.y > hi.y || lo.z > hi.z;
+    g->bounds = (grid_ibox){{lo.x, lo.y, lo.z}, {hi.x, hi.y, hi.z}};
+    if (g->empty) {
+        g->support_lo = v3(1, 1, 1);
+        g->support_hi = v3(0, 0, 0);
+    } else {
+        g->support_lo = v3(lo.x - 1.0, lo.y - 1.0, lo.z - 1.0);
+        g->support_hi = v3(hi.x + 1.0, hi.y + 1.0, hi.z + 1.0);
+    }
+    read_transforms(g);
+    *buf = (vdb_buffer){NULL, 0};
+    *out = g;
+    return HZ_OK;
+}
+
+hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error *err)
+{
+    vdb_buffer buf;
+    char msg[sizeof err->message];
+    *out = NULL;
+    if (vdb_load_grid(path, gridname, &buf, msg, sizeof msg) != HZ_OK)
+        return hz_fail(err, "%s", msg);
+    if (grid_create_from_buffer(&buf, gridname, out, err) != HZ_OK) {
+        vdb_buffer_free(&buf);
+        return HZ_ERROR;
+    }
+    return HZ_OK;
+}
+
+void grid_destroy(grid *g)
+{
+    if (!g)
+        return;
+    vdb_buffer_free(&g->owned);
+    free(g);
+}
+
+void grid_accessor_init(const grid *g, grid_accessor *a)
+{
+    pnanovdb_readaccessor_init(&a->acc, g->root);
+}
+
+transform grid_world_from_index_transform(const grid *g) { return g->world_from_index; }
+
+vec3 grid_index_from_world(const grid *g, vec3 p_world)
+{
+    return transform_point(&g->index_from_world, p_world);
+}
+
+vec3 grid_world_from_index(const grid *g, vec3 p_index)
+{
+    return transform_point(&g->world_from_index, p_index);
+}
+
+float grid_voxel(const grid *g, grid_accessor *a, int32_t i, int32_t j, int32_t k)
+{
+    pnanovdb_coord_t ijk = coord(i, j, k);
+    pnanovdb_address_t addr =
+        pnanovdb_readaccessor_get_value_address(FLOAT_GRID, g->buf, &a->acc, &ijk);
+    return pnanovdb_read_float(g->buf, addr);
+}
+
+double grid_density_index(const grid *g, grid_accessor *a, vec3 p)
+{
+    /* Written so that NaN coordinates also land here. */
+    if (!(p.x >= g->support_lo.x && p.x <= g->support_hi.x && p.y >= g->support_lo.y &&
+          p.y <= g->support_hi.y && p.z >= g->support_lo.z && p.z <= g->support_hi.z))
+        return g->background;
+    double fx = floor(p.x), fy = floor(p.y), fz = floor(p.z);
+    double tx = p.x - fx, ty = p.y - fy, tz = p.z - fz;
+    int32_t i = (int32_t)fx, j = (int32_t)fy, k = (int32_t)fz;
+    double v[2][2][2];
+    for (int dz = 0; dz < 2; ++dz)
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx)
+                v[dz][dy][dx] = grid_voxel(g, a, i + dx, j + dy, k + dz);
+    double y0 =
+        hz_lerp(ty, hz_lerp(tx, v[0][0][0], v[0][0][1]), hz_lerp(tx, v[0][1][0], v[0][1][1]));
+    double y1 =
+        hz_lerp(ty, hz_lerp(tx, v[1][0][0], v[1][0][1]), hz_lerp(tx, v[1][1][0], v[1][1][1]));
+    return hz_lerp(tz, y0, y1);
+}
+
+bool grid_index_bounds(const grid *g, grid_ibox *out)
+{
+    *out = g->bounds;
+    return !g->empty;
+}
+
+bool grid_support_bounds(const grid *g, vec3 *lo, vec3 *hi)
+{
+    *lo = g->support_lo;
+    *hi = g->support_hi;
+    return !g->empty;
+}
+
+float grid_max_value(const grid *g) { return g->max_value; }
+float grid_min_value(const grid *g) { return g->min_value; }
+float grid_background(const grid *g) { return g->background; }
+const char *grid_name(const grid *g) { return g->name; }
+
+uint64_t grid_active_voxel_count(const grid *g)
+{
+    return pnanovdb_tree_get_voxel_count(g->buf, pnanovdb_grid_get_tree(g->buf, g->handle));
+}
+
+/* ---- node statistics ---------------------------------------------------- */
+
+int32_t grid_level_dim(grid_level level)
+{
+    switch (level) {
+    case GRID_LEAF: return 8;
+    case GRID_LOWER: return 128;
+    case GRID_UPPER: return 4096;
+    }
+    assert(!"unknown grid level");
+    return 0;
+}
+
+/* Largest multiple of dim (a power of two) <= v, without relying on >> of negatives. */
+static int32_t align_down(int32_t v, int32_t dim)
+{
+    int64_t q = v >= 0 ? (int64_t)v / dim : -(((int64_t)-v + dim - 1) / dim);
+    return (int32_t)(q * dim);
+}
+
+static grid_node constant_node(grid_node_kind kind, float value, grid_level level,
+                               pnanovdb_coord_t ijk)
+{
+    int32_t dim = grid_level_dim(level);
+    return (grid_node){kind,
+                       {align_down(ijk.x, dim), align_down(ijk.y, dim), align_down(ijk.z, dim)},
+                       dim,
+                       value,
+                       value};
+}
+
+static grid_node stats_node(const grid *g, pnanovdb_address_t min_addr, pnanovdb_address_t max_addr,
+                            grid_level level, pnanovdb_coord_t ijk)
+{
+    grid_node n = constant_node(GRID_NODE_CHILD, 0.0f, level, ijk);
+    n.min = pnanovdb_read_float(g->buf, min_addr);
+    n.max = pnanovdb_read_float(g->buf, max_addr);
+    return n;
+}
+
+grid_node grid_node_at(const grid *g, grid_level level, int32_t i, int32_t j, int32_t k)
+{
+    pnanovdb_coord_t ijk = coord(i, j, k);
+    pnanovdb_buf_t buf = g->buf;
+    pnanovdb_root_tile_handle_t tile = pnanovdb_root_find_tile(FLOAT_GRID, buf, g->root, &ijk);
+    if (pnanovdb_address_is_null(tile.address))
+        return constant_node(GRID_NODE_BACKGROUND, g->background, level, ijk);
+    if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(buf, tile)))
+        return constant_node(
+            GRID_NODE_TILE,
+            pnanovdb_read_float(buf, pnanovdb_root_tile_get_value_address(FLOAT_GRID, buf, tile)),
+            level, ijk);
+    pnanovdb_upper_handle_t upper = pnanovdb_root_get_child(FLOAT_GRID, buf, g->root, tile);
+    if (level == GRID_UPPER)
+        return stats_node(g, pnanovdb_upper_get_min_address(FLOAT_GRID, buf, upper),
+                          pnanovdb_upper_get_max_address(FLOAT_GRID, buf, upper), level, ijk);
+    uint32_t n = pnanovdb_upper_coord_to_offset(&ijk);
+    if (!pnanovdb_upper_get_child_mask(buf, upper, n))
+        return constant_node(
+            GRID_NODE_TILE,
+            pnanovdb_read_float(buf, pnanovdb_upper_get_table_address(FLOAT_GRID, buf, upper, n)),
+            level, ijk);
+    pnanovdb_lower_handle_t lower = pnanovdb_upper_get_child(FLOAT_GRID, buf, upper, n);
+    if (level == GRID_LOWER)
+        return stats_node(g, pnanovdb_lower_get_min_address(FLOAT_GRID, buf, lower),
+                          pnanovdb_lower_get_max_address(FLOAT_GRID, buf, lower), level, ijk);
+    n = pnanovdb_lower_coord_to_offset(&ijk);
+    if (!pnanovdb_lower_get_child_mask(buf, lower, n))
+        return constant_node(
+            GRID_NODE_TILE,
+            pnanovdb_read_float(buf, pnanovdb_lower_get_table_address(FLOAT_GRID, buf, lower, n)),
+            level, ijk);
+    pnanovdb_leaf_handle_t leaf = pnanovdb_lower_get_child(FLOAT_GRID, buf, lower, n);
+    return stats_node(g, pnanovdb_leaf_get_min_address(FLOAT_GRID, buf, leaf),
+                      pnanovdb_leaf_get_max_address(FLOAT_GRID, buf, leaf), level, ijk);
+}
+
+/* The child-table index range [lo, hi] (per axis) of a node at `origin` whose
+ * children span `child_dim` voxels, restricted to `box`. False when disjoint. */
+static bool child_range(const int32_t origin[3], int32_t node_dim, int32_t child_dim, grid_ibox box,
+                        int32_t lo[3], int32_t hi[3])
+{
+    for (int a = 0; a < 3; ++a) {
+        int64_t first = (int64_t)origin[a], last = first + node_dim - 1;
+        if (box.max[a] < first || box.min[a] > last)
+            return false;
+        int64_t b0 = box.min[a] > first ? box.min[a] : first;
+        int64_t b1 = box.max[a] < last ? box.max[a] : last;
+        lo[a] = (int32_t)((b0 - first) / child_dim);
+        hi[a] = (int32_t)((b1 - first) / child_dim);
+    }
+    return true;
+}
+
+static float lower_region_max(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
+                              grid_ibox box, float m)
+{
+    int32_t lo[3], hi[3];
+    if (!child_range(origin, 128, 8, box, lo, hi))
+        return m;
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+                uint32_t n = (uint32_t)((x << 8) | (y << 4) | z);
+                float v;
+                if (pnanovdb_lower_get_child_mask(g->buf, lower, n)) {
+                    pnanovdb_leaf_handle_t leaf =
+                        pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n);
+                    v = pnanovdb_read_float(
+                        g->buf, pnanovdb_leaf_get_max_address(FLOAT_GRID, g->buf, leaf));
+                } else {
+                    v = pnanovdb_read_float(
+                        g->buf, pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, lower, n));
+                }
+                m = fmaxf(m, v);
+            }
+    return m;
+}
+
+static float upper_region_max(const grid *g, pnanovdb_upper_handle_t upper, const int32_t origin[3],
+                              grid_ibox box, float m)
+{
+    int32_t lo[3], hi[3];
+    if (!child_range(origin, 4096, 128, box, lo, hi))
+        return m;
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+                uint32_t n = (uint32_t)((x << 10) | (y << 5) | z);
+                if (pnanovdb_upper_get_child_mask(g->buf, upper, n)) {
+                    int32_t child_origin[3] = {origin[0] + 128 * x, origin[1] + 128 * y,
+                                               origin[2] + 128 * z};
+                    pnanovdb_lower_handle_t lower =
+                        pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n);
+                    m = lower_region_max(g, lower, child_origin, box, m);
+                } else {
+                    m = fmaxf(m, pnanovdb_read_float(g->buf, pnanovdb_upper_get_table_address(
+                                                                 FLOAT_GRID, g->buf, upper, n)));
+                }
+            }
+    return m;
+}
+
+/* Inverse of pnanovdb_coord_to_key (64-bit keys): 21 bits per axis, x highest. */
+static int32_t key_axis(uint64_t key, int shift)
+{
+    uint32_t bits = (uint32_t)((key >> shift) & 0x1FFFFFu);
+    return (int32_t)(bits << 12);
+}
+
+float grid_region_max(const grid *g, grid_ibox box)
+{
+    float m = g->background;
+    uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
+    for (uint32_t t = 0; t < count; ++t) {
+        pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(FLOAT_GRID, g->root, t);
+        uint64_t key = pnanovdb_root_tile_get_key(g->buf, tile);
+        int32_t origin[3] = {key_axis(key, 42), key_axis(key, 21), key_axis(key, 0)};
+        int32_t lo[3], hi[3];
+        if (!child_range(origin, 4096, 4096, box, lo, hi))
+            continue;
+        if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile))) {
+            m = fmaxf(m, pnanovdb_read_float(g->buf, pnanovdb_root_tile_get_value_address(
+                                                         FLOAT_GRID, g->buf, tile)));
+        } else {
+            pnanovdb_upper_handle_t upper =
+                pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile);
+            m = upper_region_max(g, upper, origin, box, m);
+        }
+    }
+    return m;
+}

@@ -1,0 +1,108 @@
+/* A NanoVDB float grid read from C through PNanoVDB: the density field of a grid
+ * medium. The grid owns its buffer (from vdb_load_grid).
+ *
+ * Conventions (DESIGN.md, "Scene files"): the value of voxel (i,j,k) sits at the
+ * index-space point (i,j,k); between those points the field is trilinear; voxels
+ * that are not stored read as the background. So the field's support reaches one
+ * voxel beyond the active voxels: index [min - 1, max + 1].
+ *
+ * Per-sample lookups go through a grid_accessor, a small value each thread keeps
+ * on its stack: it caches the last tree path, so nearby lookups are cheap. */
+#ifndef HAZE_MEDIA_GRID_H
+#define HAZE_MEDIA_GRID_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#ifndef PNANOVDB_C
+#define PNANOVDB_C
+#endif
+#ifndef PNANOVDB_HDDA
+#define PNANOVDB_HDDA
+#endif
+#include <nanovdb/PNanoVDB.h>
+
+#include "core/error.h"
+#include "core/transform.h"
+#include "core/vec.h"
+#include "media/vdb_load.h"
+
+typedef struct grid grid;
+
+/* Per-thread lookup cache. Initialise with grid_accessor_init before use; valid
+ * only with the grid it was initialised for. */
+typedef struct {
+    pnanovdb_readaccessor_t acc;
+} grid_accessor;
+
+/* An inclusive box of voxel coordinates. */
+typedef struct {
+    int32_t min[3], max[3];
+} grid_ibox;
+
+/* Takes ownership of `buf` on success (and leaves it untouched on failure).
+ * Fails unless `buf` holds a valid NanoVDB float grid. `name` is used in messages. */
+hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out, hz_error *err);
+/* vdb_load_grid + grid_create_from_buffer. */
+hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error *err);
+void grid_destroy(grid *g);
+
+void grid_accessor_init(const grid *g, grid_accessor *a);
+
+/* The voxel-to-world map of the grid (world = M index + t), and its inverse. */
+transform grid_world_from_index_transform(const grid *g);
+vec3 grid_index_from_world(const grid *g, vec3 p_world);
+vec3 grid_world_from_index(const grid *g, vec3 p_index);
+
+/* Value stored at voxel (i,j,k) (background if not stored). */
+float grid_voxel(const grid *g, grid_accessor *a, int32_t i, int32_t j, int32_t k);
+/* Trilinear density at an index-space point. */
+double grid_density_index(const grid *g, grid_accessor *a, vec3 p_index);
+
+/* Bounding box of the active voxels (from the root node). False for an empty grid. */
+bool grid_index_bounds(const grid *g, grid_ibox *out);
+/* Where the trilinear field can be non-background: [min - 1, max + 1] in index space. */
+bool grid_support_bounds(const grid *g, vec3 *lo, vec3 *hi);
+/* Largest active value (root statistics), and the background value. A majorant
+ * of the whole field is fmax(grid_max_value, grid_background). */
+float grid_max_value(const grid *g);
+float grid_min_value(const grid *g);
+float grid_background(const grid *g);
+uint64_t grid_active_voxel_count(const grid *g);
+const char *grid_name(const grid *g);
+
+/* Tree levels, finest first: a leaf spans 8^3 voxels, a lower internal node
+ * 128^3, an upper internal node 4096^3. */
+typedef enum { GRID_LEAF = 0, GRID_LOWER = 1, GRID_UPPER = 2 } grid_level;
+
+int32_t grid_level_dim(grid_level level);
+
+typedef enum {
+    GRID_NODE_CHILD,      /* a node of that level exists; min/max are its statistics */
+    GRID_NODE_TILE,       /* a coarser tile covers the region: constant value */
+    GRID_NODE_BACKGROUND, /* nothing is stored there: background */
+} grid_node_kind;
+
+/* The node of `level` containing voxel (i,j,k). For GRID_NODE_CHILD, min/max come
+ * from NanoVDB's node statistics, which cover active values only; for tiles and
+ * background they are the constant value. `origin` is the node's first voxel and
+ * `dim` its edge length in voxels (grid_level_dim(level)). Note that a trilinear
+ * lookup inside a node also reads its neighbours' voxels: a node's max bounds the
+ * field only once dilated by one voxel (see grid_region_max). */
+typedef struct {
+    grid_node_kind kind;
+    int32_t origin[3];
+    int32_t dim;
+    float min, max;
+} grid_node;
+
+grid_node grid_node_at(const grid *g, grid_level level, int32_t i, int32_t j, int32_t k);
+
+/* A conservative upper bound of the values of all voxels in the inclusive index box
+ * `box` (node statistics and tile values of every node that overlaps it, and the
+ * background). Inactive voxels inside leaves are assumed to hold the background,
+ * as they do in fog volumes. For the trilinear field over the index-space region
+ * [a, b], pass the voxels floor(a) .. floor(b) + 1. */
+float grid_region_max(const grid *g, grid_ibox box);
+
+#endif
