@@ -36,6 +36,13 @@ typedef struct {
             bool two_sided;
             double area;             /* render space */
             double *cdf;             /* triangles: cumulative areas / area (triangle_count) */
+            /* Spheres whose space_from_object is a uniform scale (times a
+             * rotation, reflection and translation) are sampled by solid
+             * angle from outside points (pbrt-v4's cone sampling); others,
+             * and points inside, by area. Set by light_area_from_entity. */
+            bool sphere_cone;
+            vec3 sphere_center;      /* render space */
+            double sphere_radius;    /* render space */
         } area;
     };
 } light;
@@ -47,6 +54,16 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
                                  hz_error *err);
 void light_free(light *l);
+
+/* Relative tolerance of light_uniform_scale, on the entries of the Gram matrix
+ * AᵀA of the linear part A (i.e. squared axis scales and cosines between axes):
+ * loose enough for matrices written with float precision, tight enough that
+ * treating the ellipsoid as a sphere is far below any sampling noise. */
+#define LIGHT_UNIFORM_SCALE_TOL 1e-6
+/* s > 0 when `t` is affine with a linear part s·Q, Q orthogonal (rotation or
+ * reflection: no shear, equal axis scales) within LIGHT_UNIFORM_SCALE_TOL;
+ * 0 otherwise. */
+double light_uniform_scale(const transform *t);
 
 /* Incident radiance sample at reference point `p`. `wi` is unit; `pdf` is
  * per solid angle (1 for delta lights). The shadow ray must test the segment
