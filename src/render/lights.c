@@ -377,36 +377,42 @@ static bool sample_sphere_cone(const light *l, vec3 p, vec2 u, vec3 *pl, vec3 *n
     return true;
 }
 
+/* Fills the geometry of a sample of a light at the single point p_light and
+ * returns the squared distance (0: p sits on the light, no sample). */
+static double toward_point(vec3 p_light, vec3 p, light_sample *out)
+{
+    vec3 d = v3_sub(p_light, p);
+    double d2 = v3_length_sq(d);
+    if (d2 == 0.0)
+        return 0.0;
+    out->dist = sqrt(d2);
+    out->wi = v3_scale(d, 1.0 / out->dist);
+    out->p_light = p_light;
+    out->pdf = 1.0;
+    return d2;
+}
+
 bool light_sample_li(const light *l, vec3 p, vec3 n, vec2 u, light_sample *out)
 {
     out->infinite = false;
     out->n_light = v3(0, 0, 0);
     switch (l->kind) {
     case LIGHT_POINT: {
-        vec3 d = v3_sub(l->point.p, p);
-        double d2 = v3_length_sq(d);
+        double d2 = toward_point(l->point.p, p, out);
         if (d2 == 0.0)
             return false;
-        out->dist = sqrt(d2);
-        out->wi = v3_scale(d, 1.0 / out->dist);
-        out->p_light = l->point.p;
-        out->pdf = 1.0;
         out->L = rgb_scale(l->emit, 1.0 / d2);
         return true;
     }
     case LIGHT_SPOT: {
-        vec3 d = v3_sub(l->spot.p, p);
-        double d2 = v3_length_sq(d);
+        double d2 = toward_point(l->spot.p, p, out);
         if (d2 == 0.0)
             return false;
-        out->dist = sqrt(d2);
-        out->wi = v3_scale(d, 1.0 / out->dist);
+        vec3 d = v3_sub(l->spot.p, p);
         vec3 wl = v3_normalize(transform_vector(&l->spot.light_from_render, v3_neg(d)));
         double falloff = smooth_step(wl.z, l->spot.cos_falloff_end, l->spot.cos_falloff_start);
         if (falloff == 0.0)
             return false;
-        out->p_light = l->spot.p;
-        out->pdf = 1.0;
         out->L = rgb_scale(l->emit, falloff / d2);
         return true;
     }
