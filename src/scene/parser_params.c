@@ -133,6 +133,16 @@ static hz_status want_numbers(const param *p, const token *vals, size_t n, hz_er
     return HZ_OK;
 }
 
+/* Spectrum and blackbody parameters become three rgb numbers. */
+static void set_rgb(param *p, rgb c)
+{
+    p->count = 3;
+    p->nums = scene_xarray(3, sizeof *p->nums);
+    p->nums[0] = c.r;
+    p->nums[1] = c.g;
+    p->nums[2] = c.b;
+}
+
 static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_error *err)
 {
     if (vals[0].kind == TOK_STRING)
@@ -168,11 +178,7 @@ static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_erro
         free(lambda);
         free(value);
     }
-    p->count = 3;
-    p->nums = scene_xarray(3, sizeof *p->nums);
-    p->nums[0] = c.r;
-    p->nums[1] = c.g;
-    p->nums[2] = c.b;
+    set_rgb(p, c);
     return HZ_OK;
 }
 
@@ -227,14 +233,7 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
         if (!(vals[0].num > 0.0))
             return hz_fail_at(err, vals[0].loc, "parameter \"blackbody %s\": temperature must be > 0",
                               p->name);
-        {
-            rgb c = spectrum_blackbody_to_rgb(vals[0].num);
-            p->count = 3;
-            p->nums = scene_xarray(3, sizeof *p->nums);
-            p->nums[0] = c.r;
-            p->nums[1] = c.g;
-            p->nums[2] = c.b;
-        }
+        set_rgb(p, spectrum_blackbody_to_rgb(vals[0].num));
         return HZ_OK;
     case PARAM_POINT2:
     case PARAM_VECTOR2:
