@@ -1,6 +1,6 @@
-/* Helpers shared by the analytic render tests: build a render_scene from scene
- * text and evaluate the integrator for the camera ray through a pixel centre,
- * returning the radiance and the world-space point it hit. */
+/* Helpers shared by the analytic render tests: join scene text, build a
+ * render_scene from it and evaluate the integrator for the camera ray through a
+ * pixel centre, returning the radiance and the world-space point it hit. */
 #ifndef HAZE_TESTS_RENDER_TEST_UTIL_H
 #define HAZE_TESTS_RENDER_TEST_UTIL_H
 
@@ -15,6 +15,16 @@
 #include <cmocka.h>
 
 #include "render/render_scene.h"
+
+/* a, b and c joined into a new string (free it). */
+static inline char *cat(const char *a, const char *b, const char *c)
+{
+    size_t n = strlen(a) + strlen(b) + strlen(c) + 1;
+    char *s = malloc(n);
+    assert_non_null(s);
+    snprintf(s, n, "%s%s%s", a, b, c);
+    return s;
+}
 
 static inline render_scene *build_scene_or_fail(const char *text, render_options *opt)
 {

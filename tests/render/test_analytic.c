@@ -18,15 +18,6 @@ static const char *plane =
 
 static const rgb rho = {0.2, 0.5, 0.8};
 
-static char *cat(const char *a, const char *b, const char *c)
-{
-    size_t n = strlen(a) + strlen(b) + strlen(c) + 1;
-    char *s = malloc(n);
-    assert_non_null(s);
-    snprintf(s, n, "%s%s%s", a, b, c);
-    return s;
-}
-
 /* ρ/π · I · cosθ / d² for a plane z = 0 with normal +z. */
 static rgb point_on_plane(vec3 p, vec3 light, rgb I)
 {

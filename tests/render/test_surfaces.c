@@ -9,15 +9,6 @@ static const char *camera_down =
     "Camera \"perspective\" \"float fov\" 60\n"
     "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\n";
 
-static char *cat(const char *a, const char *b, const char *c)
-{
-    size_t n = strlen(a) + strlen(b) + strlen(c) + 1;
-    char *s = malloc(n);
-    assert_non_null(s);
-    snprintf(s, n, "%s%s%s", a, b, c);
-    return s;
-}
-
 /* A sphere of radius R and radiance L entirely above a point's horizon gives
  * E = π L (R/D)² cosθ (D: distance to its centre, θ: angle of the centre from
  * the normal). Radius 0.5 scaled by 2 checks the area-measure Jacobian. */

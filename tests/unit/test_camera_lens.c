@@ -12,38 +12,8 @@
 #include "camera/camera.h"
 #include "camera/lens.h"
 #include "core/sampling.h"
-
-static void assert_near(double got, double want, double tol)
-{
-    if (!(fabs(got - want) <= tol))
-        fail_msg("got %.17g, want %.17g (tolerance %g)", got, want, tol);
-}
-
-static void assert_v3_near(vec3 got, vec3 want, double tol)
-{
-    assert_near(got.x, want.x, tol);
-    assert_near(got.y, want.y, tol);
-    assert_near(got.z, want.z, tol);
-}
-
-/* splitmix64: a local, seeded stream (tests must be deterministic). */
-static double rng_next(uint64_t *s)
-{
-    uint64_t z = (*s += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    z ^= z >> 31;
-    return (double)(z >> 11) * 0x1.0p-53;
-}
-
-static camera make(camera_config cfg)
-{
-    camera c;
-    hz_error err = {{0}};
-    if (camera_init(&cfg, &c, &err) != HZ_OK)
-        fail_msg("camera_init: %s", err.message);
-    return c;
-}
+#include "unit/assert_util.h"
+#include "unit/camera_util.h"
 
 /* Where a render-space ray meets camera-space plane z = depth, in camera space. */
 static vec3 hit_camera_plane(const camera *c, const ray *r, double depth)
@@ -56,7 +26,7 @@ static vec3 hit_camera_plane(const camera *c, const ray *r, double depth)
 
 static void check_lens_rays_meet_on_focal_plane(camera_config cfg)
 {
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     transform camera_from_render = transform_inverse(c.render_from_camera);
     uint64_t rng = 7;
     const vec2 pixels[] = {{0.5, 0.5}, {37.25, 81.5}, {199.9, 0.1}, {100, 50}};
@@ -120,7 +90,7 @@ static void test_circle_of_confusion(void **state)
     cfg.fov = fov;
     cfg.lens_radius = R;
     cfg.focal_distance = zf;
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     const double depths[] = {1.5, 3, 4.9, 8, 50, 1e4};
     for (size_t i = 0; i < sizeof depths / sizeof depths[0]; ++i) {
         double z = depths[i];
@@ -168,7 +138,7 @@ static void test_aperture_polygon_containment(void **state)
     cfg.focal_distance = 2;
     cfg.blades = 6;
     cfg.blade_rotation = 15;
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     assert_near(c.blade_rotation, hz_radians(15), 1e-15);
     uint64_t rng = 11;
     double best_vertex = 1e9;

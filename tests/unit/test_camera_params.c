@@ -14,12 +14,7 @@
 
 #include "camera/camera.h"
 #include "scene/params.h"
-
-static void assert_near(double got, double want, double tol)
-{
-    if (!(fabs(got - want) <= tol))
-        fail_msg("got %.17g, want %.17g (tolerance %g)", got, want, tol);
-}
+#include "unit/assert_util.h"
 
 static char *dup(const char *s)
 {

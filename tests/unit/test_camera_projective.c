@@ -11,19 +11,8 @@
 #include <string.h>
 
 #include "camera/camera.h"
-
-static void assert_near(double got, double want, double tol)
-{
-    if (!(fabs(got - want) <= tol))
-        fail_msg("got %.17g, want %.17g (tolerance %g)", got, want, tol);
-}
-
-static void assert_v3_near(vec3 got, vec3 want, double tol)
-{
-    assert_near(got.x, want.x, tol);
-    assert_near(got.y, want.y, tol);
-    assert_near(got.z, want.z, tol);
-}
+#include "unit/assert_util.h"
+#include "unit/camera_util.h"
 
 /* Bit-for-bit equality of the ray's fields (memcmp on the struct would read padding). */
 static void assert_ray_identical(const ray *a, const ray *b)
@@ -32,15 +21,6 @@ static void assert_ray_identical(const ray *a, const ray *b)
     assert_memory_equal(&a->d, &b->d, sizeof a->d);
     assert_memory_equal(&a->time, &b->time, sizeof a->time);
     assert_int_equal(a->medium, b->medium);
-}
-
-static camera make(camera_config cfg)
-{
-    camera c;
-    hz_error err = {{0}};
-    if (camera_init(&cfg, &c, &err) != HZ_OK)
-        fail_msg("camera_init: %s", err.message);
-    return c;
 }
 
 static camera_sample at(double x, double y)
@@ -60,7 +40,7 @@ static void test_raster_camera_round_trip(void **state)
         camera_config cfg =
             camera_config_default(k ? CAMERA_ORTHOGRAPHIC : CAMERA_PERSPECTIVE, 320, 240);
         cfg.fov = 40;
-        camera c = make(cfg);
+        camera c = make_camera(cfg);
         for (double y = 0; y <= 240; y += 37.5)
             for (double x = 0; x <= 320; x += 41.25) {
                 vec3 pc = transform_point(&c.camera_from_raster, v3(x, y, 0));
@@ -87,7 +67,7 @@ static void test_image_corners_map_to_screen_window_corners(void **state)
     memcpy(cfg.screen_window, custom, sizeof custom);
     for (int k = 0; k < 2; ++k) {
         cfg.kind = k ? CAMERA_ORTHOGRAPHIC : CAMERA_PERSPECTIVE;
-        camera c = make(cfg);
+        camera c = make_camera(cfg);
         transform screen_from_raster =
             transform_compose(c.screen_from_camera, c.camera_from_raster);
         /* Raster origin is the top-left corner: screen (xmin, ymax). */
@@ -107,7 +87,7 @@ static void test_fov_spans_shorter_axis_landscape(void **state)
     (void)state;
     camera_config cfg = camera_config_default(CAMERA_PERSPECTIVE, 200, 100);
     cfg.fov = 60;
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     ray top, bottom, right, centre;
     camera_generate_ray(&c, at(100, 0), &top);
     camera_generate_ray(&c, at(100, 100), &bottom);
@@ -125,7 +105,7 @@ static void test_fov_spans_shorter_axis_portrait(void **state)
     (void)state;
     camera_config cfg = camera_config_default(CAMERA_PERSPECTIVE, 100, 200);
     cfg.fov = 60;
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     ray left, right, top, centre;
     camera_generate_ray(&c, at(0, 100), &left);
     camera_generate_ray(&c, at(100, 100), &right);
@@ -139,7 +119,7 @@ static void test_orthographic_rays(void **state)
 {
     (void)state;
     camera_config cfg = camera_config_default(CAMERA_ORTHOGRAPHIC, 200, 100);
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     ray_differential rd;
     assert_true(camera_generate_ray_differential(&c, at(10.25, 70.5), &rd));
     assert_true(rd.has_differentials);
@@ -161,7 +141,7 @@ static void test_orthographic_rays(void **state)
 /* Differentials must equal the rays one pixel over, with the same lens point. */
 static void check_differentials_are_neighbours(camera_config cfg)
 {
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     const vec2 films[] = {{0.5, 0.5}, {123.25, 17.75}, {319.9, 239.1}, {160, 120}};
     const vec2 lenses[] = {{0.5, 0.5}, {0.1, 0.9}, {0.97, 0.3}};
     for (size_t i = 0; i < sizeof films / sizeof films[0]; ++i)
@@ -210,7 +190,7 @@ static void test_perspective_pinhole_differential_direction(void **state)
     (void)state;
     camera_config cfg = camera_config_default(CAMERA_PERSPECTIVE, 100, 100);
     cfg.fov = 90;
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     /* At fov 90 a pixel is 2/100 screen units = 0.02 * near in camera space. */
     assert_v3_near(c.dx_camera, v3(0.02 * 1e-2, 0, 0), 1e-17);
     assert_v3_near(c.dy_camera, v3(0, -0.02 * 1e-2, 0), 1e-17);
@@ -233,9 +213,9 @@ static void test_lens_radius_zero_is_the_pinhole_bit_for_bit(void **state)
         cfg.fov = 50;
         cfg.lens_radius = 0.0;
         cfg.focal_distance = 3.0;
-        camera c = make(cfg);
+        camera c = make_camera(cfg);
         cfg.blades = 6;
-        camera cb = make(cfg);
+        camera cb = make_camera(cfg);
         for (int i = 0; i < 50; ++i) {
             vec2 pf = v2(64.0 * i / 50.0 + 0.3, 48.0 * ((i * 7) % 50) / 50.0);
             vec2 pl = v2((i * 13 % 50) / 50.0, (i * 29 % 50) / 50.0);
@@ -271,10 +251,10 @@ static void test_render_space_far_from_origin(void **state)
             cfg.lens_radius = lens ? 0.05 : 0.0;
             cfg.focal_distance = 4;
             assert_true(transform_look_at(v3(0, 0, 0), dir, up, &cfg.camera_from_world));
-            camera near = make(cfg);
+            camera near = make_camera(cfg);
             assert_true(
                 transform_look_at(eye_far, v3_add(eye_far, dir), up, &cfg.camera_from_world));
-            camera far = make(cfg);
+            camera far = make_camera(cfg);
             assert_v3_near(transform_point(&far.world_from_render, v3(0, 0, 0)), eye_far, 0);
             assert_v3_near(transform_point(&far.render_from_camera, v3(0, 0, 0)), v3(0, 0, 0), 0);
             for (int i = 0; i < 20; ++i) {
@@ -300,7 +280,7 @@ static void test_time_and_imaging_ratio(void **state)
     camera_config cfg = camera_config_default(CAMERA_PERSPECTIVE, 10, 10);
     cfg.shutter_open = 0.25;
     cfg.shutter_close = 0.75;
-    camera c = make(cfg);
+    camera c = make_camera(cfg);
     assert_int_equal(c.medium, -1);
     ray r;
     camera_sample s = at(5, 5);
@@ -345,7 +325,7 @@ static void test_extreme_legal_values_give_finite_normalised_rays(void **state)
                         cfg.focal_distance = fds[b];
                         cfg.lens_radius = lrs[l];
                         cfg.blades = (int)(l * 3); /* 0, 3, 6 */
-                        camera c = make(cfg);
+                        camera c = make_camera(cfg);
                         double xs[] = {0, 0.5 * res[q][0], (double)res[q][0]};
                         double ys[] = {0, 0.5 * res[q][1], (double)res[q][1]};
                         for (int i = 0; i < 3; ++i)

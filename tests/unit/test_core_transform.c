@@ -9,19 +9,7 @@
 #include <math.h>
 
 #include "core/transform.h"
-
-static void assert_near(double got, double want, double tol)
-{
-    if (!(fabs(got - want) <= tol))
-        fail_msg("got %.17g, want %.17g (tolerance %g)", got, want, tol);
-}
-
-static void assert_v3_near(vec3 got, vec3 want, double tol)
-{
-    assert_near(got.x, want.x, tol);
-    assert_near(got.y, want.y, tol);
-    assert_near(got.z, want.z, tol);
-}
+#include "unit/assert_util.h"
 
 static void assert_mat4_near(mat4 got, mat4 want, double tol)
 {

@@ -10,49 +10,7 @@
 
 #include "film/filter.h"
 #include "scene/params.h"
-
-/* Builds scene entities the way the parser does, without parsing. */
-static inline char *dup_str(const char *s)
-{
-    size_t n = strlen(s) + 1;
-    char *d = malloc(n);
-    assert_non_null(d);
-    memcpy(d, s, n);
-    return d;
-}
-
-static inline void entity_init(scene_entity *e, const char *type)
-{
-    memset(e, 0, sizeof *e);
-    e->type = dup_str(type);
-    e->loc = (file_loc){"test.pbrt", 3, 1};
-    params_init(&e->params, e->loc);
-}
-
-static inline void entity_free(scene_entity *e)
-{
-    params_free(&e->params);
-    free(e->type);
-}
-
-static inline void add_nums(scene_entity *e, param_type t, const char *name, const double *v, size_t n)
-{
-    param p;
-    memset(&p, 0, sizeof p);
-    p.type = t;
-    p.name = dup_str(name);
-    p.loc = (file_loc){"test.pbrt", 3, 10};
-    p.count = n;
-    p.nums = malloc(n * sizeof *p.nums);
-    assert_non_null(p.nums);
-    memcpy(p.nums, v, n * sizeof *v);
-    assert_int_equal(params_add(&e->params, p, NULL), HZ_OK);
-}
-
-static inline void add_float(scene_entity *e, const char *name, double v) { add_nums(e, PARAM_FLOAT, name, &v, 1); }
-static inline void add_int(scene_entity *e, const char *name, double v) { add_nums(e, PARAM_INTEGER, name, &v, 1); }
-
-
+#include "unit/entity_util.h"
 
 static filter *make_filter(const char *type)
 {

@@ -12,26 +12,14 @@
 #include <string.h>
 
 #include "media/grid.h"
+#include "unit/assert_util.h"
 
 #define VOLUMES HAZE_SCENES "/../volumes/"
-
-static void assert_near(double got, double want, double tol)
-{
-    if (!(fabs(got - want) <= tol))
-        fail_msg("got %.17g, want %.17g (tolerance %g)", got, want, tol);
-}
 
 static void assert_exact(double got, double want)
 {
     if (got != want)
         fail_msg("got %.17g, want exactly %.17g", got, want);
-}
-
-static void assert_v3_near(vec3 got, vec3 want, double tol)
-{
-    assert_near(got.x, want.x, tol);
-    assert_near(got.y, want.y, tol);
-    assert_near(got.z, want.z, tol);
 }
 
 static grid *load(const char *file)
