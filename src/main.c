@@ -9,6 +9,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include "cli/info.h"
 #include "render/progress.h"
 #include "render/render_scene.h"
 #include "render/renderer.h"
@@ -18,6 +19,7 @@ enum { EXIT_SCENE = 1, EXIT_USAGE = 2 };
 
 static const char usage_text[] =
     "usage: haze render SCENE.pbrt [options]\n"
+    "       haze info FILE          describe a .vdb, .nvdb, .exr or .pbrt file\n"
     "       haze --help | --version\n"
     "\n"
     "render options:\n"
@@ -189,6 +191,32 @@ done:
     return exit_code;
 }
 
+/* haze info FILE: the file's kind is told by its content, not its extension. */
+static int run_info(int argc, char **argv)
+{
+    const char *file = NULL;
+    for (int i = 2; i < argc; ++i) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            fputs(usage_text, stdout);
+            return 0;
+        }
+        if (a[0] == '-' && a[1] != '\0')
+            return usage_error("unknown option '%s'", a);
+        if (file)
+            return usage_error("info takes one file ('%s' is extra)", a);
+        file = a;
+    }
+    if (!file)
+        return usage_error("%s", "info needs a file");
+    hz_error err = {{0}};
+    if (info_describe(file, stdout, &err) != HZ_OK) {
+        fprintf(stderr, "haze: %s\n", err.message);
+        return EXIT_SCENE;
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
@@ -214,5 +242,7 @@ int main(int argc, char **argv)
             return rc;
         return run_render(&c);
     }
-    return usage_error("unknown command '%s' (commands: render)", cmd);
+    if (!strcmp(cmd, "info"))
+        return run_info(argc, argv);
+    return usage_error("unknown command '%s' (commands: render, info)", cmd);
 }
