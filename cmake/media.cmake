@@ -21,7 +21,7 @@ set_target_properties(haze_media PROPERTIES
 # includes, so the C++ bridge builds with the same warnings as our C.
 target_compile_options(haze_media PRIVATE ${HAZE_WARNINGS})
 target_link_libraries(haze_media
-  PUBLIC haze_core
+  PUBLIC haze_core haze_scene
   PRIVATE OpenVDB::openvdb OpenVDB::nanovdb)
 
 # The generator of the small test/demo volumes in volumes/.

@@ -177,13 +177,17 @@ static int run_render(const cli *c)
         char wall[32];
         progress_format_duration(stats.wall_seconds, wall, sizeof wall);
         double rays = (double)(stats.camera_rays + stats.shadow_rays);
+        char lookups[64] = "";
+        if (stats.density_lookups > 0)
+            snprintf(lookups, sizeof lookups, "%.1f density lookups/pixel",
+                     (double)stats.density_lookups / ((double)stats.pixels > 0 ? (double)stats.pixels : 1.0));
         printf("%s: %dx%d (%d x %d pixels rendered), %d spp, %d threads, %s, "
-               "%.2f Mrays/s (%llu camera + %llu shadow), peak memory %.1f MiB\n",
+               "%.2f Mrays/s (%llu camera + %llu shadow), %s%speak memory %.1f MiB\n",
                fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,
                fp->bounds.y1 - fp->bounds.y0, stats.spp, stats.threads, wall,
                stats.wall_seconds > 0 ? rays / stats.wall_seconds * 1e-6 : 0.0,
                (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
-               peak_memory_mib());
+               lookups, lookups[0] ? ", " : "", peak_memory_mib());
     }
 done:
     render_scene_destroy(rs);

@@ -135,8 +135,25 @@ static void reject_occlusion(const struct RTCFilterFunctionNArguments *args)
 
 /* ---- building ---- */
 
+/* The index of medium `name` in sd->media; "" is vacuum (-1). */
+static hz_status resolve_medium(const scene_desc *sd, const char *name, file_loc loc, int *out,
+                                hz_error *err)
+{
+    *out = -1;
+    if (!name || !name[0])
+        return HZ_OK;
+    for (size_t i = 0; i < sd->medium_count; ++i)
+        if (strcmp(sd->media[i].name, name) == 0) {
+            *out = (int)i;
+            return HZ_OK;
+        }
+    return hz_fail_at(err, loc, "MediumInterface names medium \"%s\", which is not defined "
+                                "(MakeNamedMedium)",
+                      name);
+}
+
 static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
-                             shape_entity *se, transform space_from_world,
+                             const scene_desc *sd, shape_entity *se, transform space_from_world,
                              const material *materials,
                              size_t material_count, const material *default_material,
                              geom_shape *out, hz_error *err)
@@ -150,6 +167,9 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
                               se->material, material_count);
         out->material = &materials[se->material];
     }
+    if (resolve_medium(sd, se->inside_medium, se->entity.loc, &out->medium_inside, err) != HZ_OK ||
+        resolve_medium(sd, se->outside_medium, se->entity.loc, &out->medium_outside, err) != HZ_OK)
+        return HZ_ERROR;
 
     shape_geometry g;
     if (shape_geometry_create(se, &g, err) != HZ_OK)
@@ -277,7 +297,7 @@ static hz_status build_objects(geometry *g, scene_desc *sd, const material *mate
                                   "(pbrt-v4 refuses them too)");
             /* Prototype space = the object's world space; instances carry
              * render_from_world to the instance transform. */
-            if (build_shape(g->device, pr->scene, (unsigned)i, se, transform_identity(), materials,
+            if (build_shape(g->device, pr->scene, (unsigned)i, sd, se, transform_identity(), materials,
                             material_count, default_material, &pr->shapes[i], err) != HZ_OK)
                 return HZ_ERROR;
         }
@@ -348,7 +368,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
     }
     g->shape_count = sd->shape_count;
     for (size_t i = 0; i < sd->shape_count; ++i) {
-        if (build_shape(g->device, g->scene, (unsigned)i, &sd->shapes[i], render_from_world,
+        if (build_shape(g->device, g->scene, (unsigned)i, sd, &sd->shapes[i], render_from_world,
                         materials, material_count, default_material, &g->shapes[i],
                         err) != HZ_OK) {
             geometry_destroy(g);
@@ -540,3 +560,15 @@ vec3 geometry_offset_origin(vec3 p, vec3 n, vec3 w)
     return v3(offset_coord((float)p.x, (float)n.x), offset_coord((float)p.y, (float)n.y),
               offset_coord((float)p.z, (float)n.z));
 }
+
+/* ---- stepping past surfaces ---- */
+
+double geometry_step_past(const geom_hit *h, vec3 o, vec3 d)
+{
+    double t_hit = v3_dot(v3_sub(h->p, o), d) / v3_dot(d, d);
+    double dn = v3_dot(d, h->ng);
+    vec3 past = geometry_offset_origin(h->p, h->ng, d);
+    double dt = dn != 0.0 ? v3_dot(v3_sub(past, h->p), h->ng) / dn : 0.0;
+    return fmax(t_hit + dt, nextafter(t_hit, INFINITY));
+}
+

@@ -25,6 +25,9 @@ typedef struct {
     /* pbrt-v4: ReverseOrientation XOR a handedness-swapping transform flips
      * the geometric normal (triangles and spheres alike). */
     bool flip_normal;
+    /* MediumInterface (indices into scene_desc.media, -1 = vacuum). When they
+     * are equal the shape is no medium transition: rays keep their medium. */
+    int medium_inside, medium_outside;
     /* triangles: Embree's own buffers, so sampling and hit points use exactly
      * the surface Embree intersects */
     size_t vertex_count, triangle_count;
@@ -47,7 +50,8 @@ typedef struct {
 
 typedef struct geometry geometry;
 
-/* Builds every shape of `sd` (top level and objects, then instances).
+/* Builds every shape of `sd` (top level and objects, then instances); medium
+ * names resolve to indices of sd->media (an unknown name is an error).
  * `materials` are indexed by shape_entity.material; `default_material` is used
  * for -1. Errors name the shape's file:line:column. */
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
@@ -71,6 +75,27 @@ bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax);
  * vertex, v its third) with pbrt-v4's normals, in the shape's own space. */
 void geometry_triangle_point(const geom_shape *s, unsigned prim, double u, double v,
                              geom_hit *out);
+
+/* Shadow rays to a point stop this fraction short of it (pbrt-v4's
+ * ShadowEpsilon), so the light's own surface is not counted as a blocker. */
+#define GEOMETRY_SHADOW_EPSILON 1e-4
+
+/* The medium a ray leaving hit `h` along `w` travels in, when it travelled in
+ * `current` before: the side `w` points to for a medium transition (pbrt-v4:
+ * outside where the oriented normal points), else unchanged. */
+static inline int geometry_medium_after(const geom_hit *h, vec3 w, int current)
+{
+    const geom_shape *s = h->shape;
+    if (s->medium_inside == s->medium_outside)
+        return current;
+    return v3_dot(w, h->ng) > 0.0 ? s->medium_outside : s->medium_inside;
+}
+
+/* The ray parameter just past hit `h` of o + t d: where the line crosses the
+ * origin offset of the far side. Staying on the same line (rather than
+ * starting a new ray off the surface) keeps what lies behind exactly where it
+ * would be without the surface. */
+double geometry_step_past(const geom_hit *h, vec3 o, vec3 d);
 
 /* Moves a surface point off the surface along the side of `n` that `w`
  * points to, by a few hundred float ULPs per coordinate (Wächter & Binder,

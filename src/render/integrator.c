@@ -11,23 +11,40 @@ static rgb sky(const integrator_scene *sc)
     return L;
 }
 
-static bool unoccluded(const integrator_scene *sc, const geom_hit *h, const light_sample *ls,
-                       render_counters *counters)
+/* The shadow ray of light sample `ls` from surface hit `h`: 1 or 0 without
+ * media, the transmittance through media and interfaces with them. */
+static rgb shadow(const integrator_scene *sc, const geom_hit *h, int medium,
+                  const light_sample *ls, volume_walk *walk, render_counters *counters)
 {
-    counters->shadow_rays++;
     vec3 o = geometry_offset_origin(h->p, h->ng, ls->wi);
-    if (ls->infinite)
-        return !geometry_occluded(sc->geom, o, ls->wi, INFINITY);
-    vec3 target = ls->p_light;
-    /* Area-light points sit on a surface Embree can hit: lift them off it
-     * toward the receiver, like the origin. */
-    if (v3_length_sq(ls->n_light) > 0.0)
-        target = geometry_offset_origin(target, ls->n_light, v3_neg(ls->wi));
-    return !geometry_occluded(sc->geom, o, v3_sub(target, o), 1.0 - INTEGRATOR_SHADOW_EPSILON);
+    vec3 w = ls->wi;
+    double tmax = INFINITY;
+    if (!ls->infinite) {
+        vec3 target = ls->p_light;
+        /* Area-light points sit on a surface Embree can hit: lift them off it
+         * toward the receiver, like the origin. */
+        if (v3_length_sq(ls->n_light) > 0.0)
+            target = geometry_offset_origin(target, ls->n_light, v3_neg(ls->wi));
+        w = v3_sub(target, o);
+        tmax = 1.0 - GEOMETRY_SHADOW_EPSILON;
+    }
+    if (sc->medium_count == 0) {
+        counters->shadow_rays++;
+        return rgb_grey(geometry_occluded(sc->geom, o, w, tmax) ? 0.0 : 1.0);
+    }
+    if (!ls->infinite) {
+        double dist = v3_length(w);
+        if (!(dist > 0.0))
+            return rgb_grey(0.0);
+        w = v3_scale(w, 1.0 / dist);
+        tmax *= dist;
+    }
+    return volume_shadow_transmittance(sc, o, w, tmax, geometry_medium_after(h, w, medium), walk);
 }
 
-static rgb direct_diffuse(const integrator_scene *sc, const geom_hit *h, vec3 wo, rgb reflectance,
-                          sampler_state *st, render_counters *counters)
+static rgb direct_diffuse(const integrator_scene *sc, const geom_hit *h, int medium, vec3 wo,
+                          rgb reflectance, sampler_state *st, volume_walk *walk,
+                          render_counters *counters)
 {
     /* pbrt-v4's diffuse BSDF reflects on both sides: work on the side of wo. */
     vec3 ns = v3_dot(h->ns, wo) < 0.0 ? v3_neg(h->ns) : h->ns;
@@ -44,24 +61,12 @@ static rgb direct_diffuse(const integrator_scene *sc, const geom_hit *h, vec3 wo
         double cos_theta = v3_dot(ns, ls.wi);
         if (cos_theta <= 0.0 || ls.pdf <= 0.0)
             continue;
-        if (!unoccluded(sc, h, &ls, counters))
+        rgb T = shadow(sc, h, medium, &ls, walk, counters);
+        if (rgb_is_black(T))
             continue;
-        L = rgb_add(L, rgb_scale(rgb_mul(f, ls.L), cos_theta / ls.pdf));
+        L = rgb_add(L, rgb_scale(rgb_mul(rgb_mul(f, ls.L), T), cos_theta / ls.pdf));
     }
     return L;
-}
-
-/* The ray parameter just past an interface hit: where the line crosses the
- * origin offset of the far side. Staying on the same line (rather than
- * starting a new ray off the surface) keeps what lies behind exactly where
- * it would be without the interface. */
-static double step_past(const geom_hit *h, vec3 o, vec3 d)
-{
-    double t_hit = v3_dot(v3_sub(h->p, o), d) / v3_dot(d, d);
-    double dn = v3_dot(d, h->ng);
-    vec3 past = geometry_offset_origin(h->p, h->ng, d);
-    double dt = dn != 0.0 ? v3_dot(v3_sub(past, h->p), h->ng) / dn : 0.0;
-    return fmax(t_hit + dt, nextafter(t_hit, INFINITY));
 }
 
 rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, double *depth,
@@ -70,31 +75,50 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
     counters->camera_rays++;
     *depth = INFINITY;
     vec3 o = r->o, d = r->d;
+    int medium = r->medium;
+    volume_walk walk = {0};
+    if (sc->medium_count > 0)
+        walk.r = rng_seeded(sampler_stream_seed(st));
+    rgb beta = rgb_grey(1.0), L = rgb_grey(0.0);
     geom_hit h;
     double tmin = 0.0;
     for (int crossing = 0;; ++crossing) {
-        if (!geometry_intersect(sc->geom, o, d, tmin, INFINITY, &h))
-            return sky(sc);
+        bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, &h);
+        if (medium >= 0) {
+            volume_segment(sc, medium, o, d, tmin, hit ? h.t : INFINITY, &beta, &L, st, &walk);
+            if (rgb_is_black(beta))
+                goto done;
+        }
+        if (!hit) {
+            L = rgb_add(L, rgb_mul(beta, sky(sc)));
+            goto done;
+        }
         if (h.shape->material->kind != MATERIAL_INTERFACE)
             break;
-        if (crossing == INTEGRATOR_MAX_CROSSINGS)
-            return rgb_grey(0.0);
-        tmin = step_past(&h, o, d);
+        if (crossing == VOLUME_MAX_CROSSINGS)
+            goto done;
+        medium = geometry_medium_after(&h, d, medium);
+        tmin = geometry_step_past(&h, o, d);
     }
     *depth = v3_length(v3_sub(h.p, r->o));
 
     vec3 wo = v3_normalize(v3_neg(d));
-    rgb L = rgb_grey(0.0);
+    rgb Ls = rgb_grey(0.0);
     if (h.shape->area_light >= 0)
-        L = light_area_le(&sc->lights[h.shape->area_light], h.ng, wo);
+        Ls = light_area_le(&sc->lights[h.shape->area_light], h.ng, wo);
     switch (h.shape->material->kind) {
     case MATERIAL_DIFFUSE:
         if (rgb_is_black(h.shape->material->reflectance))
             break;
-        L = rgb_add(L, direct_diffuse(sc, &h, wo, h.shape->material->reflectance, st, counters));
+        Ls = rgb_add(Ls, direct_diffuse(sc, &h, medium, wo, h.shape->material->reflectance, st,
+                                        &walk, counters));
         break;
     case MATERIAL_INTERFACE:
         break;
     }
+    L = rgb_add(L, rgb_mul(beta, Ls));
+done:
+    counters->shadow_rays += walk.shadow_rays;
+    counters->density_lookups += walk.lookups;
     return L;
 }

@@ -9,6 +9,7 @@
 #include "render/integrator.h"
 #include "render/lights.h"
 #include "render/material.h"
+#include "render/volume.h"
 
 struct render_scene {
     camera cam;
@@ -21,16 +22,20 @@ struct render_scene {
     geometry *geom;
     light *lights;
     size_t light_count;
+    medium *media;
+    size_t medium_count;
     integrator_scene isc;
 };
 
 /* "volpath" is pbrt-v4's default; haze computes direct lighting and single
  * scattering only, so its parameters are read (not to be reported unused)
  * and a depth other than 1 is worth one warning. */
-static hz_status integrator_check(scene_entity *e, FILE *warn, hz_error *err)
+static hz_status integrator_check(scene_entity *e, FILE *warn, volume_settings *vs,
+                                  hz_error *err)
 {
     param_list *pl = &e->params;
     const char *type = e->type ? e->type : "volpath";
+    *vs = volume_settings_default();
     if (strcmp(type, "volpath") == 0) {
         bool has_depth = params_has(pl, "maxdepth");
         int maxdepth = params_int(pl, "maxdepth", 5);
@@ -43,8 +48,11 @@ static hz_status integrator_check(scene_entity *e, FILE *warn, hz_error *err)
                     e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, maxdepth);
         return params_finish(pl, "Integrator \"volpath\"", err);
     }
-    if (strcmp(type, "singlescatter") == 0)
+    if (strcmp(type, "singlescatter") == 0) {
+        if (volume_settings_from_entity(e, vs, err) != HZ_OK)
+            return HZ_ERROR;
         return params_finish(pl, "Integrator \"singlescatter\"", err);
+    }
     return hz_fail_at(err, e->loc,
                       "Integrator \"%s\" is not supported (supported: \"volpath\", "
                       "\"singlescatter\")",
@@ -126,6 +134,34 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
     return HZ_OK;
 }
 
+/* Media in scene_desc order (shapes refer to them by that index); the camera's
+ * medium is resolved by name now that the whole file is read. */
+static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_from_world,
+                             hz_error *err)
+{
+    rs->media = calloc(sd->medium_count ? sd->medium_count : 1, sizeof *rs->media);
+    if (!rs->media)
+        return hz_fail(err, "out of memory");
+    for (size_t i = 0; i < sd->medium_count; ++i) {
+        if (medium_from_entity(&sd->media[i], render_from_world, &rs->media[i], err) != HZ_OK)
+            return HZ_ERROR;
+        rs->medium_count++;
+    }
+    rs->cam.medium = -1;
+    const char *name = sd->camera.medium;
+    if (name && name[0]) {
+        for (size_t i = 0; i < sd->medium_count; ++i)
+            if (strcmp(sd->media[i].name, name) == 0)
+                rs->cam.medium = (int)i;
+        if (rs->cam.medium < 0)
+            return hz_fail_at(err, sd->camera.entity.loc,
+                              "the camera sits in medium \"%s\", which is not defined "
+                              "(MakeNamedMedium)",
+                              name);
+    }
+    return HZ_OK;
+}
+
 static hz_status build(render_scene *rs, scene_desc *sd, const render_options *opt, FILE *warn,
                        hz_error *err)
 {
@@ -153,11 +189,9 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
         return HZ_ERROR;
     /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
     film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
-    if (integrator_check(&sd->integrator, warn, err) != HZ_OK)
+    volume_settings vs;
+    if (integrator_check(&sd->integrator, warn, &vs, err) != HZ_OK)
         return HZ_ERROR;
-    if (sd->medium_count > 0)
-        return hz_fail_at(err, sd->media[0].entity.loc, "media are not supported yet");
-    rs->cam.medium = -1;
 
     if (check_static(sd, warn, err) != HZ_OK)
         return HZ_ERROR;
@@ -170,7 +204,10 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
         return HZ_ERROR;
     if (build_lights(rs, sd, render_from_world, err) != HZ_OK)
         return HZ_ERROR;
-    rs->isc = (integrator_scene){rs->geom, rs->lights, rs->light_count};
+    if (build_media(rs, sd, render_from_world, err) != HZ_OK)
+        return HZ_ERROR;
+    rs->isc = (integrator_scene){rs->geom,  rs->lights,       rs->light_count,
+                                 rs->media, rs->medium_count, vs};
     return HZ_OK;
 }
 
@@ -196,6 +233,9 @@ void render_scene_destroy(render_scene *rs)
     for (size_t i = 0; i < rs->light_count; ++i)
         light_free(&rs->lights[i]);
     free(rs->lights);
+    for (size_t i = 0; i < rs->medium_count; ++i)
+        medium_free(&rs->media[i]);
+    free(rs->media);
     geometry_destroy(rs->geom);
     free(rs->materials);
     if (rs->film)

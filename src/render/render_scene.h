@@ -38,6 +38,7 @@ const filter *render_scene_filter(const render_scene *rs);
 /* Per-thread counters, summed by the renderer for the summary. */
 typedef struct {
     uint64_t camera_rays, shadow_rays;
+    uint64_t density_lookups;
 } render_counters;
 
 /* Radiance arriving along the camera ray `r`. `depth` receives the distance to the

@@ -158,6 +158,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         for (int i = 0; i < threads; ++i) {
             stats->camera_rays += job.counters[i].camera_rays;
             stats->shadow_rays += job.counters[i].shadow_rays;
+            stats->density_lookups += job.counters[i].density_lookups;
         }
     }
     free(job.counters);

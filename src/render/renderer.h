@@ -23,6 +23,7 @@ typedef struct {
     long pixels;
     double wall_seconds;
     uint64_t camera_rays, shadow_rays;
+    uint64_t density_lookups; /* grid media */
 } render_stats;
 
 hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,

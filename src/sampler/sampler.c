@@ -12,7 +12,8 @@
 #include "scene/params.h"
 
 /* Tags keep the streams of different uses apart even at equal dimensions. */
-enum { TAG_PIXEL = 0x70697865, TAG_1D = 0x31640000, TAG_2D = 0x32640000, TAG_JITTER = 0x6a697474 };
+enum { TAG_PIXEL = 0x70697865, TAG_1D = 0x31640000, TAG_2D = 0x32640000, TAG_JITTER = 0x6a697474,
+       TAG_STREAM = 0x73747265 };
 
 /* Largest spp: sample indices stay 32-bit for Sobol' (and stay far from overflow elsewhere). */
 #define SAMPLER_MAX_SPP (1 << 30)
@@ -255,4 +256,9 @@ vec2 sampler_2d(sampler_state *st)
 vec2 sampler_pixel_2d(sampler_state *st)
 {
     return sample_2d(st, dim_hash(st, TAG_PIXEL, 0), true);
+}
+
+uint64_t sampler_stream_seed(sampler_state *st)
+{
+    return smp_hash2(dim_hash(st, TAG_STREAM, (uint64_t)st->dim++), (uint32_t)st->index);
 }

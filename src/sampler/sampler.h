@@ -39,5 +39,8 @@ double sampler_1d(sampler_state *st);
 vec2 sampler_2d(sampler_state *st);
 /* The film position sample: the first 2D dimension, stratified across the pixel's samples. */
 vec2 sampler_pixel_2d(sampler_state *st);
+/* A seed for an rng stream (core/rng.h) of this pixel sample, for estimators that
+ * use an unbounded number of random numbers; consumes one dimension. */
+uint64_t sampler_stream_seed(sampler_state *st);
 
 #endif

@@ -425,9 +425,23 @@ static void test_errors(void **state)
     build_scene_expect_error("WorldBegin\nLightSource \"infinite\" \"string filename\" \"a.exr\"\n",
                              msg, sizeof msg);
     assert_non_null(strstr(msg, "test.pbrt:2:"));
-    build_scene_expect_error("WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n",
+    /* Media names resolve after the whole file: an undefined one is an error
+     * at the directive that used it. */
+    build_scene_expect_error("MediumInterface \"\" \"fgo\"\nCamera \"perspective\"\nWorldBegin\n"
+                             "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n",
                              msg, sizeof msg);
-    assert_non_null(strstr(msg, "media are not supported yet"));
+    assert_non_null(strstr(msg, "test.pbrt:2:"));
+    assert_non_null(strstr(msg, "\"fgo\""));
+    build_scene_expect_error("WorldBegin\nMediumInterface \"fog\" \"\"\nShape \"sphere\"\n", msg,
+                             sizeof msg);
+    assert_non_null(strstr(msg, "test.pbrt:3:"));
+    build_scene_expect_error("Integrator \"singlescatter\" \"string transmittance\" \"exact\"\n"
+                             "WorldBegin\n",
+                             msg, sizeof msg);
+    assert_non_null(strstr(msg, "exact"));
+    build_scene_expect_error("Integrator \"singlescatter\" \"float stepsize\" 0\nWorldBegin\n",
+                             msg, sizeof msg);
+    assert_non_null(strstr(msg, "stepsize"));
 }
 
 int main(void)

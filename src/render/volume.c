@@ -1,0 +1,490 @@
+#include "render/volume.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "media/phase.h"
+
+/* A walk never places more in-scattering strata than this on one segment: it
+ * bounds the work of absurd step sizes (the step grows instead). */
+#define VOLUME_MAX_STRATA 1000000
+
+volume_settings volume_settings_default(void)
+{
+    return (volume_settings){TRANSMITTANCE_RATIO, 1.0, 2.0, 1};
+}
+
+hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_error *err)
+{
+    (void)err;
+    *out = volume_settings_default();
+    param_list *pl = &e->params;
+    out->step = params_float(pl, "stepsize", out->step);
+    out->shadow_step = params_float(pl, "shadowstepsize", out->shadow_step);
+    out->light_samples = params_int(pl, "lightsamples", out->light_samples);
+    const char *mode = params_string(pl, "transmittance", "ratio");
+    if (!(out->step > 0.0 && isfinite(out->step)))
+        params_reject(pl, "stepsize", "\"stepsize\" must be a positive number of voxels");
+    if (!(out->shadow_step > 0.0 && isfinite(out->shadow_step)))
+        params_reject(pl, "shadowstepsize",
+                      "\"shadowstepsize\" must be a positive number of voxels");
+    if (out->light_samples < 1 || out->light_samples > 4096)
+        params_reject(pl, "lightsamples", "\"lightsamples\" must be in [1, 4096]");
+    if (strcmp(mode, "raymarch") == 0)
+        out->mode = TRANSMITTANCE_RAYMARCH;
+    else if (strcmp(mode, "jittered") == 0)
+        out->mode = TRANSMITTANCE_JITTERED;
+    else if (strcmp(mode, "ratio") == 0)
+        out->mode = TRANSMITTANCE_RATIO;
+    else
+        params_reject(pl, "transmittance",
+                      "\"transmittance\" \"%s\" is not one of \"raymarch\", \"jittered\", "
+                      "\"ratio\"",
+                      mode);
+    return HZ_OK;
+}
+
+/* ---- per-channel helpers ---- */
+
+static inline double ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }
+
+static inline rgb rgb_exp_neg(rgb sigma, double d)
+{
+    /* 0 * INFINITY is NaN: a channel that does not attenuate stays 1. */
+    return rgb_make(sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0,
+                    sigma.g > 0.0 ? exp(-sigma.g * d) : 1.0,
+                    sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0);
+}
+
+/* Russian roulette on a walk's throughput: below the threshold it survives with
+ * probability max(beta)/threshold and is scaled up to compensate. Returns false
+ * when the walk ends (beta is then 0). */
+static bool roulette(rgb *beta, rng *r)
+{
+    double m = rgb_max(*beta);
+    if (m >= VOLUME_RR_THRESHOLD)
+        return true;
+    double q = m / VOLUME_RR_THRESHOLD;
+    if (q > 0.0 && rng_uniform(r) < q) {
+        *beta = rgb_scale(*beta, 1.0 / q);
+        return true;
+    }
+    *beta = rgb_grey(0.0);
+    return false;
+}
+
+/* ---- grid media: the ray in index space ---- */
+
+typedef struct {
+    const medium *m;
+    grid_accessor acc;
+    vec3 o, d;          /* index-space ray: p(t) = o + t d for the render-space t */
+    double voxels_per_t; /* |d| */
+} grid_ray;
+
+static void grid_ray_init(grid_ray *gr, const medium *m, vec3 o, vec3 w)
+{
+    gr->m = m;
+    grid_accessor_init(m->grid.grid, &gr->acc);
+    gr->o = transform_point(&m->grid.index_from_render, o);
+    gr->d = transform_vector(&m->grid.index_from_render, w);
+    gr->voxels_per_t = v3_length(gr->d);
+}
+
+static inline double grid_ray_density(grid_ray *gr, double t, volume_walk *walk)
+{
+    walk->lookups++;
+    return medium_density_index(gr->m, &gr->acc, v3_add(gr->o, v3_scale(gr->d, t)));
+}
+
+/* Strata of about `step` voxels over [t0, t1]: their count and width in t. */
+static int strata(const grid_ray *gr, double t0, double t1, double step, double *dt)
+{
+    double voxels = (t1 - t0) * gr->voxels_per_t;
+    double n = ceil(voxels / step);
+    if (!(n >= 1.0))
+        n = 1.0;
+    if (n > VOLUME_MAX_STRATA)
+        n = VOLUME_MAX_STRATA;
+    *dt = (t1 - t0) / n;
+    return (int)n;
+}
+
+/* The majorant of sigma_t over the whole grid (largest channel). */
+static double grid_majorant(const medium *m)
+{
+    return rgb_max(medium_sigma_t(m)) * m->grid.density_max;
+}
+
+/* Transmittance of [t0, t1] in a grid medium with the chosen estimator. */
+static rgb grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w, double t0,
+                              double t1, volume_walk *walk)
+{
+    if (!medium_clip(m, o, w, &t0, &t1))
+        return rgb_grey(1.0);
+    grid_ray gr;
+    grid_ray_init(&gr, m, o, w);
+    rgb sigma_t = medium_sigma_t(m);
+    switch (vs->settings.mode) {
+    case TRANSMITTANCE_RAYMARCH:
+    case TRANSMITTANCE_JITTERED: {
+        double dt;
+        int n = strata(&gr, t0, t1, vs->settings.shadow_step, &dt);
+        double offset =
+            vs->settings.mode == TRANSMITTANCE_JITTERED ? rng_uniform(&walk->r) : 0.5;
+        double tau = 0.0;
+        for (int i = 0; i < n; ++i)
+            tau += grid_ray_density(&gr, t0 + (i + offset) * dt, walk);
+        return rgb_exp_neg(sigma_t, tau * dt);
+    }
+    case TRANSMITTANCE_RATIO: {
+        double maj = grid_majorant(m);
+        rgb T = rgb_grey(1.0);
+        if (!(maj > 0.0))
+            return T;
+        for (double t = t0;;) {
+            t -= log1p(-rng_uniform(&walk->r)) / maj;
+            if (!(t < t1))
+                return T;
+            double dens = grid_ray_density(&gr, t, walk);
+            T = rgb_mul(T, rgb_make(1.0 - sigma_t.r * dens / maj, 1.0 - sigma_t.g * dens / maj,
+                                    1.0 - sigma_t.b * dens / maj));
+            if (!roulette(&T, &walk->r))
+                return T;
+        }
+    }
+    }
+    return rgb_grey(1.0);
+}
+
+static rgb segment_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w,
+                                 double t0, double t1, volume_walk *walk)
+{
+    switch (m->kind) {
+    case MEDIUM_HOMOGENEOUS:
+        return rgb_exp_neg(medium_sigma_t(m), t1 - t0);
+    case MEDIUM_GRID:
+        return grid_transmittance(vs, m, o, w, t0, t1, walk);
+    }
+    return rgb_grey(1.0);
+}
+
+rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmax, int medium,
+                                volume_walk *walk)
+{
+    walk->shadow_rays++;
+    rgb T = rgb_grey(1.0);
+    double tmin = 0.0;
+    for (int crossing = 0;; ++crossing) {
+        geom_hit h;
+        bool hit = geometry_intersect(vs->geom, o, w, tmin, tmax, &h);
+        if (hit && h.shape->material->kind != MATERIAL_INTERFACE)
+            return rgb_grey(0.0);
+        double t_end = hit ? h.t : tmax;
+        if (medium >= 0) {
+            T = rgb_mul(T, segment_transmittance(vs, &vs->media[medium], o, w, tmin, t_end, walk));
+            if (rgb_is_black(T))
+                return T;
+        }
+        if (!hit)
+            return T;
+        if (crossing == VOLUME_MAX_CROSSINGS)
+            return rgb_grey(0.0);
+        medium = geometry_medium_after(&h, w, medium);
+        tmin = geometry_step_past(&h, o, w);
+    }
+}
+
+/* ---- light arriving at a scattering point ---- */
+
+/* Σ over lights of p(wo, wi) L_i T_shadow / pdf at point x in medium `mi`,
+ * light_samples samples each. */
+static rgb inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_state *u,
+                       volume_walk *walk)
+{
+    const medium *m = &vs->media[mi];
+    rgb L = rgb_grey(0.0);
+    int n = vs->settings.light_samples;
+    for (size_t i = 0; i < vs->light_count; ++i) {
+        const light *l = &vs->lights[i];
+        for (int k = 0; k < n; ++k) {
+            vec2 uu = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(u);
+            vec3 wi;
+            rgb Li;
+            double f, tmax;
+            if (l->kind == LIGHT_INFINITE) {
+                /* A constant sky: sampling the phase function leaves only the
+                 * visibility to estimate (phase / pdf = 1). */
+                double pdf;
+                wi = hg_sample(wo, m->g, uu, &pdf);
+                Li = l->emit;
+                f = 1.0;
+                tmax = INFINITY;
+            } else {
+                light_sample ls;
+                if (!light_sample_li(l, x, v3(0.0, 0.0, 0.0), uu, &ls) || !(ls.pdf > 0.0))
+                    continue;
+                wi = ls.wi;
+                Li = ls.L;
+                f = hg_phase(v3_dot(wo, wi), m->g) / ls.pdf;
+                tmax = ls.infinite ? INFINITY : ls.dist * (1.0 - GEOMETRY_SHADOW_EPSILON);
+            }
+            if (rgb_is_black(Li) || !(f > 0.0))
+                continue;
+            rgb T = volume_shadow_transmittance(vs, x, wi, tmax, mi, walk);
+            L = rgb_add(L, rgb_scale(rgb_mul(Li, T), f / n));
+        }
+    }
+    return L;
+}
+
+/* ---- homogeneous media: distance sampling ---- */
+
+/* Exponential distance sampling on [0, len) (len may be INFINITY), one channel
+ * picked uniformly among those that attenuate; the pdf is the mixture over them. */
+typedef struct {
+    rgb sigma_t;
+    double len;
+    int active[3], n_active;
+} exp_sampler;
+
+static exp_sampler exp_sampler_make(rgb sigma_t, double len)
+{
+    exp_sampler e = {sigma_t, len, {0, 0, 0}, 0};
+    for (int c = 0; c < 3; ++c)
+        if (ch(sigma_t, c) > 0.0)
+            e.active[e.n_active++] = c;
+    return e;
+}
+
+static double exp_channel_pdf(double sigma, double len, double s)
+{
+    if (isinf(len))
+        return sigma * exp(-sigma * s);
+    double mass = -expm1(-sigma * len); /* 1 - e^{-sigma len} */
+    if (mass < 1e-12)
+        return 1.0 / len; /* vanishing optical depth: uniform */
+    return sigma * exp(-sigma * s) / mass;
+}
+
+static double exp_pdf(const exp_sampler *e, double s)
+{
+    if (e->n_active == 0)
+        return 0.0;
+    double p = 0.0;
+    for (int k = 0; k < e->n_active; ++k)
+        p += exp_channel_pdf(ch(e->sigma_t, e->active[k]), e->len, s);
+    return p / e->n_active;
+}
+
+static double exp_sample(const exp_sampler *e, double u)
+{
+    int k = (int)(u * e->n_active);
+    if (k >= e->n_active)
+        k = e->n_active - 1;
+    u = u * e->n_active - k;
+    double sigma = ch(e->sigma_t, e->active[k]);
+    double s;
+    if (isinf(e->len)) {
+        s = -log1p(-u) / sigma;
+    } else {
+        double mass = -expm1(-sigma * e->len);
+        s = mass < 1e-12 ? u * e->len : -log1p(-u * mass) / sigma;
+    }
+    return fmin(s, nextafter(e->len, 0.0));
+}
+
+/* Equiangular sampling (Kulla & Fajardo 2012) of s in [0, len) on the ray
+ * o + s w for a light at c: pdf ∝ 1 / |x(s) - c|². */
+typedef struct {
+    double delta, D, theta_a, theta_b;
+    bool valid;
+} equiangular;
+
+static equiangular equiangular_make(vec3 o, vec3 w, double len, vec3 c)
+{
+    equiangular e;
+    vec3 oc = v3_sub(c, o);
+    e.delta = v3_dot(oc, w);
+    e.D = v3_length(v3_sub(oc, v3_scale(w, e.delta)));
+    e.theta_a = atan2(-e.delta, e.D);
+    e.theta_b = isinf(len) ? HZ_PI / 2 : atan2(len - e.delta, e.D);
+    e.valid = e.D > 0.0 && e.theta_b > e.theta_a;
+    return e;
+}
+
+static double equiangular_sample(const equiangular *e, double u)
+{
+    double theta = e->theta_a + u * (e->theta_b - e->theta_a);
+    return e->delta + e->D * tan(theta);
+}
+
+static double equiangular_pdf(const equiangular *e, double s)
+{
+    double x = s - e->delta;
+    return e->D / ((e->theta_b - e->theta_a) * (e->D * e->D + x * x));
+}
+
+/* The light's position for equiangular sampling, if it has one. */
+static bool light_position(const light *l, vec3 *p)
+{
+    switch (l->kind) {
+    case LIGHT_POINT:
+        *p = l->point.p;
+        return true;
+    case LIGHT_SPOT:
+        *p = l->spot.p;
+        return true;
+    case LIGHT_DISTANT:
+    case LIGHT_INFINITE:
+    case LIGHT_AREA:
+        return false;
+    }
+    return false;
+}
+
+/* Light of one lamp scattered toward wo at distance s (T(0, s) σ_s applied). */
+static rgb scatter_at(const volume_scene *vs, int mi, const light *l, vec3 o, vec3 w, double s,
+                      sampler_state *u, volume_walk *walk)
+{
+    const medium *m = &vs->media[mi];
+    volume_scene one = *vs;
+    one.lights = l;
+    one.light_count = 1;
+    rgb Ls = inscattered(&one, mi, v3_add(o, v3_scale(w, s)), v3_neg(w), u, walk);
+    return rgb_mul(rgb_mul(m->sigma_s, rgb_exp_neg(medium_sigma_t(m), s)), Ls);
+}
+
+static void homogeneous_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double t0,
+                                double t1, rgb *beta, rgb *L, sampler_state *u,
+                                volume_walk *walk)
+{
+    const medium *m = &vs->media[mi];
+    rgb sigma_t = medium_sigma_t(m);
+    double len = t1 - t0;
+    vec3 a = v3_add(o, v3_scale(w, t0)); /* the segment starts at s = 0 */
+    if (!rgb_is_black(m->sigma_s) && len > 0.0) {
+        exp_sampler es = exp_sampler_make(sigma_t, len);
+        rgb Lseg = rgb_grey(0.0);
+        for (size_t i = 0; i < vs->light_count; ++i) {
+            const light *l = &vs->lights[i];
+            vec3 c;
+            equiangular eq = {0};
+            if (light_position(l, &c))
+                eq = equiangular_make(a, w, len, c);
+            /* One sample per strategy, combined with the balance heuristic:
+             * f / (p_exp + p_eq) for each. */
+            if (es.n_active > 0) {
+                double s = exp_sample(&es, sampler_1d(u));
+                double p = exp_pdf(&es, s) + (eq.valid ? equiangular_pdf(&eq, s) : 0.0);
+                if (p > 0.0)
+                    Lseg = rgb_add(Lseg, rgb_scale(scatter_at(vs, mi, l, a, w, s, u, walk), 1.0 / p));
+            }
+            if (eq.valid) {
+                double s = equiangular_sample(&eq, sampler_1d(u));
+                if (s >= 0.0 && s < len) {
+                    double p = exp_pdf(&es, s) + equiangular_pdf(&eq, s);
+                    if (p > 0.0 && isfinite(p))
+                        Lseg = rgb_add(Lseg,
+                                       rgb_scale(scatter_at(vs, mi, l, a, w, s, u, walk), 1.0 / p));
+                }
+            }
+        }
+        *L = rgb_add(*L, rgb_mul(*beta, Lseg));
+    }
+    *beta = rgb_mul(*beta, rgb_exp_neg(sigma_t, len));
+}
+
+/* ---- grid media: strata along the segment ---- */
+
+static void grid_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double t0, double t1,
+                         rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
+{
+    const medium *m = &vs->media[mi];
+    if (!medium_clip(m, o, w, &t0, &t1))
+        return;
+    grid_ray gr;
+    grid_ray_init(&gr, m, o, w);
+    rgb sigma_t = medium_sigma_t(m);
+    vec3 wo = v3_neg(w);
+    double dt;
+    int n = strata(&gr, t0, t1, vs->settings.step, &dt);
+    rgb Lseg = rgb_grey(0.0);
+    rgb T = *beta;
+
+    switch (vs->settings.mode) {
+    case TRANSMITTANCE_RAYMARCH:
+    case TRANSMITTANCE_JITTERED: {
+        /* Piecewise-constant density per stratum, integrated exactly inside it:
+         * scattering (1 - e^{-σ_t dt}) σ_s/σ_t, which stays sound in dense media. */
+        double offset =
+            vs->settings.mode == TRANSMITTANCE_JITTERED ? sampler_1d(u) : 0.5;
+        for (int i = 0; i < n; ++i) {
+            double t = t0 + (i + offset) * dt;
+            double dens = grid_ray_density(&gr, t, walk);
+            if (dens <= 0.0)
+                continue;
+            rgb step_t = rgb_exp_neg(sigma_t, dens * dt);
+            if (!rgb_is_black(m->sigma_s)) {
+                rgb frac = rgb_make(
+                    sigma_t.r > 0.0 ? (1.0 - step_t.r) * m->sigma_s.r / sigma_t.r : 0.0,
+                    sigma_t.g > 0.0 ? (1.0 - step_t.g) * m->sigma_s.g / sigma_t.g : 0.0,
+                    sigma_t.b > 0.0 ? (1.0 - step_t.b) * m->sigma_s.b / sigma_t.b : 0.0);
+                rgb Ls = inscattered(vs, mi, v3_add(o, v3_scale(w, t)), wo, u, walk);
+                Lseg = rgb_add(Lseg, rgb_mul(rgb_mul(T, frac), Ls));
+            }
+            T = rgb_mul(T, step_t);
+            if (!roulette(&T, &walk->r))
+                break;
+        }
+        break;
+    }
+    case TRANSMITTANCE_RATIO: {
+        /* Ratio tracking: tentative collisions at rate `maj` multiply T by
+         * 1 - σ_t/maj. The in-scattering integral takes one jittered sample per
+         * stratum; T at that point is the product over the collisions before it,
+         * which is unbiased since the collisions do not depend on it. */
+        double maj = grid_majorant(m);
+        double next = maj > 0.0 ? t0 - log1p(-rng_uniform(&walk->r)) / maj : INFINITY;
+        bool alive = true;
+        for (int i = 0; i <= n && alive; ++i) {
+            double t = i < n ? t0 + (i + rng_uniform(&walk->r)) * dt : t1;
+            while (next < t && alive) {
+                double dens = grid_ray_density(&gr, next, walk);
+                T = rgb_mul(T, rgb_make(1.0 - sigma_t.r * dens / maj,
+                                        1.0 - sigma_t.g * dens / maj,
+                                        1.0 - sigma_t.b * dens / maj));
+                alive = roulette(&T, &walk->r);
+                next -= log1p(-rng_uniform(&walk->r)) / maj;
+            }
+            if (i == n || !alive || rgb_is_black(m->sigma_s))
+                continue;
+            double dens = grid_ray_density(&gr, t, walk);
+            if (dens <= 0.0)
+                continue;
+            rgb Ls = inscattered(vs, mi, v3_add(o, v3_scale(w, t)), wo, u, walk);
+            Lseg = rgb_add(Lseg, rgb_mul(rgb_mul(T, rgb_scale(m->sigma_s, dens * dt)), Ls));
+        }
+        if (!alive)
+            T = rgb_grey(0.0);
+        break;
+    }
+    }
+    *L = rgb_add(*L, Lseg);
+    *beta = T;
+}
+
+void volume_segment(const volume_scene *vs, int m, vec3 o, vec3 w, double t0, double t1,
+                    rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
+{
+    if (!(t1 > t0))
+        return;
+    switch (vs->media[m].kind) {
+    case MEDIUM_HOMOGENEOUS:
+        homogeneous_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
+        break;
+    case MEDIUM_GRID:
+        grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
+        break;
+    }
+}
