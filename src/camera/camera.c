@@ -35,6 +35,9 @@ camera_config camera_config_default(camera_kind kind, int xres, int yres)
     camera_config c = {
         .kind = kind,
         .camera_from_world = transform_identity(),
+        .camera_from_world_end = transform_identity(),
+        .transform_start_time = 0.0,
+        .transform_end_time = 1.0,
         .shutter_open = 0.0,
         .shutter_close = 1.0,
         .lens_radius = 0.0,
@@ -70,6 +73,17 @@ const char *camera_config_check(const camera_config *c, hz_error *err)
     }
     if (!mat4_is_finite(&c->camera_from_world.m) || !mat4_is_finite(&c->camera_from_world.m_inv)) {
         hz_fail(err, "the camera transform is not finite or not invertible");
+        return "";
+    }
+    if (c->motion && (!mat4_is_finite(&c->camera_from_world_end.m) ||
+                      !mat4_is_finite(&c->camera_from_world_end.m_inv))) {
+        hz_fail(err, "the camera's end transform is not finite or not invertible");
+        return "";
+    }
+    if (c->motion && !(isfinite(c->transform_start_time) && isfinite(c->transform_end_time) &&
+                       c->transform_end_time >= c->transform_start_time)) {
+        hz_fail(err, "TransformTimes %g %g must be finite and increasing", c->transform_start_time,
+                c->transform_end_time);
         return "";
     }
     if (!isfinite(c->shutter_open)) {
@@ -150,10 +164,25 @@ hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err)
      * position bit for bit), so a camera far from the world origin gets the
      * same render-space rays as one at the origin. */
     transform world_from_camera = transform_inverse(cfg->camera_from_world);
-    vec3 p_camera = transform_point(&world_from_camera, v3(0.0, 0.0, 0.0));
+    animated_transform world_from_camera_motion = animated_transform_static(world_from_camera);
+    if (cfg->motion)
+        world_from_camera_motion = animated_transform_make(
+            world_from_camera, cfg->transform_start_time,
+            transform_inverse(cfg->camera_from_world_end), cfg->transform_end_time);
+    c.motion = world_from_camera_motion.animated;
+    /* pbrt-v4: the camera's position at the middle of the transform times. */
+    transform world_from_camera_mid = animated_transform_at(
+        &world_from_camera_motion, 0.5 * (cfg->transform_start_time + cfg->transform_end_time));
+    vec3 p_camera = transform_point(&world_from_camera_mid, v3(0.0, 0.0, 0.0));
     c.world_from_render = transform_translate(p_camera);
-    c.render_from_camera =
-        transform_compose(transform_inverse(c.world_from_render), world_from_camera);
+    transform render_from_world = transform_inverse(c.world_from_render);
+    c.render_from_camera = transform_compose(render_from_world, world_from_camera);
+    c.render_from_camera_motion = animated_transform_static(c.render_from_camera);
+    if (c.motion)
+        c.render_from_camera_motion = animated_transform_make(
+            c.render_from_camera, cfg->transform_start_time,
+            transform_compose(render_from_world, world_from_camera_motion.end),
+            cfg->transform_end_time);
 
     for (int i = 0; i < 4; ++i)
         c.screen_window[i] = cfg->screen_window[i];
@@ -222,12 +251,20 @@ static void camera_space_ray(const camera *c, camera_sample s, vec3 *o, vec3 *d,
     }
 }
 
-static ray render_ray(const camera *c, vec3 o, vec3 d, double time)
+/* render_from_camera at the ray's time: a moving camera interpolates. */
+static transform render_from_camera_at(const camera *c, double time)
+{
+    return c->motion ? animated_transform_at(&c->render_from_camera_motion, time)
+                     : c->render_from_camera;
+}
+
+static ray render_ray(const camera *c, const transform *render_from_camera, vec3 o, vec3 d,
+                      double time)
 {
     ray r;
-    r.o = transform_point(&c->render_from_camera, o);
-    r.d = v3_normalize(transform_vector(&c->render_from_camera, d));
-    r.time = hz_lerp(time, c->shutter_open, c->shutter_close);
+    r.o = transform_point(render_from_camera, o);
+    r.d = v3_normalize(transform_vector(render_from_camera, d));
+    r.time = time;
     r.medium = c->medium;
     return r;
 }
@@ -237,7 +274,9 @@ bool camera_generate_ray(const camera *c, camera_sample s, ray *out)
     vec3 o, d, p_camera;
     vec2 p_lens;
     camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);
-    *out = render_ray(c, o, d, s.time);
+    double time = hz_lerp(s.time, c->shutter_open, c->shutter_close);
+    transform rfc = render_from_camera_at(c, time);
+    *out = render_ray(c, &rfc, o, d, time);
     return true;
 }
 
@@ -276,15 +315,17 @@ bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_diff
     vec3 o, d, p_camera;
     vec2 p_lens = v2(0.0, 0.0);
     camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);
-    out->r = render_ray(c, o, d, s.time);
+    double time = hz_lerp(s.time, c->shutter_open, c->shutter_close);
+    transform rfc = render_from_camera_at(c, time);
+    out->r = render_ray(c, &rfc, o, d, time);
 
     vec3 ox, dx, oy, dy;
     shifted_ray(c, p_camera, c->dx_camera, p_lens, o, d, &ox, &dx);
     shifted_ray(c, p_camera, c->dy_camera, p_lens, o, d, &oy, &dy);
-    out->rx_o = transform_point(&c->render_from_camera, ox);
-    out->rx_d = v3_normalize(transform_vector(&c->render_from_camera, dx));
-    out->ry_o = transform_point(&c->render_from_camera, oy);
-    out->ry_d = v3_normalize(transform_vector(&c->render_from_camera, dy));
+    out->rx_o = transform_point(&rfc, ox);
+    out->rx_d = v3_normalize(transform_vector(&rfc, dx));
+    out->ry_o = transform_point(&rfc, oy);
+    out->ry_d = v3_normalize(transform_vector(&rfc, dy));
     out->has_differentials = true;
     return true;
 }

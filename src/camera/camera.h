@@ -1,6 +1,6 @@
 /* pbrt-v4's projective cameras (perspective, orthographic) with the thin lens,
  * ray differentials, shutter and film exposure. Rays come out in render space:
- * world translated so the camera at mid-shutter sits at the origin
+ * world translated so the camera at the middle of TransformTimes sits at the origin
  * (render_from_world is a pure translation), which keeps precision far from
  * the world origin. */
 #ifndef HAZE_CAMERA_CAMERA_H
@@ -8,6 +8,7 @@
 
 #include <stdbool.h>
 
+#include "core/animated_transform.h"
 #include "core/error.h"
 #include "core/ray.h"
 #include "core/transform.h"
@@ -25,8 +26,10 @@ typedef struct {
 
 typedef struct {
     camera_kind kind;
-    transform render_from_camera;
+    transform render_from_camera; /* at the start time when the camera moves */
     transform world_from_render;  /* a translation */
+    bool motion;                  /* the camera moves: rays use render_from_camera_motion */
+    animated_transform render_from_camera_motion;
     double shutter_open, shutter_close;
     int medium;                   /* -1 = vacuum; set by the scene builder */
 
@@ -48,6 +51,12 @@ typedef struct {
 typedef struct {
     camera_kind kind;
     transform camera_from_world;
+    /* A moving camera (pbrt-v4's animated camera transform): camera_from_world
+     * at transform_start_time, camera_from_world_end at transform_end_time,
+     * interpolated as pbrt's AnimatedTransform. Ignored unless `motion`. */
+    bool motion;
+    transform camera_from_world_end;
+    double transform_start_time, transform_end_time;
     double shutter_open, shutter_close;
     double screen_window[4];      /* xmin xmax ymin ymax */
     double lens_radius, focal_distance;

@@ -83,18 +83,14 @@ hz_status camera_create(camera_entity *e, const film_params *film, camera *out, 
         return hz_fail_at(err, ent->loc, "film resolution %dx%d must be at least 1x1",
                           film->xres, film->yres);
 
-    /* Motion blur is a separate issue; until then an animated camera is refused
-     * rather than silently rendered at its start position. */
-    for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j)
-            if (e->camera_from_world.m.m[i][j] != e->camera_from_world_end.m.m[i][j])
-                return hz_fail_at(err, ent->loc,
-                                  "animated camera transforms (TransformTimes/ActiveTransform) "
-                                  "are not supported yet");
-
     char msg[256];
     camera_config cfg = camera_config_default(kind, film->xres, film->yres);
     cfg.camera_from_world = e->camera_from_world;
+    cfg.camera_from_world_end = e->camera_from_world_end;
+    cfg.motion = memcmp(&e->camera_from_world.m, &e->camera_from_world_end.m,
+                        sizeof e->camera_from_world.m) != 0;
+    cfg.transform_start_time = e->transform_start_time;
+    cfg.transform_end_time = e->transform_end_time;
     cfg.shutter_open = params_float(pl, "shutteropen", cfg.shutter_open);
     cfg.shutter_close = params_float(pl, "shutterclose", cfg.shutter_close);
     cfg.lens_radius = params_float(pl, "lensradius", cfg.lens_radius);

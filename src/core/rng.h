@@ -13,7 +13,7 @@ typedef struct {
 
 static inline rng rng_seeded(uint64_t seed) { return (rng){seed}; }
 
-static inline uint64_t rng_next(rng *r)
+static inline uint64_t rng_bits(rng *r)
 {
     uint64_t z = (r->state += 0x9e3779b97f4a7c15ull);
     z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
@@ -22,6 +22,6 @@ static inline uint64_t rng_next(rng *r)
 }
 
 /* Uniform in [0, 1 - 2^-53]: 1.0 is never returned. */
-static inline double rng_uniform(rng *r) { return (double)(rng_next(r) >> 11) * 0x1p-53; }
+static inline double rng_uniform(rng *r) { return (double)(rng_bits(r) >> 11) * 0x1p-53; }
 
 #endif

@@ -2,6 +2,7 @@
  * Semantics follow pbrt-v4's BasicSceneBuilder (src/pbrt/scene.cpp); where
  * pbrt-v4 only warns (unknown CoordSysTransform name, area lights in object
  * instances) haze refuses, because a silently different scene is worse. */
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -236,6 +237,11 @@ static hz_status d_transform_times(parser *ps, const token *d, hz_error *err)
     double v[2];
     if (parser_need_options(ps, d, "TransformTimes", NULL, err) != HZ_OK || parser_numbers(ps, d, v, 2, false, err) != HZ_OK)
         return HZ_ERROR;
+    if (!isfinite(v[0]) || !isfinite(v[1]) || v[1] < v[0])
+        return hz_fail_at(err, d->loc,
+                          "TransformTimes %g %g: the times must be finite and the end time not "
+                          "before the start time",
+                          v[0], v[1]);
     ps->sd->transform_start_time = v[0];
     ps->sd->transform_end_time = v[1];
     return HZ_OK;

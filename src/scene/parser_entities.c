@@ -78,6 +78,8 @@ static hz_status d_camera(parser *ps, const token *d, hz_error *err)
     c->camera_from_world = ps->gs.ctm[0];
     c->camera_from_world_end = ps->gs.ctm[1];
     c->medium = (char *)ps->gs.outside;
+    c->transform_start_time = ps->sd->transform_start_time;
+    c->transform_end_time = ps->sd->transform_end_time;
     /* pbrt-v4: namedCoordinateSystems["camera"] = Inverse(cameraFromWorld). */
     transform world_from_camera[2] = {transform_inverse(ps->gs.ctm[0]),
                                       transform_inverse(ps->gs.ctm[1])};

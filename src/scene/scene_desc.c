@@ -29,6 +29,8 @@ void scene_desc_init(scene_desc *sd, const char *file)
     sd->camera.camera_from_world = transform_identity();
     sd->camera.camera_from_world_end = transform_identity();
     sd->camera.medium = (char *)own(sd, "");
+    sd->camera.transform_start_time = 0.0;
+    sd->camera.transform_end_time = 1.0;
     sd->film = default_entity(sd, "rgb", start);
     sd->sampler = default_entity(sd, "zsobol", start);
     sd->filter = default_entity(sd, "gaussian", start);

@@ -31,6 +31,7 @@ typedef struct {
     transform camera_from_world; /* the CTM at Camera (start time) */
     transform camera_from_world_end; /* the CTM at Camera (end time) */
     char *medium;                /* outside medium current at Camera, "" = vacuum */
+    double transform_start_time, transform_end_time; /* TransformTimes at Camera */
 } camera_entity;
 
 typedef struct {

@@ -10,6 +10,7 @@
 
 #include <math.h>
 
+#include "core/rng.h"
 #include "core/vec.h"
 
 static inline void assert_near(double got, double want, double tol)
@@ -25,15 +26,14 @@ static inline void assert_v3_near(vec3 got, vec3 want, double tol)
     assert_near(got.z, want.z, tol);
 }
 
-/* splitmix64: a local, seeded stream (tests must be deterministic); returns a
- * double in [0, 1) and advances *s. */
+/* A local, seeded stream (tests must be deterministic): returns a double in
+ * [0, 1) and advances *s. */
 static inline double rng_next(uint64_t *s)
 {
-    uint64_t z = (*s += 0x9e3779b97f4a7c15u);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
-    z ^= z >> 31;
-    return (double)(z >> 11) * 0x1.0p-53;
+    rng r = rng_seeded(*s);
+    double v = rng_uniform(&r);
+    *s = r.state;
+    return v;
 }
 
 #endif

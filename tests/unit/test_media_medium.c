@@ -1,0 +1,485 @@
+/* media/medium: MakeNamedMedium entities become media (parameters, defaults,
+ * errors, file resolution, grid placement), and medium_clip bounds rays to a
+ * grid's support box. Scenes are parsed from strings; the grids are the
+ * generated volumes (volumes/generate.cpp). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "media/medium.h"
+#include "scene/scene_desc.h"
+#include "unit/assert_util.h"
+
+#define VOLUMES HAZE_SCENES "/../volumes/"
+
+/* Parses `src` (named `name`), which must declare exactly one medium, and builds
+ * it with render_from_world. Returns the status; on success the caller frees
+ * both *m and *sd. On failure *sd is already freed and err holds the message. */
+static hz_status build_named(const char *src, const char *name, transform render_from_world,
+                             scene_desc *sd, medium *m, hz_error *err)
+{
+    hz_error perr;
+    if (scene_parse_string(src, name, sd, &perr) != HZ_OK)
+        fail_msg("parse error: %s", perr.message);
+    assert_int_equal(sd->medium_count, 1);
+    hz_status st = medium_from_entity(&sd->media[0], render_from_world, m, err);
+    if (st != HZ_OK) {
+        /* A failed build leaves a medium that medium_free accepts. */
+        medium_free(m);
+        scene_desc_free(sd);
+    }
+    return st;
+}
+
+static void build_ok_at(const char *src, const char *name, transform render_from_world,
+                        scene_desc *sd, medium *m)
+{
+    hz_error err;
+    if (build_named(src, name, render_from_world, sd, m, &err) != HZ_OK)
+        fail_msg("unexpected error: %s", err.message);
+}
+
+static void build_ok(const char *src, scene_desc *sd, medium *m)
+{
+    build_ok_at(src, "t.pbrt", transform_identity(), sd, m);
+}
+
+static void build_err_at(const char *src, const char *name, const char *want1, const char *want2)
+{
+    scene_desc sd;
+    medium m;
+    hz_error err;
+    if (build_named(src, name, transform_identity(), &sd, &m, &err) == HZ_OK) {
+        medium_free(&m);
+        scene_desc_free(&sd);
+        fail_msg("expected an error containing \"%s\"", want1);
+    }
+    if (!strstr(err.message, want1) || (want2 && !strstr(err.message, want2)))
+        fail_msg("got \"%s\", want \"%s\"%s%s", err.message, want1, want2 ? " and " : "",
+                 want2 ? want2 : "");
+    if (strchr(err.message, '\n'))
+        fail_msg("message spans lines: \"%s\"", err.message);
+}
+
+static void build_err(const char *src, const char *want1, const char *want2)
+{
+    build_err_at(src, "t.pbrt", want1, want2);
+}
+
+static void free_all(scene_desc *sd, medium *m)
+{
+    medium_free(m);
+    scene_desc_free(sd);
+}
+
+static void assert_rgb_near(rgb got, rgb want, double tol)
+{
+    assert_near(got.r, want.r, tol);
+    assert_near(got.g, want.g, tol);
+    assert_near(got.b, want.b, tol);
+}
+
+/* A one-medium scene with the given medium parameters, after WorldBegin. */
+static const char *homog(const char *params)
+{
+    static char buf[1024];
+    snprintf(buf, sizeof buf,
+             "WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"homogeneous\" %s\n", params);
+    return buf;
+}
+
+/* ---- homogeneous ---- */
+
+static void homogeneous_defaults(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(homog(""), &sd, &m);
+    assert_int_equal(m.kind, MEDIUM_HOMOGENEOUS);
+    assert_ptr_equal(m.name, sd.media[0].name);
+    assert_string_equal(m.name, "fog");
+    assert_rgb_near(m.sigma_a, rgb_grey(1.0), 0);
+    assert_rgb_near(m.sigma_s, rgb_grey(1.0), 0);
+    assert_rgb_near(medium_sigma_t(&m), rgb_grey(2.0), 0);
+    assert_near(m.g, 0.0, 0);
+    free_all(&sd, &m);
+}
+
+static void homogeneous_parameters(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(homog("\"rgb sigma_a\" [0.1 0.2 0.3] \"rgb sigma_s\" [1 2 3] \"float scale\" 2 "
+                   "\"float g\" -0.5"),
+             &sd, &m);
+    assert_rgb_near(m.sigma_a, rgb_make(0.2, 0.4, 0.6), 1e-15);
+    assert_rgb_near(m.sigma_s, rgb_make(2, 4, 6), 1e-15);
+    assert_rgb_near(medium_sigma_t(&m), rgb_make(2.2, 4.4, 6.6), 1e-14);
+    assert_near(m.g, -0.5, 0);
+    free_all(&sd, &m);
+
+    /* Spectra: a constant spectrum is that grey; zero coefficients and scale are fine. */
+    build_ok(homog("\"spectrum sigma_s\" 0.7 \"rgb sigma_a\" [0 0 0] \"float scale\" 3"), &sd,
+             &m);
+    assert_rgb_near(m.sigma_s, rgb_grey(2.1), 1e-12);
+    assert_rgb_near(m.sigma_a, rgb_grey(0.0), 0);
+    free_all(&sd, &m);
+    build_ok(homog("\"float scale\" 0 \"float g\" 0.999"), &sd, &m);
+    assert_rgb_near(medium_sigma_t(&m), rgb_grey(0.0), 0);
+    assert_near(m.g, 0.999, 0);
+    free_all(&sd, &m);
+
+    /* Zero emission is accepted, as is a scale on it. */
+    build_ok(homog("\"rgb Le\" [0 0 0] \"float Lescale\" 4"), &sd, &m);
+    free_all(&sd, &m);
+    build_ok(homog("\"float Lescale\" 4"), &sd, &m);
+    free_all(&sd, &m);
+}
+
+/* The transform does not matter to a homogeneous medium. */
+static void homogeneous_under_transform(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok("WorldBegin\nScale 2 3 4\nTranslate 1 2 3\nMakeNamedMedium \"a\" \"string type\" "
+             "\"homogeneous\"\n",
+             &sd, &m);
+    double t0 = 0.5, t1 = 7.0;
+    assert_true(medium_clip(&m, v3(0, 0, 0), v3(1, 0, 0), &t0, &t1));
+    assert_near(t0, 0.5, 0);
+    assert_near(t1, 7.0, 0);
+    free_all(&sd, &m);
+}
+
+static void homogeneous_errors(void **state)
+{
+    (void)state;
+    build_err("WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"cloud\"\n", "t.pbrt:2:1:",
+              "\"cloud\" is not supported (supported: \"homogeneous\", \"nanovdb\")");
+    build_err(homog("\"rgb sigma_a\" [0.5 -1 0]"), "t.pbrt:2:", "\"sigma_a\" must be");
+    build_err(homog("\"spectrum sigma_s\" -0.5"), "t.pbrt:2:", "\"sigma_s\" must be");
+    build_err(homog("\"float g\" 1"), "t.pbrt:2:", "\"g\" must lie in (-1, 1)");
+    build_err(homog("\"float g\" -1"), "t.pbrt:2:", "\"g\"");
+    build_err(homog("\"float g\" 1.5"), "t.pbrt:2:", "\"g\"");
+    build_err(homog("\"float scale\" -1"), "t.pbrt:2:", "\"scale\" must be");
+    build_err(homog("\"float scale\" 1e308 \"rgb sigma_s\" [1e10 1 1]"), "t.pbrt:2:", "\"scale\"");
+    build_err(homog("\"float fog\" 1"), "t.pbrt:2:",
+              "unused parameter \"float fog\" for MakeNamedMedium \"fog\"");
+    build_err(homog("\"rgb Le\" [0 0.1 0]"), "t.pbrt:2:", "emission (\"Le\") is not supported");
+    build_err(homog("\"spectrum Le\" 2 \"float Lescale\" 0.5"), "t.pbrt:2:",
+              "emission (\"Le\") is not supported");
+    build_err(homog("\"float sigma_a\" 1"), "t.pbrt:2:", "sigma_a");
+    build_err(homog("\"string preset\" \"Skin1\""), "t.pbrt:2:", "\"preset\"");
+    /* Grid-only parameters are unknown to homogeneous media. */
+    build_err(homog("\"string filename\" \"box.vdb\""), "t.pbrt:2:",
+              "unused parameter \"string filename\"");
+    build_err(homog("\"float temperaturescale\" 2"), "t.pbrt:2:", "unused parameter");
+}
+
+/* ---- nanovdb ---- */
+
+static const char *nanovdb_at(const char *prefix, const char *filename, const char *params)
+{
+    static char buf[2048];
+    snprintf(buf, sizeof buf,
+             "WorldBegin\n%sMakeNamedMedium \"smoke\" \"string type\" \"nanovdb\" "
+             "\"string filename\" \"%s\" %s\n",
+             prefix, filename, params);
+    return buf;
+}
+
+static const char *nanovdb(const char *filename, const char *params)
+{
+    return nanovdb_at("", filename, params);
+}
+
+static void check_box(const medium *m)
+{
+    assert_int_equal(m->kind, MEDIUM_GRID);
+    assert_non_null(m->grid.grid);
+    assert_near(m->grid.density_max, 1.0, 0);
+    assert_near(m->grid.background, 0.0, 0);
+    assert_v3_near(m->grid.support_lo, v3(-1, -1, -1), 0);
+    assert_v3_near(m->grid.support_hi, v3(32, 32, 32), 0);
+}
+
+static void nanovdb_absolute_path(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb(VOLUMES "box.vdb", "\"rgb sigma_a\" [1 2 3] \"float scale\" 0.5 "
+                                        "\"float g\" 0.8"),
+             &sd, &m);
+    check_box(&m);
+    assert_string_equal(m.name, "smoke");
+    /* Per unit density. */
+    assert_rgb_near(m.sigma_a, rgb_make(0.5, 1, 1.5), 0);
+    assert_rgb_near(m.sigma_s, rgb_grey(0.5), 0);
+    assert_near(m.g, 0.8, 0);
+    /* Voxel size 1/32, no offset. */
+    assert_v3_near(transform_point(&m.grid.index_from_render, v3(0.5, 0.25, 1)), v3(16, 8, 32),
+                   1e-12);
+    grid_accessor a;
+    grid_accessor_init(m.grid.grid, &a);
+    vec3 p = transform_point(&m.grid.index_from_render, v3(0.5, 0.5, 0.5));
+    assert_near(medium_density_index(&m, &a, p), 1.0, 0);
+    free_all(&sd, &m);
+
+    /* The same volume as NanoVDB, and the grid named explicitly. */
+    build_ok(nanovdb(VOLUMES "box.nvdb", "\"string gridname\" \"density\""), &sd, &m);
+    check_box(&m);
+    assert_rgb_near(m.sigma_a, rgb_grey(1), 0);
+    free_all(&sd, &m);
+
+    /* fog_sphere: index bounds [9, 55], index 32 at the world origin. */
+    build_ok(nanovdb(VOLUMES "fog_sphere.vdb", ""), &sd, &m);
+    assert_near(m.grid.density_max, 1.0, 0);
+    assert_v3_near(m.grid.support_lo, v3(8, 8, 8), 0);
+    assert_v3_near(m.grid.support_hi, v3(56, 56, 56), 0);
+    double t0 = 0, t1 = INFINITY;
+    assert_true(medium_clip(&m, v3(-5, 0, 0), v3(1, 0, 0), &t0, &t1));
+    assert_near(t0, 4.25, 1e-12);
+    assert_near(t1, 5.75, 1e-12);
+    free_all(&sd, &m);
+}
+
+/* pbrt-v4's temperature parameters are accepted and ignored. */
+static void nanovdb_temperature_ignored(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb(VOLUMES "box.vdb", "\"float temperaturecutoff\" 1 \"float temperaturescale\" "
+                                        "100 \"float temperatureoffset\" 2 \"float Lescale\" 5"),
+             &sd, &m);
+    check_box(&m);
+    free_all(&sd, &m);
+}
+
+static void nanovdb_relative_path(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    /* Relative to the directory of the declaring file. */
+    build_ok_at(nanovdb("box.vdb", ""), VOLUMES "x.pbrt", transform_identity(), &sd, &m);
+    check_box(&m);
+    free_all(&sd, &m);
+    build_ok_at(nanovdb("../volumes/fog_sphere.vdb", ""), VOLUMES "x.pbrt", transform_identity(),
+                &sd, &m);
+    assert_v3_near(m.grid.support_lo, v3(8, 8, 8), 0);
+    free_all(&sd, &m);
+    /* Absolute names ignore the scene's directory. */
+    build_ok_at(nanovdb(VOLUMES "box.vdb", ""), "/nonexistent/dir/x.pbrt", transform_identity(),
+                &sd, &m);
+    check_box(&m);
+    free_all(&sd, &m);
+    /* Not relative to the working directory. */
+    build_err_at(nanovdb("box.vdb", ""), "/nonexistent/dir/x.pbrt", "/nonexistent/dir/x.pbrt:2:1:",
+                 "/nonexistent/dir/box.vdb");
+}
+
+static void nanovdb_errors(void **state)
+{
+    (void)state;
+    build_err(nanovdb(VOLUMES "missing.vdb", ""), "t.pbrt:2:1:", "missing.vdb");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"string gridname\" \"nope\""), "t.pbrt:2:1:", "nope");
+    build_err(nanovdb(VOLUMES "smoke.vdb", "\"string gridname\" \"v\""), "t.pbrt:2:1:", "\"v\"");
+    build_err(nanovdb(VOLUMES "generate.cpp", ""), "t.pbrt:2:1:", "generate.cpp");
+    build_err("WorldBegin\nMakeNamedMedium \"smoke\" \"string type\" \"nanovdb\"\n", "t.pbrt:2:1:",
+              "needs \"string filename\"");
+    build_err(nanovdb("", ""), "t.pbrt:2:1:", "needs \"string filename\"");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"float g\" -1"), "t.pbrt:2:", "\"g\"");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"rgb Le\" [1 1 1]"), "t.pbrt:2:",
+              "emission (\"Le\") is not supported");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"float density\" 1"), "t.pbrt:2:",
+              "unused parameter \"float density\"");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"rgb sigma_s\" [1 -1 1]"), "t.pbrt:2:", "sigma_s");
+}
+
+/* ---- clipping ---- */
+
+static void clip_expect(const medium *m, vec3 o, vec3 d, double t0, double t1, double want0,
+                        double want1)
+{
+    if (!medium_clip(m, o, d, &t0, &t1))
+        fail_msg("ray (%g %g %g) + t (%g %g %g) missed", o.x, o.y, o.z, d.x, d.y, d.z);
+    if (!((t0 == want0 || fabs(t0 - want0) <= 1e-12 * fmax(1, fabs(want0))) &&
+          (t1 == want1 || fabs(t1 - want1) <= 1e-12 * fmax(1, fabs(want1)))))
+        fail_msg("ray (%g %g %g) + t (%g %g %g): [%.17g, %.17g], want [%.17g, %.17g]", o.x, o.y,
+                 o.z, d.x, d.y, d.z, t0, t1, want0, want1);
+}
+
+static void clip_expect_miss(const medium *m, vec3 o, vec3 d, double t0, double t1)
+{
+    if (medium_clip(m, o, d, &t0, &t1))
+        fail_msg("ray (%g %g %g) + t (%g %g %g) hit [%g, %g]", o.x, o.y, o.z, d.x, d.y, d.z, t0,
+                 t1);
+}
+
+/* box.vdb's support is index [-1, 32]^3, world [-1/32, 1]^3. */
+static void clip_box(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb(VOLUMES "box.vdb", ""), &sd, &m);
+    const double lo = -1.0 / 32, hi = 1.0;
+    /* Along +x through the centre: the y and z components of d are zero, inside the slabs. */
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 0, INFINITY, 5 - 1.0 / 32, 6);
+    /* A non-unit direction: t scales. */
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(2, 0, 0), 0, INFINITY, (5 + lo) / 2, 3);
+    /* The given interval trims the result, and the support trims the interval. */
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 5.5, 5.75, 5.5, 5.75);
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 5.5, 100, 5.5, 6);
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), -INFINITY, INFINITY, 5 + lo, 6);
+    /* From inside, backwards along -z. */
+    clip_expect(&m, v3(0.5, 0.5, 0.5), v3(0, 0, -1), 0, INFINITY, 0, 0.5 - lo);
+    /* Diagonal through the corners. */
+    clip_expect(&m, v3(-1, -1, -1), v3(1, 1, 1), 0, INFINITY, 1 + lo, 2);
+    /* On the boundary plane y = 1 (index 32): the closed box still holds it. */
+    clip_expect(&m, v3(-5, hi, 0.5), v3(1, 0, 0), 0, INFINITY, 5 + lo, 6);
+    /* A direction component too small to matter: no NaN. */
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(1, 1e-300, 0), 0, INFINITY, 5 + lo, 6);
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(1, 0x1.0p-1070, 0), 0, INFINITY, 5 + lo, 6);
+    /* On the boundary plane, a denormal component decides: inward keeps the ray,
+     * outward leaves the box at t = 0 (exactly what the slabs say). */
+    clip_expect(&m, v3(-5, hi, 0.5), v3(1, -0x1.0p-1070, 0), 0, INFINITY, 5 + lo, 6);
+    clip_expect_miss(&m, v3(-5, hi, 0.5), v3(1, 0x1.0p-1070, 0), 0, INFINITY);
+
+    /* Misses: beside the box (zero component outside its slab), behind the
+     * origin, beyond t1, before t0, a diagonal that passes a corner. */
+    clip_expect_miss(&m, v3(-5, 1.5, 0.5), v3(1, 0, 0), 0, INFINITY);
+    clip_expect_miss(&m, v3(-5, 0.5, -0.5), v3(1, 0, 0), 0, INFINITY);
+    clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(-1, 0, 0), 0, INFINITY);
+    clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 0, 4.9);
+    clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 6.1, 10);
+    clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 5.6, 5.5);
+    clip_expect_miss(&m, v3(-2, 0, 0), v3(1, -1, 0), 0, INFINITY);
+    clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), NAN, 10);
+    clip_expect_miss(&m, v3(NAN, 0.5, 0.5), v3(1, 0, 0), 0, 10);
+    clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(0, 0, 0), 0, 10);
+    clip_expect(&m, v3(0.5, 0.5, 0.5), v3(0, 0, 0), 0, 10, 0, 10);
+    free_all(&sd, &m);
+}
+
+/* The transform current at MakeNamedMedium places the grid. */
+static void clip_follows_medium_transform(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb_at("Translate 10 0 0\n", VOLUMES "box.vdb", ""), &sd, &m);
+    assert_v3_near(transform_point(&m.grid.index_from_render, v3(10.5, 0.5, 0.5)),
+                   v3(16, 16, 16), 1e-12);
+    clip_expect(&m, v3(5, 0.5, 0.5), v3(1, 0, 0), 0, INFINITY, 5 - 1.0 / 32, 6);
+    clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(0, 0, 1), 0, INFINITY);
+    free_all(&sd, &m);
+
+    /* AttributeBegin/End: the transform is the one at the declaration. */
+    build_ok(nanovdb_at("AttributeBegin\nScale 2 2 2\n", VOLUMES "box.vdb", "\nAttributeEnd"),
+             &sd, &m);
+    clip_expect(&m, v3(-5, 1, 1), v3(1, 0, 0), 0, INFINITY, 5 - 2.0 / 32, 7);
+    free_all(&sd, &m);
+
+    /* A rotation: 90° about z takes +x to +y, so the box spans world x in [-1, 1/32]. */
+    build_ok(nanovdb_at("Rotate 90 0 0 1\n", VOLUMES "box.vdb", ""), &sd, &m);
+    clip_expect(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 0, INFINITY, 4, 5 + 1.0 / 32);
+    free_all(&sd, &m);
+}
+
+/* Render space centred on a camera at (3, 1, 0): render = world - (3, 1, 0). */
+static void clip_in_camera_render_space(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    transform render_from_world = transform_translate(v3(-3, -1, 0));
+    build_ok_at(nanovdb_at("Translate 10 0 0\n", VOLUMES "box.vdb", ""), "t.pbrt",
+                render_from_world, &sd, &m);
+    assert_v3_near(transform_point(&m.grid.index_from_render, v3(10.5 - 3, 0.5 - 1, 0.5)),
+                   v3(16, 16, 16), 1e-12);
+    /* The world ray (5, 0.5, 0.5) + t x is (2, -0.5, 0.5) + t x in render space. */
+    clip_expect(&m, v3(2, -0.5, 0.5), v3(1, 0, 0), 0, INFINITY, 5 - 1.0 / 32, 6);
+    /* The untranslated world ray misses in render space. */
+    clip_expect_miss(&m, v3(5, 0.5, 0.5), v3(1, 0, 0), 0, INFINITY);
+    free_all(&sd, &m);
+}
+
+/* Hand-made grid media: empty support, non-zero background. */
+static void clip_special_grids(void **state)
+{
+    (void)state;
+    medium m;
+    memset(&m, 0, sizeof m);
+    m.kind = MEDIUM_GRID;
+    m.grid.index_from_render = transform_identity();
+    m.grid.support_lo = v3(1, 1, 1);
+    m.grid.support_hi = v3(-1, -1, -1);
+    clip_expect_miss(&m, v3(-5, 0, 0), v3(1, 0, 0), 0, INFINITY);
+    clip_expect_miss(&m, v3(0, 0, 0), v3(0, 0, 0), 0, INFINITY);
+    /* A non-zero background fills all space: the interval is kept. */
+    m.grid.background = 0.25;
+    clip_expect(&m, v3(-5, 0, 0), v3(1, 0, 0), 0, INFINITY, 0, INFINITY);
+    clip_expect_miss(&m, v3(-5, 0, 0), v3(1, 0, 0), 2, 1);
+    medium_free(&m); /* no grid: nothing to release */
+}
+
+static void homogeneous_clip(void **state)
+{
+    (void)state;
+    medium m;
+    memset(&m, 0, sizeof m);
+    m.kind = MEDIUM_HOMOGENEOUS;
+    clip_expect(&m, v3(1e9, -3, 2), v3(0, 1, 0), 0.25, INFINITY, 0.25, INFINITY);
+    clip_expect(&m, v3(0, 0, 0), v3(1, 0, 0), 3, 3, 3, 3);
+    clip_expect_miss(&m, v3(0, 0, 0), v3(1, 0, 0), 3, 2);
+    medium_free(&m);
+}
+
+static void free_is_safe(void **state)
+{
+    (void)state;
+    medium m;
+    memset(&m, 0, sizeof m);
+    medium_free(&m);
+    medium_free(&m);
+    medium_free(NULL);
+    scene_desc sd;
+    build_ok(nanovdb(VOLUMES "box.vdb", ""), &sd, &m);
+    medium_free(&m);
+    medium_free(&m); /* the grid pointer was cleared */
+    scene_desc_free(&sd);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(homogeneous_defaults),
+        cmocka_unit_test(homogeneous_parameters),
+        cmocka_unit_test(homogeneous_under_transform),
+        cmocka_unit_test(homogeneous_errors),
+        cmocka_unit_test(nanovdb_absolute_path),
+        cmocka_unit_test(nanovdb_temperature_ignored),
+        cmocka_unit_test(nanovdb_relative_path),
+        cmocka_unit_test(nanovdb_errors),
+        cmocka_unit_test(clip_box),
+        cmocka_unit_test(clip_follows_medium_transform),
+        cmocka_unit_test(clip_in_camera_render_space),
+        cmocka_unit_test(clip_special_grids),
+        cmocka_unit_test(homogeneous_clip),
+        cmocka_unit_test(free_is_safe),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
