@@ -444,10 +444,30 @@ static void test_errors(void **state)
     assert_non_null(strstr(msg, "stepsize"));
 }
 
+/* The camera's medium is named before it is defined: names resolve after the
+ * whole file is read, so declaration order does not matter. */
+static void test_camera_medium_resolved_late(void **state)
+{
+    (void)state;
+    render_scene *rs = build_scene_or_fail(
+        "MediumInterface \"\" \"thick\"\nCamera \"perspective\"\nWorldBegin\n"
+        "MakeNamedMedium \"thin\" \"string type\" \"homogeneous\"\n"
+        "MakeNamedMedium \"thick\" \"string type\" \"homogeneous\"\n",
+        NULL);
+    assert_int_equal(render_scene_camera(rs)->medium, 1);
+    render_scene_destroy(rs);
+    rs = build_scene_or_fail("Camera \"perspective\"\nWorldBegin\n"
+                             "MakeNamedMedium \"thin\" \"string type\" \"homogeneous\"\n",
+                             NULL);
+    assert_int_equal(render_scene_camera(rs)->medium, -1);
+    render_scene_destroy(rs);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_point_light),
+        cmocka_unit_test(test_camera_medium_resolved_late),
         cmocka_unit_test(test_point_light_power),
         cmocka_unit_test(test_distant_light),
         cmocka_unit_test(test_light_illuminance),
