@@ -275,10 +275,91 @@ static void test_lens_radius_zero_is_pinhole(void **state)
     free(db);
 }
 
+/* A moving camera: an orthographic camera that slides 2 units (16 pixels) along
+ * +x during the shutter over an emitting square 8 pixels wide. Each pixel sees
+ * the fraction of the shutter during which the square covers it: the static
+ * square convolved with a 16-pixel box. Energy is conserved. */
+static const char *motion_scene_fmt =
+    "LookAt 0 0 0  0 0 1  0 1 0\n"
+    "%s"
+    "Camera \"orthographic\" %s\n"
+    "Film \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 16\n"
+    "PixelFilter \"box\" \"float xradius\" 0.5 \"float yradius\" 0.5\n"
+    "Sampler \"zsobol\" \"integer pixelsamples\" 256\n"
+    "WorldBegin\n"
+    "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\n"
+    "Shape \"bilinearmesh\" \"point3 P\" [-0.5 -0.5 5  0.5 -0.5 5  -0.5 0.5 5  0.5 0.5 5]\n";
+
+static void render_motion(const char *name, const char *motion, const char *camera_params,
+                          exr_image *img)
+{
+    char text[2048];
+    snprintf(text, sizeof text, motion_scene_fmt, motion, camera_params);
+    render_or_fail(name, text, NULL, img);
+}
+
+/* Fraction of pixel [x, x+1] x shutter [0, 1] covered by the square whose
+ * raster span is [c - 4, c + 4], c = c0 + v u. */
+static double covered(int x, double c0, double v)
+{
+    const int n = 400;
+    double sum = 0;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            double px = x + (i + 0.5) / n, c = c0 + v * (j + 0.5) / n;
+            sum += fabs(px - c) < 4.0;
+        }
+    return sum / ((double)n * n);
+}
+
+static void test_moving_camera_streak(void **state)
+{
+    (void)state;
+    exr_image moving, still;
+    render_motion("motion_moving", "ActiveTransform EndTime\nTranslate -2 0 0\nActiveTransform All\n",
+                  "", &moving);
+    render_motion("motion_still", "", "", &still);
+    const float *m = channel(&moving, "G"), *s = channel(&still, "G");
+    double e_moving = 0, e_still = 0, worst = 0;
+    for (int x = 0; x < 64; ++x) {
+        double mean = 0;
+        for (int y = 4; y < 12; ++y) /* rows inside the square */
+            mean += m[y * 64 + x] / 8.0;
+        worst = fmax(worst, fabs(mean - covered(x, 32.0, -16.0)));
+        for (int y = 0; y < 16; ++y) {
+            e_moving += m[y * 64 + x];
+            e_still += s[y * 64 + x];
+        }
+    }
+    print_message("moving camera: worst row-profile error %.4f, energy %.4f vs %.4f\n", worst,
+                  e_moving, e_still);
+    assert_true(worst < 0.02);
+    assert_true(fabs(e_still - 64.0) < 1e-3); /* 8 x 8 pixels of radiance 1 */
+    assert_true(fabs(e_moving / e_still - 1.0) < 0.005);
+    exr_image_free(&moving);
+    exr_image_free(&still);
+
+    /* A very short shutter at mid-time with iso compensating (imaging ratio 1)
+     * is the static image of the camera halfway, at x = +1. */
+    exr_image brief, halfway;
+    render_motion("motion_brief", "ActiveTransform EndTime\nTranslate -2 0 0\nActiveTransform All\n",
+                  "\"float shutteropen\" 0.5 \"float shutterclose\" 0.500001", &brief);
+    render_motion("motion_halfway", "Translate -1 0 0\n", "", &halfway);
+    const float *b = channel(&brief, "G"), *h = channel(&halfway, "G");
+    double diff = 0;
+    for (int i = 0; i < 64 * 16; ++i)
+        diff = fmax(diff, fabs(b[i] * 1e6 - h[i]));
+    print_message("short shutter vs static halfway: worst pixel difference %.2e\n", diff);
+    assert_true(diff < 1e-3);
+    exr_image_free(&brief);
+    exr_image_free(&halfway);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_blur_disc_diameter),
+        cmocka_unit_test(test_moving_camera_streak),
         cmocka_unit_test(test_far_from_origin_same_image),
         cmocka_unit_test(test_extreme_legal_values),
         cmocka_unit_test(test_illegal_values_are_located_errors),
