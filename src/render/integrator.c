@@ -39,7 +39,17 @@ static rgb shadow(const integrator_scene *sc, const geom_hit *h, int medium,
         w = v3_scale(w, 1.0 / dist);
         tmax *= dist;
     }
-    return volume_shadow_transmittance(sc, o, w, tmax, geometry_medium_after(h, w, medium), walk);
+    /* Surfaces are searched from the offset origin, as without media; the
+     * medium also fills the bit between the surface and that origin: the ray
+     * starts e behind it on the same line, where that line crosses the
+     * tangent plane (at most a few offsets back, for grazing rays). */
+    vec3 off = v3_sub(o, h->p);
+    double wn = fabs(v3_dot(w, h->ng));
+    double e = v3_length(off) * 16.0;
+    if (wn * e > fabs(v3_dot(off, h->ng)))
+        e = fabs(v3_dot(off, h->ng)) / wn;
+    return volume_shadow_transmittance(sc, v3_sub(o, v3_scale(w, e)), w, e, tmax + e,
+                                       geometry_medium_after(h, w, medium), walk);
 }
 
 static rgb direct_diffuse(const integrator_scene *sc, const geom_hit *h, int medium, vec3 wo,
@@ -81,11 +91,13 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
         walk.r = rng_seeded(sampler_stream_seed(st));
     rgb beta = rgb_grey(1.0), L = rgb_grey(0.0);
     geom_hit h;
-    double tmin = 0.0;
+    /* Media fill the exact spans between crossings; only the next query
+     * starts past the surface (tmin). */
+    double tmin = 0.0, t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
         bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, &h);
         if (medium >= 0) {
-            volume_segment(sc, medium, o, d, tmin, hit ? h.t : INFINITY, &beta, &L, st, &walk);
+            volume_segment(sc, medium, o, d, t_start, hit ? h.t : INFINITY, &beta, &L, st, &walk);
             if (rgb_is_black(beta))
                 goto done;
         }
@@ -98,6 +110,7 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
         if (crossing == VOLUME_MAX_CROSSINGS)
             goto done;
         medium = geometry_medium_after(&h, d, medium);
+        t_start = h.t;
         tmin = geometry_step_past(&h, o, d);
     }
     *depth = v3_length(v3_sub(h.p, r->o));

@@ -169,12 +169,14 @@ static rgb segment_transmittance(const volume_scene *vs, const medium *m, vec3 o
     return rgb_grey(1.0);
 }
 
-rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmax, int medium,
-                                volume_walk *walk)
+rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmin, double tmax,
+                                int medium, volume_walk *walk)
 {
     walk->shadow_rays++;
     rgb T = rgb_grey(1.0);
-    double tmin = 0.0;
+    /* Media fill the exact spans between crossings; only the next query
+     * starts past the surface (tmin). */
+    double t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
         bool hit = geometry_intersect(vs->geom, o, w, tmin, tmax, &h);
@@ -182,7 +184,8 @@ rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double t
             return rgb_grey(0.0);
         double t_end = hit ? h.t : tmax;
         if (medium >= 0) {
-            T = rgb_mul(T, segment_transmittance(vs, &vs->media[medium], o, w, tmin, t_end, walk));
+            T = rgb_mul(T,
+                        segment_transmittance(vs, &vs->media[medium], o, w, t_start, t_end, walk));
             if (rgb_is_black(T))
                 return T;
         }
@@ -191,6 +194,7 @@ rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double t
         if (crossing == VOLUME_MAX_CROSSINGS)
             return rgb_grey(0.0);
         medium = geometry_medium_after(&h, w, medium);
+        t_start = h.t;
         tmin = geometry_step_past(&h, o, w);
     }
 }
@@ -231,7 +235,7 @@ static rgb inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_
             }
             if (rgb_is_black(Li) || !(f > 0.0))
                 continue;
-            rgb T = volume_shadow_transmittance(vs, x, wi, tmax, mi, walk);
+            rgb T = volume_shadow_transmittance(vs, x, wi, 0.0, tmax, mi, walk);
             L = rgb_add(L, rgb_scale(rgb_mul(Li, T), f / n));
         }
     }

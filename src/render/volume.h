@@ -74,9 +74,11 @@ typedef struct {
 
 /* Transmittance from `o` along unit `w` to distance `tmax` (INFINITY: to the end
  * of the scene), starting in `medium` (-1 vacuum): every medium segment
- * attenuates, interfaces switch the medium, any other surface blocks (black). */
-rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmax, int medium,
-                                volume_walk *walk);
+ * attenuates, interfaces switch the medium, any other surface blocks (black).
+ * Surfaces are searched from `tmin` on (past the surface `o` lies on, if any);
+ * media fill the whole span from 0. */
+rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmin, double tmax,
+                                int medium, volume_walk *walk);
 
 /* The segment [t0, t1] (t1 may be INFINITY) of the unit-direction ray o + t w in
  * medium `m`: adds beta × (in-scattered radiance) to *L and multiplies beta by
