@@ -2,7 +2,9 @@
 BUILD      ?= build
 BUILD_ASAN ?= build-asan
 JOBS       ?= $(shell nproc)
-SCENE      ?= scenes/default.pbrt
+SCENE      ?= scenes/foggy-dof.pbrt
+# Output: out/NAME.exr and out/NAME.png, NAME the scene file's name.
+OUT        ?= out/$(basename $(notdir $(SCENE)))
 
 .PHONY: all deps configure render test test-asan clean
 
@@ -17,7 +19,7 @@ configure:
 
 render: all
 	@mkdir -p out
-	$(BUILD)/haze render $(SCENE) -o out/default.exr --preview out/default.png
+	$(BUILD)/haze render $(SCENE) -o $(OUT).exr --preview $(OUT).png
 
 test: all
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)

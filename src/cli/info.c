@@ -338,9 +338,17 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
     int spp = (int)param_num(&sd.sampler.params, "pixelsamples", 16, &has);
     fprintf(out, "  %-15s %s, %d spp%s\n", "sampler", sd.sampler.type, spp, has ? "" : " (default)");
     fprintf(out, "  %-15s %s\n", "filter", sd.filter.type);
-    int depth = (int)param_num(&sd.integrator.params, "maxdepth", 5, &has);
-    fprintf(out, "  %-15s %s, max depth %d%s\n", "integrator", sd.integrator.type, depth,
-            has ? "" : " (default)");
+    if (strcmp(sd.integrator.type, "singlescatter") == 0) {
+        fprintf(out, "  %-15s %s, transmittance %s, step %g voxels, shadow step %g voxels\n",
+                "integrator", sd.integrator.type,
+                param_str(&sd.integrator.params, "transmittance", "ratio"),
+                param_num(&sd.integrator.params, "stepsize", 1.0, &has),
+                param_num(&sd.integrator.params, "shadowstepsize", 2.0, &has));
+    } else {
+        int depth = (int)param_num(&sd.integrator.params, "maxdepth", 5, &has);
+        fprintf(out, "  %-15s %s, max depth %d%s\n", "integrator", sd.integrator.type, depth,
+                has ? "" : " (default)");
+    }
 
     size_t area = 0;
     for (size_t i = 0; i < sd.shape_count; i++)

@@ -68,6 +68,12 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     if (!isfinite(background) || (nonempty && (!isfinite(vmin) || !isfinite(vmax))))
         st = hz_fail_at(err, loc, "MakeNamedMedium \"%s\": grid \"%s\" in %s has non-finite values",
                         name, gridname, path);
+    else if (background != 0.0)
+        st = hz_fail_at(err, loc,
+                        "MakeNamedMedium \"%s\": grid \"%s\" in %s has background %g; haze "
+                        "needs a fog volume with background 0 (the medium would otherwise fill "
+                        "all space)",
+                        name, gridname, path, background);
     else if (background < 0.0 || (nonempty && vmin < 0.0))
         st = hz_fail_at(err, loc,
                         "MakeNamedMedium \"%s\": grid \"%s\" in %s has negative densities "
@@ -150,6 +156,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, medi
         (void)params_float(pl, "temperaturecutoff", 0.0);
         (void)params_float(pl, "temperatureoffset", 0.0);
         (void)params_float(pl, "temperaturescale", 1.0);
+        (void)params_string(pl, "temperaturename", "temperature");
     }
 
     rgb sa = rgb_scale(sigma_a, scale), ss = rgb_scale(sigma_s, scale);

@@ -139,14 +139,9 @@ static void reject_occlusion(const struct RTCFilterFunctionNArguments *args)
 static hz_status resolve_medium(const scene_desc *sd, const char *name, file_loc loc, int *out,
                                 hz_error *err)
 {
-    *out = -1;
-    if (!name || !name[0])
+    *out = scene_find_medium(sd, name);
+    if (*out != SCENE_MEDIUM_UNDEFINED)
         return HZ_OK;
-    for (size_t i = 0; i < sd->medium_count; ++i)
-        if (strcmp(sd->media[i].name, name) == 0) {
-            *out = (int)i;
-            return HZ_OK;
-        }
     return hz_fail_at(err, loc, "MediumInterface names medium \"%s\", which is not defined "
                                 "(MakeNamedMedium)",
                       name);

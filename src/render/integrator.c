@@ -26,7 +26,8 @@ static rgb shadow(const integrator_scene *sc, const geom_hit *h, int medium,
         if (v3_length_sq(ls->n_light) > 0.0)
             target = geometry_offset_origin(target, ls->n_light, v3_neg(ls->wi));
         w = v3_sub(target, o);
-        tmax = 1.0 - GEOMETRY_SHADOW_EPSILON;
+        /* Only an emitting surface needs the shadow ray to stop short of it. */
+        tmax = v3_length_sq(ls->n_light) > 0.0 ? 1.0 - GEOMETRY_SHADOW_EPSILON : 1.0;
     }
     if (sc->medium_count == 0) {
         counters->shadow_rays++;

@@ -108,7 +108,7 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_error *err
 }
 
 static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render_from_world,
-                              hz_error *err)
+                              FILE *warn, hz_error *err)
 {
     size_t n = sd->light_count;
     for (size_t i = 0; i < sd->shape_count; ++i)
@@ -126,6 +126,16 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
         if (!sd->shapes[i].has_area_light)
             continue;
         geom_shape *gs = geometry_shape(rs->geom, i);
+        if (gs->material->kind == MATERIAL_INTERFACE) {
+            /* As pbrt-v4: an interface is no surface, so it cannot emit. */
+            file_loc l = sd->shapes[i].area_light.loc;
+            if (warn)
+                fprintf(warn,
+                        "%s:%d:%d: warning: ignoring the area light of a shape with "
+                        "Material \"interface\" (as pbrt-v4)\n",
+                        l.file ? l.file : "<input>", l.line, l.column);
+            continue;
+        }
         if (light_area_from_entity(&sd->shapes[i].area_light, gs, &rs->lights[rs->light_count],
                                    err) != HZ_OK)
             return HZ_ERROR;
@@ -147,18 +157,20 @@ static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_
             return HZ_ERROR;
         rs->medium_count++;
     }
-    rs->cam.medium = -1;
-    const char *name = sd->camera.medium;
-    if (name && name[0]) {
-        for (size_t i = 0; i < sd->medium_count; ++i)
-            if (strcmp(sd->media[i].name, name) == 0)
-                rs->cam.medium = (int)i;
-        if (rs->cam.medium < 0)
-            return hz_fail_at(err, sd->camera.entity.loc,
-                              "the camera sits in medium \"%s\", which is not defined "
+    rs->cam.medium = scene_find_medium(sd, sd->camera.medium);
+    if (rs->cam.medium == SCENE_MEDIUM_UNDEFINED)
+        return hz_fail_at(err, sd->camera.entity.loc,
+                          "the camera sits in medium \"%s\", which is not defined "
+                          "(MakeNamedMedium)",
+                          sd->camera.medium);
+    /* pbrt-v4 checks a light's medium name too (haze does not use it: shadow
+     * rays take the medium of the point they leave). */
+    for (size_t i = 0; i < sd->light_count; ++i)
+        if (scene_find_medium(sd, sd->lights[i].medium) == SCENE_MEDIUM_UNDEFINED)
+            return hz_fail_at(err, sd->lights[i].entity.loc,
+                              "the light sits in medium \"%s\", which is not defined "
                               "(MakeNamedMedium)",
-                              name);
-    }
+                              sd->lights[i].medium);
     return HZ_OK;
 }
 
@@ -202,12 +214,16 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
     if (geometry_create(sd, render_from_world, rs->materials, rs->material_count,
                         &rs->default_material, &rs->geom, err) != HZ_OK)
         return HZ_ERROR;
-    if (build_lights(rs, sd, render_from_world, err) != HZ_OK)
+    if (build_lights(rs, sd, render_from_world, warn, err) != HZ_OK)
         return HZ_ERROR;
     if (build_media(rs, sd, render_from_world, err) != HZ_OK)
         return HZ_ERROR;
+    bool stochastic = false;
+    for (size_t i = 0; i < rs->medium_count; ++i)
+        stochastic |= rs->media[i].kind == MEDIUM_GRID && vs.mode != TRANSMITTANCE_RAYMARCH;
     rs->isc = (integrator_scene){rs->geom,  rs->lights,       rs->light_count,
-                                 rs->media, rs->medium_count, vs};
+                                 rs->media, rs->medium_count, vs,
+                                 stochastic};
     return HZ_OK;
 }
 

@@ -208,9 +208,11 @@ static rgb inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_
 {
     const medium *m = &vs->media[mi];
     rgb L = rgb_grey(0.0);
-    int n = vs->settings.light_samples;
     for (size_t i = 0; i < vs->light_count; ++i) {
         const light *l = &vs->lights[i];
+        /* More samples of a delta light through deterministic transmittance
+         * would repeat the same computation. */
+        int n = light_is_delta(l) && !vs->stochastic_shadows ? 1 : vs->settings.light_samples;
         for (int k = 0; k < n; ++k) {
             vec2 uu = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(u);
             vec3 wi;
@@ -231,7 +233,10 @@ static rgb inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_
                 wi = ls.wi;
                 Li = ls.L;
                 f = hg_phase(v3_dot(wo, wi), m->g) / ls.pdf;
-                tmax = ls.infinite ? INFINITY : ls.dist * (1.0 - GEOMETRY_SHADOW_EPSILON);
+                /* Only an emitting surface needs the shadow ray to stop short. */
+                tmax = ls.infinite                     ? INFINITY
+                       : v3_length_sq(ls.n_light) > 0.0 ? ls.dist * (1.0 - GEOMETRY_SHADOW_EPSILON)
+                                                       : ls.dist;
             }
             if (rgb_is_black(Li) || !(f > 0.0))
                 continue;

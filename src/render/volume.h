@@ -39,7 +39,8 @@ typedef struct {
     transmittance_mode mode;
     double step;          /* in-scattering sample spacing along camera rays, voxels */
     double shadow_step;   /* marching step of shadow rays, voxels */
-    int light_samples;    /* samples of each light per scattering point */
+    int light_samples;    /* samples of each light per scattering point (delta
+                             lights: only with stochastic shadows, else 1) */
 } volume_settings;
 
 /* A ray crossing more interfaces than this is treated as lost (black): it
@@ -63,6 +64,9 @@ typedef struct {
     const medium *media;
     size_t medium_count;
     volume_settings settings;
+    /* Shadow transmittance is random (grid media with jittered or ratio
+     * estimators): only then do delta lights take more than one sample. */
+    bool stochastic_shadows;
 } volume_scene;
 
 /* Per-walk state: random numbers beyond the sampler's dimensions and counters. */

@@ -76,3 +76,13 @@ void scene_desc_free(scene_desc *sd)
     free(sd->strings);
     memset(sd, 0, sizeof *sd);
 }
+
+int scene_find_medium(const scene_desc *sd, const char *name)
+{
+    if (!name || !name[0])
+        return -1;
+    for (size_t i = 0; i < sd->medium_count; ++i)
+        if (strcmp(sd->media[i].name, name) == 0)
+            return (int)i;
+    return SCENE_MEDIUM_UNDEFINED;
+}

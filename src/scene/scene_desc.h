@@ -122,4 +122,9 @@ hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err);
 hz_status scene_parse_string(const char *text, const char *name, scene_desc *out, hz_error *err);
 void scene_desc_free(scene_desc *sd);
 
+/* The index in sd->media of the medium called `name`; -1 for "" or NULL
+ * (vacuum), SCENE_MEDIUM_UNDEFINED when no MakeNamedMedium defines it. */
+#define SCENE_MEDIUM_UNDEFINED (-2)
+int scene_find_medium(const scene_desc *sd, const char *name);
+
 #endif
