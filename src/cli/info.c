@@ -341,7 +341,7 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
     if (strcmp(sd.integrator.type, "singlescatter") == 0) {
         fprintf(out, "  %-15s %s, transmittance %s, step %g voxels, shadow step %g voxels\n",
                 "integrator", sd.integrator.type,
-                param_str(&sd.integrator.params, "transmittance", "ratio"),
+                param_str(&sd.integrator.params, "transmittance", "jittered"),
                 param_num(&sd.integrator.params, "stepsize", 1.0, &has),
                 param_num(&sd.integrator.params, "shadowstepsize", 2.0, &has));
     } else {

@@ -11,7 +11,9 @@
 
 volume_settings volume_settings_default(void)
 {
-    return (volume_settings){TRANSMITTANCE_RATIO, 1.0, 2.0, 1};
+    /* jittered: 8x lower RMSE than ratio tracking at equal time on
+     * scenes/smoke.pbrt (docs/media.md), with a bias below the noise. */
+    return (volume_settings){TRANSMITTANCE_JITTERED, 1.0, 2.0, 1};
 }
 
 hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_error *err)
@@ -22,7 +24,7 @@ hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_
     out->step = params_float(pl, "stepsize", out->step);
     out->shadow_step = params_float(pl, "shadowstepsize", out->shadow_step);
     out->light_samples = params_int(pl, "lightsamples", out->light_samples);
-    const char *mode = params_string(pl, "transmittance", "ratio");
+    const char *mode = params_string(pl, "transmittance", "jittered");
     if (!(out->step > 0.0 && isfinite(out->step)))
         params_reject(pl, "stepsize", "\"stepsize\" must be a positive number of voxels");
     if (!(out->shadow_step > 0.0 && isfinite(out->shadow_step)))

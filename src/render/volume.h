@@ -51,7 +51,7 @@ typedef struct {
 #define VOLUME_RR_THRESHOLD 1e-2
 
 /* Defaults, then `Integrator "singlescatter"` parameters ("float stepsize" 1,
- * "float shadowstepsize" 2, "string transmittance" "ratio", "integer
+ * "float shadowstepsize" 2, "string transmittance" "jittered", "integer
  * lightsamples" 1); errors name the entity's place. Does not call params_finish. */
 hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_error *err);
 volume_settings volume_settings_default(void);
