@@ -9,6 +9,7 @@
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include "cli/diff.h"
 #include "cli/info.h"
 #include "render/progress.h"
 #include "render/render_scene.h"
@@ -20,6 +21,8 @@ enum { EXIT_SCENE = 1, EXIT_USAGE = 2 };
 static const char usage_text[] =
     "usage: haze render SCENE.pbrt [options]\n"
     "       haze info FILE          describe a .vdb, .nvdb, .exr or .pbrt file\n"
+    "       haze diff A.exr B.exr [--channels R,G,B] [--metric NAME --threshold X]\n"
+    "                 [--heatmap OUT.exr|OUT.png]   compare two images (haze diff --help)\n"
     "       haze --help | --version\n"
     "\n"
     "render options:\n"
@@ -248,5 +251,7 @@ int main(int argc, char **argv)
     }
     if (!strcmp(cmd, "info"))
         return run_info(argc, argv);
-    return usage_error("unknown command '%s' (commands: render, info)", cmd);
+    if (!strcmp(cmd, "diff"))
+        return diff_command(argc - 1, argv + 1, stdout, stderr);
+    return usage_error("unknown command '%s' (commands: render, info, diff)", cmd);
 }

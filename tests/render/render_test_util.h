@@ -87,9 +87,12 @@ static inline pixel_eval eval_pixel(const render_scene *rs, double fx, double fy
     }
     render_counters counters = {0, 0, 0};
     rgb sum = rgb_grey(0.0);
+    /* The scene's sampler with this sample count (indices stay below it). */
+    sampler smp = *render_scene_sampler(rs);
+    sampler_set_spp(&smp, spp);
     for (int i = 0; i < spp; ++i) {
         sampler_state st;
-        sampler_start(render_scene_sampler(rs), (int)fx, (int)fy, i, &st);
+        sampler_start(&smp, (int)fx, (int)fy, i, &st);
         double depth;
         rgb L = render_scene_li(rs, &rd, &st, &depth, &counters);
         sum = rgb_add(sum, L);

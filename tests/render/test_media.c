@@ -116,9 +116,13 @@ static pstat pixel_stats_raw(const render_scene *rs, int px, int py, int spp)
     }
     render_counters counters = {0, 0, 0};
     double s[3] = {0, 0, 0}, s2[3] = {0, 0, 0};
+    /* The scene's sampler with this sample count (sample indices must stay
+     * below it). */
+    sampler smp = *render_scene_sampler(rs);
+    sampler_set_spp(&smp, spp);
     for (int i = 0; i < spp; ++i) {
         sampler_state st;
-        sampler_start(render_scene_sampler(rs), px, py, i, &st);
+        sampler_start(&smp, px, py, i, &st);
         double depth;
         rgb L = render_scene_li(rs, &rd, &st, &depth, &counters);
         for (int c = 0; c < 3; ++c) {
