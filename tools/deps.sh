@@ -12,6 +12,7 @@ packages=(
   libopenvdb-dev libnanovdb-dev  # volumes (OpenVDB 10 + NanoVDB)
   libboost-iostreams-dev         # needed by OpenVDB's headers, not pulled in by libopenvdb-dev
   libopenvdb-tools libnanovdb-tools  # vdb_print, nanovdb_print/convert for checking data
+  openimageio-tools  # idiff: haze diff is checked against it
 )
 
 missing=()
