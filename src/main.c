@@ -182,8 +182,8 @@ static int run_render(const cli *c)
         double rays = (double)(stats.camera_rays + stats.shadow_rays);
         char lookups[64] = "";
         if (stats.density_lookups > 0)
-            snprintf(lookups, sizeof lookups, "%.1f density lookups/pixel",
-                     (double)stats.density_lookups / ((double)stats.pixels > 0 ? (double)stats.pixels : 1.0));
+            snprintf(lookups, sizeof lookups, "%.1f density lookups/pixel", /* pixels > 0 here */
+                     (double)stats.density_lookups / (double)stats.pixels);
         printf("%s: %dx%d (%d x %d pixels rendered), %d spp, %d threads, %s, "
                "%.2f Mrays/s (%llu camera + %llu shadow), %s%speak memory %.1f MiB\n",
                fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,

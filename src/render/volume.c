@@ -112,6 +112,13 @@ static int strata(const grid_ray *gr, double t0, double t1, double step, double 
     return (int)n;
 }
 
+/* One tentative collision of ratio tracking: T times 1 - σ_t(density)/majorant. */
+static inline rgb ratio_step(rgb T, rgb sigma_t, double dens, double maj)
+{
+    return rgb_mul(T, rgb_make(1.0 - sigma_t.r * dens / maj, 1.0 - sigma_t.g * dens / maj,
+                               1.0 - sigma_t.b * dens / maj));
+}
+
 /* The majorant of sigma_t over the whole grid (largest channel). */
 static double grid_majorant(const medium *m)
 {
@@ -148,9 +155,7 @@ static rgb grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, v
             t -= log1p(-rng_uniform(&walk->r)) / maj;
             if (!(t < t1))
                 return T;
-            double dens = grid_ray_density(&gr, t, walk);
-            T = rgb_mul(T, rgb_make(1.0 - sigma_t.r * dens / maj, 1.0 - sigma_t.g * dens / maj,
-                                    1.0 - sigma_t.b * dens / maj));
+            T = ratio_step(T, sigma_t, grid_ray_density(&gr, t, walk), maj);
             if (!roulette(&T, &walk->r))
                 return T;
         }
@@ -203,49 +208,56 @@ rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double t
 
 /* ---- light arriving at a scattering point ---- */
 
-/* Σ over lights of p(wo, wi) L_i T_shadow / pdf at point x in medium `mi`,
- * light_samples samples each. */
-static rgb inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_state *u,
-                       volume_walk *walk)
+/* p(wo, wi) L_i T_shadow / pdf of light `l` at point x in medium `mi`,
+ * averaged over its samples. */
+static rgb light_inscattered(const volume_scene *vs, int mi, const light *l, vec3 x, vec3 wo,
+                             sampler_state *u, volume_walk *walk)
 {
     const medium *m = &vs->media[mi];
     rgb L = rgb_grey(0.0);
-    for (size_t i = 0; i < vs->light_count; ++i) {
-        const light *l = &vs->lights[i];
-        /* More samples of a delta light through deterministic transmittance
-         * would repeat the same computation. */
-        int n = light_is_delta(l) && !vs->stochastic_shadows ? 1 : vs->settings.light_samples;
-        for (int k = 0; k < n; ++k) {
-            vec2 uu = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(u);
-            vec3 wi;
-            rgb Li;
-            double f, tmax;
-            if (l->kind == LIGHT_INFINITE) {
-                /* A constant sky: sampling the phase function leaves only the
-                 * visibility to estimate (phase / pdf = 1). */
-                double pdf;
-                wi = hg_sample(wo, m->g, uu, &pdf);
-                Li = l->emit;
-                f = 1.0;
-                tmax = INFINITY;
-            } else {
-                light_sample ls;
-                if (!light_sample_li(l, x, v3(0.0, 0.0, 0.0), uu, &ls) || !(ls.pdf > 0.0))
-                    continue;
-                wi = ls.wi;
-                Li = ls.L;
-                f = hg_phase(v3_dot(wo, wi), m->g) / ls.pdf;
-                /* Only an emitting surface needs the shadow ray to stop short. */
-                tmax = ls.infinite                     ? INFINITY
-                       : v3_length_sq(ls.n_light) > 0.0 ? ls.dist * (1.0 - GEOMETRY_SHADOW_EPSILON)
-                                                       : ls.dist;
-            }
-            if (rgb_is_black(Li) || !(f > 0.0))
+    /* More samples of a delta light through deterministic transmittance
+     * would repeat the same computation. */
+    int n = light_is_delta(l) && !vs->stochastic_shadows ? 1 : vs->settings.light_samples;
+    for (int k = 0; k < n; ++k) {
+        vec2 uu = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(u);
+        vec3 wi;
+        rgb Li;
+        double f, tmax;
+        if (l->kind == LIGHT_INFINITE) {
+            /* A constant sky: sampling the phase function leaves only the
+             * visibility to estimate (phase / pdf = 1). */
+            double pdf;
+            wi = hg_sample(wo, m->g, uu, &pdf);
+            Li = l->emit;
+            f = 1.0;
+            tmax = INFINITY;
+        } else {
+            light_sample ls;
+            if (!light_sample_li(l, x, v3(0.0, 0.0, 0.0), uu, &ls) || !(ls.pdf > 0.0))
                 continue;
-            rgb T = volume_shadow_transmittance(vs, x, wi, 0.0, tmax, mi, walk);
-            L = rgb_add(L, rgb_scale(rgb_mul(Li, T), f / n));
+            wi = ls.wi;
+            Li = ls.L;
+            f = hg_phase(v3_dot(wo, wi), m->g) / ls.pdf;
+            /* Only an emitting surface needs the shadow ray to stop short. */
+            tmax = ls.infinite                     ? INFINITY
+                   : v3_length_sq(ls.n_light) > 0.0 ? ls.dist * (1.0 - GEOMETRY_SHADOW_EPSILON)
+                                                   : ls.dist;
         }
+        if (rgb_is_black(Li) || !(f > 0.0))
+            continue;
+        rgb T = volume_shadow_transmittance(vs, x, wi, 0.0, tmax, mi, walk);
+        L = rgb_add(L, rgb_scale(rgb_mul(Li, T), f / n));
     }
+    return L;
+}
+
+/* The same summed over every light. */
+static rgb inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_state *u,
+                       volume_walk *walk)
+{
+    rgb L = rgb_grey(0.0);
+    for (size_t i = 0; i < vs->light_count; ++i)
+        L = rgb_add(L, light_inscattered(vs, mi, &vs->lights[i], x, wo, u, walk));
     return L;
 }
 
@@ -422,10 +434,7 @@ static rgb scatter_at(const volume_scene *vs, int mi, const light *l, vec3 o, ve
                       sampler_state *u, volume_walk *walk)
 {
     const medium *m = &vs->media[mi];
-    volume_scene one = *vs;
-    one.lights = l;
-    one.light_count = 1;
-    rgb Ls = inscattered(&one, mi, v3_add(o, v3_scale(w, s)), v3_neg(w), u, walk);
+    rgb Ls = light_inscattered(vs, mi, l, v3_add(o, v3_scale(w, s)), v3_neg(w), u, walk);
     return rgb_mul(rgb_mul(m->sigma_s, rgb_exp_neg(medium_sigma_t(m), s)), Ls);
 }
 
@@ -521,10 +530,7 @@ static void grid_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double 
         for (int i = 0; i <= n && alive; ++i) {
             double t = i < n ? t0 + (i + rng_uniform(&walk->r)) * dt : t1;
             while (next < t && alive) {
-                double dens = grid_ray_density(&gr, next, walk);
-                T = rgb_mul(T, rgb_make(1.0 - sigma_t.r * dens / maj,
-                                        1.0 - sigma_t.g * dens / maj,
-                                        1.0 - sigma_t.b * dens / maj));
+                T = ratio_step(T, sigma_t, grid_ray_density(&gr, next, walk), maj);
                 alive = roulette(&T, &walk->r);
                 next -= log1p(-rng_uniform(&walk->r)) / maj;
             }
