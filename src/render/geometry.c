@@ -490,9 +490,10 @@ static void init_ray(struct RTCRay *r, vec3 o, vec3 d, double tmax)
     r->flags = 0;
 }
 
-bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax,
+bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
                         geom_hit *hit)
 {
+    (void)time; /* static scenes: one Embree time step */
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
@@ -524,8 +525,9 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
     return true;
 }
 
-bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax)
+bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double time)
 {
+    (void)time; /* static scenes: one Embree time step */
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRay r;

@@ -63,13 +63,14 @@ void geometry_destroy(geometry *g);
 size_t geometry_shape_count(const geometry *g);
 geom_shape *geometry_shape(geometry *g, size_t i);
 
-/* Closest hit of o + t d for t in (tmin, tmax). Interface surfaces are hit
+/* Closest hit of o + t d for t in (tmin, tmax) at scene time `time` (the
+ * ray's time, in TransformTimes units). Interface surfaces are hit
  * too (the integrator steps through them by raising tmin, which keeps the
  * ray's line exact). Thread-safe. */
-bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax,
+bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
                         geom_hit *hit);
-/* Any non-interface surface on o + t d, t in (0, tmax). Thread-safe. */
-bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax);
+/* Any non-interface surface on o + t d, t in (0, tmax), at scene time `time`. Thread-safe. */
+bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double time);
 
 /* The point at barycentrics (u, v) of triangle `prim` (u weights its second
  * vertex, v its third) with pbrt-v4's normals, in the shape's own space. */

@@ -31,7 +31,7 @@ static rgb shadow(const integrator_scene *sc, const geom_hit *h, int medium,
     }
     if (sc->medium_count == 0) {
         counters->shadow_rays++;
-        return rgb_grey(geometry_occluded(sc->geom, o, w, tmax) ? 0.0 : 1.0);
+        return rgb_grey(geometry_occluded(sc->geom, o, w, tmax, walk->time) ? 0.0 : 1.0);
     }
     if (!ls->infinite) {
         double dist = v3_length(w);
@@ -67,7 +67,7 @@ static rgb direct_diffuse(const integrator_scene *sc, const geom_hit *h, int med
          * sampler dimensions do not depend on what happened before. */
         vec2 u = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(st);
         light_sample ls;
-        if (!light_sample_li(l, h->p, ns, u, &ls))
+        if (!light_sample_li(l, h->p, ns, walk->time, u, &ls))
             continue;
         double cos_theta = v3_dot(ns, ls.wi);
         if (cos_theta <= 0.0 || ls.pdf <= 0.0)
@@ -87,7 +87,7 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
     *depth = INFINITY;
     vec3 o = r->o, d = r->d;
     int medium = r->medium;
-    volume_walk walk = {0};
+    volume_walk walk = {.time = r->time};
     if (sc->medium_count > 0)
         walk.r = rng_seeded(sampler_stream_seed(st));
     rgb beta = rgb_grey(1.0), L = rgb_grey(0.0);
@@ -96,7 +96,7 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
      * starts past the surface (tmin). */
     double tmin = 0.0, t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
-        bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, &h);
+        bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, r->time, &h);
         if (medium >= 0) {
             volume_segment(sc, medium, o, d, t_start, hit ? h.t : INFINITY, &beta, &L, st, &walk);
             if (rgb_is_black(beta))

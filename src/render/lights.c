@@ -392,8 +392,9 @@ static double toward_point(vec3 p_light, vec3 p, light_sample *out)
     return d2;
 }
 
-bool light_sample_li(const light *l, vec3 p, vec3 n, vec2 u, light_sample *out)
+bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_sample *out)
 {
+    (void)time; /* lights are static */
     out->infinite = false;
     out->n_light = v3(0, 0, 0);
     switch (l->kind) {

@@ -79,8 +79,9 @@ typedef struct {
 
 /* `n` is the unit normal of the surface at `p` on the side radiance is wanted
  * (used for cosine sampling of the infinite light). Returns false when the
- * sample carries no light. `u` in [0,1)^2 (ignored by delta lights). */
-bool light_sample_li(const light *l, vec3 p, vec3 n, vec2 u, light_sample *out);
+ * sample carries no light. `time` is the ray's scene time (area lights move
+ * with their shapes). `u` in [0,1)^2 (ignored by delta lights). */
+bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_sample *out);
 
 /* Radiance leaving an area light's surface point with unit normal `n` toward `w`. */
 rgb light_area_le(const light *l, vec3 n, vec3 w);

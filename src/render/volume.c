@@ -186,7 +186,7 @@ rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double t
     double t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
-        bool hit = geometry_intersect(vs->geom, o, w, tmin, tmax, &h);
+        bool hit = geometry_intersect(vs->geom, o, w, tmin, tmax, walk->time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE)
             return rgb_grey(0.0);
         double t_end = hit ? h.t : tmax;
@@ -233,7 +233,7 @@ static rgb light_inscattered(const volume_scene *vs, int mi, const light *l, vec
             tmax = INFINITY;
         } else {
             light_sample ls;
-            if (!light_sample_li(l, x, v3(0.0, 0.0, 0.0), uu, &ls) || !(ls.pdf > 0.0))
+            if (!light_sample_li(l, x, v3(0.0, 0.0, 0.0), walk->time, uu, &ls) || !(ls.pdf > 0.0))
                 continue;
             wi = ls.wi;
             Li = ls.L;

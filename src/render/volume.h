@@ -71,6 +71,7 @@ typedef struct {
 
 /* Per-walk state: random numbers beyond the sampler's dimensions and counters. */
 typedef struct {
+    double time;          /* the camera ray's scene time: shadow rays and lookups use it */
     rng r;
     uint64_t lookups;     /* density lookups */
     uint64_t shadow_rays;

@@ -178,7 +178,7 @@ static void test_cone_samples(void **state)
         for (int i = 0; i < n_us; ++i)
             for (int j = 0; j < n_us; ++j) {
                 light_sample ls;
-                if (!light_sample_li(&s.l, p, axis, v2(us[i], us[j]), &ls)) {
+                if (!light_sample_li(&s.l, p, axis, 0.0, v2(us[i], us[j]), &ls)) {
                     assert_true(us[i] > 0.99); /* only the rim may face away by rounding */
                     continue;
                 }
@@ -217,7 +217,7 @@ static double grid_irradiance(const light *l, vec3 p, vec3 n, int grid)
         for (int j = 0; j < grid; ++j) {
             light_sample ls;
             vec2 u = v2((i + 0.5) / grid, (j + 0.5) / grid);
-            if (!light_sample_li(l, p, n, u, &ls))
+            if (!light_sample_li(l, p, n, 0.0, u, &ls))
                 continue;
             double cos_t = v3_dot(n, ls.wi);
             if (cos_t > 0.0)
@@ -244,7 +244,7 @@ static void test_one_sided_and_inside(void **state)
     expect_close(out_only.l.area.sphere_radius, 2.0, 1e-15, 0, "radius", 0, 0);
     light_sample ls;
     for (int i = 0; i < 16; ++i)
-        assert_false(light_sample_li(&out_only.l, outside, n, v2(i / 16.0, 0.3), &ls));
+        assert_false(light_sample_li(&out_only.l, outside, n, 0.0, v2(i / 16.0, 0.3), &ls));
     /* Inside, from the centre: area sampling (the cone pdf would be wrong). */
     expect_close(grid_irradiance(&out_only.l, c, n, 64), HZ_PI * 3.0, 1e-3, 0, "inside", 0, 0);
     expect_close(grid_irradiance(&out_only.l, v3(1.5, 2.7, 3.9), n, 256), HZ_PI * 3.0, 0.02, 0,
