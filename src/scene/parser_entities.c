@@ -237,6 +237,7 @@ static hz_status d_make_named_medium(parser *ps, const token *d, hz_error *err)
     }
     m.name = (char *)name;
     m.world_from_medium = ps->gs.ctm[0];
+    m.world_from_medium_end = ps->gs.ctm[1];
     sd->media = scene_grow_implicit(sd->media, sd->medium_count, sizeof *sd->media);
     sd->media[sd->medium_count++] = m;
     return HZ_OK;

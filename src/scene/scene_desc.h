@@ -73,7 +73,8 @@ typedef struct {
 typedef struct {
     char *name;
     scene_entity entity;         /* "homogeneous", "nanovdb", ... */
-    transform world_from_medium; /* pbrt-v4 uses only the start transform of media */
+    transform world_from_medium; /* start time (pbrt-v4 uses only this one) */
+    transform world_from_medium_end; /* end time: haze moves media with it */
 } medium_entity;
 
 typedef struct {
