@@ -109,9 +109,11 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     return HZ_OK;
 }
 
-hz_status medium_from_entity(medium_entity *e, transform render_from_world, medium *out,
-                             hz_error *err)
+hz_status medium_from_entity(medium_entity *e, transform render_from_world, double time_start,
+                             double time_end, medium *out, hz_error *err)
 {
+    (void)time_start; /* media are static for now */
+    (void)time_end;
     memset(out, 0, sizeof *out);
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";

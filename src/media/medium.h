@@ -49,8 +49,10 @@ typedef struct {
  * files, a missing grid, non-float grids, negative coefficients and |g| >= 1
  * are errors naming the entity's file:line:column; unused parameters too.
  * Emission (pbrt-v4's "Le") is refused unless it is zero. */
-hz_status medium_from_entity(medium_entity *e, transform render_from_world, medium *out,
-                             hz_error *err);
+/* `time_start`/`time_end` are the scene's TransformTimes (a medium whose start and
+ * end transforms differ moves between them). */
+hz_status medium_from_entity(medium_entity *e, transform render_from_world, double time_start,
+                             double time_end, medium *out, hz_error *err);
 void medium_free(medium *m);
 
 static inline rgb medium_sigma_t(const medium *m) { return rgb_add(m->sigma_a, m->sigma_s); }

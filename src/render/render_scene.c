@@ -153,7 +153,8 @@ static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_
     if (!rs->media)
         return hz_fail(err, "out of memory");
     for (size_t i = 0; i < sd->medium_count; ++i) {
-        if (medium_from_entity(&sd->media[i], render_from_world, &rs->media[i], err) != HZ_OK)
+        if (medium_from_entity(&sd->media[i], render_from_world, sd->transform_start_time,
+                               sd->transform_end_time, &rs->media[i], err) != HZ_OK)
             return HZ_ERROR;
         rs->medium_count++;
     }

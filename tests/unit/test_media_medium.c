@@ -29,7 +29,8 @@ static hz_status build_named(const char *src, const char *name, transform render
     if (scene_parse_string(src, name, sd, &perr) != HZ_OK)
         fail_msg("parse error: %s", perr.message);
     assert_int_equal(sd->medium_count, 1);
-    hz_status st = medium_from_entity(&sd->media[0], render_from_world, m, err);
+    hz_status st = medium_from_entity(&sd->media[0], render_from_world, sd->transform_start_time,
+                                      sd->transform_end_time, m, err);
     if (st != HZ_OK) {
         /* A failed build leaves a medium that medium_free accepts. */
         medium_free(m);
