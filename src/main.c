@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "cli/diff.h"
@@ -105,7 +106,9 @@ static int parse_render_args(int argc, char **argv, cli *c)
     return -1;
 }
 
-/* Fails early, before minutes of rendering, when the output cannot be written. */
+/* Fails early, before minutes of rendering, when the output cannot be written:
+ * creates (and removes) a probe file where the output's temporary file will go,
+ * which also catches read-only file systems that access() does not see for root. */
 static int check_output_dir(const char *path, hz_error *err)
 {
     char dir[PATH_MAX];
@@ -116,11 +119,23 @@ static int check_output_dir(const char *path, hz_error *err)
         snprintf(dir, sizeof dir, "/");
     else
         snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    if (access(dir, W_OK) != 0) {
-        hz_fail(err, "cannot write '%s': directory '%s' %s", path, dir,
-                errno == ENOENT ? "does not exist" : "is not writable");
+    char probe[PATH_MAX + 32];
+    snprintf(probe, sizeof probe, "%s/.haze-probe-XXXXXX", dir);
+    int fd = mkstemp(probe);
+    if (fd < 0) {
+        int e = errno;
+        struct stat st;
+        if (stat(dir, &st) != 0)
+            hz_fail(err, "cannot write '%s': directory '%s' does not exist", path, dir);
+        else if (!S_ISDIR(st.st_mode))
+            hz_fail(err, "cannot write '%s': '%s' is not a directory", path, dir);
+        else
+            hz_fail(err, "cannot write '%s': directory '%s' is not writable (%s)", path, dir,
+                    strerror(e));
         return -1;
     }
+    close(fd);
+    unlink(probe);
     return 0;
 }
 

@@ -1,9 +1,11 @@
+#define _POSIX_C_SOURCE 200809L
 #include "scene/lexer.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 void lexer_init(lexer *lx, const char *src, size_t len, const char *file)
 {
@@ -123,6 +125,12 @@ static hz_status lex_word(lexer *lx, token *tok, hz_error *err)
     tok->len = lx->pos - start;
     if (!numeric) {
         tok->kind = TOK_IDENT;
+        /* Bare words are never values; these look like ones. */
+        static const char *const nonfinite[] = {"nan", "inf", "infinity"};
+        for (size_t i = 0; i < sizeof nonfinite / sizeof nonfinite[0]; ++i)
+            if (tok->len == strlen(nonfinite[i]) && strncasecmp(tok->text, nonfinite[i], tok->len) == 0)
+                return hz_fail_at(err, tok->loc, "'%.*s' is not a number: scene values must be finite",
+                                  (int)tok->len, tok->text);
         return HZ_OK;
     }
     tok->kind = TOK_NUMBER;

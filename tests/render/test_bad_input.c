@@ -1,0 +1,137 @@
+/* The bad-input corpus (tests/bad-input): every malformed scene or file makes
+ * haze exit with the status its first line expects ("# expect: STATUS TEXT"),
+ * print exactly one line that contains TEXT and names the place, and leave an
+ * existing good output file untouched. */
+#define _POSIX_C_SOURCE 200809L
+#include <dirent.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+#include "render/cli_util.h"
+
+#define CORPUS HAZE_TESTS "/bad-input"
+
+static const char good_bytes[] = "a good image that a failed run must not replace\n";
+
+static void write_good_output(const char *path) { write_text_file(path, good_bytes); }
+
+static void assert_good_output_kept(const char *path)
+{
+    size_t n = 0;
+    unsigned char *b = read_whole_file(path, &n);
+    assert_non_null(b);
+    assert_int_equal(n, strlen(good_bytes));
+    assert_memory_equal(b, good_bytes, n);
+    free(b);
+}
+
+/* Exactly one line, newline-terminated. */
+static void assert_one_line(const char *out)
+{
+    const char *nl = strchr(out, '\n');
+    if (!nl || nl[1] != '\0')
+        fail_msg("expected one line of output, got:\n%s", out);
+}
+
+static int compare_names(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static void test_scene_corpus(void **state)
+{
+    (void)state;
+    DIR *d = opendir(CORPUS);
+    assert_non_null(d);
+    char *names[256];
+    size_t count = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL) {
+        size_t n = strlen(e->d_name);
+        if (n > 5 && strcmp(e->d_name + n - 5, ".pbrt") == 0 && count < 256)
+            names[count++] = strdup(e->d_name);
+    }
+    closedir(d);
+    qsort(names, count, sizeof names[0], compare_names);
+    assert_true(count >= 15);
+    const char *good = HAZE_TMP "/bad_input_good.exr";
+    for (size_t i = 0; i < count; ++i) {
+        char path[1024], line[256], expect_text[200];
+        int expect_status = -1;
+        snprintf(path, sizeof path, CORPUS "/%s", names[i]);
+        FILE *f = fopen(path, "r");
+        assert_non_null(f);
+        assert_non_null(fgets(line, sizeof line, f));
+        fclose(f);
+        if (sscanf(line, "# expect: %d %199[^\n]", &expect_status, expect_text) != 2)
+            fail_msg("%s: first line must be '# expect: STATUS TEXT'", names[i]);
+        write_good_output(good);
+        char args[2048], out[8192];
+        snprintf(args, sizeof args, "render '%s' -o '%s' --quiet", path, good);
+        int status = run_haze(args, out, sizeof out);
+        print_message("%-28s exit %d: %s", names[i], status, out);
+        if (status != expect_status)
+            fail_msg("%s: exit status %d, expected %d; output: %s", names[i], status,
+                     expect_status, out);
+        assert_one_line(out);
+        if (strstr(out, expect_text) == NULL)
+            fail_msg("%s: message lacks '%s': %s", names[i], expect_text, out);
+        /* Scene errors name the file (the scene or the file it includes). */
+        if (strstr(out, ".pbrt:") == NULL && strstr(out, ".inc:") == NULL)
+            fail_msg("%s: message names no scene place: %s", names[i], out);
+        assert_good_output_kept(good);
+        free(names[i]);
+    }
+}
+
+/* Corrupt images given to haze diff: exit 2 (unreadable input), one line. */
+static void test_corrupt_exr_diff(void **state)
+{
+    (void)state;
+    static const char *files[] = {"truncated.exr", "not-an.exr", "no-such.exr"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        char args[1024], out[4096];
+        snprintf(args, sizeof args, "diff '" CORPUS "/data/%s' '" CORPUS "/data/%s'", files[i],
+                 files[i]);
+        int status = run_haze(args, out, sizeof out);
+        print_message("%-28s exit %d: %s", files[i], status, out);
+        assert_int_equal(status, 2);
+        assert_one_line(out);
+        assert_non_null(strstr(out, files[i]));
+    }
+}
+
+/* An output that cannot be written is refused before rendering; a good file
+ * at the target of a failed run stays. */
+static void test_unwritable_output(void **state)
+{
+    (void)state;
+    char out[4096];
+    const char *scene = HAZE_SCENES "/orthographic.pbrt";
+    static const char *targets[] = {"/nonexistent-haze-dir/x.exr", "/proc/haze-test.exr"};
+    for (size_t i = 0; i < 2; ++i) {
+        char args[2048];
+        snprintf(args, sizeof args, "render '%s' --spp 1 -o '%s' --quiet", scene, targets[i]);
+        int status = run_haze(args, out, sizeof out);
+        print_message("%s: exit %d: %s", targets[i], status, out);
+        assert_int_equal(status, 1);
+        assert_one_line(out);
+        assert_non_null(strstr(out, "cannot write"));
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_scene_corpus),
+        cmocka_unit_test(test_corrupt_exr_diff),
+        cmocka_unit_test(test_unwritable_output),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
