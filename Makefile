@@ -6,7 +6,7 @@ SCENE      ?= scenes/foggy-dof.pbrt
 # Output: out/NAME.exr and out/NAME.png, NAME the scene file's name.
 OUT        ?= out/$(basename $(notdir $(SCENE)))
 
-.PHONY: all deps configure render test test-asan clean
+.PHONY: all deps configure render test test-asan update-refs clean
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -28,6 +28,11 @@ test-asan: deps
 	@test -f $(BUILD_ASAN)/CMakeCache.txt || cmake -S . -B $(BUILD_ASAN) -DCMAKE_BUILD_TYPE=Debug -DHAZE_SANITIZE=ON
 	cmake --build $(BUILD_ASAN) -j $(JOBS)
 	cd $(BUILD_ASAN) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
+
+# Re-render the regression references (REF_SPP=4096 by default) and print how
+# each one changed; review, then commit them. NAMES="smoke motion" limits it.
+update-refs: all
+	sh tests/regression/update-refs.sh $(BUILD)/haze $(NAMES)
 
 clean:
 	rm -rf $(BUILD) $(BUILD_ASAN)

@@ -23,6 +23,7 @@ static const char usage_text[] =
     "usage: haze render SCENE.pbrt [options]\n"
     "       haze info FILE          describe a .vdb, .nvdb, .exr or .pbrt file\n"
     "       haze diff A.exr B.exr [--channels R,G,B] [--metric NAME --threshold X]\n"
+    "                 [--ztest [--alpha A] [--accept F]]\n"
     "                 [--heatmap OUT.exr|OUT.png]   compare two images (haze diff --help)\n"
     "       haze --help | --version\n"
     "\n"

@@ -14,14 +14,21 @@
 
 static const char diff_usage[] =
     "usage: haze diff A.exr B.exr [--channels R,G,B] [--metric NAME --threshold X]\n"
-    "                 [--heatmap OUT.exr|OUT.png]\n"
-    "  compares A with the reference B over the channels both have (or --channels)\n"
+    "                 [--ztest [--alpha A] [--accept F]] [--heatmap OUT.exr|OUT.png]\n"
+    "  compares A with the reference B over the channels both have (or --channels;\n"
+    "  Variance.* and SampleCount.* only when named)\n"
     "  --channels LIST        comma-separated channel names, each present in both\n"
     "  --metric NAME          mse, rmse, relmse, mae, max or psnr (with --threshold):\n"
     "  --threshold X          exit 1 when the overall metric exceeds X (psnr: is below X)\n"
-    "  --heatmap FILE         write the per-pixel mean |A-B| over the channels as a\n"
-    "                         one-channel EXR, or a PNG (max error = white) for *.png\n"
-    "  exit status: 0 compared (check passed), 1 check failed, 2 usage or file error\n";
+    "  --ztest                z-test A against B's mean and Variance.R/G/B per pixel,\n"
+    "                         8x8 block and image (Sidak-corrected); exit 1 when it fails\n"
+    "  --alpha A              family-wise significance level of --ztest (default 0.01)\n"
+    "  --accept F             fraction of pixel and of block tests that must pass\n"
+    "                         (default 0.999); every image test must pass\n"
+    "  --heatmap FILE         write the per-pixel mean |A-B| over the channels (with\n"
+    "                         --ztest: the largest |z|) as a one-channel EXR, or a\n"
+    "                         PNG (max = white) for *.png\n"
+    "  exit status: 0 compared (checks passed), 1 a check failed, 2 usage or file error\n";
 
 static const struct {
     const char *name;
@@ -39,11 +46,24 @@ static const char *metric_name(diff_metric m)
     return "none";
 }
 
+/* A finite number, all of `val`. */
+static hz_status parse_number(const char *opt, const char *val, double *x, hz_error *err)
+{
+    char *end;
+    errno = 0;
+    *x = strtod(val, &end);
+    if (errno || end == val || *end != '\0' || !isfinite(*x))
+        return hz_fail(err, "%s needs a finite number, not '%s'", opt, val);
+    return HZ_OK;
+}
+
 hz_status diff_parse_args(int argc, char **argv, diff_options *opt, bool *help, hz_error *err)
 {
     memset(opt, 0, sizeof *opt);
+    opt->alpha = 0.01;
+    opt->accept = 0.999;
     *help = false;
-    bool have_threshold = false;
+    bool have_threshold = false, have_alpha = false, have_accept = false;
     for (int i = 1; i < argc; ++i) {
         const char *a = argv[i];
         const char *val = i + 1 < argc ? argv[i + 1] : NULL;
@@ -51,8 +71,24 @@ hz_status diff_parse_args(int argc, char **argv, diff_options *opt, bool *help, 
             *help = true;
             return HZ_OK;
         }
-        if (!strcmp(a, "--channels") || !strcmp(a, "--metric") || !strcmp(a, "--threshold") ||
-            !strcmp(a, "--heatmap")) {
+        if (!strcmp(a, "--ztest")) {
+            opt->ztest = true;
+        } else if (!strcmp(a, "--alpha") || !strcmp(a, "--accept")) {
+            if (!val)
+                return hz_fail(err, "option %s needs a value", a);
+            ++i;
+            bool is_alpha = !strcmp(a, "--alpha");
+            double x;
+            if (parse_number(a, val, &x, err) != HZ_OK)
+                return HZ_ERROR;
+            if (is_alpha && !(x > 0.0 && x < 1.0))
+                return hz_fail(err, "--alpha must lie strictly between 0 and 1, not %s", val);
+            if (!is_alpha && !(x >= 0.0 && x <= 1.0))
+                return hz_fail(err, "--accept must lie in [0, 1], not %s", val);
+            *(is_alpha ? &opt->alpha : &opt->accept) = x;
+            *(is_alpha ? &have_alpha : &have_accept) = true;
+        } else if (!strcmp(a, "--channels") || !strcmp(a, "--metric") || !strcmp(a, "--threshold") ||
+                   !strcmp(a, "--heatmap")) {
             if (!val)
                 return hz_fail(err, "option %s needs a value", a);
             ++i;
@@ -74,12 +110,8 @@ hz_status diff_parse_args(int argc, char **argv, diff_options *opt, bool *help, 
                                    "unknown metric '%s' (metrics: mse, rmse, relmse, mae, max, psnr)",
                                    val);
             } else {
-                char *end;
-                errno = 0;
-                double x = strtod(val, &end);
-                if (errno || end == val || *end != '\0' || !isfinite(x))
-                    return hz_fail(err, "--threshold needs a finite number, not '%s'", val);
-                opt->threshold = x;
+                if (parse_number("--threshold", val, &opt->threshold, err) != HZ_OK)
+                    return HZ_ERROR;
                 have_threshold = true;
             }
         } else if (a[0] == '-' && a[1] != '\0') {
@@ -98,6 +130,8 @@ hz_status diff_parse_args(int argc, char **argv, diff_options *opt, bool *help, 
         return hz_fail(err, "--metric %s needs --threshold X", metric_name(opt->metric));
     if (opt->metric == DIFF_METRIC_NONE && have_threshold)
         return hz_fail(err, "--threshold needs --metric NAME");
+    if ((have_alpha || have_accept) && !opt->ztest)
+        return hz_fail(err, "%s needs --ztest", have_alpha ? "--alpha" : "--accept");
     return HZ_OK;
 }
 
@@ -228,8 +262,32 @@ static bool ends_with_png(const char *path)
     return n >= 4 && !strcasecmp(path + n - 4, ".png");
 }
 
-static hz_status write_heatmap(const char *path, const exr_image *a, const diff_stats *st, int nc,
-                               hz_error *err)
+/* The per-pixel mean over the chosen channels of |a-b| (NaN where no pair is
+ * finite); NULL when out of memory. */
+static float *mean_abs_heat(const exr_image *a, const diff_stats *st, int nc)
+{
+    size_t npix = (size_t)a->width * (size_t)a->height;
+    float *px = malloc(npix * sizeof *px);
+    if (!px)
+        return NULL;
+    for (size_t i = 0; i < npix; i++) {
+        double sum = 0.0;
+        int n = 0;
+        for (int c = 0; c < nc; c++) {
+            float va = st[c].a[i], vb = st[c].b[i];
+            if (isfinite(va) && isfinite(vb)) {
+                sum += fabs((double)va - (double)vb);
+                n++;
+            }
+        }
+        px[i] = n ? (float)(sum / n) : NAN;
+    }
+    return px;
+}
+
+/* One-channel ("Y") float EXR in a's windows, or a grey PNG scaled so the
+ * largest finite value is white (+inf white too, NaN red). */
+static hz_status write_heatmap(const char *path, const exr_image *a, const float *values, hz_error *err)
 {
     exr_image h;
     if (exr_image_alloc(&h, a->width, a->height, 1, err) != HZ_OK)
@@ -242,21 +300,11 @@ static hz_status write_heatmap(const char *path, const exr_image *a, const diff_
     h.channels[0].half = false;
     float *px = h.channels[0].pixels;
     size_t npix = (size_t)a->width * (size_t)a->height;
+    memcpy(px, values, npix * sizeof *px);
     float peak = 0.0f;
-    for (size_t i = 0; i < npix; i++) {
-        double sum = 0.0;
-        int n = 0;
-        for (int c = 0; c < nc; c++) {
-            float va = st[c].a[i], vb = st[c].b[i];
-            if (isfinite(va) && isfinite(vb)) {
-                sum += fabs((double)va - (double)vb);
-                n++;
-            }
-        }
-        px[i] = n ? (float)(sum / n) : NAN;
-        if (n && px[i] > peak)
+    for (size_t i = 0; i < npix; i++)
+        if (isfinite(px[i]) && px[i] > peak)
             peak = px[i];
-    }
     hz_status rc;
     if (!ends_with_png(path)) {
         rc = exr_write(path, &h, err);
@@ -272,7 +320,7 @@ static hz_status write_heatmap(const char *path, const exr_image *a, const diff_
                 rgb[3 * i + 1] = rgb[3 * i + 2] = 0;
                 continue;
             }
-            double v = peak > 0.0f ? px[i] / peak : 0.0;
+            double v = peak > 0.0f ? px[i] / peak : (px[i] > 0.0f ? 1.0 : 0.0);
             uint8_t g = (uint8_t)(v >= 1.0 ? 255 : v * 255.0 + 0.5);
             rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = g;
         }
@@ -281,6 +329,354 @@ static hz_status write_heatmap(const char *path, const exr_image *a, const diff_
     }
     exr_image_free(&h);
     return rc;
+}
+
+/* ---------------------------------------------------------------- z-test */
+
+enum { ZT_BLOCK = 8, ZT_LIST = 10 };
+
+typedef enum { ZT_PIXEL, ZT_BLOCKS, ZT_IMAGE } zt_scale_kind;
+
+typedef struct {
+    double z;           /* NaN: A is not finite (or has no sample) there: fails */
+    int x0, y0, x1, y1; /* absolute pixel coordinates, inclusive */
+    int channel;        /* index into the z-test channels */
+    double d, sd;       /* a - b (blocks, image: the sum) and sqrt of its variance */
+    double a, b;        /* pixel tests: the two values */
+} zt_test;
+
+typedef struct {
+    size_t tests, failed, limit;
+    bool have_worst;
+    zt_test worst;
+    int nlist;
+    zt_test list[ZT_LIST]; /* the worst failing tests, worst first */
+} zt_scale;
+
+typedef struct {
+    char name[64];
+    const float *a, *b, *var_b;
+    const float *var_a; /* A's own Variance.<c>, or NULL */
+} zt_channel;
+
+typedef struct {
+    zt_channel ch[3];
+    int nch;
+    const float *count_a, *count_b; /* both, or neither */
+    double level;                   /* Sidak per-test level */
+    zt_scale scale[3];              /* indexed by zt_scale_kind */
+    double image_z[3];
+} ztest;
+
+/* How bad a test is: |z|, NaN counting as infinite. */
+static double zt_key(double z) { return isnan(z) ? INFINITY : fabs(z); }
+
+static bool zt_fails(double z, double level)
+{
+    return isnan(z) || erfc(fabs(z) / sqrt(2.0)) < level;
+}
+
+/* The |z| above which a test fails: erfc(z / sqrt 2) = level, by bisection. */
+static double zt_critical(double level)
+{
+    double lo = 0.0, hi = 50.0;
+    for (int i = 0; i < 200 && hi - lo > 1e-12; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (erfc(mid / sqrt(2.0)) >= level)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return hi;
+}
+
+static void zt_record(zt_scale *s, const zt_test *t, double level)
+{
+    s->tests++;
+    double key = zt_key(t->z);
+    if (!s->have_worst || key > zt_key(s->worst.z)) {
+        s->worst = *t;
+        s->have_worst = true;
+    }
+    if (!zt_fails(t->z, level))
+        return;
+    s->failed++;
+    int at = s->nlist;
+    while (at > 0 && key > zt_key(s->list[at - 1].z))
+        at--;
+    if (at >= ZT_LIST)
+        return;
+    int last = s->nlist < ZT_LIST ? s->nlist : ZT_LIST - 1;
+    memmove(&s->list[at + 1], &s->list[at], (size_t)(last - at) * sizeof s->list[0]);
+    s->list[at] = *t;
+    if (s->nlist < ZT_LIST)
+        s->nlist++;
+}
+
+/* A reference statistic must be finite and not negative. */
+static hz_status zt_check_values(const char *file, const char *channel, const float *v,
+                                 const exr_image *img, bool sign_free, hz_error *err)
+{
+    size_t npix = (size_t)img->width * (size_t)img->height;
+    for (size_t i = 0; i < npix; i++)
+        if (!isfinite(v[i]) || (!sign_free && v[i] < 0.0f))
+            return hz_fail(err, "--ztest: %s: %s is %g at pixel (%d, %d); the test needs %s values",
+                           file, channel, (double)v[i], img->data_x0 + (int)(i % (size_t)img->width),
+                           img->data_y0 + (int)(i / (size_t)img->width),
+                           sign_free ? "finite" : "finite, non-negative");
+    return HZ_OK;
+}
+
+/* Picks the channels and the source of A's variance; validates B. */
+static hz_status zt_prepare(const diff_options *opt, const exr_image *a, const exr_image *b,
+                            const diff_stats *st, int nc, ztest *zt, hz_error *err)
+{
+    bool any_rgb = false;
+    static const char *const order[] = {"R", "G", "B"}; /* whatever the file's order */
+    for (int o = 0; o < 3; o++) {
+        int c = 0;
+        while (c < nc && strcmp(st[c].name, order[o]) != 0)
+            c++;
+        if (c == nc)
+            continue;
+        any_rgb = true;
+        char vname[96];
+        snprintf(vname, sizeof vname, "Variance.%s", st[c].name);
+        const exr_channel *vb = exr_find_channel(b, vname);
+        if (!vb)
+            continue;
+        zt_channel *z = &zt->ch[zt->nch++];
+        snprintf(z->name, sizeof z->name, "%s", st[c].name);
+        z->a = st[c].a;
+        z->b = st[c].b;
+        z->var_b = vb->pixels;
+        if (zt_check_values(opt->b, st[c].name, z->b, b, true, err) != HZ_OK ||
+            zt_check_values(opt->b, vname, z->var_b, b, false, err) != HZ_OK)
+            return HZ_ERROR;
+    }
+    if (!any_rgb)
+        return hz_fail(err, "--ztest tests R, G and B, and none of them is compared");
+    if (zt->nch == 0)
+        return hz_fail(err, "--ztest: the reference %s has no Variance.R, Variance.G or Variance.B "
+                            "(render it with Film \"bool writevariance\" true)", opt->b);
+    const exr_channel *ca = exr_find_channel(a, "SampleCount.Y");
+    const exr_channel *cb = exr_find_channel(b, "SampleCount.Y");
+    if (ca && cb) {
+        zt->count_a = ca->pixels;
+        zt->count_b = cb->pixels;
+        if (zt_check_values(opt->a, "SampleCount.Y", ca->pixels, a, false, err) != HZ_OK ||
+            zt_check_values(opt->b, "SampleCount.Y", cb->pixels, b, false, err) != HZ_OK)
+            return HZ_ERROR;
+    }
+    for (int c = 0; c < zt->nch; c++) {
+        char vname[96];
+        snprintf(vname, sizeof vname, "Variance.%s", zt->ch[c].name);
+        const exr_channel *va = exr_find_channel(a, vname);
+        if (va && zt_check_values(opt->a, vname, va->pixels, a, false, err) != HZ_OK)
+            return HZ_ERROR;
+        if (!va && !zt->count_a)
+            return hz_fail(err,
+                           "--ztest: no variance for %s: %s has no SampleCount.Y and %s has no %s "
+                           "(render both with Film \"bool writesamplecount\" true, or A with "
+                           "\"bool writevariance\" true)",
+                           opt->a, ca ? opt->b : opt->a, opt->a, vname);
+        zt->ch[c].var_a = va ? va->pixels : NULL;
+    }
+    return HZ_OK;
+}
+
+/* The tests of one channel; heat[i] keeps the largest |z| of pixel i. */
+static hz_status zt_channel_tests(const exr_image *a, ztest *zt, int c, float *heat, hz_error *err)
+{
+    const zt_channel *ch = &zt->ch[c];
+    int w = a->width, h = a->height;
+    int bw = (w + ZT_BLOCK - 1) / ZT_BLOCK, bh = (h + ZT_BLOCK - 1) / ZT_BLOCK;
+    size_t nblocks = (size_t)bw * (size_t)bh;
+    double *bd = calloc(nblocks, sizeof *bd), *bv = calloc(nblocks, sizeof *bv);
+    bool *bbad = calloc(nblocks, sizeof *bbad);
+    if (!bd || !bv || !bbad) {
+        free(bd);
+        free(bv);
+        free(bbad);
+        return hz_fail(err, "out of memory");
+    }
+    double sum_d = 0.0, sum_v = 0.0;
+    bool any_bad = false;
+    for (int y = 0; y < h; y++)
+        for (int x = 0; x < w; x++) {
+            size_t i = (size_t)y * (size_t)w + (size_t)x;
+            double va, vb = ch->var_b[i], av = ch->a[i], b = ch->b[i];
+            bool bad = !isfinite(av);
+            /* The reference's per-sample variance scaled to A's count (robust
+             * when A has few samples), or A's own variance when larger: a rare
+             * event that A caught and the reference's samples missed shows in
+             * A's own spread, not in B's. */
+            va = 0.0;
+            if (zt->count_a) {
+                if (zt->count_b[i] == 0.0f) {
+                    va = 0.0; /* B has no sample: its mean and variance are 0 */
+                } else if (zt->count_a[i] == 0.0f) {
+                    va = NAN;
+                    bad = true; /* A has no sample where B has */
+                } else {
+                    va = vb * (double)zt->count_b[i] / (double)zt->count_a[i];
+                }
+            }
+            if (ch->var_a && !bad)
+                va = fmax(va, ch->var_a[i]);
+            double d = av - b, floor_sd = 1e-5 * fmax(fabs(av), fabs(b));
+            double var = va + vb + floor_sd * floor_sd;
+            zt_test t = {0};
+            t.z = bad ? NAN : (d == 0.0 ? 0.0 : d / sqrt(var));
+            t.x0 = t.x1 = a->data_x0 + x;
+            t.y0 = t.y1 = a->data_y0 + y;
+            t.channel = c;
+            t.d = d;
+            t.sd = sqrt(var);
+            t.a = av;
+            t.b = b;
+            zt_record(&zt->scale[ZT_PIXEL], &t, zt->level);
+            float k = (float)zt_key(t.z);
+            if (k > heat[i])
+                heat[i] = k;
+            size_t bi = (size_t)(y / ZT_BLOCK) * (size_t)bw + (size_t)(x / ZT_BLOCK);
+            bd[bi] += d;
+            bv[bi] += var;
+            bbad[bi] |= bad;
+            sum_d += d;
+            sum_v += var;
+            any_bad |= bad;
+        }
+    for (size_t bi = 0; bi < nblocks; bi++) {
+        int bx = (int)(bi % (size_t)bw), by = (int)(bi / (size_t)bw);
+        zt_test t = {0};
+        t.z = bbad[bi] ? NAN : (bd[bi] == 0.0 ? 0.0 : bd[bi] / sqrt(bv[bi]));
+        t.x0 = a->data_x0 + bx * ZT_BLOCK;
+        t.y0 = a->data_y0 + by * ZT_BLOCK;
+        t.x1 = a->data_x0 + ((bx + 1) * ZT_BLOCK < w ? (bx + 1) * ZT_BLOCK : w) - 1;
+        t.y1 = a->data_y0 + ((by + 1) * ZT_BLOCK < h ? (by + 1) * ZT_BLOCK : h) - 1;
+        t.channel = c;
+        t.d = bd[bi];
+        t.sd = sqrt(bv[bi]);
+        zt_record(&zt->scale[ZT_BLOCKS], &t, zt->level);
+    }
+    zt_test t = {0};
+    t.z = any_bad ? NAN : (sum_d == 0.0 ? 0.0 : sum_d / sqrt(sum_v));
+    t.x0 = a->data_x0;
+    t.y0 = a->data_y0;
+    t.x1 = a->data_x0 + w - 1;
+    t.y1 = a->data_y0 + h - 1;
+    t.channel = c;
+    t.d = sum_d;
+    t.sd = sqrt(sum_v);
+    zt_record(&zt->scale[ZT_IMAGE], &t, zt->level);
+    zt->image_z[c] = t.z;
+    free(bd);
+    free(bv);
+    free(bbad);
+    return HZ_OK;
+}
+
+/* "(x, y) G", "(x0, y0)..(x1, y1) G" or "G". */
+static void zt_where(const ztest *zt, zt_scale_kind k, const zt_test *t, char *buf, size_t n)
+{
+    const char *name = zt->ch[t->channel].name;
+    switch (k) {
+    case ZT_PIXEL: snprintf(buf, n, "(%d, %d) %s", t->x0, t->y0, name); break;
+    case ZT_BLOCKS: snprintf(buf, n, "(%d, %d)..(%d, %d) %s", t->x0, t->y0, t->x1, t->y1, name); break;
+    case ZT_IMAGE: snprintf(buf, n, "%s", name); break;
+    }
+}
+
+static void zt_print(const diff_options *opt, const ztest *zt, int bw, int bh, FILE *out)
+{
+    static const char *const labels[] = {"pixel", "block", "image"};
+    size_t total = zt->scale[0].tests + zt->scale[1].tests + zt->scale[2].tests;
+    fprintf(out, "\nz-test of A against the mean and variance of the reference B, channels");
+    for (int c = 0; c < zt->nch; c++)
+        fprintf(out, " %s", zt->ch[c].name);
+    fprintf(out, "\nvariance of A: %s\n",
+            zt->count_a ? (zt->ch[0].var_a ? "the larger of A's own Variance and B's Variance x "
+                                             "SampleCount.Y of B / SampleCount.Y of A"
+                                           : "B's Variance x SampleCount.Y of B / SampleCount.Y of A")
+                        : "A's own Variance");
+    fprintf(out, "%zu tests (pixels, %dx%d blocks of %dx%d, image), alpha %g, accept %g\n", total,
+            bw, bh, ZT_BLOCK, ZT_BLOCK, opt->alpha, opt->accept);
+    fprintf(out, "Sidak level per test %.17g: fails when |z| > %.4f\n", zt->level,
+            zt_critical(zt->level));
+    fprintf(out, "%-6s %9s %9s %9s %12s  %s\n", "scale", "tests", "failed", "limit", "worst z",
+            "worst at");
+    for (int k = 0; k < 3; k++) {
+        const zt_scale *s = &zt->scale[k];
+        char at[128];
+        zt_where(zt, (zt_scale_kind)k, &s->worst, at, sizeof at);
+        fprintf(out, "%-6s %9zu %9zu %9zu %12.4f  %s\n", labels[k], s->tests, s->failed, s->limit,
+                s->worst.z, at);
+    }
+    fprintf(out, "image z:");
+    for (int c = 0; c < zt->nch; c++)
+        fprintf(out, " %s %.4f", zt->ch[c].name, zt->image_z[c]);
+    fprintf(out, "\n");
+    for (int k = 0; k < 2; k++) {
+        const zt_scale *s = &zt->scale[k];
+        if (s->failed == 0) {
+            fprintf(out, "failing %ss: none\n", labels[k]);
+            continue;
+        }
+        fprintf(out, "failing %ss: %zu%s\n", labels[k], s->failed,
+                s->failed > (size_t)s->nlist ? ", the worst:" : ":");
+        for (int i = 0; i < s->nlist; i++) {
+            const zt_test *t = &s->list[i];
+            char at[128];
+            zt_where(zt, (zt_scale_kind)k, t, at, sizeof at);
+            if (k == ZT_PIXEL)
+                fprintf(out, "  %s: a %.9g b %.9g sd %.6g z %.4f\n", at, t->a, t->b, t->sd, t->z);
+            else
+                fprintf(out, "  %s: sum(a-b) %.9g sd %.6g z %.4f\n", at, t->d, t->sd, t->z);
+        }
+    }
+}
+
+/* Runs the z-test, prints its report, sets *passed; *heat_out (if not NULL)
+ * receives the per-pixel |z| (caller frees). */
+static hz_status run_ztest(const diff_options *opt, const exr_image *a, const exr_image *b,
+                           const diff_stats *st, int nc, FILE *out, bool *passed, float **heat_out,
+                           hz_error *err)
+{
+    ztest zt;
+    memset(&zt, 0, sizeof zt);
+    if (zt_prepare(opt, a, b, st, nc, &zt, err) != HZ_OK)
+        return HZ_ERROR;
+    size_t npix = (size_t)a->width * (size_t)a->height;
+    int bw = (a->width + ZT_BLOCK - 1) / ZT_BLOCK, bh = (a->height + ZT_BLOCK - 1) / ZT_BLOCK;
+    size_t n = (npix + (size_t)bw * (size_t)bh + 1) * (size_t)zt.nch;
+    /* Sidak: 1 - (1 - alpha)^(1/N), without cancellation. */
+    zt.level = -expm1(log1p(-opt->alpha) / (double)n);
+    float *heat = calloc(npix, sizeof *heat);
+    if (!heat)
+        return hz_fail(err, "out of memory");
+    for (int c = 0; c < zt.nch; c++)
+        if (zt_channel_tests(a, &zt, c, heat, err) != HZ_OK) {
+            free(heat);
+            return HZ_ERROR;
+        }
+    for (int k = 0; k < 2; k++)
+        zt.scale[k].limit = (size_t)floor((1.0 - opt->accept) * (double)zt.scale[k].tests);
+    zt.scale[ZT_IMAGE].limit = 0;
+    *passed = true;
+    for (int k = 0; k < 3; k++)
+        *passed = *passed && zt.scale[k].failed <= zt.scale[k].limit;
+    zt_print(opt, &zt, bw, bh, out);
+    fprintf(out, "%s: z-test: %zu of %zu pixel tests failed (limit %zu), %zu of %zu block tests "
+                 "(limit %zu), %zu of %zu image tests (limit 0)\n",
+            *passed ? "PASS" : "FAIL", zt.scale[0].failed, zt.scale[0].tests, zt.scale[0].limit,
+            zt.scale[1].failed, zt.scale[1].tests, zt.scale[1].limit, zt.scale[2].failed,
+            zt.scale[2].tests);
+    if (heat_out)
+        *heat_out = heat;
+    else
+        free(heat);
+    return HZ_OK;
 }
 
 /* ------------------------------------------------------------------ run */
@@ -292,8 +688,10 @@ static hz_status choose_channels(const diff_options *opt, const exr_image *a, co
     *nc = 0;
     if (!opt->channels) {
         for (int c = 0; c < a->channel_count; c++) {
-            const exr_channel *cb = exr_find_channel(b, a->channels[c].name);
-            if (!cb)
+            const char *name = a->channels[c].name;
+            const exr_channel *cb = exr_find_channel(b, name);
+            /* The statistics layers describe the image; compared only on request. */
+            if (!cb || !strncmp(name, "Variance.", 9) || !strncmp(name, "SampleCount.", 12))
                 continue;
             stats_init(&st[*nc], a->channels[c].name);
             st[*nc].a = a->channels[c].pixels;
@@ -398,11 +796,20 @@ static hz_status compare(const diff_options *opt, const exr_image *a, const exr_
     }
 
     hz_status rc = HZ_OK;
-    if (opt->heatmap) {
-        rc = write_heatmap(opt->heatmap, a, st, nc, err);
+    float *heat = NULL;
+    if (opt->ztest) {
+        bool zpass = false;
+        rc = run_ztest(opt, a, b, st, nc, out, &zpass, opt->heatmap ? &heat : NULL, err);
+        *passed = *passed && zpass;
+    }
+    if (rc == HZ_OK && opt->heatmap) {
+        if (!heat)
+            heat = mean_abs_heat(a, st, nc);
+        rc = heat ? write_heatmap(opt->heatmap, a, heat, err) : hz_fail(err, "out of memory");
         if (rc == HZ_OK)
             fprintf(out, "heatmap: %s\n", opt->heatmap);
     }
+    free(heat);
     free(st);
     return rc;
 }

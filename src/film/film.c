@@ -29,11 +29,19 @@ typedef struct {
     double sum, w; /* |weight|-weighted finite depths */
 } film_depth;
 
+/* Weighted Welford/West state with weights |w|: W = sum |w|, W2 = sum w^2,
+ * the |w|-weighted running mean and M2 = sum |w| (L - mean)^2 per component. */
+typedef struct {
+    double w, w2, mean[3], m2[3];
+} film_moments;
+
 struct film {
     film_params p;
     int width, height; /* of the bounds */
     film_pixel *pixels;
     film_depth *depth; /* NULL unless write_z */
+    film_moments *moments; /* NULL unless write_variance */
+    uint32_t *count;   /* NULL unless write_sample_count */
     double clamp_ratio;
     atomic_long nonfinite; /* tiles run in parallel; only this is shared */
 };
@@ -51,12 +59,15 @@ void film_params_default(film_params *p)
     p->diagonal = 35.0;
 }
 
-/* Bytes per bounds pixel: accumulation, optional depth, and the output image. */
+/* Bytes per bounds pixel: accumulation, optional depth and statistics, and
+ * the output image (one float per channel). */
 static double film_bytes(const film_params *p)
 {
     double area = (double)(p->bounds.x1 - p->bounds.x0) * (double)(p->bounds.y1 - p->bounds.y0);
     double per = sizeof(film_pixel) + 4.0 * sizeof(float) +
-                 (p->write_z ? sizeof(film_depth) + sizeof(float) : 0.0);
+                 (p->write_z ? sizeof(film_depth) + sizeof(float) : 0.0) +
+                 (p->write_variance ? sizeof(film_moments) + 3.0 * sizeof(float) : 0.0) +
+                 (p->write_sample_count ? sizeof(uint32_t) + sizeof(float) : 0.0);
     return area * per;
 }
 
@@ -146,6 +157,8 @@ hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *e
         snprintf(p->filename, sizeof p->filename, "%s", name);
     p->savefp16 = params_bool(pl, "savefp16", false);
     p->write_z = params_bool(pl, "writedepth", false);
+    p->write_variance = params_bool(pl, "writevariance", false);
+    p->write_sample_count = params_bool(pl, "writesamplecount", false);
     p->iso = params_float(pl, "iso", 100.0);
     if (!(p->iso > 0.0 && isfinite(p->iso)))
         params_reject(pl, "iso", "\"float iso\" must be positive, got %g", p->iso);
@@ -203,7 +216,12 @@ film *film_create(const film_params *p, hz_error *err)
     f->pixels = calloc(n, sizeof *f->pixels);
     if (p->write_z)
         f->depth = calloc(n, sizeof *f->depth);
-    if (!f->pixels || (p->write_z && !f->depth)) {
+    if (p->write_variance)
+        f->moments = calloc(n, sizeof *f->moments);
+    if (p->write_sample_count)
+        f->count = calloc(n, sizeof *f->count);
+    if (!f->pixels || (p->write_z && !f->depth) || (p->write_variance && !f->moments) ||
+        (p->write_sample_count && !f->count)) {
         hz_fail(err, "film: out of memory for %dx%d pixels (%.1f MiB)", f->width, f->height,
                 bytes / (1024.0 * 1024));
         film_destroy(f);
@@ -218,6 +236,8 @@ void film_destroy(film *f)
         return;
     free(f->pixels);
     free(f->depth);
+    free(f->moments);
+    free(f->count);
     free(f);
 }
 
@@ -256,6 +276,21 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
         f->depth[i].sum += fabs(weight) * depth;
         f->depth[i].w += fabs(weight);
     }
+    if (f->moments && weight != 0.0) {
+        /* West (1979): the weighted form of Welford's update. */
+        film_moments *m = &f->moments[i];
+        double aw = fabs(weight), x[3] = {L.r, L.g, L.b};
+        m->w += aw;
+        m->w2 += aw * aw;
+        double k = aw / m->w;
+        for (int c = 0; c < 3; c++) {
+            double d = x[c] - m->mean[c];
+            m->mean[c] += k * d;
+            m->m2[c] += aw * d * (x[c] - m->mean[c]);
+        }
+    }
+    if (f->count && f->count[i] != UINT32_MAX)
+        f->count[i]++;
 }
 
 rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio)
@@ -267,6 +302,24 @@ rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio)
     return rgb_make(p->r * s, p->g * s, p->b * s);
 }
 
+rgb film_get_variance(const film *f, int px, int py, double imaging_ratio)
+{
+    assert(f->moments);
+    const film_moments *m = &f->moments[film_index(f, px, py)];
+    /* (M2 / W) / (n_eff - 1) with n_eff = W^2 / W2, i.e. M2 W2 / (W (W^2 - W2)). */
+    double excess = m->w * m->w - m->w2;
+    if (!(m->w > 0.0) || !(excess > 0.0))
+        return rgb_grey(0.0); /* n_eff <= 1 */
+    double s = imaging_ratio * imaging_ratio * m->w2 / (m->w * excess);
+    return rgb_make(m->m2[0] * s, m->m2[1] * s, m->m2[2] * s);
+}
+
+long film_get_sample_count(const film *f, int px, int py)
+{
+    assert(f->count);
+    return (long)f->count[film_index(f, px, py)];
+}
+
 static double film_get_depth(const film *f, int px, int py)
 {
     const film_depth *d = &f->depth[film_index(f, px, py)];
@@ -276,14 +329,31 @@ static double film_get_depth(const film *f, int px, int py)
 hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err)
 {
     exr_image img;
-    int nc = f->depth ? 5 : 4;
+    /* R G B A, then the optional channels in this order (-1: not written). */
+    int zc = -1, vc = -1, sc = -1, nc = 4;
+    if (f->depth)
+        zc = nc++;
+    if (f->moments) {
+        vc = nc;
+        nc += 3;
+    }
+    if (f->count)
+        sc = nc++;
     if (exr_image_alloc(&img, f->width, f->height, nc, err) != HZ_OK)
         return HZ_ERROR;
-    static const char *names[] = {"R", "G", "B", "A", "Z"};
-    for (int c = 0; c < nc; c++) {
+    static const char *names[] = {"R", "G", "B", "A"};
+    for (int c = 0; c < 4; c++)
         snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
-        img.channels[c].half = f->p.savefp16 && c < 4; /* depth needs float precision */
-    }
+    if (zc >= 0)
+        snprintf(img.channels[zc].name, sizeof img.channels[zc].name, "Z");
+    for (int c = 0; vc >= 0 && c < 3; c++)
+        snprintf(img.channels[vc + c].name, sizeof img.channels[vc + c].name, "Variance.%s", names[c]);
+    if (sc >= 0)
+        snprintf(img.channels[sc].name, sizeof img.channels[sc].name, "SampleCount.Y");
+    /* Depth and the statistics need float precision (a variance is tiny, a
+     * count exceeds half's 2048 exact integers). */
+    for (int c = 0; c < nc; c++)
+        img.channels[c].half = f->p.savefp16 && c < 4;
     img.data_x0 = f->p.bounds.x0;
     img.data_y0 = f->p.bounds.y0;
     img.display_width = f->p.xres;
@@ -297,8 +367,16 @@ hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, 
             img.channels[1].pixels[i] = (float)v.g;
             img.channels[2].pixels[i] = (float)v.b;
             img.channels[3].pixels[i] = f->pixels[i].w != 0.0 ? 1.0f : 0.0f;
-            if (f->depth)
-                img.channels[4].pixels[i] = (float)film_get_depth(f, px, py);
+            if (zc >= 0)
+                img.channels[zc].pixels[i] = (float)film_get_depth(f, px, py);
+            if (vc >= 0) {
+                rgb var = film_get_variance(f, px, py, imaging_ratio);
+                img.channels[vc].pixels[i] = (float)var.r;
+                img.channels[vc + 1].pixels[i] = (float)var.g;
+                img.channels[vc + 2].pixels[i] = (float)var.b;
+            }
+            if (sc >= 0)
+                img.channels[sc].pixels[i] = (float)f->count[i];
         }
     hz_status st = exr_image_add_attribute(&img, "software", "haze " HAZE_VERSION, err);
     if (st == HZ_OK)

@@ -20,6 +20,8 @@ typedef struct {
     bool savefp16;
     double iso;                /* 100 by default; imaging ratio = exposure time * iso / 100 */
     bool write_z;              /* haze extension: "bool writedepth" adds a Z channel */
+    bool write_variance;       /* haze: "bool writevariance" adds Variance.R/G/B */
+    bool write_sample_count;   /* haze: "bool writesamplecount" adds SampleCount.Y */
     double max_component_value; /* pbrt-v4 "maxcomponentvalue": INFINITY = no clamp */
     double diagonal;           /* pbrt-v4 "diagonal" (mm, default 35), for physical cameras */
 } film_params;
@@ -29,7 +31,8 @@ void film_params_default(film_params *p);
 
 /* Reads Film "rgb" (xresolution yresolution filename cropwindow pixelbounds
  * savefp16 iso maxcomponentvalue diagonal, "sensor" "cie1931" and
- * whitebalance 0 only, and haze's writedepth); other types are errors. Bounds
+ * whitebalance 0 only, and haze's writedepth, writevariance and
+ * writesamplecount); other types are errors. Bounds
  * follow pbrt-v4: ceil(res * crop); "pixelbounds" [x0 x1 y0 y1] overrides
  * "cropwindow" and must be a non-empty part of the image. Films needing more
  * than 64 GiB are refused. */
@@ -52,10 +55,23 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
 void film_set_imaging_ratio(film *f, double imaging_ratio);
 /* Final pixel value = imaging_ratio * sum(w L) / sum(w) (0 when sum(w) == 0). */
 rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio);
+/* Estimated variance of film_get_pixel's value (the weighted mean), per
+ * component, imaging_ratio applied squared. Online weighted Welford/West over
+ * the same (clamped) L as the mean, with weights |w|: W = sum |w|, W2 = sum
+ * w^2, M2 = sum |w| (L - mean)^2, n_eff = W^2 / W2, variance = (M2 / W) /
+ * (n_eff - 1), exactly s^2/n for equal weights (pbrt-v4's filter sampling
+ * with a positive filter); an approximation for filters with negative lobes
+ * (whose weights differ in sign). 0 when n_eff <= 1 (one sample, or none).
+ * Only on a film created with write_variance (asserted). */
+rgb film_get_variance(const film *f, int px, int py, double imaging_ratio);
+/* Number of finite samples that reached the pixel (dropped non-finite ones
+ * are not counted). Only on a film created with write_sample_count (asserted). */
+long film_get_sample_count(const film *f, int px, int py);
 /* Number of non-finite sample values that were dropped (counted, never stored). */
 long film_nonfinite_count(const film *f);
-/* Writes R G B A (+ Z when requested) float32, or half with savefp16 (Z stays
- * float), A = 1 where any weight was accumulated, data
+/* Writes R G B A (+ Z, Variance.R/G/B, SampleCount.Y when requested) float32,
+ * or half with savefp16 (Z and the statistics AOVs stay float), A = 1 where
+ * any weight was accumulated, data
  * window = bounds, display window = full resolution; written to a temporary
  * file in the same directory, then renamed over `path`. */
 hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err);

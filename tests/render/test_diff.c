@@ -2,7 +2,11 @@
 /* `haze diff A.exr B.exr`: metrics against values computed here, the max's
  * location, --metric/--threshold exit codes, NaN/Inf exclusion, heatmaps,
  * exit 2 on mismatched or broken inputs, and agreement with OpenImageIO's
- * idiff when it is installed. */
+ * idiff when it is installed. --ztest: on constructed images with known
+ * statistics (the false-failure rate over many seeds against alpha, a 5%
+ * shift caught by the block and image scales, an outlier at its exact
+ * coordinates, the Sidak level), and on real renders (a re-seeded render
+ * passes, one light 5% brighter fails). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -42,10 +46,10 @@ static void tmp_path(char *buf, size_t size, const char *name)
     snprintf(buf, size, "%s/diff_%s", HAZE_TMP, name);
 }
 
-/* Writes a w x h float EXR whose channels are named by the comma-free
- * strings in names; channel c of pixel (x, y) is fn(x, y, c). */
-static void write_image(const char *path, int w, int h, int x0, int y0, int nc,
-                        const char *const *names, pixel_fn fn)
+/* Writes a w x h float EXR (data window at (x0, y0)) whose channels are
+ * named by names; planes[c] holds channel c row by row. */
+static void write_planes(const char *path, int w, int h, int x0, int y0, int nc,
+                         const char *const *names, float *const *planes)
 {
     exr_image img;
     hz_error err = {{0}};
@@ -57,13 +61,29 @@ static void write_image(const char *path, int w, int h, int x0, int y0, int nc,
     for (int c = 0; c < nc; c++) {
         snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
         img.channels[c].half = false;
-        for (int y = 0; y < h; y++)
-            for (int x = 0; x < w; x++)
-                img.channels[c].pixels[y * w + x] = fn(x, y, c);
+        memcpy(img.channels[c].pixels, planes[c], (size_t)w * (size_t)h * sizeof(float));
     }
     if (exr_write(path, &img, &err) != HZ_OK)
         fail_msg("%s", err.message);
     exr_image_free(&img);
+}
+
+/* The same with channel c of pixel (x, y) = fn(x, y, c). */
+static void write_image(const char *path, int w, int h, int x0, int y0, int nc,
+                        const char *const *names, pixel_fn fn)
+{
+    float *planes[8];
+    assert_true(nc <= 8);
+    for (int c = 0; c < nc; c++) {
+        planes[c] = malloc((size_t)w * (size_t)h * sizeof(float));
+        assert_non_null(planes[c]);
+        for (int y = 0; y < h; y++)
+            for (int x = 0; x < w; x++)
+                planes[c][y * w + x] = fn(x, y, c);
+    }
+    write_planes(path, w, h, x0, y0, nc, names, planes);
+    for (int c = 0; c < nc; c++)
+        free(planes[c]);
 }
 
 static const char *const rgb[] = {"R", "G", "B"};
@@ -485,6 +505,540 @@ static void test_idiff_agrees(void **state)
     assert_string_equal(at, all.at);
 }
 
+
+/* ------------------------------------------------------------------ z-test */
+
+/* splitmix64 and Box-Muller: the noise of the constructed images. */
+static double uniform01(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9e3779b97f4a7c15u);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+    z ^= z >> 31;
+    return ((double)(z >> 11) + 0.5) * 0x1p-53; /* in (0, 1) */
+}
+
+static double gauss(uint64_t *s)
+{
+    double u1 = uniform01(s), u2 = uniform01(s);
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+/* A pair of images with known statistics: the true mean mu(x, y, c); the
+ * reference B = mu + N(0, vB) carries Variance = vB; A = (1 + shift) mu +
+ * N(0, vA). With counts, both carry SampleCount.Y (B 1024, A 16, so haze
+ * derives vA = 64 vB); otherwise A carries its own Variance = vA = 4 vB. The
+ * difference a - b has relative standard deviation `noise` (times zt_factor). */
+typedef struct {
+    int w, h, x0, y0;
+    uint64_t seed;
+    bool counts;
+    double noise, shift;
+    int ox, oy, oc;     /* outlier pixel (data-window coordinates), ox < 0: none */
+    double out_sigmas;  /* added to A there, in standard deviations of a - b */
+    bool nan_outlier;   /* A is NaN there instead */
+    bool b_variance;    /* false: B has no Variance channels */
+    bool flat;          /* the noise factor is 1 everywhere */
+} zt_case;
+
+static zt_case zt_default(uint64_t seed)
+{
+    zt_case k = {64, 64, 0, 0, seed, false, 0.02, 0.0, -1, 0, 0, 0.0, false, true, false};
+    return k;
+}
+
+/* The factor of the noise at (x, y), in [0.5, 1.5]. */
+static double zt_factor(int x, int y, const zt_case *k)
+{
+    return k->flat ? 1.0 : 0.5 + 0.25 * ((x * 7 + y * 3) % 5);
+}
+
+static double zt_mu(int x, int y, int c, const zt_case *k)
+{
+    return 0.2 + 0.6 * (double)(x + y) / (double)(k->w + k->h) + 0.1 * c;
+}
+
+static void zt_write(const zt_case *k, const char *a_path, const char *b_path)
+{
+    size_t n = (size_t)k->w * (size_t)k->h;
+    float *p[14];
+    for (int i = 0; i < 14; i++) {
+        p[i] = malloc(n * sizeof(float));
+        assert_non_null(p[i]);
+    }
+    /* p[0..2] A's R G B, p[3..5] A's variance, p[6] A's count; p[7..9] B's
+     * R G B, p[10..12] B's variance, p[13] B's count. */
+    double ratio = k->counts ? 1024.0 / 16.0 : 4.0;
+    uint64_t rng = k->seed * 0x2545f4914f6cdd1du + 1;
+    for (int c = 0; c < 3; c++)
+        for (int y = 0; y < k->h; y++)
+            for (int x = 0; x < k->w; x++) {
+                size_t i = (size_t)y * (size_t)k->w + (size_t)x;
+                double mu = zt_mu(x, y, c, k);
+                double sd = k->noise * mu * zt_factor(x, y, k);
+                double vb = sd * sd / (1.0 + ratio), va = ratio * vb;
+                double a = (1.0 + k->shift) * mu + sqrt(va) * gauss(&rng);
+                double b = mu + sqrt(vb) * gauss(&rng);
+                if (x == k->ox && y == k->oy && c == k->oc)
+                    a = k->nan_outlier ? NAN : a + k->out_sigmas * sd;
+                p[c][i] = (float)a;
+                p[3 + c][i] = (float)va;
+                p[7 + c][i] = (float)b;
+                p[10 + c][i] = (float)vb;
+                p[6][i] = 16.0f;
+                p[13][i] = 1024.0f;
+            }
+    static const char *const a_own[] = {"R", "G", "B", "Variance.R", "Variance.G", "Variance.B"};
+    static const char *const a_cnt[] = {"R", "G", "B", "SampleCount.Y"};
+    static const char *const b_all[] = {"R", "G", "B", "Variance.R", "Variance.G", "Variance.B",
+                                        "SampleCount.Y"};
+    float *const a_cnt_planes[] = {p[0], p[1], p[2], p[6]};
+    if (k->counts)
+        write_planes(a_path, k->w, k->h, k->x0, k->y0, 4, a_cnt, a_cnt_planes);
+    else
+        write_planes(a_path, k->w, k->h, k->x0, k->y0, 6, a_own, p);
+    write_planes(b_path, k->w, k->h, k->x0, k->y0, k->b_variance ? (k->counts ? 7 : 6) : 3, b_all,
+                 p + 7);
+    for (int i = 0; i < 14; i++)
+        free(p[i]);
+}
+
+typedef struct {
+    size_t tests, failed, limit;
+    double worst;
+    char at[96];
+} zt_row;
+
+/* The row of one scale ("pixel", "block", "image") of the z-test table. */
+static zt_row zt_parse(const char *out, const char *scale)
+{
+    const char *t = strstr(out, "\nscale ");
+    if (!t)
+        fail_msg("no z-test table in:\n%s", out);
+    char key[32];
+    snprintf(key, sizeof key, "\n%s ", scale);
+    const char *l = strstr(t, key);
+    if (!l)
+        fail_msg("no z-test row '%s' in:\n%s", scale, out);
+    zt_row r;
+    memset(&r, 0, sizeof r);
+    if (sscanf(l + 1, "%*s %zu %zu %zu %lf %95[^\n]", &r.tests, &r.failed, &r.limit, &r.worst, r.at) != 5)
+        fail_msg("cannot parse z-test row '%s' in:\n%s", scale, out);
+    return r;
+}
+
+static double zt_parse_level(const char *out)
+{
+    const char *l = strstr(out, "Sidak level per test ");
+    if (!l)
+        fail_msg("no Sidak level in:\n%s", out);
+    return strtod(l + strlen("Sidak level per test "), NULL);
+}
+
+static double zt_image_z(const char *out, const char *channel)
+{
+    const char *l = strstr(out, "\nimage z:");
+    assert_non_null(l);
+    char key[8];
+    snprintf(key, sizeof key, " %s ", channel);
+    const char *k = strstr(l, key);
+    if (!k || strchr(l + 1, '\n') < k)
+        fail_msg("no image z of %s in:\n%s", channel, out);
+    return strtod(k + strlen(key), NULL);
+}
+
+/* Runs the z-test on A against B with extra options; returns the exit code. */
+static int zt_run(const char *a, const char *b, const char *extra, char *out, size_t size)
+{
+    char args[4096];
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest %s", a, b, extra);
+    return run_haze(args, out, size);
+}
+
+/* (a) A consistent with B: the first seeds pass with the defaults; with
+ * --alpha 0.5 --accept 1 (pure Sidak: fail when any test fails; a large alpha
+ * so that 40 seeds measure the rate) the fraction of seeds that fail is about
+ * alpha, the pixel tests fail at the per-test level, and the image-level z is
+ * standard normal. Counts and A's own variance alternate. */
+static void test_ztest_false_failures(void **state)
+{
+    (void)state;
+    enum { SEEDS = 40, DEFAULT_SEEDS = 8 };
+    char a[1024], b[1024];
+    static char out[65536];
+    tmp_path(a, sizeof a, "zt_a.exr");
+    tmp_path(b, sizeof b, "zt_b.exr");
+    int runs_failed = 0;
+    size_t pixel_failures = 0, pixel_tests = 0;
+    double level = 0.0, sum_z2 = 0.0, worst_default = 0.0;
+    for (int s = 0; s < SEEDS; s++) {
+        zt_case k = zt_default((uint64_t)s + 1);
+        k.counts = s % 2;
+        zt_write(&k, a, b);
+        int rc;
+        zt_row px;
+        if (s < DEFAULT_SEEDS) {
+            rc = zt_run(a, b, "", out, sizeof out);
+            if (rc != 0)
+                fail_msg("seed %d: consistent images fail the default z-test:\n%s", s + 1, out);
+            assert_non_null(strstr(out, k.counts ? "variance of A: B's Variance x SampleCount.Y"
+                                                 : "variance of A: A's own Variance"));
+            px = zt_parse(out, "pixel");
+            if (fabs(px.worst) > worst_default)
+                worst_default = fabs(px.worst);
+        }
+        rc = zt_run(a, b, "--alpha 0.5 --accept 1", out, sizeof out);
+        assert_true(rc == 0 || rc == 1);
+        runs_failed += rc;
+        px = zt_parse(out, "pixel");
+        zt_row bl = zt_parse(out, "block"), im = zt_parse(out, "image");
+        assert_int_equal(rc, px.failed + bl.failed + im.failed > 0);
+        assert_int_equal(px.tests, 64 * 64 * 3);
+        assert_int_equal(bl.tests, 8 * 8 * 3);
+        assert_int_equal(im.tests, 3);
+        assert_int_equal(px.limit + bl.limit + im.limit, 0);
+        pixel_failures += px.failed;
+        pixel_tests += px.tests;
+        level = zt_parse_level(out);
+        for (int c = 0; c < 3; c++) {
+            double z = zt_image_z(out, rgb[c]);
+            sum_z2 += z * z;
+        }
+    }
+    /* Binomial(40, P) with P = 0.5 for independent tests (Sidak is exact
+     * then; the blocks depend on their pixels, which can only lower P). */
+    double expect_pixels = (double)pixel_tests * level;
+    double mean_z2 = sum_z2 / (3.0 * SEEDS);
+    print_message("z-test false failures: %d of %d seeds at alpha 0.5 (expected <= %.0f); %zu pixel "
+                  "tests failed (expected %.1f); mean image z^2 %.3f (expected 1); worst pixel |z| "
+                  "at the defaults %.3f\n",
+                  runs_failed, SEEDS, 0.5 * SEEDS, pixel_failures, expect_pixels, mean_z2,
+                  worst_default);
+    assert_true(runs_failed >= 8 && runs_failed <= 32); /* 20 +- 3.8 sd */
+    assert_true(fabs((double)pixel_failures - expect_pixels) <= 4.0 * sqrt(expect_pixels) + 1.0);
+    assert_true(fabs(mean_z2 - 1.0) <= 4.0 * sqrt(2.0 / (3.0 * SEEDS))); /* chi^2 / n */
+}
+
+/* (b) A uniform 5% shift with 5% noise per pixel: each pixel's z is about
+ * N(1, 1), so the pixel scale passes, but every 8x8 block sums to z ~ 8 and
+ * the image to z ~ 64. */
+static void test_ztest_shift(void **state)
+{
+    (void)state;
+    char a[1024], b[1024], out[65536];
+    tmp_path(a, sizeof a, "zt_shift_a.exr");
+    tmp_path(b, sizeof b, "zt_shift_b.exr");
+    zt_case k = zt_default(7);
+    k.noise = 0.05;
+    k.shift = 0.05;
+    k.flat = true; /* z ~ N(1, 1) at every pixel */
+    for (int counts = 0; counts < 2; counts++) {
+        k.counts = counts;
+        zt_write(&k, a, b);
+        assert_int_equal(zt_run(a, b, "", out, sizeof out), 1);
+        zt_row px = zt_parse(out, "pixel"), bl = zt_parse(out, "block"), im = zt_parse(out, "image");
+        assert_true(px.failed <= px.limit);
+        assert_int_equal(px.limit, 12); /* floor(0.001 * 12288) */
+        assert_true(bl.failed >= bl.tests * 9 / 10);
+        assert_int_equal(im.failed, 3);
+        /* The image z is sum(a - b) / sqrt(sum var) = sum 0.05 mu / sqrt(sum
+         * (0.05 mu)^2) + N(0, 1), about 64 + N(0, 1). */
+        for (int c = 0; c < 3; c++) {
+            double num = 0.0, var = 0.0;
+            for (int y = 0; y < 64; y++)
+                for (int x = 0; x < 64; x++) {
+                    double mu = zt_mu(x, y, c, &k);
+                    num += 0.05 * mu;
+                    var += (0.05 * mu) * (0.05 * mu);
+                }
+            double z = zt_image_z(out, rgb[c]), want = num / sqrt(var);
+            print_message("shift, %s: image z %s %.3f (expected %.3f +- 1)\n",
+                          counts ? "counts" : "own variance", rgb[c], z, want);
+            assert_true(fabs(z - want) < 4.5);
+        }
+        assert_non_null(strstr(out, "FAIL: z-test"));
+    }
+    /* A 0.1% shift is within the noise at every scale (image z ~ 1.3). */
+    k.shift = 0.001;
+    k.counts = false;
+    zt_write(&k, a, b);
+    assert_int_equal(zt_run(a, b, "", out, sizeof out), 0);
+    assert_non_null(strstr(out, "PASS: z-test"));
+}
+
+/* (c) One outlier pixel: reported at its display-window coordinates, with the
+ * block that contains it; a moderate outlier fails its pixel test only (within
+ * the accepted fraction), a NaN fails every scale. */
+static void test_ztest_outlier(void **state)
+{
+    (void)state;
+    char a[1024], b[1024], heat[1024], out[65536];
+    tmp_path(a, sizeof a, "zt_out_a.exr");
+    tmp_path(b, sizeof b, "zt_out_b.exr");
+    tmp_path(heat, sizeof heat, "zt_heat.exr");
+    zt_case k = zt_default(11);
+    k.x0 = 10;
+    k.y0 = 20;
+    k.ox = 37; /* absolute (47, 65); block x 32..39, y 40..47 -> (42, 60)..(49, 67) */
+    k.oy = 45;
+    k.oc = 1;
+    k.out_sigmas = 60.0;
+    zt_write(&k, a, b);
+    unlink(heat);
+    char extra[1100];
+    snprintf(extra, sizeof extra, "--heatmap '%s'", heat);
+    assert_int_equal(zt_run(a, b, extra, out, sizeof out), 1);
+    zt_row px = zt_parse(out, "pixel"), bl = zt_parse(out, "block"), im = zt_parse(out, "image");
+    assert_string_equal(px.at, "(47, 65) G");
+    assert_true(px.worst > 55.0 && px.worst < 65.0);
+    assert_true(px.failed >= 1 && px.failed <= px.limit);
+    assert_string_equal(bl.at, "(42, 60)..(49, 67) G");
+    assert_true(bl.failed >= 1);
+    assert_int_equal(im.failed, 0);
+    const char *list = strstr(out, "failing pixels: ");
+    assert_non_null(list);
+    assert_non_null(strstr(list, "\n  (47, 65) G: a "));
+    list = strstr(out, "failing blocks: ");
+    assert_non_null(list);
+    assert_non_null(strstr(list, "\n  (42, 60)..(49, 67) G: sum(a-b) "));
+    /* The heatmap: |z| per pixel, largest at the outlier. */
+    exr_image h;
+    hz_error err = {{0}};
+    if (exr_read(heat, &h, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(h.data_x0, 10);
+    assert_int_equal(h.data_y0, 20);
+    float top = 0.0f;
+    int top_i = -1;
+    for (int i = 0; i < 64 * 64; i++)
+        if (h.channels[0].pixels[i] > top) {
+            top = h.channels[0].pixels[i];
+            top_i = i;
+        }
+    assert_int_equal(top_i, 45 * 64 + 37);
+    assert_float_equal(top, px.worst, 1e-3);
+    exr_image_free(&h);
+
+    /* 8 sigma: the pixel test fails (z ~ 8 > 4.74), its block (z ~ 1 + 8/8) and
+     * the image pass, and one failure is within floor(0.001 * 12288) = 12. */
+    k.out_sigmas = 8.0;
+    zt_write(&k, a, b);
+    assert_int_equal(zt_run(a, b, "", out, sizeof out), 0);
+    px = zt_parse(out, "pixel");
+    assert_string_equal(px.at, "(47, 65) G");
+    assert_true(px.failed >= 1);
+    assert_non_null(strstr(out, "\n  (47, 65) G: a "));
+    assert_non_null(strstr(out, "PASS: z-test"));
+    assert_int_equal(zt_run(a, b, "--accept 1", out, sizeof out), 1); /* no failure accepted */
+    assert_non_null(strstr(out, "FAIL: z-test"));
+
+    /* A NaN in A fails its pixel, its block and the image test of G. */
+    k.nan_outlier = true;
+    zt_write(&k, a, b);
+    assert_int_equal(zt_run(a, b, "", out, sizeof out), 1);
+    px = zt_parse(out, "pixel");
+    bl = zt_parse(out, "block");
+    im = zt_parse(out, "image");
+    assert_string_equal(px.at, "(47, 65) G");
+    assert_true(isnan(px.worst));
+    assert_string_equal(bl.at, "(42, 60)..(49, 67) G");
+    assert_int_equal(im.failed, 1);
+    assert_string_equal(im.at, "G");
+}
+
+/* (d) The per-test level is 1 - (1 - alpha)^(1/N) over N = (pixels + blocks +
+ * 1) * channels, partial edge blocks included. */
+static void test_ztest_sidak(void **state)
+{
+    (void)state;
+    char a[1024], b[1024], out[65536];
+    tmp_path(a, sizeof a, "zt_sidak_a.exr");
+    tmp_path(b, sizeof b, "zt_sidak_b.exr");
+    zt_case k = zt_default(3);
+    k.w = 13; /* 2 x 2 blocks: 8 + 5 columns, 8 + 3 rows */
+    k.h = 11;
+    zt_write(&k, a, b);
+    const struct {
+        const char *extra;
+        double alpha;
+        int channels;
+    } cases[] = {{"", 0.01, 3}, {"--alpha 0.05", 0.05, 3}, {"--alpha 1e-6 --channels G", 1e-6, 1},
+                 {"--channels B,R --alpha 0.3", 0.3, 2}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        assert_int_equal(zt_run(a, b, cases[i].extra, out, sizeof out), 0);
+        double n = (13.0 * 11.0 + 4.0 + 1.0) * cases[i].channels;
+        double want = -expm1(log1p(-cases[i].alpha) / n);
+        double got = zt_parse_level(out);
+        if (got != want)
+            fail_msg("%s: level %.17g, want %.17g", cases[i].extra, got, want);
+        /* The naive formula agrees to rounding. */
+        assert_true(fabs(got - (1.0 - pow(1.0 - cases[i].alpha, 1.0 / n))) <= 1e-15);
+        zt_row bl = zt_parse(out, "block");
+        assert_int_equal(bl.tests, 4 * cases[i].channels);
+        assert_int_equal(zt_parse(out, "pixel").tests, 143 * cases[i].channels);
+        /* The printed critical |z| solves erfc(z / sqrt 2) = level. */
+        const char *l = strstr(out, "fails when |z| > ");
+        assert_non_null(l);
+        double zc = strtod(l + strlen("fails when |z| > "), NULL);
+        assert_true(erfc((zc - 1e-4) / sqrt(2.0)) > want && erfc((zc + 1e-4) / sqrt(2.0)) < want);
+    }
+    /* Channels: R G B in that order, only those B has a variance for. */
+    assert_non_null(strstr(out, "channels R B\n"));
+}
+
+/* (e) Missing statistics: exit 2 and one line saying what is missing. */
+static void test_ztest_errors(void **state)
+{
+    (void)state;
+    char a[1024], b[1024], args[4096];
+    tmp_path(a, sizeof a, "zt_err_a.exr");
+    tmp_path(b, sizeof b, "zt_err_b.exr");
+    zt_case k = zt_default(5);
+    k.w = k.h = 9;
+    k.b_variance = false;
+    zt_write(&k, a, b);
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest", a, b);
+    expect_exit2(args, "has no Variance.R, Variance.G or Variance.B");
+    /* B has variances and counts, A only a count: fine; A with neither: error. */
+    k.b_variance = true;
+    k.counts = true;
+    zt_write(&k, a, b);
+    char out[16384];
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    /* The metrics leave the statistics layers out unless named. */
+    assert_null(strstr(out, "\nVariance.R "));
+    assert_null(strstr(out, "\nSampleCount.Y "));
+    snprintf(args, sizeof args, "diff '%s' '%s' --channels R,SampleCount.Y", a, b);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "\nSampleCount.Y "));
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest", ref_exr, b);
+    expect_exit2(args, "sizes differ");
+    char c[1024];
+    tmp_path(c, sizeof c, "zt_err_plain.exr");
+    write_image(c, 9, 9, 0, 0, 3, rgb, ref_value);
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest", c, b);
+    expect_exit2(args, "no variance for");
+    expect_exit2(args, "Variance.R");
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest --channels A", c, b);
+    expect_exit2(args, "no channel \"A\"");
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest", b, c); /* the plain one as reference */
+    expect_exit2(args, "has no Variance.R");
+    /* Invalid reference statistics. */
+    static const char *const rv[] = {"R", "G", "B", "Variance.R", "Variance.G", "Variance.B"};
+    write_image(c, W, H, 0, 0, 6, rv, offset_value); /* Variance.R = ref + 0.25 > 0 */
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest", ref_exr, c);
+    assert_int_equal(run_haze(args, out, sizeof out), 2);
+    assert_non_null(strstr(out, "no variance for")); /* A has no statistics */
+    write_image(c, W, H, 0, 0, 6, rv, nan_a);
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest", c, c);
+    expect_exit2(args, "R is nan at pixel (1, 1)");
+    /* Options (usage errors add a line pointing at --help). */
+    const struct {
+        const char *opts, *want;
+    } usage[] = {{"--alpha 0.05", "--alpha needs --ztest"},
+                 {"--ztest --accept 0.9 --alpha 1", "--alpha must lie strictly between 0 and 1"},
+                 {"--ztest --accept 1.5", "--accept must lie in [0, 1]"},
+                 {"--ztest --accept x", "--accept needs a finite number"},
+                 {"--ztest --alpha", "option --alpha needs a value"}};
+    for (size_t i = 0; i < sizeof usage / sizeof usage[0]; i++) {
+        snprintf(args, sizeof args, "diff '%s' '%s' %s", a, b, usage[i].opts);
+        int rc = run_haze(args, out, sizeof out);
+        if (rc != 2 || !strstr(out, usage[i].want))
+            fail_msg("haze %s: exit %d, output:\n%s(expected exit 2 and '%s')", args, rc, out,
+                     usage[i].want);
+    }
+}
+
+/* --ztest with --metric: both checks must pass. */
+static void test_ztest_with_metric(void **state)
+{
+    (void)state;
+    char a[1024], b[1024], out[65536];
+    tmp_path(a, sizeof a, "zt_m_a.exr");
+    tmp_path(b, sizeof b, "zt_m_b.exr");
+    zt_case k = zt_default(9);
+    k.w = k.h = 16;
+    zt_write(&k, a, b);
+    assert_int_equal(zt_run(a, b, "--metric rmse --threshold 1", out, sizeof out), 0);
+    assert_non_null(strstr(out, "PASS: rmse"));
+    assert_non_null(strstr(out, "PASS: z-test"));
+    assert_int_equal(zt_run(a, b, "--metric rmse --threshold 1e-6", out, sizeof out), 1);
+    assert_non_null(strstr(out, "FAIL: rmse"));
+    assert_non_null(strstr(out, "PASS: z-test"));
+    k.shift = 0.2;
+    zt_write(&k, a, b);
+    assert_int_equal(zt_run(a, b, "--metric rmse --threshold 1", out, sizeof out), 1);
+    assert_non_null(strstr(out, "PASS: rmse"));
+    assert_non_null(strstr(out, "FAIL: z-test"));
+}
+
+/* (f) Real renders: a reference at 1024 spp with variance and sample count; a
+ * re-seeded render at 16 spp passes; the same scene with the point light 5%
+ * brighter fails (through the block and image scales: at 16 spp the shift is
+ * within each pixel's noise). */
+static const char zt_scene[] =
+    "LookAt 0 3.2 -2.2   0 0.4 0.6   0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 40\n"
+    "Film \"rgb\" \"integer xresolution\" 48 \"integer yresolution\" 32\n"
+    "    \"bool writevariance\" true \"bool writesamplecount\" true\n"
+    "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+    "WorldBegin\n"
+    "LightSource \"point\" \"point3 from\" [1.5 2.5 -0.5] \"rgb I\" [%s]\n"
+    "AttributeBegin\n"
+    "  AreaLightSource \"diffuse\" \"rgb L\" [0.6 0.8 1.2]\n"
+    "  Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+    "      \"point3 P\" [-2 3.5 -1  2 3.5 -1  2 3.5 3  -2 3.5 3]\n"
+    "AttributeEnd\n"
+    "Material \"diffuse\" \"rgb reflectance\" [0.6 0.6 0.6]\n"
+    "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+    "    \"point3 P\" [-8 0 -8  8 0 -8  8 0 8  -8 0 8]\n"
+    "Translate 0 0.9 0.6\n"
+    "Shape \"sphere\" \"float radius\" 0.5\n";
+
+static void zt_render(const char *intensity, const char *exr, int spp, int seed)
+{
+    char scene[1024], text[2048], args[4096], out[8192];
+    snprintf(scene, sizeof scene, "%s.pbrt", exr);
+    snprintf(text, sizeof text, zt_scene, intensity);
+    write_text_file(scene, text);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --spp %d --seed %d --quiet", scene, exr, spp,
+             seed);
+    if (run_haze(args, out, sizeof out) != 0)
+        fail_msg("haze %s:\n%s", args, out);
+}
+
+static void test_ztest_render(void **state)
+{
+    (void)state;
+    char ref[1024], a[1024], out[65536];
+    tmp_path(ref, sizeof ref, "zt_render_ref.exr");
+    tmp_path(a, sizeof a, "zt_render_a.exr");
+    zt_render("12 9 6", ref, 1024, 1);
+    for (int seed = 2; seed <= 4; seed++) {
+        zt_render("12 9 6", a, 16, seed);
+        int rc = zt_run(a, ref, "", out, sizeof out);
+        zt_row px = zt_parse(out, "pixel"), bl = zt_parse(out, "block");
+        print_message("re-seeded render (seed %d): exit %d, pixel tests failed %zu (limit %zu), "
+                      "worst pixel z %.3f, worst block z %.3f, image z R %.3f G %.3f B %.3f\n",
+                      seed, rc, px.failed, px.limit, px.worst, bl.worst, zt_image_z(out, "R"),
+                      zt_image_z(out, "G"), zt_image_z(out, "B"));
+        if (rc != 0)
+            fail_msg("a re-seeded render fails the z-test:\n%s", out);
+        assert_non_null(strstr(out, "variance of A: the larger of A's own Variance and B's "
+                                    "Variance x SampleCount.Y"));
+    }
+    zt_render("12.6 9.45 6.3", a, 16, 2);
+    assert_int_equal(zt_run(a, ref, "", out, sizeof out), 1);
+    zt_row px = zt_parse(out, "pixel"), bl = zt_parse(out, "block"), im = zt_parse(out, "image");
+    print_message("point light 5%% brighter: pixel tests failed %zu (limit %zu), block tests failed "
+                  "%zu of %zu, image z R %.3f G %.3f B %.3f\n",
+                  px.failed, px.limit, bl.failed, bl.tests, zt_image_z(out, "R"), zt_image_z(out, "G"),
+                  zt_image_z(out, "B"));
+    assert_true(bl.failed > 0);
+    assert_int_equal(im.failed, 3);
+    assert_true(zt_image_z(out, "R") > 10.0); /* the warm light shows most in R */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -492,7 +1046,10 @@ int main(void)
         cmocka_unit_test(test_max_location),       cmocka_unit_test(test_thresholds),
         cmocka_unit_test(test_nonfinite_excluded), cmocka_unit_test(test_heatmaps),
         cmocka_unit_test(test_input_errors),       cmocka_unit_test(test_usage),
-        cmocka_unit_test(test_idiff_agrees),
+        cmocka_unit_test(test_idiff_agrees),       cmocka_unit_test(test_ztest_false_failures),
+        cmocka_unit_test(test_ztest_shift),        cmocka_unit_test(test_ztest_outlier),
+        cmocka_unit_test(test_ztest_sidak),        cmocka_unit_test(test_ztest_errors),
+        cmocka_unit_test(test_ztest_with_metric),  cmocka_unit_test(test_ztest_render),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

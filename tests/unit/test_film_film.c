@@ -86,6 +86,13 @@ static void test_params_defaults(void **state)
     assert_string_equal(p.filename, "out/fog.EXR");
     assert_true(p.savefp16 && p.write_z);
     assert_true(p.iso == 400.0 && p.max_component_value == 10.0);
+    assert_false(p.write_variance || p.write_sample_count);
+
+    entity_init(&e, "rgb");
+    add_bool(&e, "writevariance", true);
+    add_bool(&e, "writesamplecount", true);
+    p = params_ok(&e);
+    assert_true(p.write_variance && p.write_sample_count);
 }
 
 static void test_params_bounds(void **state)
@@ -171,6 +178,37 @@ static void test_params_errors(void **state)
     entity_init(&e, "rgb");
     add_float(&e, "iso", -5);
     params_fail(&e, "iso");
+    /* The statistics count in the memory estimate: 40000 x 25000 pixels need
+     * 1e9 * 48 bytes = 44.7 GiB plain (accepted), 1e9 * 124 bytes = 115.5 GiB
+     * with variance (refused). */
+    entity_init(&e, "rgb");
+    add_int(&e, "xresolution", 40000);
+    add_int(&e, "yresolution", 25000);
+    params_ok(&e);
+    entity_init(&e, "rgb");
+    add_int(&e, "xresolution", 40000);
+    add_int(&e, "yresolution", 25000);
+    add_bool(&e, "writevariance", true);
+    params_fail(&e, "115.5 GiB");
+    entity_init(&e, "rgb");
+    add_int(&e, "xresolution", 40000);
+    add_int(&e, "yresolution", 25000);
+    add_bool(&e, "writesamplecount", true); /* 56 bytes: 52.2 GiB, still accepted */
+    params_ok(&e);
+    entity_init(&e, "rgb");
+    add_int(&e, "xresolution", 50000);
+    add_int(&e, "yresolution", 25000);
+    add_bool(&e, "writesamplecount", true); /* 1.25e9 * 56 bytes = 65.2 GiB */
+    params_fail(&e, "65.2 GiB");
+}
+
+static film *film_with(const film_params *p)
+{
+    hz_error err = {{0}};
+    film *f = film_create(p, &err);
+    if (!f)
+        fail_msg("%s", err.message);
+    return f;
 }
 
 static film *small_film(int xres, int yres, pixel_bounds b, bool z, bool fp16)
@@ -182,11 +220,7 @@ static film *small_film(int xres, int yres, pixel_bounds b, bool z, bool fp16)
     p.bounds = b;
     p.write_z = z;
     p.savefp16 = fp16;
-    hz_error err = {{0}};
-    film *f = film_create(&p, &err);
-    if (!f)
-        fail_msg("%s", err.message);
-    return f;
+    return film_with(&p);
 }
 
 static void test_accumulation(void **state)
@@ -298,6 +332,205 @@ static void test_write_exr(void **state)
     }
 }
 
+/* A film of w x h pixels from the origin with the statistics AOVs. */
+static film *stats_film(int w, int h, bool fp16, double max_component)
+{
+    film_params p;
+    film_params_default(&p);
+    p.xres = w;
+    p.yres = h;
+    p.bounds = (pixel_bounds){0, 0, w, h};
+    p.write_variance = p.write_sample_count = true;
+    p.savefp16 = fp16;
+    p.max_component_value = max_component;
+    return film_with(&p);
+}
+
+/* Deterministic samples: a large offset (so a naive sum-of-squares formula
+ * would lose digits) plus a spread, per component. */
+static double sample_value(int i, int c)
+{
+    uint32_t h = (uint32_t)i * 2654435761u ^ (uint32_t)(c + 1) * 40503u;
+    h ^= h >> 15;
+    h *= 2246822519u;
+    h ^= h >> 13;
+    return 1000.0 * (c + 1) + (double)(h % 100000u) / 100000.0 * (c + 0.5);
+}
+
+/* Two-pass reference: |w|-weighted mean, M2 = sum |w| (x - mean)^2, n_eff =
+ * W^2/W2 and (M2/W)/(n_eff - 1). */
+static double two_pass_variance(const double *x, const double *w, int n)
+{
+    double W = 0, W2 = 0, S = 0;
+    for (int i = 0; i < n; i++) {
+        W += fabs(w[i]);
+        W2 += w[i] * w[i];
+        S += fabs(w[i]) * x[i];
+    }
+    double mean = S / W, M2 = 0;
+    for (int i = 0; i < n; i++)
+        M2 += fabs(w[i]) * (x[i] - mean) * (x[i] - mean);
+    double neff = W * W / W2;
+    return neff > 1.0 ? (M2 / W) / (neff - 1.0) : 0.0;
+}
+
+static void assert_rel(double got, double want, double rel)
+{
+    if (!(fabs(got - want) <= rel * fabs(want)))
+        fail_msg("got %.17g, want %.17g (relative tolerance %g)", got, want, rel);
+}
+
+static void test_variance_equal_weights(void **state)
+{
+    (void)state;
+    enum { N = 1000 };
+    film *f = stats_film(3, 2, false, INFINITY);
+    static double x[3][N], w[N];
+    /* Equal weights (pbrt-v4's sampled positive filters): exactly s^2 / n. The
+     * weight is the gaussian filter's tabulated integral, not 1. */
+    for (int i = 0; i < N; i++) {
+        for (int c = 0; c < 3; c++)
+            x[c][i] = sample_value(i, c);
+        w[i] = 0.7268;
+        film_add_sample(f, 2, 1, rgb_make(x[0][i], x[1][i], x[2][i]), w[i], INFINITY);
+    }
+    for (double ratio = 1.0; ratio <= 3.0; ratio += 2.0) {
+        rgb v = film_get_variance(f, 2, 1, ratio);
+        double got[3] = {v.r, v.g, v.b};
+        for (int c = 0; c < 3; c++) {
+            double mean = 0, ss = 0;
+            for (int i = 0; i < N; i++)
+                mean += x[c][i];
+            mean /= N;
+            for (int i = 0; i < N; i++)
+                ss += (x[c][i] - mean) * (x[c][i] - mean);
+            double s2_over_n = ss / (N - 1) / N;
+            assert_rel(got[c], ratio * ratio * s2_over_n, 1e-10);
+            assert_rel(got[c], ratio * ratio * two_pass_variance(x[c], w, N), 1e-10);
+        }
+    }
+    assert_int_equal(film_get_sample_count(f, 2, 1), N);
+    /* The mean is untouched by the extra state. */
+    double mean0 = 0;
+    for (int i = 0; i < N; i++)
+        mean0 += x[0][i];
+    assert_rel(film_get_pixel(f, 2, 1, 1.0).r, mean0 / N, 1e-13);
+
+    /* No sample, or one: n_eff <= 1 gives 0. Two samples 1 and 3: s^2/n = 2/2. */
+    rgb z = film_get_variance(f, 0, 0, 1.0);
+    assert_true(z.r == 0.0 && z.g == 0.0 && z.b == 0.0);
+    assert_int_equal(film_get_sample_count(f, 0, 0), 0);
+    film_add_sample(f, 0, 0, rgb_make(5.0, 6.0, 7.0), 2.5, INFINITY);
+    z = film_get_variance(f, 0, 0, 1.0);
+    assert_true(z.r == 0.0 && z.g == 0.0 && z.b == 0.0);
+    assert_int_equal(film_get_sample_count(f, 0, 0), 1);
+    film_add_sample(f, 1, 0, rgb_grey(1.0), 1.0, INFINITY);
+    film_add_sample(f, 1, 0, rgb_grey(3.0), 1.0, INFINITY);
+    assert_true(film_get_variance(f, 1, 0, 1.0).g == 1.0);
+    assert_true(film_get_variance(f, 1, 0, 2.0).g == 4.0); /* imaging ratio squared */
+    film_destroy(f);
+}
+
+static void test_variance_weighted(void **state)
+{
+    (void)state;
+    enum { N = 257 };
+    film *f = stats_film(2, 2, false, INFINITY);
+    static double x[3][N], w[N];
+    for (int i = 0; i < N; i++) {
+        for (int c = 0; c < 3; c++)
+            x[c][i] = sample_value(i + 7, c);
+        /* Unequal weights of both signs (a filter with negative lobes):
+         * the variance uses |w|. */
+        w[i] = (0.2 + (i % 5) * 0.45) * (i % 7 == 3 ? -1.0 : 1.0);
+        film_add_sample(f, 1, 1, rgb_make(x[0][i], x[1][i], x[2][i]), w[i], INFINITY);
+    }
+    rgb v = film_get_variance(f, 1, 1, 0.5);
+    double got[3] = {v.r, v.g, v.b};
+    for (int c = 0; c < 3; c++)
+        assert_rel(got[c], 0.25 * two_pass_variance(x[c], w, N), 1e-10);
+    assert_int_equal(film_get_sample_count(f, 1, 1), N);
+
+    /* Positive unequal weights: the estimate equals sum w^2 s_w^2 / W^2 with
+     * the unbiased weighted variance s_w^2 = M2 / (W - W2/W), i.e. the variance
+     * of the weighted mean for independent samples. */
+    double xs[4] = {1.0, 2.0, 4.0, 8.0}, ws[4] = {1.0, 2.0, 0.5, 1.5};
+    for (int i = 0; i < 4; i++)
+        film_add_sample(f, 0, 1, rgb_grey(xs[i]), ws[i], INFINITY);
+    double W = 5.0, W2 = 1 + 4 + 0.25 + 2.25, mean = (1 + 4 + 2 + 12) / W, M2 = 0;
+    for (int i = 0; i < 4; i++)
+        M2 += ws[i] * (xs[i] - mean) * (xs[i] - mean);
+    double sw2 = M2 / (W - W2 / W);
+    assert_rel(film_get_variance(f, 0, 1, 1.0).b, W2 * sw2 / (W * W), 1e-14);
+
+    /* Zero weights add nothing to the moments but count as samples. */
+    film_add_sample(f, 1, 0, rgb_grey(1.0), 1.0, INFINITY);
+    film_add_sample(f, 1, 0, rgb_grey(100.0), 0.0, INFINITY);
+    film_add_sample(f, 1, 0, rgb_grey(3.0), 1.0, INFINITY);
+    assert_true(film_get_variance(f, 1, 0, 1.0).r == 1.0);
+    assert_int_equal(film_get_sample_count(f, 1, 0), 3);
+    /* Non-finite samples are dropped: not in the moments, not counted. */
+    film_add_sample(f, 1, 0, rgb_make(NAN, 1, 1), 1.0, INFINITY);
+    film_add_sample(f, 1, 0, rgb_grey(1.0), INFINITY, INFINITY);
+    assert_true(film_get_variance(f, 1, 0, 1.0).r == 1.0);
+    assert_int_equal(film_get_sample_count(f, 1, 0), 3);
+    film_destroy(f);
+
+    /* The moments see the clamped values the mean sees: 4 -> 2 (max 2). */
+    f = stats_film(1, 1, false, 2.0);
+    film_add_sample(f, 0, 0, rgb_make(4.0, 1.0, 0.0), 1.0, INFINITY);
+    film_add_sample(f, 0, 0, rgb_make(1.0, 0.5, 0.0), 1.0, INFINITY);
+    assert_true(film_get_pixel(f, 0, 0, 1.0).r == 1.5);
+    rgb cv = film_get_variance(f, 0, 0, 1.0);
+    assert_true(cv.r == 0.25 && cv.g == 0.0 && cv.b == 0.0); /* (2-1)^2/2 / 2 */
+    film_destroy(f);
+}
+
+static void test_write_statistics(void **state)
+{
+    (void)state;
+    for (int fp16 = 0; fp16 < 2; fp16++) {
+        film *f = stats_film(4, 3, fp16, INFINITY);
+        for (int y = 0; y < 3; y++)
+            for (int x = 0; x < 4; x++)
+                for (int i = 0; i < x + 4 * y; i++) /* pixel (x, y) gets x + 4y samples */
+                    film_add_sample(f, x, y, rgb_make(sample_value(i, 0) - 1000.0, 0.001 * i, 1e-4 * i * i),
+                                    1.0, INFINITY);
+        char path[512];
+        snprintf(path, sizeof path, "%s/film_stats_%d.exr", HAZE_TMP, fp16);
+        hz_error err = {{0}};
+        assert_int_equal(film_write_exr(f, path, 1.5, &err), HZ_OK);
+        exr_image img;
+        assert_int_equal(exr_read(path, &img, &err), HZ_OK);
+        assert_int_equal(img.channel_count, 8);
+        const char *names[] = {"R", "G", "B", "A", "Variance.R", "Variance.G", "Variance.B", "SampleCount.Y"};
+        for (int c = 0; c < 8; c++) {
+            const exr_channel *ch = exr_find_channel(&img, names[c]);
+            if (!ch)
+                fail_msg("no channel %s", names[c]);
+            assert_int_equal(ch->half, fp16 && c < 4); /* the statistics stay float */
+        }
+        const exr_channel *V[3] = {exr_find_channel(&img, "Variance.R"), exr_find_channel(&img, "Variance.G"),
+                                   exr_find_channel(&img, "Variance.B")};
+        const exr_channel *S = exr_find_channel(&img, "SampleCount.Y");
+        for (int y = 0; y < 3; y++)
+            for (int x = 0; x < 4; x++) {
+                int i = y * 4 + x;
+                rgb v = film_get_variance(f, x, y, 1.5);
+                assert_true(V[0]->pixels[i] == (float)v.r);
+                assert_true(V[1]->pixels[i] == (float)v.g);
+                assert_true(V[2]->pixels[i] == (float)v.b);
+                assert_true(S->pixels[i] == (float)(x + 4 * y));
+                if (x + 4 * y >= 2)
+                    assert_true(v.g > 0.0);
+            }
+        /* Pixel (3, 0): 3 samples of G = 0, 0.001, 0.002: s^2/n = 1e-6/3, times 1.5^2. */
+        assert_float_equal(V[1]->pixels[3], 2.25e-6 / 3.0, 1e-12);
+        exr_image_free(&img);
+        film_destroy(f);
+    }
+}
+
 /* Reads an 8-bit RGB PNG with libpng's simplified API. */
 static uint8_t *read_png(const char *path, int *w, int *h)
 {
@@ -360,6 +593,9 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_accumulation),
         cmocka_unit_test(test_write_exr),
+        cmocka_unit_test(test_variance_equal_weights),
+        cmocka_unit_test(test_variance_weighted),
+        cmocka_unit_test(test_write_statistics),
         cmocka_unit_test(test_write_png),
         /* Factories last: they need scene/params. */
         cmocka_unit_test(test_params_defaults),
