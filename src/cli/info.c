@@ -253,7 +253,7 @@ static hz_status describe_exr(const char *path, FILE *out, hz_error *err)
     fprintf(out, "  %-15s (0, 0) .. (%d, %d)  (%d x %d)\n", "display window",
             img.display_width - 1, img.display_height - 1, img.display_width, img.display_height);
     fprintf(out, "\nchannels (%d)\n", img.channel_count);
-    fprintf(out, "  %-12s %-6s %12s %12s %12s %8s %8s\n", "name", "type", "min", "max", "mean", "NaN",
+    fprintf(out, "  %-14s %-6s %12s %12s %12s %8s %8s\n", "name", "type", "min", "max", "mean", "NaN",
             "Inf");
     size_t pixels = (size_t)img.width * (size_t)img.height;
     for (int c = 0; c < img.channel_count; c++) {
@@ -275,7 +275,7 @@ static hz_status describe_exr(const char *path, FILE *out, hz_error *err)
                     hi = v;
             }
         }
-        fprintf(out, "  %-12s %-6s ", ch->name, ch->half ? "half" : "float");
+        fprintf(out, "  %-14s %-6s ", ch->name, ch->half ? "half" : "float");
         if (finite)
             fprintf(out, "%12.6g %12.6g %12.6g", lo, hi, sum / (double)finite);
         else
