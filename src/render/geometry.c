@@ -13,9 +13,13 @@ typedef struct {
     size_t shape_count;
 } prototype;
 
+/* An Embree instance: of an object's prototype (ObjectInstance), or of the
+ * private scene of a moving top-level shape. */
 typedef struct {
-    transform render_from_instance;
-    size_t object;
+    transform render_from_instance; /* static instances */
+    geom_motion motion;             /* moving ones: motion.steps != NULL */
+    const geom_shape *shapes;       /* the instanced scene's shapes, by Embree geomID */
+    RTCScene own_scene;             /* a moving shape's scene (released with the geometry) */
 } instance;
 
 struct geometry {
@@ -27,6 +31,11 @@ struct geometry {
     size_t object_count;
     instance *instances;      /* Embree geomID = shape_count + index */
     size_t instance_count;
+    /* Per top-level shape, the instance that moves it (NULL: static); the
+     * table itself is NULL when no shape moves. */
+    instance **shape_instances;
+    bool motion;              /* some shape or instance moves */
+    double start_time, end_time; /* TransformTimes */
 };
 
 /* ---- spheres: Embree user geometry solved in object space, in double ---- */
@@ -148,7 +157,7 @@ static hz_status resolve_medium(const scene_desc *sd, const char *name, file_loc
 }
 
 static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
-                             const scene_desc *sd, shape_entity *se, transform space_from_world,
+                             const scene_desc *sd, shape_entity *se, transform space_from_object,
                              const material *materials,
                              size_t material_count, const material *default_material,
                              geom_shape *out, hz_error *err)
@@ -169,7 +178,6 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
     shape_geometry g;
     if (shape_geometry_create(se, &g, err) != HZ_OK)
         return HZ_ERROR;
-    transform space_from_object = transform_compose(space_from_world, se->world_from_object);
     out->kind = g.kind;
     out->flip_normal = se->reverse_orientation ^ transform_swaps_handedness(&space_from_object);
     bool interface = out->material->kind == MATERIAL_INTERFACE;
@@ -292,12 +300,158 @@ static hz_status build_objects(geometry *g, scene_desc *sd, const material *mate
                                   "(pbrt-v4 refuses them too)");
             /* Prototype space = the object's world space; instances carry
              * render_from_world to the instance transform. */
-            if (build_shape(g->device, pr->scene, (unsigned)i, sd, se, transform_identity(), materials,
-                            material_count, default_material, &pr->shapes[i], err) != HZ_OK)
+            transform space_from_object =
+                transform_compose(transform_identity(), se->world_from_object);
+            if (build_shape(g->device, pr->scene, (unsigned)i, sd, se, space_from_object,
+                            materials, material_count, default_material, &pr->shapes[i],
+                            err) != HZ_OK)
                 return HZ_ERROR;
         }
         rtcCommitScene(pr->scene);
         if (check_device(g->device, err) != HZ_OK)
+            return HZ_ERROR;
+    }
+    return HZ_OK;
+}
+
+/* ---- motion ---- */
+
+static bool moves(const transform *start, const transform *end)
+{
+    return memcmp(&start->m, &end->m, sizeof start->m) != 0;
+}
+
+transform geom_motion_at(const geom_motion *m, double time)
+{
+    double u = hz_clamp((time - m->start_time) / (m->end_time - m->start_time), 0.0, 1.0);
+    /* Embree sees the ray time as a float. */
+    mat4 x = quat_motion_at(m->steps, m->segments, (double)(float)u);
+    transform t;
+    if (!transform_from_matrix(x, &t)) { /* not for steps of one handedness */
+        mat4 x0 = quat_decomposition_matrix(&m->steps[0]);
+        if (!transform_from_matrix(x0, &t))
+            t = transform_identity();
+    }
+    return t;
+}
+
+/* Attaches to the top-level scene, as `geom_id`, an instance of `child` that
+ * moves with `a` (animated): time steps doubled until Embree's path follows
+ * a's within GEOMETRY_MOTION_TOLERANCE over the child's bounds. */
+static hz_status attach_moving(geometry *g, instance *in, RTCScene child,
+                               const animated_transform *a, unsigned geom_id, file_loc loc,
+                               hz_error *err)
+{
+    /* pbrt-v4 lerps S from one keyframe to the other: with a reflection at
+     * one end only it passes through a singular transform. */
+    if (transform_swaps_handedness(&a->start) != transform_swaps_handedness(&a->end))
+        return hz_fail_at(err, loc,
+                          "the start and end transforms differ in handedness (one mirrors, the "
+                          "other does not): the motion would pass through a flat transform");
+    struct RTCBounds b;
+    rtcGetSceneBounds(child, &b);
+    if (!(b.lower_x <= b.upper_x && b.lower_y <= b.upper_y && b.lower_z <= b.upper_z))
+        return HZ_OK; /* nothing to intersect */
+    vec3 lo = v3(b.lower_x, b.lower_y, b.lower_z), hi = v3(b.upper_x, b.upper_y, b.upper_z);
+    int n = 1;
+    quat_decomposition *steps = NULL;
+    for (;;) {
+        quat_decomposition *grown = realloc(steps, (size_t)(n + 1) * sizeof *steps);
+        if (!grown) {
+            free(steps);
+            return hz_fail(err, "out of memory");
+        }
+        steps = grown;
+        if (!animated_transform_time_steps(a, n, steps)) {
+            free(steps);
+            return hz_fail_at(err, loc, "the animated transform is singular between its keyframes");
+        }
+        if (n >= GEOMETRY_MAX_SEGMENTS ||
+            animated_transform_steps_error(a, steps, n, lo, hi) <= GEOMETRY_MOTION_TOLERANCE)
+            break;
+        n *= 2;
+    }
+    in->motion = (geom_motion){a->start_time, a->end_time, n, steps};
+
+    RTCGeometry geom = rtcNewGeometry(g->device, RTC_GEOMETRY_TYPE_INSTANCE);
+    rtcSetGeometryInstancedScene(geom, child);
+    rtcSetGeometryTimeStepCount(geom, (unsigned)n + 1);
+    for (int k = 0; k <= n; ++k) {
+        const quat_decomposition *d = &steps[k];
+        struct RTCQuaternionDecomposition qd;
+        rtcInitQuaternionDecomposition(&qd);
+        rtcQuaternionDecompositionSetScale(&qd, (float)d->scale[0], (float)d->scale[1],
+                                           (float)d->scale[2]);
+        rtcQuaternionDecompositionSetSkew(&qd, (float)d->skew[0], (float)d->skew[1],
+                                          (float)d->skew[2]);
+        rtcQuaternionDecompositionSetQuaternion(&qd, (float)d->rotation.w, (float)d->rotation.x,
+                                                (float)d->rotation.y, (float)d->rotation.z);
+        rtcQuaternionDecompositionSetTranslation(&qd, (float)d->translation.x,
+                                                 (float)d->translation.y,
+                                                 (float)d->translation.z);
+        rtcSetGeometryTransformQuaternion(geom, (unsigned)k, &qd);
+    }
+    rtcCommitGeometry(geom);
+    rtcAttachGeometryByID(g->scene, geom, geom_id);
+    rtcReleaseGeometry(geom);
+    g->motion = true;
+    return HZ_OK;
+}
+
+/* A moving top-level shape: built in object space in a scene of its own,
+ * instanced with its motion as Embree geomID i. Like pbrt-v4's animated
+ * shapes (created with an identity transform), its normals do not flip with
+ * the handedness of the transform. */
+static hz_status build_moving_shape(geometry *g, scene_desc *sd, size_t i,
+                                    const animated_transform *a, const material *materials,
+                                    size_t material_count, const material *default_material,
+                                    hz_error *err)
+{
+    instance *in = calloc(1, sizeof *in);
+    if (!in)
+        return hz_fail(err, "out of memory");
+    g->shape_instances[i] = in;
+    in->own_scene = new_scene(g->device);
+    in->shapes = &g->shapes[i];
+    shape_entity *se = &sd->shapes[i];
+    if (build_shape(g->device, in->own_scene, 0, sd, se, transform_identity(), materials,
+                    material_count, default_material, &g->shapes[i], err) != HZ_OK)
+        return HZ_ERROR;
+    rtcCommitScene(in->own_scene);
+    if (check_device(g->device, err) != HZ_OK ||
+        attach_moving(g, in, in->own_scene, a, (unsigned)i, se->entity.loc, err) != HZ_OK)
+        return HZ_ERROR;
+    if (in->motion.steps)
+        g->shapes[i].motion = &in->motion;
+    return HZ_OK;
+}
+
+static hz_status build_shapes(geometry *g, scene_desc *sd, transform render_from_world,
+                              const material *materials, size_t material_count,
+                              const material *default_material, hz_error *err)
+{
+    for (size_t i = 0; i < sd->shape_count; ++i) {
+        shape_entity *se = &sd->shapes[i];
+        transform render_from_object = transform_compose(render_from_world, se->world_from_object);
+        if (moves(&se->world_from_object, &se->world_from_object_end)) {
+            animated_transform a = animated_transform_make(
+                render_from_object, sd->transform_start_time,
+                transform_compose(render_from_world, se->world_from_object_end),
+                sd->transform_end_time);
+            if (a.animated) {
+                if (!g->shape_instances) {
+                    g->shape_instances = calloc(sd->shape_count, sizeof *g->shape_instances);
+                    if (!g->shape_instances)
+                        return hz_fail(err, "out of memory");
+                }
+                if (build_moving_shape(g, sd, i, &a, materials, material_count, default_material,
+                                       err) != HZ_OK)
+                    return HZ_ERROR;
+                continue;
+            }
+        }
+        if (build_shape(g->device, g->scene, (unsigned)i, sd, se, render_from_object, materials,
+                        material_count, default_material, &g->shapes[i], err) != HZ_OK)
             return HZ_ERROR;
     }
     return HZ_OK;
@@ -315,8 +469,21 @@ static hz_status build_instances(geometry *g, scene_desc *sd, transform render_f
         if (ie->object >= g->object_count)
             return hz_fail_at(err, ie->loc, "instance of unknown object %zu", ie->object);
         instance *in = &g->instances[i];
-        in->object = ie->object;
+        in->shapes = g->objects[ie->object].shapes;
         in->render_from_instance = transform_compose(render_from_world, ie->world_from_instance);
+        unsigned geom_id = (unsigned)(g->shape_count + i);
+        if (moves(&ie->world_from_instance, &ie->world_from_instance_end)) {
+            animated_transform a = animated_transform_make(
+                in->render_from_instance, sd->transform_start_time,
+                transform_compose(render_from_world, ie->world_from_instance_end),
+                sd->transform_end_time);
+            if (a.animated) {
+                if (attach_moving(g, in, g->objects[ie->object].scene, &a, geom_id, ie->loc,
+                                  err) != HZ_OK)
+                    return HZ_ERROR;
+                continue;
+            }
+        }
         float xfm[12];
         for (int r = 0; r < 3; ++r)
             for (int c = 0; c < 4; ++c)
@@ -326,7 +493,7 @@ static hz_status build_instances(geometry *g, scene_desc *sd, transform render_f
         rtcSetGeometryTimeStepCount(geom, 1);
         rtcSetGeometryTransform(geom, 0, RTC_FORMAT_FLOAT3X4_ROW_MAJOR, xfm);
         rtcCommitGeometry(geom);
-        rtcAttachGeometryByID(g->scene, geom, (unsigned)(g->shape_count + i));
+        rtcAttachGeometryByID(g->scene, geom, geom_id);
         rtcReleaseGeometry(geom);
     }
     return HZ_OK;
@@ -349,6 +516,8 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
     geometry *g = calloc(1, sizeof *g);
     if (!g)
         return hz_fail(err, "out of memory");
+    g->start_time = sd->transform_start_time;
+    g->end_time = sd->transform_end_time;
     g->device = new_device();
     if (!g->device) {
         free(g);
@@ -362,15 +531,9 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
         return hz_fail(err, "out of memory");
     }
     g->shape_count = sd->shape_count;
-    for (size_t i = 0; i < sd->shape_count; ++i) {
-        if (build_shape(g->device, g->scene, (unsigned)i, sd, &sd->shapes[i], render_from_world,
-                        materials, material_count, default_material, &g->shapes[i],
-                        err) != HZ_OK) {
-            geometry_destroy(g);
-            return HZ_ERROR;
-        }
-    }
-    if (build_objects(g, sd, materials, material_count, default_material, err) != HZ_OK ||
+    if (build_shapes(g, sd, render_from_world, materials, material_count, default_material,
+                     err) != HZ_OK ||
+        build_objects(g, sd, materials, material_count, default_material, err) != HZ_OK ||
         build_instances(g, sd, render_from_world, err) != HZ_OK) {
         geometry_destroy(g);
         return HZ_ERROR;
@@ -391,6 +554,18 @@ void geometry_destroy(geometry *g)
     for (size_t i = 0; i < g->shape_count; ++i)
         free(g->shapes[i].n);
     free(g->shapes);
+    if (g->shape_instances) {
+        for (size_t i = 0; i < g->shape_count; ++i) {
+            instance *in = g->shape_instances[i];
+            if (!in)
+                continue;
+            free(in->motion.steps);
+            if (in->own_scene)
+                rtcReleaseScene(in->own_scene);
+            free(in);
+        }
+        free(g->shape_instances);
+    }
     for (size_t o = 0; o < g->object_count; ++o) {
         for (size_t i = 0; i < g->objects[o].shape_count; ++i)
             free(g->objects[o].shapes[i].n);
@@ -399,6 +574,8 @@ void geometry_destroy(geometry *g)
             rtcReleaseScene(g->objects[o].scene);
     }
     free(g->objects);
+    for (size_t i = 0; i < g->instance_count; ++i)
+        free(g->instances[i].motion.steps);
     free(g->instances);
     if (g->scene)
         rtcReleaseScene(g->scene);
@@ -406,6 +583,8 @@ void geometry_destroy(geometry *g)
         rtcReleaseDevice(g->device);
     free(g);
 }
+
+bool geometry_has_motion(const geometry *g) { return g->motion; }
 
 size_t geometry_shape_count(const geometry *g) { return g->shape_count; }
 geom_shape *geometry_shape(geometry *g, size_t i) { return &g->shapes[i]; }
@@ -474,7 +653,16 @@ void geometry_triangle_point(const geom_shape *s, unsigned prim, double u, doubl
     surface_at(s, prim, u, v, v3(0, 0, 0), v3(0, 0, 0), 0.0, out);
 }
 
-static void init_ray(struct RTCRay *r, vec3 o, vec3 d, double tmax)
+/* The ray time Embree sees: the scene time over TransformTimes, in [0, 1];
+ * 0 in a scene without motion, as before motion existed. */
+static float embree_time(const geometry *g, double time)
+{
+    if (!g->motion)
+        return 0.0f;
+    return (float)hz_clamp((time - g->start_time) / (g->end_time - g->start_time), 0.0, 1.0);
+}
+
+static void init_ray(struct RTCRay *r, vec3 o, vec3 d, double tmax, float time)
 {
     r->org_x = (float)o.x;
     r->org_y = (float)o.y;
@@ -483,7 +671,7 @@ static void init_ray(struct RTCRay *r, vec3 o, vec3 d, double tmax)
     r->dir_x = (float)d.x;
     r->dir_y = (float)d.y;
     r->dir_z = (float)d.z;
-    r->time = 0.0f;
+    r->time = time;
     r->tfar = tmax >= (double)INFINITY ? INFINITY : (float)tmax;
     r->mask = 0xFFFFFFFFu;
     r->id = 0;
@@ -493,11 +681,10 @@ static void init_ray(struct RTCRay *r, vec3 o, vec3 d, double tmax)
 bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
                         geom_hit *hit)
 {
-    (void)time; /* static scenes: one Embree time step */
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
-    init_ray(&rh.ray, o, d, tmax);
+    init_ray(&rh.ray, o, d, tmax, embree_time(g, time));
     rh.ray.tnear = (float)tmin;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -513,25 +700,29 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
         surface_at(s, rh.hit.primID, rh.hit.u, rh.hit.v, o, d, rh.ray.tfar, hit);
         return true;
     }
-    const instance *in = &g->instances[rh.hit.instID[0] - g->shape_count];
-    const geom_shape *s = &g->objects[in->object].shapes[rh.hit.geomID];
+    unsigned id = rh.hit.instID[0];
+    const instance *in = id < g->shape_count ? g->shape_instances[id]
+                                             : &g->instances[id - g->shape_count];
+    const geom_shape *s = &in->shapes[rh.hit.geomID];
     hit->shape = s;
-    transform instance_from_render = transform_inverse(in->render_from_instance);
+    /* A moving instance at the ray's time, as Embree moved it. */
+    transform render_from_instance =
+        in->motion.steps ? geom_motion_at(&in->motion, time) : in->render_from_instance;
+    transform instance_from_render = transform_inverse(render_from_instance);
     surface_at(s, rh.hit.primID, rh.hit.u, rh.hit.v, transform_point(&instance_from_render, o),
                transform_vector(&instance_from_render, d), rh.ray.tfar, hit);
-    hit->p = transform_point(&in->render_from_instance, hit->p);
-    hit->ng = v3_normalize(transform_normal(&in->render_from_instance, hit->ng));
-    hit->ns = v3_normalize(transform_normal(&in->render_from_instance, hit->ns));
+    hit->p = transform_point(&render_from_instance, hit->p);
+    hit->ng = v3_normalize(transform_normal(&render_from_instance, hit->ng));
+    hit->ns = v3_normalize(transform_normal(&render_from_instance, hit->ns));
     return true;
 }
 
 bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double time)
 {
-    (void)time; /* static scenes: one Embree time step */
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRay r;
-    init_ray(&r, o, d, tmax);
+    init_ray(&r, o, d, tmax, embree_time(g, time));
     rtcOccluded1(g->scene, &ctx, &r);
     return r.tfar == -INFINITY;
 }

@@ -2,7 +2,14 @@
  * triangles (vertices baked to float in render space), spheres as user
  * geometry solved in object space in double precision, ObjectBegin/End
  * prototypes as Embree instances. Hits come back with pbrt-v4's normal
- * orientation rules applied. */
+ * orientation rules applied.
+ *
+ * Motion (docs/motion.md): a top-level shape or an instance whose transform
+ * differs at the two TransformTimes moves as pbrt-v4's AnimatedTransform,
+ * intersected through Embree's quaternion motion blur: the shape sits in
+ * object space in a scene of its own, instanced with time steps. Shapes and
+ * instances whose keyframes are equal are built exactly as without motion, and
+ * a scene without motion has no time steps at all. */
 #ifndef HAZE_RENDER_GEOMETRY_H
 #define HAZE_RENDER_GEOMETRY_H
 
@@ -10,11 +17,31 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/animated_transform.h"
 #include "core/error.h"
 #include "core/transform.h"
 #include "render/material.h"
 #include "scene/scene_desc.h"
 #include "scene/shape.h"
+
+/* How a moving shape or instance moves: render_from_object (or
+ * render_from_instance) as the Embree time steps it is intersected with, over
+ * the scene's TransformTimes. */
+typedef struct {
+    double start_time, end_time; /* TransformTimes, end > start */
+    int segments;                /* Embree time steps - 1, in [1, GEOMETRY_MAX_SEGMENTS] */
+    quat_decomposition *steps;   /* segments + 1 */
+} geom_motion;
+
+/* At most 128 segments (Embree takes up to 129 time steps); the steps of a
+ * motion are doubled from 1 until Embree's path follows pbrt-v4's within
+ * GEOMETRY_MOTION_TOLERANCE (relative to the distance from the camera). */
+#define GEOMETRY_MAX_SEGMENTS 128
+#define GEOMETRY_MOTION_TOLERANCE 1e-5
+
+/* The transform at scene time `time` (clamped to TransformTimes): exactly the
+ * motion Embree intersects (its segment choice and interpolation, in double). */
+transform geom_motion_at(const geom_motion *m, double time);
 
 /* One shape as the renderer sees it. Top-level shapes live in render space,
  * shapes of an object (ObjectBegin) in that object's prototype space. */
@@ -37,6 +64,10 @@ typedef struct {
     /* sphere */
     double radius;
     transform space_from_object; /* render (or prototype) space from object space */
+    /* A moving top-level shape: everything above is in object space (space =
+     * object space, space_from_object the identity) and render_from_object at
+     * a time is geom_motion_at(motion, time). NULL for static shapes. */
+    const geom_motion *motion;
 } geom_shape;
 
 typedef struct {
@@ -53,11 +84,16 @@ typedef struct geometry geometry;
 /* Builds every shape of `sd` (top level and objects, then instances); medium
  * names resolve to indices of sd->media (an unknown name is an error).
  * `materials` are indexed by shape_entity.material; `default_material` is used
- * for -1. Errors name the shape's file:line:column. */
+ * for -1. Moving shapes and instances move over sd's TransformTimes; keyframes
+ * of different handedness are an error. Errors name the shape's
+ * file:line:column. */
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
                           geometry **out, hz_error *err);
 void geometry_destroy(geometry *g);
+
+/* True when some shape or instance moves (the scene has Embree time steps). */
+bool geometry_has_motion(const geometry *g);
 
 /* Top-level shapes, in scene_desc.shapes order (index = shape index). */
 size_t geometry_shape_count(const geometry *g);
@@ -73,7 +109,8 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
 bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double time);
 
 /* The point at barycentrics (u, v) of triangle `prim` (u weights its second
- * vertex, v its third) with pbrt-v4's normals, in the shape's own space. */
+ * vertex, v its third) with pbrt-v4's normals, in the shape's own space
+ * (object space for a moving shape). */
 void geometry_triangle_point(const geom_shape *s, unsigned prim, double u, double v,
                              geom_hit *out);
 

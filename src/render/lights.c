@@ -180,6 +180,8 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
 
     if (shape->kind == GEOMETRY_SPHERE) {
         out->area.area = 0.0; /* see sample_sphere_cone and sample_sphere */
+        if (shape->motion)
+            return HZ_OK; /* decided at each sample's time (sample_moving_area) */
         double scale = light_uniform_scale(&shape->space_from_object);
         double radius = scale * shape->radius;
         if (scale > 0.0 && radius > 0.0 && isfinite(radius)) {
@@ -255,7 +257,8 @@ rgb light_area_le(const light *l, vec3 n, vec3 w)
     return l->emit;
 }
 
-/* A point on the mesh, chosen proportionally to area; pdf per unit area. */
+/* A point on the mesh, chosen proportionally to area; pdf per unit area (in
+ * the shape's space: object space for a moving shape). */
 static bool sample_triangles(const light *l, vec2 u, vec3 *p, vec3 *n, double *pdf_area)
 {
     const geom_shape *s = l->area.shape;
@@ -281,20 +284,26 @@ static bool sample_triangles(const light *l, vec2 u, vec3 *p, vec3 *n, double *p
     return true;
 }
 
+/* |det| of the 3x3 part of t. */
+static double abs_det3(const transform *t)
+{
+    const double(*m)[4] = t->m.m;
+    return fabs(m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]));
+}
+
 /* Uniform by area in object space, with the exact area change of the
- * transform, so non-uniform scales stay unbiased. */
-static bool sample_sphere(const light *l, vec2 u, vec3 *p, vec3 *n, double *pdf_area)
+ * transform `render_from_object`, so non-uniform scales stay unbiased. */
+static bool sample_sphere(const light *l, const transform *render_from_object, vec2 u, vec3 *p,
+                          vec3 *n, double *pdf_area)
 {
     const geom_shape *s = l->area.shape;
     vec3 n_obj = sample_uniform_sphere(u);
     vec3 po = v3_scale(n_obj, s->radius);
-    *p = transform_point(&s->space_from_object, po);
-    vec3 nt = transform_normal(&s->space_from_object, n_obj);
-    const double(*m)[4] = s->space_from_object.m.m;
-    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    double jacobian = fabs(det) * v3_length(nt); /* dA_render / dA_object */
+    *p = transform_point(render_from_object, po);
+    vec3 nt = transform_normal(render_from_object, n_obj);
+    double jacobian = abs_det3(render_from_object) * v3_length(nt); /* dA_render / dA_object */
     if (jacobian == 0.0)
         return false;
     *pdf_area = 1.0 / (4.0 * HZ_PI * s->radius * s->radius * jacobian);
@@ -304,7 +313,7 @@ static bool sample_sphere(const light *l, vec2 u, vec3 *p, vec3 *n, double *pdf_
 }
 
 /* pbrt-v4's Sphere::Sample(ctx, u): uniform over the cone of directions from
- * `p` that the sphere subtends, pdf 1 / (2π (1 − cosθmax)) per solid angle,
+ * `p` that the sphere (centre c, radius r, render space) subtends, pdf 1 / (2π (1 − cosθmax)) per solid angle,
  * with the point found through the angle α at the centre rather than by
  * intersecting a ray. Returns false when `p` is inside the sphere (or on it,
  * up to rounding), which the caller samples by area, as pbrt-v4 does.
@@ -323,11 +332,9 @@ static bool sample_sphere(const light *l, vec2 u, vec3 *p, vec3 *n, double *pdf_
  * truncated expansion is off by up to sin²θmax / 2 relative, 3e-4 at its
  * threshold), and a sphere of radius 1e-3 at 1e3 (sin²θmax = 1e-12) samples
  * and weighs correctly. */
-static bool sample_sphere_cone(const light *l, vec3 p, vec2 u, vec3 *pl, vec3 *nl,
-                               double *pdf_dir)
+static bool sample_sphere_cone(const light *l, vec3 c, double r, vec3 p, vec2 u, vec3 *pl,
+                               vec3 *nl, double *pdf_dir)
 {
-    vec3 c = l->area.sphere_center;
-    double r = l->area.sphere_radius;
     vec3 to_c = v3_sub(c, p);
     double dc2 = v3_length_sq(to_c);
     /* Inside or on the surface: area sampling. The margin only absorbs the
@@ -392,9 +399,85 @@ static double toward_point(vec3 p_light, vec3 p, light_sample *out)
     return d2;
 }
 
+/* The sample of point `pl` (normal `nl`) of an area light chosen with
+ * density `pdf_dir` per solid angle at p (sphere cone sampling). */
+static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_dir,
+                                    light_sample *out)
+{
+    vec3 d = v3_sub(pl, p);
+    double d2 = v3_length_sq(d);
+    if (d2 == 0.0)
+        return false;
+    out->pdf = pdf_dir;
+    out->dist = sqrt(d2);
+    out->wi = v3_scale(d, 1.0 / out->dist);
+    /* One-sided: only the side the normal faces emits (for an outward normal
+     * that is the whole cone but its rim). */
+    out->L = light_area_le(l, nl, v3_neg(out->wi));
+    if (rgb_is_black(out->L))
+        return false;
+    out->p_light = pl;
+    out->n_light = nl;
+    return true;
+}
+
+/* The sample of point `pl` (unit normal `nl`) of an area light chosen with
+ * density `pdf_area` per unit area (render space). */
+static bool area_sample_area(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_area,
+                             light_sample *out)
+{
+    vec3 d = v3_sub(pl, p);
+    double d2 = v3_length_sq(d);
+    if (d2 == 0.0)
+        return false;
+    out->dist = sqrt(d2);
+    out->wi = v3_scale(d, 1.0 / out->dist);
+    double cos_l = fabs(v3_dot(nl, out->wi));
+    if (cos_l == 0.0)
+        return false;
+    out->L = light_area_le(l, nl, v3_neg(out->wi));
+    if (rgb_is_black(out->L))
+        return false;
+    out->pdf = pdf_area * d2 / cos_l;
+    out->p_light = pl;
+    out->n_light = nl;
+    return true;
+}
+
+/* An area light on a moving shape (kept in object space, geometry.h) at scene
+ * time `time`: the shape sampled in object space and carried to render space
+ * by render_from_object at that time, the transform Embree intersects. */
+static bool sample_moving_area(const light *l, vec3 p, double time, vec2 u, light_sample *out)
+{
+    const geom_shape *s = l->area.shape;
+    transform render_from_object = geom_motion_at(s->motion, time);
+    vec3 pl, nl;
+    double pdf;
+    if (s->kind == GEOMETRY_SPHERE) {
+        /* Cone sampling while the transform is a similarity at this time. */
+        double scale = light_uniform_scale(&render_from_object);
+        double radius = scale * s->radius;
+        if (scale > 0.0 && radius > 0.0 && isfinite(radius) &&
+            sample_sphere_cone(l, transform_point(&render_from_object, v3(0, 0, 0)), radius, p, u,
+                               &pl, &nl, &pdf))
+            return area_sample_solid_angle(l, p, pl, nl, pdf, out);
+        return sample_sphere(l, &render_from_object, u, &pl, &nl, &pdf) &&
+               area_sample_area(l, p, pl, nl, pdf, out);
+    }
+    if (!sample_triangles(l, u, &pl, &nl, &pdf))
+        return false;
+    /* Per object-space area so far; dA_render = |det A| |A^-T n| dA_object
+     * for the unit normal n (the triangle's area changes with a scale). */
+    vec3 nt = transform_normal(&render_from_object, nl);
+    double jacobian = abs_det3(&render_from_object) * v3_length(nt);
+    if (!(jacobian > 0.0) || !isfinite(jacobian))
+        return false;
+    return area_sample_area(l, p, transform_point(&render_from_object, pl), v3_normalize(nt),
+                            pdf / jacobian, out);
+}
+
 bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_sample *out)
 {
-    (void)time; /* lights are static */
     out->infinite = false;
     out->n_light = v3(0, 0, 0);
     switch (l->kind) {
@@ -438,45 +521,18 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
         return true;
     }
     case LIGHT_AREA: {
+        const geom_shape *s = l->area.shape;
+        if (s->motion)
+            return sample_moving_area(l, p, time, u, out);
         vec3 pl, nl;
-        double pdf_area;
-        if (l->area.sphere_cone && sample_sphere_cone(l, p, u, &pl, &nl, &out->pdf)) {
-            vec3 d = v3_sub(pl, p);
-            double d2 = v3_length_sq(d);
-            if (d2 == 0.0)
-                return false;
-            out->dist = sqrt(d2);
-            out->wi = v3_scale(d, 1.0 / out->dist);
-            /* One-sided: only the side the normal faces emits (for an
-             * outward normal that is the whole cone but its rim). */
-            out->L = light_area_le(l, nl, v3_neg(out->wi));
-            if (rgb_is_black(out->L))
-                return false;
-            out->p_light = pl;
-            out->n_light = nl;
-            return true;
-        }
-        bool ok = l->area.shape->kind == GEOMETRY_SPHERE
-                      ? sample_sphere(l, u, &pl, &nl, &pdf_area)
-                      : sample_triangles(l, u, &pl, &nl, &pdf_area);
-        if (!ok)
-            return false;
-        vec3 d = v3_sub(pl, p);
-        double d2 = v3_length_sq(d);
-        if (d2 == 0.0)
-            return false;
-        out->dist = sqrt(d2);
-        out->wi = v3_scale(d, 1.0 / out->dist);
-        double cos_l = fabs(v3_dot(nl, out->wi));
-        if (cos_l == 0.0)
-            return false;
-        out->L = light_area_le(l, nl, v3_neg(out->wi));
-        if (rgb_is_black(out->L))
-            return false;
-        out->pdf = pdf_area * d2 / cos_l;
-        out->p_light = pl;
-        out->n_light = nl;
-        return true;
+        double pdf;
+        if (l->area.sphere_cone && sample_sphere_cone(l, l->area.sphere_center,
+                                                      l->area.sphere_radius, p, u, &pl, &nl, &pdf))
+            return area_sample_solid_angle(l, p, pl, nl, pdf, out);
+        bool ok = s->kind == GEOMETRY_SPHERE
+                      ? sample_sphere(l, &s->space_from_object, u, &pl, &nl, &pdf)
+                      : sample_triangles(l, u, &pl, &nl, &pdf);
+        return ok && area_sample_area(l, p, pl, nl, pdf, out);
     }
     }
     return false;

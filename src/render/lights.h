@@ -32,14 +32,18 @@ typedef struct {
             vec3 w; /* unit direction toward the light */
         } distant;
         struct {
-            const geom_shape *shape; /* top-level, render space */
+            /* top-level; in render space, or in object space when it moves
+             * (shape->motion): then it is sampled in object space and moved
+             * to render space with the transform at the sample's time */
+            const geom_shape *shape;
             bool two_sided;
-            double area;             /* render space */
+            double area;             /* in the shape's space */
             double *cdf;             /* triangles: cumulative areas / area (triangle_count) */
             /* Spheres whose space_from_object is a uniform scale (times a
              * rotation, reflection and translation) are sampled by solid
              * angle from outside points (pbrt-v4's cone sampling); others,
-             * and points inside, by area. Set by light_area_from_entity. */
+             * and points inside, by area. Set by light_area_from_entity for
+             * static spheres; a moving one decides at each sample's time. */
             bool sphere_cone;
             vec3 sphere_center;      /* render space */
             double sphere_radius;    /* render space */
@@ -50,7 +54,8 @@ typedef struct {
 /* LightSource "point", "spot", "distant", "infinite" (constant L only). */
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
                             hz_error *err);
-/* AreaLightSource "diffuse" on a (top-level) shape already in render space. */
+/* AreaLightSource "diffuse" on a top-level shape (in render space, or in
+ * object space with its motion). */
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
                                  hz_error *err);
 void light_free(light *l);

@@ -193,6 +193,75 @@ static void test_active_transform(void **state)
     parse_err("ActiveTransform Sometimes WorldBegin", "t.pbrt:1:17: ActiveTransform expects");
 }
 
+/* pbrt-v4's two current transforms, in detail: transform directives change
+ * the active ones only (Transform and Identity too); AttributeBegin/End and
+ * ObjectBegin/End save and restore both and the active set; CoordinateSystem
+ * and CoordSysTransform save and restore both whatever is active; WorldBegin
+ * resets both and makes both active; shapes, lights, instances and the camera
+ * record both. */
+static void test_active_transform_pbrt_rules(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("TransformTimes 1 3\n"
+             "ActiveTransform EndTime\nTranslate 0 0 1\nActiveTransform All\n"
+             "Camera \"perspective\"\n"
+             "ActiveTransform EndTime\n" /* still active at WorldBegin: reset to All */
+             "WorldBegin\n"
+             "Translate 1 0 0\n"
+             "Shape \"sphere\"\n"                                           /* 0 */
+             "AttributeBegin\nActiveTransform StartTime\nTranslate 0 1 0\n"
+             "Shape \"sphere\"\n"                                           /* 1 */
+             "AttributeEnd\n"
+             "Shape \"sphere\"\n"                                           /* 2 */
+             "AttributeBegin\nActiveTransform EndTime\nIdentity\nShape \"sphere\"\n" /* 3 */
+             "ActiveTransform StartTime\nTransform [1 0 0 0  0 1 0 0  0 0 1 0  0 0 5 1]\n"
+             "Shape \"sphere\"\n"                                           /* 4 */
+             "ConcatTransform [1 0 0 0  0 1 0 0  0 0 1 0  0 2 0 1]\n"
+             "CoordinateSystem \"c\"\n"
+             "ActiveTransform All\nIdentity\nActiveTransform EndTime\n"
+             "CoordSysTransform \"c\"\nShape \"sphere\"\n"                  /* 5 */
+             "LightSource \"point\"\n"
+             "AttributeEnd\n"
+             "AttributeBegin\nCoordSysTransform \"camera\"\nShape \"sphere\"\n" /* 6 */
+             "AttributeEnd\n"
+             "ObjectBegin \"o\"\nActiveTransform EndTime\nTranslate 0 0 7\nObjectEnd\n"
+             "Translate 0 3 0\n" /* All again after ObjectEnd */
+             "ObjectInstance \"o\"\n",
+             &sd);
+    assert_true(sd.transform_start_time == 1.0 && sd.transform_end_time == 3.0);
+    assert_true(sd.camera.transform_start_time == 1.0 && sd.camera.transform_end_time == 3.0);
+    assert_int_equal(sd.shape_count, 7);
+    const shape_entity *sh = sd.shapes;
+    vec3 o = v3(0, 0, 0);
+    assert_point(&sh[0].world_from_object, o, v3(1, 0, 0));
+    assert_point(&sh[0].world_from_object_end, o, v3(1, 0, 0));
+    assert_point(&sh[1].world_from_object, o, v3(1, 1, 0));
+    assert_point(&sh[1].world_from_object_end, o, v3(1, 0, 0));
+    assert_point(&sh[2].world_from_object, o, v3(1, 0, 0)); /* restored, All active */
+    assert_point(&sh[2].world_from_object_end, o, v3(1, 0, 0));
+    assert_point(&sh[3].world_from_object, o, v3(1, 0, 0));
+    assert_point(&sh[3].world_from_object_end, o, v3(0, 0, 0));
+    assert_point(&sh[4].world_from_object, o, v3(0, 0, 5));
+    assert_point(&sh[4].world_from_object_end, o, v3(0, 0, 0));
+    /* "c" saved (0 2 5) / (0 0 0); Identity reset both; CoordSysTransform
+     * restores both with only EndTime active */
+    assert_point(&sh[5].world_from_object, o, v3(0, 2, 5));
+    assert_point(&sh[5].world_from_object_end, o, v3(0, 0, 0));
+    assert_int_equal(sd.light_count, 1);
+    assert_point(&sd.lights[0].world_from_light, o, v3(0, 2, 5));
+    assert_point(&sd.lights[0].world_from_light_end, o, v3(0, 0, 0));
+    /* "camera" is world_from_camera at both times */
+    assert_point(&sh[6].world_from_object, o, v3(0, 0, 0));
+    assert_point(&sh[6].world_from_object_end, o, v3(0, 0, -1));
+    assert_int_equal(sd.instance_count, 1);
+    assert_point(&sd.instances[0].world_from_instance, o, v3(1, 3, 0));
+    assert_point(&sd.instances[0].world_from_instance_end, o, v3(1, 3, 0));
+    scene_desc_free(&sd);
+    parse_err("WorldBegin\nTransformTimes 0 1", "t.pbrt:2:1:");
+    parse_err("TransformTimes 2 1\nWorldBegin", "t.pbrt:1:1: TransformTimes 2 1");
+}
+
 static void test_named_material(void **state)
 {
     (void)state;
@@ -522,6 +591,7 @@ int main(void)
         cmocka_unit_test(test_default_material),
         cmocka_unit_test(test_coordsys),
         cmocka_unit_test(test_active_transform),
+        cmocka_unit_test(test_active_transform_pbrt_rules),
         cmocka_unit_test(test_named_material),
         cmocka_unit_test(test_media),
         cmocka_unit_test(test_objects),
