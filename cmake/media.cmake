@@ -5,6 +5,7 @@
 # OpenVDB ships only a find-module (no package config) on Debian.
 list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB)
 find_package(OpenVDB REQUIRED COMPONENTS openvdb nanovdb)
+find_package(ZLIB REQUIRED)
 
 file(GLOB haze_media_c CONFIGURE_DEPENDS ${CMAKE_SOURCE_DIR}/src/media/*.c)
 add_library(haze_media STATIC ${haze_media_c} ${CMAKE_SOURCE_DIR}/src/media/vdb_load.cpp)
@@ -22,14 +23,18 @@ set_target_properties(haze_media PROPERTIES
 target_compile_options(haze_media PRIVATE ${HAZE_WARNINGS})
 target_link_libraries(haze_media
   PUBLIC haze_core haze_scene
-  PRIVATE OpenVDB::openvdb OpenVDB::nanovdb)
+  PRIVATE OpenVDB::openvdb OpenVDB::nanovdb ZLIB::ZLIB)
+# .nvdb files may be ZIP-compressed (NanoVDB's Codec::ZIP, zlib: already an
+# OpenVDB dependency); the small vector test volumes are.
+target_compile_definitions(haze_media PRIVATE NANOVDB_USE_ZIP)
 
 # The generator of the small test/demo volumes in volumes/.
 add_executable(haze_volumes ${CMAKE_SOURCE_DIR}/volumes/generate.cpp)
 set_target_properties(haze_volumes PROPERTIES CXX_STANDARD 17 CXX_STANDARD_REQUIRED ON
   CXX_EXTENSIONS OFF)
 target_compile_options(haze_volumes PRIVATE ${HAZE_WARNINGS})
-target_link_libraries(haze_volumes PRIVATE OpenVDB::openvdb OpenVDB::nanovdb)
+target_link_libraries(haze_volumes PRIVATE OpenVDB::openvdb OpenVDB::nanovdb ZLIB::ZLIB)
+target_compile_definitions(haze_volumes PRIVATE NANOVDB_USE_ZIP)
 
 add_custom_target(volumes
   COMMAND haze_volumes ${CMAKE_SOURCE_DIR}/volumes

@@ -8,6 +8,7 @@ packages=(
   libembree-dev      # surfaces (Embree 3 C API)
   libopenexr-dev     # images (OpenEXRCore C API)
   libpng-dev         # --preview PNG
+  zlib1g-dev         # ZIP-compressed .nvdb files (NanoVDB codec)
   libcmocka-dev      # test framework
   libopenvdb-dev libnanovdb-dev  # volumes (OpenVDB 10 + NanoVDB)
   libboost-iostreams-dev         # needed by OpenVDB's headers, not pulled in by libopenvdb-dev

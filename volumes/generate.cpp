@@ -1,5 +1,5 @@
-// Writes haze's small test and demo volumes (all FloatGrids named "density", in
-// non-negative index space, a few hundred KB at most):
+// Writes haze's small test and demo volumes (FloatGrids named "density", some
+// with a Vec3SGrid velocity "v"; a few hundred KB each at most):
 //
 //   box.vdb, box.nvdb  density exactly 1 on voxels [0,31]^3, voxel size 1/32, no
 //                      offset: voxel (i,j,k) sits at world (i,j,k)/32
@@ -9,12 +9,31 @@
 //                      density 1, voxel size 1/64, world x, z in [-0.5, 0.5], y = 0
 //   smoke.vdb          a rising plume (fBm value noise, densities in [0,1]) plus a
 //                      Vec3f velocity grid "v" on the same voxels
+//   plume.vdb          a puffy, swirling plume ("density" in [0,1], voxel size
+//                      1/64, within 1 x 2 x 1 world units standing on y = 0) with
+//                      a velocity grid "v" (world units per second, rising 0.7 to
+//                      1.3 and swirling about the column) at half the resolution
+//                      (voxel size 1/32), defined over the density's voxels
+//                      dilated by 8 density voxels so that Eulerian motion blur
+//                      finds a velocity wherever density can be moved to
+//                      (displacements up to 8 voxels, 1/8 world unit); the
+//                      velocity is stored as half floats
+//   box_velocity.vdb   box.vdb's "density" and a constant velocity "v" = (1, 0.25,
+//                      0) on the same index space over voxels [-3,50] x [-3,38] x
+//                      [-3,34]: the box's voxels, dilated to hold every point
+//                      the box reaches when moved by up to (0.5, 0.125, 0) world
+//                      units (16 and 4 voxels); and "v0", zero on the same voxels
+//   vec_ramp.vdb/.nvdb "v": the linear field v(i,j,k) = (0.5 i - 1, 0.25 j, 2 - k)
+//                      on voxels [0,7]^3 (voxel size 0.25, offset (1, 2, 3)), and
+//                      "density": 1 on the same voxels (for type checks); the
+//                      .nvdb is ZIP-compressed
 //
 // Deterministic: fixed seeds and our own integer hash (OpenVDB still writes a
 // random file UUID into each header, so the bytes differ between runs).
 // Usage: haze_volumes OUTDIR
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
+#include <openvdb/tools/Morphology.h>
 #include <nanovdb/util/IO.h>
 #include <nanovdb/util/OpenToNanoVDB.h>
 
@@ -26,6 +45,8 @@
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace
 {
@@ -184,6 +205,122 @@ void smoke(FloatGrid::Ptr &density, Vec3SGrid::Ptr &velocity)
     }
 }
 
+// A puffy plume rising along +y with a velocity field: puffs are bands of
+// density along the column, displaced by fBm, so rising and swirling motion
+// shows as blur. Both are functions of world position (metres): the plume
+// stands on y = 0 in x, z in [-0.5, 0.5], y in [0, 2].
+struct plume_frame {
+    double cx, cz, radius; // the column's axis and radius at a height
+};
+
+plume_frame plume_at(double y)
+{
+    return {0.06 * std::sin(2.5 * y), 0.06 * std::cos(2.0 * y), 0.08 + 0.15 * y};
+}
+
+// Metres per second: rising (faster on the axis), swirling about the axis
+// (solid-body inside the column, decaying outside) and spreading near the top.
+openvdb::Vec3s plume_velocity(const openvdb::Vec3d &p)
+{
+    plume_frame f = plume_at(std::clamp(p.y(), 0.0, 2.0));
+    double dx = p.x() - f.cx, dz = p.z() - f.cz;
+    double r = std::sqrt(dx * dx + dz * dz), q = r / f.radius;
+    double vy = 0.7 + 0.6 * std::exp(-0.5 * q * q);
+    double swirl = 0.9 * std::min(q, 1.0) * std::exp(-0.5 * std::max(q - 1.0, 0.0));
+    double spread = 0.3 * smoothstep(1.2, 2.0, p.y());
+    double ux = r > 1e-9 ? dx / r : 0.0, uz = r > 1e-9 ? dz / r : 0.0;
+    return openvdb::Vec3s(float(-uz * swirl + ux * spread), float(vy),
+                          float(ux * swirl + uz * spread));
+}
+
+void plume(FloatGrid::Ptr &density, Vec3SGrid::Ptr &velocity)
+{
+    const int n = 64; // voxels per metre
+    const double vs = 1.0 / n;
+    density = make_density(vs, openvdb::Vec3d(-0.5, 0.0, -0.5));
+    auto dacc = density->getAccessor();
+    const uint32_t seed = 7771u;
+    for (int j = 0; j < 2 * n; ++j) {
+        double y = (j + 0.5) * vs;
+        plume_frame f = plume_at(y);
+        // Noise in a frame twisted about the axis: swirling wisps.
+        double a = 1.6 * y, ca = std::cos(a), sa = std::sin(a);
+        for (int i = 0; i < n; ++i)
+            for (int k = 0; k < n; ++k) {
+                double dx = (i + 0.5) * vs - 0.5 - f.cx, dz = (k + 0.5) * vs - 0.5 - f.cz;
+                double q = std::sqrt(dx * dx + dz * dz) / f.radius;
+                if (q > 1.6)
+                    continue;
+                double nz = fbm((ca * dx - sa * dz) * 16.0, y * 9.0, (sa * dx + ca * dz) * 16.0, 5,
+                                seed);
+                double edge = 1.0 - smoothstep(0.5, 0.9, q + 1.1 * (nz - 0.5));
+                double band = 0.5 + 0.5 * std::sin(2.0 * 3.14159265358979 * (3.0 * y + 2.0 * nz));
+                double puffs = 0.1 + 0.9 * smoothstep(0.3, 0.7, band);
+                double d = edge * puffs * smoothstep(0.0, 0.1, y) *
+                           (1.0 - smoothstep(1.6, 1.95, y));
+                d *= smoothstep(0.25, 0.65, nz);
+                if (d < 0.01)
+                    continue;
+                dacc.setValue(Coord(i, j, k), float(std::min(d, 1.0)));
+            }
+    }
+    // The velocity: half the resolution, over the density's voxels dilated by
+    // 8 density voxels (every coarse voxel whose trilinear stencil reaches them).
+    FloatGrid::TreeType band(density->tree());
+    openvdb::tools::dilateActiveValues(band, 8, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
+    velocity = Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    velocity->setName("v");
+    velocity->setGridClass(openvdb::GRID_STAGGERED);
+    velocity->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+    auto vxf = openvdb::math::Transform::createLinearTransform(2.0 * vs);
+    vxf->postTranslate(openvdb::Vec3d(-0.5, 0.0, -0.5));
+    velocity->setTransform(vxf);
+    velocity->setSaveFloatAsHalf(true);
+    auto vacc = velocity->getAccessor();
+    auto half = [](int32_t x) { return x >= 0 ? x / 2 : -((1 - x) / 2); }; // floor(x / 2)
+    for (auto it = band.cbeginLeaf(); it; ++it)
+        for (auto v = it->cbeginValueOn(); v; ++v) {
+            Coord c = v.getCoord();
+            Coord lo(half(c.x()), half(c.y()), half(c.z()));
+            for (int a = 0; a < 2; ++a)
+                for (int b = 0; b < 2; ++b)
+                    for (int e = 0; e < 2; ++e) {
+                        Coord cc = lo.offsetBy(a, b, e);
+                        if (!vacc.isValueOn(cc))
+                            vacc.setValue(cc, plume_velocity(vxf->indexToWorld(cc)));
+                    }
+        }
+}
+
+// box.vdb's box with a constant velocity over the dilated region.
+Vec3SGrid::Ptr box_velocity(const FloatGrid &density, const char *name, openvdb::Vec3s value)
+{
+    Vec3SGrid::Ptr v = Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    v->setName(name);
+    v->setTransform(density.transform().copy());
+    v->tree().fill(openvdb::CoordBBox(Coord(-3, -3, -3), Coord(50, 38, 34)), value, true);
+    return v;
+}
+
+// A linear vector field on one leaf (trilinear lookups reproduce it exactly).
+void vec_ramp(FloatGrid::Ptr &density, Vec3SGrid::Ptr &velocity)
+{
+    density = make_density(0.25, openvdb::Vec3d(1.0, 2.0, 3.0));
+    velocity = Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    velocity->setName("v");
+    velocity->setTransform(density->transform().copy());
+    auto dacc = density->getAccessor();
+    auto vacc = velocity->getAccessor();
+    for (int i = 0; i < 8; ++i)
+        for (int j = 0; j < 8; ++j)
+            for (int k = 0; k < 8; ++k) {
+                dacc.setValue(Coord(i, j, k), 1.0f);
+                vacc.setValue(Coord(i, j, k),
+                              openvdb::Vec3s(0.5f * i - 1.0f, 0.25f * j, 2.0f - float(k)));
+            }
+}
+
 void write_vdb(const std::string &path, openvdb::GridPtrVec grids)
 {
     std::string tmp = path + ".tmp";
@@ -198,12 +335,18 @@ void write_vdb(const std::string &path, openvdb::GridPtrVec grids)
     std::printf("wrote %s\n", path.c_str());
 }
 
-void write_nvdb(const std::string &path, const FloatGrid &grid)
+template <typename GridT>
+nanovdb::GridHandle<nanovdb::HostBuffer> to_nano(const GridT &grid)
 {
-    auto handle =
-        nanovdb::openToNanoVDB(grid, nanovdb::StatsMode::MinMax, nanovdb::ChecksumMode::Partial);
+    return nanovdb::openToNanoVDB(grid, nanovdb::StatsMode::MinMax, nanovdb::ChecksumMode::Partial);
+}
+
+void write_nvdb(const std::string &path,
+                std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> handles,
+                nanovdb::io::Codec codec = nanovdb::io::Codec::NONE)
+{
     std::string tmp = path + ".tmp";
-    nanovdb::io::writeGrid(tmp, handle);
+    nanovdb::io::writeGrids(tmp, handles, codec);
     if (std::rename(tmp.c_str(), path.c_str()) != 0)
         throw std::runtime_error("cannot rename " + tmp + " to " + path);
     std::printf("wrote %s\n", path.c_str());
@@ -222,13 +365,32 @@ int main(int argc, char **argv)
         openvdb::initialize();
         FloatGrid::Ptr b = box();
         write_vdb(dir + "/box.vdb", {b});
-        write_nvdb(dir + "/box.nvdb", *b);
+        {
+            std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
+            h.push_back(to_nano(*b));
+            write_nvdb(dir + "/box.nvdb", std::move(h));
+        }
         write_vdb(dir + "/fog_sphere.vdb", {fog_sphere()});
         write_vdb(dir + "/sheet.vdb", {sheet()});
         FloatGrid::Ptr d;
         Vec3SGrid::Ptr v;
         smoke(d, v);
         write_vdb(dir + "/smoke.vdb", {d, v});
+        plume(d, v);
+        write_vdb(dir + "/plume.vdb", {d, v});
+        write_vdb(dir + "/box_velocity.vdb",
+                  {b, box_velocity(*b, "v", openvdb::Vec3s(1.0f, 0.25f, 0.0f)),
+                   box_velocity(*b, "v0", openvdb::Vec3s(0.0f))});
+        vec_ramp(d, v);
+        write_vdb(dir + "/vec_ramp.vdb", {d, v});
+        {
+            std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
+            h.push_back(to_nano(*v));
+            h.push_back(to_nano(*d));
+            // ZIP: a NanoVDB vec3 grid is half a megabyte uncompressed (its upper
+            // internal node alone).
+            write_nvdb(dir + "/vec_ramp.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
+        }
     } catch (const std::exception &e) {
         std::fprintf(stderr, "haze_volumes: %s\n", e.what());
         return 1;

@@ -1,5 +1,6 @@
-/* A NanoVDB float grid read from C through PNanoVDB: the density field of a grid
- * medium. The grid owns its buffer (from vdb_load_grid).
+/* A NanoVDB grid read from C through PNanoVDB: a float grid (the density field
+ * of a grid medium) or a grid of float 3-vectors (a velocity field). The grid
+ * owns its buffer (from vdb_load_typed_grid).
  *
  * Conventions (DESIGN.md, "Scene files"): the value of voxel (i,j,k) sits at the
  * index-space point (i,j,k); between those points the field is trilinear; voxels
@@ -40,12 +41,19 @@ typedef struct {
     int32_t min[3], max[3];
 } grid_ibox;
 
+typedef enum { GRID_FLOAT, GRID_VEC3 } grid_value_type;
+
 /* Takes ownership of `buf` on success (and leaves it untouched on failure).
- * Fails unless `buf` holds a valid NanoVDB float grid. `name` is used in messages. */
+ * Fails unless `buf` holds a valid NanoVDB float or vec3f grid, or when a
+ * non-empty grid has no min/max statistics. `name` is used in messages. */
 hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out, hz_error *err);
-/* vdb_load_grid + grid_create_from_buffer. */
+/* vdb_load_typed_grid + grid_create_from_buffer: a float grid. */
 hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error *err);
+/* The same for a vec3 grid (OpenVDB Vec3SGrid, NanoVDB Vec3f). */
+hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_error *err);
 void grid_destroy(grid *g);
+
+grid_value_type grid_type(const grid *g);
 
 void grid_accessor_init(const grid *g, grid_accessor *a);
 
@@ -54,22 +62,33 @@ transform grid_world_from_index_transform(const grid *g);
 vec3 grid_index_from_world(const grid *g, vec3 p_world);
 vec3 grid_world_from_index(const grid *g, vec3 p_index);
 
-/* Value stored at voxel (i,j,k) (background if not stored). */
+/* Value stored at voxel (i,j,k) (background if not stored). Float grids. */
 float grid_voxel(const grid *g, grid_accessor *a, int32_t i, int32_t j, int32_t k);
-/* Trilinear density at an index-space point. */
+/* Trilinear density at an index-space point. Float grids. */
 double grid_density_index(const grid *g, grid_accessor *a, vec3 p_index);
+
+/* The same for vec3 grids: the vector stored at voxel (i,j,k), and the
+ * trilinear vector field at an index-space point (background outside the
+ * support [min - 1, max + 1], as for floats). */
+vec3 grid_vec3_voxel(const grid *g, grid_accessor *a, int32_t i, int32_t j, int32_t k);
+vec3 grid_vec3_index(const grid *g, grid_accessor *a, vec3 p_index);
 
 /* Bounding box of the active voxels (from the root node). False for an empty grid. */
 bool grid_index_bounds(const grid *g, grid_ibox *out);
 /* Where the trilinear field can be non-background: [min - 1, max + 1] in index space. */
 bool grid_support_bounds(const grid *g, vec3 *lo, vec3 *hi);
 /* Largest active value (root statistics), and the background value. A majorant
- * of the whole field is fmax(grid_max_value, grid_background). */
+ * of the whole field is fmax(grid_max_value, grid_background). For vec3 grids
+ * these are lengths: of the longest and shortest active vector and of the
+ * background vector, so fmax(grid_max_value, grid_background) bounds the length
+ * of every trilinear value. */
 float grid_max_value(const grid *g);
 float grid_min_value(const grid *g);
 float grid_background(const grid *g);
 uint64_t grid_active_voxel_count(const grid *g);
 const char *grid_name(const grid *g);
+
+/* Node statistics and region maxima below: float grids only. */
 
 /* Tree levels, finest first: a leaf spans 8^3 voxels, a lower internal node
  * 128^3, an upper internal node 4096^3. */

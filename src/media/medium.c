@@ -41,12 +41,100 @@ static char *resolve_path(const char *base, const char *name)
     return path;
 }
 
+/* What MakeNamedMedium says about a grid's motion. */
+typedef struct {
+    const char *velocityname; /* NULL: no velocity grid */
+    double scale, time;       /* velocityscale, velocitytime */
+    double time_start, time_end; /* TransformTimes */
+} motion_params;
+
+static bool transforms_equal(const transform *a, const transform *b)
+{
+    return memcmp(&a->m, &b->m, sizeof a->m) == 0;
+}
+
+/* The placement of the grid at both keyframes: animated when they differ. */
+static hz_status place_grid(medium_entity *e, transform render_from_world, const grid *g,
+                            const motion_params *mp, medium *out, hz_error *err)
+{
+    const char *name = e->name ? e->name : "";
+    transform world_from_index = grid_world_from_index_transform(g);
+    out->grid.index_from_medium = transform_inverse(world_from_index);
+    transform render_from_index = transform_compose(
+        render_from_world, transform_compose(e->world_from_medium, world_from_index));
+    out->grid.index_from_render = transform_inverse(render_from_index);
+    bool finite = transform_is_finite(&out->grid.index_from_render);
+    animated_transform a = animated_transform_make(
+        transform_compose(render_from_world, e->world_from_medium), mp->time_start,
+        transform_compose(render_from_world, e->world_from_medium_end), mp->time_end);
+    if (finite && a.animated) {
+        out->grid.moving = true;
+        out->grid.render_from_medium = a;
+        transform end = transform_inverse(transform_compose(a.end, world_from_index));
+        finite = transform_is_finite(&end);
+    }
+    if (!finite)
+        return hz_fail_at(err, e->entity.loc,
+                          "MakeNamedMedium \"%s\": the grid's placement (its transform times "
+                          "the current transform) is singular or not finite",
+                          name);
+    return HZ_OK;
+}
+
+/* Loads the velocity grid `mp->velocityname` of `path` and derives what the
+ * lookups and the motion bounds need. */
+static hz_status load_velocity(medium_entity *e, const char *path, const motion_params *mp,
+                               medium *out, hz_error *err)
+{
+    const char *name = e->name ? e->name : "";
+    file_loc loc = params_loc(&e->entity.params, "velocityname");
+    hz_error inner;
+    grid *v = NULL;
+    if (grid_load_vec3(path, mp->velocityname, &v, &inner) != HZ_OK)
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": velocity grid: %s", name,
+                          inner.message);
+    double vmax = grid_max_value(v), vbg = grid_background(v);
+    if (!isfinite(vmax) || !isfinite(vbg)) {
+        grid_destroy(v);
+        return hz_fail_at(err, loc,
+                          "MakeNamedMedium \"%s\": velocity grid \"%s\" in %s has non-finite "
+                          "values",
+                          name, mp->velocityname, path);
+    }
+    vmax = fmax(vmax, vbg);
+    const grid *d = out->grid.grid;
+    transform d_world_from_index = grid_world_from_index_transform(d);
+    transform v_world_from_index = grid_world_from_index_transform(v);
+    out->grid.velocity = v;
+    out->grid.velocity_aligned = transforms_equal(&d_world_from_index, &v_world_from_index);
+    out->grid.vindex_from_index =
+        transform_compose(transform_inverse(v_world_from_index), d_world_from_index);
+    out->grid.velocity_scale = mp->scale;
+    out->grid.velocity_time = mp->time;
+    /* |displacement_i| <= |row_i(index_from_medium)| |v| |shift| (Cauchy–Schwarz). */
+    const mat4 *r = &out->grid.index_from_medium.m;
+    double row[3];
+    for (int i = 0; i < 3; ++i)
+        row[i] = vmax * sqrt(r->m[i][0] * r->m[i][0] + r->m[i][1] * r->m[i][1] +
+                             r->m[i][2] * r->m[i][2]);
+    vec3 lo, hi;
+    out->grid.dilation = grid_support_bounds(d, &lo, &hi) ? v3(row[0], row[1], row[2])
+                                                          : v3(0.0, 0.0, 0.0);
+    if (!v3_is_finite(out->grid.dilation))
+        return hz_fail_at(err, loc,
+                          "MakeNamedMedium \"%s\": velocity grid \"%s\" in %s moves the "
+                          "density too far (its bound is not finite)",
+                          name, mp->velocityname, path);
+    return HZ_OK;
+}
+
 /* Loads the grid and places it. Densities must be >= 0: the majorant-based
  * trackers treat sigma_t(p) / sigma_t_max as a probability, which a negative
  * density breaks (and pbrt-v4 has no meaning for it either), so grids with a
  * negative active value or background are refused rather than clamped. */
 static hz_status load_grid(medium_entity *e, transform render_from_world, const char *filename,
-                           const char *gridname, medium *out, hz_error *err)
+                           const char *gridname, const motion_params *mp, medium *out,
+                           hz_error *err)
 {
     file_loc loc = e->entity.loc;
     const char *name = e->name ? e->name : "";
@@ -79,19 +167,10 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
                         "MakeNamedMedium \"%s\": grid \"%s\" in %s has negative densities "
                         "(min %g, background %g); densities must be >= 0",
                         name, gridname, path, nonempty ? vmin : background, background);
-    if (st == HZ_OK) {
-        transform world_from_index = grid_world_from_index_transform(g);
-        transform render_from_index = transform_compose(
-            render_from_world, transform_compose(e->world_from_medium, world_from_index));
-        out->grid.index_from_render = transform_inverse(render_from_index);
-        if (!transform_is_finite(&out->grid.index_from_render))
-            st = hz_fail_at(err, loc,
-                            "MakeNamedMedium \"%s\": the grid's placement (its transform times "
-                            "the current transform) is singular or not finite",
-                            name);
-    }
-    free(path);
+    if (st == HZ_OK)
+        st = place_grid(e, render_from_world, g, mp, out, err);
     if (st != HZ_OK) {
+        free(path);
         grid_destroy(g);
         return HZ_ERROR;
     }
@@ -106,14 +185,15 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     }
     out->grid.background = background;
     out->grid.density_max = fmax(nonempty ? fmax(vmax, background) : background, 0.0);
-    return HZ_OK;
+    if (mp->velocityname)
+        st = load_velocity(e, path, mp, out, err);
+    free(path);
+    return st; /* on failure, the caller frees what was loaded */
 }
 
 hz_status medium_from_entity(medium_entity *e, transform render_from_world, double time_start,
                              double time_end, medium *out, hz_error *err)
 {
-    (void)time_start; /* media are static for now */
-    (void)time_end;
     memset(out, 0, sizeof *out);
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
@@ -150,9 +230,26 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
         params_reject(pl, "Le", "emission (\"Le\") is not supported");
 
     const char *filename = NULL, *gridname = NULL;
+    motion_params mp = {NULL, 1.0, time_start, time_start, time_end};
     if (is_grid) {
         filename = params_string(pl, "filename", NULL);
         gridname = params_string(pl, "gridname", "density");
+        mp.velocityname = params_string(pl, "velocityname", NULL);
+        mp.scale = params_float(pl, "velocityscale", 1.0);
+        mp.time = params_float(pl, "velocitytime", time_start);
+        if (!mp.velocityname) {
+            const char *p = params_has(pl, "velocityscale") ? "velocityscale" : "velocitytime";
+            if (params_has(pl, p))
+                params_reject(pl, p, "\"%s\" needs a velocity grid (\"string velocityname\")",
+                              p);
+        } else if (!mp.velocityname[0]) {
+            params_reject(pl, "velocityname", "\"velocityname\" is empty");
+        }
+        if (!(isfinite(mp.scale) && mp.scale >= 0.0))
+            params_reject(pl, "velocityscale",
+                          "\"velocityscale\" must be finite and non-negative, got %g", mp.scale);
+        if (!isfinite(mp.time))
+            params_reject(pl, "velocitytime", "\"velocitytime\" must be finite, got %g", mp.time);
         /* pbrt-v4 turns a "temperature" grid into emission with these; emission is
          * not supported, so they are read (to be accepted) and ignored. */
         (void)params_float(pl, "temperaturecutoff", 0.0);
@@ -189,7 +286,8 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
         return hz_fail_at(err, params_loc(pl, "gridname"),
                           "MakeNamedMedium \"%s\": \"gridname\" is empty", name);
     }
-    if (load_grid(e, render_from_world, filename, gridname, out, err) != HZ_OK) {
+    if (load_grid(e, render_from_world, filename, gridname, &mp, out, err) != HZ_OK) {
+        medium_free(out);
         memset(out, 0, sizeof *out);
         return HZ_ERROR;
     }
@@ -200,27 +298,52 @@ void medium_free(medium *m)
 {
     if (!m)
         return;
-    if (m->kind == MEDIUM_GRID)
+    if (m->kind == MEDIUM_GRID) {
         grid_destroy(m->grid.grid);
+        grid_destroy(m->grid.velocity);
+    }
     m->grid.grid = NULL;
+    m->grid.velocity = NULL;
 }
 
-bool medium_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1)
+bool medium_grid_ray_make(const medium *m, vec3 o, vec3 d, double time, medium_grid_ray *out)
+{
+    if (m->grid.moving) {
+        /* The placement at this time: one interpolation per ray segment. */
+        transform render_from_medium = animated_transform_at(&m->grid.render_from_medium, time);
+        transform index_from_render =
+            transform_compose(m->grid.index_from_medium, transform_inverse(render_from_medium));
+        out->o = transform_point(&index_from_render, o);
+        out->d = transform_vector(&index_from_render, d);
+    } else {
+        out->o = transform_point(&m->grid.index_from_render, o);
+        out->d = transform_vector(&m->grid.index_from_render, d);
+    }
+    out->lo = m->grid.support_lo;
+    out->hi = m->grid.support_hi;
+    out->shift = 0.0;
+    if (m->grid.velocity) {
+        out->shift = m->grid.velocity_scale * (time - m->grid.velocity_time);
+        vec3 grow = v3_scale(m->grid.dilation, fabs(out->shift));
+        out->lo = v3_sub(out->lo, grow);
+        out->hi = v3_add(out->hi, grow);
+        if (!isfinite(out->shift) || !v3_is_finite(grow))
+            return false;
+    }
+    return v3_is_finite(out->o) && v3_is_finite(out->d);
+}
+
+bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0, double *t1)
 {
     double lo = *t0, hi = *t1;
     if (!(lo <= hi)) /* also NaN */
         return false;
-    if (m->kind == MEDIUM_HOMOGENEOUS || m->grid.background != 0.0)
+    if (m->grid.background != 0.0)
         return true;
-
     /* Slab test of the index-space ray against the support box; same t. */
-    vec3 oi = transform_point(&m->grid.index_from_render, o);
-    vec3 di = transform_vector(&m->grid.index_from_render, d);
-    if (!v3_is_finite(oi) || !v3_is_finite(di))
-        return false; /* a degenerate ray: it cannot sample the field meaningfully */
-    const double o3[3] = {oi.x, oi.y, oi.z}, d3[3] = {di.x, di.y, di.z};
-    const double lo3[3] = {m->grid.support_lo.x, m->grid.support_lo.y, m->grid.support_lo.z};
-    const double hi3[3] = {m->grid.support_hi.x, m->grid.support_hi.y, m->grid.support_hi.z};
+    const double o3[3] = {r->o.x, r->o.y, r->o.z}, d3[3] = {r->d.x, r->d.y, r->d.z};
+    const double lo3[3] = {r->lo.x, r->lo.y, r->lo.z};
+    const double hi3[3] = {r->hi.x, r->hi.y, r->hi.z};
     for (int a = 0; a < 3; ++a) {
         if (!(lo3[a] <= hi3[a]))
             return false; /* empty grid */
@@ -251,4 +374,21 @@ bool medium_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1)
     *t0 = lo;
     *t1 = hi;
     return true;
+}
+
+bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1)
+{
+    if (!(*t0 <= *t1)) /* also NaN */
+        return false;
+    if (m->kind == MEDIUM_HOMOGENEOUS || m->grid.background != 0.0)
+        return true;
+    medium_grid_ray r;
+    return medium_grid_ray_make(m, o, d, time, &r) && medium_grid_ray_clip(m, &r, t0, t1);
+}
+
+void medium_accessor_init(const medium *m, medium_accessor *a)
+{
+    grid_accessor_init(m->grid.grid, &a->density);
+    if (m->grid.velocity)
+        grid_accessor_init(m->grid.velocity, &a->velocity);
 }

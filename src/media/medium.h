@@ -7,17 +7,31 @@
  *                  declares the medium), gridname (default "density"), and the
  *                  same sigma_a, sigma_s, scale, g; the coefficients are per unit
  *                  density, so sigma_t(p) = (sigma_a + sigma_s) * scale * density(p).
+ *                  Motion blur from a velocity grid: velocityname (a vec3 grid of
+ *                  the same file; absent: none), velocityscale (default 1, >= 0),
+ *                  velocitytime (default: the TransformTimes start).
  *
  * A medium is placed by the transform current at its MakeNamedMedium. A grid's
  * density is the trilinear field of its voxel values (values at integer index
  * points, background elsewhere); it is not clipped at the grid's bounding box,
  * so it reaches one voxel beyond the active voxels (pbrt-v4 clips at index
- * [min, max + 1]). */
+ * [min, max + 1]).
+ *
+ * Moving grids. A grid medium declared under an animated transform (start and
+ * end CTMs differ) moves with it: a ray at scene time t sees the grid placed by
+ * pbrt-v4's AnimatedTransform interpolation at t. With a velocity grid v, the
+ * density at a point x (in the grid's world space, i.e. medium space) and time
+ * t is density(x - v(x) * velocityscale * (t - velocitytime)): first-order
+ * Eulerian motion blur. Both combine (the velocity is relative to the moving
+ * frame). Static grids (equal keyframes, no velocity grid) run the same code
+ * as before motion existed. */
 #ifndef HAZE_MEDIA_MEDIUM_H
 #define HAZE_MEDIA_MEDIUM_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
+#include "core/animated_transform.h"
 #include "core/error.h"
 #include "core/transform.h"
 #include "core/vec.h"
@@ -42,6 +56,23 @@ typedef struct {
         vec3 support_lo, support_hi;
         double background;           /* density outside the support */
         double density_max;          /* >= every density value of the field, >= 0 */
+
+        /* An animated placement: index_from_render above is the start's, and a
+         * ray at time t uses index_from_medium ∘ inverse(render_from_medium(t)). */
+        bool moving;
+        animated_transform render_from_medium; /* moving only */
+        /* The grid's own map (index from its world space, i.e. medium space). */
+        transform index_from_medium;
+
+        /* Velocity (Eulerian motion blur); NULL: none. */
+        grid *velocity;                  /* owned; a vec3 grid, medium units per time */
+        bool velocity_aligned;           /* same index space as the density grid */
+        transform vindex_from_index;     /* velocity index from density index */
+        double velocity_scale, velocity_time;
+        /* Growth of the support box, in index units per unit of
+         * |velocity_scale (t - velocity_time)|: the longest velocity times the
+         * length of each row of index_from_medium's linear part. */
+        vec3 dilation;
     } grid;                  /* MEDIUM_GRID only */
 } medium;
 
@@ -57,15 +88,57 @@ void medium_free(medium *m);
 
 static inline rgb medium_sigma_t(const medium *m) { return rgb_add(m->sigma_a, m->sigma_s); }
 
-/* Clips the render-space ray o + t d, t in [*t0, *t1], to where the medium can
- * attenuate or scatter: unchanged for homogeneous media (and for grids with a
- * non-zero background), the support box for grids. False when nothing is left. */
-bool medium_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1);
+/* A grid medium as one ray at one scene time sees it: what every lookup along
+ * the ray needs, computed once per ray segment. */
+typedef struct {
+    vec3 o, d;         /* the ray in the density grid's index space: o + t d, same t */
+    double shift;      /* velocity_scale (time - velocity_time); 0 without velocity */
+    vec3 lo, hi;       /* where the density can be non-zero at this time (index space) */
+} medium_grid_ray;
 
-/* Trilinear density at an index-space point (grid media). */
+/* Maps the render-space ray o + t d at scene `time` into a grid medium. False
+ * for a degenerate ray (non-finite in index space), which cannot sample the
+ * field meaningfully. */
+bool medium_grid_ray_make(const medium *m, vec3 o, vec3 d, double time, medium_grid_ray *out);
+
+/* Clips [*t0, *t1] to the ray's support box (unchanged for a non-zero
+ * background). False when nothing is left (also for an empty grid or NaN). */
+bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0, double *t1);
+
+/* Clips the render-space ray o + t d at scene `time`, t in [*t0, *t1], to where
+ * the medium can attenuate or scatter: unchanged for homogeneous media (and
+ * for grids with a non-zero background), the support box at that time for
+ * grids. False when nothing is left. */
+bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1);
+
+/* Per-thread lookup caches of a grid medium's grids. */
+typedef struct {
+    grid_accessor density, velocity;
+} medium_accessor;
+
+void medium_accessor_init(const medium *m, medium_accessor *a);
+
+/* Trilinear density at an index-space point (grid media), without motion. */
 static inline double medium_density_index(const medium *m, grid_accessor *a, vec3 p_index)
 {
     return grid_density_index(m->grid.grid, a, p_index);
+}
+
+/* Density at o + t d of a grid ray, moved by the velocity field when the ray
+ * has a shift. Adds the grid lookups it made (1, or 2 with a velocity lookup)
+ * to *lookups. */
+static inline double medium_density_at(const medium *m, medium_accessor *a,
+                                       const medium_grid_ray *r, double t, uint64_t *lookups)
+{
+    vec3 p = v3_add(r->o, v3_scale(r->d, t));
+    if (r->shift != 0.0) {
+        vec3 q = m->grid.velocity_aligned ? p : transform_point(&m->grid.vindex_from_index, p);
+        vec3 v = grid_vec3_index(m->grid.velocity, &a->velocity, q);
+        p = v3_sub(p, v3_scale(transform_vector(&m->grid.index_from_medium, v), r->shift));
+        ++*lookups;
+    }
+    ++*lookups;
+    return grid_density_index(m->grid.grid, &a->density, p);
 }
 
 #endif

@@ -226,7 +226,28 @@ std::vector<std::string> vdb_names(openvdb::io::File &file)
     return names;
 }
 
-vdb_buffer load_vdb(const std::string &path, const std::string &name, std::uintmax_t size)
+// What each value type is called in messages, and its OpenVDB grid type.
+const char *type_name(vdb_value_type type) { return type == VDB_VEC3 ? "vec3s" : "float"; }
+
+template <typename GridT>
+vdb_buffer convert_vdb(const std::string &path, const std::string &name,
+                       const openvdb::GridBase::Ptr &base)
+{
+    typename GridT::Ptr grid = openvdb::gridPtrCast<GridT>(base);
+    if (!grid)
+        throw load_error(path + ": grid \"" + name + "\" is " + base->valueType() +
+                         ", expected " + openvdb::typeNameAsString<typename GridT::ValueType>());
+    // Node min/max statistics are what empty-space skipping and the motion
+    // bounds use (for vectors: the values of least and greatest length).
+    auto handle =
+        nanovdb::openToNanoVDB(*grid, nanovdb::StatsMode::MinMax, nanovdb::ChecksumMode::Partial);
+    if (!handle)
+        throw load_error(path + ": converting grid \"" + name + "\" to NanoVDB failed");
+    return to_buffer(handle);
+}
+
+vdb_buffer load_vdb(const std::string &path, const std::string &name, vdb_value_type type,
+                    std::uintmax_t size)
 {
     auto file_ptr = open_vdb(path, size);
     openvdb::io::File &file = *file_ptr;
@@ -234,21 +255,15 @@ vdb_buffer load_vdb(const std::string &path, const std::string &name, std::uintm
         throw load_error(path + ": no grid named \"" + name +
                          "\" (grids: " + join(vdb_names(file)) + ")");
     openvdb::GridBase::Ptr meta = file.readGridMetadata(name);
-    if (!meta->isType<openvdb::FloatGrid>())
+    bool ok = type == VDB_VEC3 ? meta->isType<openvdb::Vec3SGrid>()
+                               : meta->isType<openvdb::FloatGrid>();
+    if (!ok)
         throw load_error(path + ": grid \"" + name + "\" is " + meta->valueType() +
-                         ", expected float");
+                         ", expected " + type_name(type));
     openvdb::GridBase::Ptr base = file.readGrid(name);
     file.close();
-    openvdb::FloatGrid::Ptr grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
-    if (!grid)
-        throw load_error(path + ": grid \"" + name + "\" is " + base->valueType() +
-                         ", expected float");
-    // Node min/max statistics are what empty-space skipping will use later.
-    auto handle =
-        nanovdb::openToNanoVDB(*grid, nanovdb::StatsMode::MinMax, nanovdb::ChecksumMode::Partial);
-    if (!handle)
-        throw load_error(path + ": converting grid \"" + name + "\" to NanoVDB failed");
-    return to_buffer(handle);
+    return type == VDB_VEC3 ? convert_vdb<openvdb::Vec3SGrid>(path, name, base)
+                            : convert_vdb<openvdb::FloatGrid>(path, name, base);
 }
 
 std::vector<nanovdb::io::GridMetaData> nvdb_meta(const std::string &path)
@@ -260,7 +275,19 @@ std::vector<nanovdb::io::GridMetaData> nvdb_meta(const std::string &path)
     }
 }
 
-vdb_buffer load_nvdb(const std::string &path, const std::string &name, std::uintmax_t size)
+template <typename ValueT>
+void check_nvdb(const std::string &path, const std::string &name,
+                const nanovdb::GridHandle<nanovdb::HostBuffer> &handle)
+{
+    const nanovdb::NanoGrid<ValueT> *grid = handle.template grid<ValueT>();
+    if (!grid)
+        throw load_error(path + ": could not read grid \"" + name + "\"");
+    if (!nanovdb::isValid(*grid, /*detailed=*/true))
+        throw load_error(path + ": grid \"" + name + "\" is corrupt (failed validation)");
+}
+
+vdb_buffer load_nvdb(const std::string &path, const std::string &name, vdb_value_type type,
+                     std::uintmax_t size)
 {
     std::vector<nanovdb::io::GridMetaData> metas = nvdb_meta(path);
     std::vector<std::string> names;
@@ -272,19 +299,19 @@ vdb_buffer load_nvdb(const std::string &path, const std::string &name, std::uint
     }
     if (!found)
         throw load_error(path + ": no grid named \"" + name + "\" (grids: " + join(names) + ")");
-    if (found->gridType != nanovdb::GridType::Float)
+    nanovdb::GridType want = type == VDB_VEC3 ? nanovdb::GridType::Vec3f : nanovdb::GridType::Float;
+    if (found->gridType != want)
         throw load_error(path + ": grid \"" + name + "\" is " + nanovdb::toStr(found->gridType) +
-                         ", expected float");
+                         ", expected " + nanovdb::toStr(want));
     if (found->codec == nanovdb::io::Codec::NONE && found->gridSize > size)
         throw load_error(path + ": file is truncated (grid \"" + name + "\" needs " +
                          std::to_string(found->gridSize) + " bytes, file has " +
                          std::to_string(size) + ")");
     auto handle = nanovdb::io::readGrid(path, name);
-    const nanovdb::NanoGrid<float> *grid = handle.template grid<float>();
-    if (!grid)
-        throw load_error(path + ": could not read grid \"" + name + "\"");
-    if (!nanovdb::isValid(*grid, /*detailed=*/true))
-        throw load_error(path + ": grid \"" + name + "\" is corrupt (failed validation)");
+    if (type == VDB_VEC3)
+        check_nvdb<nanovdb::Vec3f>(path, name, handle);
+    else
+        check_nvdb<float>(path, name, handle);
     return to_buffer(handle);
 }
 
@@ -397,6 +424,12 @@ void list_nvdb(const std::string &path, vdb_grid_callback cb, void *user)
             info.has_range = 1;
             info.min_value = grid->tree().root().minimum();
             info.max_value = grid->tree().root().maximum();
+        } else if (const nanovdb::NanoGrid<nanovdb::Vec3f> *vgrid =
+                       handle.template grid<nanovdb::Vec3f>()) {
+            // NanoVDB's statistics of vectors: the shortest and longest value.
+            info.has_range = 1;
+            info.min_value = vgrid->tree().root().minimum().length();
+            info.max_value = vgrid->tree().root().maximum().length();
         }
         cb(&info, user);
     }
@@ -449,8 +482,9 @@ extern "C" void vdb_buffer_free(vdb_buffer *b)
     b->size = 0;
 }
 
-extern "C" hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out,
-                                   char *err, size_t err_size)
+extern "C" hz_status vdb_load_typed_grid(const char *path, const char *gridname,
+                                         vdb_value_type type, vdb_buffer *out, char *err,
+                                         size_t err_size)
 {
     if (err && err_size)
         err[0] = '\0';
@@ -458,9 +492,15 @@ extern "C" hz_status vdb_load_grid(const char *path, const char *gridname, vdb_b
     return guarded(path, err, err_size, [&] {
         file_kind kind;
         std::uintmax_t size = check_file(path, &kind);
-        *out = kind == file_kind::openvdb ? load_vdb(path, gridname, size)
-                                          : load_nvdb(path, gridname, size);
+        *out = kind == file_kind::openvdb ? load_vdb(path, gridname, type, size)
+                                          : load_nvdb(path, gridname, type, size);
     });
+}
+
+extern "C" hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out,
+                                   char *err, size_t err_size)
+{
+    return vdb_load_typed_grid(path, gridname, VDB_FLOAT, out, err, err_size);
 }
 
 extern "C" hz_status vdb_list_grids(const char *path, vdb_grid_callback cb, void *user, char *err,

@@ -25,10 +25,17 @@ typedef struct {
 
 void vdb_buffer_free(vdb_buffer *b);
 
+/* The value types haze reads: float (density) and 3-vectors of floats (velocity;
+ * OpenVDB's Vec3SGrid, NanoVDB's Vec3f). */
+typedef enum { VDB_FLOAT, VDB_VEC3 } vdb_value_type;
+
 /* Loads the grid called `gridname` from `path` (a .vdb or .nvdb file, told apart
- * by its magic number, not its extension). Only float grids load; any other value
- * type is an error naming the type. On failure `out` is left empty and `err`
- * (of `err_size` bytes, may be NULL) holds the message. */
+ * by its magic number, not its extension). Only grids of value type `type` load;
+ * any other value type is an error naming the type. On failure `out` is left
+ * empty and `err` (of `err_size` bytes, may be NULL) holds the message. */
+hz_status vdb_load_typed_grid(const char *path, const char *gridname, vdb_value_type type,
+                              vdb_buffer *out, char *err, size_t err_size);
+/* vdb_load_typed_grid of a float grid. */
 hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out, char *err,
                         size_t err_size);
 

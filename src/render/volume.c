@@ -79,24 +79,28 @@ static bool roulette(rgb *beta, rng *r)
 
 typedef struct {
     const medium *m;
-    grid_accessor acc;
-    vec3 o, d;          /* index-space ray: p(t) = o + t d for the render-space t */
+    medium_accessor acc;
+    medium_grid_ray r;   /* index-space ray at the walk's time: p(t) = o + t d */
     double voxels_per_t; /* |d| */
 } grid_ray;
 
-static void grid_ray_init(grid_ray *gr, const medium *m, vec3 o, vec3 w)
+/* The ray o + t w at the walk's time in grid medium m, with [*t0, *t1] clipped
+ * to where the density can be non-zero then. False when nothing is left. */
+static bool grid_ray_init(grid_ray *gr, const medium *m, vec3 o, vec3 w, double time, double *t0,
+                          double *t1)
 {
+    if (!medium_grid_ray_make(m, o, w, time, &gr->r) || !medium_grid_ray_clip(m, &gr->r, t0, t1))
+        return false;
     gr->m = m;
-    grid_accessor_init(m->grid.grid, &gr->acc);
-    gr->o = transform_point(&m->grid.index_from_render, o);
-    gr->d = transform_vector(&m->grid.index_from_render, w);
-    gr->voxels_per_t = v3_length(gr->d);
+    medium_accessor_init(m, &gr->acc);
+    gr->voxels_per_t = v3_length(gr->r.d);
+    return true;
 }
 
+/* Counts density and velocity lookups alike (volume_walk.lookups). */
 static inline double grid_ray_density(grid_ray *gr, double t, volume_walk *walk)
 {
-    walk->lookups++;
-    return medium_density_index(gr->m, &gr->acc, v3_add(gr->o, v3_scale(gr->d, t)));
+    return medium_density_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
 }
 
 /* Strata of about `step` voxels over [t0, t1]: their count and width in t. */
@@ -129,10 +133,9 @@ static double grid_majorant(const medium *m)
 static rgb grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w, double t0,
                               double t1, volume_walk *walk)
 {
-    if (!medium_clip(m, o, w, &t0, &t1))
-        return rgb_grey(1.0);
     grid_ray gr;
-    grid_ray_init(&gr, m, o, w);
+    if (!grid_ray_init(&gr, m, o, w, walk->time, &t0, &t1))
+        return rgb_grey(1.0);
     rgb sigma_t = medium_sigma_t(m);
     switch (vs->settings.mode) {
     case TRANSMITTANCE_RAYMARCH:
@@ -481,10 +484,9 @@ static void grid_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double 
                          rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
 {
     const medium *m = &vs->media[mi];
-    if (!medium_clip(m, o, w, &t0, &t1))
-        return;
     grid_ray gr;
-    grid_ray_init(&gr, m, o, w);
+    if (!grid_ray_init(&gr, m, o, w, walk->time, &t0, &t1))
+        return;
     rgb sigma_t = medium_sigma_t(m);
     vec3 wo = v3_neg(w);
     double dt;

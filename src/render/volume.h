@@ -14,7 +14,9 @@
  *   TRANSMITTANCE_JITTERED   steps with one random offset per ray (banding becomes noise),
  *   TRANSMITTANCE_RATIO      ratio tracking against the grid's majorant (unbiased).
  * Shadow rays use the same estimator with `shadowstepsize`. Low transmittance
- * ends a walk by Russian roulette, never by a cutoff. */
+ * ends a walk by Russian roulette, never by a cutoff. Moving grids (animated
+ * placement, velocity grids) are looked up at the walk's time everywhere:
+ * camera rays, shadow rays, every estimator. */
 #ifndef HAZE_RENDER_VOLUME_H
 #define HAZE_RENDER_VOLUME_H
 
@@ -73,7 +75,7 @@ typedef struct {
 typedef struct {
     double time;          /* the camera ray's scene time: shadow rays and lookups use it */
     rng r;
-    uint64_t lookups;     /* density lookups */
+    uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
     uint64_t shadow_rays;
 } volume_walk;
 

@@ -1,6 +1,6 @@
 /* media/grid: trilinear density with values at integer index points, transforms,
- * bounds and node statistics, checked on the generated volumes whose contents
- * are known exactly (volumes/generate.cpp). */
+ * bounds and node statistics, and vec3 (velocity) grids, checked on the
+ * generated volumes whose contents are known exactly (volumes/generate.cpp). */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -307,6 +307,107 @@ static void rejects_bad_buffers(void **state)
     vdb_buffer_free(&junk);
 }
 
+/* ---- vec3 grids ---- */
+
+static grid *load_vec3(const char *file, const char *name)
+{
+    grid *g = NULL;
+    hz_error err = {{0}};
+    if (grid_load_vec3(file, name, &g, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    return g;
+}
+
+/* vec_ramp: v(i,j,k) = (0.5 i - 1, 0.25 j, 2 - k) on voxels [0,7]^3. */
+static vec3 ramp(double i, double j, double k) { return v3(0.5 * i - 1.0, 0.25 * j, 2.0 - k); }
+
+static void check_ramp(const char *file)
+{
+    grid *g = load_vec3(file, "v");
+    assert_int_equal(grid_type(g), GRID_VEC3);
+    grid_accessor a;
+    grid_accessor_init(g, &a);
+    /* Voxel values, exactly. */
+    for (int i = 0; i < 8; i += 3)
+        for (int j = 0; j < 8; j += 2)
+            for (int k = 0; k < 8; k += 7) {
+                vec3 v = grid_vec3_voxel(g, &a, i, j, k), want = ramp(i, j, k);
+                assert_exact(v.x, want.x);
+                assert_exact(v.y, want.y);
+                assert_exact(v.z, want.z);
+            }
+    /* Trilinear interpolation reproduces a linear field inside the active box. */
+    uint64_t seed = 17;
+    for (int n = 0; n < 200; ++n) {
+        vec3 p = v3(7 * rng_next(&seed), 7 * rng_next(&seed), 7 * rng_next(&seed));
+        assert_v3_near(grid_vec3_index(g, &a, p), ramp(p.x, p.y, p.z), 1e-12);
+    }
+    /* Beyond the active voxels the field falls to the background over one voxel,
+     * and is the background (0) outside [-1, 8]. */
+    assert_v3_near(grid_vec3_index(g, &a, v3(7.5, 4, 4)), v3_scale(ramp(7, 4, 4), 0.5), 1e-12);
+    assert_v3_near(grid_vec3_index(g, &a, v3(3, 3, -0.25)), v3_scale(ramp(3, 3, 0), 0.75), 1e-12);
+    assert_v3_near(grid_vec3_index(g, &a, v3(8, 4, 4)), v3(0, 0, 0), 0);
+    assert_v3_near(grid_vec3_index(g, &a, v3(-3, 4, 4)), v3(0, 0, 0), 0);
+    assert_v3_near(grid_vec3_index(g, &a, v3(NAN, 4, 4)), v3(0, 0, 0), 0);
+    /* Statistics are lengths: the longest vector is v(7, 7, 7), the shortest 0. */
+    assert_near(grid_max_value(g), v3_length(ramp(7, 7, 7)), 1e-6);
+    assert_exact(grid_min_value(g), 0.0);
+    assert_exact(grid_background(g), 0.0);
+    assert_int_equal(grid_active_voxel_count(g), 512);
+    /* Voxel size 0.25, offset (1, 2, 3). */
+    assert_v3_near(grid_world_from_index(g, v3(4, 0, 8)), v3(2, 2, 5), 1e-15);
+    grid_destroy(g);
+}
+
+static void vec3_ramp_vdb(void **state)
+{
+    (void)state;
+    check_ramp(VOLUMES "vec_ramp.vdb");
+}
+
+/* The same grid from a (ZIP-compressed) NanoVDB file. */
+static void vec3_ramp_nvdb(void **state)
+{
+    (void)state;
+    check_ramp(VOLUMES "vec_ramp.nvdb");
+}
+
+/* The loaders insist on the value type, naming what they found. */
+static void vec3_type_mismatch(void **state)
+{
+    (void)state;
+    grid *g = NULL;
+    hz_error err = {{0}};
+    assert_int_equal(grid_load_vec3(VOLUMES "vec_ramp.vdb", "density", &g, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "grid \"density\" is float, expected vec3s"));
+    assert_int_equal(grid_load_vec3(VOLUMES "vec_ramp.nvdb", "density", &g, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "grid \"density\" is float, expected Vec3f"));
+    assert_int_equal(grid_load(VOLUMES "vec_ramp.nvdb", "v", &g, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "grid \"v\" is Vec3f, expected float"));
+    assert_null(g);
+    g = load(VOLUMES "vec_ramp.nvdb");
+    assert_int_equal(grid_type(g), GRID_FLOAT);
+    grid_destroy(g);
+}
+
+/* plume.vdb: the velocity has half the density's resolution and its own map. */
+static void vec3_plume_velocity(void **state)
+{
+    (void)state;
+    grid *d = load(VOLUMES "plume.vdb"), *v = load_vec3(VOLUMES "plume.vdb", "v");
+    assert_v3_near(grid_world_from_index(d, v3(32, 64, 32)), v3(0, 1, 0), 1e-15);
+    assert_v3_near(grid_world_from_index(v, v3(16, 32, 16)), v3(0, 1, 0), 1e-15);
+    /* Rising everywhere it is defined: 0.7 to 1.3 m/s up, plus the swirl. */
+    grid_accessor a;
+    grid_accessor_init(v, &a);
+    vec3 up = grid_vec3_voxel(v, &a, 16, 32, 16);
+    assert_true(up.y > 0.7 && up.y < 1.31);
+    assert_true(grid_max_value(v) > 1.0f && grid_max_value(v) < 1.6f);
+    assert_true(grid_min_value(v) >= 0.7f);
+    grid_destroy(d);
+    grid_destroy(v);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -321,6 +422,10 @@ int main(void)
         cmocka_unit_test(region_max_box),
         cmocka_unit_test(region_max_is_a_majorant),
         cmocka_unit_test(rejects_bad_buffers),
+        cmocka_unit_test(vec3_ramp_vdb),
+        cmocka_unit_test(vec3_ramp_nvdb),
+        cmocka_unit_test(vec3_type_mismatch),
+        cmocka_unit_test(vec3_plume_velocity),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

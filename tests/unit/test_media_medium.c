@@ -1,6 +1,7 @@
 /* media/medium: MakeNamedMedium entities become media (parameters, defaults,
- * errors, file resolution, grid placement), and medium_clip bounds rays to a
- * grid's support box. Scenes are parsed from strings; the grids are the
+ * errors, file resolution, grid placement), medium_clip bounds rays to a
+ * grid's support box, and moving grids (animated transforms, velocity grids)
+ * place each ray at its time. Scenes are parsed from strings; the grids are the
  * generated volumes (volumes/generate.cpp). */
 #include <stdarg.h>
 #include <stddef.h>
@@ -156,7 +157,7 @@ static void homogeneous_under_transform(void **state)
              "\"homogeneous\"\n",
              &sd, &m);
     double t0 = 0.5, t1 = 7.0;
-    assert_true(medium_clip(&m, v3(0, 0, 0), v3(1, 0, 0), &t0, &t1));
+    assert_true(medium_clip(&m, v3(0, 0, 0), v3(1, 0, 0), 0.0, &t0, &t1));
     assert_near(t0, 0.5, 0);
     assert_near(t1, 7.0, 0);
     free_all(&sd, &m);
@@ -249,7 +250,7 @@ static void nanovdb_absolute_path(void **state)
     assert_v3_near(m.grid.support_lo, v3(8, 8, 8), 0);
     assert_v3_near(m.grid.support_hi, v3(56, 56, 56), 0);
     double t0 = 0, t1 = INFINITY;
-    assert_true(medium_clip(&m, v3(-5, 0, 0), v3(1, 0, 0), &t0, &t1));
+    assert_true(medium_clip(&m, v3(-5, 0, 0), v3(1, 0, 0), 0.0, &t0, &t1));
     assert_near(t0, 4.25, 1e-12);
     assert_near(t1, 5.75, 1e-12);
     free_all(&sd, &m);
@@ -314,7 +315,7 @@ static void nanovdb_errors(void **state)
 static void clip_expect(const medium *m, vec3 o, vec3 d, double t0, double t1, double want0,
                         double want1)
 {
-    if (!medium_clip(m, o, d, &t0, &t1))
+    if (!medium_clip(m, o, d, 0.0, &t0, &t1))
         fail_msg("ray (%g %g %g) + t (%g %g %g) missed", o.x, o.y, o.z, d.x, d.y, d.z);
     if (!((t0 == want0 || fabs(t0 - want0) <= 1e-12 * fmax(1, fabs(want0))) &&
           (t1 == want1 || fabs(t1 - want1) <= 1e-12 * fmax(1, fabs(want1)))))
@@ -324,7 +325,7 @@ static void clip_expect(const medium *m, vec3 o, vec3 d, double t0, double t1, d
 
 static void clip_expect_miss(const medium *m, vec3 o, vec3 d, double t0, double t1)
 {
-    if (medium_clip(m, o, d, &t0, &t1))
+    if (medium_clip(m, o, d, 0.0, &t0, &t1))
         fail_msg("ray (%g %g %g) + t (%g %g %g) hit [%g, %g]", o.x, o.y, o.z, d.x, d.y, d.z, t0,
                  t1);
 }
@@ -464,6 +465,263 @@ static void free_is_safe(void **state)
     scene_desc_free(&sd);
 }
 
+/* ---- moving grids ---- */
+
+/* A ray's index-space origin at `time` (the grid ray of o + t d). */
+static vec3 index_origin(const medium *m, vec3 o, double time)
+{
+    medium_grid_ray r;
+    assert_true(medium_grid_ray_make(m, o, v3(1, 0, 0), time, &r));
+    return r.o;
+}
+
+static void clip_expect_at(const medium *m, vec3 o, vec3 d, double time, double want0,
+                           double want1)
+{
+    double t0 = 0, t1 = INFINITY;
+    if (!medium_clip(m, o, d, time, &t0, &t1))
+        fail_msg("missed at time %g", time);
+    if (!(fabs(t0 - want0) <= 1e-12 * fmax(1, fabs(want0)) &&
+          fabs(t1 - want1) <= 1e-12 * fmax(1, fabs(want1))))
+        fail_msg("time %g: [%.17g, %.17g], want [%.17g, %.17g]", time, t0, t1, want0, want1);
+}
+
+/* A grid under an animated transform moves with it over TransformTimes. */
+static void moving_translation(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb_at("ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n",
+                        VOLUMES "box.vdb", ""),
+             &sd, &m);
+    assert_true(m.grid.moving);
+    vec3 o = v3(-5, 0.5, 0.5);
+    for (double t = 0; t <= 1.0; t += 0.25) {
+        assert_v3_near(index_origin(&m, o, t), v3(32 * (-5 - t), 16, 16), 1e-12);
+        clip_expect_at(&m, o, v3(1, 0, 0), t, 5 + t - 1.0 / 32, 6 + t);
+    }
+    /* Before and after the transform times: the end keyframes. */
+    assert_v3_near(index_origin(&m, o, -3), v3(-160, 16, 16), 1e-12);
+    assert_v3_near(index_origin(&m, o, 7), v3(-192, 16, 16), 1e-12);
+    /* A ray that meets the box only late in the motion. */
+    double t0 = 0, t1 = INFINITY;
+    assert_false(medium_clip(&m, v3(1.5, -5, 0.5), v3(0, 1, 0), 0.25, &t0, &t1));
+    assert_true(medium_clip(&m, v3(1.5, -5, 0.5), v3(0, 1, 0), 0.75, &t0, &t1));
+    free_all(&sd, &m);
+
+    /* Other TransformTimes: the motion spans them. */
+    build_ok("TransformTimes 2 4\nWorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\n"
+             "ActiveTransform All\nMakeNamedMedium \"smoke\" \"string type\" \"nanovdb\" "
+             "\"string filename\" \"" VOLUMES "box.vdb\"\n",
+             &sd, &m);
+    assert_v3_near(index_origin(&m, o, 3), v3(32 * -5.5, 16, 16), 1e-12);
+    assert_v3_near(index_origin(&m, o, 1), v3(-160, 16, 16), 1e-12);
+    free_all(&sd, &m);
+}
+
+/* Rotations are interpolated as pbrt-v4 does (slerp): half way through a 90°
+ * turn about z, the grid has turned 45°. */
+static void moving_rotation(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb_at("ActiveTransform EndTime\nRotate 90 0 0 1\nActiveTransform All\n",
+                        VOLUMES "box.vdb", ""),
+             &sd, &m);
+    /* Index (16,16,16) is medium (0.5, 0.5, 0.5); turned 45° about z. */
+    vec3 centre = v3(0, sqrt(0.5), 0.5);
+    assert_v3_near(index_origin(&m, centre, 0.5), v3(16, 16, 16), 1e-12);
+    assert_v3_near(index_origin(&m, v3(-0.5, 0.5, 0.5), 1), v3(16, 16, 16), 1e-12);
+    free_all(&sd, &m);
+}
+
+/* Equal keyframes are no motion: the static placement and code path. */
+static void moving_equal_keyframes_are_static(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m, still;
+    build_ok(nanovdb_at("Translate 0.25 0 0\nActiveTransform EndTime\nTranslate 0 0 0\n"
+                        "ActiveTransform All\n",
+                        VOLUMES "box.vdb", ""),
+             &sd, &m);
+    assert_false(m.grid.moving);
+    scene_desc sd2;
+    build_ok(nanovdb_at("Translate 0.25 0 0\n", VOLUMES "box.vdb", ""), &sd2, &still);
+    assert_memory_equal(&m.grid.index_from_render, &still.grid.index_from_render,
+                        sizeof still.grid.index_from_render);
+    free_all(&sd, &m);
+    free_all(&sd2, &still);
+    /* A homogeneous medium accepts an animated transform (its shapes place it). */
+    build_ok("WorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n"
+             "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n",
+             &sd, &m);
+    assert_int_equal(m.kind, MEDIUM_HOMOGENEOUS);
+    free_all(&sd, &m);
+}
+
+/* box_velocity.vdb: box.vdb's density, v = (1, 0.25, 0) world units per time
+ * on the same index space (voxel size 1/32). */
+static void velocity_box(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb(VOLUMES "box_velocity.vdb",
+                     "\"string velocityname\" \"v\" \"float velocityscale\" 0.5"),
+             &sd, &m);
+    check_box(&m);
+    assert_non_null(m.grid.velocity);
+    assert_true(m.grid.velocity_aligned);
+    assert_false(m.grid.moving);
+    assert_near(m.grid.velocity_scale, 0.5, 0);
+    assert_near(m.grid.velocity_time, 0.0, 0); /* TransformTimes start */
+    /* |v| times 32 index units per world unit, on every axis. */
+    double grow = 32 * sqrt(1.0625);
+    assert_v3_near(m.grid.dilation, v3(grow, grow, grow), 1e-5);
+
+    medium_accessor a;
+    medium_accessor_init(&m, &a);
+    /* At time 1 the density has moved by 0.5 v = 16 and 4 voxels. */
+    vec3 o = v3(40.0 / 32, 18.0 / 32, 0.5); /* index (40, 18, 16) */
+    medium_grid_ray r;
+    uint64_t lookups = 0;
+    assert_true(medium_grid_ray_make(&m, o, v3(0, 0, 1), 1.0, &r));
+    assert_near(r.shift, 0.5, 0);
+    assert_near(medium_density_at(&m, &a, &r, 0.0, &lookups), 1.0, 0);
+    assert_int_equal(lookups, 2); /* velocity, then density */
+    assert_near(medium_density_at(&m, &a, &r, 15.5 / 32, &lookups), 0.5, 1e-12); /* z = 31.5 */
+    /* At time 0 (velocitytime): no velocity lookup, the static box. */
+    assert_true(medium_grid_ray_make(&m, o, v3(0, 0, 1), 0.0, &r));
+    assert_near(r.shift, 0.0, 0);
+    lookups = 0;
+    assert_near(medium_density_at(&m, &a, &r, 0.0, &lookups), 0.0, 0);
+    assert_int_equal(lookups, 1);
+    /* The support grows by |shift| times the dilation, both ways. */
+    assert_true(medium_grid_ray_make(&m, o, v3(0, 0, 1), 1.0, &r));
+    assert_v3_near(r.lo, v3_sub(m.grid.support_lo, v3_scale(m.grid.dilation, 0.5)), 1e-12);
+    assert_v3_near(r.hi, v3_add(m.grid.support_hi, v3_scale(m.grid.dilation, 0.5)), 1e-12);
+    grow = m.grid.dilation.x;
+    clip_expect_at(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 1.0, 5 + (-1 - 0.5 * grow) / 32,
+                   5 + (32 + 0.5 * grow) / 32);
+    free_all(&sd, &m);
+
+    /* velocitytime: the grid shows time 0.5; at time 0 the box sits 8 and 2
+     * voxels back (where the velocity grid still holds v). */
+    build_ok(nanovdb(VOLUMES "box_velocity.vdb",
+                     "\"string velocityname\" \"v\" \"float velocityscale\" 0.5 "
+                     "\"float velocitytime\" 0.5"),
+             &sd, &m);
+    medium_accessor_init(&m, &a);
+    assert_true(medium_grid_ray_make(&m, v3(-2.0 / 32, 0.5, 0.5), v3(1, 0, 0), 0.0, &r));
+    assert_near(r.shift, -0.25, 0);
+    assert_near(medium_density_at(&m, &a, &r, 0.0, &lookups), 1.0, 0);          /* x = -2 */
+    assert_near(medium_density_at(&m, &a, &r, -7.0 / 32, &lookups), 0.0, 0);    /* x = -9 */
+    assert_near(medium_density_at(&m, &a, &r, 25.5 / 32, &lookups), 0.5, 1e-12); /* x = 23.5 */
+    free_all(&sd, &m);
+}
+
+/* plume.vdb's velocity has its own map (half the resolution): lookups go
+ * through the grids' world space. Checked against the grid functions. */
+static void velocity_unaligned_grids(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(nanovdb(VOLUMES "plume.vdb",
+                     "\"string velocityname\" \"v\" \"float velocityscale\" 0.2 "
+                     "\"float velocitytime\" 0.5"),
+             &sd, &m);
+    assert_false(m.grid.velocity_aligned);
+    const grid *d = m.grid.grid, *v = m.grid.velocity;
+    medium_accessor a;
+    medium_accessor_init(&m, &a);
+    grid_accessor va, da;
+    grid_accessor_init(v, &va);
+    grid_accessor_init(d, &da);
+    uint64_t seed = 5, lookups = 0;
+    int nonzero = 0;
+    for (int n = 0; n < 300; ++n) {
+        vec3 o = v3(rng_next(&seed) - 0.5, 2 * rng_next(&seed), rng_next(&seed) - 0.5);
+        double time = rng_next(&seed);
+        medium_grid_ray r;
+        assert_true(medium_grid_ray_make(&m, o, v3(0, 1, 0), time, &r));
+        double got = medium_density_at(&m, &a, &r, 0.0, &lookups);
+        vec3 vel = grid_vec3_index(v, &va, grid_index_from_world(v, o));
+        vec3 moved = v3_sub(o, v3_scale(vel, 0.2 * (time - 0.5)));
+        double want = grid_density_index(d, &da, grid_index_from_world(d, moved));
+        assert_near(got, want, 1e-9);
+        nonzero += want > 0.0;
+    }
+    assert_true(nonzero > 20);
+    free_all(&sd, &m);
+}
+
+/* The column of `needle` (1-based) in the one-line-after-WorldBegin source. */
+static int column_of(const char *src, const char *needle)
+{
+    const char *p = strstr(src, needle);
+    assert_non_null(p);
+    const char *line = p;
+    while (line > src && line[-1] != '\n')
+        --line;
+    return (int)(p - line) + 1;
+}
+
+static void velocity_errors(void **state)
+{
+    (void)state;
+    char want[64];
+    const char *src = nanovdb(VOLUMES "box_velocity.vdb", "\"string velocityname\" \"nope\"");
+    snprintf(want, sizeof want, "t.pbrt:2:%d:", column_of(src, "\"string velocityname\""));
+    build_err(src, want, "velocity grid");
+    build_err(nanovdb(VOLUMES "box_velocity.vdb", "\"string velocityname\" \"nope\""), want,
+              "no grid named \"nope\" (grids: \"density\", \"v\", \"v0\")");
+    build_err(nanovdb(VOLUMES "box_velocity.vdb", "\"string velocityname\" \"density\""), want,
+              "grid \"density\" is float, expected vec3s");
+    build_err(nanovdb(VOLUMES "box_velocity.vdb", "\"string velocityname\" \"\""), want,
+              "\"velocityname\" is empty");
+    src = nanovdb(VOLUMES "box_velocity.vdb",
+                  "\"string velocityname\" \"v\" \"float velocityscale\" -1");
+    snprintf(want, sizeof want, "t.pbrt:2:%d:", column_of(src, "\"float velocityscale\""));
+    build_err(src, want, "\"velocityscale\" must be finite and non-negative, got -1");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"float velocityscale\" 1"), "t.pbrt:2:",
+              "\"velocityscale\" needs a velocity grid (\"string velocityname\")");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"float velocitytime\" 1"), "t.pbrt:2:",
+              "\"velocitytime\" needs a velocity grid");
+    build_err(homog("\"string velocityname\" \"v\""), "t.pbrt:2:",
+              "unused parameter \"string velocityname\"");
+    /* The parser refuses a written NaN at its place. */
+    scene_desc sd;
+    hz_error err;
+    src = nanovdb(VOLUMES "box_velocity.vdb",
+                  "\"string velocityname\" \"v\" \"float velocityscale\" nan");
+    assert_int_equal(scene_parse_string(src, "t.pbrt", &sd, &err), HZ_ERROR);
+    snprintf(want, sizeof want, "t.pbrt:2:%d:", column_of(src, "velocityscale\" nan") + 15);
+    assert_non_null(strstr(err.message, want));
+    assert_non_null(strstr(err.message, "not a number"));
+
+    /* A NaN that reaches the medium (set after parsing) is refused too. */
+    src = nanovdb(VOLUMES "box_velocity.vdb",
+                  "\"string velocityname\" \"v\" \"float velocityscale\" 1");
+    if (scene_parse_string(src, "t.pbrt", &sd, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    param_list *pl = &sd.media[0].entity.params;
+    for (size_t i = 0; i < pl->count; ++i)
+        if (strcmp(pl->items[i].name, "velocityscale") == 0)
+            pl->items[i].nums[0] = NAN;
+    medium m;
+    assert_int_equal(medium_from_entity(&sd.media[0], transform_identity(), 0, 1, &m, &err),
+                     HZ_ERROR);
+    snprintf(want, sizeof want, "t.pbrt:2:%d:", column_of(src, "\"float velocityscale\""));
+    assert_non_null(strstr(err.message, want));
+    assert_non_null(strstr(err.message, "\"velocityscale\" must be finite"));
+    medium_free(&m);
+    scene_desc_free(&sd);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -481,6 +739,12 @@ int main(void)
         cmocka_unit_test(clip_special_grids),
         cmocka_unit_test(homogeneous_clip),
         cmocka_unit_test(free_is_safe),
+        cmocka_unit_test(moving_translation),
+        cmocka_unit_test(moving_rotation),
+        cmocka_unit_test(moving_equal_keyframes_are_static),
+        cmocka_unit_test(velocity_box),
+        cmocka_unit_test(velocity_unaligned_grids),
+        cmocka_unit_test(velocity_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
