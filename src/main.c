@@ -148,6 +148,22 @@ static double peak_memory_mib(void)
     return ru.ru_maxrss / 1024.0;
 }
 
+/* "static", or what moves: "motion: camera, surfaces, 1 medium". */
+static void format_motion(render_motion m, char *buf, size_t n)
+{
+    if (!m.camera && !m.surfaces && m.media == 0) {
+        snprintf(buf, n, "static");
+        return;
+    }
+    snprintf(buf, n, "motion:%s%s%s", m.camera ? " camera" : "",
+             m.surfaces ? (m.camera ? ", surfaces" : " surfaces") : "", "");
+    if (m.media > 0) {
+        size_t len = strlen(buf);
+        snprintf(buf + len, n - len, "%s %zu medi%s", m.camera || m.surfaces ? "," : "", m.media,
+                 m.media == 1 ? "um" : "a");
+    }
+}
+
 static int run_render(const cli *c)
 {
     hz_error err = {{0}};
@@ -200,13 +216,15 @@ static int run_render(const cli *c)
         if (stats.density_lookups > 0)
             snprintf(lookups, sizeof lookups, "%.1f density lookups/pixel", /* pixels > 0 here */
                      (double)stats.density_lookups / (double)stats.pixels);
+        char motion[96];
+        format_motion(render_scene_motion(rs), motion, sizeof motion);
         printf("%s: %dx%d (%d x %d pixels rendered), %d spp, %d threads, %s, "
-               "%.2f Mrays/s (%llu camera + %llu shadow), %s%speak memory %.1f MiB\n",
+               "%.2f Mrays/s (%llu camera + %llu shadow), %s%s%s, peak memory %.1f MiB\n",
                fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,
                fp->bounds.y1 - fp->bounds.y0, stats.spp, stats.threads, wall,
                stats.wall_seconds > 0 ? rays / stats.wall_seconds * 1e-6 : 0.0,
                (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
-               lookups, lookups[0] ? ", " : "", peak_memory_mib());
+               lookups, lookups[0] ? ", " : "", motion, peak_memory_mib());
     }
 done:
     render_scene_destroy(rs);

@@ -261,6 +261,22 @@ film *render_scene_film(render_scene *rs) { return rs->film; }
 const sampler *render_scene_sampler(const render_scene *rs) { return &rs->smp; }
 const filter *render_scene_filter(const render_scene *rs) { return rs->filt; }
 
+render_motion render_scene_motion(const render_scene *rs)
+{
+    render_motion m = {rs->cam.motion, geometry_has_motion(rs->geom), 0};
+    for (size_t i = 0; i < rs->medium_count; ++i) {
+        const medium *md = &rs->media[i];
+        switch (md->kind) {
+        case MEDIUM_HOMOGENEOUS:
+            break;
+        case MEDIUM_GRID:
+            m.media += md->grid.moving || md->grid.velocity != NULL;
+            break;
+        }
+    }
+    return m;
+}
+
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, render_counters *counters)
 {

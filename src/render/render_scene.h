@@ -4,6 +4,8 @@
 #ifndef HAZE_RENDER_RENDER_SCENE_H
 #define HAZE_RENDER_RENDER_SCENE_H
 
+#include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 
@@ -34,6 +36,16 @@ const camera *render_scene_camera(const render_scene *rs);
 film *render_scene_film(render_scene *rs);
 const sampler *render_scene_sampler(const render_scene *rs);
 const filter *render_scene_filter(const render_scene *rs);
+
+/* What moves during the shutter: a scene pays for motion only where it has
+ * some (static Embree scene, no time steps, no per-ray grid transforms). */
+typedef struct {
+    bool camera;   /* animated camera transform */
+    bool surfaces; /* animated shapes or instances (Embree motion blur) */
+    size_t media;  /* grid media that move (animated transform or velocity grid) */
+} render_motion;
+
+render_motion render_scene_motion(const render_scene *rs);
 
 /* Per-thread counters, summed by the renderer for the summary. */
 typedef struct {
