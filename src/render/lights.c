@@ -401,16 +401,25 @@ static double toward_point(vec3 p_light, vec3 p, light_sample *out)
 
 /* The sample of point `pl` (normal `nl`) of an area light chosen with
  * density `pdf_dir` per solid angle at p (sphere cone sampling). */
-static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_dir,
-                                    light_sample *out)
+/* out->dist and out->wi from p toward the light point pl; returns the squared
+ * distance, 0 when they coincide (then out is unchanged). */
+static double sample_direction(vec3 p, vec3 pl, light_sample *out)
 {
     vec3 d = v3_sub(pl, p);
     double d2 = v3_length_sq(d);
     if (d2 == 0.0)
-        return false;
-    out->pdf = pdf_dir;
+        return 0.0;
     out->dist = sqrt(d2);
     out->wi = v3_scale(d, 1.0 / out->dist);
+    return d2;
+}
+
+static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_dir,
+                                    light_sample *out)
+{
+    if (sample_direction(p, pl, out) == 0.0)
+        return false;
+    out->pdf = pdf_dir;
     /* One-sided: only the side the normal faces emits (for an outward normal
      * that is the whole cone but its rim). */
     out->L = light_area_le(l, nl, v3_neg(out->wi));
@@ -426,12 +435,9 @@ static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, do
 static bool area_sample_area(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_area,
                              light_sample *out)
 {
-    vec3 d = v3_sub(pl, p);
-    double d2 = v3_length_sq(d);
+    double d2 = sample_direction(p, pl, out);
     if (d2 == 0.0)
         return false;
-    out->dist = sqrt(d2);
-    out->wi = v3_scale(d, 1.0 / out->dist);
     double cos_l = fabs(v3_dot(nl, out->wi));
     if (cos_l == 0.0)
         return false;

@@ -29,6 +29,17 @@ typedef struct {
     int index;
 } worker_arg;
 
+camera_sample renderer_camera_sample(const filter *flt, sampler_state *st, int px, int py)
+{
+    filter_sample fs = filter_sample_offset(flt, sampler_pixel_2d(st));
+    camera_sample cs;
+    cs.p_film = v2(px + 0.5 + fs.p.x, py + 0.5 + fs.p.y);
+    cs.time = sampler_1d(st);
+    cs.p_lens = sampler_2d(st);
+    cs.filter_weight = fs.weight;
+    return cs;
+}
+
 static void render_pixel(render_job *job, int px, int py, render_counters *counters)
 {
     const camera *cam = render_scene_camera(job->rs);
@@ -39,13 +50,7 @@ static void render_pixel(render_job *job, int px, int py, render_counters *count
     for (int i = 0; i < job->spp; ++i) {
         sampler_state st;
         sampler_start(smp, px, py, i, &st);
-        /* pbrt-v4's GetCameraSample order: film position, time, lens. */
-        filter_sample fs = filter_sample_offset(flt, sampler_pixel_2d(&st));
-        camera_sample cs;
-        cs.p_film = v2(px + 0.5 + fs.p.x, py + 0.5 + fs.p.y);
-        cs.time = sampler_1d(&st);
-        cs.p_lens = sampler_2d(&st);
-        cs.filter_weight = fs.weight;
+        camera_sample cs = renderer_camera_sample(flt, &st, px, py);
 
         ray_differential rd;
         if (!camera_generate_ray_differential(cam, cs, &rd))

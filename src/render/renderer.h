@@ -29,6 +29,10 @@ typedef struct {
 hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
                        hz_error *err);
 
+/* The camera sample of pixel (px, py) drawn from `st` in pbrt-v4's order
+ * (GetCameraSample): film position through the filter, time, lens. */
+camera_sample renderer_camera_sample(const filter *flt, sampler_state *st, int px, int py);
+
 /* Number of online processors (at least 1). */
 int renderer_default_threads(void);
 

@@ -5,6 +5,7 @@
 #define HAZE_TESTS_RENDER_TEST_UTIL_H
 
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -106,6 +107,37 @@ static inline pixel_eval eval_pixel(const render_scene *rs, double fx, double fy
         out.p_world = transform_point(&cam->world_from_render, p_render);
     }
     return out;
+}
+
+/* Calls fn(ctx, x, y) for every pixel of a w x h image on two threads (pixels
+ * interleaved). fn must not call cmocka (it is not thread-safe). */
+typedef void (*pixel_fn)(void *ctx, int x, int y);
+
+typedef struct {
+    pixel_fn fn;
+    void *ctx;
+    int w, h, first, stride;
+} pixel_job;
+
+static inline void *pixel_job_run(void *p)
+{
+    pixel_job *j = p;
+    for (int i = j->first; i < j->w * j->h; i += j->stride)
+        j->fn(j->ctx, i % j->w, i / j->w);
+    return NULL;
+}
+
+static inline void for_each_pixel_parallel(int w, int h, pixel_fn fn, void *ctx)
+{
+    enum { THREADS = 2 };
+    pthread_t th[THREADS];
+    pixel_job jobs[THREADS];
+    for (int t = 0; t < THREADS; ++t) {
+        jobs[t] = (pixel_job){fn, ctx, w, h, t, THREADS};
+        assert_int_equal(pthread_create(&th[t], NULL, pixel_job_run, &jobs[t]), 0);
+    }
+    for (int t = 0; t < THREADS; ++t)
+        pthread_join(th[t], NULL);
 }
 
 static inline void expect_close(double got, double want, double rel, double abs_tol,

@@ -147,33 +147,23 @@ static pstat pixel_stats_raw(const render_scene *rs, int px, int py, int spp)
 
 typedef struct {
     const render_scene *rs;
-    int w, h, spp, stride, first;
+    int w, spp;
     pstat *out;
 } image_job;
 
-static void *image_worker(void *p)
+static void image_pixel(void *ctx, int x, int y)
 {
-    image_job *j = p;
-    for (int i = j->first; i < j->w * j->h; i += j->stride)
-        j->out[i] = pixel_stats_raw(j->rs, i % j->w, i / j->w, j->spp);
-    return NULL;
+    image_job *j = ctx;
+    j->out[y * j->w + x] = pixel_stats_raw(j->rs, x, y, j->spp);
 }
 
-#define THREADS 2
-
-/* Statistics of every pixel of a w x h image (row-major), on THREADS threads. */
+/* Statistics of every pixel of a w x h image (row-major), on two threads. */
 static pstat *image_stats(const render_scene *rs, int w, int h, int spp)
 {
     pstat *out = calloc((size_t)w * h, sizeof *out);
     assert_non_null(out);
-    pthread_t th[THREADS];
-    image_job jobs[THREADS];
-    for (int t = 0; t < THREADS; ++t) {
-        jobs[t] = (image_job){rs, w, h, spp, THREADS, t, out};
-        assert_int_equal(pthread_create(&th[t], NULL, image_worker, &jobs[t]), 0);
-    }
-    for (int t = 0; t < THREADS; ++t)
-        pthread_join(th[t], NULL);
+    image_job job = {rs, w, spp, out};
+    for_each_pixel_parallel(w, h, image_pixel, &job);
     for (int i = 0; i < w * h; ++i)
         if (!out[i].finite) {
             print_error("pixel (%d, %d) has a non-finite sample\n", i % w, i / w);

@@ -13,6 +13,7 @@
 #include "core/animated_transform.h"
 #include "core/rng.h"
 #include "render/geometry.h"
+#include "render/renderer.h"
 
 static bool verbose(void)
 {
@@ -45,17 +46,12 @@ static pstat pixel_stat(const render_scene *rs, int px, int py, int spp)
     for (int i = 0; i < spp; ++i) {
         sampler_state st;
         sampler_start(&smp, px, py, i, &st);
-        filter_sample fs = filter_sample_offset(flt, sampler_pixel_2d(&st));
-        camera_sample cs;
-        cs.p_film = v2(px + 0.5 + fs.p.x, py + 0.5 + fs.p.y);
-        cs.time = sampler_1d(&st);
-        cs.p_lens = sampler_2d(&st);
-        cs.filter_weight = fs.weight;
+        camera_sample cs = renderer_camera_sample(flt, &st, px, py);
         ray_differential rd;
         double v = 0.0;
         if (camera_generate_ray_differential(cam, cs, &rd)) {
             double depth;
-            v = fs.weight * render_scene_li(rs, &rd, &st, &depth, &counters).g;
+            v = cs.filter_weight * render_scene_li(rs, &rd, &st, &depth, &counters).g;
         }
         s += v;
         s2 += v * v;
@@ -67,32 +63,24 @@ static pstat pixel_stat(const render_scene *rs, int px, int py, int spp)
 
 typedef struct {
     const render_scene *rs;
-    int w, h, spp, first, stride;
+    int w, spp;
     pstat *out;
 } stat_job;
 
-static void *stat_worker(void *arg)
+static void stat_pixel(void *ctx, int x, int y)
 {
-    stat_job *j = arg;
-    for (int i = j->first; i < j->w * j->h; i += j->stride)
-        j->out[i] = pixel_stat(j->rs, i % j->w, i / j->w, j->spp);
-    return NULL;
+    stat_job *j = ctx;
+    j->out[y * j->w + x] = pixel_stat(j->rs, x, y, j->spp);
 }
 
 /* Every pixel of a w x h image (row-major), on two threads; checks each is finite. */
-static pstat *render_stats(const char *text, int w, int h, int spp)
+static pstat *image_pixel_stats(const char *text, int w, int h, int spp)
 {
     render_scene *rs = build_scene_or_fail(text, NULL);
     pstat *out = calloc((size_t)w * h, sizeof *out);
     assert_non_null(out);
-    pthread_t th[2];
-    stat_job jobs[2];
-    for (int t = 0; t < 2; ++t) {
-        jobs[t] = (stat_job){rs, w, h, spp, t, 2, out};
-        assert_int_equal(pthread_create(&th[t], NULL, stat_worker, &jobs[t]), 0);
-    }
-    for (int t = 0; t < 2; ++t)
-        pthread_join(th[t], NULL);
+    stat_job job = {rs, w, spp, out};
+    for_each_pixel_parallel(w, h, stat_pixel, &job);
     for (int i = 0; i < w * h; ++i)
         if (!isfinite(out[i].mean) || !isfinite(out[i].se) || out[i].mean < 0.0) {
             print_error("pixel (%d, %d) is %g\n", i % w, i / w, out[i].mean);
@@ -211,10 +199,10 @@ static void test_rotating_emitter_blurs_along_arc(void **state)
     (void)state;
     char text[2048];
     snprintf(text, sizeof text, rotor_fmt, 1, "");
-    pstat *still = render_stats(text, ROTOR_RES, ROTOR_RES, 256);
+    pstat *still = image_pixel_stats(text, ROTOR_RES, ROTOR_RES, 256);
     snprintf(text, sizeof text, rotor_fmt, 2,
              "ActiveTransform EndTime\nRotate 90 0 0 1\nActiveTransform All\n");
-    pstat *moving = render_stats(text, ROTOR_RES, ROTOR_RES, 256);
+    pstat *moving = image_pixel_stats(text, ROTOR_RES, ROTOR_RES, 256);
     rotor_measure s = measure_rotor(still), m = measure_rotor(moving);
     double want_r = square_mean_radius();
     double z_still = (s.energy - 0.04) / s.se, z_moving = (m.energy - 0.04) / m.se;
@@ -287,16 +275,16 @@ static void test_camera_motion_equals_world_motion(void **state)
     const char *slide = "ActiveTransform EndTime\nTranslate -0.6 0 -0.3\nActiveTransform All\n";
     char text[4096];
     snprintf(text, sizeof text, relative_fmt, slide, 1, "");
-    pstat *cam = render_stats(text, 24, 16, 64);
+    pstat *cam = image_pixel_stats(text, 24, 16, 64);
     snprintf(text, sizeof text, relative_fmt, "", 2, slide);
-    pstat *world = render_stats(text, 24, 16, 64);
+    pstat *world = image_pixel_stats(text, 24, 16, 64);
     zstats z = compare_images(cam, world, 24 * 16, "camera +d vs world -d");
     assert_true(z.compared > 300);
     assert_true(z.zmax < 5.0);
     assert_true(fabs(z.pooled) < 4.5);
     /* and the slide is visible: the still scene differs */
     snprintf(text, sizeof text, relative_fmt, "", 3, "");
-    pstat *still = render_stats(text, 24, 16, 64);
+    pstat *still = image_pixel_stats(text, 24, 16, 64);
     zstats zs = compare_images(cam, still, 24 * 16, "camera +d vs still");
     assert_true(zs.zmax > 10.0);
     free(cam);
@@ -409,13 +397,13 @@ static void compare_with_still_average(const char *what, const char *shape, cons
 {
     char text[4096], xf[512];
     snprintf(text, sizeof text, floor_fmt, 1, motion, shape);
-    pstat *moving = render_stats(text, 16, 16, AVG_N * AVG_SPP);
+    pstat *moving = image_pixel_stats(text, 16, 16, AVG_N * AVG_SPP);
     pstat avg[256];
     memset(avg, 0, sizeof avg);
     for (int k = 0; k < AVG_N; ++k) {
         at((k + 0.5) / AVG_N, xf, sizeof xf);
         snprintf(text, sizeof text, floor_fmt, 100 + k, xf, shape);
-        pstat *still = render_stats(text, 16, 16, AVG_SPP);
+        pstat *still = image_pixel_stats(text, 16, 16, AVG_SPP);
         for (int i = 0; i < 256; ++i) {
             avg[i].mean += still[i].mean / AVG_N;
             avg[i].se += still[i].se * still[i].se / (AVG_N * AVG_N); /* variance for now */
@@ -517,7 +505,7 @@ static double shadowed_fraction(double x0)
 static void test_moving_occluder_shadow(void **state)
 {
     (void)state;
-    pstat *px = render_stats(shadow_scene, 32, 4, 256);
+    pstat *px = image_pixel_stats(shadow_scene, 32, 4, 256);
     const double lit = 0.5 * HZ_INV_PI * 2.0 * sqrt(0.5);
     double zmax = 0.0, dsum = 0.0, vsum = 0.0, darkest = 1.0;
     for (int i = 0; i < 32 * 4; ++i) {
