@@ -120,6 +120,7 @@ static void test_threads_bit_identical(void **state)
     expect_threads_bit_identical(scene_path, "");
     expect_threads_bit_identical(HAZE_SCENES "/smoke.pbrt", "--spp 1");
     expect_threads_bit_identical(HAZE_SCENES "/foggy-dof.pbrt", "--spp 1");
+    expect_threads_bit_identical(HAZE_SCENES "/camera-pan.pbrt", "--spp 1"); /* motion blur */
 }
 
 static void test_output_dir_missing_exit_1(void **state)
