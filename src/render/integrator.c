@@ -97,8 +97,9 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
     double tmin = 0.0, t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
         bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, r->time, &h);
+        double t_hit = !hit ? INFINITY : sc->medium_count > 0 ? volume_crossing_t(&h, o, d) : h.t;
         if (medium >= 0) {
-            volume_segment(sc, medium, o, d, t_start, hit ? h.t : INFINITY, &beta, &L, st, &walk);
+            volume_segment(sc, medium, o, d, t_start, t_hit, &beta, &L, st, &walk);
             if (rgb_is_black(beta))
                 goto done;
         }
@@ -111,7 +112,7 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
         if (crossing == VOLUME_MAX_CROSSINGS)
             goto done;
         medium = geometry_medium_after(&h, d, medium);
-        t_start = h.t;
+        t_start = fmax(t_hit, t_start);
         tmin = geometry_step_past(&h, o, d);
     }
     *depth = v3_length(v3_sub(h.p, r->o));

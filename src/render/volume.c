@@ -179,20 +179,40 @@ static rgb segment_transmittance(const volume_scene *vs, const medium *m, vec3 o
     return rgb_grey(1.0);
 }
 
-rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmin, double tmax,
-                                int medium, volume_walk *walk)
+double volume_crossing_t(const geom_hit *h, vec3 o, vec3 w)
+{
+    double dn = v3_dot(w, h->ng);
+    vec3 off = v3_sub(h->p, v3_add(o, v3_scale(w, h->t)));
+    double c = dn != 0.0 ? v3_dot(off, h->ng) / dn : 0.0;
+    /* A correction beyond float rounding (a ray grazing the surface) keeps h->t. */
+    double scale = fmax(fmax(fabs(h->p.x), fabs(h->p.y)), fmax(fabs(h->p.z), fabs(h->t)));
+    return fabs(c) <= 0x1p-12 * scale ? h->t + c : h->t;
+}
+
+/* Transmittance of the media along o + t w over [t_fill, tmax]; surfaces are
+ * searched from tmin on. Hits before t_fill lie behind the point the light
+ * arrives at: opaque ones there block nothing and are stepped over;
+ * interfaces there still switch the medium (with no medium between them), so
+ * that the walk leaves through a boundary that float rounding put just behind
+ * the point. With t_fill = 0 this is the plain walk from o. */
+static rgb shadow_walk(const volume_scene *vs, vec3 o, vec3 w, double tmin, double t_fill,
+                       double tmax, int medium, volume_walk *walk)
 {
     walk->shadow_rays++;
     rgb T = rgb_grey(1.0);
     /* Media fill the exact spans between crossings; only the next query
      * starts past the surface (tmin). */
-    double t_start = 0.0;
+    double t_start = t_fill;
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
         bool hit = geometry_intersect(vs->geom, o, w, tmin, tmax, walk->time, &h);
-        if (hit && h.shape->material->kind != MATERIAL_INTERFACE)
-            return rgb_grey(0.0);
-        double t_end = hit ? h.t : tmax;
+        if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
+            if (h.t >= t_fill || crossing == VOLUME_MAX_CROSSINGS)
+                return rgb_grey(0.0);
+            tmin = geometry_step_past(&h, o, w);
+            continue;
+        }
+        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start) : tmax;
         if (medium >= 0) {
             T = rgb_mul(T,
                         segment_transmittance(vs, &vs->media[medium], o, w, t_start, t_end, walk));
@@ -204,9 +224,31 @@ rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double t
         if (crossing == VOLUME_MAX_CROSSINGS)
             return rgb_grey(0.0);
         medium = geometry_medium_after(&h, w, medium);
-        t_start = h.t;
+        t_start = t_end;
         tmin = geometry_step_past(&h, o, w);
     }
+}
+
+rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmin, double tmax,
+                                int medium, volume_walk *walk)
+{
+    return shadow_walk(vs, o, w, tmin, 0.0, tmax, medium, walk);
+}
+
+/* The shadow ray from scattering point x in medium `mi` toward unit w, to
+ * distance tmax. Embree sees x rounded to float: a point within rounding of
+ * its medium's boundary can land on the far side, where the ray misses the
+ * exit and sees the medium as unbounded (dense media, whose scattering happens
+ * within a few free paths of the boundary, went dark: 9% at density scale 1e6,
+ * black at 1e9). So surfaces are searched from x - e w, e a margin of
+ * VOLUME_SHADOW_BACKOFF times x's largest coordinate (some 2^7..2^8 float ULPs,
+ * far above the rounding even where w meets the boundary at a grazing 1/64),
+ * and the medium fills the ray from x on. */
+static rgb scatter_shadow(const volume_scene *vs, vec3 x, vec3 w, double tmax, int mi,
+                          volume_walk *walk)
+{
+    double e = VOLUME_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    return shadow_walk(vs, v3_sub(x, v3_scale(w, e)), w, 0.0, e, tmax + e, mi, walk);
 }
 
 /* ---- light arriving at a scattering point ---- */
@@ -248,7 +290,7 @@ static rgb light_inscattered(const volume_scene *vs, int mi, const light *l, vec
         }
         if (rgb_is_black(Li) || !(f > 0.0))
             continue;
-        rgb T = volume_shadow_transmittance(vs, x, wi, 0.0, tmax, mi, walk);
+        rgb T = scatter_shadow(vs, x, wi, tmax, mi, walk);
         L = rgb_add(L, rgb_scale(rgb_mul(Li, T), f / n));
     }
     return L;

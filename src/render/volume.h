@@ -49,6 +49,11 @@ typedef struct {
  * bounds the work of pathological nested boundaries. */
 #define VOLUME_MAX_CROSSINGS 64
 
+/* Shadow rays from scattering points search surfaces from this fraction of
+ * the point's largest render-space coordinate behind it (2^-16), so that
+ * float rounding of the point cannot hide its medium's boundary. */
+#define VOLUME_SHADOW_BACKOFF 0x1p-16
+
 /* Below this largest transmittance component a walk plays Russian roulette. */
 #define VOLUME_RR_THRESHOLD 1e-2
 
@@ -78,6 +83,13 @@ typedef struct {
     uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
     uint64_t shadow_rays;
 } volume_walk;
+
+/* Where the double-precision ray o + t w crosses the surface of hit `h` (found
+ * by Embree from o rounded to float, and h->t rounded to float): h->t moved
+ * along w onto the tangent plane at h->p, which lies on the surface. Media
+ * segments start and end there, so a medium denser than float rounding is
+ * bounded where its surface is. */
+double volume_crossing_t(const geom_hit *h, vec3 o, vec3 w);
 
 /* Transmittance from `o` along unit `w` to distance `tmax` (INFINITY: to the end
  * of the scene), starting in `medium` (-1 vacuum): every medium segment
