@@ -1,8 +1,10 @@
 /* haze: command line. Exit status 0 on success, 1 on scene or render errors,
- * 2 on usage errors. */
+ * 2 on usage errors, 130 when a render was interrupted by SIGINT or SIGTERM
+ * (docs/faults.md). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <limits.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,7 +19,44 @@
 #include "render/renderer.h"
 #include "scene/scene_desc.h"
 
-enum { EXIT_SCENE = 1, EXIT_USAGE = 2 };
+enum { EXIT_SCENE = 1, EXIT_USAGE = 2, EXIT_INTERRUPTED = 130 };
+
+/* The only mutable globals of haze, shared with the signal handler: the
+ * interrupt flag the renderer polls, and the temporary output file to remove
+ * when a second signal ends the process at once. */
+static volatile sig_atomic_t interrupted;
+static tmp_file_note output_note;
+
+static void on_interrupt(int sig)
+{
+    (void)sig;
+    if (interrupted) {
+        if (output_note.valid)
+            unlink(output_note.path);
+        _exit(EXIT_INTERRUPTED);
+    }
+    interrupted = 1;
+}
+
+/* First SIGINT/SIGTERM: finish the tiles under way and write what is done;
+ * second: exit at once. A signal ignored when haze started (a background job
+ * of a non-interactive shell ignores SIGINT) stays ignored. */
+static void install_interrupt_handlers(void)
+{
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_interrupt;
+    sigemptyset(&sa.sa_mask);
+    sigaddset(&sa.sa_mask, SIGINT);
+    sigaddset(&sa.sa_mask, SIGTERM);
+    sa.sa_flags = SA_RESTART;
+    const int sigs[] = {SIGINT, SIGTERM};
+    for (int i = 0; i < 2; ++i) {
+        struct sigaction old;
+        if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
+            sigaction(sigs[i], &sa, NULL);
+    }
+}
 
 static const char usage_text[] =
     "usage: haze render SCENE.pbrt [options]\n"
@@ -140,6 +179,72 @@ static int check_output_dir(const char *path, hz_error *err)
     return 0;
 }
 
+/* Where an interrupted render's partial image goes: the requested path if
+ * nothing is there yet, else NAME.partial.EXT next to it (replacing an older
+ * partial image), so that a partial image never replaces a file silently. */
+static void partial_path(const char *path, char *out, size_t n)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0 && errno == ENOENT) {
+        snprintf(out, n, "%s", path);
+        return;
+    }
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(path, '.');
+    if (!dot || (slash && dot < slash) || dot == path || (slash && dot == slash + 1))
+        snprintf(out, n, "%s.partial", path);
+    else
+        snprintf(out, n, "%.*s.partial%s", (int)(dot - path), path, dot);
+}
+
+static void format_count(char *buf, size_t n, long long v) { snprintf(buf, n, "%lld", v); }
+
+/* Writes the EXR (and the PNG preview) of an interrupted render: rendered
+ * tiles only, with header attributes describing which. */
+static int write_partial(const cli *c, film *f, double ratio, const render_stats *stats)
+{
+    const film_params *fp = film_get_params(f);
+    if (stats->tiles_done == 0) {
+        fprintf(stderr, "haze: interrupted before any tile was rendered: nothing written\n");
+        return EXIT_INTERRUPTED;
+    }
+    char tiles_done[32], tile_count[32], tile_size[32], pixels_done[32], pixels_total[32], spp[32];
+    format_count(tiles_done, sizeof tiles_done, stats->tiles_done);
+    format_count(tile_count, sizeof tile_count, stats->tile_count);
+    format_count(tile_size, sizeof tile_size, RENDERER_TILE_SIZE);
+    format_count(pixels_done, sizeof pixels_done, stats->pixels);
+    format_count(pixels_total, sizeof pixels_total, stats->pixels_total);
+    format_count(spp, sizeof spp, stats->spp);
+    const film_attribute attrs[] = {
+        {"haze:partial", "true"},
+        {"haze:tiles_done", tiles_done},
+        {"haze:tile_count", tile_count},
+        {"haze:tile_size", tile_size},
+        {"haze:tile_order", "row-major over the data window; tiles >= tiles_done not rendered"},
+        {"haze:pixels_done", pixels_done},
+        {"haze:pixels_total", pixels_total},
+        {"haze:spp", spp},
+    };
+    film_output out = {attrs, (int)(sizeof attrs / sizeof attrs[0]), &output_note};
+    char exr_path[PATH_MAX + 16], png_path[PATH_MAX + 16];
+    partial_path(fp->filename, exr_path, sizeof exr_path);
+    hz_error err = {{0}};
+    if (film_write_exr_with(f, exr_path, ratio, &out, &err) != HZ_OK) {
+        fprintf(stderr, "haze: %s\n", err.message);
+        return EXIT_SCENE;
+    }
+    if (c->preview) {
+        partial_path(c->preview, png_path, sizeof png_path);
+        if (film_write_png_with(f, png_path, ratio, &out, &err) != HZ_OK) {
+            fprintf(stderr, "haze: %s\n", err.message);
+            return EXIT_SCENE;
+        }
+    }
+    fprintf(stderr, "haze: interrupted: wrote %d of %d tiles to %s%s%s\n", stats->tiles_done,
+            stats->tile_count, exr_path, c->preview ? " and " : "", c->preview ? png_path : "");
+    return EXIT_INTERRUPTED;
+}
+
 static double peak_memory_mib(void)
 {
     struct rusage ru;
@@ -190,8 +295,10 @@ static int run_render(const cli *c)
         goto done;
     }
 
+    install_interrupt_handlers();
     renderer_options opt = {.threads = c->threads,
-                            .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL};
+                            .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
+                            .cancel = &interrupted};
     render_stats stats;
     if (renderer_run(rs, &opt, &stats, &err) != HZ_OK) {
         fprintf(stderr, "haze: %s\n", err.message);
@@ -199,12 +306,21 @@ static int run_render(const cli *c)
         goto done;
     }
     double ratio = camera_imaging_ratio(render_scene_camera(rs), fp);
-    if (film_write_exr(f, fp->filename, ratio, &err) != HZ_OK ||
-        (c->preview && film_write_png(f, c->preview, ratio, &err) != HZ_OK)) {
+    if (stats.interrupted) {
+        exit_code = write_partial(c, f, ratio, &stats);
+        goto done;
+    }
+    film_output out = {NULL, 0, &output_note};
+    if (film_write_exr_with(f, fp->filename, ratio, &out, &err) != HZ_OK ||
+        (c->preview && film_write_png_with(f, c->preview, ratio, &out, &err) != HZ_OK)) {
         fprintf(stderr, "haze: %s\n", err.message);
         exit_code = EXIT_SCENE;
         goto done;
     }
+    /* A signal after the last tile: the image is complete and written as
+     * usual, but the run still reports the interruption. */
+    if (interrupted)
+        exit_code = EXIT_INTERRUPTED;
     long bad = film_nonfinite_count(f);
     if (bad > 0)
         fprintf(stderr, "haze: warning: %ld non-finite sample values were dropped\n", bad);
@@ -260,6 +376,9 @@ static int run_info(int argc, char **argv)
 
 int main(int argc, char **argv)
 {
+    /* Exceeding the file size limit is then a failed write (EFBIG), reported
+     * with the temporary file removed, instead of a kill that leaves it behind. */
+    signal(SIGXFSZ, SIG_IGN);
     if (argc < 2)
         return usage_error("%s", "no command given");
     const char *cmd = argv[1];

@@ -14,6 +14,8 @@ packages=(
   libboost-iostreams-dev         # needed by OpenVDB's headers, not pulled in by libopenvdb-dev
   libopenvdb-tools libnanovdb-tools  # vdb_print, nanovdb_print/convert for checking data
   openimageio-tools  # idiff: haze diff is checked against it
+  clang libclang-rt-14-dev  # make fuzz: clang and its libFuzzer runtime (libclang_rt.fuzzer)
+  valgrind           # the valgrind_render memcheck test
 )
 
 missing=()

@@ -8,6 +8,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -351,7 +352,31 @@ done:
     return st;
 }
 
+void tmp_file_note_set(tmp_file_note *note, const char *tmp)
+{
+    if (!note)
+        return;
+    note->valid = 0;
+    atomic_signal_fence(memory_order_seq_cst);
+    snprintf(note->path, sizeof note->path, "%s", tmp);
+    atomic_signal_fence(memory_order_seq_cst);
+    note->valid = strlen(tmp) < sizeof note->path; /* a truncated name is never unlinked */
+}
+
+void tmp_file_note_clear(tmp_file_note *note)
+{
+    if (note)
+        note->valid = 0;
+    atomic_signal_fence(memory_order_seq_cst);
+}
+
 hz_status exr_write(const char *path, const exr_image *img, hz_error *err)
+{
+    return exr_write_noted(path, img, NULL, err);
+}
+
+hz_status exr_write_noted(const char *path, const exr_image *img, tmp_file_note *note,
+                          hz_error *err)
 {
     if (exr_validate(path, img, err) != HZ_OK)
         return HZ_ERROR;
@@ -368,6 +393,7 @@ hz_status exr_write(const char *path, const exr_image *img, hz_error *err)
         free(tmp);
         return st;
     }
+    tmp_file_note_set(note, tmp);
     /* mkstemp makes the file private; give it the mode of the file it
      * replaces, or an ordinary image's. */
     struct stat old;
@@ -385,6 +411,7 @@ hz_status exr_write(const char *path, const exr_image *img, hz_error *err)
         st = hz_fail(err, "%s: cannot rename the temporary EXR into place: %s", path, strerror(errno));
     if (st != HZ_OK)
         unlink(tmp);
+    tmp_file_note_clear(note);
     free(tmp);
     return st;
 }

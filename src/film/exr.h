@@ -2,6 +2,7 @@
 #ifndef HAZE_FILM_EXR_H
 #define HAZE_FILM_EXR_H
 
+#include <signal.h>
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -35,9 +36,26 @@ void exr_image_free(exr_image *img);
 hz_status exr_image_add_attribute(exr_image *img, const char *name, const char *value, hz_error *err);
 const exr_channel *exr_find_channel(const exr_image *img, const char *name);
 
+/* The name of an atomic writer's temporary file, published while the file
+ * exists so that a signal handler can unlink it before _exit: `path` is
+ * complete whenever `valid` is non-zero. (Between mkstemp and publication
+ * there is a window of a few instructions in which it is not yet valid.) */
+typedef struct {
+    char path[4200];
+    volatile sig_atomic_t valid;
+} tmp_file_note;
+
+/* Publish / withdraw a temporary name (no-ops on a NULL note). */
+void tmp_file_note_set(tmp_file_note *note, const char *tmp);
+void tmp_file_note_clear(tmp_file_note *note);
+
 /* Scanline, ZIP-compressed; written to "path.tmp-XXXXXX" in the same directory
- * and renamed, so a failure never leaves a broken file at `path`. */
+ * and renamed, so a failure never leaves a broken file at `path`; on failure
+ * the temporary file is removed. */
 hz_status exr_write(const char *path, const exr_image *img, hz_error *err);
+/* Same, publishing the temporary file's name in `note` (may be NULL) while it exists. */
+hz_status exr_write_noted(const char *path, const exr_image *img, tmp_file_note *note,
+                          hz_error *err);
 /* Reads the first part's channels (half or float; uint, subsampled and deep
  * data are refused) into float; scanline files and the full-resolution level
  * of tiled files. data_x0/y0 are relative to the display window's origin.

@@ -328,6 +328,17 @@ static double film_get_depth(const film *f, int px, int py)
 
 hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err)
 {
+    return film_write_exr_with(f, path, imaging_ratio, NULL, err);
+}
+
+hz_status film_write_png(const film *f, const char *path, double imaging_ratio, hz_error *err)
+{
+    return film_write_png_with(f, path, imaging_ratio, NULL, err);
+}
+
+hz_status film_write_exr_with(const film *f, const char *path, double imaging_ratio,
+                              const film_output *out, hz_error *err)
+{
     exr_image img;
     /* R G B A, then the optional channels in this order (-1: not written). */
     int zc = -1, vc = -1, sc = -1, nc = 4;
@@ -379,13 +390,16 @@ hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, 
                 img.channels[sc].pixels[i] = (float)f->count[i];
         }
     hz_status st = exr_image_add_attribute(&img, "software", "haze " HAZE_VERSION, err);
+    for (int a = 0; out && st == HZ_OK && a < out->attribute_count; a++)
+        st = exr_image_add_attribute(&img, out->attributes[a].name, out->attributes[a].value, err);
     if (st == HZ_OK)
-        st = exr_write(path, &img, err);
+        st = exr_write_noted(path, &img, out ? out->note : NULL, err);
     exr_image_free(&img);
     return st;
 }
 
-hz_status film_write_png(const film *f, const char *path, double imaging_ratio, hz_error *err)
+hz_status film_write_png_with(const film *f, const char *path, double imaging_ratio,
+                              const film_output *out, hz_error *err)
 {
     size_t n = (size_t)f->width * (size_t)f->height;
     uint8_t *buf = malloc(n * 3);
@@ -399,7 +413,8 @@ hz_status film_write_png(const film *f, const char *path, double imaging_ratio, 
             o[1] = png_out_srgb8(v.g);
             o[2] = png_out_srgb8(v.b);
         }
-    hz_status st = png_out_write_rgb8(path, f->width, f->height, buf, err);
+    hz_status st =
+        png_out_write_rgb8_noted(path, f->width, f->height, buf, out ? out->note : NULL, err);
     free(buf);
     return st;
 }

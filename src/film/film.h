@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/vec.h"
+#include "film/exr.h" /* tmp_file_note */
 #include "scene/scene_desc.h"
 
 typedef struct {
@@ -77,5 +78,24 @@ long film_nonfinite_count(const film *f);
 hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err);
 /* Tonemapped (clamp, sRGB transfer) 8-bit PNG of the pixel bounds; atomic too. */
 hz_status film_write_png(const film *f, const char *path, double imaging_ratio, hz_error *err);
+
+/* Extras for an output: EXR header string attributes (names < 64 bytes,
+ * values < 256; ignored by the PNG writer) and where to publish the
+ * temporary file's name while it exists (NULL: nowhere). */
+typedef struct {
+    const char *name, *value;
+} film_attribute;
+
+typedef struct {
+    const film_attribute *attributes;
+    int attribute_count;
+    tmp_file_note *note;
+} film_output;
+
+/* film_write_exr / film_write_png with extras (`out` may be NULL). */
+hz_status film_write_exr_with(const film *f, const char *path, double imaging_ratio,
+                              const film_output *out, hz_error *err);
+hz_status film_write_png_with(const film *f, const char *path, double imaging_ratio,
+                              const film_output *out, hz_error *err);
 
 #endif

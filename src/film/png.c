@@ -77,6 +77,12 @@ static int png_out_encode(FILE *fp, int width, int height, const uint8_t *rgb8, 
 hz_status png_out_write_rgb8(const char *path, int width, int height, const uint8_t *rgb8,
                              hz_error *err)
 {
+    return png_out_write_rgb8_noted(path, width, height, rgb8, NULL, err);
+}
+
+hz_status png_out_write_rgb8_noted(const char *path, int width, int height, const uint8_t *rgb8,
+                                   tmp_file_note *note, hz_error *err)
+{
     if (width < 1 || height < 1 || width > 1000000 || height > 1000000)
         return hz_fail(err, "%s: invalid PNG size %dx%d", path, width, height);
     png_bytep *rows = malloc((size_t)height * sizeof *rows);
@@ -97,6 +103,7 @@ hz_status png_out_write_rgb8(const char *path, int width, int height, const uint
         free(tmp);
         return st;
     }
+    tmp_file_note_set(note, tmp);
     struct stat old;
     fchmod(fd, stat(path, &old) == 0 ? (old.st_mode & 07777) : 0644);
     hz_status st = HZ_OK;
@@ -117,6 +124,7 @@ hz_status png_out_write_rgb8(const char *path, int width, int height, const uint
         st = hz_fail(err, "%s: cannot rename the temporary PNG into place: %s", path, strerror(errno));
     if (st != HZ_OK)
         unlink(tmp);
+    tmp_file_note_clear(note);
     free(rows);
     free(tmp);
     return st;

@@ -6,10 +6,14 @@
 #include <stdint.h>
 
 #include "core/error.h"
+#include "film/exr.h" /* tmp_file_note */
 
 /* `rgb8` holds width*height*3 bytes, top row first. */
 hz_status png_out_write_rgb8(const char *path, int width, int height, const uint8_t *rgb8,
                              hz_error *err);
+/* Same, publishing the temporary file's name in `note` (may be NULL) while it exists. */
+hz_status png_out_write_rgb8_noted(const char *path, int width, int height, const uint8_t *rgb8,
+                                   tmp_file_note *note, hz_error *err);
 
 /* sRGB transfer of a linear value in [0,1] to 8 bits (round half up). */
 uint8_t png_out_srgb8(double linear);

@@ -51,10 +51,10 @@ void progress_update(progress_bar *b, int done, double now)
         draw(b, done, now);
 }
 
-void progress_end(progress_bar *b, double now)
+void progress_end(progress_bar *b, int done, double now)
 {
     if (!b->out)
         return;
-    draw(b, b->total, now);
+    draw(b, done, now);
     fputc('\n', b->out);
 }

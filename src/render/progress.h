@@ -13,7 +13,8 @@ typedef struct {
 
 void progress_begin(progress_bar *b, FILE *out, int total, double now);
 void progress_update(progress_bar *b, int done, double now);
-void progress_end(progress_bar *b, double now);
+/* Draws the final state (`done` of total: less when interrupted) and ends the line. */
+void progress_end(progress_bar *b, int done, double now);
 /* "1m05s", "3.2s": used by the bar and the summary. */
 void progress_format_duration(double seconds, char *buf, size_t size);
 

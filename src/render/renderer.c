@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <signal.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,7 +12,7 @@
 
 #include "render/progress.h"
 
-enum { TILE_SIZE = 16 };
+enum { TILE_SIZE = RENDERER_TILE_SIZE };
 
 typedef struct {
     render_scene *rs;
@@ -21,6 +22,7 @@ typedef struct {
     double diff_scale;
     atomic_int next_tile;
     atomic_int tiles_done;
+    const volatile sig_atomic_t *cancel; /* NULL: never */
     render_counters *counters; /* one per thread */
 } render_job;
 
@@ -74,6 +76,8 @@ static void *worker_main(void *p)
     render_job *job = arg->job;
     render_counters *counters = &job->counters[arg->index];
     for (;;) {
+        if (job->cancel && *job->cancel)
+            break; /* claimed tiles stay a prefix: every one of them is finished */
         int t = atomic_fetch_add(&job->next_tile, 1);
         if (t >= job->tile_count)
             break;
@@ -117,6 +121,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     job.diff_scale = fmax(0.125, 1.0 / sqrt((double)job.spp));
     atomic_init(&job.next_tile, 0);
     atomic_init(&job.tiles_done, 0);
+    job.cancel = opt->cancel;
 
     int threads = opt->threads > 0 ? opt->threads : renderer_default_threads();
     if (threads > job.tile_count)
@@ -131,6 +136,13 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         return hz_fail(err, "out of memory starting %d render threads", threads);
     }
 
+    /* Workers inherit a mask without SIGINT/SIGTERM: a handler then runs on
+     * this thread, whose nap it interrupts. */
+    sigset_t block, old;
+    sigemptyset(&block);
+    sigaddset(&block, SIGINT);
+    sigaddset(&block, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &block, &old);
     double t0 = now_seconds();
     int started = 0;
     for (; started < threads; ++started) {
@@ -138,27 +150,38 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         if (pthread_create(&tids[started], NULL, worker_main, &args[started]) != 0)
             break;
     }
+    pthread_sigmask(SIG_SETMASK, &old, NULL);
     hz_status status = HZ_OK;
+    progress_bar bar;
     if (started == 0) {
         status = hz_fail(err, "could not start any render thread");
     } else {
-        progress_bar bar;
         progress_begin(&bar, opt->progress, job.tile_count, t0);
-        while (atomic_load(&job.tiles_done) < job.tile_count) {
+        while (atomic_load(&job.tiles_done) < job.tile_count && !(job.cancel && *job.cancel)) {
             progress_update(&bar, atomic_load(&job.tiles_done), now_seconds());
             struct timespec nap = {0, 100 * 1000 * 1000};
-            nanosleep(&nap, NULL);
+            nanosleep(&nap, NULL); /* a signal cuts it short */
         }
-        progress_end(&bar, now_seconds());
     }
     for (int i = 0; i < started; ++i)
         pthread_join(tids[i], NULL);
+    int done = atomic_load(&job.tiles_done);
+    if (started > 0)
+        progress_end(&bar, done, now_seconds());
 
     if (stats) {
         memset(stats, 0, sizeof *stats);
         stats->threads = started;
         stats->spp = job.spp;
-        stats->pixels = (long)w * h;
+        stats->pixels_total = (long)w * h;
+        stats->tile_count = job.tile_count;
+        stats->tiles_done = done;
+        stats->interrupted = done < job.tile_count;
+        for (int t = 0; t < done; ++t) {
+            int x0 = (t % job.tiles_x) * TILE_SIZE, y0 = (t / job.tiles_x) * TILE_SIZE;
+            stats->pixels += (long)(w - x0 < TILE_SIZE ? w - x0 : TILE_SIZE) *
+                             (h - y0 < TILE_SIZE ? h - y0 : TILE_SIZE);
+        }
         stats->wall_seconds = now_seconds() - t0;
         for (int i = 0; i < threads; ++i) {
             stats->camera_rays += job.counters[i].camera_rays;

@@ -5,6 +5,7 @@
 #ifndef HAZE_RENDER_RENDERER_H
 #define HAZE_RENDER_RENDERER_H
 
+#include <signal.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -12,20 +13,35 @@
 #include "core/error.h"
 #include "render/render_scene.h"
 
+/* Tiles are RENDERER_TILE_SIZE square (clipped at the bounds' right and
+ * bottom edges), numbered row-major over the film's pixel bounds. */
+enum { RENDERER_TILE_SIZE = 16 };
+
 typedef struct {
     int threads;         /* <= 0: all cores */
     FILE *progress;      /* progress bar destination, or NULL for none */
+    /* When not NULL and *cancel becomes non-zero (a signal handler sets it),
+     * no further tile is started; tiles under way are finished. Because tiles
+     * are claimed in order, the rendered tiles are then exactly the first
+     * stats.tiles_done, each with all its samples. */
+    const volatile sig_atomic_t *cancel;
 } renderer_options;
 
 typedef struct {
     int threads;
     int spp;
-    long pixels;
+    long pixels;          /* rendered pixels (all of the bounds unless interrupted) */
+    long pixels_total;    /* pixels of the film's bounds */
+    int tiles_done, tile_count;
+    bool interrupted;     /* stopped by *cancel before every tile was rendered */
     double wall_seconds;
     uint64_t camera_rays, shadow_rays;
     uint64_t density_lookups; /* grid media */
 } render_stats;
 
+/* Renders every tile of the film (or, once *opt->cancel is set, the tiles
+ * already claimed). Worker threads block SIGINT and SIGTERM, so a handler runs
+ * on the calling thread. */
 hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
                        hz_error *err);
 

@@ -1,0 +1,488 @@
+#define _POSIX_C_SOURCE 200809L
+/* Faults: SIGINT/SIGTERM during a render (partial image, second signal),
+ * failed writes (RLIMIT_FSIZE) and out of memory (RLIMIT_AS), each against
+ * the haze executable in a child process. docs/faults.md states the policies. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli_util.h"
+#include "film/exr.h"
+#include "film/png.h"
+
+#if defined(__SANITIZE_ADDRESS__)
+#define UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define UNDER_ASAN 1
+#endif
+#endif
+#ifndef UNDER_ASAN
+#define UNDER_ASAN 0
+#endif
+
+enum { TILE = 16, W = 256, H = 128 };
+
+static char dir[1024];
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+static void nap(double s)
+{
+    struct timespec ts = {(time_t)s, (long)((s - (double)(time_t)s) * 1e9)};
+    while (nanosleep(&ts, &ts) != 0 && errno == EINTR) {
+    }
+}
+
+/* A W x H scene whose cost is set by spp; `bounds` adds a pixelbounds line. */
+static void write_scene(const char *path, int spp, const char *bounds)
+{
+    char text[4096];
+    snprintf(text, sizeof text,
+             "LookAt 0 1 -3  0 0.5 0  0 1 0\n"
+             "Camera \"perspective\" \"float fov\" 50\n"
+             "Film \"rgb\" \"integer xresolution\" %d \"integer yresolution\" %d\n"
+             "  \"bool writesamplecount\" true %s\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" %d\n"
+             "WorldBegin\n"
+             "LightSource \"point\" \"point3 from\" [1 2 -1] \"rgb I\" [3 3 3]\n"
+             "LightSource \"infinite\" \"rgb L\" [0.2 0.25 0.3]\n"
+             "AttributeBegin\n"
+             "  AreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\n"
+             "  Shape \"sphere\" \"float radius\" 0.3\n"
+             "AttributeEnd\n"
+             "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+             "  \"point3 P\" [-2 0 -2  2 0 -2  2 0 2  -2 0 2]\n",
+             W, H, bounds ? bounds : "", spp);
+    write_text_file(path, text);
+}
+
+typedef struct {
+    pid_t pid;
+    int out_fd; /* the child's stdout + stderr */
+} child;
+
+typedef enum { LIMIT_NONE, LIMIT_FSIZE, LIMIT_AS } limit_kind;
+
+/* Starts `haze render SCENE -o OUT --threads 2 --quiet [--preview PNG]` with
+ * an optional resource limit (haze ignores SIGXFSZ itself, so a write past
+ * RLIMIT_FSIZE fails with EFBIG). */
+static child spawn(const char *scene, const char *out, const char *preview, limit_kind lk,
+                   rlim_t limit)
+{
+    int p[2];
+    assert_int_equal(pipe(p), 0);
+    child c = {fork(), p[0]};
+    assert_true(c.pid >= 0);
+    if (c.pid == 0) {
+        dup2(p[1], STDOUT_FILENO);
+        dup2(p[1], STDERR_FILENO);
+        close(p[0]);
+        close(p[1]);
+        /* As a shell with job control would (a background job of a plain sh
+         * inherits SIGINT ignored, and haze keeps ignored signals ignored). */
+        signal(SIGINT, SIG_DFL);
+        signal(SIGTERM, SIG_DFL);
+        if (lk != LIMIT_NONE) {
+            struct rlimit rl = {limit, limit};
+            if (setrlimit(lk == LIMIT_FSIZE ? RLIMIT_FSIZE : RLIMIT_AS, &rl) != 0)
+                _exit(77);
+        }
+        if (preview)
+            execl(HAZE_BIN, HAZE_BIN, "render", scene, "-o", out, "--threads", "2", "--quiet",
+                  "--preview", preview, (char *)NULL);
+        else
+            execl(HAZE_BIN, HAZE_BIN, "render", scene, "-o", out, "--threads", "2", "--quiet",
+                  (char *)NULL);
+        _exit(127);
+    }
+    close(p[1]);
+    return c;
+}
+
+/* Waits for the child (at most `timeout` s); returns its exit status, or -1
+ * if it did not exit normally, and its output in `text`. */
+static int finish(child c, double timeout, char *text, size_t n)
+{
+    double t0 = now();
+    int status = 0;
+    pid_t r;
+    while ((r = waitpid(c.pid, &status, WNOHANG)) == 0 && now() - t0 < timeout)
+        nap(0.01);
+    if (r == 0) {
+        kill(c.pid, SIGKILL);
+        waitpid(c.pid, &status, 0);
+    }
+    ssize_t got = read(c.out_fd, text, n - 1);
+    text[got > 0 ? got : 0] = '\0';
+    close(c.out_fd);
+    if (r == 0)
+        fail_msg("haze did not exit within %.0f s", timeout);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+static bool file_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+/* Number of files in `dir` whose name contains ".tmp-" (atomic-write leftovers). */
+static int count_temporaries(void)
+{
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) != NULL)
+        n += strstr(e->d_name, ".tmp-") != NULL;
+    closedir(d);
+    return n;
+}
+
+static const char *attribute(const exr_image *img, const char *name)
+{
+    for (int a = 0; a < img->attribute_count; a++)
+        if (strcmp(img->attribute_names[a], name) == 0)
+            return img->attribute_values[a];
+    return NULL;
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "%s/faults-%ld", HAZE_TMP, (long)getpid());
+    mkdir(dir, 0755);
+    return 0;
+}
+
+/* Waits until the child catches SIGINT and SIGTERM (haze installs its
+ * handlers just before rendering: /proc/PID/status SigCgt), then `delay`
+ * seconds more, so the render threads have claimed their first tiles. Timing
+ * free: a fast or a slow (sanitized, loaded) machine waits for the same event. */
+static void wait_rendering(pid_t pid, double delay)
+{
+    char path[64], line[256];
+    snprintf(path, sizeof path, "/proc/%ld/status", (long)pid);
+    unsigned long long want = (1ULL << (SIGINT - 1)) | (1ULL << (SIGTERM - 1));
+    for (int tries = 0; tries < 6000; ++tries) {
+        FILE *f = fopen(path, "r");
+        unsigned long long caught = 0;
+        if (f) {
+            while (fgets(line, sizeof line, f))
+                if (strncmp(line, "SigCgt:", 7) == 0)
+                    caught = strtoull(line + 7, NULL, 16);
+            fclose(f);
+        }
+        if ((caught & want) == want) {
+            nap(delay);
+            return;
+        }
+        nap(0.01);
+    }
+    fail_msg("haze (pid %ld) never installed its signal handlers", (long)pid);
+}
+
+/* An interrupted render of `spp` samples per pixel; sends `sig` `delay` s
+ * after rendering began and returns the exit status and the time from signal
+ * to exit. */
+static int interrupt_render(const char *scene, const char *out, const char *preview, int sig,
+                            double delay, double *exit_seconds, char *text, size_t n)
+{
+    child c = spawn(scene, out, preview, LIMIT_NONE, 0);
+    wait_rendering(c.pid, delay);
+    kill(c.pid, sig);
+    double t0 = now();
+    int rc = finish(c, 120.0, text, n);
+    *exit_seconds = now() - t0;
+    return rc;
+}
+
+/* The partial image's rendered tiles equal an uninterrupted render of the
+ * same pixels bit for bit; the others are zero with a zero sample count. */
+static void check_partial(const char *partial, const char *scene_dir_name, int spp)
+{
+    hz_error err = {{0}};
+    exr_image img;
+    assert_int_equal(exr_read(partial, &img, &err), HZ_OK);
+    assert_string_equal(attribute(&img, "haze:partial"), "true");
+    assert_int_equal(atoi(attribute(&img, "haze:tile_size")), TILE);
+    assert_int_equal(atoi(attribute(&img, "haze:spp")), spp);
+    int tiles_x = W / TILE, count = tiles_x * (H / TILE);
+    int done = atoi(attribute(&img, "haze:tiles_done"));
+    assert_int_equal(atoi(attribute(&img, "haze:tile_count")), count);
+    assert_true(done >= 1 && done < count);
+    assert_int_equal(atol(attribute(&img, "haze:pixels_done")), (long)done * TILE * TILE);
+    assert_int_equal(img.width, W);
+    assert_int_equal(img.height, H);
+
+    /* Reference: only the tile rows holding rendered tiles, same seed. */
+    int rows = (done + tiles_x - 1) / tiles_x;
+    char scene[1200], ref[1200], bounds[64], text[4096];
+    snprintf(scene, sizeof scene, "%s/%s-ref.pbrt", dir, scene_dir_name);
+    snprintf(ref, sizeof ref, "%s/%s-ref.exr", dir, scene_dir_name);
+    snprintf(bounds, sizeof bounds, "\"integer pixelbounds\" [0 %d 0 %d]", W, rows * TILE);
+    write_scene(scene, spp, bounds);
+    assert_int_equal(finish(spawn(scene, ref, NULL, LIMIT_NONE, 0), 300.0, text, sizeof text), 0);
+    exr_image want;
+    assert_int_equal(exr_read(ref, &want, &err), HZ_OK);
+    assert_int_equal(want.width, W);
+    assert_int_equal(want.height, rows * TILE);
+    static const char *names[] = {"R", "G", "B", "A", "SampleCount.Y"};
+    long rendered = 0, differing = 0, lit = 0;
+    for (int ch = 0; ch < 5; ch++) {
+        const exr_channel *a = exr_find_channel(&img, names[ch]);
+        const exr_channel *b = exr_find_channel(&want, names[ch]);
+        assert_non_null(a);
+        assert_non_null(b);
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++) {
+                int t = (y / TILE) * tiles_x + x / TILE;
+                float got = a->pixels[(size_t)y * W + x];
+                if (t < done) {
+                    float w = b->pixels[(size_t)y * W + x];
+                    differing += memcmp(&got, &w, sizeof got) != 0;
+                    rendered += ch == 0;
+                    lit += ch == 0 && got > 0.0f;
+                } else {
+                    assert_true(got == 0.0f);
+                }
+            }
+    }
+    assert_int_equal(differing, 0);
+    assert_int_equal(rendered, (long)done * TILE * TILE);
+    assert_int_equal(lit, rendered); /* the sky lights every pixel: a real comparison */
+    /* Rendered pixels have all their samples (no pixel of this scene misses the camera). */
+    const exr_channel *sc = exr_find_channel(&img, "SampleCount.Y");
+    assert_true(sc->pixels[0] == (float)spp);
+    exr_image_free(&want);
+    exr_image_free(&img);
+}
+
+/* Per-tile cost: about 0.13 s at 1024 spp in a Release build; the whole
+ * 256x128 image (128 tiles) takes several seconds on two threads. */
+static const int interrupt_spp = 1024;
+
+static void interrupted_by(int sig, const char *name)
+{
+    char scene[1200], out[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/%s.pbrt", dir, name);
+    snprintf(out, sizeof out, "%s/%s.exr", dir, name);
+    unlink(out);
+    write_scene(scene, interrupt_spp, NULL);
+    double secs;
+    int rc = interrupt_render(scene, out, NULL, sig, 0.3, &secs, text, sizeof text);
+    print_message("%s: exit %d %.3f s after the signal: %s", name, rc, secs, text);
+    assert_int_equal(rc, 130);
+    assert_non_null(strstr(text, "interrupted: wrote "));
+    assert_non_null(strstr(text, out));
+    assert_int_equal(count_temporaries(), 0);
+    check_partial(out, name, interrupt_spp);
+}
+
+static void test_sigint_writes_partial_image(void **state)
+{
+    (void)state;
+    interrupted_by(SIGINT, "sigint");
+}
+
+static void test_sigterm_writes_partial_image(void **state)
+{
+    (void)state;
+    interrupted_by(SIGTERM, "sigterm");
+}
+
+/* A partial image never replaces an existing file: it goes to NAME.partial.exr
+ * (and the preview to NAME.partial.png), and the existing files stay as they were. */
+static void test_partial_does_not_replace_existing(void **state)
+{
+    (void)state;
+    char scene[1200], out[1200], png[1200], pout[1200], ppng[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/keep.pbrt", dir);
+    snprintf(out, sizeof out, "%s/keep.exr", dir);
+    snprintf(png, sizeof png, "%s/keep.png", dir);
+    snprintf(pout, sizeof pout, "%s/keep.partial.exr", dir);
+    snprintf(ppng, sizeof ppng, "%s/keep.partial.png", dir);
+    unlink(pout);
+    unlink(ppng);
+    write_text_file(out, "a complete image\n");
+    write_text_file(png, "a complete preview\n");
+    write_scene(scene, interrupt_spp, NULL);
+    double secs;
+    int rc = interrupt_render(scene, out, png, SIGINT, 0.3, &secs, text, sizeof text);
+    assert_int_equal(rc, 130);
+    assert_non_null(strstr(text, pout));
+    assert_non_null(strstr(text, ppng));
+    size_t n = 0;
+    unsigned char *kept = read_whole_file(out, &n);
+    assert_non_null(kept);
+    assert_memory_equal(kept, "a complete image\n", n);
+    free(kept);
+    kept = read_whole_file(png, &n);
+    assert_non_null(kept);
+    assert_memory_equal(kept, "a complete preview\n", n);
+    free(kept);
+    hz_error err = {{0}};
+    exr_image img;
+    assert_int_equal(exr_read(pout, &img, &err), HZ_OK);
+    assert_string_equal(attribute(&img, "haze:partial"), "true");
+    exr_image_free(&img);
+    unsigned char *p = read_whole_file(ppng, &n);
+    assert_non_null(p);
+    assert_true(n > 8 && memcmp(p, "\x89PNG", 4) == 0);
+    free(p);
+    assert_int_equal(count_temporaries(), 0);
+}
+
+/* A second signal exits at once, writing nothing. */
+static void test_second_signal_exits_at_once(void **state)
+{
+    (void)state;
+    char scene[1200], out[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/twice.pbrt", dir);
+    snprintf(out, sizeof out, "%s/twice.exr", dir);
+    unlink(out);
+    write_scene(scene, 64 * interrupt_spp, NULL); /* tiles of seconds */
+    child c = spawn(scene, out, NULL, LIMIT_NONE, 0);
+    wait_rendering(c.pid, 0.2);
+    kill(c.pid, SIGINT);
+    nap(0.1);
+    kill(c.pid, SIGINT);
+    double t0 = now();
+    int rc = finish(c, 30.0, text, sizeof text);
+    double secs = now() - t0;
+    print_message("second SIGINT: exit %d after %.3f s\n", rc, secs);
+    assert_int_equal(rc, 130);
+    assert_true(secs < 1.0);
+    assert_false(file_exists(out));
+    assert_int_equal(count_temporaries(), 0);
+}
+
+/* A write that fails part-way (file size limit): one line, exit 1, the
+ * temporary file removed and the previous output byte for byte intact. */
+static void test_failed_exr_write_keeps_previous(void **state)
+{
+    (void)state;
+    char scene[1200], out[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/fsize.pbrt", dir);
+    snprintf(out, sizeof out, "%s/fsize.exr", dir);
+    write_scene(scene, 2, NULL);
+    assert_int_equal(finish(spawn(scene, out, NULL, LIMIT_NONE, 0), 60.0, text, sizeof text), 0);
+    size_t n0, n1;
+    unsigned char *before = read_whole_file(out, &n0);
+    assert_non_null(before);
+    assert_true(n0 > 4096);
+    int rc = finish(spawn(scene, out, NULL, LIMIT_FSIZE, 4096), 60.0, text, sizeof text);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(text, out));
+    assert_non_null(strchr(text, '\n'));
+    assert_null(strchr(strchr(text, '\n') + 1, '\n')); /* one line */
+    unsigned char *after = read_whole_file(out, &n1);
+    assert_non_null(after);
+    assert_int_equal(n1, n0);
+    assert_memory_equal(after, before, n0);
+    assert_int_equal(count_temporaries(), 0);
+    free(before);
+    free(after);
+}
+
+/* The same for the PNG writer, in a child process with the limit. */
+static void test_failed_png_write_keeps_previous(void **state)
+{
+    (void)state;
+    char path[1200];
+    snprintf(path, sizeof path, "%s/fsize.png", dir);
+    write_text_file(path, "previous preview\n");
+    enum { PW = 128, PH = 128 };
+    static uint8_t noise[PW * PH * 3];
+    uint32_t s = 12345;
+    for (size_t i = 0; i < sizeof noise; i++) {
+        s = s * 1664525u + 1013904223u;
+        noise[i] = (uint8_t)(s >> 24);
+    }
+    int p[2];
+    assert_int_equal(pipe(p), 0);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        close(p[0]);
+        struct rlimit rl = {8192, 8192};
+        signal(SIGXFSZ, SIG_IGN);
+        setrlimit(RLIMIT_FSIZE, &rl);
+        hz_error err = {{0}};
+        hz_status st = png_out_write_rgb8(path, PW, PH, noise, &err);
+        if (write(p[1], err.message, strlen(err.message)) < 0)
+            _exit(3);
+        _exit(st == HZ_OK ? 0 : 1);
+    }
+    close(p[1]);
+    char msg[1024] = "";
+    ssize_t got = read(p[0], msg, sizeof msg - 1);
+    msg[got > 0 ? got : 0] = '\0';
+    close(p[0]);
+    int status;
+    waitpid(pid, &status, 0);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 1);
+    assert_non_null(strstr(msg, "fsize.png"));
+    size_t n = 0;
+    unsigned char *kept = read_whole_file(path, &n);
+    assert_non_null(kept);
+    assert_memory_equal(kept, "previous preview\n", n);
+    free(kept);
+    assert_int_equal(count_temporaries(), 0);
+}
+
+/* A film larger than the address space allowed: one clear line, exit 1. */
+static void test_out_of_memory_film(void **state)
+{
+    (void)state;
+    if (UNDER_ASAN) {
+        print_message("skipped: ASan cannot run under RLIMIT_AS\n");
+        return;
+    }
+    char scene[1200], out[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/oom-film.pbrt", dir);
+    snprintf(out, sizeof out, "%s/oom-film.exr", dir);
+    write_text_file(scene, "Camera \"perspective\"\n"
+                           "Film \"rgb\" \"integer xresolution\" 40000 \"integer yresolution\" 20000\n"
+                           "WorldBegin\n"
+                           "Shape \"sphere\"\n");
+    int rc = finish(spawn(scene, out, NULL, LIMIT_AS, (rlim_t)2 << 30), 60.0, text, sizeof text);
+    print_message("OOM film: exit %d: %s", rc, text);
+    assert_int_equal(rc, 1);
+    assert_non_null(strstr(text, "out of memory"));
+    assert_null(strchr(strchr(text, '\n') + 1, '\n'));
+    assert_false(file_exists(out));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_sigint_writes_partial_image),
+        cmocka_unit_test(test_sigterm_writes_partial_image),
+        cmocka_unit_test(test_partial_does_not_replace_existing),
+        cmocka_unit_test(test_second_signal_exits_at_once),
+        cmocka_unit_test(test_failed_exr_write_keeps_previous),
+        cmocka_unit_test(test_failed_png_write_keeps_previous),
+        cmocka_unit_test(test_out_of_memory_film),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}
