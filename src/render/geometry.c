@@ -261,9 +261,14 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
 static hz_status check_device(RTCDevice device, hz_error *err)
 {
     enum RTCError e = rtcGetDeviceError(device);
-    if (e != RTC_ERROR_NONE)
+    switch (e) {
+    case RTC_ERROR_NONE:
+        return HZ_OK;
+    case RTC_ERROR_OUT_OF_MEMORY:
+        return hz_fail(err, "out of memory building the Embree scene (acceleration structure)");
+    default:
         return hz_fail(err, "Embree error %d while building the scene", (int)e);
-    return HZ_OK;
+    }
 }
 
 static RTCScene new_scene(RTCDevice device)
