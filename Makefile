@@ -6,7 +6,7 @@ SCENE      ?= scenes/foggy-dof.pbrt
 # Output: out/NAME.exr and out/NAME.png, NAME the scene file's name.
 OUT        ?= out/$(basename $(notdir $(SCENE)))
 
-.PHONY: all deps configure render test test-asan update-refs clean
+.PHONY: all deps configure render test test-asan update-refs clean fuzz
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -33,6 +33,14 @@ test-asan: deps
 # each one changed; review, then commit them. NAMES="smoke motion" limits it.
 update-refs: all
 	sh tests/regression/update-refs.sh $(BUILD)/haze $(NAMES)
+
+# libFuzzer: builds build-fuzz with clang (HAZE_FUZZ=ON) and runs each target for
+# FUZZ_SECONDS on a scratch copy of fuzz/corpus; fails on any crash (docs/fuzzing.md).
+FUZZ_SECONDS ?= 60
+fuzz: deps
+	@test -f build-fuzz/CMakeCache.txt || CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHAZE_FUZZ=ON -DHAZE_TESTS=OFF
+	cmake --build build-fuzz -j $(JOBS) --target fuzz_scene fuzz_exr
+	sh fuzz/run.sh build-fuzz $(FUZZ_SECONDS)
 
 clean:
 	rm -rf $(BUILD) $(BUILD_ASAN)

@@ -257,8 +257,9 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
         return hz_fail_at(err, p->loc, "parameter \"%s %s\" needs a multiple of %zu values, got %zu",
                           param_type_name(p->type), p->name, tuple, n);
     for (size_t i = 0; p->type == PARAM_INTEGER && i < n; ++i)
-        if (vals[i].num != (double)(long long)vals[i].num || vals[i].num > 2147483647.0 ||
-            vals[i].num < -2147483648.0)
+        /* Range first: converting an out-of-range double to an integer is undefined. */
+        if (!(vals[i].num >= -2147483648.0 && vals[i].num <= 2147483647.0) ||
+            vals[i].num != (double)(long long)vals[i].num)
             return hz_fail_at(err, vals[i].loc, "parameter \"integer %s\" expects integers, got %.*s",
                               p->name, (int)(vals[i].len < 30 ? vals[i].len : 30), vals[i].text);
     p->nums = scene_xarray(n, sizeof *p->nums);

@@ -442,6 +442,12 @@ static void test_param_errors(void **state)
     parse_err("Camera \"perspective\" \"float fov\"\nWorldBegin",
               "t.pbrt:1:22: parameter \"float fov\" has no value (found 'WorldBegin')");
     parse_err("Camera \"perspective\" \"integer n\" 1.5", "t.pbrt:1:34: parameter \"integer n\" expects integers");
+    /* Found by fuzz_scene: integers far outside long long's range (and beyond
+     * int's) are rejected without an undefined double-to-integer conversion. */
+    parse_err("Camera \"perspective\" \"integer n\" [0 -6222222222222222222222222222]",
+              "t.pbrt:1:37: parameter \"integer n\" expects integers, got -6222222222222222222222222222");
+    parse_err("Camera \"perspective\" \"integer n\" 1e300", "t.pbrt:1:34: parameter \"integer n\" expects integers");
+    parse_err("Camera \"perspective\" \"integer n\" 2147483648", "t.pbrt:1:34: parameter \"integer n\" expects integers");
     parse_err("Camera \"perspective\" \"bool b\" 1", "t.pbrt:1:31: parameter \"bool b\" expects true or false");
     parse_err("Camera \"perspective\" \"float f\" []", "t.pbrt:1:22: parameter \"float f\" has no values");
     parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"metal-Cu-eta\"",
