@@ -526,10 +526,21 @@ static hz_status exr_read_header(const char *path, exr_context_t ctx, exr_io *io
         return hz_fail(err, "%s: invalid EXR data or display window", path);
     if (!chl || chl->num_channels < 1)
         return hz_fail(err, "%s: EXR image has no channels", path);
-    /* Refuse before allocating: a corrupt header must not cause a huge allocation. */
-    if ((double)w * (double)h * chl->num_channels * 4.0 > 16.0 * 1024 * 1024 * 1024)
-        return hz_fail(err, "%s: EXR image %lldx%lld with %d channels is too large to read", path,
-                       (long long)w, (long long)h, chl->num_channels);
+    /* Refuse before allocating: a corrupt header must not cause a huge
+     * allocation. No EXR codec packs more than ~2000 float samples' bytes into
+     * one stored byte (deflate tops out near 1032:1 on half data), so an image
+     * claiming over 4096 times its file size (and over 64 MiB) has a corrupt
+     * window (found by fuzzing: one flipped bit asked for 16 GiB). */
+    double bytes = (double)w * (double)h * chl->num_channels * 4.0;
+    struct stat fs;
+    double file_bytes = stat(path, &fs) == 0 ? (double)fs.st_size : 0.0;
+    if (bytes > 16.0 * 1024 * 1024 * 1024 ||
+        (bytes > 64.0 * 1024 * 1024 && bytes > 4096.0 * file_bytes))
+        return hz_fail(err,
+                       "%s: EXR header claims %lldx%lld pixels with %d channels (%.0f MiB), more "
+                       "than a %.0f-byte file can hold: corrupt data window?",
+                       path, (long long)w, (long long)h, chl->num_channels,
+                       bytes / (1024.0 * 1024.0), file_bytes);
     for (int c = 0; c < chl->num_channels; c++) {
         const exr_attr_chlist_entry_t *e = &chl->entries[c];
         if (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)

@@ -1,6 +1,7 @@
 /* Allocation for the scene subsystem. Running out of memory while reading a
- * scene is not recoverable in a useful way, so these abort with a message
- * instead of threading a third failure mode through every parser function. */
+ * scene is not recoverable in a useful way, so these end the program with one
+ * line and exit status 1 (like any scene error) instead of threading a third
+ * failure mode through every parser function. Never a crash or a core dump. */
 #ifndef HAZE_SCENE_MEM_H
 #define HAZE_SCENE_MEM_H
 
@@ -12,20 +13,20 @@ static inline void *scene_xrealloc(void *p, size_t n)
 {
     void *q = realloc(p, n ? n : 1);
     if (!q) {
-        fprintf(stderr, "haze: out of memory (%zu bytes)\n", n);
-        abort();
+        fprintf(stderr, "haze: out of memory reading the scene (%zu more bytes needed)\n", n);
+        exit(EXIT_FAILURE);
     }
     return q;
 }
 
 static inline void *scene_xmalloc(size_t n) { return scene_xrealloc(NULL, n); }
 
-/* count * size, aborting on overflow (sizes come from untrusted files). */
+/* count * size, refusing overflow (sizes come from untrusted files). */
 static inline void *scene_xarray(size_t count, size_t size)
 {
     if (size && count > (size_t)-1 / size) {
-        fprintf(stderr, "haze: allocation size overflow\n");
-        abort();
+        fprintf(stderr, "haze: out of memory reading the scene (%zu x %zu bytes)\n", count, size);
+        exit(EXIT_FAILURE);
     }
     return scene_xmalloc(count * size);
 }
@@ -56,8 +57,10 @@ static inline void *scene_grow_implicit(void *items, size_t count, size_t size)
     if (count == 0)
         return scene_xrealloc(items, 8 * size);
     if (count >= 8 && (count & (count - 1)) == 0) {
-        if (count > (size_t)-1 / 2 / size)
-            abort();
+        if (count > (size_t)-1 / 2 / size) {
+            fprintf(stderr, "haze: out of memory reading the scene (%zu items)\n", count);
+            exit(EXIT_FAILURE);
+        }
         return scene_xrealloc(items, 2 * count * size);
     }
     return items;
