@@ -16,6 +16,7 @@
 #include <cmocka.h>
 
 #include "render/render_scene.h"
+#include "render/renderer.h"
 
 /* a, b and c joined into a new string (free it). */
 static inline char *cat(const char *a, const char *b, const char *c)
@@ -107,6 +108,18 @@ static inline pixel_eval eval_pixel(const render_scene *rs, double fx, double fy
         out.p_world = transform_point(&cam->world_from_render, p_render);
     }
     return out;
+}
+
+/* Renders the whole film of `rs` on two threads and requires that no sample
+ * was non-finite (the film counts and drops them). */
+static inline void render_expect_finite(render_scene *rs)
+{
+    renderer_options opt = {.threads = 2, .progress = NULL};
+    render_stats stats;
+    hz_error err = {{0}};
+    if (renderer_run(rs, &opt, &stats, &err) != HZ_OK)
+        fail_msg("render: %s", err.message);
+    assert_int_equal(film_nonfinite_count(render_scene_film(rs)), 0);
 }
 
 /* Calls fn(ctx, x, y) for every pixel of a w x h image on two threads (pixels

@@ -37,17 +37,12 @@ static rendered render_text(const char *text)
 {
     rendered r;
     r.rs = build_scene_or_fail(text, NULL);
-    renderer_options opt = {.threads = 2, .progress = NULL};
-    render_stats stats;
-    hz_error err = {{0}};
-    if (renderer_run(r.rs, &opt, &stats, &err) != HZ_OK)
-        fail_msg("render: %s", err.message);
+    render_expect_finite(r.rs);
     film *f = render_scene_film(r.rs);
     const film_params *fp = film_get_params(f);
     r.w = fp->bounds.x1 - fp->bounds.x0;
     r.h = fp->bounds.y1 - fp->bounds.y0;
     r.ratio = camera_imaging_ratio(render_scene_camera(r.rs), fp);
-    assert_int_equal(film_nonfinite_count(f), 0);
     return r;
 }
 

@@ -272,11 +272,7 @@ static void test_light_on_ray(void **state)
                  2);
     free(px);
     /* The film: a full render (filtered pixels) counts no non-finite sample. */
-    renderer_options opt = {.threads = 2, .progress = NULL};
-    render_stats stats;
-    hz_error err = {{0}};
-    assert_int_equal(renderer_run(rs, &opt, &stats, &err), HZ_OK);
-    assert_int_equal(film_nonfinite_count(render_scene_film(rs)), 0);
+    render_expect_finite(rs);
     render_scene_destroy(rs);
     free(text);
 }
@@ -383,11 +379,7 @@ static void test_grazing_interface(void **state)
         }
     assert_int_equal(below, 128);
     /* The film: no non-finite sample. */
-    renderer_options opt = {.threads = 2, .progress = NULL};
-    render_stats stats;
-    hz_error err = {{0}};
-    assert_int_equal(renderer_run(rs, &opt, &stats, &err), HZ_OK);
-    assert_int_equal(film_nonfinite_count(render_scene_film(rs)), 0);
+    render_expect_finite(rs);
     render_scene_destroy(rs);
     free(text);
     free(box);
