@@ -41,6 +41,9 @@ typedef struct {
     transmittance_mode mode;
     double step;          /* in-scattering sample spacing along camera rays, voxels */
     double shadow_step;   /* marching step of shadow rays, voxels */
+    double max_collisions; /* ratio: a segment expecting more tentative collisions
+                              (majorant x length) is marched (jittered) instead;
+                              0 = never */
     int light_samples;    /* samples of each light per scattering point (delta
                              lights: only with stochastic shadows, else 1) */
 } volume_settings;
