@@ -9,7 +9,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include <time.h>
 
-#include "media_test_util.h"
+#include "render/media_test_util.h"
 
 #include "render/renderer.h"
 
