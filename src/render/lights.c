@@ -384,23 +384,6 @@ static bool sample_sphere_cone(const light *l, vec3 c, double r, vec3 p, vec2 u,
     return true;
 }
 
-/* Fills the geometry of a sample of a light at the single point p_light and
- * returns the squared distance (0: p sits on the light, no sample). */
-static double toward_point(vec3 p_light, vec3 p, light_sample *out)
-{
-    vec3 d = v3_sub(p_light, p);
-    double d2 = v3_length_sq(d);
-    if (d2 == 0.0)
-        return 0.0;
-    out->dist = sqrt(d2);
-    out->wi = v3_scale(d, 1.0 / out->dist);
-    out->p_light = p_light;
-    out->pdf = 1.0;
-    return d2;
-}
-
-/* The sample of point `pl` (normal `nl`) of an area light chosen with
- * density `pdf_dir` per solid angle at p (sphere cone sampling). */
 /* out->dist and out->wi from p toward the light point pl; returns the squared
  * distance, 0 when they coincide (then out is unchanged). */
 static double sample_direction(vec3 p, vec3 pl, light_sample *out)
@@ -413,6 +396,21 @@ static double sample_direction(vec3 p, vec3 pl, light_sample *out)
     out->wi = v3_scale(d, 1.0 / out->dist);
     return d2;
 }
+
+/* Fills the geometry of a sample of a light at the single point p_light and
+ * returns the squared distance (0: p sits on the light, no sample). */
+static double toward_point(vec3 p_light, vec3 p, light_sample *out)
+{
+    double d2 = sample_direction(p, p_light, out);
+    if (d2 == 0.0)
+        return 0.0;
+    out->p_light = p_light;
+    out->pdf = 1.0;
+    return d2;
+}
+
+/* The sample of point `pl` (normal `nl`) of an area light chosen with
+ * density `pdf_dir` per solid angle at p (sphere cone sampling). */
 
 static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_dir,
                                     light_sample *out)
