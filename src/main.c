@@ -260,13 +260,17 @@ static void format_motion(render_motion m, char *buf, size_t n)
         snprintf(buf, n, "static");
         return;
     }
-    snprintf(buf, n, "motion:%s%s%s", m.camera ? " camera" : "",
-             m.surfaces ? (m.camera ? ", surfaces" : " surfaces") : "", "");
-    if (m.media > 0) {
-        size_t len = strlen(buf);
-        snprintf(buf + len, n - len, "%s %zu medi%s", m.camera || m.surfaces ? "," : "", m.media,
-                 m.media == 1 ? "um" : "a");
-    }
+    char media[32];
+    snprintf(media, sizeof media, "%zu medi%s", m.media, m.media == 1 ? "um" : "a");
+    const char *parts[3] = {m.camera ? "camera" : NULL, m.surfaces ? "surfaces" : NULL,
+                            m.media ? media : NULL};
+    size_t len = (size_t)snprintf(buf, n, "motion:");
+    const char *sep = " ";
+    for (int i = 0; i < 3 && len < n; ++i)
+        if (parts[i]) {
+            len += (size_t)snprintf(buf + len, n - len, "%s%s", sep, parts[i]);
+            sep = ", ";
+        }
 }
 
 static int run_render(const cli *c)
