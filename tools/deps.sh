@@ -16,6 +16,8 @@ packages=(
   openimageio-tools  # idiff: haze diff is checked against it
   clang libclang-rt-14-dev  # make fuzz: clang and its libFuzzer runtime (libclang_rt.fuzzer)
   valgrind           # the valgrind_render memcheck test
+  libopenmpi-dev openmpi-bin  # MPI: one image across ranks (mpirun), on when found
+  gnuplot-nox        # make bench: bench/results/trade.png
 )
 
 missing=()
