@@ -589,6 +589,8 @@ void geometry_destroy(geometry *g)
     free(g);
 }
 
+struct RTCSceneTy *geometry_embree_scene(const geometry *g) { return g->scene; }
+
 bool geometry_has_motion(const geometry *g) { return g->motion; }
 
 size_t geometry_shape_count(const geometry *g) { return g->shape_count; }

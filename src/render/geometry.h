@@ -92,6 +92,10 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
                           geometry **out, hz_error *err);
 void geometry_destroy(geometry *g);
 
+/* The committed Embree scene (RTCScene; declared without Embree's header),
+ * for bench/embree_loop.c's bare-Embree yardstick. */
+struct RTCSceneTy *geometry_embree_scene(const geometry *g);
+
 /* True when some shape or instance moves (the scene has Embree time steps). */
 bool geometry_has_motion(const geometry *g);
 

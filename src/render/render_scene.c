@@ -260,6 +260,9 @@ const camera *render_scene_camera(const render_scene *rs) { return &rs->cam; }
 film *render_scene_film(render_scene *rs) { return rs->film; }
 const sampler *render_scene_sampler(const render_scene *rs) { return &rs->smp; }
 const filter *render_scene_filter(const render_scene *rs) { return rs->filt; }
+const geometry *render_scene_geometry(const render_scene *rs) { return rs->geom; }
+size_t render_scene_light_count(const render_scene *rs) { return rs->light_count; }
+const light *render_scene_lights(const render_scene *rs) { return rs->lights; }
 
 render_motion render_scene_motion(const render_scene *rs)
 {

@@ -14,6 +14,8 @@
 #include "core/ray.h"
 #include "film/film.h"
 #include "film/filter.h"
+#include "render/geometry.h"
+#include "render/lights.h"
 #include "sampler/sampler.h"
 #include "scene/scene_desc.h"
 
@@ -36,6 +38,10 @@ const camera *render_scene_camera(const render_scene *rs);
 film *render_scene_film(render_scene *rs);
 const sampler *render_scene_sampler(const render_scene *rs);
 const filter *render_scene_filter(const render_scene *rs);
+/* The scene's surfaces and lights (for bench/embree_loop.c). */
+const geometry *render_scene_geometry(const render_scene *rs);
+size_t render_scene_light_count(const render_scene *rs);
+const light *render_scene_lights(const render_scene *rs);
 
 /* What moves during the shutter: a scene pays for motion only where it has
  * some (static Embree scene, no time steps, no per-ray grid transforms). */

@@ -1,0 +1,86 @@
+# Shared helpers of the benchmark scripts (sourced, POSIX sh + awk).
+# Expects: HAZE (the haze binary), BENCH (the bench/ directory), CACHE (the
+# reference cache directory), THREADS.
+
+# now: seconds since the epoch with nanoseconds (GNU date).
+now() { date +%s.%N; }
+
+# elapsed T0 T1: T1 - T0 in seconds, 3 decimals.
+elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", b - a }'; }
+
+# median of the numbers on stdin.
+median() { sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else printf "%.3f\n", (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
+
+# timed CMD...: runs CMD (stdout and stderr to $LOG), prints its wall time in
+# seconds; a failing command is fatal. Runs that take under 2 s are repeated
+# (3 runs in all) and the median printed.
+timed() {
+    t0=$(now)
+    "$@" >>"$LOG" 2>&1 || { echo "bench: failed: $*" >&2; tail -5 "$LOG" >&2; exit 1; }
+    t1=$(now)
+    t=$(elapsed "$t0" "$t1")
+    if awk -v t="$t" 'BEGIN { exit !(t < 2) }'; then
+        ts=$t
+        for _ in 2 3; do
+            t0=$(now); "$@" >>"$LOG" 2>&1; t1=$(now)
+            ts="$ts $(elapsed "$t0" "$t1")"
+        done
+        t=$(printf '%s\n' $ts | median)
+    fi
+    echo "$t"
+}
+
+# errors A.exr REF.exr: prints "RMSE RELMSE" over R,G,B (haze diff's "all" row).
+errors() {
+    "$HAZE" diff "$1" "$2" --channels R,G,B | awk '$1 == "all" { print $3, $4; found = 1 } END { exit !found }' ||
+        { echo "bench: haze diff $1 $2 failed" >&2; exit 1; }
+}
+
+# variant OUT.pbrt SCENE.pbrt INTEGRATOR-LINE: a scene file that sets the
+# integrator and includes SCENE (whose relative paths stay relative to it).
+variant() {
+    printf '%s\nInclude "%s"\n' "$3" "$(cd "$(dirname "$2")" && pwd)/$(basename "$2")" >"$1"
+}
+
+# integrator EST STEP: the Integrator line of one ladder rung (shadow step
+# twice the camera-ray step, as haze's defaults 1 / 2).
+integrator() {
+    sstep=$(awk -v s="$2" 'BEGIN { print 2 * s }')
+    printf 'Integrator "singlescatter" "string transmittance" "%s" "float stepsize" %s "float shadowstepsize" %s' "$1" "$2" "$sstep"
+}
+
+# haze_id: what a cached reference depends on besides its scene: haze's
+# version and the git tree of src/ (or the binary's hash outside git).
+haze_id() {
+    v=$("$HAZE" --version 2>&1)
+    t=$(git -C "$BENCH" rev-parse HEAD:src 2>/dev/null) || t=$(sha256sum <"$HAZE" | cut -c1-40)
+    if [ -n "$(git -C "$BENCH" status --porcelain -- ../src 2>/dev/null)" ]; then
+        t="$t-dirty-$(sha256sum <"$HAZE" | cut -c1-16)"
+    fi
+    echo "$v $t"
+}
+
+# cache_key FILE... -- WORDS: a hash of the files' contents, the words and haze_id.
+cache_key() {
+    {
+        while [ $# -gt 0 ] && [ "$1" != -- ]; do cat "$1"; shift; done
+        [ "$1" = -- ] && shift
+        echo "$*"
+        haze_id
+    } | sha256sum | cut -c1-16
+}
+
+# has_option OPT: haze render accepts OPT (features being added on main).
+has_option() { "$HAZE" --help 2>&1 | grep -q -e "$1"; }
+
+# has_estimator NAME: haze accepts "string transmittance" NAME.
+has_estimator() {
+    d=$CACHE/probe; mkdir -p "$d"
+    cat >"$d/probe-$1.pbrt" <<EOF
+Integrator "singlescatter" "string transmittance" "$1"
+Camera "perspective"
+Film "rgb" "integer xresolution" 4 "integer yresolution" 4
+WorldBegin
+EOF
+    "$HAZE" render "$d/probe-$1.pbrt" --spp 1 --threads 1 -o "$d/probe.exr" --quiet >/dev/null 2>&1
+}
