@@ -23,6 +23,11 @@
 //                      [-3,34]: the box's voxels, dilated to hold every point
 //                      the box reaches when moved by up to (0.5, 0.125, 0) world
 //                      units (16 and 4 voxels); and "v0", zero on the same voxels
+//   sparse.vdb         eight soft balls (radius 8.5 voxels, density 1 with a
+//                      one-voxel fall-off) near the corners of voxels [0,127]^3,
+//                      voxel size 1/64, world [-1, 1] x [0, 2] x [-1, 1]: the
+//                      active voxels are about 1% of the bounding box (make
+//                      bench's occupancy benchmark)
 //   vec_ramp.vdb/.nvdb "v": the linear field v(i,j,k) = (0.5 i - 1, 0.25 j, 2 - k)
 //                      on voxels [0,7]^3 (voxel size 0.25, offset (1, 2, 3)), and
 //                      "density": 1 on the same voxels (for type checks); the
@@ -162,6 +167,27 @@ FloatGrid::Ptr sheet()
     for (int i = 0; i < 64; ++i)
         for (int k = 0; k < 64; ++k)
             acc.setValue(Coord(i, 0, k), 1.0f);
+    return grid;
+}
+
+// Eight soft balls near the corners of [0,127]^3: about 1% of the box active.
+FloatGrid::Ptr sparse()
+{
+    FloatGrid::Ptr grid = make_density(1.0 / 64.0, openvdb::Vec3d(-1.0, 0.0, -1.0));
+    auto acc = grid->getAccessor();
+    const double radius = 8.5, lo = 9.0, hi = 118.0;
+    for (int b = 0; b < 8; ++b) {
+        double cx = b & 1 ? hi : lo, cy = b & 2 ? hi : lo, cz = b & 4 ? hi : lo;
+        for (int i = int(cx - radius) - 1; i <= int(cx + radius) + 1; ++i)
+            for (int j = int(cy - radius) - 1; j <= int(cy + radius) + 1; ++j)
+                for (int k = int(cz - radius) - 1; k <= int(cz + radius) + 1; ++k) {
+                    double r = std::sqrt((i - cx) * (i - cx) + (j - cy) * (j - cy) +
+                                         (k - cz) * (k - cz));
+                    double d = 1.0 - smoothstep(radius - 1.0, radius, r);
+                    if (d > 0.0)
+                        acc.setValue(Coord(i, j, k), float(d));
+                }
+    }
     return grid;
 }
 
@@ -372,6 +398,7 @@ int main(int argc, char **argv)
         }
         write_vdb(dir + "/fog_sphere.vdb", {fog_sphere()});
         write_vdb(dir + "/sheet.vdb", {sheet()});
+        write_vdb(dir + "/sparse.vdb", {sparse()});
         FloatGrid::Ptr d;
         Vec3SGrid::Ptr v;
         smoke(d, v);
