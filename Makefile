@@ -6,7 +6,7 @@ SCENE      ?= scenes/foggy-dof.pbrt
 # Output: out/NAME.exr and out/NAME.png, NAME the scene file's name.
 OUT        ?= out/$(basename $(notdir $(SCENE)))
 
-.PHONY: all deps configure render test test-asan update-refs clean fuzz
+.PHONY: all deps configure render test test-asan update-refs clean fuzz bench
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -41,6 +41,12 @@ fuzz: deps
 	@test -f build-fuzz/CMakeCache.txt || CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHAZE_FUZZ=ON -DHAZE_TESTS=OFF
 	cmake --build build-fuzz -j $(JOBS) --target fuzz_scene fuzz_exr
 	sh fuzz/run.sh build-fuzz $(FUZZ_SECONDS)
+
+# Speed against accuracy (bench/README.md): about 20 min on two cores, references
+# cached in bench/cache/; BENCH_QUICK=1 is a ~3 min smoke run into
+# bench/cache/quick-results/. Writes bench/results/trade.md and trade.png.
+bench: all
+	BENCH_QUICK=$(BENCH_QUICK) sh bench/run.sh $(BUILD)/haze
 
 clean:
 	rm -rf $(BUILD) $(BUILD_ASAN)

@@ -70,8 +70,8 @@ cache_key() {
     } | sha256sum | cut -c1-16
 }
 
-# has_option OPT: haze render accepts OPT (features being added on main).
-has_option() { "$HAZE" --help 2>&1 | grep -q -e "$1"; }
+# has_option NAME: haze render accepts --NAME (features being added on main).
+has_option() { "$HAZE" --help 2>&1 | grep -q -e "--$1\b"; }
 
 # has_estimator NAME: haze accepts "string transmittance" NAME.
 has_estimator() {

@@ -1,0 +1,102 @@
+#!/bin/sh
+# The peer (bench/README.md): OpenVDB's vdb_render and haze on the same
+# volumes/smoke.vdb, camera and light (bench/scenes/peer-thin.pbrt and
+# peer-thick.pbrt hold haze's side of the mapping), each against its own
+# converged image. Writes $RESULTS/peer.tsv (one row per render:
+# config renderer mode step spp seconds rmse relmse) and
+# $RESULTS/peer-match.tsv (haze's converged pixel-centre image against
+# vdb_render's converged image). Sourced by bench/run.sh.
+
+# vdb_render's view of bench/scenes/peer-*.pbrt (the fov is horizontal there).
+PEER_VIEW="-res 640x480 -translate 0.15,1.05,-3.7 -lookat -0.05,0.98,-0.03 -up 0,1,0 -fov 44.356"
+PEER_LIGHT="-light 0.3,3,0.2,1,1,1 -gain 0 -cutoff 1e-5 -shadowstep 3 -name density"
+
+# peer_coefficients CONFIG: vdb_render's -absorb/-scatter (per voxel length).
+peer_coefficients() {
+    case $1 in
+    thick) echo "-absorb 0.1,0.1,0.1 -scatter 1.5,1.5,1.5" ;;  # vdb_render's defaults
+    thin) echo "-absorb 0.005,0.005,0.005 -scatter 0.075,0.075,0.075" ;;  # defaults / 20
+    esac
+}
+
+# vdb CONFIG STEP OUT.exr: one vdb_render image.
+vdb() {
+    # shellcheck disable=SC2086
+    vdb_render "$BENCH/../volumes/smoke.vdb" "$3" $PEER_VIEW $PEER_LIGHT $(peer_coefficients "$1") \
+        -step "$2" -cpus "$THREADS"
+}
+
+peer_config() {
+    cfg=$1
+    vref_step=0.01
+    [ -n "$BENCH_QUICK" ] && vref_step=0.05
+    key=$(cache_key "$BENCH/../volumes/smoke.vdb" -- "vdb $(vdb_render -version 2>&1) $PEER_VIEW $PEER_LIGHT $(peer_coefficients "$cfg") $vref_step")
+    vref=$CACHE/vdb-ref-$cfg-$key.exr
+    if [ ! -f "$vref" ]; then
+        echo "  vdb_render reference $cfg: step $vref_step" >&2
+        t=$(timed vdb "$cfg" "$vref_step" "$CACHE/vdb-tmp.exr")
+        mv "$CACHE/vdb-tmp.exr" "$vref"
+        echo "  vdb_render reference $cfg took $t s" >&2
+    fi
+    steps="4 2 1 0.5 0.25 0.1"
+    [ -n "$BENCH_QUICK" ] && steps="2 1 0.5"
+    for s in $steps; do
+        t=$(timed vdb "$cfg" "$s" "$CACHE/vdb-rung.exr")
+        e=$(errors "$CACHE/vdb-rung.exr" "$vref")
+        printf '%s\tvdb_render\tcentre\t%s\t1\t%s\t%s\n' "$cfg" "$s" "$t" "$(echo "$e" | tr ' ' '\t')" >>"$RESULTS/peer.tsv"
+        echo "  peer $cfg vdb_render step $s: $t s, rmse relmse $e" >&2
+    done
+
+    scene=$BENCH/scenes/peer-$cfg.pbrt
+    modes=aa
+    if has_option disable-pixel-jitter; then modes="centre aa"; else
+        echo "  (haze has no --disable-pixel-jitter: pixel-centre comparison skipped)" >&2
+    fi
+    ref_spp=128
+    [ -n "$BENCH_QUICK" ] && ref_spp=16
+    for mode in $modes; do
+        flag=
+        [ "$mode" = centre ] && flag=--disable-pixel-jitter
+        key=$(cache_key "$scene" -- "peer-ref $ladder_ref_est $ref_spp $mode")
+        href=$CACHE/haze-ref-$cfg-$mode-$key.exr
+        if [ ! -f "$href" ]; then
+            variant "$CACHE/peer-ref.pbrt" "$scene" "$(integrator "$ladder_ref_est" 1)"
+            echo "  haze reference $cfg $mode: $ladder_ref_est, $ref_spp spp" >&2
+            # shellcheck disable=SC2086
+            t=$(timed "$HAZE" render "$CACHE/peer-ref.pbrt" $flag --spp "$ref_spp" --threads "$THREADS" --seed 12345 -o "$CACHE/peer-tmp.exr" --quiet)
+            mv "$CACHE/peer-tmp.exr" "$href"
+            echo "  haze reference $cfg $mode took $t s" >&2
+        fi
+        if [ "$mode" = centre ] || [ "$modes" = aa ]; then
+            # How close the two models come (bench/README.md: the mapping).
+            e=$(errors "$href" "$vref")
+            m=$("$HAZE" diff "$href" "$vref" --channels R,G,B | awk '$1 == "all" { print $9, $10, $11 }')
+            printf '%s\t%s\t%s\t%s\n' "$cfg" "$mode" "$(echo "$e" | tr ' ' '\t')" "$(echo "$m" | tr ' ' '\t')" >>"$RESULTS/peer-match.tsv"
+            echo "  peer $cfg: haze ($mode) vs vdb_render converged: rmse relmse $e; mean haze, vdb, rel diff $m" >&2
+        fi
+        hsteps="1 2 4"
+        hspps="1 4 16"
+        [ -n "$BENCH_QUICK" ] && hsteps=2 && hspps="1 4"
+        for s in $hsteps; do
+            variant "$CACHE/peer-rung.pbrt" "$scene" "$(integrator jittered "$s")"
+            for spp in $hspps; do
+                # shellcheck disable=SC2086
+                t=$(timed "$HAZE" render "$CACHE/peer-rung.pbrt" $flag --spp "$spp" --threads "$THREADS" --seed 1 -o "$CACHE/peer-rung.exr" --quiet)
+                e=$(errors "$CACHE/peer-rung.exr" "$href")
+                printf '%s\thaze\t%s\t%s\t%s\t%s\t%s\n' "$cfg" "$mode" "$s" "$spp" "$t" "$(echo "$e" | tr ' ' '\t')" >>"$RESULTS/peer.tsv"
+                echo "  peer $cfg haze $mode jittered step $s spp $spp: $t s, rmse relmse $e" >&2
+            done
+        done
+    done
+}
+
+peer_run() {
+    printf 'config\trenderer\tmode\tstep\tspp\tseconds\trmse\trelmse\n' >"$RESULTS/peer.tsv"
+    printf 'config\thaze_mode\trmse\trelmse\tmean_haze\tmean_vdb\trel_diff\n' >"$RESULTS/peer-match.tsv"
+    if ! command -v vdb_render >/dev/null; then
+        echo "bench: vdb_render missing (Debian libopenvdb-tools): peer skipped" >&2
+        return 0
+    fi
+    peer_config thin
+    peer_config thick
+}

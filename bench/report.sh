@@ -1,0 +1,183 @@
+#!/bin/sh
+# Turns the raw tables of a bench run ($RESULTS/*.tsv) into
+# $RESULTS/trade.md and, with gnuplot, $RESULTS/trade.png.
+# Sourced by bench/run.sh.
+
+# The Pareto front of "seconds error" rows on stdin (sorted by time; a row is
+# kept when its error is below every faster row's).
+front() { sort -g -k1,1 -k2,2 | awk 'NR == 1 || $2 < best { print; best = $2 }'; }
+
+# time_to TARGETS...: for the front on stdin, the time to reach each target
+# error by log-log interpolation between the front points around it; "<=T"
+# when even the fastest rung is below the target, "-" when none reaches it.
+time_to() {
+    awk -v targets="$*" '
+        { t[NR] = $1; e[NR] = $2 }
+        END {
+            n = split(targets, T, " ")
+            for (k = 1; k <= n; ++k) {
+                E = T[k]; out = "-"
+                for (i = 1; i <= NR; ++i) {
+                    if (e[i] > E) continue
+                    if (i == 1) { out = sprintf("<=%.3g", t[1]); break }
+                    lt = log(t[i - 1]) + (log(E) - log(e[i - 1])) * (log(t[i]) - log(t[i - 1])) / (log(e[i]) - log(e[i - 1]))
+                    out = sprintf("%.3g", exp(lt)); break
+                }
+                printf "%s%s", out, k < n ? " " : "\n"
+            }
+        }'
+}
+
+report_ladder() {
+    echo "## The ladder"
+    echo
+    echo "Error against each scene's converged reference ($ladder_ref_est tracking, cached"
+    echo "in bench/cache/), over R, G, B. Time is the process wall clock (start-up,"
+    echo "scene loading and EXR writing included; the median of three runs when one"
+    echo "takes under 2 s), $THREADS threads. Shadow step = 2 x step. \`*\` marks the"
+    echo "scene's Pareto front (no faster rung has a lower relMSE)."
+    echo
+    for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/ladder.tsv" | uniq); do
+        echo "### $scene"
+        echo
+        echo "| estimator | step (voxels) | spp | time (s) | RMSE | relMSE | |"
+        echo "|---|---|---|---|---|---|---|"
+        awk -F'\t' -v s="$scene" 'NR > 1 && $1 == s { print $5, $7 }' "$RESULTS/ladder.tsv" | front >"$CACHE/front.txt"
+        awk -F'\t' -v s="$scene" 'FNR == NR { f[$0] = 1; next }
+            FNR > 1 && $1 == s { printf "| %s | %s | %s | %s | %.4g | %.4g | %s |\n", $2, $2 == "exact" ? "-" : $3, $4, $5, $6, $7, (($5 " " $7) in f) ? "*" : "" }' \
+            "$CACHE/front.txt" "$RESULTS/ladder.tsv"
+        echo
+        echo "Recommended ($scene): the front, fastest first:"
+        awk -F'\t' -v s="$scene" 'FNR == NR { f[$0] = 1; next }
+            FNR > 1 && $1 == s && (($5 " " $7) in f) { printf "%s\t%s step %s, %s spp (%.3g s, relMSE %.3g)\n", $5, $2, $2 == "exact" ? "-" : $3, $4, $5, $7 }' \
+            "$CACHE/front.txt" "$RESULTS/ladder.tsv" | sort -g | cut -f2 | awk '{ printf "%s%s", (NR > 1 ? "; " : ""), $0 } END { print "." }'
+
+        echo
+    done
+}
+
+PEER_TARGETS="0.1 0.03 0.01 0.003 0.001 0.0003 0.0001"
+
+report_peer() {
+    [ "$(wc -l <"$RESULTS/peer.tsv")" -gt 1 ] || return 0
+    echo "## The peer: vdb_render"
+    echo
+    echo "How close the models come: haze's converged image against vdb_render's"
+    echo "converged image (step 0.01) of the same configuration (bench/README.md has"
+    echo "the mapping and where they differ):"
+    echo
+    echo "| config | haze image | RMSE | relMSE | mean haze | mean vdb_render | rel. diff of means |"
+    echo "|---|---|---|---|---|---|---|"
+    awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4g | %.4g | %.4g | %.4g | %+.2f%% |\n", $1, $2, $3, $4, $5, $6, 100 * $7 }' "$RESULTS/peer-match.tsv"
+    echo
+    echo "Renders (each against its own converged image; vdb_render renders one ray"
+    echo "per pixel centre, haze \`centre\` with --disable-pixel-jitter, \`aa\` anti-aliased;"
+    echo "haze uses jittered marching):"
+    echo
+    echo "| config | renderer | mode | step | spp | time (s) | RMSE | relMSE |"
+    echo "|---|---|---|---|---|---|---|---|"
+    awk -F'\t' 'NR > 1 { printf "| %s | %s | %s | %s | %s | %s | %.4g | %.4g |\n", $1, $2, $3, $4, $5, $6, $7, $8 }' "$RESULTS/peer.tsv"
+    echo
+    echo "Time to reach a relMSE (log-log interpolation on each one's Pareto front;"
+    echo "\`<=T\`: already below it at the fastest rung; \`-\`: not reached on the"
+    echo "ladder). Target: haze (pixel centre) at most 1/3 of vdb_render's time."
+    echo
+    echo "| config | relMSE | vdb_render (s) | haze centre (s) | haze aa (s) | centre / vdb_render | target <= 0.333 |"
+    echo "|---|---|---|---|---|---|---|"
+    for cfg in thin thick; do
+        v=$(awk -F'\t' -v c="$cfg" 'NR > 1 && $1 == c && $2 == "vdb_render" { print $6, $8 }' "$RESULTS/peer.tsv" | front | time_to $PEER_TARGETS)
+        hc=$(awk -F'\t' -v c="$cfg" 'NR > 1 && $1 == c && $2 == "haze" && $3 == "centre" { print $6, $8 }' "$RESULTS/peer.tsv" | front | time_to $PEER_TARGETS)
+        ha=$(awk -F'\t' -v c="$cfg" 'NR > 1 && $1 == c && $2 == "haze" && $3 == "aa" { print $6, $8 }' "$RESULTS/peer.tsv" | front | time_to $PEER_TARGETS)
+        [ -n "$v" ] || continue
+        echo "$PEER_TARGETS|$v|${hc:-}|${ha:-}" | awk -F'|' -v c="$cfg" '{
+            n = split($1, T, " "); split($2, V, " "); split($3, C, " "); split($4, A, " ")
+            for (k = 1; k <= n; ++k) {
+                if (C[k] == "") C[k] = "n/a"
+                if (A[k] == "") A[k] = "n/a"
+                r = "-"; ok = "-"
+                if (V[k] ~ /^[0-9]/ && C[k] ~ /^[0-9]/) { r = sprintf("%.2f", C[k] / V[k]); ok = C[k] / V[k] <= 1 / 3 ? "met" : "missed" }
+                else if (V[k] ~ /^[0-9]/ && C[k] ~ /^<=/) { x = substr(C[k], 3); r = sprintf("<=%.2f", x / V[k]); ok = x / V[k] <= 1 / 3 ? "met" : "undecided" }
+                else if (V[k] ~ /^<=/ && C[k] ~ /^[0-9]/) { ok = "undecided" }
+                if (V[k] == "-" && C[k] == "-") continue
+                printf "| %s | %s | %s | %s | %s | %s | %s |\n", c, T[k], V[k], C[k], A[k], r, ok
+            }
+        }'
+    done
+    echo
+}
+
+report_yardsticks() {
+    echo "## Yardsticks"
+    echo
+    echo "| measure | value | target | verdict | how |"
+    echo "|---|---|---|---|---|"
+    awk -F'\t' 'NR > 1 { printf "| %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5 }' "$RESULTS/yardsticks.tsv"
+    echo
+}
+
+report_plot() {
+    command -v gnuplot >/dev/null || { echo "bench: no gnuplot: trade.png not drawn" >&2; return 0; }
+    d=$CACHE/plot; rm -rf "$d"; mkdir -p "$d"
+    # One file per scene and estimator: that estimator's front.
+    for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/ladder.tsv" | uniq); do
+        for est in $(awk -F'\t' -v s="$scene" 'NR > 1 && $1 == s { print $2 }' "$RESULTS/ladder.tsv" | sort -u); do
+            awk -F'\t' -v s="$scene" -v e="$est" 'NR > 1 && $1 == s && $2 == e { print $5, $7 }' "$RESULTS/ladder.tsv" | front >"$d/$scene.$est.front"
+            awk -F'\t' -v s="$scene" -v e="$est" 'NR > 1 && $1 == s && $2 == e { print $5, $7 }' "$RESULTS/ladder.tsv" >"$d/$scene.$est.all"
+        done
+    done
+    for cfg in thin thick; do
+        for who in "vdb_render centre" "haze centre" "haze aa"; do
+            set -- $who
+            awk -F'\t' -v c="$cfg" -v r="$1" -v m="$2" 'NR > 1 && $1 == c && $2 == r && $3 == m { print $6, $8 }' "$RESULTS/peer.tsv" | front >"$d/peer-$cfg.$1-$2.front"
+        done
+    done
+    {
+        echo 'set terminal pngcairo noenhanced size 1400,1000 font ",10"'
+        echo "set output '$RESULTS/trade.png'"
+        echo 'set logscale xy; set grid; set key top right; set format y "%.0e"'
+        echo 'set xlabel "wall time (s)"; set ylabel "relMSE vs converged"'
+        echo 'set multiplot layout 2,3 title "haze: error vs time (Pareto front per estimator; points: every rung)"'
+        for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/ladder.tsv" | uniq); do
+            echo "set title '$scene'"
+            printf 'plot'
+            sep=' '
+            for f in "$d/$scene".*.front; do
+                est=$(basename "$f" .front); est=${est#"$scene".}
+                printf "%s'%s' using 1:2 with linespoints lw 2 title '%s', '%s' using 1:2 with points pt 6 notitle" "$sep" "$f" "$est" "$d/$scene.$est.all"
+                sep=', '
+            done
+            echo
+        done
+        for cfg in thin thick; do
+            if [ -s "$d/peer-$cfg.vdb_render-centre.front" ]; then
+                echo "set title 'smoke.vdb $cfg: haze vs vdb_render (each vs its own converged image)'"
+                printf 'plot'
+                sep=' '
+                for who in vdb_render-centre haze-centre haze-aa; do
+                    [ -s "$d/peer-$cfg.$who.front" ] || continue
+                    printf "%s'%s' using 1:2 with linespoints lw 2 title '%s'" "$sep" "$d/peer-$cfg.$who.front" "$who"
+                    sep=', '
+                done
+                echo
+            fi
+        done
+        echo 'unset multiplot'
+    } >"$d/trade.gp"
+    gnuplot "$d/trade.gp" || echo "bench: gnuplot failed (see $d/trade.gp)" >&2
+}
+
+report_run() {
+    {
+        echo "# Speed against accuracy: make bench results"
+        echo
+        echo "Written by \`make bench\`$([ -n "$BENCH_QUICK" ] && echo " (BENCH_QUICK=1: the short smoke run, not the full ladder)") on $(date -u '+%Y-%m-%d %H:%M UTC'),"
+        echo "$(nproc) CPUs ($(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)), load average before the run $BENCH_LOAD,"
+        echo "haze $(haze_id). The plot is [trade.png](trade.png); bench/README.md says what"
+        echo "each part measures."
+        echo
+        report_ladder
+        report_peer
+        report_yardsticks
+    } >"$RESULTS/trade.md"
+    report_plot
+}

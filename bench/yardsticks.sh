@@ -1,0 +1,65 @@
+#!/bin/sh
+# The yardsticks (bench/README.md): thread scaling, the cost of a sparse
+# volume, haze against a bare Embree loop, peak memory. Writes
+# $RESULTS/yardsticks.tsv (name value target verdict detail).
+# Sourced by bench/run.sh.
+
+# verdict VALUE OP LIMIT: "met" or "missed" (OP: le or ge).
+verdict() { awk -v v="$1" -v l="$3" -v op="$2" 'BEGIN { ok = op == "le" ? v <= l : v >= l; print ok ? "met" : "missed" }'; }
+
+yard_row() { printf '%s\t%s\t%s\t%s\t%s\n' "$@" >>"$RESULTS/yardsticks.tsv"; echo "  $1: $2 (target $3: $4) $5" >&2; }
+
+# stat FILE NAME: the value of "stat NAME VALUE" in FILE (haze render --stats), or empty.
+stat_of() { awk -v n="$2" '$1 == "stat" && $2 == n { print $3 }' "$1"; }
+
+yardsticks_run() {
+    printf 'name\tvalue\ttarget\tverdict\tdetail\n' >"$RESULTS/yardsticks.tsv"
+    spp=4
+    [ -n "$BENCH_QUICK" ] && spp=1
+
+    # Two threads against one, smoke scene, haze's default integrator.
+    v=$CACHE/threads.pbrt
+    variant "$v" "$BENCH/scenes/smoke.pbrt" 'Integrator "singlescatter"'
+    t1=$(timed "$HAZE" render "$v" --spp "$spp" --threads 1 -o "$CACHE/threads.exr" --quiet)
+    t2=$(timed "$HAZE" render "$v" --spp "$spp" --threads 2 -o "$CACHE/threads.exr" --quiet)
+    s=$(awk -v a="$t1" -v b="$t2" 'BEGIN { printf "%.2f", a / b }')
+    yard_row threads_speedup "$s" ">= 1.8" "$(verdict "$s" ge 1.8)" "smoke.pbrt $spp spp: 1 thread $t1 s, 2 threads $t2 s"
+
+    # A volume filling 1% of its box against the same scene without it.
+    sspp=$((spp * 4))
+    t_full=$(timed "$HAZE" render "$BENCH/scenes/sparse.pbrt" --spp "$sspp" --threads "$THREADS" -o "$CACHE/sparse.exr" --quiet)
+    t_empty=$(timed "$HAZE" render "$BENCH/scenes/sparse-empty.pbrt" --spp "$sspp" --threads "$THREADS" -o "$CACHE/sparse-empty.exr" --quiet)
+    r=$(awk -v a="$t_full" -v b="$t_empty" 'BEGIN { printf "%.2f", a / b }')
+    yard_row sparse_over_empty "$r" "<= 2" "$(verdict "$r" le 2)" "sparse.pbrt $t_full s, sparse-empty.pbrt $t_empty s ($sspp spp)"
+
+    # haze against the bare Embree loop on the surfaces-only scene.
+    LOOP=${EMBREE_LOOP:-$(dirname "$HAZE")/bench/embree_loop}
+    if [ -x "$LOOP" ]; then
+        t_haze=$(timed "$HAZE" render "$BENCH/scenes/surfaces.pbrt" --spp 16 --threads "$THREADS" -o "$CACHE/surfaces.exr" --quiet)
+        t_loop=$(timed "$LOOP" "$BENCH/scenes/surfaces.pbrt" --spp 16 --threads "$THREADS")
+        r=$(awk -v a="$t_haze" -v b="$t_loop" 'BEGIN { printf "%.2f", a / b }')
+        rays=$("$LOOP" "$BENCH/scenes/surfaces.pbrt" --spp 1 --threads 1 | sed 's/.*loop [0-9.]* s, //; s/, mean.*//')
+        yard_row surfaces_over_embree "$r" "<= 1.3" "$(verdict "$r" le 1.3)" "surfaces.pbrt 16 spp: haze $t_haze s, embree_loop $t_loop s (process wall times; loop at 1 spp: $rays)"
+    else
+        echo "  (no $LOOP: the Embree yardstick is skipped)" >&2
+    fi
+
+    # Peak memory of a volume render against its parts (haze render --stats).
+    if has_option stats; then
+        out=$CACHE/memory.txt
+        "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --stats >"$out" 2>&1 ||
+            { echo "bench: haze render --stats failed" >&2; cat "$out" >&2; exit 1; }
+        peak=$(stat_of "$out" memory_peak_mib); base=$(stat_of "$out" memory_baseline_mib)
+        grids=$(stat_of "$out" memory_grids_mib); filmm=$(stat_of "$out" memory_film_mib)
+        emb=$(stat_of "$out" memory_embree_mib)
+        if [ -n "$peak" ] && [ -n "$base" ] && [ -n "$grids" ] && [ -n "$filmm" ] && [ -n "$emb" ]; then
+            r=$(awk -v p="$peak" -v b="$base" -v g="$grids" -v f="$filmm" -v e="$emb" 'BEGIN { printf "%.2f", (p - b) / (g + f + e) }')
+            yard_row memory_over_parts "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "smoke.pbrt: peak $peak MiB - baseline $base MiB over grids $grids + film $filmm + embree $emb MiB"
+        else
+            echo "  (haze --stats lacks a memory line: memory skipped)" >&2
+        fi
+    else
+        kb=$(/usr/bin/time -f %M "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
+        yard_row memory_peak_mib "$(awk -v k="$kb" 'BEGIN { printf "%.1f", k / 1024 }')" "<= 1.5x parts" "unknown" "no haze render --stats yet: only the process peak RSS is known"
+    fi
+}
