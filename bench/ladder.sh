@@ -56,8 +56,8 @@ ladder_run() {
         ladder_scene "$BENCH/scenes/cloud.pbrt" cloud 16 "$ests" "1 2" "1 4"
         ladder_scene "$BENCH/scenes/fog-dof.pbrt" fog-dof 64 exact 1 "1 4"
     else
-        ladder_scene "$BENCH/scenes/smoke.pbrt" smoke 256 "$ests" "1 2 4" "1 4 16"
-        ladder_scene "$BENCH/scenes/cloud.pbrt" cloud 256 "$ests" "1 2 4" "1 4 16"
-        ladder_scene "$BENCH/scenes/fog-dof.pbrt" fog-dof 512 exact 1 "1 4 16 64"
+        ladder_scene "$BENCH/scenes/smoke.pbrt" smoke 128 "$ests" "1 2 4" "1 4 16"
+        ladder_scene "$BENCH/scenes/cloud.pbrt" cloud 128 "$ests" "1 2 4" "1 4 16"
+        ladder_scene "$BENCH/scenes/fog-dof.pbrt" fog-dof 256 exact 1 "1 4 16 64"
     fi
 }

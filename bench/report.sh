@@ -5,7 +5,7 @@
 
 # The Pareto front of "seconds error" rows on stdin (sorted by time; a row is
 # kept when its error is below every faster row's).
-front() { sort -g -k1,1 -k2,2 | awk 'NR == 1 || $2 < best { print; best = $2 }'; }
+front() { sort -g -k1,1 -k2,2 | awk 'NR == 1 || $2 < 0.95 * best { print; best = $2 }'; }
 
 # time_to TARGETS...: for the front on stdin, the time to reach each target
 # error by log-log interpolation between the front points around it; "<=T"
@@ -35,7 +35,7 @@ report_ladder() {
     echo "in bench/cache/), over R, G, B. Time is the process wall clock (start-up,"
     echo "scene loading and EXR writing included; the median of three runs when one"
     echo "takes under 2 s), $THREADS threads. Shadow step = 2 x step. \`*\` marks the"
-    echo "scene's Pareto front (no faster rung has a lower relMSE)."
+    echo "scene's Pareto front (no faster rung has a relMSE within 5% of it)."
     echo
     for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/ladder.tsv" | uniq); do
         echo "### $scene"
@@ -63,7 +63,7 @@ report_peer() {
     echo "## The peer: vdb_render"
     echo
     echo "How close the models come: haze's converged image against vdb_render's"
-    echo "converged image (step 0.01) of the same configuration (bench/README.md has"
+    echo "converged image (step 0.05, shadow step 0.5) of the same configuration (bench/README.md has"
     echo "the mapping and where they differ):"
     echo
     echo "| config | haze image | RMSE | relMSE | mean haze | mean vdb_render | rel. diff of means |"

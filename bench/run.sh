@@ -25,7 +25,7 @@ BENCH_LOAD=$(cut -d' ' -f1-3 /proc/loadavg)
 
 # BENCH_PARTS: a subset of "ladder peer yardsticks" (the others' tables of
 # the last run are reused by the report).
-PARTS=${BENCH_PARTS:-ladder peer yardsticks}
+PARTS=${BENCH_PARTS-ladder peer yardsticks}
 start=$(now)
 for part in $PARTS; do
     echo "bench: $part" >&2
