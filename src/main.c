@@ -72,7 +72,10 @@ static const char usage_text[] =
     "  --threads N             render threads (default: all cores)\n"
     "  --seed N                random seed (default 0; a Sampler's \"integer seed\" wins)\n"
     "  --preview FILE.png      also write a tonemapped sRGB PNG\n"
-    "  --quiet                 no progress bar and no summary\n";
+    "  --quiet                 no progress bar and no summary\n"
+    "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
+    "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
+    "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n";
 
 typedef struct {
     const char *scene;
@@ -81,6 +84,8 @@ typedef struct {
     int spp, threads;
     unsigned long long seed;
     int quiet;
+    int stats;                /* --stats */
+    int disable_pixel_jitter; /* --disable-pixel-jitter */
 } cli;
 
 static int usage_error(const char *fmt, const char *arg)
@@ -133,6 +138,10 @@ static int parse_render_args(int argc, char **argv, cli *c)
             }
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
             c->quiet = 1;
+        } else if (!strcmp(a, "--stats")) {
+            c->stats = 1;
+        } else if (!strcmp(a, "--disable-pixel-jitter")) {
+            c->disable_pixel_jitter = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
             return usage_error("unknown option '%s'", a);
         } else if (!c->scene) {
@@ -253,6 +262,46 @@ static double peak_memory_mib(void)
     return ru.ru_maxrss / 1024.0;
 }
 
+/* Resident memory now (/proc/self/statm), 0 when unknown. */
+static double resident_memory_mib(void)
+{
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (!f)
+        return 0.0;
+    unsigned long size = 0, resident = 0;
+    int n = fscanf(f, "%lu %lu", &size, &resident);
+    fclose(f);
+    return n == 2 ? resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0) : 0.0;
+}
+
+/* --stats: one 'stat NAME VALUE' line per figure (docs/performance.md). */
+static void print_stats(const render_scene *rs, const render_stats *st, double baseline_mib)
+{
+    double px = st->pixels > 0 ? (double)st->pixels : 1.0, mib = 1.0 / (1024.0 * 1024.0);
+    render_memory mem = render_scene_memory(rs);
+    double other = st->time_busy_s - st->time_media_s - st->time_film_s;
+    printf("stat wall_s %.4f\n", st->wall_seconds);
+    printf("stat threads %d\n", st->threads);
+    printf("stat pixels %ld\n", st->pixels);
+    printf("stat spp %d\n", st->spp);
+    printf("stat camera_rays %llu\n", (unsigned long long)st->camera_rays);
+    printf("stat shadow_rays %llu\n", (unsigned long long)st->shadow_rays);
+    printf("stat rays_per_s %.0f\n",
+           st->wall_seconds > 0 ? (st->camera_rays + st->shadow_rays) / st->wall_seconds : 0.0);
+    printf("stat density_lookups_per_pixel %.2f\n", st->density_lookups / px);
+    printf("stat majorant_steps_per_pixel %.2f\n", st->majorant_steps / px);
+    printf("stat time_busy_s %.4f\n", st->time_busy_s);
+    printf("stat time_surfaces_s %.4f\n", other > 0.0 ? other : 0.0);
+    printf("stat time_media_s %.4f\n", st->time_media_s);
+    printf("stat time_film_s %.4f\n", st->time_film_s);
+    printf("stat memory_peak_mib %.2f\n", peak_memory_mib());
+    printf("stat memory_baseline_mib %.2f\n", baseline_mib);
+    printf("stat memory_grids_mib %.3f\n", mem.grids * mib);
+    printf("stat memory_majorants_mib %.3f\n", mem.majorants * mib);
+    printf("stat memory_film_mib %.3f\n", mem.film * mib);
+    printf("stat memory_embree_mib %.3f\n", mem.embree * mib);
+}
+
 /* "static", or what moves: "motion: camera, surfaces, 1 medium". */
 static void format_motion(render_motion m, char *buf, size_t n)
 {
@@ -276,6 +325,7 @@ static void format_motion(render_motion m, char *buf, size_t n)
 static int run_render(const cli *c)
 {
     hz_error err = {{0}};
+    double baseline_mib = c->stats ? resident_memory_mib() : 0.0;
     scene_desc sd;
     if (scene_parse_file(c->scene, &sd, &err) != HZ_OK) {
         fprintf(stderr, "haze: %s\n", err.message);
@@ -302,7 +352,9 @@ static int run_render(const cli *c)
     install_interrupt_handlers();
     renderer_options opt = {.threads = c->threads,
                             .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
-                            .cancel = &interrupted};
+                            .cancel = &interrupted,
+                            .disable_pixel_jitter = c->disable_pixel_jitter != 0,
+                            .timing = c->stats != 0};
     render_stats stats;
     if (renderer_run(rs, &opt, &stats, &err) != HZ_OK) {
         fprintf(stderr, "haze: %s\n", err.message);
@@ -346,6 +398,8 @@ static int run_render(const cli *c)
                (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
                lookups, lookups[0] ? ", " : "", motion, peak_memory_mib());
     }
+    if (c->stats)
+        print_stats(rs, &stats, baseline_mib);
 done:
     render_scene_destroy(rs);
     scene_desc_free(&sd);

@@ -71,6 +71,8 @@ static double film_bytes(const film_params *p)
     return area * per;
 }
 
+double film_memory_bytes(const film *f) { return film_bytes(&f->p); }
+
 static bool ends_with_exr(const char *s)
 {
     size_t n = strlen(s);

@@ -43,6 +43,8 @@ typedef struct film film;
 
 film *film_create(const film_params *p, hz_error *err);
 void film_destroy(film *f);
+/* Bytes the film holds for its bounds (accumulators, AOVs and output rows). */
+double film_memory_bytes(const film *f);
 const film_params *film_get_params(const film *f);
 /* (px, py) absolute raster pixel inside bounds. Not thread-safe for the same
  * pixel; tiles own disjoint pixels. `depth` is the first-hit distance (or INFINITY).

@@ -323,6 +323,8 @@ bool grid_support_bounds(const grid *g, vec3 *lo, vec3 *hi)
 float grid_max_value(const grid *g) { return g->max_value; }
 float grid_min_value(const grid *g) { return g->min_value; }
 float grid_background(const grid *g) { return g->background; }
+size_t grid_buffer_bytes(const grid *g) { return g->owned.size; }
+
 const char *grid_name(const grid *g) { return g->name; }
 
 uint64_t grid_active_voxel_count(const grid *g)

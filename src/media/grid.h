@@ -87,6 +87,8 @@ float grid_min_value(const grid *g);
 float grid_background(const grid *g);
 uint64_t grid_active_voxel_count(const grid *g);
 const char *grid_name(const grid *g);
+/* Size of the grid's NanoVDB buffer in bytes. */
+size_t grid_buffer_bytes(const grid *g);
 
 /* Node statistics and region maxima below: float grids only. */
 

@@ -277,6 +277,25 @@ render_motion render_scene_motion(const render_scene *rs)
     return m;
 }
 
+render_memory render_scene_memory(const render_scene *rs)
+{
+    render_memory mem = {0.0, 0.0, film_memory_bytes(rs->film),
+                         (double)geometry_embree_peak_bytes(rs->geom)};
+    for (size_t i = 0; i < rs->medium_count; ++i) {
+        const medium *md = &rs->media[i];
+        switch (md->kind) {
+        case MEDIUM_HOMOGENEOUS:
+            break;
+        case MEDIUM_GRID:
+            mem.grids += (double)grid_buffer_bytes(md->grid.grid);
+            if (md->grid.velocity)
+                mem.grids += (double)grid_buffer_bytes(md->grid.velocity);
+            break;
+        }
+    }
+    return mem;
+}
+
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, render_counters *counters)
 {

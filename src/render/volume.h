@@ -85,6 +85,7 @@ typedef struct {
     rng r;
     uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
     uint64_t shadow_rays;
+    uint64_t majorant_steps; /* majorant-grid cells entered */
 } volume_walk;
 
 /* Where the double-precision ray o + t w crosses the surface of hit `h` (found
