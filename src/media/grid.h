@@ -125,5 +125,9 @@ grid_node grid_node_at(const grid *g, grid_level level, int32_t i, int32_t j, in
  * as they do in fog volumes. For the trilinear field over the index-space region
  * [a, b], pass the voxels floor(a) .. floor(b) + 1. */
 float grid_region_max(const grid *g, grid_ibox box);
+/* Lower and upper bounds of the values of all voxels in `box` (same sources and
+ * assumption; the lower bound is exact only where fully active leaves and
+ * tiles cover the box, else it includes the background). */
+void grid_region_range(const grid *g, grid_ibox box, float *min, float *max);
 
 #endif

@@ -290,6 +290,7 @@ render_memory render_scene_memory(const render_scene *rs)
             mem.grids += (double)grid_buffer_bytes(md->grid.grid);
             if (md->grid.velocity)
                 mem.grids += (double)grid_buffer_bytes(md->grid.velocity);
+            mem.majorants += (double)majorant_grid_bytes(&md->grid.majorant);
             break;
         }
     }
