@@ -39,6 +39,21 @@ void film_params_default(film_params *p);
  * than 64 GiB are refused. */
 hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *err);
 
+/* A region given on the command line (haze render --pixelbounds /
+ * --cropwindow), which replaces the Film's own cropwindow/pixelbounds. */
+typedef enum { FILM_REGION_NONE = 0, FILM_REGION_PIXELS, FILM_REGION_CROP } film_region_kind;
+
+typedef struct {
+    film_region_kind kind;
+    double v[4]; /* x0 x1 y0 y1: integer pixels (half-open) or crop fractions in [0, 1] */
+} film_region;
+
+/* Sets p->bounds from `r` for p's resolution (a no-op for FILM_REGION_NONE):
+ * pixels as given, crop fractions by pbrt-v4's ceil(res * crop). Fails with a
+ * one-line message (no option name) when the region is malformed, empty or
+ * not inside the image, or the film would need more than 64 GiB. */
+hz_status film_params_set_region(film_params *p, const film_region *r, hz_error *err);
+
 typedef struct film film;
 
 film *film_create(const film_params *p, hz_error *err);

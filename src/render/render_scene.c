@@ -180,6 +180,8 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
             return hz_fail(err, "output file name too long: %s", opt->output);
         snprintf(fp.filename, sizeof fp.filename, "%s", opt->output);
     }
+    if (opt && film_params_set_region(&fp, &opt->region, err) != HZ_OK)
+        return HZ_ERROR;
     rs->filt = filter_create(&sd->filter, err);
     if (!rs->filt)
         return HZ_ERROR;
