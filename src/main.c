@@ -323,9 +323,9 @@ static int check_region(const cli *c, scene_desc *sd)
 {
     film_params fp;
     hz_error err = {{0}};
-    if (c->region.kind == FILM_REGION_NONE || film_params_from_entity(&sd->film, &fp, &err) != HZ_OK)
-        return 0;
-    if (film_params_set_region(&fp, &c->region, &err) == HZ_OK)
+    bool bad = false;
+    if (c->region.kind == FILM_REGION_NONE ||
+        film_params_from_entity_region(&sd->film, &c->region, &fp, &bad, &err) == HZ_OK || !bad)
         return 0;
     fprintf(stderr, "haze: %s %s: %s\nTry 'haze --help'.\n", c->region_opt, c->region_arg, err.message);
     return -1;

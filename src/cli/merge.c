@@ -182,7 +182,7 @@ static hz_status check_tiling(const exr_image *parts, const char *const *files, 
     int64_t full = (int64_t)w * h;
     if (area == full)
         return HZ_OK;
-    uint8_t *covered = full < INT64_C(1) << 40 ? calloc((size_t)full, 1) : NULL;
+    uint8_t *covered = full <= INT64_C(1) << 32 ? calloc((size_t)full, 1) : NULL;
     if (!covered)
         return hz_fail(err, "merge: the parts cover %lld of the %dx%d image's %lld pixels",
                        (long long)area, w, h, (long long)full);

@@ -135,6 +135,14 @@ static void film_read_bounds(param_list *pl, film_params *p)
 
 hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *err)
 {
+    return film_params_from_entity_region(e, NULL, out, NULL, err);
+}
+
+hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, film_params *out,
+                                         bool *bad_region, hz_error *err)
+{
+    if (bad_region)
+        *bad_region = false;
     film_params_default(out);
     const char *type = e->type ? e->type : "";
     if (strcmp(type, "rgb") != 0)
@@ -185,6 +193,11 @@ hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *e
         params_reject(pl, "whitebalance", "Film \"float whitebalance\" is not supported (only 0, no white balance)");
     if (params_finish(pl, "Film \"rgb\"", err) != HZ_OK)
         return HZ_ERROR;
+    if (r && film_params_set_region(p, r, err) != HZ_OK) {
+        if (bad_region)
+            *bad_region = true;
+        return HZ_ERROR;
+    }
     double bytes = film_bytes(p);
     if (bytes > FILM_MAX_BYTES)
         return hz_fail_at(err, e->loc, "Film of %dx%d pixels would need %.1f GiB of memory (limit %.0f GiB)",
@@ -224,13 +237,6 @@ hz_status film_params_set_region(film_params *p, const film_region *r, hz_error 
             return hz_fail(err, "crop window [%g,%g]x[%g,%g] covers no pixel of the %dx%d image",
                            v[0], v[1], v[2], v[3], p->xres, p->yres);
     }
-    film_params q = *p;
-    q.bounds = b;
-    double bytes = film_bytes(&q);
-    if (bytes > FILM_MAX_BYTES)
-        return hz_fail(err, "a film of %dx%d pixels would need %.1f GiB of memory (limit %.0f GiB)",
-                       b.x1 - b.x0, b.y1 - b.y0, bytes / (1024.0 * 1024 * 1024),
-                       FILM_MAX_BYTES / (1024.0 * 1024 * 1024));
     p->bounds = b;
     return HZ_OK;
 }

@@ -263,6 +263,23 @@ static void test_overrides_film(void **state)
     check_region_file("fogfull.exr", "pbover.exr", XS, W, 0, YS);
     render("fogpb", "pbown.exr", "");
     check_region_file("fogfull.exr", "pbown.exr", 0, 5, 0, 5);
+    /* A frame too large to render whole (the film limit is 64 GiB) renders in regions. */
+    write_scene("huge", 200000, 150000, "");
+    char s[1200], msg[4096], args[4096];
+    scene_path(s, sizeof s, "huge");
+    snprintf(args, sizeof args, "render '%s' -o '%s/hugefull.exr' --quiet", s, dir);
+    assert_int_equal(run_haze(args, msg, sizeof msg), 1);
+    assert_non_null(strstr(msg, "Film of 200000x150000 pixels would need"));
+    render("huge", "huge.exr", "--pixelbounds 100000,100008,75000,75004");
+    exr_image img;
+    read_exr("huge.exr", &img);
+    assert_int_equal(img.display_width, 200000);
+    assert_int_equal(img.display_height, 150000);
+    assert_int_equal(img.data_x0, 100000);
+    assert_int_equal(img.data_y0, 75000);
+    assert_int_equal(img.width, 8);
+    assert_int_equal(img.height, 4);
+    exr_image_free(&img);
 }
 
 /* A refused merge: exit 1, the message, and the existing output untouched,
