@@ -14,6 +14,7 @@
 
 #include "cli/diff.h"
 #include "cli/info.h"
+#include "cli/merge.h"
 #include "render/progress.h"
 #include "render/render_scene.h"
 #include "render/renderer.h"
@@ -64,6 +65,7 @@ static const char usage_text[] =
     "       haze diff A.exr B.exr [--channels R,G,B] [--metric NAME --threshold X]\n"
     "                 [--ztest [--alpha A] [--accept F]]\n"
     "                 [--heatmap OUT.exr|OUT.png]   compare two images (haze diff --help)\n"
+    "       haze merge PART.exr... -o FULL.exr   assemble region renders (haze merge --help)\n"
     "       haze --help | --version\n"
     "\n"
     "render options:\n"
@@ -72,6 +74,9 @@ static const char usage_text[] =
     "  --threads N             render threads (default: all cores)\n"
     "  --seed N                random seed (default 0; a Sampler's \"integer seed\" wins)\n"
     "  --preview FILE.png      also write a tonemapped sRGB PNG\n"
+    "  --pixelbounds x0,x1,y0,y1  render only pixels [x0,x1) x [y0,y1) (overrides the Film's)\n"
+    "  --cropwindow x0,x1,y0,y1   render only this fraction of the image, values in [0,1],\n"
+    "                          pixels ceil(res * crop) as pbrt-v4 (not with --pixelbounds)\n"
     "  --quiet                 no progress bar and no summary\n"
     "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
     "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
@@ -86,6 +91,9 @@ typedef struct {
     int quiet;
     int stats;                /* --stats */
     int disable_pixel_jitter; /* --disable-pixel-jitter */
+    film_region region;     /* --pixelbounds / --cropwindow */
+    const char *region_opt; /* which of the two, and its text, for messages */
+    const char *region_arg;
 } cli;
 
 static int usage_error(const char *fmt, const char *arg)
@@ -107,6 +115,29 @@ static int parse_count(const char *s, long lo, long hi, long *out)
     return 0;
 }
 
+/* "x0,x1,y0,y1": four integers (pixels) or four finite numbers (crop). */
+static int parse_region(const char *s, film_region_kind kind, film_region *out)
+{
+    const char *p = s;
+    for (int i = 0; i < 4; ++i) {
+        char *end;
+        errno = 0;
+        if (kind == FILM_REGION_PIXELS) {
+            long v = strtol(p, &end, 10);
+            if (v < -(1L << 30) || v > (1L << 30))
+                return -1;
+            out->v[i] = (double)v;
+        } else {
+            out->v[i] = strtod(p, &end);
+        }
+        if (errno || end == p || *end != (i < 3 ? ',' : '\0') || out->v[i] != out->v[i])
+            return -1;
+        p = end + 1;
+    }
+    out->kind = kind;
+    return 0;
+}
+
 /* Returns -1 on success, else the exit status. */
 static int parse_render_args(int argc, char **argv, cli *c)
 {
@@ -115,7 +146,8 @@ static int parse_render_args(int argc, char **argv, cli *c)
         const char *val = i + 1 < argc ? argv[i + 1] : NULL;
         long n;
         if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--spp") ||
-            !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview")) {
+            !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview") ||
+            !strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow")) {
             if (!val)
                 return usage_error("option %s needs a value", a);
             ++i;
@@ -123,6 +155,17 @@ static int parse_render_args(int argc, char **argv, cli *c)
                 c->output = val;
             else if (!strcmp(a, "--preview"))
                 c->preview = val;
+            else if (!strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow")) {
+                bool pixels = !strcmp(a, "--pixelbounds");
+                if (c->region_opt && strcmp(c->region_opt, a) != 0)
+                    return usage_error("%s", "--pixelbounds and --cropwindow cannot both be given");
+                if (parse_region(val, pixels ? FILM_REGION_PIXELS : FILM_REGION_CROP, &c->region))
+                    return usage_error(pixels ? "--pixelbounds needs four integers x0,x1,y0,y1, not '%s'"
+                                              : "--cropwindow needs four numbers x0,x1,y0,y1, not '%s'",
+                                       val);
+                c->region_opt = a;
+                c->region_arg = val;
+            }
             else if (!strcmp(a, "--spp")) {
                 if (parse_count(val, 1, 1 << 24, &n))
                     return usage_error("--spp needs an integer in [1, 16777216], not '%s'", val);
@@ -322,6 +365,21 @@ static void format_motion(render_motion m, char *buf, size_t n)
         }
 }
 
+/* A --pixelbounds / --cropwindow region that does not fit the scene's film is
+ * a usage error, found before the scene is built (the film's own errors are
+ * left to render_scene_create). */
+static int check_region(const cli *c, scene_desc *sd)
+{
+    film_params fp;
+    hz_error err = {{0}};
+    bool bad = false;
+    if (c->region.kind == FILM_REGION_NONE ||
+        film_params_from_entity_region(&sd->film, &c->region, &fp, &bad, &err) == HZ_OK || !bad)
+        return 0;
+    fprintf(stderr, "haze: %s %s: %s\nTry 'haze --help'.\n", c->region_opt, c->region_arg, err.message);
+    return -1;
+}
+
 static int run_render(const cli *c)
 {
     hz_error err = {{0}};
@@ -331,7 +389,11 @@ static int run_render(const cli *c)
         fprintf(stderr, "haze: %s\n", err.message);
         return EXIT_SCENE;
     }
-    render_options ro = {.seed = c->seed, .spp = c->spp, .output = c->output};
+    if (check_region(c, &sd) != 0) {
+        scene_desc_free(&sd);
+        return EXIT_USAGE;
+    }
+    render_options ro = {.seed = c->seed, .spp = c->spp, .output = c->output, .region = c->region};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, &ro, stderr, &rs, &err);
     if (st != HZ_OK) {
@@ -464,5 +526,7 @@ int main(int argc, char **argv)
         return run_info(argc, argv);
     if (!strcmp(cmd, "diff"))
         return diff_command(argc - 1, argv + 1, stdout, stderr);
-    return usage_error("unknown command '%s' (commands: render, info, diff)", cmd);
+    if (!strcmp(cmd, "merge"))
+        return merge_command(argc - 1, argv + 1, stdout, stderr);
+    return usage_error("unknown command '%s' (commands: render, info, diff, merge)", cmd);
 }

@@ -173,7 +173,8 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
                        hz_error *err)
 {
     film_params fp;
-    if (film_params_from_entity(&sd->film, &fp, err) != HZ_OK)
+    if (film_params_from_entity_region(&sd->film, opt ? &opt->region : NULL, &fp, NULL, err) !=
+        HZ_OK)
         return HZ_ERROR;
     if (opt && opt->output) {
         if (strlen(opt->output) >= sizeof fp.filename)

@@ -21,6 +21,8 @@ typedef struct {
     uint64_t seed;             /* default for the Sampler's "integer seed" (--seed) */
     int spp;                   /* > 0 overrides the sampler's count (--spp) */
     const char *output;        /* non-NULL overrides the Film's filename (-o) */
+    film_region region;        /* replaces the Film's cropwindow/pixelbounds unless NONE
+                                * (--pixelbounds, --cropwindow) */
 } render_options;
 
 typedef struct render_scene render_scene;

@@ -36,7 +36,7 @@ static inline render_scene *build_scene_or_fail(const char *text, render_options
         print_error("parse: %s\n", err.message);
         fail();
     }
-    render_options def = {0, 0, NULL};
+    render_options def = {.seed = 0};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, opt ? opt : &def, NULL, &rs, &err);
     scene_desc_free(&sd);
@@ -57,7 +57,7 @@ static inline void build_scene_expect_error(const char *text, char *msg, size_t 
         snprintf(msg, n, "%s", err.message);
         return;
     }
-    render_options def = {0, 0, NULL};
+    render_options def = {.seed = 0};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, &def, NULL, &rs, &err);
     scene_desc_free(&sd);
