@@ -14,6 +14,7 @@
 
 #include "cli/diff.h"
 #include "cli/info.h"
+#include "cli/merge.h"
 #include "render/progress.h"
 #include "render/render_scene.h"
 #include "render/renderer.h"
@@ -64,6 +65,7 @@ static const char usage_text[] =
     "       haze diff A.exr B.exr [--channels R,G,B] [--metric NAME --threshold X]\n"
     "                 [--ztest [--alpha A] [--accept F]]\n"
     "                 [--heatmap OUT.exr|OUT.png]   compare two images (haze diff --help)\n"
+    "       haze merge PART.exr... -o FULL.exr   assemble region renders (haze merge --help)\n"
     "       haze --help | --version\n"
     "\n"
     "render options:\n"
@@ -72,7 +74,13 @@ static const char usage_text[] =
     "  --threads N             render threads (default: all cores)\n"
     "  --seed N                random seed (default 0; a Sampler's \"integer seed\" wins)\n"
     "  --preview FILE.png      also write a tonemapped sRGB PNG\n"
-    "  --quiet                 no progress bar and no summary\n";
+    "  --pixelbounds x0,x1,y0,y1  render only pixels [x0,x1) x [y0,y1) (overrides the Film's)\n"
+    "  --cropwindow x0,x1,y0,y1   render only this fraction of the image, values in [0,1],\n"
+    "                          pixels ceil(res * crop) as pbrt-v4 (not with --pixelbounds)\n"
+    "  --quiet                 no progress bar and no summary\n"
+    "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
+    "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
+    "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n";
 
 typedef struct {
     const char *scene;
@@ -81,6 +89,11 @@ typedef struct {
     int spp, threads;
     unsigned long long seed;
     int quiet;
+    int stats;                /* --stats */
+    int disable_pixel_jitter; /* --disable-pixel-jitter */
+    film_region region;     /* --pixelbounds / --cropwindow */
+    const char *region_opt; /* which of the two, and its text, for messages */
+    const char *region_arg;
 } cli;
 
 static int usage_error(const char *fmt, const char *arg)
@@ -102,6 +115,29 @@ static int parse_count(const char *s, long lo, long hi, long *out)
     return 0;
 }
 
+/* "x0,x1,y0,y1": four integers (pixels) or four finite numbers (crop). */
+static int parse_region(const char *s, film_region_kind kind, film_region *out)
+{
+    const char *p = s;
+    for (int i = 0; i < 4; ++i) {
+        char *end;
+        errno = 0;
+        if (kind == FILM_REGION_PIXELS) {
+            long v = strtol(p, &end, 10);
+            if (v < -(1L << 30) || v > (1L << 30))
+                return -1;
+            out->v[i] = (double)v;
+        } else {
+            out->v[i] = strtod(p, &end);
+        }
+        if (errno || end == p || *end != (i < 3 ? ',' : '\0') || out->v[i] != out->v[i])
+            return -1;
+        p = end + 1;
+    }
+    out->kind = kind;
+    return 0;
+}
+
 /* Returns -1 on success, else the exit status. */
 static int parse_render_args(int argc, char **argv, cli *c)
 {
@@ -110,7 +146,8 @@ static int parse_render_args(int argc, char **argv, cli *c)
         const char *val = i + 1 < argc ? argv[i + 1] : NULL;
         long n;
         if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--spp") ||
-            !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview")) {
+            !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview") ||
+            !strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow")) {
             if (!val)
                 return usage_error("option %s needs a value", a);
             ++i;
@@ -118,6 +155,17 @@ static int parse_render_args(int argc, char **argv, cli *c)
                 c->output = val;
             else if (!strcmp(a, "--preview"))
                 c->preview = val;
+            else if (!strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow")) {
+                bool pixels = !strcmp(a, "--pixelbounds");
+                if (c->region_opt && strcmp(c->region_opt, a) != 0)
+                    return usage_error("%s", "--pixelbounds and --cropwindow cannot both be given");
+                if (parse_region(val, pixels ? FILM_REGION_PIXELS : FILM_REGION_CROP, &c->region))
+                    return usage_error(pixels ? "--pixelbounds needs four integers x0,x1,y0,y1, not '%s'"
+                                              : "--cropwindow needs four numbers x0,x1,y0,y1, not '%s'",
+                                       val);
+                c->region_opt = a;
+                c->region_arg = val;
+            }
             else if (!strcmp(a, "--spp")) {
                 if (parse_count(val, 1, 1 << 24, &n))
                     return usage_error("--spp needs an integer in [1, 16777216], not '%s'", val);
@@ -133,6 +181,10 @@ static int parse_render_args(int argc, char **argv, cli *c)
             }
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
             c->quiet = 1;
+        } else if (!strcmp(a, "--stats")) {
+            c->stats = 1;
+        } else if (!strcmp(a, "--disable-pixel-jitter")) {
+            c->disable_pixel_jitter = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
             return usage_error("unknown option '%s'", a);
         } else if (!c->scene) {
@@ -253,6 +305,46 @@ static double peak_memory_mib(void)
     return ru.ru_maxrss / 1024.0;
 }
 
+/* Resident memory now (/proc/self/statm), 0 when unknown. */
+static double resident_memory_mib(void)
+{
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (!f)
+        return 0.0;
+    unsigned long size = 0, resident = 0;
+    int n = fscanf(f, "%lu %lu", &size, &resident);
+    fclose(f);
+    return n == 2 ? resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0) : 0.0;
+}
+
+/* --stats: one 'stat NAME VALUE' line per figure (docs/performance.md). */
+static void print_stats(const render_scene *rs, const render_stats *st, double baseline_mib)
+{
+    double px = st->pixels > 0 ? (double)st->pixels : 1.0, mib = 1.0 / (1024.0 * 1024.0);
+    render_memory mem = render_scene_memory(rs);
+    double other = st->time_busy_s - st->time_media_s - st->time_film_s;
+    printf("stat wall_s %.4f\n", st->wall_seconds);
+    printf("stat threads %d\n", st->threads);
+    printf("stat pixels %ld\n", st->pixels);
+    printf("stat spp %d\n", st->spp);
+    printf("stat camera_rays %llu\n", (unsigned long long)st->camera_rays);
+    printf("stat shadow_rays %llu\n", (unsigned long long)st->shadow_rays);
+    printf("stat rays_per_s %.0f\n",
+           st->wall_seconds > 0 ? (st->camera_rays + st->shadow_rays) / st->wall_seconds : 0.0);
+    printf("stat density_lookups_per_pixel %.2f\n", st->density_lookups / px);
+    printf("stat majorant_steps_per_pixel %.2f\n", st->majorant_steps / px);
+    printf("stat time_busy_s %.4f\n", st->time_busy_s);
+    printf("stat time_surfaces_s %.4f\n", other > 0.0 ? other : 0.0);
+    printf("stat time_media_s %.4f\n", st->time_media_s);
+    printf("stat time_film_s %.4f\n", st->time_film_s);
+    printf("stat memory_peak_mib %.2f\n", peak_memory_mib());
+    printf("stat memory_baseline_mib %.2f\n", baseline_mib);
+    printf("stat memory_grids_mib %.3f\n", mem.grids * mib);
+    printf("stat memory_majorants_mib %.3f\n", mem.majorants * mib);
+    printf("stat memory_film_mib %.3f\n", mem.film * mib);
+    printf("stat memory_embree_mib %.3f\n", mem.embree * mib);
+}
+
 /* "static", or what moves: "motion: camera, surfaces, 1 medium". */
 static void format_motion(render_motion m, char *buf, size_t n)
 {
@@ -273,15 +365,35 @@ static void format_motion(render_motion m, char *buf, size_t n)
         }
 }
 
+/* A --pixelbounds / --cropwindow region that does not fit the scene's film is
+ * a usage error, found before the scene is built (the film's own errors are
+ * left to render_scene_create). */
+static int check_region(const cli *c, scene_desc *sd)
+{
+    film_params fp;
+    hz_error err = {{0}};
+    bool bad = false;
+    if (c->region.kind == FILM_REGION_NONE ||
+        film_params_from_entity_region(&sd->film, &c->region, &fp, &bad, &err) == HZ_OK || !bad)
+        return 0;
+    fprintf(stderr, "haze: %s %s: %s\nTry 'haze --help'.\n", c->region_opt, c->region_arg, err.message);
+    return -1;
+}
+
 static int run_render(const cli *c)
 {
     hz_error err = {{0}};
+    double baseline_mib = c->stats ? resident_memory_mib() : 0.0;
     scene_desc sd;
     if (scene_parse_file(c->scene, &sd, &err) != HZ_OK) {
         fprintf(stderr, "haze: %s\n", err.message);
         return EXIT_SCENE;
     }
-    render_options ro = {.seed = c->seed, .spp = c->spp, .output = c->output};
+    if (check_region(c, &sd) != 0) {
+        scene_desc_free(&sd);
+        return EXIT_USAGE;
+    }
+    render_options ro = {.seed = c->seed, .spp = c->spp, .output = c->output, .region = c->region};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, &ro, stderr, &rs, &err);
     if (st != HZ_OK) {
@@ -302,7 +414,9 @@ static int run_render(const cli *c)
     install_interrupt_handlers();
     renderer_options opt = {.threads = c->threads,
                             .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
-                            .cancel = &interrupted};
+                            .cancel = &interrupted,
+                            .disable_pixel_jitter = c->disable_pixel_jitter != 0,
+                            .timing = c->stats != 0};
     render_stats stats;
     if (renderer_run(rs, &opt, &stats, &err) != HZ_OK) {
         fprintf(stderr, "haze: %s\n", err.message);
@@ -346,6 +460,8 @@ static int run_render(const cli *c)
                (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
                lookups, lookups[0] ? ", " : "", motion, peak_memory_mib());
     }
+    if (c->stats)
+        print_stats(rs, &stats, baseline_mib);
 done:
     render_scene_destroy(rs);
     scene_desc_free(&sd);
@@ -410,5 +526,7 @@ int main(int argc, char **argv)
         return run_info(argc, argv);
     if (!strcmp(cmd, "diff"))
         return diff_command(argc - 1, argv + 1, stdout, stderr);
-    return usage_error("unknown command '%s' (commands: render, info, diff)", cmd);
+    if (!strcmp(cmd, "merge"))
+        return merge_command(argc - 1, argv + 1, stdout, stderr);
+    return usage_error("unknown command '%s' (commands: render, info, diff, merge)", cmd);
 }

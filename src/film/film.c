@@ -71,10 +71,19 @@ static double film_bytes(const film_params *p)
     return area * per;
 }
 
+double film_memory_bytes(const film *f) { return film_bytes(&f->p); }
+
 static bool ends_with_exr(const char *s)
 {
     size_t n = strlen(s);
     return n > 4 && strcasecmp(s + n - 4, ".exr") == 0;
+}
+
+/* pbrt-v4's crop window rule: ceil(res * crop), crop = [x0 x1 y0 y1] in [0, 1]. */
+static pixel_bounds crop_bounds(int xres, int yres, const double crop[4])
+{
+    return (pixel_bounds){(int)ceil(xres * crop[0]), (int)ceil(yres * crop[2]),
+                          (int)ceil(xres * crop[1]), (int)ceil(yres * crop[3])};
 }
 
 /* Bounds from cropwindow / pixelbounds, as pbrt-v4's FilmBaseParameters. */
@@ -117,8 +126,7 @@ static void film_read_bounds(param_list *pl, film_params *p)
                       crop[0], crop[1], crop[2], crop[3]);
         return;
     }
-    pixel_bounds b = {(int)ceil(p->xres * crop[0]), (int)ceil(p->yres * crop[2]),
-                      (int)ceil(p->xres * crop[1]), (int)ceil(p->yres * crop[3])};
+    pixel_bounds b = crop_bounds(p->xres, p->yres, crop);
     if (b.x0 >= b.x1 || b.y0 >= b.y1) {
         params_reject(pl, "cropwindow", "\"float cropwindow\" [%g %g %g %g] covers no pixel of the %dx%d image",
                       crop[0], crop[1], crop[2], crop[3], p->xres, p->yres);
@@ -129,6 +137,14 @@ static void film_read_bounds(param_list *pl, film_params *p)
 
 hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *err)
 {
+    return film_params_from_entity_region(e, NULL, out, NULL, err);
+}
+
+hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, film_params *out,
+                                         bool *bad_region, hz_error *err)
+{
+    if (bad_region)
+        *bad_region = false;
     film_params_default(out);
     const char *type = e->type ? e->type : "";
     if (strcmp(type, "rgb") != 0)
@@ -179,11 +195,51 @@ hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *e
         params_reject(pl, "whitebalance", "Film \"float whitebalance\" is not supported (only 0, no white balance)");
     if (params_finish(pl, "Film \"rgb\"", err) != HZ_OK)
         return HZ_ERROR;
+    if (r && film_params_set_region(p, r, err) != HZ_OK) {
+        if (bad_region)
+            *bad_region = true;
+        return HZ_ERROR;
+    }
     double bytes = film_bytes(p);
     if (bytes > FILM_MAX_BYTES)
         return hz_fail_at(err, e->loc, "Film of %dx%d pixels would need %.1f GiB of memory (limit %.0f GiB)",
                           p->bounds.x1 - p->bounds.x0, p->bounds.y1 - p->bounds.y0,
                           bytes / (1024.0 * 1024 * 1024), FILM_MAX_BYTES / (1024.0 * 1024 * 1024));
+    return HZ_OK;
+}
+
+hz_status film_params_set_region(film_params *p, const film_region *r, hz_error *err)
+{
+    const double *v = r->v;
+    pixel_bounds b;
+    if (r->kind == FILM_REGION_NONE)
+        return HZ_OK;
+    if (r->kind == FILM_REGION_PIXELS) {
+        for (int i = 0; i < 4; i++)
+            if (!(v[i] == floor(v[i]) && fabs(v[i]) <= (double)(1 << 30)))
+                return hz_fail(err, "pixel bounds must be integers, got %g", v[i]);
+        b = (pixel_bounds){(int)v[0], (int)v[2], (int)v[1], (int)v[3]};
+        if (b.x0 >= b.x1 || b.y0 >= b.y1)
+            return hz_fail(err, "pixel bounds [%d,%d)x[%d,%d) are empty (need x0 < x1 and y0 < y1)",
+                           b.x0, b.x1, b.y0, b.y1);
+        if (b.x0 < 0 || b.y0 < 0 || b.x1 > p->xres || b.y1 > p->yres)
+            return hz_fail(err,
+                           "pixel bounds [%d,%d)x[%d,%d) are not inside the %dx%d image "
+                           "(0 <= x0 < x1 <= %d, 0 <= y0 < y1 <= %d)",
+                           b.x0, b.x1, b.y0, b.y1, p->xres, p->yres, p->xres, p->yres);
+    } else {
+        for (int i = 0; i < 4; i++)
+            if (!(v[i] >= 0.0 && v[i] <= 1.0))
+                return hz_fail(err, "crop window values must lie in [0, 1], got %g", v[i]);
+        if (!(v[0] < v[1] && v[2] < v[3]))
+            return hz_fail(err, "crop window [%g,%g]x[%g,%g] is empty (need x0 < x1 and y0 < y1)",
+                           v[0], v[1], v[2], v[3]);
+        b = crop_bounds(p->xres, p->yres, v);
+        if (b.x0 >= b.x1 || b.y0 >= b.y1)
+            return hz_fail(err, "crop window [%g,%g]x[%g,%g] covers no pixel of the %dx%d image",
+                           v[0], v[1], v[2], v[3], p->xres, p->yres);
+    }
+    p->bounds = b;
     return HZ_OK;
 }
 

@@ -30,6 +30,21 @@ typedef struct {
 /* Fills pbrt-v4's defaults (1280x720, full bounds, "pbrt.exr", iso 100, float32). */
 void film_params_default(film_params *p);
 
+/* A region given on the command line (haze render --pixelbounds /
+ * --cropwindow), which replaces the Film's own cropwindow/pixelbounds. */
+typedef enum { FILM_REGION_NONE = 0, FILM_REGION_PIXELS, FILM_REGION_CROP } film_region_kind;
+
+typedef struct {
+    film_region_kind kind;
+    double v[4]; /* x0 x1 y0 y1: integer pixels (half-open) or crop fractions in [0, 1] */
+} film_region;
+
+/* Sets p->bounds from `r` for p's resolution (a no-op for FILM_REGION_NONE):
+ * pixels as given, crop fractions by pbrt-v4's ceil(res * crop). Fails with a
+ * one-line message (no option name) when the region is malformed, empty or
+ * not inside the image. */
+hz_status film_params_set_region(film_params *p, const film_region *r, hz_error *err);
+
 /* Reads Film "rgb" (xresolution yresolution filename cropwindow pixelbounds
  * savefp16 iso maxcomponentvalue diagonal, "sensor" "cie1931" and
  * whitebalance 0 only, and haze's writedepth, writevariance and
@@ -38,11 +53,19 @@ void film_params_default(film_params *p);
  * "cropwindow" and must be a non-empty part of the image. Films needing more
  * than 64 GiB are refused. */
 hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *err);
+/* The same with the Film's bounds replaced by `r` (NULL or FILM_REGION_NONE:
+ * kept) before the memory limit is checked, so a region of a frame too large
+ * to render whole can be rendered. When it fails because of `r`, sets
+ * *bad_region (may be NULL) to true, else to false. */
+hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, film_params *out,
+                                         bool *bad_region, hz_error *err);
 
 typedef struct film film;
 
 film *film_create(const film_params *p, hz_error *err);
 void film_destroy(film *f);
+/* Bytes the film holds for its bounds (accumulators, AOVs and output rows). */
+double film_memory_bytes(const film *f);
 const film_params *film_get_params(const film *f);
 /* (px, py) absolute raster pixel inside bounds. Not thread-safe for the same
  * pixel; tiles own disjoint pixels. `depth` is the first-hit distance (or INFINITY).

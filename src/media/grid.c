@@ -323,6 +323,8 @@ bool grid_support_bounds(const grid *g, vec3 *lo, vec3 *hi)
 float grid_max_value(const grid *g) { return g->max_value; }
 float grid_min_value(const grid *g) { return g->min_value; }
 float grid_background(const grid *g) { return g->background; }
+size_t grid_buffer_bytes(const grid *g) { return g->owned.size; }
+
 const char *grid_name(const grid *g) { return g->name; }
 
 uint64_t grid_active_voxel_count(const grid *g)
@@ -425,53 +427,98 @@ static bool child_range(const int32_t origin[3], int32_t node_dim, int32_t child
     return true;
 }
 
-static float lower_region_max(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
-                              grid_ibox box, float m)
+/* Bounds of the values in a region, and how many of its voxels stored nodes
+ * and tiles cover (the rest reads the background). */
+typedef struct {
+    float min, max;
+    int64_t covered;
+} region_range;
+
+static void range_add(region_range *r, float lo, float hi)
+{
+    r->min = fminf(r->min, lo);
+    r->max = fmaxf(r->max, hi);
+}
+
+/* Voxels of `box` inside the node of edge `dim` at `origin`. */
+static int64_t overlap_voxels(const int32_t origin[3], int32_t dim, grid_ibox box)
+{
+    int64_t n = 1;
+    for (int a = 0; a < 3; ++a) {
+        int64_t lo = box.min[a] > origin[a] ? box.min[a] : origin[a];
+        int64_t hi = box.max[a] < (int64_t)origin[a] + dim - 1 ? box.max[a]
+                                                               : (int64_t)origin[a] + dim - 1;
+        if (hi < lo)
+            return 0;
+        n *= hi - lo + 1;
+    }
+    return n;
+}
+
+static bool leaf_fully_active(pnanovdb_buf_t buf, pnanovdb_leaf_handle_t leaf)
+{
+    for (uint32_t w = 0; w < 16; ++w)
+        if (pnanovdb_read_uint32(buf, pnanovdb_address_offset(leaf.address,
+                                                              PNANOVDB_LEAF_OFF_VALUE_MASK + 4u * w)) !=
+            0xFFFFFFFFu)
+            return false;
+    return true;
+}
+
+static void lower_region_range(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
+                               grid_ibox box, region_range *r)
 {
     int32_t lo[3], hi[3];
     if (!child_range(origin, 128, 8, box, lo, hi))
-        return m;
+        return;
     for (int32_t x = lo[0]; x <= hi[0]; ++x)
         for (int32_t y = lo[1]; y <= hi[1]; ++y)
             for (int32_t z = lo[2]; z <= hi[2]; ++z) {
                 uint32_t n = (uint32_t)((x << 8) | (y << 4) | z);
-                float v;
+                int32_t child_origin[3] = {origin[0] + 8 * x, origin[1] + 8 * y, origin[2] + 8 * z};
+                r->covered += overlap_voxels(child_origin, 8, box);
                 if (pnanovdb_lower_get_child_mask(g->buf, lower, n)) {
                     pnanovdb_leaf_handle_t leaf =
                         pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n);
-                    v = pnanovdb_read_float(
+                    float vmin = pnanovdb_read_float(
+                        g->buf, pnanovdb_leaf_get_min_address(FLOAT_GRID, g->buf, leaf));
+                    float vmax = pnanovdb_read_float(
                         g->buf, pnanovdb_leaf_get_max_address(FLOAT_GRID, g->buf, leaf));
+                    /* Statistics cover active voxels; the others hold the background. */
+                    if (!leaf_fully_active(g->buf, leaf))
+                        vmin = fminf(vmin, g->background);
+                    range_add(r, vmin, vmax);
                 } else {
-                    v = pnanovdb_read_float(
+                    float v = pnanovdb_read_float(
                         g->buf, pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, lower, n));
+                    range_add(r, v, v);
                 }
-                m = fmaxf(m, v);
             }
-    return m;
 }
 
-static float upper_region_max(const grid *g, pnanovdb_upper_handle_t upper, const int32_t origin[3],
-                              grid_ibox box, float m)
+static void upper_region_range(const grid *g, pnanovdb_upper_handle_t upper, const int32_t origin[3],
+                               grid_ibox box, region_range *r)
 {
     int32_t lo[3], hi[3];
     if (!child_range(origin, 4096, 128, box, lo, hi))
-        return m;
+        return;
     for (int32_t x = lo[0]; x <= hi[0]; ++x)
         for (int32_t y = lo[1]; y <= hi[1]; ++y)
             for (int32_t z = lo[2]; z <= hi[2]; ++z) {
                 uint32_t n = (uint32_t)((x << 10) | (y << 5) | z);
+                int32_t child_origin[3] = {origin[0] + 128 * x, origin[1] + 128 * y,
+                                           origin[2] + 128 * z};
                 if (pnanovdb_upper_get_child_mask(g->buf, upper, n)) {
-                    int32_t child_origin[3] = {origin[0] + 128 * x, origin[1] + 128 * y,
-                                               origin[2] + 128 * z};
                     pnanovdb_lower_handle_t lower =
                         pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n);
-                    m = lower_region_max(g, lower, child_origin, box, m);
+                    lower_region_range(g, lower, child_origin, box, r);
                 } else {
-                    m = fmaxf(m, pnanovdb_read_float(g->buf, pnanovdb_upper_get_table_address(
-                                                                 FLOAT_GRID, g->buf, upper, n)));
+                    float v = pnanovdb_read_float(
+                        g->buf, pnanovdb_upper_get_table_address(FLOAT_GRID, g->buf, upper, n));
+                    range_add(r, v, v);
+                    r->covered += overlap_voxels(child_origin, 128, box);
                 }
             }
-    return m;
 }
 
 /* Inverse of pnanovdb_coord_to_key (64-bit keys): 21 bits per axis, x highest. */
@@ -481,10 +528,10 @@ static int32_t key_axis(uint64_t key, int shift)
     return (int32_t)(bits << 12);
 }
 
-float grid_region_max(const grid *g, grid_ibox box)
+void grid_region_range(const grid *g, grid_ibox box, float *min, float *max)
 {
     assert(g->type == FLOAT_GRID);
-    float m = g->background;
+    region_range r = {INFINITY, -INFINITY, 0};
     uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
     for (uint32_t t = 0; t < count; ++t) {
         pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(FLOAT_GRID, g->root, t);
@@ -494,13 +541,29 @@ float grid_region_max(const grid *g, grid_ibox box)
         if (!child_range(origin, 4096, 4096, box, lo, hi))
             continue;
         if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile))) {
-            m = fmaxf(m, pnanovdb_read_float(g->buf, pnanovdb_root_tile_get_value_address(
-                                                         FLOAT_GRID, g->buf, tile)));
+            float v = pnanovdb_read_float(
+                g->buf, pnanovdb_root_tile_get_value_address(FLOAT_GRID, g->buf, tile));
+            range_add(&r, v, v);
+            r.covered += overlap_voxels(origin, 4096, box);
         } else {
             pnanovdb_upper_handle_t upper =
                 pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile);
-            m = upper_region_max(g, upper, origin, box, m);
+            upper_region_range(g, upper, origin, box, &r);
         }
     }
-    return m;
+    int64_t volume = 1;
+    for (int a = 0; a < 3; ++a)
+        volume *= box.max[a] >= box.min[a] ? (int64_t)box.max[a] - box.min[a] + 1 : 0;
+    /* Voxels no node or tile covers read the background. */
+    if (r.covered < volume || volume == 0)
+        range_add(&r, g->background, g->background);
+    *min = r.min;
+    *max = r.max;
+}
+
+float grid_region_max(const grid *g, grid_ibox box)
+{
+    float lo, hi;
+    grid_region_range(g, box, &lo, &hi);
+    return fmaxf(hi, g->background);
 }

@@ -87,6 +87,8 @@ float grid_min_value(const grid *g);
 float grid_background(const grid *g);
 uint64_t grid_active_voxel_count(const grid *g);
 const char *grid_name(const grid *g);
+/* Size of the grid's NanoVDB buffer in bytes. */
+size_t grid_buffer_bytes(const grid *g);
 
 /* Node statistics and region maxima below: float grids only. */
 
@@ -123,5 +125,9 @@ grid_node grid_node_at(const grid *g, grid_level level, int32_t i, int32_t j, in
  * as they do in fog volumes. For the trilinear field over the index-space region
  * [a, b], pass the voxels floor(a) .. floor(b) + 1. */
 float grid_region_max(const grid *g, grid_ibox box);
+/* Lower and upper bounds of the values of all voxels in `box` (same sources and
+ * assumption; the lower bound is exact only where fully active leaves and
+ * tiles cover the box, else it includes the background). */
+void grid_region_range(const grid *g, grid_ibox box, float *min, float *max);
 
 #endif

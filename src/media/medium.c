@@ -191,6 +191,25 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     return st; /* on failure, the caller frees what was loaded */
 }
 
+/* The majorant grid over the support; with a velocity grid every cell's box
+ * grows by the largest displacement over the shutter, so one grid bounds the
+ * density at every time. */
+static hz_status build_majorants(medium *m, double time_start, double time_end, hz_error *err)
+{
+    int32_t pad[3] = {0, 0, 0};
+    if (m->grid.velocity) {
+        double shift = m->grid.velocity_scale * fmax(fabs(time_start - m->grid.velocity_time),
+                                                     fabs(time_end - m->grid.velocity_time));
+        const double d3[3] = {m->grid.dilation.x, m->grid.dilation.y, m->grid.dilation.z};
+        for (int a = 0; a < 3; ++a) {
+            double p = ceil(d3[a] * shift);
+            pad[a] = p < (double)(1 << 28) ? (int32_t)p : (1 << 28);
+        }
+    }
+    return majorant_grid_build(m->grid.grid, m->grid.support_lo, m->grid.support_hi, pad,
+                               &m->grid.majorant, err);
+}
+
 hz_status medium_from_entity(medium_entity *e, transform render_from_world, double time_start,
                              double time_end, medium *out, hz_error *err)
 {
@@ -286,7 +305,8 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
         return hz_fail_at(err, params_loc(pl, "gridname"),
                           "MakeNamedMedium \"%s\": \"gridname\" is empty", name);
     }
-    if (load_grid(e, render_from_world, filename, gridname, &mp, out, err) != HZ_OK) {
+    if (load_grid(e, render_from_world, filename, gridname, &mp, out, err) != HZ_OK ||
+        build_majorants(out, time_start, time_end, err) != HZ_OK) {
         medium_free(out);
         memset(out, 0, sizeof *out);
         return HZ_ERROR;
@@ -301,6 +321,7 @@ void medium_free(medium *m)
     if (m->kind == MEDIUM_GRID) {
         grid_destroy(m->grid.grid);
         grid_destroy(m->grid.velocity);
+        majorant_grid_free(&m->grid.majorant);
     }
     m->grid.grid = NULL;
     m->grid.velocity = NULL;

@@ -36,6 +36,7 @@
 #include "core/transform.h"
 #include "core/vec.h"
 #include "media/grid.h"
+#include "media/majorant.h"
 #include "scene/scene_desc.h"
 
 typedef enum { MEDIUM_HOMOGENEOUS, MEDIUM_GRID } medium_kind;
@@ -56,6 +57,10 @@ typedef struct {
         vec3 support_lo, support_hi;
         double background;           /* density outside the support */
         double density_max;          /* >= every density value of the field, >= 0 */
+        /* Per-cell density bounds over the support, at every time of the
+         * shutter (velocity displacement included): empty-space skipping
+         * and local majorants for the estimators. */
+        majorant_grid majorant;
 
         /* An animated placement: index_from_render above is the start's, and a
          * ray at time t uses index_from_medium ∘ inverse(render_from_medium(t)). */

@@ -1,5 +1,7 @@
 #include "render/geometry.h"
 
+#include <stdatomic.h>
+
 #include <assert.h>
 #include <math.h>
 #include <stdlib.h>
@@ -36,7 +38,26 @@ struct geometry {
     instance **shape_instances;
     bool motion;              /* some shape or instance moves */
     double start_time, end_time; /* TransformTimes */
+    /* Bytes Embree holds (its memory monitor): now and at most. */
+    _Atomic long long embree_bytes, embree_peak;
 };
+
+static bool embree_memory(void *user, ssize_t bytes, bool post)
+{
+    (void)post;
+    geometry *g = user;
+    long long now = atomic_fetch_add(&g->embree_bytes, (long long)bytes) + bytes;
+    long long peak = atomic_load(&g->embree_peak);
+    while (now > peak && !atomic_compare_exchange_weak(&g->embree_peak, &peak, now))
+        ;
+    return true;
+}
+
+size_t geometry_embree_peak_bytes(const geometry *g)
+{
+    long long p = atomic_load(&((geometry *)g)->embree_peak);
+    return p > 0 ? (size_t)p : 0;
+}
 
 /* ---- spheres: Embree user geometry solved in object space, in double ---- */
 
@@ -529,6 +550,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
         return hz_fail(err, "cannot create the Embree device (error %d)",
                        (int)rtcGetDeviceError(NULL));
     }
+    rtcSetDeviceMemoryMonitorFunction(g->device, embree_memory, g);
     g->scene = new_scene(g->device);
     g->shapes = calloc(sd->shape_count ? sd->shape_count : 1, sizeof *g->shapes);
     if (!g->shapes) {

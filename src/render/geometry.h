@@ -144,4 +144,8 @@ double geometry_step_past(const geom_hit *h, vec3 o, vec3 d);
  * Ray Tracing Gems ch. 6): scale-invariant, so no scene-size epsilon. */
 vec3 geometry_offset_origin(vec3 p, vec3 n, vec3 w);
 
+/* The most memory Embree has held for this geometry (its memory monitor):
+ * BVHs and vertex copies, in bytes. */
+size_t geometry_embree_peak_bytes(const geometry *g);
+
 #endif

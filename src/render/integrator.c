@@ -1,6 +1,9 @@
+#define _POSIX_C_SOURCE 200809L
 #include "render/integrator.h"
 
 #include <math.h>
+
+#include "core/clock.h"
 
 static rgb sky(const integrator_scene *sc)
 {
@@ -49,8 +52,12 @@ static rgb shadow(const integrator_scene *sc, const geom_hit *h, int medium,
     double e = v3_length(off) * 16.0;
     if (wn * e > fabs(v3_dot(off, h->ng)))
         e = fabs(v3_dot(off, h->ng)) / wn;
-    return volume_shadow_transmittance(sc, v3_sub(o, v3_scale(w, e)), w, e, tmax + e,
-                                       geometry_medium_after(h, w, medium), walk);
+    uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
+    rgb T = volume_shadow_transmittance(sc, v3_sub(o, v3_scale(w, e)), w, e, tmax + e,
+                                        geometry_medium_after(h, w, medium), walk);
+    if (counters->timed)
+        counters->media_ns += hz_clock_ns() - t0;
+    return T;
 }
 
 static rgb direct_diffuse(const integrator_scene *sc, const geom_hit *h, int medium, vec3 wo,
@@ -99,7 +106,10 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
         bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, r->time, &h);
         double t_hit = !hit ? INFINITY : sc->medium_count > 0 ? volume_crossing_t(&h, o, d) : h.t;
         if (medium >= 0) {
+            uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
             volume_segment(sc, medium, o, d, t_start, t_hit, &beta, &L, st, &walk);
+            if (counters->timed)
+                counters->media_ns += hz_clock_ns() - t0;
             if (rgb_is_black(beta))
                 goto done;
         }
@@ -135,5 +145,6 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
 done:
     counters->shadow_rays += walk.shadow_rays;
     counters->density_lookups += walk.lookups;
+    counters->majorant_steps += walk.majorant_steps;
     return L;
 }

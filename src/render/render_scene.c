@@ -173,7 +173,8 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
                        hz_error *err)
 {
     film_params fp;
-    if (film_params_from_entity(&sd->film, &fp, err) != HZ_OK)
+    if (film_params_from_entity_region(&sd->film, opt ? &opt->region : NULL, &fp, NULL, err) !=
+        HZ_OK)
         return HZ_ERROR;
     if (opt && opt->output) {
         if (strlen(opt->output) >= sizeof fp.filename)
@@ -278,6 +279,26 @@ render_motion render_scene_motion(const render_scene *rs)
         }
     }
     return m;
+}
+
+render_memory render_scene_memory(const render_scene *rs)
+{
+    render_memory mem = {0.0, 0.0, film_memory_bytes(rs->film),
+                         (double)geometry_embree_peak_bytes(rs->geom)};
+    for (size_t i = 0; i < rs->medium_count; ++i) {
+        const medium *md = &rs->media[i];
+        switch (md->kind) {
+        case MEDIUM_HOMOGENEOUS:
+            break;
+        case MEDIUM_GRID:
+            mem.grids += (double)grid_buffer_bytes(md->grid.grid);
+            if (md->grid.velocity)
+                mem.grids += (double)grid_buffer_bytes(md->grid.velocity);
+            mem.majorants += (double)majorant_grid_bytes(&md->grid.majorant);
+            break;
+        }
+    }
+    return mem;
 }
 
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,

@@ -23,6 +23,8 @@ typedef struct {
     uint64_t seed;             /* default for the Sampler's "integer seed" (--seed) */
     int spp;                   /* > 0 overrides the sampler's count (--spp) */
     const char *output;        /* non-NULL overrides the Film's filename (-o) */
+    film_region region;        /* replaces the Film's cropwindow/pixelbounds unless NONE
+                                * (--pixelbounds, --cropwindow) */
 } render_options;
 
 typedef struct render_scene render_scene;
@@ -53,10 +55,22 @@ typedef struct {
 
 render_motion render_scene_motion(const render_scene *rs);
 
+/* What the scene holds in memory, in bytes: NanoVDB buffers (density and
+ * velocity grids, majorant grids), the film, and Embree's peak. */
+typedef struct {
+    double grids, majorants, film, embree;
+} render_memory;
+render_memory render_scene_memory(const render_scene *rs);
+
 /* Per-thread counters, summed by the renderer for the summary. */
 typedef struct {
     uint64_t camera_rays, shadow_rays;
     uint64_t density_lookups;
+    uint64_t majorant_steps;   /* majorant-grid cells entered by media walks */
+    /* With `timed` (haze render --stats), the nanoseconds spent in media walks
+     * (camera segments and shadow rays through media) and in the film. */
+    bool timed;
+    uint64_t media_ns, film_ns;
 } render_counters;
 
 /* Radiance arriving along the camera ray `r`. `depth` receives the distance to the

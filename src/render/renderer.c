@@ -10,6 +10,11 @@
 #include <time.h>
 #include <unistd.h>
 
+#if defined(__SSE2__)
+#include <xmmintrin.h>
+#endif
+
+#include "core/clock.h"
 #include "render/progress.h"
 
 enum { TILE_SIZE = RENDERER_TILE_SIZE };
@@ -23,7 +28,9 @@ typedef struct {
     atomic_int next_tile;
     atomic_int tiles_done;
     const volatile sig_atomic_t *cancel; /* NULL: never */
+    bool jitter;   /* false: --disable-pixel-jitter */
     render_counters *counters; /* one per thread */
+    uint64_t *busy_ns;         /* one per thread */
 } render_job;
 
 typedef struct {
@@ -33,7 +40,15 @@ typedef struct {
 
 camera_sample renderer_camera_sample(const filter *flt, sampler_state *st, int px, int py)
 {
+    return renderer_camera_sample_jitter(flt, st, px, py, true);
+}
+
+camera_sample renderer_camera_sample_jitter(const filter *flt, sampler_state *st, int px, int py,
+                                            bool jitter)
+{
     filter_sample fs = filter_sample_offset(flt, sampler_pixel_2d(st));
+    if (!jitter)
+        fs = (filter_sample){v2(0.0, 0.0), 1.0}; /* as pbrt-v4's GetCameraSample */
     camera_sample cs;
     cs.p_film = v2(px + 0.5 + fs.p.x, py + 0.5 + fs.p.y);
     cs.time = sampler_1d(st);
@@ -52,7 +67,7 @@ static void render_pixel(render_job *job, int px, int py, render_counters *count
     for (int i = 0; i < job->spp; ++i) {
         sampler_state st;
         sampler_start(smp, px, py, i, &st);
-        camera_sample cs = renderer_camera_sample(flt, &st, px, py);
+        camera_sample cs = renderer_camera_sample_jitter(flt, &st, px, py, job->jitter);
 
         ray_differential rd;
         if (!camera_generate_ray_differential(cam, cs, &rd))
@@ -66,15 +81,36 @@ static void render_pixel(render_job *job, int px, int py, render_counters *count
         }
         double depth = INFINITY;
         rgb L = render_scene_li(job->rs, &rd, &st, &depth, counters);
-        film_add_sample(f, px, py, L, cs.filter_weight, depth);
+        if (counters->timed) {
+            uint64_t t0 = hz_clock_ns();
+            film_add_sample(f, px, py, L, cs.filter_weight, depth);
+            counters->film_ns += hz_clock_ns() - t0;
+        } else {
+            film_add_sample(f, px, py, L, cs.filter_weight, depth);
+        }
     }
+}
+
+/* Denormals flushed to zero on render threads (FTZ and DAZ): a transmittance
+ * or weight that small is noise far below a pixel's precision, and denormal
+ * arithmetic costs some hundred cycles per operation on x86. */
+static void flush_denormals(void)
+{
+#if defined(__SSE2__)
+    _mm_setcsr(_mm_getcsr() | 0x8040u);
+#endif
 }
 
 static void *worker_main(void *p)
 {
     worker_arg *arg = p;
     render_job *job = arg->job;
-    render_counters *counters = &job->counters[arg->index];
+    flush_denormals();
+    /* Counted on this thread's stack, not in the shared array: neighbouring
+     * threads' counters would share cache lines. */
+    render_counters local = job->counters[arg->index];
+    render_counters *counters = &local;
+    uint64_t start = hz_clock_ns();
     for (;;) {
         if (job->cancel && *job->cancel)
             break; /* claimed tiles stay a prefix: every one of them is finished */
@@ -90,6 +126,8 @@ static void *worker_main(void *p)
                 render_pixel(job, x, y, counters);
         atomic_fetch_add(&job->tiles_done, 1);
     }
+    job->busy_ns[arg->index] = hz_clock_ns() - start;
+    job->counters[arg->index] = local;
     return NULL;
 }
 
@@ -99,12 +137,7 @@ int renderer_default_threads(void)
     return n < 1 ? 1 : (int)n;
 }
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
+static double now_seconds(void) { return hz_clock_seconds(); }
 
 hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
                        hz_error *err)
@@ -122,19 +155,24 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     atomic_init(&job.next_tile, 0);
     atomic_init(&job.tiles_done, 0);
     job.cancel = opt->cancel;
+    job.jitter = !opt->disable_pixel_jitter;
 
     int threads = opt->threads > 0 ? opt->threads : renderer_default_threads();
     if (threads > job.tile_count)
         threads = job.tile_count > 0 ? job.tile_count : 1;
     job.counters = calloc((size_t)threads, sizeof *job.counters);
+    job.busy_ns = calloc((size_t)threads, sizeof *job.busy_ns);
     pthread_t *tids = calloc((size_t)threads, sizeof *tids);
     worker_arg *args = calloc((size_t)threads, sizeof *args);
-    if (!job.counters || !tids || !args) {
+    if (!job.counters || !job.busy_ns || !tids || !args) {
         free(job.counters);
+        free(job.busy_ns);
         free(tids);
         free(args);
         return hz_fail(err, "out of memory starting %d render threads", threads);
     }
+    for (int i = 0; i < threads; ++i)
+        job.counters[i].timed = opt->timing;
 
     /* Workers inherit a mask without SIGINT/SIGTERM: a handler then runs on
      * this thread, whose nap it interrupts. */
@@ -187,9 +225,14 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
             stats->camera_rays += job.counters[i].camera_rays;
             stats->shadow_rays += job.counters[i].shadow_rays;
             stats->density_lookups += job.counters[i].density_lookups;
+            stats->majorant_steps += job.counters[i].majorant_steps;
+            stats->time_busy_s += job.busy_ns[i] * 1e-9;
+            stats->time_media_s += job.counters[i].media_ns * 1e-9;
+            stats->time_film_s += job.counters[i].film_ns * 1e-9;
         }
     }
     free(job.counters);
+    free(job.busy_ns);
     free(tids);
     free(args);
     return status;

@@ -25,6 +25,13 @@ typedef struct {
      * are claimed in order, the rendered tiles are then exactly the first
      * stats.tiles_done, each with all its samples. */
     const volatile sig_atomic_t *cancel;
+    /* pbrt-v4's --disable-pixel-jitter: every camera ray through its pixel's
+     * centre (filter offset 0, weight 1); the sample is still drawn, so the
+     * other dimensions (time, lens, ...) are unchanged. */
+    bool disable_pixel_jitter;
+    /* Time media walks and film updates (render_stats.time_*); costs two clock
+     * reads per media segment and per sample. */
+    bool timing;
 } renderer_options;
 
 typedef struct {
@@ -37,6 +44,10 @@ typedef struct {
     double wall_seconds;
     uint64_t camera_rays, shadow_rays;
     uint64_t density_lookups; /* grid media */
+    uint64_t majorant_steps;  /* majorant-grid cells entered */
+    /* Thread seconds: busy (all work of the render threads), and within it
+     * media walks and film updates (only with renderer_options.timing). */
+    double time_busy_s, time_media_s, time_film_s;
 } render_stats;
 
 /* Renders every tile of the film (or, once *opt->cancel is set, the tiles
@@ -48,6 +59,9 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
 /* The camera sample of pixel (px, py) drawn from `st` in pbrt-v4's order
  * (GetCameraSample): film position through the filter, time, lens. */
 camera_sample renderer_camera_sample(const filter *flt, sampler_state *st, int px, int py);
+/* The same with pixel jitter optionally disabled (renderer_options). */
+camera_sample renderer_camera_sample_jitter(const filter *flt, sampler_state *st, int px, int py,
+                                            bool jitter);
 
 /* Number of online processors (at least 1). */
 int renderer_default_threads(void);

@@ -1,19 +1,33 @@
-#include "render/volume.h"
+#include "render/volume_internal.h"
 
 #include <math.h>
 #include <string.h>
 
 #include "media/phase.h"
 
-/* A walk never places more in-scattering strata than this on one segment: it
- * bounds the work of absurd step sizes (the step grows instead). */
-#define VOLUME_MAX_STRATA 1000000
-
 volume_settings volume_settings_default(void)
 {
     /* jittered: 8x lower RMSE than ratio tracking at equal time on
      * scenes/smoke.pbrt (docs/media.md), with a bias below the noise. */
-    return (volume_settings){TRANSMITTANCE_JITTERED, 1.0, 2.0, 65536.0, 1};
+    return (volume_settings){TRANSMITTANCE_JITTERED, TRANSMITTANCE_JITTERED, 1.0, 2.0, 65536.0,
+                             1};
+}
+
+static bool parse_mode(const char *name, transmittance_mode *out)
+{
+    static const struct {
+        const char *name;
+        transmittance_mode mode;
+    } modes[] = {{"raymarch", TRANSMITTANCE_RAYMARCH},
+                 {"jittered", TRANSMITTANCE_JITTERED},
+                 {"ratio", TRANSMITTANCE_RATIO},
+                 {"residual", TRANSMITTANCE_RESIDUAL}};
+    for (size_t i = 0; i < sizeof modes / sizeof modes[0]; ++i)
+        if (strcmp(name, modes[i].name) == 0) {
+            *out = modes[i].mode;
+            return true;
+        }
+    return false;
 }
 
 hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_error *err)
@@ -36,36 +50,24 @@ hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_
                       "\"shadowstepsize\" must be a positive number of voxels");
     if (out->light_samples < 1 || out->light_samples > 4096)
         params_reject(pl, "lightsamples", "\"lightsamples\" must be in [1, 4096]");
-    if (strcmp(mode, "raymarch") == 0)
-        out->mode = TRANSMITTANCE_RAYMARCH;
-    else if (strcmp(mode, "jittered") == 0)
-        out->mode = TRANSMITTANCE_JITTERED;
-    else if (strcmp(mode, "ratio") == 0)
-        out->mode = TRANSMITTANCE_RATIO;
-    else
+    if (!parse_mode(mode, &out->mode))
         params_reject(pl, "transmittance",
                       "\"transmittance\" \"%s\" is not one of \"raymarch\", \"jittered\", "
-                      "\"ratio\"",
+                      "\"ratio\", \"residual\"",
                       mode);
+    out->shadow_mode = out->mode;
+    const char *shadow = params_string(pl, "shadowtransmittance", NULL);
+    if (shadow && !parse_mode(shadow, &out->shadow_mode))
+        params_reject(pl, "shadowtransmittance",
+                      "\"shadowtransmittance\" \"%s\" is not one of \"raymarch\", "
+                      "\"jittered\", \"ratio\", \"residual\"",
+                      shadow);
     return HZ_OK;
 }
 
 /* ---- per-channel helpers ---- */
 
-static inline double ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }
-
-static inline rgb rgb_exp_neg(rgb sigma, double d)
-{
-    /* 0 * INFINITY is NaN: a channel that does not attenuate stays 1. */
-    return rgb_make(sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0,
-                    sigma.g > 0.0 ? exp(-sigma.g * d) : 1.0,
-                    sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0);
-}
-
-/* Russian roulette on a walk's throughput: below the threshold it survives with
- * probability max(beta)/threshold and is scaled up to compensate. Returns false
- * when the walk ends (beta is then 0). */
-static bool roulette(rgb *beta, rng *r)
+bool volume_roulette(rgb *beta, rng *r)
 {
     double m = rgb_max(*beta);
     if (m >= VOLUME_RR_THRESHOLD)
@@ -79,113 +81,6 @@ static bool roulette(rgb *beta, rng *r)
     return false;
 }
 
-/* ---- grid media: the ray in index space ---- */
-
-typedef struct {
-    const medium *m;
-    medium_accessor acc;
-    medium_grid_ray r;   /* index-space ray at the walk's time: p(t) = o + t d */
-    double voxels_per_t; /* |d| */
-} grid_ray;
-
-/* The ray o + t w at the walk's time in grid medium m, with [*t0, *t1] clipped
- * to where the density can be non-zero then. False when nothing is left. */
-static bool grid_ray_init(grid_ray *gr, const medium *m, vec3 o, vec3 w, double time, double *t0,
-                          double *t1)
-{
-    if (!medium_grid_ray_make(m, o, w, time, &gr->r) || !medium_grid_ray_clip(m, &gr->r, t0, t1))
-        return false;
-    gr->m = m;
-    medium_accessor_init(m, &gr->acc);
-    gr->voxels_per_t = v3_length(gr->r.d);
-    return true;
-}
-
-/* Counts density and velocity lookups alike (volume_walk.lookups). */
-static inline double grid_ray_density(grid_ray *gr, double t, volume_walk *walk)
-{
-    return medium_density_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
-}
-
-/* Strata of about `step` voxels over [t0, t1]: their count and width in t. */
-static int strata(const grid_ray *gr, double t0, double t1, double step, double *dt)
-{
-    double voxels = (t1 - t0) * gr->voxels_per_t;
-    double n = ceil(voxels / step);
-    if (!(n >= 1.0))
-        n = 1.0;
-    if (n > VOLUME_MAX_STRATA)
-        n = VOLUME_MAX_STRATA;
-    *dt = (t1 - t0) / n;
-    return (int)n;
-}
-
-/* One tentative collision of ratio tracking: T times 1 - σ_t(density)/majorant. */
-static inline rgb ratio_step(rgb T, rgb sigma_t, double dens, double maj)
-{
-    return rgb_mul(T, rgb_make(1.0 - sigma_t.r * dens / maj, 1.0 - sigma_t.g * dens / maj,
-                               1.0 - sigma_t.b * dens / maj));
-}
-
-/* The majorant of sigma_t over the whole grid (largest channel). */
-static double grid_majorant(const medium *m)
-{
-    return rgb_max(medium_sigma_t(m)) * m->grid.density_max;
-}
-
-/* The estimator for [t0, t1]: the chosen one, except that ratio tracking over a
- * segment expecting more than max_collisions tentative collisions (one global
- * majorant in a very dense grid: 1e12 collisions per unit length is not
- * unusual at extreme densities) is replaced by jittered marching, whose
- * exponential of the marched optical depth is exact where the density is
- * constant and at worst as biased as `jittered` everywhere. */
-static transmittance_mode segment_mode(const volume_settings *s, const medium *m, double t0,
-                                       double t1)
-{
-    if (s->mode == TRANSMITTANCE_RATIO && s->max_collisions > 0.0 &&
-        grid_majorant(m) * (t1 - t0) > s->max_collisions)
-        return TRANSMITTANCE_JITTERED;
-    return s->mode;
-}
-
-/* Transmittance of [t0, t1] in a grid medium with the chosen estimator. */
-static rgb grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w, double t0,
-                              double t1, volume_walk *walk)
-{
-    grid_ray gr;
-    if (!grid_ray_init(&gr, m, o, w, walk->time, &t0, &t1))
-        return rgb_grey(1.0);
-    rgb sigma_t = medium_sigma_t(m);
-    transmittance_mode mode = segment_mode(&vs->settings, m, t0, t1);
-    switch (mode) {
-    case TRANSMITTANCE_RAYMARCH:
-    case TRANSMITTANCE_JITTERED: {
-        double dt;
-        int n = strata(&gr, t0, t1, vs->settings.shadow_step, &dt);
-        double offset = mode == TRANSMITTANCE_JITTERED ? rng_uniform(&walk->r) : 0.5;
-        double tau = 0.0;
-        for (int i = 0; i < n; ++i)
-            tau += grid_ray_density(&gr, t0 + (i + offset) * dt, walk);
-        return rgb_exp_neg(sigma_t, tau * dt);
-    }
-    case TRANSMITTANCE_RATIO: {
-        double maj = grid_majorant(m);
-        rgb T = rgb_grey(1.0);
-        if (!(maj > 0.0))
-            return T;
-        for (double t = t0;;) {
-            t -= log1p(-rng_uniform(&walk->r)) / maj;
-            if (!(t < t1))
-                return T;
-            T = ratio_step(T, sigma_t, grid_ray_density(&gr, t, walk), maj);
-            if (!roulette(&T, &walk->r))
-                return T;
-        }
-    }
-    }
-    return rgb_grey(1.0);
-}
-
 static rgb segment_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w,
                                  double t0, double t1, volume_walk *walk)
 {
@@ -193,7 +88,7 @@ static rgb segment_transmittance(const volume_scene *vs, const medium *m, vec3 o
     case MEDIUM_HOMOGENEOUS:
         return rgb_exp_neg(medium_sigma_t(m), t1 - t0);
     case MEDIUM_GRID:
-        return grid_transmittance(vs, m, o, w, t0, t1, walk);
+        return volume_grid_transmittance(vs, m, o, w, t0, t1, walk);
     }
     return rgb_grey(1.0);
 }
@@ -315,8 +210,7 @@ static rgb light_inscattered(const volume_scene *vs, int mi, const light *l, vec
     return L;
 }
 
-/* The same summed over every light. */
-static rgb inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_state *u,
+rgb volume_inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_state *u,
                        volume_walk *walk)
 {
     rgb L = rgb_grey(0.0);
@@ -339,7 +233,7 @@ static exp_sampler exp_sampler_make(rgb sigma_t, double len)
 {
     exp_sampler e = {sigma_t, len, {0, 0, 0}, 0};
     for (int c = 0; c < 3; ++c)
-        if (ch(sigma_t, c) > 0.0)
+        if (volume_ch(sigma_t, c) > 0.0)
             e.active[e.n_active++] = c;
     return e;
 }
@@ -360,7 +254,7 @@ static double exp_pdf(const exp_sampler *e, double s)
         return 0.0;
     double p = 0.0;
     for (int k = 0; k < e->n_active; ++k)
-        p += exp_channel_pdf(ch(e->sigma_t, e->active[k]), e->len, s);
+        p += exp_channel_pdf(volume_ch(e->sigma_t, e->active[k]), e->len, s);
     return p / e->n_active;
 }
 
@@ -370,7 +264,7 @@ static double exp_sample(const exp_sampler *e, double u)
     if (k >= e->n_active)
         k = e->n_active - 1;
     u = u * e->n_active - k;
-    double sigma = ch(e->sigma_t, e->active[k]);
+    double sigma = volume_ch(e->sigma_t, e->active[k]);
     double s;
     if (isinf(e->len)) {
         s = -log1p(-u) / sigma;
@@ -539,81 +433,6 @@ static void homogeneous_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, 
     *beta = rgb_mul(*beta, rgb_exp_neg(sigma_t, len));
 }
 
-/* ---- grid media: strata along the segment ---- */
-
-static void grid_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double t0, double t1,
-                         rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
-{
-    const medium *m = &vs->media[mi];
-    grid_ray gr;
-    if (!grid_ray_init(&gr, m, o, w, walk->time, &t0, &t1))
-        return;
-    rgb sigma_t = medium_sigma_t(m);
-    vec3 wo = v3_neg(w);
-    double dt;
-    int n = strata(&gr, t0, t1, vs->settings.step, &dt);
-    rgb Lseg = rgb_grey(0.0);
-    rgb T = *beta;
-
-    transmittance_mode mode = segment_mode(&vs->settings, m, t0, t1);
-    switch (mode) {
-    case TRANSMITTANCE_RAYMARCH:
-    case TRANSMITTANCE_JITTERED: {
-        /* Piecewise-constant density per stratum, integrated exactly inside it:
-         * scattering (1 - e^{-σ_t dt}) σ_s/σ_t, which stays sound in dense media. */
-        double offset = mode == TRANSMITTANCE_JITTERED ? sampler_1d(u) : 0.5;
-        for (int i = 0; i < n; ++i) {
-            double t = t0 + (i + offset) * dt;
-            double dens = grid_ray_density(&gr, t, walk);
-            if (dens <= 0.0)
-                continue;
-            rgb step_t = rgb_exp_neg(sigma_t, dens * dt);
-            if (!rgb_is_black(m->sigma_s)) {
-                rgb frac = rgb_make(
-                    sigma_t.r > 0.0 ? (1.0 - step_t.r) * m->sigma_s.r / sigma_t.r : 0.0,
-                    sigma_t.g > 0.0 ? (1.0 - step_t.g) * m->sigma_s.g / sigma_t.g : 0.0,
-                    sigma_t.b > 0.0 ? (1.0 - step_t.b) * m->sigma_s.b / sigma_t.b : 0.0);
-                rgb Ls = inscattered(vs, mi, v3_add(o, v3_scale(w, t)), wo, u, walk);
-                Lseg = rgb_add(Lseg, rgb_mul(rgb_mul(T, frac), Ls));
-            }
-            T = rgb_mul(T, step_t);
-            if (!roulette(&T, &walk->r))
-                break;
-        }
-        break;
-    }
-    case TRANSMITTANCE_RATIO: {
-        /* Ratio tracking: tentative collisions at rate `maj` multiply T by
-         * 1 - σ_t/maj. The in-scattering integral takes one jittered sample per
-         * stratum; T at that point is the product over the collisions before it,
-         * which is unbiased since the collisions do not depend on it. */
-        double maj = grid_majorant(m);
-        double next = maj > 0.0 ? t0 - log1p(-rng_uniform(&walk->r)) / maj : INFINITY;
-        bool alive = true;
-        for (int i = 0; i <= n && alive; ++i) {
-            double t = i < n ? t0 + (i + rng_uniform(&walk->r)) * dt : t1;
-            while (next < t && alive) {
-                T = ratio_step(T, sigma_t, grid_ray_density(&gr, next, walk), maj);
-                alive = roulette(&T, &walk->r);
-                next -= log1p(-rng_uniform(&walk->r)) / maj;
-            }
-            if (i == n || !alive || rgb_is_black(m->sigma_s))
-                continue;
-            double dens = grid_ray_density(&gr, t, walk);
-            if (dens <= 0.0)
-                continue;
-            rgb Ls = inscattered(vs, mi, v3_add(o, v3_scale(w, t)), wo, u, walk);
-            Lseg = rgb_add(Lseg, rgb_mul(rgb_mul(T, rgb_scale(m->sigma_s, dens * dt)), Ls));
-        }
-        if (!alive)
-            T = rgb_grey(0.0);
-        break;
-    }
-    }
-    *L = rgb_add(*L, Lseg);
-    *beta = T;
-}
-
 void volume_segment(const volume_scene *vs, int m, vec3 o, vec3 w, double t0, double t1,
                     rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
 {
@@ -624,7 +443,7 @@ void volume_segment(const volume_scene *vs, int m, vec3 o, vec3 w, double t0, do
         homogeneous_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
         break;
     case MEDIUM_GRID:
-        grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
+        volume_grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
         break;
     }
 }

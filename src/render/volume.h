@@ -12,7 +12,11 @@
  * `stepsize`-voxel strata of the segment and estimate transmittance by
  *   TRANSMITTANCE_RAYMARCH   fixed steps (midpoint; biased, error shrinks with the step),
  *   TRANSMITTANCE_JITTERED   steps with one random offset per ray (banding becomes noise),
- *   TRANSMITTANCE_RATIO      ratio tracking against the grid's majorant (unbiased).
+ *   TRANSMITTANCE_RATIO      ratio tracking against each majorant-grid cell's bound (unbiased),
+ *   TRANSMITTANCE_RESIDUAL   residual ratio tracking: the cell's lower bound as an exact
+ *                            control, collisions only for the residual (unbiased).
+ * Every estimator walks the medium's majorant grid (media/majorant.h): empty
+ * cells cost no density lookup.
  * Shadow rays use the same estimator with `shadowstepsize`. Low transmittance
  * ends a walk by Russian roulette, never by a cutoff. Moving grids (animated
  * placement, velocity grids) are looked up at the walk's time everywhere:
@@ -35,10 +39,12 @@ typedef enum {
     TRANSMITTANCE_RAYMARCH,
     TRANSMITTANCE_JITTERED,
     TRANSMITTANCE_RATIO,
+    TRANSMITTANCE_RESIDUAL,
 } transmittance_mode;
 
 typedef struct {
-    transmittance_mode mode;
+    transmittance_mode mode;        /* camera rays */
+    transmittance_mode shadow_mode; /* shadow rays ("shadowtransmittance"; default: mode) */
     double step;          /* in-scattering sample spacing along camera rays, voxels */
     double shadow_step;   /* marching step of shadow rays, voxels */
     double max_collisions; /* ratio: a segment expecting more tentative collisions
@@ -62,7 +68,8 @@ typedef struct {
 
 /* Defaults, then `Integrator "singlescatter"` parameters ("float stepsize" 1,
  * "float shadowstepsize" 2, "string transmittance" "jittered", "integer
- * lightsamples" 1); errors name the entity's place. Does not call params_finish. */
+ * lightsamples" 1, "string shadowtransmittance": as transmittance, "float
+ * maxcollisions" 65536); errors name the entity's place. Does not call params_finish. */
 hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_error *err);
 volume_settings volume_settings_default(void);
 
@@ -85,6 +92,7 @@ typedef struct {
     rng r;
     uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
     uint64_t shadow_rays;
+    uint64_t majorant_steps; /* majorant-grid cells entered */
 } volume_walk;
 
 /* Where the double-precision ray o + t w crosses the surface of hit `h` (found

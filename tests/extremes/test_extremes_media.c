@@ -280,7 +280,11 @@ static void test_light_on_ray(void **state)
 /* box.vdb (voxels of 1/32) and everything around it scaled by k = 32e-6 and
  * 32e6 (voxels of 1e-6 and 1e6 world units), densities by 1/k and the camera placed k times as far: the same
  * optical depths along the same rays, so the same image as at k = 1 (every
- * estimator uses the same random numbers: agreement to float rounding). */
+ * estimator uses the same random numbers: marching agrees to float rounding;
+ * ratio and residual tracking too, except where rounding moves a tentative
+ * collision that falls within rounding of a majorant-cell boundary into the
+ * neighbouring cell, an equally valid sample with that cell's majorant: a
+ * rare, small difference). */
 static char *scaled_box_scene(double k, const char *mode)
 {
     char *encl = box_mesh(v3(-0.1, -0.1, -0.1), v3(1.1, 1.1, 1.1));
@@ -308,8 +312,8 @@ static char *scaled_box_scene(double k, const char *mode)
 static void test_voxel_size_extremes(void **state)
 {
     (void)state;
-    const char *modes[] = {"raymarch", "jittered", "ratio"};
-    for (int m = 0; m < 3; ++m) {
+    const char *modes[] = {"raymarch", "jittered", "ratio", "residual"};
+    for (int m = 0; m < 4; ++m) {
         char *t1 = scaled_box_scene(1.0, modes[m]);
         render_scene *r1 = build(t1);
         pstat *ref = image_stats(r1, 6, 6, 4);
@@ -326,7 +330,7 @@ static void test_voxel_size_extremes(void **state)
                 }
             note("voxel size %.0e (%s): worst relative difference %.3g\n", ks[j] / 32, modes[m],
                  worst);
-            assert_true(worst < 1e-4);
+            assert_true(worst < (m < 2 ? 1e-12 : 0.1));
             free(px);
             render_scene_destroy(rk);
             free(tk);

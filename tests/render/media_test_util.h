@@ -98,6 +98,7 @@ typedef struct {
     rgb mean, se; /* sample mean and its standard error, per channel */
     bool finite; /* every sample finite */
     double min; /* smallest channel of any sample */
+    uint64_t lookups; /* density lookups of all the samples */
 } pstat;
 
 static inline double ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }
@@ -106,7 +107,7 @@ static inline double ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b
  * cmocka calls (used from worker threads). */
 static inline pstat pixel_stats_raw(const render_scene *rs, int px, int py, int spp)
 {
-    pstat out = {rgb_grey(0.0), rgb_grey(0.0), true, INFINITY};
+    pstat out = {rgb_grey(0.0), rgb_grey(0.0), true, INFINITY, 0};
     const camera *cam = render_scene_camera(rs);
     camera_sample cs = {v2(px + 0.5, py + 0.5), v2(0.5, 0.5), 0.5, 1.0};
     ray_differential rd;
@@ -114,7 +115,7 @@ static inline pstat pixel_stats_raw(const render_scene *rs, int px, int py, int 
         out.finite = false;
         return out;
     }
-    render_counters counters = {0, 0, 0};
+    render_counters counters = {0};
     double s[3] = {0, 0, 0}, s2[3] = {0, 0, 0};
     /* The scene's sampler with this sample count (sample indices must stay
      * below it). */
@@ -142,6 +143,7 @@ static inline pstat pixel_stats_raw(const render_scene *rs, int px, int py, int 
     }
     out.mean = rgb_make(m[0], m[1], m[2]);
     out.se = rgb_make(e[0], e[1], e[2]);
+    out.lookups = counters.density_lookups;
     return out;
 }
 

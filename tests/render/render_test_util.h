@@ -36,7 +36,7 @@ static inline render_scene *build_scene_or_fail(const char *text, render_options
         print_error("parse: %s\n", err.message);
         fail();
     }
-    render_options def = {0, 0, NULL};
+    render_options def = {.seed = 0};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, opt ? opt : &def, NULL, &rs, &err);
     scene_desc_free(&sd);
@@ -57,7 +57,7 @@ static inline void build_scene_expect_error(const char *text, char *msg, size_t 
         snprintf(msg, n, "%s", err.message);
         return;
     }
-    render_options def = {0, 0, NULL};
+    render_options def = {.seed = 0};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, &def, NULL, &rs, &err);
     scene_desc_free(&sd);
@@ -87,7 +87,7 @@ static inline pixel_eval eval_pixel(const render_scene *rs, double fx, double fy
         print_error("no camera ray at %g %g\n", fx, fy);
         fail();
     }
-    render_counters counters = {0, 0, 0};
+    render_counters counters = {0};
     rgb sum = rgb_grey(0.0);
     /* The scene's sampler with this sample count (indices stay below it). */
     sampler smp = *render_scene_sampler(rs);

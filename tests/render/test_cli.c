@@ -8,6 +8,7 @@
 #include <cmocka.h>
 
 #include "cli_util.h"
+#include "film/exr.h"
 
 #include <unistd.h>
 
@@ -153,6 +154,73 @@ static void test_summary_and_preview(void **state)
     free(d);
 }
 
+/* An emitter whose edge falls inside a pixel column: the pixel-centre
+ * quantity is exactly L or 0 in every pixel, whatever the sample count. */
+static const char edge_scene[] =
+    "LookAt 0 0 0  0 0 1  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 40\n"
+    "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 8\n"
+    "Sampler \"zsobol\" \"integer pixelsamples\" 8\n"
+    "WorldBegin\n"
+    "AreaLightSource \"diffuse\" \"rgb L\" [0.75 0.75 0.75]\n"
+    "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+    "  \"point3 P\" [-100 -100 5  -100 100 5  0.1371 100 5  0.1371 -100 5]\n";
+
+/* Counts pixels of R that are neither 0 nor exactly 0.75. */
+static int count_partial_pixels(const char *exr_path)
+{
+    exr_image img;
+    hz_error err = {{0}};
+    assert_int_equal(exr_read(exr_path, &img, &err), HZ_OK);
+    int partial = -1;
+    for (int c = 0; c < img.channel_count; ++c)
+        if (!strcmp(img.channels[c].name, "R")) {
+            partial = 0;
+            for (int i = 0; i < img.width * img.height; ++i) {
+                float v = img.channels[c].pixels[i];
+                partial += v != 0.0f && v != 0.75f;
+            }
+        }
+    exr_image_free(&img);
+    return partial;
+}
+
+static void test_disable_pixel_jitter(void **state)
+{
+    (void)state;
+    char scene[1024], exr[1024], args[4096], out[4096];
+    snprintf(scene, sizeof scene, "%s/cli_edge.pbrt", HAZE_TMP);
+    snprintf(exr, sizeof exr, "%s/cli_edge.exr", HAZE_TMP);
+    write_text_file(scene, edge_scene);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet", scene, exr);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    assert_true(count_partial_pixels(exr) >= 8); /* anti-aliased: the edge column is grey */
+    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet --disable-pixel-jitter", scene, exr);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    assert_int_equal(count_partial_pixels(exr), 0);
+}
+
+/* --stats: the figures are there and add up (every camera ray counted). */
+static void test_stats(void **state)
+{
+    (void)state;
+    char exr[1024], args[4096], out[8192];
+    snprintf(exr, sizeof exr, "%s/cli_stats.exr", HAZE_TMP);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --spp 4 --stats", scene_path, exr);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    const char *names[] = {"wall_s", "camera_rays", "shadow_rays", "density_lookups_per_pixel",
+                           "majorant_steps_per_pixel", "time_surfaces_s", "time_media_s",
+                           "time_film_s", "memory_peak_mib", "memory_film_mib",
+                           "memory_embree_mib", "memory_grids_mib"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i) {
+        char key[128];
+        snprintf(key, sizeof key, "stat %s ", names[i]);
+        assert_non_null(strstr(out, key));
+    }
+    assert_non_null(strstr(out, "stat camera_rays 6144\n")); /* 48 x 32 x 4 */
+    assert_non_null(strstr(out, "stat density_lookups_per_pixel 0.00\n"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -163,6 +231,8 @@ int main(void)
         cmocka_unit_test(test_threads_bit_identical),
         cmocka_unit_test(test_output_dir_missing_exit_1),
         cmocka_unit_test(test_summary_and_preview),
+        cmocka_unit_test(test_disable_pixel_jitter),
+        cmocka_unit_test(test_stats),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

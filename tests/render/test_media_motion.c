@@ -70,7 +70,7 @@ static rgb li(const render_scene *rs, const ray_differential *rd, int px, int py
     sampler_set_spp(&smp, spp);
     sampler_state st;
     sampler_start(&smp, px, py, i, &st);
-    render_counters counters = {0, 0, 0};
+    render_counters counters = {0};
     double depth;
     return render_scene_li(rs, rd, &st, &depth, &counters);
 }
@@ -237,7 +237,7 @@ static rgb *lit_samples(const char *medium, const char *integrator, uint64_t see
     char head[1024];
     snprintf(head, sizeof head, "%s%sSampler \"independent\"\n", lit_head, integrator);
     char *text = scene_text(head, medium, lit_params, lit_tail);
-    render_options opt = {seed, 0, NULL};
+    render_options opt = {.seed = seed};
     render_scene *rs = build_scene_or_fail(text, &opt);
     free(text);
     rgb *out = calloc((size_t)LIT_RES * LIT_RES * spp, sizeof *out);
@@ -471,7 +471,7 @@ static void test_example_scene_builds(void **state)
     hz_error err = {{0}};
     if (scene_parse_file(HAZE_SCENES "/moving-smoke.pbrt", &sd, &err) != HZ_OK)
         fail_msg("%s", err.message);
-    render_options opt = {0, 1, NULL};
+    render_options opt = {.spp = 1};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, &opt, NULL, &rs, &err);
     scene_desc_free(&sd);

@@ -1,0 +1,369 @@
+/* Grid media: the estimators of render/volume.h over the medium's majorant
+ * grid. A ray segment is mapped into the grid's index space once, then walked
+ * cell by cell (media/majorant.h); cells with no medium cost one DDA step and
+ * no density lookup, whatever the estimator.
+ *
+ *   raymarch, jittered  strata of `stepsize` voxels over the segment, sampled
+ *                       at one offset (0.5, or one uniform per ray); strata
+ *                       whose sample lies in an empty cell are skipped, which
+ *                       changes no result (their density is exactly 0).
+ *   ratio               ratio tracking with each cell's own majorant.
+ *   residual            residual ratio tracking (Novák et al. 2014): each
+ *                       cell's lower bound is a control whose transmittance is
+ *                       exact, and tentative collisions at the rate of the
+ *                       residual (max - min) correct for the rest. In cells of
+ *                       near-constant density this needs few lookups.
+ * Ratio and residual tracking are unbiased; a cell that expects more than
+ * `maxcollisions` tentative collisions is marched instead (jittered). Camera
+ * rays take in-scattering samples on jittered strata with every estimator. */
+#include <math.h>
+
+#include "render/volume_internal.h"
+
+typedef struct {
+    const medium *m;
+    medium_accessor acc;
+    medium_grid_ray r;   /* index-space ray at the walk's time: p(t) = o + t d */
+    double voxels_per_t; /* |d| */
+} grid_ray;
+
+/* The ray o + t w at the walk's time in grid medium m, with [*t0, *t1] clipped
+ * to where the density can be non-zero then; `mw` starts its walk through the
+ * majorant grid. False when nothing is left. */
+static bool grid_ray_init(grid_ray *gr, majorant_walk *mw, const medium *m, vec3 o, vec3 w,
+                          double time, double *t0, double *t1)
+{
+    if (!medium_grid_ray_make(m, o, w, time, &gr->r) || !medium_grid_ray_clip(m, &gr->r, t0, t1) ||
+        !majorant_walk_start(mw, &m->grid.majorant, gr->r.o, gr->r.d, *t0, *t1))
+        return false;
+    gr->m = m;
+    medium_accessor_init(m, &gr->acc);
+    gr->voxels_per_t = v3_length(gr->r.d);
+    return true;
+}
+
+/* Counts density and velocity lookups alike (volume_walk.lookups). */
+static inline double grid_ray_density(grid_ray *gr, double t, volume_walk *walk)
+{
+    return medium_density_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
+}
+
+static inline bool next_cell(majorant_walk *mw, majorant_segment *seg, volume_walk *walk)
+{
+    if (!majorant_walk_next(mw, seg))
+        return false;
+    walk->majorant_steps++;
+    return true;
+}
+
+/* ---- strata: sample points t0 + (i + offset) dt, i < n ---- */
+
+typedef struct {
+    double t0, dt;
+    int n, i;
+    double offset; /* < 0: a uniform of its own per stratum */
+    uint64_t key;  /* ... the i-th number of the stream that starts at key */
+    double t;      /* sample point of stratum i (INFINITY once i == n) */
+} strata;
+
+/* Per-stratum offsets are read at random from a counter-based stream, not
+ * drawn in turn: skipping strata then draws nothing, so where cell
+ * boundaries fall (up to rounding) does not shift any later random number. */
+static void strata_load(strata *s)
+{
+    double u = s->offset;
+    if (u < 0.0) {
+        rng at = rng_seeded(s->key + (uint64_t)s->i * 0x9e3779b97f4a7c15ull);
+        u = rng_uniform(&at);
+    }
+    s->t = s->i < s->n ? s->t0 + (s->i + u) * s->dt : INFINITY;
+}
+
+/* Strata of about `step` voxels over [t0, t1], positioned at stratum 0. */
+static void strata_make(strata *s, const grid_ray *gr, double t0, double t1, double step,
+                        double offset, rng *r)
+{
+    double n = ceil((t1 - t0) * gr->voxels_per_t / step);
+    if (!(n >= 1.0))
+        n = 1.0;
+    if (n > VOLUME_MAX_STRATA)
+        n = VOLUME_MAX_STRATA;
+    s->t0 = t0;
+    s->n = (int)n;
+    s->dt = (t1 - t0) / n;
+    s->i = 0;
+    s->offset = offset;
+    s->key = offset < 0.0 ? rng_bits(r) : 0;
+    strata_load(s);
+}
+
+static inline bool strata_before(const strata *s, double b) { return s->i < s->n && s->t < b; }
+
+static inline void strata_next(strata *s)
+{
+    ++s->i;
+    strata_load(s);
+}
+
+/* Moves past every stratum whose sample lies before b (the end of an empty
+ * cell), jumping over those that end before it. */
+static void strata_skip_to(strata *s, double b)
+{
+    while (strata_before(s, b)) {
+        double k = floor((b - s->t0) / s->dt); /* strata before k end before b */
+        s->i = k > s->i + 1.0 ? (k >= s->n ? s->n : (int)k) : s->i + 1;
+        strata_load(s);
+    }
+}
+
+/* ---- per cell ---- */
+
+/* The rate of tentative collisions in a cell and the density of its control
+ * (residual tracking: the cell's lower bound; ratio tracking: none). */
+typedef struct {
+    double lo;    /* control density */
+    double mu;    /* majorant of sigma_t (density - lo), largest channel */
+    bool march;   /* more collisions expected than max_collisions: march instead */
+} cell_rates;
+
+static cell_rates cell_rates_make(const volume_settings *set, transmittance_mode mode,
+                                  const majorant_segment *seg, double sigma_max)
+{
+    cell_rates c;
+    c.lo = mode == TRANSMITTANCE_RESIDUAL ? seg->min : 0.0;
+    c.mu = sigma_max * (seg->max - c.lo);
+    c.march = set->max_collisions > 0.0 && c.mu * (seg->t1 - seg->t0) > set->max_collisions;
+    return c;
+}
+
+/* T times 1 - sigma_t (dens - lo) / mu per channel: one tentative collision. */
+static inline rgb collide(rgb T, rgb sigma_t, double d, double mu)
+{
+    return rgb_mul(T, rgb_make(1.0 - sigma_t.r * d / mu, 1.0 - sigma_t.g * d / mu,
+                               1.0 - sigma_t.b * d / mu));
+}
+
+/* An optical distance to the next tentative collision, Exp(1). It is carried
+ * across cells (each cell uses up mu times its length of it), so cell
+ * boundaries draw no random numbers: a collision lands at the same place
+ * however a ray's cells are cut, up to rounding. */
+static inline double exp1(rng *r) { return -log1p(-rng_uniform(r)); }
+
+/* Jittered marching of the density integral over [a, b] (a cell that ratio
+ * tracking would need too many collisions for). */
+static double march_tau(grid_ray *gr, double a, double b, double step, volume_walk *walk)
+{
+    strata s;
+    strata_make(&s, gr, a, b, step, rng_uniform(&walk->r), &walk->r);
+    double tau = 0.0;
+    for (; s.i < s.n; strata_next(&s))
+        tau += grid_ray_density(gr, s.t, walk);
+    return tau * s.dt;
+}
+
+/* ---- transmittance (shadow rays) ---- */
+
+rgb volume_grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w, double t0,
+                              double t1, volume_walk *walk)
+{
+    grid_ray gr;
+    majorant_walk mw;
+    if (!grid_ray_init(&gr, &mw, m, o, w, walk->time, &t0, &t1))
+        return rgb_grey(1.0);
+    const volume_settings *set = &vs->settings;
+    rgb sigma_t = medium_sigma_t(m);
+    majorant_segment seg;
+    switch (set->shadow_mode) {
+    case TRANSMITTANCE_RAYMARCH:
+    case TRANSMITTANCE_JITTERED: {
+        double offset =
+            set->shadow_mode == TRANSMITTANCE_JITTERED ? rng_uniform(&walk->r) : 0.5;
+        strata s;
+        strata_make(&s, &gr, t0, t1, set->shadow_step, offset, &walk->r);
+        double tau = 0.0;
+        while (next_cell(&mw, &seg, walk)) {
+            if (!(seg.max > 0.0)) {
+                strata_skip_to(&s, seg.t1);
+                continue;
+            }
+            for (; strata_before(&s, seg.t1); strata_next(&s))
+                tau += grid_ray_density(&gr, s.t, walk);
+        }
+        return rgb_exp_neg(sigma_t, tau * s.dt);
+    }
+    case TRANSMITTANCE_RATIO:
+    case TRANSMITTANCE_RESIDUAL: {
+        double sigma_max = rgb_max(sigma_t);
+        rgb T = rgb_grey(1.0);
+        double tau = exp1(&walk->r);
+        while (next_cell(&mw, &seg, walk)) {
+            if (!(seg.max > 0.0))
+                continue;
+            cell_rates c = cell_rates_make(set, set->shadow_mode, &seg, sigma_max);
+            if (c.march) {
+                T = rgb_mul(T, rgb_exp_neg(sigma_t, march_tau(&gr, seg.t0, seg.t1,
+                                                              set->shadow_step, walk)));
+            } else {
+                if (c.lo > 0.0)
+                    T = rgb_mul(T, rgb_exp_neg(sigma_t, c.lo * (seg.t1 - seg.t0)));
+                for (double pos = seg.t0; c.mu > 0.0;) {
+                    double room = c.mu * (seg.t1 - pos);
+                    if (!(tau < room)) {
+                        tau -= room;
+                        break;
+                    }
+                    pos += tau / c.mu;
+                    T = collide(T, sigma_t, grid_ray_density(&gr, pos, walk) - c.lo, c.mu);
+                    if (!volume_roulette(&T, &walk->r))
+                        return T;
+                    tau = exp1(&walk->r);
+                }
+            }
+            if (!volume_roulette(&T, &walk->r))
+                return T;
+        }
+        return T;
+    }
+    }
+    return rgb_grey(1.0);
+}
+
+/* ---- camera-ray segments: transmittance and in-scattering ---- */
+
+typedef struct {
+    const volume_scene *vs;
+    int mi;
+    const medium *m;
+    vec3 o, w, wo;
+    rgb sigma_t;
+    bool scatters;
+    grid_ray gr;
+    strata s;
+    rgb T, Lseg;
+    double tau; /* optical distance left to the next tentative collision */
+    sampler_state *u;
+    volume_walk *walk;
+} segment_walk;
+
+/* Light scattered toward the camera at the current stratum's sample. */
+static inline rgb inscattered_at(segment_walk *sw, double t)
+{
+    return volume_inscattered(sw->vs, sw->mi, v3_add(sw->o, v3_scale(sw->w, t)), sw->wo, sw->u,
+                              sw->walk);
+}
+
+/* Marching over the strata whose samples lie in [.., b): piecewise-constant
+ * density per stratum, integrated exactly inside it (scattering (1 -
+ * e^{-sigma_t dt}) sigma_s / sigma_t), sound in dense media. False when the
+ * walk ended. */
+static bool march_strata(segment_walk *sw, double b)
+{
+    strata *s = &sw->s;
+    const medium *m = sw->m;
+    rgb sigma_t = sw->sigma_t;
+    for (; strata_before(s, b); strata_next(s)) {
+        double dens = grid_ray_density(&sw->gr, s->t, sw->walk);
+        if (dens <= 0.0)
+            continue;
+        rgb step_t = rgb_exp_neg(sigma_t, dens * s->dt);
+        if (sw->scatters) {
+            rgb frac =
+                rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) * m->sigma_s.r / sigma_t.r : 0.0,
+                         sigma_t.g > 0.0 ? (1.0 - step_t.g) * m->sigma_s.g / sigma_t.g : 0.0,
+                         sigma_t.b > 0.0 ? (1.0 - step_t.b) * m->sigma_s.b / sigma_t.b : 0.0);
+            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, frac), inscattered_at(sw, s->t)));
+        }
+        sw->T = rgb_mul(sw->T, step_t);
+        if (!volume_roulette(&sw->T, &sw->walk->r)) {
+            strata_next(s);
+            return false;
+        }
+    }
+    return true;
+}
+
+/* Ratio or residual tracking through one cell, with in-scattering at the
+ * strata samples inside it: T at a sample is the product over the collisions
+ * before it (and the control's exact transmittance up to it), unbiased since
+ * the collisions do not depend on the sample. False when the walk ended. */
+static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates c)
+{
+    strata *s = &sw->s;
+    rng *r = &sw->walk->r;
+    rgb control = rgb_scale(sw->sigma_t, c.lo);
+    double pos = seg->t0;
+    for (;;) {
+        bool at_sample = strata_before(s, seg->t1);
+        double x = at_sample && s->t > pos ? s->t : at_sample ? pos : seg->t1;
+        /* Tentative collisions before x. */
+        while (c.mu > 0.0 && sw->tau < c.mu * (x - pos)) {
+            double tc = pos + sw->tau / c.mu;
+            if (c.lo > 0.0)
+                sw->T = rgb_mul(sw->T, rgb_exp_neg(control, tc - pos));
+            pos = tc;
+            double d = grid_ray_density(&sw->gr, tc, sw->walk) - c.lo;
+            sw->T = collide(sw->T, sw->sigma_t, d, c.mu);
+            if (!volume_roulette(&sw->T, r))
+                return false;
+            sw->tau = exp1(r);
+        }
+        if (x > pos) {
+            sw->tau = fmax(sw->tau - c.mu * (x - pos), 0.0);
+            if (c.lo > 0.0) {
+                sw->T = rgb_mul(sw->T, rgb_exp_neg(control, x - pos));
+                if (!volume_roulette(&sw->T, r))
+                    return false;
+            }
+            pos = x;
+        }
+        if (!at_sample)
+            return true;
+        if (sw->scatters) {
+            double dens = grid_ray_density(&sw->gr, s->t, sw->walk);
+            if (dens > 0.0)
+                sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, rgb_scale(sw->m->sigma_s,
+                                                                             dens * s->dt)),
+                                                     inscattered_at(sw, s->t)));
+        }
+        strata_next(s);
+    }
+}
+
+void volume_grid_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double t0, double t1,
+                         rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
+{
+    segment_walk sw = {.vs = vs, .mi = mi, .m = &vs->media[mi], .o = o, .w = w,
+                       .wo = v3_neg(w), .T = *beta, .Lseg = rgb_grey(0.0), .u = u,
+                       .walk = walk};
+    majorant_walk mw;
+    if (!grid_ray_init(&sw.gr, &mw, sw.m, o, w, walk->time, &t0, &t1))
+        return;
+    sw.sigma_t = medium_sigma_t(sw.m);
+    sw.scatters = !rgb_is_black(sw.m->sigma_s);
+    const volume_settings *set = &vs->settings;
+    transmittance_mode mode = set->mode;
+    bool marching = mode == TRANSMITTANCE_RAYMARCH || mode == TRANSMITTANCE_JITTERED;
+    double offset = mode == TRANSMITTANCE_JITTERED ? sampler_1d(u)
+                    : mode == TRANSMITTANCE_RAYMARCH ? 0.5
+                                                     : -1.0;
+    strata_make(&sw.s, &sw.gr, t0, t1, set->step, offset, &walk->r);
+    if (!marching)
+        sw.tau = exp1(&walk->r);
+    double sigma_max = rgb_max(sw.sigma_t);
+    bool alive = true;
+    majorant_segment seg;
+    while (alive && next_cell(&mw, &seg, walk)) {
+        if (!(seg.max > 0.0)) {
+            strata_skip_to(&sw.s, seg.t1);
+            continue;
+        }
+        if (marching) {
+            alive = march_strata(&sw, seg.t1);
+            continue;
+        }
+        cell_rates c = cell_rates_make(set, mode, &seg, sigma_max);
+        alive = c.march ? march_strata(&sw, seg.t1) : track_cell(&sw, &seg, c);
+    }
+    *L = rgb_add(*L, sw.Lseg);
+    *beta = alive ? sw.T : rgb_grey(0.0);
+}
