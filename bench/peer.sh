@@ -48,7 +48,7 @@ peer_config() {
         ss=$(awk -v s="$s" 'BEGIN { print 2 * s }')
         t=$(timed vdb "$cfg" "$s" "$ss" "$CACHE/vdb-rung.exr")
         e=$(errors "$CACHE/vdb-rung.exr" "$vref")
-        printf '%s\tvdb_render\tcentre\t%s\t1\t%s\t%s\n' "$cfg" "$s" "$t" "$(echo "$e" | tr ' ' '\t')" >>"$RESULTS/peer.tsv"
+        printf '%s\tvdb_render\tcentre\t%s\t1\t%s\t%s\t%s\n' "$cfg" "$s" "$t" "$(echo "$e" | tr ' ' '\t')" "${e#* }" >>"$RESULTS/peer.tsv"
         echo "  peer $cfg vdb_render step $s: $t s, rmse relmse $e" >&2
     done
 
@@ -72,6 +72,21 @@ peer_config() {
             mv "$CACHE/peer-tmp.exr" "$href"
             echo "  haze reference $cfg $mode took $t s" >&2
         fi
+        # The reference's own noise (its floor): a second, independent
+        # reference at a quarter of the samples, B, against it, A:
+        # E[MSE(B, A)] = var A + var B = 5 var A.
+        key2=$(cache_key "$scene" -- "peer-ref-floor $ladder_ref_est $ref_spp $mode")
+        href2=$CACHE/haze-ref2-$cfg-$mode-$key2.exr
+        if [ ! -f "$href2" ]; then
+            variant "$CACHE/peer-ref.pbrt" "$scene" "$(integrator "$ladder_ref_est" 1)"
+            # shellcheck disable=SC2086
+            "$HAZE" render "$CACHE/peer-ref.pbrt" $flag --spp $((ref_spp / 4)) --threads "$THREADS" --seed 54321 -o "$CACHE/peer-tmp.exr" --quiet
+            mv "$CACHE/peer-tmp.exr" "$href2"
+        fi
+        floor=$(errors "$href2" "$href" | awk '{ printf "%.6g %.6g", $1 * $1 / 5, $2 / 5 }')
+        printf '%s\t%s\t%s\n' "$cfg" "$mode" "$(echo "$floor" | tr ' ' '\t')" >>"$RESULTS/peer-floor.tsv"
+        floor_rel=${floor#* }
+        echo "  haze reference $cfg $mode: noise floor (MSE relMSE) $floor" >&2
         if [ "$mode" = centre ] || [ "$modes" = aa ]; then
             # How close the two models come (bench/README.md: the mapping).
             e=$(errors "$href" "$vref")
@@ -88,7 +103,11 @@ peer_config() {
                 # shellcheck disable=SC2086
                 t=$(timed "$HAZE" render "$CACHE/peer-rung.pbrt" $flag --spp "$spp" --threads "$THREADS" --seed 1 -o "$CACHE/peer-rung.exr" --quiet)
                 e=$(errors "$CACHE/peer-rung.exr" "$href")
-                printf '%s\thaze\t%s\t%s\t%s\t%s\t%s\n' "$cfg" "$mode" "$s" "$spp" "$t" "$(echo "$e" | tr ' ' '\t')" >>"$RESULTS/peer.tsv"
+                # relMSE net of the reference's noise; "<X" (X a tenth of the
+                # measured value) when the measured value is within 10% of
+                # that noise: unresolved, X is an upper bound.
+                net=$(echo "$e" | awk -v f="$floor_rel" '{ n = $2 - f; if (n < 0.1 * $2) printf "<%.6g", 0.1 * $2; else printf "%.6g", n }')
+                printf '%s\thaze\t%s\t%s\t%s\t%s\t%s\t%s\n' "$cfg" "$mode" "$s" "$spp" "$t" "$(echo "$e" | tr ' ' '\t')" "$net" >>"$RESULTS/peer.tsv"
                 echo "  peer $cfg haze $mode jittered step $s spp $spp: $t s, rmse relmse $e" >&2
             done
         done
@@ -96,7 +115,8 @@ peer_config() {
 }
 
 peer_run() {
-    printf 'config\trenderer\tmode\tstep\tspp\tseconds\trmse\trelmse\n' >"$RESULTS/peer.tsv"
+    printf 'config\trenderer\tmode\tstep\tspp\tseconds\trmse\trelmse\trelmse_net\n' >"$RESULTS/peer.tsv"
+    printf 'config\tmode\tmse_floor\trelmse_floor\n' >"$RESULTS/peer-floor.tsv"
     printf 'config\thaze_mode\trmse\trelmse\tmean_haze\tmean_vdb\trel_diff\n' >"$RESULTS/peer-match.tsv"
     if ! command -v vdb_render >/dev/null; then
         echo "bench: vdb_render missing (Debian libopenvdb-tools): peer skipped" >&2
