@@ -42,8 +42,8 @@ fuzz: deps
 	cmake --build build-fuzz -j $(JOBS) --target fuzz_scene fuzz_exr
 	sh fuzz/run.sh build-fuzz $(FUZZ_SECONDS)
 
-# Speed against accuracy (bench/README.md): about 20 min on two cores, references
-# cached in bench/cache/; BENCH_QUICK=1 is a ~3 min smoke run into
+# Speed against accuracy (bench/README.md): about 25 min on two cores (15 with
+# the references cached in bench/cache/); BENCH_QUICK=1 is a ~4 min smoke run into
 # bench/cache/quick-results/. Writes bench/results/trade.md and trade.png.
 bench: all
 	BENCH_QUICK=$(BENCH_QUICK) sh bench/run.sh $(BUILD)/haze
