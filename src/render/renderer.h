@@ -25,6 +25,14 @@ typedef struct {
      * are claimed in order, the rendered tiles are then exactly the first
      * stats.tiles_done, each with all its samples. */
     const volatile sig_atomic_t *cancel;
+    /* Where tiles come from. NULL: this process renders every tile, claimed
+     * in row-major order from a shared counter. Otherwise the worker threads
+     * call next_tile(tile_ctx), concurrently, for the index of their next
+     * tile, -1 when none is left (src/mpi: one image across processes), and
+     * the progress bar shows tiles_shown(tile_ctx) when that is not NULL. */
+    int (*next_tile)(void *tile_ctx);
+    int (*tiles_shown)(void *tile_ctx);
+    void *tile_ctx;
 } renderer_options;
 
 typedef struct {

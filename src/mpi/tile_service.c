@@ -1,0 +1,182 @@
+/* Tile hand-out across MPI ranks.
+ *
+ * Why a service thread on rank 0 and not MPI_Fetch_and_op on a counter
+ * window: passive-target one-sided operations progress only where the MPI
+ * transport does atomics in hardware or shared memory (osc/sm on one node,
+ * osc/ucx on RDMA networks). Over TCP, OpenMPI 4.1 falls back to osc/pt2pt,
+ * whose target (rank 0) must itself enter MPI for a remote fetch to complete,
+ * and rank 0's threads are busy rendering: a claim could wait for a whole
+ * tile. Point-to-point messages work on every transport; the service thread
+ * answers them at once. It polls (MPI_Test and a 50 us nap) instead of
+ * blocking in MPI_Recv, because OpenMPI's blocking receive spins a core that
+ * rank 0's render threads need. Rank 0's own threads take tiles from the same
+ * atomic counter without MPI. The other ranks serialise their workers'
+ * requests with a mutex, so every rank has at most one request in flight and
+ * MPI_THREAD_SERIALIZED suffices (rank 0 calls MPI only from the service
+ * thread while rendering, and from the main thread after joining it).
+ * Measured cost per claim: docs/mpi.md. */
+#define _POSIX_C_SOURCE 200809L
+#include "mpi/tile_service.h"
+
+#ifdef HAZE_HAVE_MPI
+
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <time.h>
+
+enum { TAG_CLAIM = 1, TAG_TILE = 2, TAG_FINISH = 3 };
+
+struct tile_service {
+    MPI_Comm comm;
+    int rank, size, tile_count;
+    atomic_int next; /* rank 0: the next tile index to hand out */
+    pthread_t thread; /* rank 0 with size > 1 */
+    bool thread_started;
+    bool finished; /* tile_service_finish ran */
+    pthread_mutex_t lock; /* other ranks: one request in flight */
+    long claims;          /* under lock (rank 0: atomic counter, see below) */
+    double claim_seconds; /* under lock */
+    atomic_long local_claims; /* rank 0 */
+};
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* Completes `req` without spinning a core: a few quick tests (a reply
+ * usually arrives within microseconds), then tests between short naps. */
+static void wait_polling(MPI_Request *req, MPI_Status *st)
+{
+    for (int i = 0;; ++i) {
+        int done = 0;
+        MPI_Test(req, &done, st);
+        if (done)
+            return;
+        if (i >= 64) {
+            struct timespec nap = {0, 50 * 1000};
+            nanosleep(&nap, NULL);
+        }
+    }
+}
+
+static int take_local(tile_service *s)
+{
+    int t = atomic_fetch_add(&s->next, 1);
+    return t < s->tile_count ? t : -1;
+}
+
+static void *service_main(void *p)
+{
+    tile_service *s = p;
+    int finished = 0;
+    while (finished < s->size - 1) {
+        int msg = 0;
+        MPI_Request req;
+        MPI_Status st;
+        MPI_Irecv(&msg, 1, MPI_INT, MPI_ANY_SOURCE, MPI_ANY_TAG, s->comm, &req);
+        wait_polling(&req, &st);
+        if (st.MPI_TAG == TAG_CLAIM) {
+            int t = take_local(s);
+            MPI_Send(&t, 1, MPI_INT, st.MPI_SOURCE, TAG_TILE, s->comm);
+        } else if (st.MPI_TAG == TAG_FINISH) {
+            ++finished;
+        }
+    }
+    return NULL;
+}
+
+hz_status tile_service_create(MPI_Comm comm, int tile_count, tile_service **out, hz_error *err)
+{
+    tile_service *s = calloc(1, sizeof *s);
+    if (!s)
+        return hz_fail(err, "out of memory for the tile service");
+    s->comm = comm;
+    MPI_Comm_rank(comm, &s->rank);
+    MPI_Comm_size(comm, &s->size);
+    s->tile_count = tile_count;
+    atomic_init(&s->next, 0);
+    atomic_init(&s->local_claims, 0);
+    pthread_mutex_init(&s->lock, NULL);
+    if (s->rank == 0 && s->size > 1) {
+        if (pthread_create(&s->thread, NULL, service_main, s) != 0) {
+            pthread_mutex_destroy(&s->lock);
+            free(s);
+            /* The other ranks would wait for tiles forever. */
+            return hz_fail(err, "could not start the tile service thread");
+        }
+        s->thread_started = true;
+    }
+    *out = s;
+    return HZ_OK;
+}
+
+int tile_service_next(void *service)
+{
+    tile_service *s = service;
+    if (s->rank == 0) {
+        atomic_fetch_add_explicit(&s->local_claims, 1, memory_order_relaxed);
+        return take_local(s);
+    }
+    pthread_mutex_lock(&s->lock);
+    double t0 = now_seconds();
+    int ask = 0, t = -1;
+    MPI_Send(&ask, 1, MPI_INT, 0, TAG_CLAIM, s->comm);
+    MPI_Request req;
+    MPI_Status st;
+    MPI_Irecv(&t, 1, MPI_INT, 0, TAG_TILE, s->comm, &req);
+    wait_polling(&req, &st);
+    s->claims++;
+    s->claim_seconds += now_seconds() - t0;
+    pthread_mutex_unlock(&s->lock);
+    return t;
+}
+
+int tile_service_shown(void *service)
+{
+    tile_service *s = service;
+    int t = atomic_load(&s->next);
+    return t < s->tile_count ? t : s->tile_count;
+}
+
+void tile_service_finish(tile_service *s)
+{
+    if (s->finished)
+        return;
+    s->finished = true;
+    if (s->rank != 0) {
+        int done = 0;
+        MPI_Send(&done, 1, MPI_INT, 0, TAG_FINISH, s->comm);
+    } else if (s->thread_started) {
+        pthread_join(s->thread, NULL);
+        s->thread_started = false;
+    }
+}
+
+void tile_service_claims(const tile_service *s, long *claims, double *seconds)
+{
+    if (s->rank == 0) {
+        *claims = atomic_load_explicit(&((tile_service *)s)->local_claims, memory_order_relaxed);
+        *seconds = 0.0; /* an atomic increment */
+    } else {
+        *claims = s->claims;
+        *seconds = s->claim_seconds;
+    }
+}
+
+void tile_service_destroy(tile_service *s)
+{
+    if (!s)
+        return;
+    tile_service_finish(s); /* joins a service thread still running (rank 0) */
+    pthread_mutex_destroy(&s->lock);
+    free(s);
+}
+
+#else
+typedef int tile_service_unused; /* ISO C: a translation unit declares something */
+#endif

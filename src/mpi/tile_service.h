@@ -1,0 +1,30 @@
+/* The dynamic tile hand-out of a render across MPI ranks (internal to
+ * src/mpi, built only with HAZE_HAVE_MPI): rank 0 holds the tile counter; its
+ * own worker threads take indices from it directly, a service thread answers
+ * the other ranks' requests. docs/mpi.md explains the choice. */
+#ifndef HAZE_MPI_TILE_SERVICE_H
+#define HAZE_MPI_TILE_SERVICE_H
+
+#ifdef HAZE_HAVE_MPI
+#include <mpi.h>
+
+#include "core/error.h"
+
+typedef struct tile_service tile_service;
+
+/* Every rank calls this before rendering; rank 0 starts its service thread. */
+hz_status tile_service_create(MPI_Comm comm, int tile_count, tile_service **out, hz_error *err);
+/* renderer_options.next_tile: the next tile index, -1 when none is left.
+ * Thread-safe (other ranks serialise their requests with a mutex). */
+int tile_service_next(void *service);
+/* renderer_options.tiles_shown: tiles handed out so far (rank 0). */
+int tile_service_shown(void *service);
+/* After this rank's render: the other ranks tell rank 0 they are done; rank 0
+ * waits until every rank has, then stops its service thread. */
+void tile_service_finish(tile_service *s);
+/* Tile indices this rank obtained and the seconds its workers waited for them. */
+void tile_service_claims(const tile_service *s, long *claims, double *seconds);
+void tile_service_destroy(tile_service *s);
+
+#endif
+#endif
