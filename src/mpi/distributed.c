@@ -348,6 +348,8 @@ hz_status distributed_render(distributed *d, render_scene *rs, const renderer_op
 #ifdef HAZE_HAVE_MPI
     if (d->size > 1)
         return render_mpi(d, rs, opt, stats, err);
+#else
+    (void)d;
 #endif
     return renderer_run(rs, opt, stats, err);
 }
