@@ -281,7 +281,10 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     hz_status st = renderer_run(rs, &o, &mine, &local);
     double render_seconds = now_seconds() - t0;
     double t_wait = now_seconds();
-    tile_service_finish(ts); /* rank 0: until every rank is done */
+    int lost = tile_service_finish(ts); /* rank 0: until every rank is done */
+    if (lost > 0 && st == HZ_OK)
+        st = hz_fail(&local, "%d tile%s handed to this rank were not rendered", lost,
+                     lost == 1 ? "" : "s");
     long claims = 0;
     double claim_seconds = 0.0;
     tile_service_claims(ts, &claims, &claim_seconds);

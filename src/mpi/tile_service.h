@@ -15,13 +15,16 @@ typedef struct tile_service tile_service;
 /* Every rank calls this before rendering; rank 0 starts its service thread. */
 hz_status tile_service_create(MPI_Comm comm, int tile_count, tile_service **out, hz_error *err);
 /* renderer_options.next_tile: the next tile index, -1 when none is left.
- * Thread-safe (other ranks serialise their requests with a mutex). */
+ * Thread-safe. On ranks other than 0 a thread keeps one request ahead, so it
+ * must call this until it returns -1. */
 int tile_service_next(void *service);
 /* renderer_options.tiles_shown: tiles handed out so far (rank 0). */
 int tile_service_shown(void *service);
 /* After this rank's render: the other ranks tell rank 0 they are done; rank 0
- * waits until every rank has, then stops its service thread. */
-void tile_service_finish(tile_service *s);
+ * waits until every rank has, then stops its service thread. Returns the
+ * number of tiles this rank was handed but did not ask for (0 unless a worker
+ * stopped early, i.e. the render failed). */
+int tile_service_finish(tile_service *s);
 /* Tile indices this rank obtained and the seconds its workers waited for them. */
 void tile_service_claims(const tile_service *s, long *claims, double *seconds);
 void tile_service_destroy(tile_service *s);
