@@ -16,7 +16,16 @@
 #endif
 
 /* Per-rank figures gathered on rank 0 after a render (as doubles). */
-enum { FIG_TILES, FIG_THREADS, FIG_CLAIMS, FIG_CLAIM_SECONDS, FIG_RENDER_SECONDS, FIG_COUNT };
+enum {
+    FIG_TILES,
+    FIG_THREADS,
+    FIG_CLAIMS,
+    FIG_LATE,
+    FIG_CLAIM_SECONDS,
+    FIG_MAX_WAIT,
+    FIG_RENDER_SECONDS,
+    FIG_COUNT
+};
 
 struct distributed {
     int rank, size;
@@ -285,9 +294,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     if (lost > 0 && st == HZ_OK)
         st = hz_fail(&local, "%d tile%s handed to this rank were not rendered", lost,
                      lost == 1 ? "" : "s");
-    long claims = 0;
-    double claim_seconds = 0.0;
-    tile_service_claims(ts, &claims, &claim_seconds);
+    tile_claim_stats claims = tile_service_claims(ts);
     tile_service_destroy(ts);
 
     err->message[0] = '\0';
@@ -314,8 +321,10 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     double fig[FIG_COUNT] = {0};
     fig[FIG_TILES] = mine.tiles_done;
     fig[FIG_THREADS] = mine.threads;
-    fig[FIG_CLAIMS] = (double)claims;
-    fig[FIG_CLAIM_SECONDS] = claim_seconds;
+    fig[FIG_CLAIMS] = (double)claims.claims;
+    fig[FIG_LATE] = (double)claims.late;
+    fig[FIG_CLAIM_SECONDS] = claims.wait_seconds;
+    fig[FIG_MAX_WAIT] = claims.max_wait;
     fig[FIG_RENDER_SECONDS] = render_seconds;
     free(d->figures);
     d->figures = NULL;
@@ -363,20 +372,22 @@ void distributed_print_report(const distributed *d, FILE *out)
         return;
     char tiles[512];
     size_t len = 0;
-    long remote_claims = 0;
-    double remote_seconds = 0.0;
+    long claims = 0, late = 0;
+    double waited = 0.0, max_wait = 0.0;
     for (int r = 0; r < d->size && len < sizeof tiles; ++r) {
         const double *fg = d->figures + (size_t)r * FIG_COUNT;
         len += (size_t)snprintf(tiles + len, sizeof tiles - len, "%s%.0f", r ? " + " : "",
                                 fg[FIG_TILES]);
         if (r > 0) {
-            remote_claims += (long)fg[FIG_CLAIMS];
-            remote_seconds += fg[FIG_CLAIM_SECONDS];
+            claims += (long)fg[FIG_CLAIMS];
+            late += (long)fg[FIG_LATE];
+            waited += fg[FIG_CLAIM_SECONDS];
+            max_wait = fg[FIG_MAX_WAIT] > max_wait ? fg[FIG_MAX_WAIT] : max_wait;
         }
     }
     fprintf(out,
-            "%d ranks: tiles %s (rank 0 first); a tile index took %.1f us per remote claim "
-            "(%ld claims); rank 0 waited %.3f s for the other ranks, gather %.3f s\n",
-            d->size, tiles, remote_claims > 0 ? remote_seconds / (double)remote_claims * 1e6 : 0.0,
-            remote_claims, d->wait_seconds, d->gather_seconds);
+            "%d ranks: tiles %s (rank 0 first); remote tile claims %ld, %ld late, mean wait "
+            "%.1f us, max %.1f ms; rank 0 waited %.3f s for the other ranks, gather %.3f s\n",
+            d->size, tiles, claims, late, claims > 0 ? waited / (double)claims * 1e6 : 0.0,
+            max_wait * 1e3, d->wait_seconds, d->gather_seconds);
 }

@@ -58,8 +58,7 @@ struct tile_service {
     pthread_mutex_t lock; /* other ranks: serialises MPI calls and the slots */
     claim_slot **slots;
     int slot_count, slot_cap;
-    long claims;          /* under lock (rank 0: local_claims) */
-    double claim_seconds; /* under lock: time workers waited in tile_service_next */
+    tile_claim_stats stats; /* under lock (rank 0: claims from local_claims) */
     atomic_long local_claims; /* rank 0 */
 };
 
@@ -190,6 +189,7 @@ int tile_service_next(void *service)
     if (!c->pending)
         post_claim(s, c); /* the thread's first claim */
     pthread_mutex_unlock(&s->lock);
+    bool late = false;
     for (int i = 0;; ++i) {
         int done = 0;
         pthread_mutex_lock(&s->lock);
@@ -197,6 +197,7 @@ int tile_service_next(void *service)
         pthread_mutex_unlock(&s->lock);
         if (done)
             break;
+        late = true;
         if (i >= 64) {
             struct timespec nap = {0, 50 * 1000};
             nanosleep(&nap, NULL);
@@ -207,8 +208,12 @@ int tile_service_next(void *service)
     c->pending = false;
     if (t >= 0)
         post_claim(s, c); /* the next index travels while tile t renders */
-    s->claims++;
-    s->claim_seconds += now_seconds() - t0;
+    double waited = now_seconds() - t0;
+    s->stats.claims++;
+    s->stats.late += late;
+    s->stats.wait_seconds += waited;
+    if (waited > s->stats.max_wait)
+        s->stats.max_wait = waited;
     pthread_mutex_unlock(&s->lock);
     return t;
 }
@@ -244,15 +249,12 @@ int tile_service_finish(tile_service *s)
     return lost;
 }
 
-void tile_service_claims(const tile_service *s, long *claims, double *seconds)
+tile_claim_stats tile_service_claims(const tile_service *s)
 {
-    if (s->rank == 0) {
-        *claims = atomic_load_explicit(&((tile_service *)s)->local_claims, memory_order_relaxed);
-        *seconds = 0.0; /* an atomic increment */
-    } else {
-        *claims = s->claims;
-        *seconds = s->claim_seconds;
-    }
+    tile_claim_stats c = s->stats;
+    if (s->rank == 0) /* an atomic increment each: nothing to wait for */
+        c.claims = atomic_load_explicit(&((tile_service *)s)->local_claims, memory_order_relaxed);
+    return c;
 }
 
 void tile_service_destroy(tile_service *s)

@@ -25,8 +25,15 @@ int tile_service_shown(void *service);
  * number of tiles this rank was handed but did not ask for (0 unless a worker
  * stopped early, i.e. the render failed). */
 int tile_service_finish(tile_service *s);
-/* Tile indices this rank obtained and the seconds its workers waited for them. */
-void tile_service_claims(const tile_service *s, long *claims, double *seconds);
+/* What this rank's claims cost. */
+typedef struct {
+    long claims;         /* calls of tile_service_next (each thread's final -1 included) */
+    long late;           /* other ranks: claims whose reply had not yet arrived */
+    double wait_seconds; /* other ranks: total time workers spent in tile_service_next */
+    double max_wait;     /* other ranks: the longest of those waits */
+} tile_claim_stats;
+
+tile_claim_stats tile_service_claims(const tile_service *s);
 void tile_service_destroy(tile_service *s);
 
 #endif
