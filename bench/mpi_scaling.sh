@@ -123,10 +123,11 @@ for mode in split all; do
         late=$(field ', \([0-9]*\) late,')
         claim=$(field 'mean wait \([0-9.]*\) us')
         maxw=$(field 'max \([0-9.]*\) ms;')
+        svc=$(field 'service thread \([0-9.]*\) CPU s')
         waited=$(field 'waited \([0-9.]*\) s')
         gather=$(field 'gather \([0-9.]*\) s')
         split=$(field 'tiles \([0-9 +]*\) (rank 0')
-        echo "$mode $n $threads $t $cpu ${wall:--} ${claim:--} ${maxw:--} ${claims:--} ${late:--} ${waited:--} ${gather:--} $same ${split:-$tiles}" >>"$rows"
+        echo "$mode $n $threads $t $cpu ${wall:--} ${claim:--} ${maxw:--} ${claims:--} ${late:--} ${svc:--} ${waited:--} ${gather:--} $same ${split:-$tiles}" >>"$rows"
         echo "  $mode: $n ranks x $threads threads: $t s, $cpu CPU s (identical: $same)" >&2
     done
 done
@@ -147,15 +148,15 @@ t1_all=$(awk '$1 == "all" && $2 == 1 { print $4 }' "$rows")
     echo
     echo "Single process (\`haze render\`, $CORES threads): **${t_single} s** wall, ${c_single} CPU s."
     echo
-    echo "| ranks | threads/rank | wall (s, mpirun start to exit) | CPU (s, all processes) | render (s, rank 0 summary) | speedup vs 1 rank | efficiency (speedup / ranks) | tiles per rank | remote tile claims | late claims | tile index wait, mean (us) | max (ms) | rank 0 waits for others (s) | gather (s) | image = single process |"
-    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-    while read -r mode n threads t cpu wall claim maxw claims late waited gather same split; do
+    echo "| ranks | threads/rank | wall (s, mpirun start to exit) | CPU (s, all processes) | render (s, rank 0 summary) | speedup vs 1 rank | efficiency (speedup / ranks) | tiles per rank | remote tile claims | late claims | tile index wait, mean (us) | max (ms) | service thread CPU (s) | rank 0 waits for others (s) | gather (s) | image = single process |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    while read -r mode n threads t cpu wall claim maxw claims late svc waited gather same split; do
         base=$t1_split; [ "$mode" = all ] && base=$t1_all
         sp=$(awk -v b="$base" -v t="$t" 'BEGIN { printf "%.4f", b / t }')
         eff=$(awk -v s="$sp" -v n="$n" 'BEGIN { printf "%.4f", s / n }')
-        printf '| %s | %s | %s | %s | %s | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s | %s |\n' \
+        printf '| %s | %s | %s | %s | %s | %.2f | %.2f | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' \
             "$n" "$threads" "$t" "$cpu" "$wall" "$sp" "$eff" "$split" "$claims" "$late" "$claim" \
-            "$maxw" "$waited" "$gather" "$same"
+            "$maxw" "$svc" "$waited" "$gather" "$same"
     done <"$rows"
     echo
     echo "Start-up (a 16x16 image at 1 spp, best of 5): plain \`haze render\` ${t_tiny_plain} s;"

@@ -33,7 +33,7 @@ struct distributed {
     char host[256];
     /* Rank 0 after distributed_render: FIG_COUNT figures per rank. */
     double *figures;
-    double wait_seconds, gather_seconds;
+    double wait_seconds, gather_seconds, service_cpu_seconds;
 };
 
 bool distributed_launched(void)
@@ -295,6 +295,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
         st = hz_fail(&local, "%d tile%s handed to this rank were not rendered", lost,
                      lost == 1 ? "" : "s");
     tile_claim_stats claims = tile_service_claims(ts);
+    d->service_cpu_seconds = claims.service_cpu_seconds;
     tile_service_destroy(ts);
 
     err->message[0] = '\0';
@@ -387,7 +388,8 @@ void distributed_print_report(const distributed *d, FILE *out)
     }
     fprintf(out,
             "%d ranks: tiles %s (rank 0 first); remote tile claims %ld, %ld late, mean wait "
-            "%.1f us, max %.1f ms; rank 0 waited %.3f s for the other ranks, gather %.3f s\n",
+            "%.1f us, max %.1f ms; service thread %.3f CPU s; rank 0 waited %.3f s for the "
+            "other ranks, gather %.3f s\n",
             d->size, tiles, claims, late, claims > 0 ? waited / (double)claims * 1e6 : 0.0,
-            max_wait * 1e3, d->wait_seconds, d->gather_seconds);
+            max_wait * 1e3, d->service_cpu_seconds, d->wait_seconds, d->gather_seconds);
 }

@@ -31,6 +31,7 @@ typedef struct {
     long late;           /* other ranks: claims whose reply had not yet arrived */
     double wait_seconds; /* other ranks: total time workers spent in tile_service_next */
     double max_wait;     /* other ranks: the longest of those waits */
+    double service_cpu_seconds; /* rank 0: CPU time of the service thread */
 } tile_claim_stats;
 
 tile_claim_stats tile_service_claims(const tile_service *s);
