@@ -42,6 +42,12 @@ target_compile_options(haze_openvdb PRIVATE ${HAZE_WARNINGS})
 set_target_properties(haze_openvdb PROPERTIES
   CXX_STANDARD 17 CXX_STANDARD_REQUIRED ON CXX_EXTENSIONS OFF)
 target_link_libraries(haze_openvdb PRIVATE OpenVDB::openvdb OpenVDB::nanovdb)
+# Only the entry table is exported: the module's own copies of OpenVDB's
+# templates bind at link time instead of by symbol lookup when it is loaded.
+target_link_options(haze_openvdb PRIVATE
+  -Wl,--version-script=${CMAKE_SOURCE_DIR}/src/media/openvdb_module.map)
+set_property(TARGET haze_openvdb APPEND PROPERTY LINK_DEPENDS
+  ${CMAKE_SOURCE_DIR}/src/media/openvdb_module.map)
 add_dependencies(haze_media haze_openvdb)
 
 # The generator of the small test/demo volumes in volumes/.

@@ -65,6 +65,71 @@ file_kind sniff(const char *path, std::uintmax_t *size_out)
     return file_kind::unknown;
 }
 
+// A NanoVDB buffer type whose memory is the vdb_buffer that C will own
+// (32-byte aligned, freed with free()): nanovdb::io::readGrid reads the grid
+// straight into it, so loading a .nvdb grid holds one copy, not two.
+class c_buffer
+{
+  public:
+    c_buffer() = default;
+    c_buffer(const c_buffer &) = delete;
+    c_buffer &operator=(const c_buffer &) = delete;
+    c_buffer(c_buffer &&o) noexcept : data_(o.data_), size_(o.size_)
+    {
+        o.data_ = nullptr;
+        o.size_ = 0;
+    }
+    c_buffer &operator=(c_buffer &&o) noexcept
+    {
+        if (this != &o) {
+            clear();
+            data_ = o.data_;
+            size_ = o.size_;
+            o.data_ = nullptr;
+            o.size_ = 0;
+        }
+        return *this;
+    }
+    ~c_buffer() { clear(); }
+
+    // What nanovdb::io::readGrid calls (the second argument is its context).
+    static c_buffer create(uint64_t size, const c_buffer * = nullptr)
+    {
+        // aligned_alloc needs a multiple of the alignment; the tail is zeroed.
+        const uint64_t alloc = std::max<uint64_t>(32, (size + 31) / 32 * 32);
+        if (size > std::numeric_limits<size_t>::max() - 32)
+            throw std::bad_alloc();
+        c_buffer b;
+        b.data_ = static_cast<uint8_t *>(std::aligned_alloc(32, size_t(alloc)));
+        if (!b.data_)
+            throw std::bad_alloc();
+        std::memset(b.data_ + size, 0, size_t(alloc - size));
+        b.size_ = size;
+        return b;
+    }
+    uint8_t *data() { return data_; }
+    const uint8_t *data() const { return data_; }
+    uint64_t size() const { return size_; }
+    void clear()
+    {
+        std::free(data_);
+        data_ = nullptr;
+        size_ = 0;
+    }
+    // Hands the memory to C (vdb_buffer_free releases it).
+    vdb_buffer release()
+    {
+        vdb_buffer b{data_, size_t(size_)};
+        data_ = nullptr;
+        size_ = 0;
+        return b;
+    }
+
+  private:
+    uint8_t *data_ = nullptr;
+    uint64_t size_ = 0;
+};
+
 std::vector<nanovdb::io::GridMetaData> nvdb_meta(const std::string &path)
 {
     try {
@@ -76,7 +141,7 @@ std::vector<nanovdb::io::GridMetaData> nvdb_meta(const std::string &path)
 
 template <typename ValueT>
 void check_nvdb(const std::string &path, const std::string &name,
-                const nanovdb::GridHandle<nanovdb::HostBuffer> &handle)
+                const nanovdb::GridHandle<c_buffer> &handle)
 {
     const nanovdb::NanoGrid<ValueT> *grid = handle.template grid<ValueT>();
     if (!grid)
@@ -106,12 +171,12 @@ vdb_buffer load_nvdb(const std::string &path, const std::string &name, vdb_value
         throw load_error(path + ": file is truncated (grid \"" + name + "\" needs " +
                          std::to_string(found->gridSize) + " bytes, file has " +
                          std::to_string(size) + ")");
-    auto handle = nanovdb::io::readGrid(path, name);
+    auto handle = nanovdb::io::readGrid<c_buffer>(path, name);
     if (type == VDB_VEC3)
         check_nvdb<nanovdb::Vec3f>(path, name, handle);
     else
         check_nvdb<float>(path, name, handle);
-    return to_buffer(handle);
+    return handle.buffer().release();
 }
 
 void list_nvdb(const std::string &path, vdb_grid_callback cb, void *user)
