@@ -1,5 +1,6 @@
-# Participating media from OpenVDB grids: the haze_media library (C, plus the one
-# C++17 bridge to OpenVDB), the volume generator and the `volumes` target.
+# Participating media from OpenVDB grids: the haze_media library (C, plus the
+# C++17 NanoVDB reader), the OpenVDB module haze loads for .vdb files, the volume
+# generator and the `volumes` target.
 # Included from the top-level CMakeLists.txt.
 
 # OpenVDB ships only a find-module (no package config) on Debian.
@@ -13,20 +14,41 @@ target_include_directories(haze_media PUBLIC ${CMAKE_SOURCE_DIR}/src)
 target_compile_definitions(haze_media PUBLIC HAZE_VERSION="${PROJECT_VERSION}")
 set_target_properties(haze_media PROPERTIES
   CXX_STANDARD 17 CXX_STANDARD_REQUIRED ON CXX_EXTENSIONS OFF
-  # Anything linking this static library needs the C++ driver (libstdc++, and the
-  # OpenVDB/TBB/Imath shared libraries it pulls in). CMake propagates the C++ link
-  # language from a static library to the executables that link it, so C test
-  # programs link with c++ without further setup.
+  # Anything linking this static library needs the C++ driver (libstdc++ for
+  # the NanoVDB reader). CMake propagates the C++ link language from a static
+  # library to the executables that link it, so C test programs link with c++
+  # without further setup.
   LINKER_LANGUAGE CXX)
-# The OpenVDB and NanoVDB headers come from imported targets, hence are SYSTEM
-# includes, so the C++ bridge builds with the same warnings as our C.
+# haze reads .nvdb itself with NanoVDB's header-only IO: only NanoVDB's headers
+# (not OpenVDB::nanovdb, which drags in libopenvdb), SYSTEM so the bridge builds
+# with the same warnings as our C. .nvdb files may be ZIP-compressed (NanoVDB's
+# Codec::ZIP, zlib); the small vector test volumes are.
+get_target_property(haze_nanovdb_include OpenVDB::nanovdb INTERFACE_INCLUDE_DIRECTORIES)
+target_include_directories(haze_media SYSTEM PRIVATE ${haze_nanovdb_include})
 target_compile_options(haze_media PRIVATE ${HAZE_WARNINGS})
+target_compile_definitions(haze_media PRIVATE NANOVDB_USE_ZIP
+  HAZE_OPENVDB_MODULE_NAME="$<TARGET_FILE_NAME:haze_openvdb>"
+  HAZE_OPENVDB_MODULE_BUILD_PATH="$<TARGET_FILE:haze_openvdb>")
 target_link_libraries(haze_media
   PUBLIC haze_core haze_scene
-  PRIVATE OpenVDB::openvdb OpenVDB::nanovdb ZLIB::ZLIB)
-# .nvdb files may be ZIP-compressed (NanoVDB's Codec::ZIP, zlib: already an
-# OpenVDB dependency); the small vector test volumes are.
-target_compile_definitions(haze_media PRIVATE NANOVDB_USE_ZIP)
+  PRIVATE ZLIB::ZLIB Threads::Threads ${CMAKE_DL_LIBS})
+
+# Everything that needs OpenVDB (.vdb files) is a module that haze dlopens on
+# the first .vdb file (src/media/vdb_module.h), next to the haze executable.
+# Whatever links haze_media gets it built.
+add_library(haze_openvdb MODULE ${CMAKE_SOURCE_DIR}/src/media/openvdb_module.cpp)
+target_include_directories(haze_openvdb PRIVATE ${CMAKE_SOURCE_DIR}/src)
+target_compile_options(haze_openvdb PRIVATE ${HAZE_WARNINGS})
+set_target_properties(haze_openvdb PROPERTIES
+  CXX_STANDARD 17 CXX_STANDARD_REQUIRED ON CXX_EXTENSIONS OFF)
+target_link_libraries(haze_openvdb PRIVATE OpenVDB::openvdb OpenVDB::nanovdb)
+# Only the entry table is exported: the module's own copies of OpenVDB's
+# templates bind at link time instead of by symbol lookup when it is loaded.
+target_link_options(haze_openvdb PRIVATE
+  -Wl,--version-script=${CMAKE_SOURCE_DIR}/src/media/openvdb_module.map)
+set_property(TARGET haze_openvdb APPEND PROPERTY LINK_DEPENDS
+  ${CMAKE_SOURCE_DIR}/src/media/openvdb_module.map)
+add_dependencies(haze_media haze_openvdb)
 
 # The generator of the small test/demo volumes in volumes/.
 add_executable(haze_volumes ${CMAKE_SOURCE_DIR}/volumes/generate.cpp)

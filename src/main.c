@@ -15,6 +15,7 @@
 #include "cli/diff.h"
 #include "cli/info.h"
 #include "cli/merge.h"
+#include "mpi/distributed.h"
 #include "render/progress.h"
 #include "render/render_scene.h"
 #include "render/renderer.h"
@@ -380,49 +381,53 @@ static int check_region(const cli *c, scene_desc *sd)
     return -1;
 }
 
-static int run_render(const cli *c)
+/* Under mpirun every rank builds the scene; only rank 0 checks and writes the
+ * output and prints (docs/mpi.md). */
+static int run_render(const cli *c, distributed *dist)
 {
     hz_error err = {{0}};
     double baseline_mib = c->stats ? resident_memory_mib() : 0.0;
     scene_desc sd;
-    if (scene_parse_file(c->scene, &sd, &err) != HZ_OK) {
-        fprintf(stderr, "haze: %s\n", err.message);
-        return EXIT_SCENE;
-    }
-    if (check_region(c, &sd) != 0) {
+    bool rank0 = distributed_rank(dist) == 0, mpi = distributed_size(dist) > 1;
+    bool parsed = scene_parse_file(c->scene, &sd, &err) == HZ_OK;
+    /* Every rank has the same arguments: under mpirun all of them stop here. */
+    if (parsed && check_region(c, &sd) != 0) {
         scene_desc_free(&sd);
         return EXIT_USAGE;
     }
     render_options ro = {.seed = c->seed, .spp = c->spp, .output = c->output, .region = c->region};
     render_scene *rs = NULL;
-    hz_status st = render_scene_create(&sd, &ro, stderr, &rs, &err);
-    if (st != HZ_OK) {
-        fprintf(stderr, "haze: %s\n", err.message);
-        scene_desc_free(&sd);
-        return EXIT_SCENE;
-    }
-    film *f = render_scene_film(rs);
-    const film_params *fp = film_get_params(f);
+    hz_status st = parsed ? render_scene_create(&sd, &ro, rank0 ? stderr : NULL, &rs, &err)
+                          : HZ_ERROR;
+    film *f = st == HZ_OK ? render_scene_film(rs) : NULL;
+    const film_params *fp = f ? film_get_params(f) : NULL;
     int exit_code = 0;
-    if (check_output_dir(fp->filename, &err) != 0 ||
-        (c->preview && check_output_dir(c->preview, &err) != 0)) {
-        fprintf(stderr, "haze: %s\n", err.message);
+    if (st == HZ_OK && rank0 &&
+        (check_output_dir(fp->filename, &err) != 0 ||
+         (c->preview && check_output_dir(c->preview, &err) != 0)))
+        st = HZ_ERROR;
+    if (distributed_agree(dist, st, &err, st == HZ_OK ? distributed_fingerprint(c->scene, rs) : 0,
+                          stderr) != HZ_OK) {
         exit_code = EXIT_SCENE;
         goto done;
     }
 
-    install_interrupt_handlers();
+    if (!mpi) /* under mpirun a signal ends the job (docs/mpi.md) */
+        install_interrupt_handlers();
     renderer_options opt = {.threads = c->threads,
                             .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
-                            .cancel = &interrupted,
+                            .cancel = mpi ? NULL : &interrupted,
                             .disable_pixel_jitter = c->disable_pixel_jitter != 0,
                             .timing = c->stats != 0};
     render_stats stats;
-    if (renderer_run(rs, &opt, &stats, &err) != HZ_OK) {
-        fprintf(stderr, "haze: %s\n", err.message);
+    if (distributed_render(dist, rs, &opt, &stats, &err) != HZ_OK) {
+        if (rank0)
+            fprintf(stderr, "haze: %s\n", err.message);
         exit_code = EXIT_SCENE;
         goto done;
     }
+    if (!rank0)
+        goto done; /* rank 0 holds the whole film */
     double ratio = camera_imaging_ratio(render_scene_camera(rs), fp);
     if (stats.interrupted) {
         exit_code = write_partial(c, f, ratio, &stats);
@@ -450,21 +455,25 @@ static int run_render(const cli *c)
         if (stats.density_lookups > 0)
             snprintf(lookups, sizeof lookups, "%.1f density lookups/pixel", /* pixels > 0 here */
                      (double)stats.density_lookups / (double)stats.pixels);
-        char motion[96];
+        char motion[96], ranks[32] = "";
         format_motion(render_scene_motion(rs), motion, sizeof motion);
-        printf("%s: %dx%d (%d x %d pixels rendered), %d spp, %d threads, %s, "
+        if (mpi)
+            snprintf(ranks, sizeof ranks, " on %d ranks", distributed_size(dist));
+        printf("%s: %dx%d (%d x %d pixels rendered), %d spp, %d threads%s, %s, "
                "%.2f Mrays/s (%llu camera + %llu shadow), %s%s%s, peak memory %.1f MiB\n",
                fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,
-               fp->bounds.y1 - fp->bounds.y0, stats.spp, stats.threads, wall,
+               fp->bounds.y1 - fp->bounds.y0, stats.spp, stats.threads, ranks, wall,
                stats.wall_seconds > 0 ? rays / stats.wall_seconds * 1e-6 : 0.0,
                (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
                lookups, lookups[0] ? ", " : "", motion, peak_memory_mib());
+        distributed_print_report(dist, stdout);
     }
     if (c->stats)
         print_stats(rs, &stats, baseline_mib);
 done:
     render_scene_destroy(rs);
-    scene_desc_free(&sd);
+    if (parsed)
+        scene_desc_free(&sd);
     return exit_code;
 }
 
@@ -520,7 +529,15 @@ int main(int argc, char **argv)
         int rc = parse_render_args(argc, argv, &c);
         if (rc >= 0)
             return rc;
-        return run_render(&c);
+        distributed *dist = NULL;
+        hz_error err = {{0}};
+        if (distributed_create(&dist, &err) != HZ_OK) {
+            fprintf(stderr, "haze: %s\n", err.message);
+            return EXIT_SCENE;
+        }
+        rc = run_render(&c, dist);
+        distributed_destroy(dist);
+        return rc;
     }
     if (!strcmp(cmd, "info"))
         return run_info(argc, argv);

@@ -306,6 +306,36 @@ long film_nonfinite_count(const film *f)
     return atomic_load_explicit(&((film *)f)->nonfinite, memory_order_relaxed);
 }
 
+void film_get_accumulators(film *f, film_accumulators *out)
+{
+    /* The structs are plain doubles (no padding), so each array is a flat
+     * array of doubles. */
+    _Static_assert(sizeof(film_pixel) == 4 * sizeof(double), "film_pixel is 4 doubles");
+    _Static_assert(sizeof(film_depth) == 2 * sizeof(double), "film_depth is 2 doubles");
+    _Static_assert(sizeof(film_moments) == 8 * sizeof(double), "film_moments is 8 doubles");
+    size_t n = (size_t)f->width * (size_t)f->height;
+    memset(out, 0, sizeof *out);
+    out->doubles[0] = (double *)f->pixels;
+    out->double_count[0] = 4 * n;
+    if (f->depth) {
+        out->doubles[1] = (double *)f->depth;
+        out->double_count[1] = 2 * n;
+    }
+    if (f->moments) {
+        out->doubles[2] = (double *)f->moments;
+        out->double_count[2] = 8 * n;
+    }
+    if (f->count) {
+        out->counts = f->count;
+        out->count_count = n;
+    }
+}
+
+void film_add_nonfinite(film *f, long n)
+{
+    atomic_fetch_add_explicit(&f->nonfinite, n, memory_order_relaxed);
+}
+
 static size_t film_index(const film *f, int px, int py)
 {
     assert(px >= f->p.bounds.x0 && px < f->p.bounds.x1 && py >= f->p.bounds.y0 && py < f->p.bounds.y1);

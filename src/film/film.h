@@ -4,6 +4,8 @@
 #define HAZE_FILM_FILM_H
 
 #include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
 
 #include "core/error.h"
 #include "core/vec.h"
@@ -101,6 +103,24 @@ long film_nonfinite_count(const film *f);
 hz_status film_write_exr(const film *f, const char *path, double imaging_ratio, hz_error *err);
 /* Tonemapped (clamp, sRGB transfer) 8-bit PNG of the pixel bounds; atomic too. */
 hz_status film_write_png(const film *f, const char *path, double imaging_ratio, hz_error *err);
+
+/* The film's raw accumulators, for combining films that rendered disjoint
+ * pixels (one image across MPI ranks, src/mpi): per pixel the sums of w*L and
+ * w, the depth sums, the weighted Welford states and the sample counts. Each
+ * is exactly +0 (never -0) where no sample landed, and is touched only by the
+ * samples of its own pixel, so adding another film's arrays element by element
+ * (x + 0 = x) yields bit for bit the film that rendered both pixel sets.
+ * Arrays that the film does not keep are NULL with count 0. */
+typedef struct {
+    double *doubles[3];      /* pixel sums, depth sums (write_z), moments (write_variance) */
+    size_t double_count[3];
+    uint32_t *counts;        /* sample counts (write_sample_count) */
+    size_t count_count;
+} film_accumulators;
+
+void film_get_accumulators(film *f, film_accumulators *out);
+/* Adds n to film_nonfinite_count (the dropped samples of a combined film). */
+void film_add_nonfinite(film *f, long n);
 
 /* Extras for an output: EXR header string attributes (names < 64 bytes,
  * values < 256; ignored by the PNG writer) and where to publish the

@@ -1,57 +1,34 @@
-// The bridge between OpenVDB (C++ only) and haze's C code. Everything C++ stays in
-// this file: exceptions are caught at the extern "C" boundary and turned into one
-// line of text; the grid leaves as a plain malloc'd, 32-byte aligned byte buffer.
+// haze's half of the bridge to OpenVDB/NanoVDB: reads .nvdb files itself, with
+// NanoVDB's header-only C++ IO (ZIP through zlib), and hands .vdb files to the
+// OpenVDB module (vdb_module.h, openvdb_module.cpp), loaded on the first .vdb
+// file, so that haze never links libopenvdb. Exceptions are caught at the
+// extern "C" boundary and turned into one line of text; the grid leaves as a
+// plain malloc'd, 32-byte aligned byte buffer.
 #include "media/vdb_load.h"
 
-#include <openvdb/openvdb.h>
-#include <openvdb/io/File.h>
+#include "media/vdb_bridge.hpp"
+#include "media/vdb_module.h"
+
+#include <iostream> // before NanoVDB: GridValidator.h uses std::cerr without it
 #include <nanovdb/NanoVDB.h>
 #include <nanovdb/util/GridHandle.h>
 #include <nanovdb/util/GridValidator.h>
 #include <nanovdb/util/IO.h>
-#include <nanovdb/util/OpenToNanoVDB.h>
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
-#include <cstdarg>
-#include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <limits>
-#include <memory>
-#include <mutex>
-#include <new>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+using namespace haze_vdb;
+
 namespace
 {
-
-// A failure with a message meant for the user (already one line, already naming
-// the file), as opposed to exceptions from the libraries, which get the path
-// prepended.
-struct load_error : std::runtime_error {
-    using std::runtime_error::runtime_error;
-};
-
-void init_openvdb()
-{
-    static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
-}
-
-void set_error(char *err, size_t err_size, const std::string &msg)
-{
-    if (!err || err_size == 0)
-        return;
-    // Library messages can span lines; the user gets one.
-    std::string line = msg;
-    std::replace(line.begin(), line.end(), '\n', ' ');
-    std::snprintf(err, err_size, "%s", line.c_str());
-}
 
 enum class file_kind { missing, empty, openvdb, nanovdb, unknown };
 
@@ -88,183 +65,70 @@ file_kind sniff(const char *path, std::uintmax_t *size_out)
     return file_kind::unknown;
 }
 
-std::string join(const std::vector<std::string> &names)
-{
-    if (names.empty())
-        return "none";
-    std::string s;
-    for (size_t i = 0; i < names.size(); ++i)
-        s += (i ? ", " : "") + ("\"" + names[i] + "\"");
-    return s;
-}
-
-// Copies the handle's bytes into memory that C owns and frees with free().
-template <typename HandleT> vdb_buffer to_buffer(const HandleT &handle)
-{
-    const size_t size = handle.size();
-    const size_t alloc = (size + 31) / 32 * 32; // aligned_alloc needs a multiple
-    void *data = std::aligned_alloc(32, alloc);
-    if (!data)
-        throw std::bad_alloc();
-    std::memcpy(data, handle.data(), size);
-    std::memset(static_cast<char *>(data) + size, 0, alloc - size);
-    return vdb_buffer{data, size};
-}
-
-// OpenVDB trusts a file's structure: a truncated file makes it read lengths and
-// offsets from past the end (we have seen it allocate gigabytes for one name). So
-// walk the layout first, with every length checked against the file size: header,
-// file metadata, then each grid descriptor, whose recorded end must lie within the
-// file. (Format as written by openvdb::io::File since file version 216.)
-class layout_reader
+// A NanoVDB buffer type whose memory is the vdb_buffer that C will own
+// (32-byte aligned, freed with free()): nanovdb::io::readGrid reads the grid
+// straight into it, so loading a .nvdb grid holds one copy, not two.
+class c_buffer
 {
   public:
-    layout_reader(const std::string &path, std::uintmax_t size)
-        : in_(path, std::ios::binary), size_(size)
+    c_buffer() = default;
+    c_buffer(const c_buffer &) = delete;
+    c_buffer &operator=(const c_buffer &) = delete;
+    c_buffer(c_buffer &&o) noexcept : data_(o.data_), size_(o.size_)
     {
+        o.data_ = nullptr;
+        o.size_ = 0;
     }
-    void skip(std::uintmax_t n, const char *what)
+    c_buffer &operator=(c_buffer &&o) noexcept
     {
-        need(n, what);
-        in_.seekg(static_cast<std::streamoff>(n), std::ios::cur);
-        pos_ += n;
+        if (this != &o) {
+            clear();
+            data_ = o.data_;
+            size_ = o.size_;
+            o.data_ = nullptr;
+            o.size_ = 0;
+        }
+        return *this;
     }
-    uint32_t u32(const char *what) { return uint32_t(read_le(4, what)); }
-    uint64_t u64(const char *what) { return read_le(8, what); }
-    uint32_t string(const char *what)
+    ~c_buffer() { clear(); }
+
+    // What nanovdb::io::readGrid calls (the second argument is its context).
+    static c_buffer create(uint64_t size, const c_buffer * = nullptr)
     {
-        uint32_t n = u32(what);
-        skip(n, what);
-        return n;
+        // aligned_alloc needs a multiple of the alignment; the tail is zeroed.
+        const uint64_t alloc = std::max<uint64_t>(32, (size + 31) / 32 * 32);
+        if (size > std::numeric_limits<size_t>::max() - 32)
+            throw std::bad_alloc();
+        c_buffer b;
+        b.data_ = static_cast<uint8_t *>(std::aligned_alloc(32, size_t(alloc)));
+        if (!b.data_)
+            throw std::bad_alloc();
+        std::memset(b.data_ + size, 0, size_t(alloc - size));
+        b.size_ = size;
+        return b;
     }
-    std::uintmax_t size() const { return size_; }
-    void seek_to(std::uintmax_t pos, const char *what)
+    uint8_t *data() { return data_; }
+    const uint8_t *data() const { return data_; }
+    uint64_t size() const { return size_; }
+    void clear()
     {
-        if (pos < pos_)
-            throw load_error(std::string("corrupt file (") + what + " points backwards)");
-        skip(pos - pos_, what);
+        std::free(data_);
+        data_ = nullptr;
+        size_ = 0;
+    }
+    // Hands the memory to C (vdb_buffer_free releases it).
+    vdb_buffer release()
+    {
+        vdb_buffer b{data_, size_t(size_)};
+        data_ = nullptr;
+        size_ = 0;
+        return b;
     }
 
   private:
-    void need(std::uintmax_t n, const char *what)
-    {
-        if (n > size_ - pos_)
-            throw load_error("file is truncated (" + std::string(what) + " at byte " +
-                             std::to_string(pos_) + " needs " + std::to_string(n) +
-                             " bytes, file has " + std::to_string(size_) + ")");
-    }
-    uint64_t read_le(int n, const char *what)
-    {
-        need(uintmax_t(n), what);
-        unsigned char b[8] = {0};
-        in_.read(reinterpret_cast<char *>(b), n);
-        pos_ += uintmax_t(n);
-        uint64_t v = 0;
-        for (int i = n - 1; i >= 0; --i)
-            v = v << 8 | b[i];
-        return v;
-    }
-    std::ifstream in_;
-    std::uintmax_t size_, pos_ = 0;
+    uint8_t *data_ = nullptr;
+    uint64_t size_ = 0;
 };
-
-void check_vdb_layout(const std::string &path, std::uintmax_t size)
-{
-    try {
-        layout_reader r(path, size);
-        r.skip(8, "magic number");
-        uint32_t version = r.u32("file version");
-        if (version < 216)
-            return; // older layouts: leave it to OpenVDB
-        r.skip(8, "library version");
-        r.skip(1, "grid offsets flag");
-        r.skip(36, "UUID");
-        for (uint32_t i = 0, n = r.u32("metadata count"); i < n; ++i) {
-            r.string("metadata name");
-            r.string("metadata type");
-            r.skip(r.u32("metadata size"), "metadata value");
-        }
-        uint32_t grids = r.u32("grid count");
-        for (uint32_t g = 0; g < grids; ++g) {
-            r.string("grid name");
-            r.string("grid type");
-            r.string("grid instance parent");
-            r.u64("grid position");
-            r.u64("grid block position");
-            uint64_t end = r.u64("grid end");
-            if (end > r.size())
-                throw load_error("file is truncated (grid " + std::to_string(g + 1) + " of " +
-                                 std::to_string(grids) + " ends at byte " + std::to_string(end) +
-                                 ", file has " + std::to_string(r.size()) + ")");
-            r.seek_to(end, "grid end"); // where the next descriptor starts
-        }
-    } catch (const load_error &e) {
-        throw load_error(path + ": " + e.what());
-    }
-}
-
-std::unique_ptr<openvdb::io::File> open_vdb(const std::string &path, std::uintmax_t file_size)
-{
-    init_openvdb();
-    auto file = std::make_unique<openvdb::io::File>(path);
-    file->setCopyMaxBytes(0); // never copy to a temporary file
-    check_vdb_layout(path, file_size);
-    try {
-        // Delayed loading would map the file lazily; the whole grid is converted.
-        file->open(/*delayLoad=*/false);
-    } catch (const std::exception &e) {
-        throw load_error(path + ": not a readable VDB file (" + e.what() + ")");
-    }
-    return file;
-}
-
-std::vector<std::string> vdb_names(openvdb::io::File &file)
-{
-    std::vector<std::string> names;
-    for (auto it = file.beginName(); it != file.endName(); ++it)
-        names.push_back(it.gridName());
-    return names;
-}
-
-// What each value type is called in messages, and its OpenVDB grid type.
-const char *type_name(vdb_value_type type) { return type == VDB_VEC3 ? "vec3s" : "float"; }
-
-template <typename GridT>
-vdb_buffer convert_vdb(const std::string &path, const std::string &name,
-                       const openvdb::GridBase::Ptr &base)
-{
-    typename GridT::Ptr grid = openvdb::gridPtrCast<GridT>(base);
-    if (!grid)
-        throw load_error(path + ": grid \"" + name + "\" is " + base->valueType() +
-                         ", expected " + openvdb::typeNameAsString<typename GridT::ValueType>());
-    // Node min/max statistics are what empty-space skipping and the motion
-    // bounds use (for vectors: the values of least and greatest length).
-    auto handle =
-        nanovdb::openToNanoVDB(*grid, nanovdb::StatsMode::MinMax, nanovdb::ChecksumMode::Partial);
-    if (!handle)
-        throw load_error(path + ": converting grid \"" + name + "\" to NanoVDB failed");
-    return to_buffer(handle);
-}
-
-vdb_buffer load_vdb(const std::string &path, const std::string &name, vdb_value_type type,
-                    std::uintmax_t size)
-{
-    auto file_ptr = open_vdb(path, size);
-    openvdb::io::File &file = *file_ptr;
-    if (!file.hasGrid(name))
-        throw load_error(path + ": no grid named \"" + name +
-                         "\" (grids: " + join(vdb_names(file)) + ")");
-    openvdb::GridBase::Ptr meta = file.readGridMetadata(name);
-    bool ok = type == VDB_VEC3 ? meta->isType<openvdb::Vec3SGrid>()
-                               : meta->isType<openvdb::FloatGrid>();
-    if (!ok)
-        throw load_error(path + ": grid \"" + name + "\" is " + meta->valueType() +
-                         ", expected " + type_name(type));
-    openvdb::GridBase::Ptr base = file.readGrid(name);
-    file.close();
-    return type == VDB_VEC3 ? convert_vdb<openvdb::Vec3SGrid>(path, name, base)
-                            : convert_vdb<openvdb::FloatGrid>(path, name, base);
-}
 
 std::vector<nanovdb::io::GridMetaData> nvdb_meta(const std::string &path)
 {
@@ -277,7 +141,7 @@ std::vector<nanovdb::io::GridMetaData> nvdb_meta(const std::string &path)
 
 template <typename ValueT>
 void check_nvdb(const std::string &path, const std::string &name,
-                const nanovdb::GridHandle<nanovdb::HostBuffer> &handle)
+                const nanovdb::GridHandle<c_buffer> &handle)
 {
     const nanovdb::NanoGrid<ValueT> *grid = handle.template grid<ValueT>();
     if (!grid)
@@ -307,84 +171,12 @@ vdb_buffer load_nvdb(const std::string &path, const std::string &name, vdb_value
         throw load_error(path + ": file is truncated (grid \"" + name + "\" needs " +
                          std::to_string(found->gridSize) + " bytes, file has " +
                          std::to_string(size) + ")");
-    auto handle = nanovdb::io::readGrid(path, name);
+    auto handle = nanovdb::io::readGrid<c_buffer>(path, name);
     if (type == VDB_VEC3)
         check_nvdb<nanovdb::Vec3f>(path, name, handle);
     else
         check_nvdb<float>(path, name, handle);
-    return to_buffer(handle);
-}
-
-// World bounds of the cells of the voxels in [lo, hi]: the 8 corners of
-// [lo - 1/2, hi + 1/2] mapped through the transform.
-void world_cells(const openvdb::math::Transform &xf, const openvdb::CoordBBox &box,
-                 vdb_grid_info &info)
-{
-    for (int a = 0; a < 3; ++a) {
-        info.world_min[a] = std::numeric_limits<double>::infinity();
-        info.world_max[a] = -std::numeric_limits<double>::infinity();
-    }
-    for (int c = 0; c < 8; ++c) {
-        openvdb::Vec3d p((c & 1 ? box.max().x() + 0.5 : box.min().x() - 0.5),
-                         (c & 2 ? box.max().y() + 0.5 : box.min().y() - 0.5),
-                         (c & 4 ? box.max().z() + 0.5 : box.min().z() - 0.5));
-        openvdb::Vec3d w = xf.indexToWorld(p);
-        for (int a = 0; a < 3; ++a) {
-            info.world_min[a] = std::min(info.world_min[a], w[a]);
-            info.world_max[a] = std::max(info.world_max[a], w[a]);
-        }
-    }
-}
-
-template <typename GridT, typename F>
-void value_range(const GridT &grid, F &&f, vdb_grid_info &info)
-{
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (auto it = grid.cbeginValueOn(); it; ++it) {
-        double v = f(*it);
-        lo = std::min(lo, v);
-        hi = std::max(hi, v);
-    }
-    if (lo <= hi) {
-        info.has_range = 1;
-        info.min_value = lo;
-        info.max_value = hi;
-    }
-}
-
-void list_vdb(const std::string &path, std::uintmax_t size, vdb_grid_callback cb, void *user)
-{
-    auto file = open_vdb(path, size);
-    openvdb::GridPtrVecPtr grids = file->getGrids();
-    file->close();
-    for (const openvdb::GridBase::Ptr &g : *grids) {
-        vdb_grid_info info{};
-        std::string name = g->getName(), type = g->valueType();
-        info.name = name.c_str();
-        info.type = type.c_str();
-        info.active_voxels = g->activeVoxelCount();
-        openvdb::CoordBBox box = g->evalActiveVoxelBoundingBox();
-        if (box.empty())
-            box = openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(0));
-        for (int a = 0; a < 3; ++a) {
-            info.index_min[a] = box.min()[a];
-            info.index_max[a] = box.max()[a];
-        }
-        world_cells(g->transform(), box, info);
-        openvdb::Vec3d vs = g->voxelSize();
-        for (int a = 0; a < 3; ++a)
-            info.voxel_size[a] = vs[a];
-        if (auto fg = openvdb::gridConstPtrCast<openvdb::FloatGrid>(g))
-            value_range(
-                *fg, [](float v) { return double(v); }, info);
-        else if (auto dg = openvdb::gridConstPtrCast<openvdb::DoubleGrid>(g))
-            value_range(
-                *dg, [](double v) { return v; }, info);
-        else if (auto vg = openvdb::gridConstPtrCast<openvdb::Vec3SGrid>(g))
-            value_range(
-                *vg, [](const openvdb::Vec3s &v) { return double(v.length()); }, info);
-        cb(&info, user);
-    }
+    return handle.buffer().release();
 }
 
 void list_nvdb(const std::string &path, vdb_grid_callback cb, void *user)
@@ -435,25 +227,6 @@ void list_nvdb(const std::string &path, vdb_grid_callback cb, void *user)
     }
 }
 
-// Runs `body`, turning every exception into an error message.
-template <typename F> hz_status guarded(const char *path, char *err, size_t err_size, F &&body)
-{
-    try {
-        body();
-        return HZ_OK;
-    } catch (const load_error &e) {
-        set_error(err, err_size, e.what());
-    } catch (const std::bad_alloc &) {
-        set_error(err, err_size,
-                  std::string(path) + ": out of memory (file corrupt or truncated?)");
-    } catch (const std::exception &e) {
-        set_error(err, err_size, std::string(path) + ": " + e.what());
-    } catch (...) {
-        set_error(err, err_size, std::string(path) + ": unknown error while reading");
-    }
-    return HZ_ERROR;
-}
-
 std::uintmax_t check_file(const char *path, file_kind *kind)
 {
     std::uintmax_t size = 0;
@@ -469,6 +242,17 @@ std::uintmax_t check_file(const char *path, file_kind *kind)
     case file_kind::nanovdb: break;
     }
     return size;
+}
+
+
+// The OpenVDB module's entry table; throws with the module's message.
+const haze_openvdb_api &openvdb_module(const char *path)
+{
+    const haze_openvdb_api *api = nullptr;
+    char msg[1024];
+    if (vdb_module_get(&api, msg, sizeof msg) != HZ_OK)
+        throw load_error(std::string(path) + ": " + msg);
+    return *api;
 }
 
 } // namespace
@@ -489,12 +273,16 @@ extern "C" hz_status vdb_load_typed_grid(const char *path, const char *gridname,
     if (err && err_size)
         err[0] = '\0';
     *out = vdb_buffer{nullptr, 0};
-    return guarded(path, err, err_size, [&] {
+    hz_status st = HZ_OK;
+    hz_status guard = guarded(path, err, err_size, [&] {
         file_kind kind;
         std::uintmax_t size = check_file(path, &kind);
-        *out = kind == file_kind::openvdb ? load_vdb(path, gridname, type, size)
-                                          : load_nvdb(path, gridname, type, size);
+        if (kind == file_kind::openvdb)
+            st = openvdb_module(path).load_grid(path, size, gridname, type, out, err, err_size);
+        else
+            *out = load_nvdb(path, gridname, type, size);
     });
+    return guard == HZ_OK ? st : guard;
 }
 
 extern "C" hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out,
@@ -508,12 +296,14 @@ extern "C" hz_status vdb_list_grids(const char *path, vdb_grid_callback cb, void
 {
     if (err && err_size)
         err[0] = '\0';
-    return guarded(path, err, err_size, [&] {
+    hz_status st = HZ_OK;
+    hz_status guard = guarded(path, err, err_size, [&] {
         file_kind kind;
         std::uintmax_t size = check_file(path, &kind);
         if (kind == file_kind::openvdb)
-            list_vdb(path, size, cb, user);
+            st = openvdb_module(path).list_grids(path, size, cb, user, err, err_size);
         else
             list_nvdb(path, cb, user);
     });
+    return guard == HZ_OK ? st : guard;
 }

@@ -27,6 +27,9 @@ typedef struct {
     double diff_scale;
     atomic_int next_tile;
     atomic_int tiles_done;
+    atomic_int running; /* workers not yet finished */
+    int (*tile_source)(void *); /* NULL: the counter next_tile */
+    void *tile_ctx;
     const volatile sig_atomic_t *cancel; /* NULL: never */
     bool jitter;   /* false: --disable-pixel-jitter */
     render_counters *counters; /* one per thread */
@@ -114,8 +117,9 @@ static void *worker_main(void *p)
     for (;;) {
         if (job->cancel && *job->cancel)
             break; /* claimed tiles stay a prefix: every one of them is finished */
-        int t = atomic_fetch_add(&job->next_tile, 1);
-        if (t >= job->tile_count)
+        int t = job->tile_source ? job->tile_source(job->tile_ctx)
+                               : atomic_fetch_add(&job->next_tile, 1);
+        if (t < 0 || t >= job->tile_count)
             break;
         int x0 = job->bounds.x0 + (t % job->tiles_x) * TILE_SIZE;
         int y0 = job->bounds.y0 + (t / job->tiles_x) * TILE_SIZE;
@@ -128,6 +132,7 @@ static void *worker_main(void *p)
     }
     job->busy_ns[arg->index] = hz_clock_ns() - start;
     job->counters[arg->index] = local;
+    atomic_fetch_sub(&job->running, 1);
     return NULL;
 }
 
@@ -154,6 +159,9 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     job.diff_scale = fmax(0.125, 1.0 / sqrt((double)job.spp));
     atomic_init(&job.next_tile, 0);
     atomic_init(&job.tiles_done, 0);
+    atomic_init(&job.running, 0);
+    job.tile_source = opt->next_tile;
+    job.tile_ctx = opt->tile_ctx;
     job.cancel = opt->cancel;
     job.jitter = !opt->disable_pixel_jitter;
 
@@ -185,8 +193,11 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     int started = 0;
     for (; started < threads; ++started) {
         args[started] = (worker_arg){&job, started};
-        if (pthread_create(&tids[started], NULL, worker_main, &args[started]) != 0)
+        atomic_fetch_add(&job.running, 1);
+        if (pthread_create(&tids[started], NULL, worker_main, &args[started]) != 0) {
+            atomic_fetch_sub(&job.running, 1);
             break;
+        }
     }
     pthread_sigmask(SIG_SETMASK, &old, NULL);
     hz_status status = HZ_OK;
@@ -195,8 +206,10 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         status = hz_fail(err, "could not start any render thread");
     } else {
         progress_begin(&bar, opt->progress, job.tile_count, t0);
-        while (atomic_load(&job.tiles_done) < job.tile_count && !(job.cancel && *job.cancel)) {
-            progress_update(&bar, atomic_load(&job.tiles_done), now_seconds());
+        while (atomic_load(&job.running) > 0 && !(job.cancel && *job.cancel)) {
+            progress_update(&bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx)
+                                                   : atomic_load(&job.tiles_done),
+                            now_seconds());
             struct timespec nap = {0, 100 * 1000 * 1000};
             nanosleep(&nap, NULL); /* a signal cuts it short */
         }
@@ -205,7 +218,8 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         pthread_join(tids[i], NULL);
     int done = atomic_load(&job.tiles_done);
     if (started > 0)
-        progress_end(&bar, done, now_seconds());
+        progress_end(&bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx) : done,
+                     now_seconds());
 
     if (stats) {
         memset(stats, 0, sizeof *stats);

@@ -32,6 +32,14 @@ typedef struct {
     /* Time media walks and film updates (render_stats.time_*); costs two clock
      * reads per media segment and per sample. */
     bool timing;
+    /* Where tiles come from. NULL: this process renders every tile, claimed
+     * in row-major order from a shared counter. Otherwise the worker threads
+     * call next_tile(tile_ctx), concurrently, for the index of their next
+     * tile, -1 when none is left (src/mpi: one image across processes), and
+     * the progress bar shows tiles_shown(tile_ctx) when that is not NULL. */
+    int (*next_tile)(void *tile_ctx);
+    int (*tiles_shown)(void *tile_ctx);
+    void *tile_ctx;
 } renderer_options;
 
 typedef struct {

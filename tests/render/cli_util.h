@@ -8,6 +8,19 @@
 #include <string.h>
 #include <sys/wait.h>
 
+/* 1 in a build with AddressSanitizer (gcc or clang): tests of timing or
+ * resource limits adapt to it. */
+#if defined(__SANITIZE_ADDRESS__)
+#define UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define UNDER_ASAN 1
+#endif
+#endif
+#ifndef UNDER_ASAN
+#define UNDER_ASAN 0
+#endif
+
 /* Runs `haze ARGS` (a shell fragment), captures stdout+stderr into out (if not
  * NULL) and returns the exit status (-1 if it did not exit normally). */
 static inline int run_haze(const char *args, char *out, size_t out_size)

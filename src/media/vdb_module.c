@@ -1,0 +1,133 @@
+/* Finding and loading the OpenVDB module (see vdb_module.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "media/vdb_module.h"
+
+#include <dlfcn.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* Set by the build: the module's file name and its absolute path in the build tree. */
+#ifndef HAZE_OPENVDB_MODULE_NAME
+#define HAZE_OPENVDB_MODULE_NAME "libhaze_openvdb.so"
+#endif
+#ifndef HAZE_OPENVDB_MODULE_BUILD_PATH
+#define HAZE_OPENVDB_MODULE_BUILD_PATH ""
+#endif
+
+#define MODULE_PATH_MAX 4096
+
+/* The outcome of the one search for the module: the only state in this file.
+ * It is written once, by module_search under pthread_once, and only read after
+ * that (pthread_once orders the write before every return from it). The module
+ * stays loaded until the process exits. */
+typedef struct {
+    const haze_openvdb_api *api; /* NULL if the search failed */
+    char error[3 * MODULE_PATH_MAX];
+} module_state;
+
+static pthread_once_t module_once = PTHREAD_ONCE_INIT;
+static module_state the_module;
+
+/* snprintf that may cut long paths short (the result is a message, not a path). */
+__attribute__((format(printf, 3, 4))) static void message(char *out, size_t size,
+                                                          const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(out, size, fmt, ap);
+    va_end(ap);
+}
+
+/* dlopens `path` and checks its entry table; on failure returns NULL with the
+ * reason (starting with the path) in `why`. */
+static const haze_openvdb_api *try_load(const char *path, char *why, size_t why_size)
+{
+    void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!handle) {
+        const char *e = dlerror();
+        message(why, why_size, "%s", e ? e : path);
+        return NULL;
+    }
+    /* The entry table is a data symbol: no object-to-function pointer cast. */
+    const haze_openvdb_api *api = dlsym(handle, HAZE_OPENVDB_ENTRY);
+    if (!api) {
+        message(why, why_size, "%s: no %s table (not a haze OpenVDB module)", path,
+                 HAZE_OPENVDB_ENTRY);
+        dlclose(handle);
+        return NULL;
+    }
+    if (api->abi_version != HAZE_OPENVDB_ABI || api->struct_size != sizeof *api) {
+        message(why, why_size,
+                 "%s: module ABI version %u (table of %u bytes), this haze needs version %d "
+                 "(%zu bytes): a module from another haze build",
+                 path, (unsigned)api->abi_version, (unsigned)api->struct_size, HAZE_OPENVDB_ABI,
+                 sizeof *api);
+        dlclose(handle);
+        return NULL;
+    }
+    return api;
+}
+
+/* The module file next to the executable, or "" if /proc/self/exe is unreadable. */
+static void next_to_executable(char *out, size_t size)
+{
+    char exe[MODULE_PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    out[0] = '\0';
+    if (n <= 0)
+        return;
+    exe[n] = '\0';
+    char *slash = strrchr(exe, '/');
+    if (!slash)
+        return;
+    slash[1] = '\0';
+    int len = snprintf(out, size, "%s%s", exe, HAZE_OPENVDB_MODULE_NAME);
+    if (len < 0 || (size_t)len >= size)
+        out[0] = '\0';
+}
+
+static void module_search(void)
+{
+    char candidates[2][MODULE_PATH_MAX];
+    int count = 0;
+    const char *env = getenv("HAZE_OPENVDB_MODULE");
+    if (env && env[0]) {
+        message(candidates[count++], MODULE_PATH_MAX, "%s", env);
+    } else {
+        next_to_executable(candidates[count], MODULE_PATH_MAX);
+        if (candidates[count][0])
+            count++;
+        const char *built = HAZE_OPENVDB_MODULE_BUILD_PATH;
+        if (built[0] && (count == 0 || strcmp(candidates[0], built) != 0))
+            message(candidates[count++], MODULE_PATH_MAX, "%s", built);
+    }
+
+    char reasons[2 * MODULE_PATH_MAX + 8] = "";
+    for (int i = 0; i < count; ++i) {
+        char why[MODULE_PATH_MAX + 256];
+        the_module.api = try_load(candidates[i], why, sizeof why);
+        if (the_module.api)
+            return;
+        size_t used = strlen(reasons);
+        message(reasons + used, sizeof reasons - used, "%s%s", i ? "; " : "", why);
+    }
+    message(the_module.error, sizeof the_module.error,
+             "cannot load the OpenVDB module that reading .vdb files needs (tried %s); "
+             "convert the file to .nvdb, or set HAZE_OPENVDB_MODULE to the module's path",
+             count ? reasons : "no path");
+}
+
+hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_size)
+{
+    pthread_once(&module_once, module_search);
+    *api = the_module.api;
+    if (*api)
+        return HZ_OK;
+    if (err && err_size)
+        message(err, err_size, "%s", the_module.error);
+    return HZ_ERROR;
+}

@@ -1,0 +1,401 @@
+/* One image across MPI ranks: launch detection, agreement, render and gather
+ * (the tile hand-out is in tile_service.c). Without HAZE_HAVE_MPI only the
+ * one-rank path is compiled. */
+#define _POSIX_C_SOURCE 200809L
+#include "mpi/distributed.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#ifdef HAZE_HAVE_MPI
+#include <mpi.h>
+
+#include "mpi/tile_service.h"
+#endif
+
+/* Per-rank figures gathered on rank 0 after a render (as doubles). */
+enum {
+    FIG_TILES,
+    FIG_THREADS,
+    FIG_CLAIMS,
+    FIG_LATE,
+    FIG_CLAIM_SECONDS,
+    FIG_MAX_WAIT,
+    FIG_RENDER_SECONDS,
+    FIG_COUNT
+};
+
+struct distributed {
+    int rank, size;
+    bool mpi; /* MPI_Init_thread succeeded: MPI_Finalize at the end */
+    char host[256];
+    /* Rank 0 after distributed_render: FIG_COUNT figures per rank. */
+    double *figures;
+    double wait_seconds, gather_seconds, service_cpu_seconds;
+};
+
+bool distributed_launched(void)
+{
+    return getenv("OMPI_COMM_WORLD_SIZE") != NULL || getenv("PMIX_RANK") != NULL;
+}
+
+hz_status distributed_create(distributed **out, hz_error *err)
+{
+    *out = NULL;
+    distributed *d = calloc(1, sizeof *d);
+    if (!d)
+        return hz_fail(err, "out of memory");
+    d->size = 1;
+    if (gethostname(d->host, sizeof d->host - 1) != 0)
+        snprintf(d->host, sizeof d->host, "?");
+    if (distributed_launched()) {
+#ifdef HAZE_HAVE_MPI
+        int provided = 0;
+        if (MPI_Init_thread(NULL, NULL, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS) {
+            free(d);
+            return hz_fail(err, "MPI_Init_thread failed");
+        }
+        d->mpi = true;
+        MPI_Comm_rank(MPI_COMM_WORLD, &d->rank);
+        MPI_Comm_size(MPI_COMM_WORLD, &d->size);
+        char name[MPI_MAX_PROCESSOR_NAME];
+        int len = 0;
+        if (MPI_Get_processor_name(name, &len) == MPI_SUCCESS && len > 0)
+            snprintf(d->host, sizeof d->host, "%.*s", len, name);
+        if (provided < MPI_THREAD_SERIALIZED) {
+            distributed_destroy(d);
+            return hz_fail(err, "the MPI library offers thread level %d; haze needs "
+                                "MPI_THREAD_SERIALIZED",
+                           provided);
+        }
+#else
+        const char *n = getenv("OMPI_COMM_WORLD_SIZE");
+        if (n && atoi(n) > 1) {
+            free(d);
+            return hz_fail(err, "launched by mpirun with %s ranks, but this haze was built "
+                                "without MPI (HAZE_MPI=OFF): every rank would render the "
+                                "whole image",
+                           n);
+        }
+#endif
+    }
+    *out = d;
+    return HZ_OK;
+}
+
+void distributed_destroy(distributed *d)
+{
+    if (!d)
+        return;
+#ifdef HAZE_HAVE_MPI
+    if (d->mpi)
+        MPI_Finalize();
+#endif
+    free(d->figures);
+    free(d);
+}
+
+int distributed_rank(const distributed *d) { return d->rank; }
+int distributed_size(const distributed *d) { return d->size; }
+
+static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *b = p;
+    for (size_t i = 0; i < n; ++i) {
+        h ^= b[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+#define HASH_FIELD(h, x) ((h) = fnv1a((h), &(x), sizeof(x)))
+
+uint64_t distributed_fingerprint(const char *scene_path, const render_scene *rs)
+{
+    uint64_t h = 14695981039346656037ull;
+    FILE *f = fopen(scene_path, "rb");
+    if (f) {
+        unsigned char buf[65536];
+        size_t n;
+        while ((n = fread(buf, 1, sizeof buf, f)) > 0)
+            h = fnv1a(h, buf, n);
+        fclose(f);
+    }
+    /* Not the file name: only rank 0 writes. */
+    const film_params *fp = film_get_params(render_scene_film((render_scene *)rs));
+    HASH_FIELD(h, fp->xres);
+    HASH_FIELD(h, fp->yres);
+    HASH_FIELD(h, fp->bounds.x0);
+    HASH_FIELD(h, fp->bounds.y0);
+    HASH_FIELD(h, fp->bounds.x1);
+    HASH_FIELD(h, fp->bounds.y1);
+    HASH_FIELD(h, fp->savefp16);
+    HASH_FIELD(h, fp->write_z);
+    HASH_FIELD(h, fp->write_variance);
+    HASH_FIELD(h, fp->write_sample_count);
+    HASH_FIELD(h, fp->iso);
+    HASH_FIELD(h, fp->max_component_value);
+    HASH_FIELD(h, fp->diagonal);
+    const sampler *s = render_scene_sampler(rs);
+    HASH_FIELD(h, s->kind);
+    HASH_FIELD(h, s->spp);
+    HASH_FIELD(h, s->xsamples);
+    HASH_FIELD(h, s->ysamples);
+    HASH_FIELD(h, s->jitter);
+    HASH_FIELD(h, s->seed);
+    return h;
+}
+
+#ifdef HAZE_HAVE_MPI
+/* What each rank tells rank 0 at an agreement point. */
+typedef struct {
+    int32_t status;
+    int32_t check_fingerprint;
+    uint64_t fingerprint;
+    char host[256];
+    char message[sizeof(((hz_error *)0)->message)];
+} verdict;
+
+static const char mismatch_text[] =
+    "parsed a different scene or options than rank 0 (the scene file's bytes, the film, the "
+    "sampler, spp or seed differ)";
+
+/* Gathers every rank's verdict on rank 0, which calls `on_failure` for each
+ * failing rank (in rank order); returns the common outcome on every rank. */
+static hz_status agree_all(distributed *d, hz_status local, const char *message,
+                           uint64_t fingerprint, bool check_fingerprint,
+                           void (*on_failure)(void *ctx, int rank, const verdict *v,
+                                              const char *why),
+                           void *ctx)
+{
+    verdict mine;
+    memset(&mine, 0, sizeof mine);
+    mine.status = local == HZ_OK ? 0 : 1;
+    mine.check_fingerprint = check_fingerprint;
+    mine.fingerprint = fingerprint;
+    snprintf(mine.host, sizeof mine.host, "%s", d->host);
+    if (local != HZ_OK)
+        snprintf(mine.message, sizeof mine.message, "%s", message ? message : "failed");
+    verdict *all = NULL;
+    int ok = 1;
+    if (d->rank == 0) {
+        all = malloc((size_t)d->size * sizeof *all);
+        if (!all)
+            MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    MPI_Gather(&mine, (int)sizeof mine, MPI_BYTE, all, (int)sizeof mine, MPI_BYTE, 0,
+               MPI_COMM_WORLD);
+    if (d->rank == 0) {
+        for (int r = 0; r < d->size; ++r) {
+            const char *why = NULL;
+            if (all[r].status != 0)
+                why = all[r].message;
+            else if (check_fingerprint && all[0].status == 0 &&
+                     all[r].fingerprint != all[0].fingerprint)
+                why = mismatch_text;
+            if (why) {
+                ok = 0;
+                on_failure(ctx, r, &all[r], why);
+            }
+        }
+        free(all);
+    }
+    MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    return ok ? HZ_OK : HZ_ERROR;
+}
+
+static void report_line(void *ctx, int rank, const verdict *v, const char *why)
+{
+    fprintf((FILE *)ctx, "haze: rank %d on host %s: %s\n", rank, v->host, why);
+}
+
+/* The first failure goes into the caller's hz_error, later ones to stderr. */
+static void keep_first(void *ctx, int rank, const verdict *v, const char *why)
+{
+    hz_error *err = ctx;
+    if (err->message[0] == '\0')
+        hz_fail(err, "rank %d on host %s: %s", rank, v->host, why);
+    else
+        fprintf(stderr, "haze: rank %d on host %s: %s\n", rank, v->host, why);
+}
+#endif
+
+hz_status distributed_agree(distributed *d, hz_status local, const hz_error *local_err,
+                            uint64_t fingerprint, FILE *report)
+{
+    if (d->size == 1) {
+        if (local != HZ_OK)
+            fprintf(report, "haze: %s\n", local_err->message);
+        return local;
+    }
+#ifdef HAZE_HAVE_MPI
+    return agree_all(d, local, local_err->message, fingerprint, true, report_line, report);
+#else
+    (void)fingerprint;
+    return local;
+#endif
+}
+
+#ifdef HAZE_HAVE_MPI
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* Element-wise sum onto rank 0, in chunks that fit MPI's int counts. */
+static void reduce_sum(void *buf, size_t count, MPI_Datatype type, size_t elem_size, int rank)
+{
+    const size_t chunk = (size_t)1 << 24;
+    for (size_t off = 0; off < count; off += chunk) {
+        int n = (int)(count - off < chunk ? count - off : chunk);
+        void *b = (char *)buf + off * elem_size;
+        MPI_Reduce(rank == 0 ? MPI_IN_PLACE : b, b, n, type, MPI_SUM, 0, MPI_COMM_WORLD);
+    }
+}
+
+static int tile_count_of(const film_params *fp)
+{
+    int w = fp->bounds.x1 - fp->bounds.x0, h = fp->bounds.y1 - fp->bounds.y0;
+    return ((w + RENDERER_TILE_SIZE - 1) / RENDERER_TILE_SIZE) *
+           ((h + RENDERER_TILE_SIZE - 1) / RENDERER_TILE_SIZE);
+}
+
+static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_options *opt,
+                            render_stats *stats, hz_error *err)
+{
+    double t0 = now_seconds();
+    film *f = render_scene_film(rs);
+    const film_params *fp = film_get_params(f);
+    hz_error local = {{0}};
+    tile_service *ts = NULL;
+    if (tile_service_create(MPI_COMM_WORLD, tile_count_of(fp), &ts, &local) != HZ_OK) {
+        /* Without its service (rank 0) or its requests (others) the run
+         * cannot go on, nor can the ranks agree on it: end the job. */
+        fprintf(stderr, "haze: rank %d on host %s: %s\n", d->rank, d->host, local.message);
+        MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    renderer_options o = *opt;
+    o.cancel = NULL;
+    o.next_tile = tile_service_next;
+    o.tiles_shown = d->rank == 0 ? tile_service_shown : NULL;
+    o.tile_ctx = ts;
+    if (d->rank != 0)
+        o.progress = NULL;
+    render_stats mine;
+    memset(&mine, 0, sizeof mine);
+    hz_status st = renderer_run(rs, &o, &mine, &local);
+    double render_seconds = now_seconds() - t0;
+    double t_wait = now_seconds();
+    int lost = tile_service_finish(ts); /* rank 0: until every rank is done */
+    if (lost > 0 && st == HZ_OK)
+        st = hz_fail(&local, "%d tile%s handed to this rank were not rendered", lost,
+                     lost == 1 ? "" : "s");
+    tile_claim_stats claims = tile_service_claims(ts);
+    d->service_cpu_seconds = claims.service_cpu_seconds;
+    tile_service_destroy(ts);
+
+    err->message[0] = '\0';
+    st = agree_all(d, st, local.message, 0, false, keep_first, err);
+    d->wait_seconds = now_seconds() - t_wait;
+    if (st != HZ_OK) {
+        if (d->rank != 0)
+            hz_fail(err, "%s", local.message[0] ? local.message : "another rank failed");
+        return HZ_ERROR;
+    }
+
+    double t_gather = now_seconds();
+    film_accumulators acc;
+    film_get_accumulators(f, &acc);
+    for (int i = 0; i < 3; ++i)
+        if (acc.doubles[i])
+            reduce_sum(acc.doubles[i], acc.double_count[i], MPI_DOUBLE, sizeof(double), d->rank);
+    if (acc.counts)
+        reduce_sum(acc.counts, acc.count_count, MPI_UINT32_T, sizeof(uint32_t), d->rank);
+    long own_nonfinite = film_nonfinite_count(f);
+    uint64_t sums[5] = {mine.camera_rays, mine.shadow_rays, mine.density_lookups,
+                        (uint64_t)own_nonfinite, mine.majorant_steps};
+    reduce_sum(sums, 5, MPI_UINT64_T, sizeof(uint64_t), d->rank);
+    double times[3] = {mine.time_busy_s, mine.time_media_s, mine.time_film_s};
+    reduce_sum(times, 3, MPI_DOUBLE, sizeof(double), d->rank);
+    double fig[FIG_COUNT] = {0};
+    fig[FIG_TILES] = mine.tiles_done;
+    fig[FIG_THREADS] = mine.threads;
+    fig[FIG_CLAIMS] = (double)claims.claims;
+    fig[FIG_LATE] = (double)claims.late;
+    fig[FIG_CLAIM_SECONDS] = claims.wait_seconds;
+    fig[FIG_MAX_WAIT] = claims.max_wait;
+    fig[FIG_RENDER_SECONDS] = render_seconds;
+    free(d->figures);
+    d->figures = NULL;
+    if (d->rank == 0) {
+        d->figures = calloc((size_t)d->size * FIG_COUNT, sizeof *d->figures);
+        if (!d->figures)
+            MPI_Abort(MPI_COMM_WORLD, 1);
+    }
+    MPI_Gather(fig, FIG_COUNT, MPI_DOUBLE, d->figures, FIG_COUNT, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    d->gather_seconds = now_seconds() - t_gather;
+
+    *stats = mine;
+    if (d->rank == 0) {
+        film_add_nonfinite(f, (long)sums[3] - own_nonfinite);
+        stats->camera_rays = sums[0];
+        stats->shadow_rays = sums[1];
+        stats->density_lookups = sums[2];
+        stats->majorant_steps = sums[4];
+        stats->time_busy_s = times[0];
+        stats->time_media_s = times[1];
+        stats->time_film_s = times[2];
+        stats->threads = 0;
+        for (int r = 0; r < d->size; ++r)
+            stats->threads += (int)d->figures[r * FIG_COUNT + FIG_THREADS];
+        stats->tiles_done = stats->tile_count;
+        stats->pixels = stats->pixels_total;
+        stats->interrupted = false;
+        stats->wall_seconds = now_seconds() - t0;
+    }
+    return HZ_OK;
+}
+#endif
+
+hz_status distributed_render(distributed *d, render_scene *rs, const renderer_options *opt,
+                             render_stats *stats, hz_error *err)
+{
+#ifdef HAZE_HAVE_MPI
+    if (d->size > 1)
+        return render_mpi(d, rs, opt, stats, err);
+#else
+    (void)d;
+#endif
+    return renderer_run(rs, opt, stats, err);
+}
+
+void distributed_print_report(const distributed *d, FILE *out)
+{
+    if (d->size == 1 || d->rank != 0 || !d->figures)
+        return;
+    char tiles[512];
+    size_t len = 0;
+    long claims = 0, late = 0;
+    double waited = 0.0, max_wait = 0.0;
+    for (int r = 0; r < d->size && len < sizeof tiles; ++r) {
+        const double *fg = d->figures + (size_t)r * FIG_COUNT;
+        len += (size_t)snprintf(tiles + len, sizeof tiles - len, "%s%.0f", r ? " + " : "",
+                                fg[FIG_TILES]);
+        if (r > 0) {
+            claims += (long)fg[FIG_CLAIMS];
+            late += (long)fg[FIG_LATE];
+            waited += fg[FIG_CLAIM_SECONDS];
+            max_wait = fg[FIG_MAX_WAIT] > max_wait ? fg[FIG_MAX_WAIT] : max_wait;
+        }
+    }
+    fprintf(out,
+            "%d ranks: tiles %s (rank 0 first); remote tile claims %ld, %ld late, mean wait "
+            "%.1f us, max %.1f ms; service thread %.3f CPU s; rank 0 waited %.3f s for the "
+            "other ranks, gather %.3f s\n",
+            d->size, tiles, claims, late, claims > 0 ? waited / (double)claims * 1e6 : 0.0,
+            max_wait * 1e3, d->service_cpu_seconds, d->wait_seconds, d->gather_seconds);
+}
