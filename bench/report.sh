@@ -164,7 +164,7 @@ report_plot() {
         done
         for cfg in thin thick; do
             if [ -s "$d/peer-$cfg.vdb_render-centre.front" ]; then
-                echo "set title 'smoke.vdb $cfg: haze vs vdb_render (net relMSE, each vs its own converged image)'"
+                echo "set title 'peer, $cfg: net relMSE vs own converged image'"
                 printf 'plot'
                 sep=' '
                 for who in vdb_render-centre haze-centre haze-aa; do
