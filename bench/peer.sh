@@ -62,31 +62,57 @@ peer_config() {
     for mode in $modes; do
         flag=
         [ "$mode" = centre ] && flag=--disable-pixel-jitter
-        key=$(cache_key "$scene" -- "peer-ref $ladder_ref_est $ref_spp $mode")
-        href=$CACHE/haze-ref-$cfg-$mode-$key.exr
-        if [ ! -f "$href" ]; then
-            variant "$CACHE/peer-ref.pbrt" "$scene" "$(integrator "$ladder_ref_est" 1)"
-            echo "  haze reference $cfg $mode: $ladder_ref_est, $ref_spp spp" >&2
-            # shellcheck disable=SC2086
-            t=$(timed "$HAZE" render "$CACHE/peer-ref.pbrt" $flag --spp "$ref_spp" --threads "$THREADS" --seed 12345 -o "$CACHE/peer-tmp.exr" --quiet)
-            mv "$CACHE/peer-tmp.exr" "$href"
-            echo "  haze reference $cfg $mode took $t s" >&2
+        if [ "$mode" = centre ]; then
+            # At pixel centres haze's raymarch (midpoint steps, distant light)
+            # is deterministic, like vdb_render: its converged image is a fine
+            # raymarch at 1 spp, with no noise; its error is estimated from
+            # the same render at twice the steps (midpoint: error ~ step^2, so
+            # MSE(2h vs h) ~ 9 MSE(h)).
+            rstep=0.0625
+            [ -n "$BENCH_QUICK" ] && rstep=0.25
+            rsteps=$(awk -v s="$rstep" 'BEGIN { print s, 2 * s, 2 * s, 4 * s }')
+            set -- $rsteps
+            key=$(cache_key "$scene" -- "peer-ref raymarch $1 $2 centre")
+            href=$CACHE/haze-ref-$cfg-$mode-$key.exr
+            key2=$(cache_key "$scene" -- "peer-ref raymarch $3 $4 centre")
+            href2=$CACHE/haze-ref2-$cfg-$mode-$key2.exr
+            for r in "$href $1 $2" "$href2 $3 $4"; do
+                set -- $r
+                [ -f "$1" ] && continue
+                variant "$CACHE/peer-ref.pbrt" "$scene" "Integrator \"singlescatter\" \"string transmittance\" \"raymarch\" \"float stepsize\" $2 \"float shadowstepsize\" $3"
+                echo "  haze reference $cfg centre: raymarch $2 / $3, 1 spp" >&2
+                t=$(timed "$HAZE" render "$CACHE/peer-ref.pbrt" $flag --spp 1 --threads "$THREADS" --seed 12345 -o "$CACHE/peer-tmp.exr" --quiet)
+                mv "$CACHE/peer-tmp.exr" "$1"
+                echo "  haze reference took $t s" >&2
+            done
+            floor=$(errors "$href2" "$href" | awk '{ printf "%.6g %.6g", $1 * $1 / 9, $2 / 9 }')
+        else
+            key=$(cache_key "$scene" -- "peer-ref $ladder_ref_est $ref_spp $mode")
+            href=$CACHE/haze-ref-$cfg-$mode-$key.exr
+            if [ ! -f "$href" ]; then
+                variant "$CACHE/peer-ref.pbrt" "$scene" "$(integrator "$ladder_ref_est" 1)"
+                echo "  haze reference $cfg $mode: $ladder_ref_est, $ref_spp spp" >&2
+                # shellcheck disable=SC2086
+                t=$(timed "$HAZE" render "$CACHE/peer-ref.pbrt" $flag --spp "$ref_spp" --threads "$THREADS" --seed 12345 -o "$CACHE/peer-tmp.exr" --quiet)
+                mv "$CACHE/peer-tmp.exr" "$href"
+                echo "  haze reference $cfg $mode took $t s" >&2
+            fi
+            # The reference's own noise (its floor): a second, independent
+            # reference at a quarter of the samples, B, against it, A:
+            # E[MSE(B, A)] = var A + var B = 5 var A.
+            key2=$(cache_key "$scene" -- "peer-ref-floor $ladder_ref_est $ref_spp $mode")
+            href2=$CACHE/haze-ref2-$cfg-$mode-$key2.exr
+            if [ ! -f "$href2" ]; then
+                variant "$CACHE/peer-ref.pbrt" "$scene" "$(integrator "$ladder_ref_est" 1)"
+                # shellcheck disable=SC2086
+                "$HAZE" render "$CACHE/peer-ref.pbrt" $flag --spp $((ref_spp / 4)) --threads "$THREADS" --seed 54321 -o "$CACHE/peer-tmp.exr" --quiet
+                mv "$CACHE/peer-tmp.exr" "$href2"
+            fi
+            floor=$(errors "$href2" "$href" | awk '{ printf "%.6g %.6g", $1 * $1 / 5, $2 / 5 }')
         fi
-        # The reference's own noise (its floor): a second, independent
-        # reference at a quarter of the samples, B, against it, A:
-        # E[MSE(B, A)] = var A + var B = 5 var A.
-        key2=$(cache_key "$scene" -- "peer-ref-floor $ladder_ref_est $ref_spp $mode")
-        href2=$CACHE/haze-ref2-$cfg-$mode-$key2.exr
-        if [ ! -f "$href2" ]; then
-            variant "$CACHE/peer-ref.pbrt" "$scene" "$(integrator "$ladder_ref_est" 1)"
-            # shellcheck disable=SC2086
-            "$HAZE" render "$CACHE/peer-ref.pbrt" $flag --spp $((ref_spp / 4)) --threads "$THREADS" --seed 54321 -o "$CACHE/peer-tmp.exr" --quiet
-            mv "$CACHE/peer-tmp.exr" "$href2"
-        fi
-        floor=$(errors "$href2" "$href" | awk '{ printf "%.6g %.6g", $1 * $1 / 5, $2 / 5 }')
         printf '%s\t%s\t%s\n' "$cfg" "$mode" "$(echo "$floor" | tr ' ' '\t')" >>"$RESULTS/peer-floor.tsv"
         floor_rel=${floor#* }
-        echo "  haze reference $cfg $mode: noise floor (MSE relMSE) $floor" >&2
+        echo "  haze reference $cfg $mode: error floor (MSE relMSE) $floor" >&2
         if [ "$mode" = centre ] || [ "$modes" = aa ]; then
             # How close the two models come (bench/README.md: the mapping).
             e=$(errors "$href" "$vref")
@@ -94,23 +120,35 @@ peer_config() {
             printf '%s\t%s\t%s\t%s\n' "$cfg" "$mode" "$(echo "$e" | tr ' ' '\t')" "$(echo "$m" | tr ' ' '\t')" >>"$RESULTS/peer-match.tsv"
             echo "  peer $cfg: haze ($mode) vs vdb_render converged: rmse relmse $e; mean haze, vdb, rel diff $m" >&2
         fi
+        # rung ESTIMATOR STEP SPP: one haze render against the reference.
+        rung() {
+            variant "$CACHE/peer-rung.pbrt" "$scene" "$(integrator "$1" "$2")"
+            # shellcheck disable=SC2086
+            t=$(timed "$HAZE" render "$CACHE/peer-rung.pbrt" $flag --spp "$3" --threads "$THREADS" --seed 1 -o "$CACHE/peer-rung.exr" --quiet)
+            e=$(errors "$CACHE/peer-rung.exr" "$href")
+            # relMSE net of the reference's error; "<X" (X a tenth of the
+            # measured value) when the measured value is within 10% of
+            # that error: unresolved, X is an upper bound.
+            net=$(echo "$e" | awk -v f="$floor_rel" '{ n = $2 - f; if (n < 0.1 * $2) printf "<%.6g", 0.1 * $2; else printf "%.6g", n }')
+            printf '%s\thaze\t%s\t%s %s\t%s\t%s\t%s\t%s\n' "$cfg" "$mode" "$1" "$2" "$3" "$t" "$(echo "$e" | tr ' ' '\t')" "$net" >>"$RESULTS/peer.tsv"
+            echo "  peer $cfg haze $mode $1 step $2 spp $3: $t s, rmse relmse $e" >&2
+        }
         hsteps="1 2 4"
         hspps="1 4 16"
         [ -n "$BENCH_QUICK" ] && hsteps=2 && hspps="1 4"
         for s in $hsteps; do
-            variant "$CACHE/peer-rung.pbrt" "$scene" "$(integrator jittered "$s")"
             for spp in $hspps; do
-                # shellcheck disable=SC2086
-                t=$(timed "$HAZE" render "$CACHE/peer-rung.pbrt" $flag --spp "$spp" --threads "$THREADS" --seed 1 -o "$CACHE/peer-rung.exr" --quiet)
-                e=$(errors "$CACHE/peer-rung.exr" "$href")
-                # relMSE net of the reference's noise; "<X" (X a tenth of the
-                # measured value) when the measured value is within 10% of
-                # that noise: unresolved, X is an upper bound.
-                net=$(echo "$e" | awk -v f="$floor_rel" '{ n = $2 - f; if (n < 0.1 * $2) printf "<%.6g", 0.1 * $2; else printf "%.6g", n }')
-                printf '%s\thaze\t%s\t%s\t%s\t%s\t%s\t%s\n' "$cfg" "$mode" "$s" "$spp" "$t" "$(echo "$e" | tr ' ' '\t')" "$net" >>"$RESULTS/peer.tsv"
-                echo "  peer $cfg haze $mode jittered step $s spp $spp: $t s, rmse relmse $e" >&2
+                rung jittered "$s" "$spp"
             done
         done
+        # Deterministic at pixel centres: one sample is the converged pixel.
+        if [ "$mode" = centre ]; then
+            rsteps="8 4 2 1 0.5"
+            [ -n "$BENCH_QUICK" ] && rsteps="4 2"
+            for s in $rsteps; do
+                rung raymarch "$s" 1
+            done
+        fi
     done
 }
 

@@ -90,6 +90,8 @@ double camera_imaging_ratio(const camera *c, const film_params *film);
 
 /* Returns false when the sample makes no ray. Rays are normalised and in render space. */
 bool camera_generate_ray(const camera *c, camera_sample s, ray *out);
+/* Whether rays depend on camera_sample.p_lens (a thin lens). */
+static inline bool camera_has_lens(const camera *c) { return c->lens_radius > 0.0; }
 bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_differential *out);
 
 #endif

@@ -24,14 +24,17 @@ typedef struct {
     pixel_bounds bounds;
     int tiles_x, tile_count;
     int spp;
-    double diff_scale;
     atomic_int next_tile;
     atomic_int tiles_done;
     atomic_int running; /* workers not yet finished */
+    /* The last worker to finish wakes the calling thread (which otherwise
+     * naps between progress updates): a short render is not held up by a nap. */
+    pthread_mutex_t lock;
+    pthread_cond_t wake;
     int (*tile_source)(void *); /* NULL: the counter next_tile */
     void *tile_ctx;
     const volatile sig_atomic_t *cancel; /* NULL: never */
-    bool jitter;   /* false: --disable-pixel-jitter */
+    camera_sample_needs needs;
     render_counters *counters; /* one per thread */
     uint64_t *busy_ns;         /* one per thread */
 } render_job;
@@ -43,20 +46,31 @@ typedef struct {
 
 camera_sample renderer_camera_sample(const filter *flt, sampler_state *st, int px, int py)
 {
-    return renderer_camera_sample_jitter(flt, st, px, py, true);
+    return renderer_camera_sample_needs(flt, st, px, py, (camera_sample_needs){true, true, true});
 }
 
-camera_sample renderer_camera_sample_jitter(const filter *flt, sampler_state *st, int px, int py,
-                                            bool jitter)
+camera_sample renderer_camera_sample_needs(const filter *flt, sampler_state *st, int px, int py,
+                                           camera_sample_needs needs)
 {
-    filter_sample fs = filter_sample_offset(flt, sampler_pixel_2d(st));
-    if (!jitter)
-        fs = (filter_sample){v2(0.0, 0.0), 1.0}; /* as pbrt-v4's GetCameraSample */
+    /* As pbrt-v4's GetCameraSample; the pixel dimension has its own tag, so
+     * not drawing it moves no other dimension. */
+    filter_sample fs = needs.jitter ? filter_sample_offset(flt, sampler_pixel_2d(st))
+                                    : (filter_sample){v2(0.0, 0.0), 1.0};
     camera_sample cs;
     cs.p_film = v2(px + 0.5 + fs.p.x, py + 0.5 + fs.p.y);
-    cs.time = sampler_1d(st);
-    cs.p_lens = sampler_2d(st);
     cs.filter_weight = fs.weight;
+    if (needs.time) {
+        cs.time = sampler_1d(st);
+    } else {
+        sampler_skip(st, 1);
+        cs.time = 0.5;
+    }
+    if (needs.lens) {
+        cs.p_lens = sampler_2d(st);
+    } else {
+        sampler_skip(st, 1);
+        cs.p_lens = v2(0.5, 0.5);
+    }
     return cs;
 }
 
@@ -70,18 +84,13 @@ static void render_pixel(render_job *job, int px, int py, render_counters *count
     for (int i = 0; i < job->spp; ++i) {
         sampler_state st;
         sampler_start(smp, px, py, i, &st);
-        camera_sample cs = renderer_camera_sample_jitter(flt, &st, px, py, job->jitter);
+        camera_sample cs = renderer_camera_sample_needs(flt, &st, px, py, job->needs);
 
-        ray_differential rd;
-        if (!camera_generate_ray_differential(cam, cs, &rd))
+        /* haze's integrator reads no ray differentials (it has no textures to
+         * filter): the main ray only, the same ray as with differentials. */
+        ray_differential rd = {.has_differentials = false};
+        if (!camera_generate_ray(cam, cs, &rd.r))
             continue;
-        if (rd.has_differentials) {
-            /* As pbrt-v4: narrow the footprint with the sample count. */
-            rd.rx_o = v3_add(rd.r.o, v3_scale(v3_sub(rd.rx_o, rd.r.o), job->diff_scale));
-            rd.ry_o = v3_add(rd.r.o, v3_scale(v3_sub(rd.ry_o, rd.r.o), job->diff_scale));
-            rd.rx_d = v3_add(rd.r.d, v3_scale(v3_sub(rd.rx_d, rd.r.d), job->diff_scale));
-            rd.ry_d = v3_add(rd.r.d, v3_scale(v3_sub(rd.ry_d, rd.r.d), job->diff_scale));
-        }
         double depth = INFINITY;
         rgb L = render_scene_li(job->rs, &rd, &st, &depth, counters);
         if (counters->timed) {
@@ -132,7 +141,10 @@ static void *worker_main(void *p)
     }
     job->busy_ns[arg->index] = hz_clock_ns() - start;
     job->counters[arg->index] = local;
+    pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->running, 1);
+    pthread_cond_signal(&job->wake);
+    pthread_mutex_unlock(&job->lock);
     return NULL;
 }
 
@@ -156,14 +168,22 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     job.tiles_x = (w + TILE_SIZE - 1) / TILE_SIZE;
     job.tile_count = job.tiles_x * ((h + TILE_SIZE - 1) / TILE_SIZE);
     job.spp = render_scene_sampler(rs)->spp;
-    job.diff_scale = fmax(0.125, 1.0 / sqrt((double)job.spp));
     atomic_init(&job.next_tile, 0);
     atomic_init(&job.tiles_done, 0);
     atomic_init(&job.running, 0);
+    pthread_mutex_init(&job.lock, NULL);
+    pthread_condattr_t cattr;
+    pthread_condattr_init(&cattr);
+    pthread_condattr_setclock(&cattr, CLOCK_MONOTONIC);
+    pthread_cond_init(&job.wake, &cattr);
+    pthread_condattr_destroy(&cattr);
     job.tile_source = opt->next_tile;
     job.tile_ctx = opt->tile_ctx;
     job.cancel = opt->cancel;
-    job.jitter = !opt->disable_pixel_jitter;
+    render_motion motion = render_scene_motion(rs);
+    job.needs = (camera_sample_needs){!opt->disable_pixel_jitter,
+                                      motion.camera || motion.surfaces || motion.media > 0,
+                                      camera_has_lens(render_scene_camera(rs))};
 
     int threads = opt->threads > 0 ? opt->threads : renderer_default_threads();
     if (threads > job.tile_count)
@@ -177,6 +197,8 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         free(job.busy_ns);
         free(tids);
         free(args);
+        pthread_cond_destroy(&job.wake);
+        pthread_mutex_destroy(&job.lock);
         return hz_fail(err, "out of memory starting %d render threads", threads);
     }
     for (int i = 0; i < threads; ++i)
@@ -206,13 +228,23 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         status = hz_fail(err, "could not start any render thread");
     } else {
         progress_begin(&bar, opt->progress, job.tile_count, t0);
+        pthread_mutex_lock(&job.lock);
         while (atomic_load(&job.running) > 0 && !(job.cancel && *job.cancel)) {
             progress_update(&bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx)
                                                    : atomic_load(&job.tiles_done),
                             now_seconds());
-            struct timespec nap = {0, 100 * 1000 * 1000};
-            nanosleep(&nap, NULL); /* a signal cuts it short */
+            /* Up to 100 ms; the last worker's signal, or a cancel noticed
+             * then (workers stop claiming tiles on their own), ends it. */
+            struct timespec until;
+            clock_gettime(CLOCK_MONOTONIC, &until);
+            until.tv_nsec += 100 * 1000 * 1000;
+            if (until.tv_nsec >= 1000000000L) {
+                until.tv_sec += 1;
+                until.tv_nsec -= 1000000000L;
+            }
+            pthread_cond_timedwait(&job.wake, &job.lock, &until);
         }
+        pthread_mutex_unlock(&job.lock);
     }
     for (int i = 0; i < started; ++i)
         pthread_join(tids[i], NULL);
@@ -249,5 +281,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     free(job.busy_ns);
     free(tids);
     free(args);
+    pthread_cond_destroy(&job.wake);
+    pthread_mutex_destroy(&job.lock);
     return status;
 }

@@ -67,9 +67,17 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
 /* The camera sample of pixel (px, py) drawn from `st` in pbrt-v4's order
  * (GetCameraSample): film position through the filter, time, lens. */
 camera_sample renderer_camera_sample(const filter *flt, sampler_state *st, int px, int py);
-/* The same with pixel jitter optionally disabled (renderer_options). */
-camera_sample renderer_camera_sample_jitter(const filter *flt, sampler_state *st, int px, int py,
-                                            bool jitter);
+/* What a camera sample needs to compute: without jitter the film position is
+ * the pixel centre (renderer_options.disable_pixel_jitter); without motion the
+ * time, and without a lens the lens point, are consumed but not computed
+ * (their values would change nothing), so every later dimension, and the
+ * image, stay the same. */
+typedef struct {
+    bool jitter, time, lens;
+} camera_sample_needs;
+
+camera_sample renderer_camera_sample_needs(const filter *flt, sampler_state *st, int px, int py,
+                                           camera_sample_needs needs);
 
 /* Number of online processors (at least 1). */
 int renderer_default_threads(void);

@@ -37,6 +37,9 @@ typedef struct {
 void sampler_start(const sampler *s, int px, int py, int sample_index, sampler_state *st);
 double sampler_1d(sampler_state *st);
 vec2 sampler_2d(sampler_state *st);
+/* Consumes n dimensions without computing them (1D and 2D dimensions alike):
+ * a caller that does not need a value keeps every later dimension where it was. */
+static inline void sampler_skip(sampler_state *st, int n) { st->dim += n; }
 /* The film position sample: the first 2D dimension, stratified across the pixel's samples. */
 vec2 sampler_pixel_2d(sampler_state *st);
 /* A seed for an rng stream (core/rng.h) of this pixel sample, for estimators that
