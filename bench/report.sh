@@ -56,7 +56,7 @@ report_ladder() {
     done
 }
 
-PEER_TARGETS="0.1 0.03 0.01 0.003 0.001 0.0003 0.0001"
+PEER_TARGETS="0.1 0.03 0.01 0.003 0.001 0.0003 0.0001 3e-05 1e-05 3e-06"
 
 report_peer() {
     [ "$(wc -l <"$RESULTS/peer.tsv")" -gt 1 ] || return 0
