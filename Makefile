@@ -6,7 +6,7 @@ SCENE      ?= scenes/foggy-dof.pbrt
 # Output: out/NAME.exr and out/NAME.png, NAME the scene file's name.
 OUT        ?= out/$(basename $(notdir $(SCENE)))
 
-.PHONY: all deps configure render test test-asan update-refs clean fuzz bench
+.PHONY: all deps configure render test test-asan update-refs clean fuzz bench bench-mpi
 
 all: deps configure
 	cmake --build $(BUILD) -j $(JOBS)
@@ -47,6 +47,10 @@ fuzz: deps
 # bench/cache/quick-results/. Writes bench/results/trade.md and trade.png.
 bench: all
 	BENCH_QUICK=$(BENCH_QUICK) sh bench/run.sh $(BUILD)/haze
+
+# MPI scaling (bench/results/mpi.md): 1, 2 and 4 ranks on one machine.
+bench-mpi: all
+	sh bench/mpi_scaling.sh $(BUILD)/haze
 
 clean:
 	rm -rf $(BUILD) $(BUILD_ASAN)

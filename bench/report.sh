@@ -72,13 +72,15 @@ report_peer() {
     echo
     echo "Renders (each against its own converged image; vdb_render renders one ray"
     echo "per pixel centre, haze \`centre\` with --disable-pixel-jitter, \`aa\` anti-aliased;"
-    echo "haze uses jittered marching):"
+    echo "haze \`raymarch S\` and \`jittered S\` rungs, step S, shadow step 2S):"
     echo
-    echo "haze's references carry Monte Carlo noise. Its size, measured with a"
+    echo "haze's references: at pixel centres a deterministic raymarch (step 0.0625),"
+    echo "whose error is estimated from the same render at twice the steps (MSE/9);"
+    echo "anti-aliased, 64 spp of tracking, whose Monte Carlo noise is measured with a"
     echo "second, independent reference at a quarter of the samples (B against A:"
     echo "E[MSE] = var A + var B = 5 var A):"
     echo
-    echo "| config | haze image | reference noise MSE | reference noise relMSE |"
+    echo "| config | haze image | reference error MSE | reference error relMSE |"
     echo "|---|---|---|---|"
     awk -F'\t' 'NR > 1 { printf "| %s | %s | %.3g | %.3g |\n", $1, $2, $3, $4 }' "$RESULTS/peer-floor.tsv"
     echo
