@@ -20,16 +20,12 @@
 #include <unistd.h>
 
 #include "cli_util.h"
+#include "core/clock.h"
 
 
 static char dir[1024], scene[1200], reference[1200], host[256];
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
+static double now(void) { return hz_clock_seconds(); }
 
 static void nap(double s)
 {

@@ -19,6 +19,7 @@
 #include <unistd.h>
 
 #include "cli_util.h"
+#include "core/clock.h"
 #include "film/exr.h"
 #include "film/png.h"
 
@@ -27,12 +28,7 @@ enum { TILE = 16, W = 256, H = 128 };
 
 static char dir[1024];
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec + ts.tv_nsec * 1e-9;
-}
+static double now(void) { return hz_clock_seconds(); }
 
 static void nap(double s)
 {
