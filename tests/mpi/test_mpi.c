@@ -11,7 +11,6 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
-#include <dirent.h>
 #include <errno.h>
 #include <signal.h>
 #include <stdbool.h>
@@ -54,25 +53,10 @@ static int run_shell(const char *cmd, char *out, size_t n)
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-static bool same_bytes(const char *a, const char *b)
-{
-    size_t na = 0, nb = 0;
-    unsigned char *x = read_whole_file(a, &na), *y = read_whole_file(b, &nb);
-    bool same = x && y && na == nb && memcmp(x, y, na) == 0;
-    free(x);
-    free(y);
-    return same;
-}
-
 static int count_temporaries(void)
 {
-    DIR *d = opendir(dir);
-    assert_non_null(d);
-    int n = 0;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL)
-        n += strstr(e->d_name, ".tmp-") != NULL;
-    closedir(d);
+    int n = count_temporaries_in(dir);
+    assert_true(n >= 0);
     return n;
 }
 
@@ -161,7 +145,7 @@ static void expect_identical(const char *mpirun_args, const char *out_name, cons
     if (rc != 0)
         fail_msg("mpirun %s exited %d: %s", mpirun_args, rc, text);
     snprintf(out, sizeof out, "%s/%s", dir, out_name);
-    if (!same_bytes(out, reference))
+    if (!files_equal(out, reference))
         fail_msg("%s differs from the single-process render", out);
 }
 
@@ -209,7 +193,7 @@ static void existing_output(const char *name, char *path, size_t n)
 
 static void expect_untouched(const char *path)
 {
-    assert_true(same_bytes(path, reference));
+    assert_true(files_equal(path, reference));
     assert_int_equal(count_temporaries(), 0);
 }
 

@@ -3,6 +3,8 @@
 #define HAZE_TESTS_CLI_UTIL_H
 
 
+#include <dirent.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -72,6 +74,31 @@ static inline unsigned char *read_whole_file(const char *path, size_t *size)
     fclose(f);
     *size = (size_t)n;
     return buf;
+}
+
+/* Whether two files hold the same bytes (false if either cannot be read). */
+static inline bool files_equal(const char *a, const char *b)
+{
+    size_t na = 0, nb = 0;
+    unsigned char *x = read_whole_file(a, &na), *y = read_whole_file(b, &nb);
+    bool same = x && y && na == nb && memcmp(x, y, na) == 0;
+    free(x);
+    free(y);
+    return same;
+}
+
+/* Number of files in `dir` whose name contains ".tmp-" (leftovers of atomic
+ * writes); -1 when `dir` cannot be read. */
+static inline int count_temporaries_in(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d)
+        return -1;
+    int n = 0;
+    for (struct dirent *e; (e = readdir(d)) != NULL;)
+        n += strstr(e->d_name, ".tmp-") != NULL;
+    closedir(d);
+    return n;
 }
 
 #endif

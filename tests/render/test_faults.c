@@ -8,7 +8,6 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
-#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
@@ -133,13 +132,8 @@ static bool file_exists(const char *path)
 /* Number of files in `dir` whose name contains ".tmp-" (atomic-write leftovers). */
 static int count_temporaries(void)
 {
-    DIR *d = opendir(dir);
-    assert_non_null(d);
-    int n = 0;
-    struct dirent *e;
-    while ((e = readdir(d)) != NULL)
-        n += strstr(e->d_name, ".tmp-") != NULL;
-    closedir(d);
+    int n = count_temporaries_in(dir);
+    assert_true(n >= 0);
     return n;
 }
 

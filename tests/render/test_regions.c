@@ -14,7 +14,6 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
-#include <dirent.h>
 #include <sys/stat.h>
 
 #include "cli_util.h"
@@ -301,12 +300,7 @@ static void expect_refused(const char *parts, const char *expected)
     assert_int_equal(n, strlen("an existing output\n"));
     assert_memory_equal(bytes, "an existing output\n", n);
     free(bytes);
-    DIR *d = opendir(dir);
-    assert_non_null(d);
-    for (struct dirent *e; (e = readdir(d));)
-        if (strstr(e->d_name, ".tmp-"))
-            fail_msg("temporary file left behind: %s", e->d_name);
-    closedir(d);
+    assert_int_equal(count_temporaries_in(dir), 0); /* no temporary file left behind */
 }
 
 /* Writes dir/OUT: the EXR `in` with its data window moved to (x0, y0) and
