@@ -560,10 +560,3 @@ void grid_region_range(const grid *g, grid_ibox box, float *min, float *max)
     *min = r.min;
     *max = r.max;
 }
-
-float grid_region_max(const grid *g, grid_ibox box)
-{
-    float lo, hi;
-    grid_region_range(g, box, &lo, &hi);
-    return fmaxf(hi, g->background);
-}

@@ -109,7 +109,7 @@ typedef enum {
  * background they are the constant value. `origin` is the node's first voxel and
  * `dim` its edge length in voxels (grid_level_dim(level)). Note that a trilinear
  * lookup inside a node also reads its neighbours' voxels: a node's max bounds the
- * field only once dilated by one voxel (see grid_region_max). */
+ * field only once dilated by one voxel (see grid_region_range). */
 typedef struct {
     grid_node_kind kind;
     int32_t origin[3];
@@ -119,15 +119,13 @@ typedef struct {
 
 grid_node grid_node_at(const grid *g, grid_level level, int32_t i, int32_t j, int32_t k);
 
-/* A conservative upper bound of the values of all voxels in the inclusive index box
- * `box` (node statistics and tile values of every node that overlaps it, and the
- * background). Inactive voxels inside leaves are assumed to hold the background,
- * as they do in fog volumes. For the trilinear field over the index-space region
- * [a, b], pass the voxels floor(a) .. floor(b) + 1. */
-float grid_region_max(const grid *g, grid_ibox box);
-/* Lower and upper bounds of the values of all voxels in `box` (same sources and
- * assumption; the lower bound is exact only where fully active leaves and
- * tiles cover the box, else it includes the background). */
+/* Conservative lower and upper bounds of the values of all voxels in the
+ * inclusive index box `box`, from the node statistics and tile values of every
+ * node that overlaps it, and the background where no node or tile covers part
+ * of it. Inactive voxels inside leaves are assumed to hold the background, as
+ * they do in fog volumes (so the lower bound of a leaf that is not fully active
+ * includes the background). For the trilinear field over the index-space
+ * region [a, b], pass the voxels floor(a) .. floor(b) + 1. */
 void grid_region_range(const grid *g, grid_ibox box, float *min, float *max);
 
 #endif
