@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/path.h"
+
 static bool rgb_is_finite(rgb c) { return isfinite(c.r) && isfinite(c.g) && isfinite(c.b); }
 
 /* A coefficient spectrum: finite and non-negative in every channel. */
@@ -24,21 +26,6 @@ static bool transform_is_finite(const transform *t)
             if (!isfinite(t->m.m[r][c]) || !isfinite(t->m_inv.m[r][c]))
                 return false;
     return true;
-}
-
-/* `name` relative to the directory of the scene file `base` (absolute names, and
- * names from scenes without a directory, e.g. parsed from a string, as they are). */
-static char *resolve_path(const char *base, const char *name)
-{
-    const char *slash = base ? strrchr(base, '/') : NULL;
-    size_t dir = (name[0] != '/' && slash) ? (size_t)(slash - base) + 1 : 0;
-    size_t n = strlen(name);
-    char *path = malloc(dir + n + 1);
-    if (!path)
-        return NULL;
-    memcpy(path, base, dir);
-    memcpy(path + dir, name, n + 1);
-    return path;
 }
 
 /* What MakeNamedMedium says about a grid's motion. */
@@ -138,7 +125,7 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
 {
     file_loc loc = e->entity.loc;
     const char *name = e->name ? e->name : "";
-    char *path = resolve_path(loc.file, filename);
+    char *path = path_relative_to(loc.file, filename);
     if (!path)
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": out of memory", name);
     hz_error inner;

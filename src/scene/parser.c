@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/path.h"
 #include "scene/mem.h"
 
 /* Deep enough for any real scene, shallow enough that the C stack is safe. */
@@ -192,24 +193,13 @@ static hz_status parse_text(parser *ps, const char *text, size_t len, const char
     return st;
 }
 
-static char *join_relative(const char *base_file, const char *path)
-{
-    const char *slash = strrchr(base_file, '/');
-    if (path[0] == '/' || !slash)
-        return scene_xstrdup(path);
-    size_t dir = (size_t)(slash - base_file) + 1;
-    size_t n = strlen(path);
-    char *out = scene_xmalloc(dir + n + 1);
-    memcpy(out, base_file, dir);
-    memcpy(out + dir, path, n + 1);
-    return out;
-}
-
 hz_status parser_include(parser *ps, const token *directive, const char *path, hz_error *err)
 {
     char name[48];
     directive_name(directive, name, sizeof name);
-    char *full = join_relative(directive->loc.file, path);
+    char *full = path_relative_to(directive->loc.file, path);
+    if (!full)
+        return hz_fail_at(err, directive->loc, "%s: out of memory", name);
     char *canon = realpath(full, NULL);
     if (!canon) {
         hz_status st = hz_fail_at(err, directive->loc, "%s: cannot open \"%s\": %s", name, full,
@@ -252,6 +242,7 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
     }
     const char *file = parser_intern(ps, full);
     free(full);
+    scene_desc_add_file(ps->sd, file);
     chain_push(ps, canon);
     hz_status st = parse_text(ps, text, len, file, NULL, err);
     free(ps->chain[--ps->chain_len]);

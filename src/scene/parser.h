@@ -86,5 +86,7 @@ void gstate_free(gstate *g);
 
 /* scene_desc.c */
 void scene_desc_init(scene_desc *sd, const char *file);
+/* Records a file the parser read; `owned_name` must point into sd->strings. */
+void scene_desc_add_file(scene_desc *sd, const char *owned_name);
 
 #endif

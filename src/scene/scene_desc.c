@@ -25,6 +25,7 @@ void scene_desc_init(scene_desc *sd, const char *file)
 {
     memset(sd, 0, sizeof *sd);
     file_loc start = {own(sd, file), 1, 1};
+    scene_desc_add_file(sd, start.file);
     sd->camera.entity = default_entity(sd, "perspective", start);
     sd->camera.camera_from_world = transform_identity();
     sd->camera.camera_from_world_end = transform_identity();
@@ -38,6 +39,12 @@ void scene_desc_init(scene_desc *sd, const char *file)
     sd->transform_start_time = 0.0;
     sd->transform_end_time = 1.0;
     params_init(&sd->options, start);
+}
+
+void scene_desc_add_file(scene_desc *sd, const char *owned_name)
+{
+    sd->files = scene_grow_implicit(sd->files, sd->file_count, sizeof *sd->files);
+    sd->files[sd->file_count++] = owned_name;
 }
 
 static void free_shapes(shape_entity *s, size_t n)
@@ -74,6 +81,7 @@ void scene_desc_free(scene_desc *sd)
     for (size_t i = 0; i < sd->string_count; ++i)
         free(sd->strings[i]);
     free(sd->strings);
+    free(sd->files);
     memset(sd, 0, sizeof *sd);
 }
 

@@ -105,6 +105,13 @@ typedef struct {
      * honours with the params getters. */
     param_list options;
 
+    /* Every file the parser read, in the order it opened them: the scene file
+     * first, then each Include/Import (as named, relative to the working
+     * directory; pointers into `strings`). Meshes and volumes are not here:
+     * their entities name them. */
+    const char **files;
+    size_t file_count;
+
     /* Owned strings (file names, names) that file_loc.file and others point to. */
     char **strings;
     size_t string_count, string_capacity;

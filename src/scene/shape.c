@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "core/path.h"
 #include "scene/mem.h"
 #include "scene/ply.h"
 
@@ -107,13 +108,9 @@ static hz_status create_plymesh(shape_entity *se, shape_geometry *g, hz_error *e
     if (!name)
         return hz_fail_at(err, se->entity.loc, "plymesh needs \"string filename\"");
     /* Relative to the directory of the scene file that names it. */
-    const char *base = se->entity.loc.file ? se->entity.loc.file : "";
-    const char *slash = strrchr(base, '/');
-    size_t dir = (name[0] != '/' && slash) ? (size_t)(slash - base) + 1 : 0;
-    size_t n = strlen(name);
-    char *path = scene_xmalloc(dir + n + 1);
-    memcpy(path, base, dir);
-    memcpy(path + dir, name, n + 1);
+    char *path = path_relative_to(se->entity.loc.file, name);
+    if (!path)
+        return hz_fail_at(err, params_loc(pl, "filename"), "plymesh: out of memory");
     hz_error perr;
     hz_status st = ply_read(path, g, &perr);
     free(path);

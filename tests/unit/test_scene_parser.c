@@ -523,6 +523,11 @@ static void test_include(void **state)
     assert_int_equal(sd.shapes[0].entity.loc.line, 2);
     assert_int_equal(sd.shapes[0].entity.loc.column, 3);
     assert_string_equal(sd.shapes[1].entity.loc.file, path);
+    /* Every file read, in the order opened: the scene, then its includes. */
+    assert_int_equal(sd.file_count, 3);
+    assert_string_equal(sd.files[0], path);
+    assert_string_equal(sd.files[1], strcat(strcpy((char[800]){0}, dir), "/sub/a.pbrt"));
+    assert_string_equal(sd.files[2], strcat(strcpy((char[800]){0}, dir), "/sub/b.pbrt"));
     scene_desc_free(&sd);
 
     /* A cycle through two files, reported at the Include that closes it. */
