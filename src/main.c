@@ -447,6 +447,11 @@ static int run_render(const cli *c, distributed *dist)
     long bad = film_nonfinite_count(f);
     if (bad > 0)
         fprintf(stderr, "haze: warning: %ld non-finite sample values were dropped\n", bad);
+    if (stats.lost_paths > 0)
+        fprintf(stderr,
+                "haze: warning: %llu rays crossed more than %d interfaces and were dropped "
+                "(black)\n",
+                (unsigned long long)stats.lost_paths, GEOMETRY_MAX_CROSSINGS);
     if (!c->quiet) {
         char wall[32];
         progress_format_duration(stats.wall_seconds, wall, sizeof wall);

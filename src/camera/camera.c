@@ -115,8 +115,8 @@ const char *camera_config_check(const camera_config *c, hz_error *err)
                 w[0], w[1], w[2], w[3]);
         return "screenwindow";
     }
-    if (!isfinite(c->lens_radius) || c->lens_radius < 0.0) {
-        hz_fail(err, "\"lensradius\" must be finite and >= 0, got %g", c->lens_radius);
+    if (!isfinite(c->lens_radius) || c->lens_radius < 0.0 || c->lens_radius > HZ_MAX_COORD) {
+        hz_fail(err, "\"lensradius\" must be in [0, %g], got %g", HZ_MAX_COORD, c->lens_radius);
         return "lensradius";
     }
     if (!isfinite(c->focal_distance) || c->focal_distance <= 0.0) {

@@ -316,9 +316,9 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     if (acc.counts)
         reduce_sum(acc.counts, acc.count_count, MPI_UINT32_T, sizeof(uint32_t), d->rank);
     long own_nonfinite = film_nonfinite_count(f);
-    uint64_t sums[5] = {mine.camera_rays, mine.shadow_rays, mine.density_lookups,
-                        (uint64_t)own_nonfinite, mine.majorant_steps};
-    reduce_sum(sums, 5, MPI_UINT64_T, sizeof(uint64_t), d->rank);
+    uint64_t sums[6] = {mine.camera_rays, mine.shadow_rays, mine.density_lookups,
+                        (uint64_t)own_nonfinite, mine.majorant_steps, mine.lost_paths};
+    reduce_sum(sums, 6, MPI_UINT64_T, sizeof(uint64_t), d->rank);
     double times[3] = {mine.time_busy_s, mine.time_media_s, mine.time_film_s};
     reduce_sum(times, 3, MPI_DOUBLE, sizeof(double), d->rank);
     double fig[FIG_COUNT] = {0};
@@ -346,6 +346,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
         stats->shadow_rays = sums[1];
         stats->density_lookups = sums[2];
         stats->majorant_steps = sums[4];
+        stats->lost_paths = sums[5];
         stats->time_busy_s = times[0];
         stats->time_media_s = times[1];
         stats->time_film_s = times[2];

@@ -1,5 +1,7 @@
 #include "render/geometry.h"
 
+#include "core/ray.h"
+
 #include <stdatomic.h>
 
 #include <assert.h>
@@ -292,9 +294,19 @@ static hz_status check_device(RTCDevice device, hz_error *err)
     }
 }
 
+/* rtcNewScene failed: the device's error, or a generic message. */
+static hz_status new_scene_failed(RTCDevice device, hz_error *err)
+{
+    if (check_device(device, err) != HZ_OK)
+        return HZ_ERROR;
+    return hz_fail(err, "cannot create an Embree scene");
+}
+
 static RTCScene new_scene(RTCDevice device)
 {
     RTCScene s = rtcNewScene(device);
+    if (!s)
+        return NULL;
     /* Robust mode makes the triangle test watertight against edges and
      * vertices; the cost is small and leaks between triangles are worse. */
     rtcSetSceneFlags(s, RTC_SCENE_FLAG_ROBUST);
@@ -314,6 +326,8 @@ static hz_status build_objects(geometry *g, scene_desc *sd, const material *mate
         object_entity *oe = &sd->objects[o];
         prototype *pr = &g->objects[o];
         pr->scene = new_scene(g->device);
+        if (!pr->scene)
+            return new_scene_failed(g->device, err);
         pr->shapes = calloc(oe->shape_count ? oe->shape_count : 1, sizeof *pr->shapes);
         if (!pr->shapes)
             return hz_fail(err, "out of memory");
@@ -438,6 +452,8 @@ static hz_status build_moving_shape(geometry *g, scene_desc *sd, size_t i,
         return hz_fail(err, "out of memory");
     g->shape_instances[i] = in;
     in->own_scene = new_scene(g->device);
+    if (!in->own_scene)
+        return new_scene_failed(g->device, err);
     in->shapes = &g->shapes[i];
     shape_entity *se = &sd->shapes[i];
     if (build_shape(g->device, in->own_scene, 0, sd, se, transform_identity(), materials,
@@ -552,6 +568,11 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
     }
     rtcSetDeviceMemoryMonitorFunction(g->device, embree_memory, g);
     g->scene = new_scene(g->device);
+    if (!g->scene) {
+        hz_status st = new_scene_failed(g->device, err);
+        geometry_destroy(g);
+        return st;
+    }
     g->shapes = calloc(sd->shape_count ? sd->shape_count : 1, sizeof *g->shapes);
     if (!g->shapes) {
         geometry_destroy(g);
@@ -707,9 +728,21 @@ static void init_ray(struct RTCRay *r, vec3 o, vec3 d, double tmax, float time)
     r->flags = 0;
 }
 
+/* What Embree's ray validity check accepts (kernels/common/ray.h: |org| and
+ * |dir| components at most FLT_LARGE = 1.844e18, tnear and tfar not NaN),
+ * with a margin, and tnear >= 0 (its documented range). */
+static bool embree_can_trace(vec3 o, vec3 d, double tmin, double tmax)
+{
+    const double large = 1e18;
+    return point_within(o, large) && point_within(d, large) && tmin >= 0.0 && !isnan(tmax) &&
+           (float)tmin <= large;
+}
+
 bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
                         geom_hit *hit)
 {
+    if (!embree_can_trace(o, d, tmin, tmax))
+        return false;
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
@@ -748,6 +781,8 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
 
 bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double time)
 {
+    if (!embree_can_trace(o, d, 0.0, tmax))
+        return true;
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRay r;

@@ -103,10 +103,19 @@ bool geometry_has_motion(const geometry *g);
 size_t geometry_shape_count(const geometry *g);
 geom_shape *geometry_shape(geometry *g, size_t i);
 
+/* Interfaces one ray may cross before it is dropped (black, and counted in
+ * render_stats.lost_paths: haze warns): bounds the work of pathological nested
+ * boundaries. */
+#define GEOMETRY_MAX_CROSSINGS 64
+
 /* Closest hit of o + t d for t in (tmin, tmax) at scene time `time` (the
  * ray's time, in TransformTimes units). Interface surfaces are hit
  * too (the integrator steps through them by raising tmin, which keeps the
- * ray's line exact). Thread-safe. */
+ * ray's line exact). Thread-safe.
+ * A ray Embree cannot trace (a non-finite value, or a coordinate beyond
+ * Embree's range, ~1.8e18) hits nothing, and is blocked for geometry_occluded:
+ * the scene factories keep such rays from arising (core/ray.h, HZ_MAX_COORD);
+ * this keeps a missed case from aborting inside Embree. */
 bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
                         geom_hit *hit);
 /* Any non-interface surface on o + t d, t in (0, tmax), at scene time `time`. Thread-safe. */

@@ -104,7 +104,11 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
     double tmin = 0.0, t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
         bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, r->time, &h);
-        double t_hit = !hit ? INFINITY : sc->medium_count > 0 ? volume_crossing_t(&h, o, d) : h.t;
+        /* A ray that leaves the scene inside a medium ends at HZ_FAR_COORD
+         * (core/ray.h): no medium point beyond it is traced. */
+        double t_hit = !hit ? (medium >= 0 ? ray_far_t(o, d) : INFINITY)
+                       : sc->medium_count > 0 ? volume_crossing_t(&h, o, d)
+                                              : h.t;
         if (medium >= 0) {
             uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
             volume_segment(sc, medium, o, d, t_start, t_hit, &beta, &L, st, &walk);
@@ -119,8 +123,10 @@ rgb integrator_li(const integrator_scene *sc, const ray *r, sampler_state *st, d
         }
         if (h.shape->material->kind != MATERIAL_INTERFACE)
             break;
-        if (crossing == VOLUME_MAX_CROSSINGS)
+        if (crossing == VOLUME_MAX_CROSSINGS) {
+            walk.lost++;
             goto done;
+        }
         medium = geometry_medium_after(&h, d, medium);
         t_start = fmax(t_hit, t_start);
         tmin = geometry_step_past(&h, o, d);
@@ -146,5 +152,6 @@ done:
     counters->shadow_rays += walk.shadow_rays;
     counters->density_lookups += walk.lookups;
     counters->majorant_steps += walk.majorant_steps;
+    counters->lost_paths += walk.lost;
     return L;
 }

@@ -1,5 +1,6 @@
 #include "render/lights.h"
 
+#include "core/ray.h"
 #include "core/sampling.h"
 
 #include <float.h>
@@ -138,6 +139,12 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
                           "\"distant\", \"infinite\")",
                           type);
     }
+    vec3 p = out->kind == LIGHT_POINT ? out->point.p : out->kind == LIGHT_SPOT ? out->spot.p : v3(0, 0, 0);
+    if (!point_within(p, HZ_MAX_COORD))
+        params_reject(pl, "from",
+                      "light position (%g, %g, %g) in render space is beyond +-%g, where haze "
+                      "cannot trace rays",
+                      p.x, p.y, p.z, HZ_MAX_COORD);
     char what[128];
     snprintf(what, sizeof what, "LightSource \"%s\"", type);
     return params_finish(pl, what, err);

@@ -67,6 +67,7 @@ typedef struct {
     uint64_t camera_rays, shadow_rays;
     uint64_t density_lookups;
     uint64_t majorant_steps;   /* majorant-grid cells entered by media walks */
+    uint64_t lost_paths;       /* rays dropped (black) after VOLUME_MAX_CROSSINGS interfaces */
     /* With `timed` (haze render --stats), the nanoseconds spent in media walks
      * (camera segments and shadow rays through media) and in the film. */
     bool timed;

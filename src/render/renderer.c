@@ -272,6 +272,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
             stats->shadow_rays += job.counters[i].shadow_rays;
             stats->density_lookups += job.counters[i].density_lookups;
             stats->majorant_steps += job.counters[i].majorant_steps;
+            stats->lost_paths += job.counters[i].lost_paths;
             stats->time_busy_s += job.busy_ns[i] * 1e-9;
             stats->time_media_s += job.counters[i].media_ns * 1e-9;
             stats->time_film_s += job.counters[i].film_ns * 1e-9;

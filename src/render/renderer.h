@@ -53,6 +53,7 @@ typedef struct {
     uint64_t camera_rays, shadow_rays;
     uint64_t density_lookups; /* grid media */
     uint64_t majorant_steps;  /* majorant-grid cells entered */
+    uint64_t lost_paths;      /* camera or shadow rays dropped after too many interfaces */
     /* Thread seconds: busy (all work of the render threads), and within it
      * media walks and film updates (only with renderer_options.timing). */
     double time_busy_s, time_media_s, time_film_s;

@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "core/ray.h"
 #include "media/phase.h"
 
 volume_settings volume_settings_default(void)
@@ -121,12 +122,17 @@ static rgb shadow_walk(const volume_scene *vs, vec3 o, vec3 w, double tmin, doub
         geom_hit h;
         bool hit = geometry_intersect(vs->geom, o, w, tmin, tmax, walk->time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
-            if (h.t >= t_fill || crossing == VOLUME_MAX_CROSSINGS)
+            if (h.t >= t_fill)
                 return rgb_grey(0.0);
+            if (crossing == VOLUME_MAX_CROSSINGS) {
+                walk->lost++;
+                return rgb_grey(0.0);
+            }
             tmin = geometry_step_past(&h, o, w);
             continue;
         }
-        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start) : tmax;
+        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start)
+                     : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
             T = rgb_mul(T,
                         segment_transmittance(vs, &vs->media[medium], o, w, t_start, t_end, walk));
@@ -135,8 +141,10 @@ static rgb shadow_walk(const volume_scene *vs, vec3 o, vec3 w, double tmin, doub
         }
         if (!hit)
             return T;
-        if (crossing == VOLUME_MAX_CROSSINGS)
+        if (crossing == VOLUME_MAX_CROSSINGS) {
+            walk->lost++;
             return rgb_grey(0.0);
+        }
         medium = geometry_medium_after(&h, w, medium);
         t_start = t_end;
         tmin = geometry_step_past(&h, o, w);

@@ -56,7 +56,7 @@ typedef struct {
 
 /* A ray crossing more interfaces than this is treated as lost (black): it
  * bounds the work of pathological nested boundaries. */
-#define VOLUME_MAX_CROSSINGS 64
+#define VOLUME_MAX_CROSSINGS GEOMETRY_MAX_CROSSINGS
 
 /* Shadow rays from scattering points search surfaces from this fraction of
  * the point's largest render-space coordinate behind it (2^-16), so that
@@ -93,6 +93,7 @@ typedef struct {
     uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
     uint64_t shadow_rays;
     uint64_t majorant_steps; /* majorant-grid cells entered */
+    uint64_t lost;           /* shadow rays dropped after VOLUME_MAX_CROSSINGS interfaces */
 } volume_walk;
 
 /* Where the double-precision ray o + t w crosses the surface of hit `h` (found

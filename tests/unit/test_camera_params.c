@@ -277,7 +277,7 @@ static void test_illegal_values_name_their_place(void **state)
         {"fov", 180, "scene.pbrt:12:9: \"fov\" must be in (0, 180) degrees, got 180"},
         {"fov", -3, "scene.pbrt:12:9: \"fov\" must be in (0, 180) degrees, got -3"},
         {"fov", INFINITY, "scene.pbrt:12:9: \"fov\" must be in (0, 180) degrees, got inf"},
-        {"lensradius", -0.5, "scene.pbrt:12:9: \"lensradius\" must be finite and >= 0, got -0.5"},
+        {"lensradius", -0.5, "scene.pbrt:12:9: \"lensradius\" must be in [0, 1e+16], got -0.5"},
         {"focaldistance", 0, "scene.pbrt:12:9: \"focaldistance\" must be finite and > 0, got 0"},
         {"focaldistance", -2, "scene.pbrt:12:9: \"focaldistance\" must be finite and > 0, got -2"},
         {"focaldistance", NAN,
