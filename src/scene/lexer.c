@@ -12,6 +12,9 @@ void lexer_init(lexer *lx, const char *src, size_t len, const char *file)
     lx->src = src;
     lx->len = len;
     lx->pos = 0;
+    /* A UTF-8 byte order mark (editors on Windows write one) is not text. */
+    if (len >= 3 && memcmp(src, "\xEF\xBB\xBF", 3) == 0)
+        lx->pos = 3;
     lx->line = 1;
     lx->column = 1;
     lx->file = file;
@@ -62,6 +65,9 @@ static hz_status lex_string(lexer *lx, token *tok, hz_error *err)
         char c = lx->src[lx->pos];
         if (c == '"')
             break;
+        /* C strings end at a NUL: the name would be silently cut short. */
+        if (c == '\0')
+            return hz_fail_at(err, here(lx), "NUL byte inside a string");
         if (c == '\\') {
             file_loc at = here(lx);
             advance(lx);

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/file.h"
 #include "core/path.h"
 #include "scene/mem.h"
 
@@ -73,7 +74,9 @@ hz_status parser_string_arg(parser *ps, const token *directive, const char **out
                           directive_name(directive, name, sizeof name), got);
     }
     char *s = token_string_dup(&t);
-    *out = parser_intern(ps, s ? s : "");
+    if (!s)
+        return hz_fail_at(err, t.loc, "out of memory");
+    *out = parser_intern(ps, s);
     free(s);
     return HZ_OK;
 }
@@ -113,36 +116,6 @@ hz_status parser_numbers(parser *ps, const token *directive, double *out, int n,
 }
 
 /* Reads a whole file; NUL bytes are kept (the lexer reports them). */
-static hz_status read_file(const char *path, char **text, size_t *len, int *error_number)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        *error_number = errno;
-        return HZ_ERROR;
-    }
-    size_t cap = 1 << 16, n = 0;
-    char *buf = scene_xmalloc(cap);
-    for (;;) {
-        if (n == cap) {
-            cap *= 2;
-            buf = scene_xrealloc(buf, cap);
-        }
-        size_t got = fread(buf + n, 1, cap - n, f);
-        n += got;
-        if (got == 0)
-            break;
-    }
-    int failed = ferror(f);
-    *error_number = failed ? (errno ? errno : EIO) : 0;
-    fclose(f);
-    if (failed) {
-        free(buf);
-        return HZ_ERROR;
-    }
-    *text = buf;
-    *len = n;
-    return HZ_OK;
-}
 
 /* The canonical name used for cycle detection; falls back to the name itself
  * for in-memory scenes whose name is not a file. */
@@ -232,10 +205,10 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
     }
     char *text;
     size_t len;
-    int en;
-    if (read_file(full, &text, &len, &en) != HZ_OK) {
+    hz_error ferr;
+    if (file_read_all(full, FILE_LIMIT_SCENE, &text, &len, &ferr) != HZ_OK) {
         hz_status st = hz_fail_at(err, directive->loc, "%s: cannot read \"%s\": %s", name, full,
-                                  strerror(en));
+                                  ferr.message);
         free(full);
         free(canon);
         return st;
@@ -287,10 +260,10 @@ hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err)
 {
     char *text;
     size_t len;
-    int en;
+    hz_error ferr;
     memset(out, 0, sizeof *out);
-    if (read_file(path, &text, &len, &en) != HZ_OK)
-        return hz_fail(err, "%s: cannot read scene: %s", path, strerror(en));
+    if (file_read_all(path, FILE_LIMIT_SCENE, &text, &len, &ferr) != HZ_OK)
+        return hz_fail(err, "%s: cannot read scene: %s", path, ferr.message);
     hz_status st = parse_root(text, len, path, out, err);
     free(text);
     return st;

@@ -202,6 +202,8 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
                                   p->name, got);
             }
             p->strs[i] = token_string_dup(&vals[i]);
+            if (!p->strs[i])
+                return hz_fail_at(err, vals[i].loc, "out of memory");
         }
         return HZ_OK;
     case PARAM_BOOL:
@@ -272,6 +274,8 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
 static hz_status parse_one(parser *ps, const token *decl_tok, param_list *out, hz_error *err)
 {
     char *decl = token_string_dup(decl_tok);
+    if (!decl)
+        return hz_fail_at(err, decl_tok->loc, "out of memory");
     char type[128], name[128];
     param p;
     memset(&p, 0, sizeof p);

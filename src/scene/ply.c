@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/file.h"
 #include "scene/mem.h"
 
 #define MAX_ELEMENTS 32
@@ -379,22 +380,12 @@ hz_status ply_read(const char *path, shape_geometry *out, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     out->kind = GEOMETRY_TRIANGLES;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return hz_fail(err, "%s: cannot open: %s", path, strerror(errno));
-    size_t cap = 1 << 16, len = 0, got;
-    unsigned char *data = scene_xmalloc(cap);
-    while ((got = fread(data + len, 1, cap - len, f)) > 0) {
-        len += got;
-        if (len == cap)
-            data = scene_xrealloc(data, cap *= 2);
-    }
-    int failed = ferror(f);
-    fclose(f);
-    if (failed) {
-        free(data);
-        return hz_fail(err, "%s: cannot read", path);
-    }
+    char *text;
+    size_t len;
+    hz_error ferr;
+    if (file_read_all(path, FILE_LIMIT_MESH, &text, &len, &ferr) != HZ_OK)
+        return hz_fail(err, "%s: cannot open: %s", path, ferr.message);
+    unsigned char *data = (unsigned char *)text;
     ply_reader r = {path, data, len, 0, FMT_ASCII, 0};
     ply_element *els = scene_xarray(MAX_ELEMENTS, sizeof *els);
     int nel;

@@ -8,6 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
+
+#include <zlib.h>
 
 #include "scene/scene_desc.h"
 
@@ -552,6 +555,83 @@ static void test_include(void **state)
     assert_non_null(strstr(err.message, "/nonexistent/x.pbrt: cannot read scene"));
 }
 
+static void write_bytes(const char *path, const char *bytes, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, n, f), n);
+    fclose(f);
+}
+
+/* What haze reads as scene input: regular files only (never blocking on a
+ * FIFO or growing without bound on a device), gzip-compressed files, a UTF-8
+ * byte order mark; a NUL inside a string is refused. */
+static void test_input_files(void **state)
+{
+    (void)state;
+    char dir[512], path[700], fifo[700];
+    snprintf(dir, sizeof dir, "%s/scene_input_files", HAZE_TMP);
+    mkdir(dir, 0755);
+    scene_desc sd;
+    hz_error err;
+
+    /* Devices and FIFOs, as the scene and as an Include. */
+    assert_int_equal(scene_parse_file("/dev/zero", &sd, &err), HZ_ERROR);
+    assert_string_equal(err.message,
+                        "/dev/zero: cannot read scene: is a device; haze reads only regular files");
+    snprintf(path, sizeof path, "%s/main.pbrt", dir);
+    write_file(path, "WorldBegin\nInclude \"/dev/urandom\"\n");
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "main.pbrt:2:1: Include: cannot read \"/dev/urandom\": is "
+                                        "a device; haze reads only regular files"));
+    snprintf(fifo, sizeof fifo, "%s/pipe", dir);
+    unlink(fifo);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    write_file(path, "WorldBegin\nInclude \"pipe\"\n");
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "is a FIFO; haze reads only regular files"));
+    snprintf(path, sizeof path, "%s", dir);
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "is a directory"));
+
+    /* gzip: the scene itself and an Include. */
+    const char *text = "WorldBegin\nShape \"sphere\" \"float radius\" 2\n";
+    snprintf(path, sizeof path, "%s/sub.pbrt.gz", dir);
+    gzFile gz = gzopen(path, "wb");
+    assert_non_null(gz);
+    assert_int_equal(gzwrite(gz, text, (unsigned)strlen(text)), (int)strlen(text));
+    gzclose(gz);
+    if (scene_parse_file(path, &sd, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(sd.shape_count, 1);
+    assert_int_equal(sd.shapes[0].entity.loc.line, 2);
+    scene_desc_free(&sd);
+    snprintf(path, sizeof path, "%s/main.pbrt", dir);
+    write_file(path, "Include \"sub.pbrt.gz\"\nShape \"disk\"\n");
+    if (scene_parse_file(path, &sd, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(sd.shape_count, 2);
+    scene_desc_free(&sd);
+    snprintf(path, sizeof path, "%s/bad.pbrt.gz", dir);
+    write_bytes(path, "\x1f\x8b\x08\x00garbage-garbage", 19);
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "bad.pbrt.gz: cannot read scene: "));
+
+    /* A UTF-8 byte order mark is skipped; places count from after it. */
+    snprintf(path, sizeof path, "%s/bom.pbrt", dir);
+    write_bytes(path, "\xEF\xBB\xBFWorldBegin\nShape \"sphere\"\n", 29);
+    if (scene_parse_file(path, &sd, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(sd.shapes[0].entity.loc.line, 2);
+    scene_desc_free(&sd);
+
+    /* A NUL inside a string would cut the name short: refused at its place. */
+    snprintf(path, sizeof path, "%s/nul.pbrt", dir);
+    write_bytes(path, "WorldBegin\nShape \"sph\0ere\"\n", 27);
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "nul.pbrt:2:11: NUL byte inside a string"));
+}
+
 /* Garbage must give an error or a scene, never a crash, hang or leak (run
  * under ASan): random bytes, and random mutations of a valid scene. */
 static void test_garbage(void **state)
@@ -595,6 +675,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_input_files),
         cmocka_unit_test(test_look_at),
         cmocka_unit_test(test_transform_is_transposed),
         cmocka_unit_test(test_composition_order),

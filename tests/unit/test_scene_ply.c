@@ -7,6 +7,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include <zlib.h>
+
 #include "scene/ply.h"
 
 static void tmp_path(char *buf, size_t n, const char *name)
@@ -194,12 +196,38 @@ static void test_errors(void **state)
     expect_error(path, "does-not-exist.ply: cannot open");
 }
 
+/* pbrt-v4 reads .ply.gz; a device is refused instead of read forever. */
+static void test_gzip_and_devices(void **state)
+{
+    (void)state;
+    char plain[512], packed[512];
+    tmp_path(plain, sizeof plain, "gz_quad.ply");
+    tmp_path(packed, sizeof packed, "gz_quad.ply.gz");
+    write_bytes(plain, ascii_ply, sizeof ascii_ply - 1);
+    gzFile gz = gzopen(packed, "wb");
+    assert_non_null(gz);
+    assert_int_equal(gzwrite(gz, ascii_ply, sizeof ascii_ply - 1), (int)(sizeof ascii_ply - 1));
+    gzclose(gz);
+    shape_geometry a, b;
+    hz_error err;
+    if (ply_read(plain, &a, &err) != HZ_OK || ply_read(packed, &b, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(a.vertex_count, b.vertex_count);
+    assert_int_equal(a.triangle_count, b.triangle_count);
+    assert_memory_equal(a.p, b.p, 3 * a.vertex_count * sizeof *a.p);
+    assert_memory_equal(a.indices, b.indices, 3 * a.triangle_count * sizeof *a.indices);
+    shape_geometry_free(&a);
+    shape_geometry_free(&b);
+    expect_error("/dev/zero", "/dev/zero: cannot open: is a device; haze reads only regular files");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ascii),
         cmocka_unit_test(test_binary),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_gzip_and_devices),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

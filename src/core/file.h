@@ -1,0 +1,22 @@
+/* Reading input files whole: scene files, includes, PLY meshes. */
+#ifndef HAZE_CORE_FILE_H
+#define HAZE_CORE_FILE_H
+
+#include <stddef.h>
+
+#include "core/error.h"
+
+/* Size limits of what haze reads whole (after decompression). They stop a
+ * device such as /dev/zero, or a gzip bomb, from growing memory until the
+ * process is killed; real scenes stay far below them. */
+#define FILE_LIMIT_SCENE ((size_t)1 << 30) /* scene text: 1 GiB */
+#define FILE_LIMIT_MESH ((size_t)8 << 30)  /* a PLY mesh: 8 GiB */
+
+/* Reads `path` whole into a malloc'ed buffer (*data, NUL-terminated; *len
+ * excludes the NUL). Only regular files are read: a directory, device, FIFO or
+ * socket is refused without blocking on it. A name ending in ".gz" is
+ * gunzipped (pbrt-v4 reads .pbrt.gz and .ply.gz). More than `limit` bytes is
+ * an error. The message is the reason only; callers name the file. */
+hz_status file_read_all(const char *path, size_t limit, char **data, size_t *len, hz_error *err);
+
+#endif
