@@ -15,6 +15,7 @@
 #include "cli/diff.h"
 #include "cli/info.h"
 #include "cli/merge.h"
+#include "cli/outputs.h"
 #include "mpi/distributed.h"
 #include "render/progress.h"
 #include "render/render_scene.h"
@@ -199,64 +200,13 @@ static int parse_render_args(int argc, char **argv, cli *c)
     return -1;
 }
 
-/* Fails early, before minutes of rendering, when the output cannot be written:
- * creates (and removes) a probe file where the output's temporary file will go,
- * which also catches read-only file systems that access() does not see for root. */
-static int check_output_dir(const char *path, hz_error *err)
-{
-    char dir[PATH_MAX];
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        snprintf(dir, sizeof dir, ".");
-    else if (slash == path)
-        snprintf(dir, sizeof dir, "/");
-    else
-        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    char probe[PATH_MAX + 32];
-    snprintf(probe, sizeof probe, "%s/.haze-probe-XXXXXX", dir);
-    int fd = mkstemp(probe);
-    if (fd < 0) {
-        int e = errno;
-        struct stat st;
-        if (stat(dir, &st) != 0)
-            hz_fail(err, "cannot write '%s': directory '%s' does not exist", path, dir);
-        else if (!S_ISDIR(st.st_mode))
-            hz_fail(err, "cannot write '%s': '%s' is not a directory", path, dir);
-        else
-            hz_fail(err, "cannot write '%s': directory '%s' is not writable (%s)", path, dir,
-                    strerror(e));
-        return -1;
-    }
-    close(fd);
-    unlink(probe);
-    return 0;
-}
-
-/* Where an interrupted render's partial image goes: the requested path if
- * nothing is there yet, else NAME.partial.EXT next to it (replacing an older
- * partial image), so that a partial image never replaces a file silently. */
-static void partial_path(const char *path, char *out, size_t n)
-{
-    struct stat st;
-    if (lstat(path, &st) != 0 && errno == ENOENT) {
-        snprintf(out, n, "%s", path);
-        return;
-    }
-    const char *slash = strrchr(path, '/');
-    const char *dot = strrchr(path, '.');
-    if (!dot || (slash && dot < slash) || dot == path || (slash && dot == slash + 1))
-        snprintf(out, n, "%s.partial", path);
-    else
-        snprintf(out, n, "%.*s.partial%s", (int)(dot - path), path, dot);
-}
-
 static void format_count(char *buf, size_t n, long long v) { snprintf(buf, n, "%lld", v); }
 
 /* Writes the EXR (and the PNG preview) of an interrupted render: rendered
  * tiles only, with header attributes describing which. */
-static int write_partial(const cli *c, film *f, double ratio, const render_stats *stats)
+static int write_partial(const render_outputs *outs, film *f, double ratio,
+                         const render_stats *stats)
 {
-    const film_params *fp = film_get_params(f);
     if (stats->tiles_done == 0) {
         fprintf(stderr, "haze: interrupted before any tile was rendered: nothing written\n");
         return EXIT_INTERRUPTED;
@@ -280,21 +230,22 @@ static int write_partial(const cli *c, film *f, double ratio, const render_stats
     };
     film_output out = {attrs, (int)(sizeof attrs / sizeof attrs[0]), &output_note};
     char exr_path[PATH_MAX + 16], png_path[PATH_MAX + 16];
-    partial_path(fp->filename, exr_path, sizeof exr_path);
+    outputs_partial_path(outs->exr, exr_path, sizeof exr_path);
     hz_error err = {{0}};
     if (film_write_exr_with(f, exr_path, ratio, &out, &err) != HZ_OK) {
         fprintf(stderr, "haze: %s\n", err.message);
         return EXIT_SCENE;
     }
-    if (c->preview) {
-        partial_path(c->preview, png_path, sizeof png_path);
+    bool preview = outs->png[0] != '\0';
+    if (preview) {
+        outputs_partial_path(outs->png, png_path, sizeof png_path);
         if (film_write_png_with(f, png_path, ratio, &out, &err) != HZ_OK) {
             fprintf(stderr, "haze: %s\n", err.message);
             return EXIT_SCENE;
         }
     }
     fprintf(stderr, "haze: interrupted: wrote %d of %d tiles to %s%s%s\n", stats->tiles_done,
-            stats->tile_count, exr_path, c->preview ? " and " : "", c->preview ? png_path : "");
+            stats->tile_count, exr_path, preview ? " and " : "", preview ? png_path : "");
     return EXIT_INTERRUPTED;
 }
 
@@ -402,9 +353,8 @@ static int run_render(const cli *c, distributed *dist)
     film *f = st == HZ_OK ? render_scene_film(rs) : NULL;
     const film_params *fp = f ? film_get_params(f) : NULL;
     int exit_code = 0;
-    if (st == HZ_OK && rank0 &&
-        (check_output_dir(fp->filename, &err) != 0 ||
-         (c->preview && check_output_dir(c->preview, &err) != 0)))
+    render_outputs outs;
+    if (st == HZ_OK && rank0 && outputs_resolve(&sd, fp->filename, c->preview, &outs, &err) != HZ_OK)
         st = HZ_ERROR;
     if (distributed_agree(dist, st, &err, st == HZ_OK ? distributed_fingerprint(c->scene, rs) : 0,
                           stderr) != HZ_OK) {
@@ -430,12 +380,12 @@ static int run_render(const cli *c, distributed *dist)
         goto done; /* rank 0 holds the whole film */
     double ratio = camera_imaging_ratio(render_scene_camera(rs), fp);
     if (stats.interrupted) {
-        exit_code = write_partial(c, f, ratio, &stats);
+        exit_code = write_partial(&outs, f, ratio, &stats);
         goto done;
     }
     film_output out = {NULL, 0, &output_note};
-    if (film_write_exr_with(f, fp->filename, ratio, &out, &err) != HZ_OK ||
-        (c->preview && film_write_png_with(f, c->preview, ratio, &out, &err) != HZ_OK)) {
+    if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
+        (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
         fprintf(stderr, "haze: %s\n", err.message);
         exit_code = EXIT_SCENE;
         goto done;

@@ -130,6 +130,12 @@ hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err);
 hz_status scene_parse_string(const char *text, const char *name, scene_desc *out, hz_error *err);
 void scene_desc_free(scene_desc *sd);
 
+/* Every file a render of `sd` reads, as paths relative to the working
+ * directory: sd->files (the scene and its includes), then each plymesh's and
+ * nanovdb medium's "filename". Free with scene_input_files_free. */
+hz_status scene_input_files(const scene_desc *sd, char ***files, size_t *count, hz_error *err);
+void scene_input_files_free(char **files, size_t count);
+
 /* The index in sd->media of the medium called `name`; -1 for "" or NULL
  * (vacuum), SCENE_MEDIUM_UNDEFINED when no MakeNamedMedium defines it. */
 #define SCENE_MEDIUM_UNDEFINED (-2)

@@ -1,0 +1,144 @@
+#define _XOPEN_SOURCE 700
+#include "cli/outputs.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    return n > m && strcasecmp(s + n - m, suffix) == 0 && s[n - m - 1] != '/';
+}
+
+static const char *kind_of(mode_t mode)
+{
+    if (S_ISDIR(mode))
+        return "a directory";
+    if (S_ISCHR(mode) || S_ISBLK(mode))
+        return "a device";
+    if (S_ISFIFO(mode))
+        return "a FIFO";
+    if (S_ISSOCK(mode))
+        return "a socket";
+    return "not a regular file";
+}
+
+/* Creates (and removes) a probe file where the temporary file will go, which
+ * also catches read-only file systems that access() does not see for root. */
+static hz_status check_dir(const char *path, hz_error *err)
+{
+    char dir[PATH_MAX];
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == path)
+        snprintf(dir, sizeof dir, "/");
+    else
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    char probe[PATH_MAX + 32];
+    snprintf(probe, sizeof probe, "%s/.haze-probe-XXXXXX", dir);
+    int fd = mkstemp(probe);
+    if (fd >= 0) {
+        close(fd);
+        unlink(probe);
+        return HZ_OK;
+    }
+    int e = errno;
+    struct stat st;
+    if (stat(dir, &st) != 0)
+        return hz_fail(err, "cannot write '%s': directory '%s' does not exist", path, dir);
+    if (!S_ISDIR(st.st_mode))
+        return hz_fail(err, "cannot write '%s': '%s' is not a directory", path, dir);
+    return hz_fail(err, "cannot write '%s': directory '%s' is not writable (%s)", path, dir,
+                   strerror(e));
+}
+
+/* `path` or, for a symlink, its target; then what may be replaced there. */
+static hz_status resolve(const char *path, const char *ext, const char *what, char *out,
+                         size_t n, hz_error *err)
+{
+    if (!has_suffix(path, ext))
+        return hz_fail(err, "%s '%s' must end in %s%s", what, path, ext,
+                       strcmp(ext, ".exr") == 0 ? " (haze writes OpenEXR; give -o NAME.exr)" : "");
+    struct stat st;
+    if (lstat(path, &st) != 0) {
+        if (errno != ENOENT)
+            return hz_fail(err, "cannot write '%s': %s", path, strerror(errno));
+        snprintf(out, n, "%s", path);
+        return check_dir(out, err);
+    }
+    if (S_ISLNK(st.st_mode)) {
+        char *target = realpath(path, NULL);
+        if (!target)
+            return hz_fail(err, "%s '%s' is a symlink to a missing file (%s); name the file itself",
+                           what, path, strerror(errno));
+        snprintf(out, n, "%s", target);
+        free(target);
+        if (stat(out, &st) != 0)
+            return hz_fail(err, "cannot write '%s': %s", out, strerror(errno));
+    } else {
+        snprintf(out, n, "%s", path);
+    }
+    if (!S_ISREG(st.st_mode))
+        return hz_fail(err, "%s '%s' is %s; haze replaces only regular files", what, out,
+                       kind_of(st.st_mode));
+    return check_dir(out, err);
+}
+
+static bool same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    if (stat(a, &sa) == 0 && stat(b, &sb) == 0)
+        return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+    return strcmp(a, b) == 0;
+}
+
+hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png,
+                          render_outputs *out, hz_error *err)
+{
+    out->png[0] = '\0';
+    if (resolve(exr, ".exr", "output", out->exr, sizeof out->exr, err) != HZ_OK)
+        return HZ_ERROR;
+    if (png && resolve(png, ".png", "preview", out->png, sizeof out->png, err) != HZ_OK)
+        return HZ_ERROR;
+    if (png && same_file(out->exr, out->png))
+        return hz_fail(err, "output '%s' and preview '%s' are the same file", exr, png);
+    char **inputs;
+    size_t count;
+    if (scene_input_files(sd, &inputs, &count, err) != HZ_OK)
+        return HZ_ERROR;
+    hz_status st = HZ_OK;
+    for (size_t i = 0; st == HZ_OK && i < count; ++i) {
+        struct stat si, so;
+        if (stat(inputs[i], &si) != 0)
+            continue;
+        const char *outs[2] = {out->exr, out->png};
+        for (int k = 0; k < 2 && st == HZ_OK; ++k)
+            if (outs[k][0] && stat(outs[k], &so) == 0 && so.st_dev == si.st_dev &&
+                so.st_ino == si.st_ino)
+                st = hz_fail(err, "%s '%s' is '%s', which the render reads; refusing to replace it",
+                             k == 0 ? "output" : "preview", k == 0 ? exr : png, inputs[i]);
+    }
+    scene_input_files_free(inputs, count);
+    return st;
+}
+
+void outputs_partial_path(const char *path, char *out, size_t n)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0 && errno == ENOENT) {
+        snprintf(out, n, "%s", path);
+        return;
+    }
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(path, '.');
+    if (!dot || (slash && dot < slash) || dot == path || (slash && dot == slash + 1))
+        snprintf(out, n, "%s.partial", path);
+    else
+        snprintf(out, n, "%.*s.partial%s", (int)(dot - path), path, dot);
+}

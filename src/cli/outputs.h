@@ -1,0 +1,31 @@
+/* Where `haze render` may write its images, checked before rendering. */
+#ifndef HAZE_CLI_OUTPUTS_H
+#define HAZE_CLI_OUTPUTS_H
+
+#include <limits.h>
+#include <stdbool.h>
+
+#include "core/error.h"
+#include "scene/scene_desc.h"
+
+typedef struct {
+    char exr[PATH_MAX]; /* the file the EXR replaces (a symlink's target) */
+    char png[PATH_MAX]; /* the same for the --preview PNG; "" without one */
+} render_outputs;
+
+/* Resolves and checks the EXR output `exr` and the optional PNG `png` (NULL:
+ * none) of a render of `sd`. Refused, each with one line naming the file:
+ * an EXR name not ending in ".exr" (a PNG not in ".png"); an existing file
+ * that is not a regular file (device, FIFO, socket, directory: never
+ * replaced); a dangling symlink; a file the render reads (the scene, an
+ * include, a mesh, a volume: compared by device and inode); the EXR and the
+ * PNG being one file; a directory that does not exist or cannot be written.
+ * A symlink is written through: its target is replaced atomically. */
+hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png,
+                          render_outputs *out, hz_error *err);
+
+/* Where an interrupted render's image goes: `path` when nothing is there yet,
+ * else NAME.partial.EXT next to it. */
+void outputs_partial_path(const char *path, char *out, size_t n);
+
+#endif

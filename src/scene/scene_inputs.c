@@ -1,0 +1,77 @@
+/* Every file a render of a scene reads. */
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/path.h"
+#include "scene/scene_desc.h"
+
+static const char *string_param(const param_list *pl, const char *name)
+{
+    for (size_t i = 0; i < pl->count; ++i) {
+        const param *p = &pl->items[i];
+        if (p->type == PARAM_STRING && p->count == 1 && strcmp(p->name, name) == 0)
+            return p->strs[0];
+    }
+    return NULL;
+}
+
+static bool push(char ***list, size_t *n, size_t *cap, char *path)
+{
+    if (!path)
+        return false;
+    if (*n == *cap) {
+        size_t c = *cap ? 2 * *cap : 16;
+        char **grown = realloc(*list, c * sizeof *grown);
+        if (!grown) {
+            free(path);
+            return false;
+        }
+        *list = grown;
+        *cap = c;
+    }
+    (*list)[(*n)++] = path;
+    return true;
+}
+
+static bool push_named(char ***list, size_t *n, size_t *cap, const scene_entity *e,
+                       const char *type, const char *param_name)
+{
+    if (!e->type || strcmp(e->type, type) != 0)
+        return true;
+    const char *name = string_param(&e->params, param_name);
+    return !name || push(list, n, cap, path_relative_to(e->loc.file, name));
+}
+
+hz_status scene_input_files(const scene_desc *sd, char ***out, size_t *count, hz_error *err)
+{
+    char **list = NULL;
+    size_t n = 0, cap = 0;
+    bool ok = true;
+    for (size_t i = 0; ok && i < sd->file_count; ++i) {
+        size_t len = strlen(sd->files[i]) + 1;
+        char *copy = malloc(len);
+        if (copy)
+            memcpy(copy, sd->files[i], len);
+        ok = push(&list, &n, &cap, copy);
+    }
+    for (size_t i = 0; ok && i < sd->shape_count; ++i)
+        ok = push_named(&list, &n, &cap, &sd->shapes[i].entity, "plymesh", "filename");
+    for (size_t i = 0; ok && i < sd->object_shape_count; ++i)
+        ok = push_named(&list, &n, &cap, &sd->object_shapes[i].entity, "plymesh", "filename");
+    for (size_t i = 0; ok && i < sd->medium_count; ++i)
+        ok = push_named(&list, &n, &cap, &sd->media[i].entity, "nanovdb", "filename");
+    if (!ok) {
+        scene_input_files_free(list, n);
+        return hz_fail(err, "out of memory listing the scene's files");
+    }
+    *out = list;
+    *count = n;
+    return HZ_OK;
+}
+
+void scene_input_files_free(char **files, size_t count)
+{
+    for (size_t i = 0; i < count; ++i)
+        free(files[i]);
+    free(files);
+}

@@ -1,0 +1,138 @@
+/* Where haze render may write (cli/outputs.h): outputs that would destroy
+ * something are refused before rendering, with one line, exit 1, and the
+ * thing left exactly as it was. */
+#define _XOPEN_SOURCE 700
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "render/cli_util.h"
+
+#define DIR HAZE_TMP "/outputs"
+
+static const char scene_text[] =
+    "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\n"
+    "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+    "Sampler \"zsobol\" \"integer pixelsamples\" 1\nWorldBegin\n"
+    "LightSource \"infinite\" \"rgb L\" [1 1 1]\nInclude \"part.pbrt\"\n";
+
+/* Runs `haze render DIR/scene.pbrt ARGS` from DIR; returns the status and
+ * fills out with what it printed. */
+static int render_in_dir(const char *args, char *out, size_t n)
+{
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "render '" DIR "/scene.pbrt' %s --quiet", args);
+    return run_haze(cmd, out, n);
+}
+
+static void expect_refused(const char *args, const char *message)
+{
+    char out[2048];
+    assert_int_equal(render_in_dir(args, out, sizeof out), 1);
+    if (!strstr(out, message))
+        fail_msg("haze render %s: got \"%s\", want \"%s\"", args, out, message);
+    const char *nl = strchr(out, '\n');
+    assert_true(nl && nl[1] == '\0'); /* one line */
+}
+
+static void setup_dir(void)
+{
+    mkdir(HAZE_TMP, 0755);
+    mkdir(DIR, 0755);
+    write_text_file(DIR "/scene.pbrt", scene_text);
+    write_text_file(DIR "/part.pbrt", "Shape \"sphere\"\n");
+}
+
+static void test_wrong_extensions(void **state)
+{
+    (void)state;
+    setup_dir();
+    expect_refused("-o '" DIR "/scene.pbrt'", "output '" DIR "/scene.pbrt' must end in .exr");
+    expect_refused("-o /dev/null", "output '/dev/null' must end in .exr");
+    expect_refused("-o '" DIR "/x.exr' --preview '" DIR "/x.exr'", "must end in .png");
+    expect_refused("-o '" DIR "/x.png'", "must end in .exr");
+    size_t n = 0;
+    unsigned char *kept = read_whole_file(DIR "/scene.pbrt", &n);
+    assert_int_equal(n, strlen(scene_text));
+    assert_memory_equal(kept, scene_text, n);
+    free(kept);
+}
+
+/* Devices, FIFOs and directories are never replaced, whatever their name. */
+static void test_non_regular_outputs(void **state)
+{
+    (void)state;
+    setup_dir();
+    unlink(DIR "/fifo.exr");
+    assert_int_equal(mkfifo(DIR "/fifo.exr", 0600), 0);
+    expect_refused("-o '" DIR "/fifo.exr'", "is a FIFO; haze replaces only regular files");
+    struct stat st;
+    assert_int_equal(lstat(DIR "/fifo.exr", &st), 0);
+    assert_true(S_ISFIFO(st.st_mode));
+    mkdir(DIR "/dir.exr", 0755);
+    expect_refused("-o '" DIR "/dir.exr'", "is a directory; haze replaces only regular files");
+    unlink(DIR "/null.exr");
+    assert_int_equal(symlink("/dev/null", DIR "/null.exr"), 0);
+    expect_refused("-o '" DIR "/null.exr'", "'/dev/null' is a device");
+    assert_int_equal(lstat("/dev/null", &st), 0);
+    assert_true(S_ISCHR(st.st_mode));
+    unlink(DIR "/dangling.exr");
+    assert_int_equal(symlink("nowhere.exr", DIR "/dangling.exr"), 0);
+    expect_refused("-o '" DIR "/dangling.exr'", "is a symlink to a missing file");
+}
+
+/* An output that is an input of the render (through a symlink or another
+ * name for the same file) would destroy it. */
+static void test_inputs_are_not_outputs(void **state)
+{
+    (void)state;
+    setup_dir();
+    unlink(DIR "/alias.exr");
+    unlink(DIR "/part.png");
+    assert_int_equal(symlink("scene.pbrt", DIR "/alias.exr"), 0);
+    expect_refused("-o '" DIR "/alias.exr'", "which the render reads; refusing to replace it");
+    assert_int_equal(link(DIR "/part.pbrt", DIR "/part.png"), 0);
+    expect_refused("-o '" DIR "/ok.exr' --preview '" DIR "/part.png'",
+                   "preview '" DIR "/part.png' is '" DIR "/part.pbrt', which the render reads");
+    /* The same file twice: a PNG name linked to the EXR. */
+    write_text_file(DIR "/twice.exr", "x");
+    unlink(DIR "/twice.png");
+    assert_int_equal(symlink("twice.exr", DIR "/twice.png"), 0);
+    expect_refused("-o '" DIR "/twice.exr' --preview '" DIR "/twice.png'", "are the same file");
+}
+
+/* A symlink is written through: the link stays, its target gets the image. */
+static void test_symlink_written_through(void **state)
+{
+    (void)state;
+    setup_dir();
+    write_text_file(DIR "/target.exr", "old");
+    unlink(DIR "/link.exr");
+    assert_int_equal(symlink("target.exr", DIR "/link.exr"), 0);
+    char out[2048];
+    if (render_in_dir("-o '" DIR "/link.exr'", out, sizeof out) != 0)
+        fail_msg("%s", out);
+    struct stat st;
+    assert_int_equal(lstat(DIR "/link.exr", &st), 0);
+    assert_true(S_ISLNK(st.st_mode));
+    size_t n = 0;
+    unsigned char *b = read_whole_file(DIR "/target.exr", &n);
+    assert_true(n > 4 && b[0] == 0x76 && b[1] == 0x2f && b[2] == 0x31 && b[3] == 0x01);
+    free(b);
+    assert_int_equal(count_temporaries_in(DIR), 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_wrong_extensions),
+        cmocka_unit_test(test_non_regular_outputs),
+        cmocka_unit_test(test_inputs_are_not_outputs),
+        cmocka_unit_test(test_symlink_written_through),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
