@@ -146,6 +146,7 @@ typedef struct {
     int max_x, max_y;                  /* data-window coordinates of max_abs */
     char max_channel[64];
     size_t bad_a, bad_b;               /* NaN/Inf values in A, in B */
+    size_t bad_only_a;                 /* NaN/Inf in A where B is finite */
 } diff_stats;
 
 typedef struct {
@@ -199,6 +200,7 @@ static void accumulate(diff_stats *s, const exr_image *img)
         bool ok_a = isfinite(fa), ok_b = isfinite(fb);
         s->bad_a += !ok_a;
         s->bad_b += !ok_b;
+        s->bad_only_a += !ok_a && ok_b;
         if (!ok_a || !ok_b)
             continue;
         double a = fa, b = fb, d = a - b, ad = fabs(d);
@@ -226,6 +228,7 @@ static void merge(diff_stats *all, const diff_stats *s)
     all->sum_a += s->sum_a;
     all->sum_b += s->sum_b;
     all->bad_a += s->bad_a;
+    all->bad_only_a += s->bad_only_a;
     all->bad_b += s->bad_b;
     if (s->n && s->max_abs > all->max_abs) {
         all->max_abs = s->max_abs;
@@ -785,6 +788,11 @@ static hz_status compare(const diff_options *opt, const exr_image *a, const exr_
         if (all.n == 0) {
             *passed = false;
             fprintf(out, "FAIL: %s: no finite value pairs to compare\n", name);
+        } else if (all.bad_only_a > 0) {
+            /* Left out of the metric, a broken pixel would pass unseen. */
+            *passed = false;
+            fprintf(out, "FAIL: %s: %zu values are NaN/Inf in A where B is finite\n", name,
+                    all.bad_only_a);
         } else {
             diff_figures f = figures(&all);
             double v = figure_of(&f, opt->metric);

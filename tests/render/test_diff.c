@@ -323,6 +323,15 @@ static void test_nonfinite_excluded(void **state)
     assert_int_equal(e.n, 58);
     check_row(&all, &e);
     assert_non_null(strstr(out, "2 of 60 value pairs excluded"));
+
+    /* With a threshold, a NaN in A where the reference B is finite fails,
+     * however good the metric of the other pairs. */
+    snprintf(args, sizeof args, "diff '%s' '%s' --metric mse --threshold 1", a, b);
+    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    assert_non_null(strstr(out, "FAIL: mse: 1 values are NaN/Inf in A where B is finite"));
+    /* A non-finite reference value alone (A finite there) is only excluded. */
+    snprintf(args, sizeof args, "diff '%s' '%s' --metric mse --threshold 1", off_exr, b);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
 }
 
 static void test_heatmaps(void **state)
