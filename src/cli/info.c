@@ -4,6 +4,9 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli/info.h"
 
+#include "core/file.h"
+#include "core/text.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -11,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <openexr.h>
 
@@ -23,14 +27,16 @@ typedef enum { KIND_VDB, KIND_NVDB, KIND_EXR, KIND_TEXT, KIND_UNKNOWN } file_kin
 /* Reads the first bytes of the file and tells the format from them. */
 static hz_status sniff(const char *path, file_kind *kind, hz_error *err)
 {
-    struct stat st;
-    if (stat(path, &st) != 0)
+    int fd;
+    off_t size;
+    hz_error ferr;
+    if (file_open_regular(path, &fd, &size, &ferr) != HZ_OK)
+        return hz_fail(err, "%s: cannot open file (%s)", path, ferr.message);
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        close(fd);
         return hz_fail(err, "%s: cannot open file (%s)", path, strerror(errno));
-    if (S_ISDIR(st.st_mode))
-        return hz_fail(err, "%s: is a directory, not a file", path);
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return hz_fail(err, "%s: cannot open file (%s)", path, strerror(errno));
+    }
     unsigned char buf[4096];
     size_t n = fread(buf, 1, sizeof buf, f);
     bool read_error = ferror(f) != 0;
@@ -248,10 +254,14 @@ static hz_status describe_exr(const char *path, FILE *out, hz_error *err)
         return HZ_ERROR;
     fprintf(out, "%s: OpenEXR image\n", path);
     fprintf(out, "  %-15s %d x %d\n", "size", img.width, img.height);
-    fprintf(out, "  %-15s (%d, %d) .. (%d, %d)\n", "data window", img.data_x0, img.data_y0,
-            img.data_x0 + img.width - 1, img.data_y0 + img.height - 1);
-    fprintf(out, "  %-15s (0, 0) .. (%d, %d)  (%d x %d)\n", "display window",
-            img.display_width - 1, img.display_height - 1, img.display_width, img.display_height);
+    /* The file's own coordinates (exr_image counts from the display window's
+     * corner). */
+    long long dx = img.file_display_x0, dy = img.file_display_y0;
+    fprintf(out, "  %-15s (%lld, %lld) .. (%lld, %lld)\n", "data window", dx + img.data_x0,
+            dy + img.data_y0, dx + img.data_x0 + img.width - 1, dy + img.data_y0 + img.height - 1);
+    fprintf(out, "  %-15s (%lld, %lld) .. (%lld, %lld)  (%d x %d)\n", "display window", dx, dy,
+            dx + img.display_width - 1, dy + img.display_height - 1, img.display_width,
+            img.display_height);
     fprintf(out, "\nchannels (%d)\n", img.channel_count);
     fprintf(out, "  %-14s %-6s %12s %12s %12s %8s %8s\n", "name", "type", "min", "max", "mean", "NaN",
             "Inf");
@@ -376,6 +386,28 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
 
 /* ------------------------------------------------------------------------ */
 
+/* Names and strings come from the file: each line goes out with control
+ * bytes and invalid UTF-8 escaped (an escape sequence in a grid name must not
+ * reach the terminal). */
+static void print_escaped(FILE *out, const char *text, size_t size)
+{
+    char line[4 * 4096 + 1];
+    for (size_t start = 0; start < size;) {
+        const char *nl = memchr(text + start, '\n', size - start);
+        size_t end = nl ? (size_t)(nl - text) : size;
+        for (size_t chunk = start; chunk < end || chunk == start; chunk += 4096) {
+            size_t n = end - chunk < 4096 ? end - chunk : 4096;
+            text_escape(text + chunk, n, line, sizeof line);
+            fputs(line, out);
+            if (n < 4096)
+                break;
+        }
+        if (nl)
+            fputc('\n', out);
+        start = end + 1;
+    }
+}
+
 hz_status info_describe(const char *path, FILE *out, hz_error *err)
 {
     hz_error local;
@@ -406,7 +438,7 @@ hz_status info_describe(const char *path, FILE *out, hz_error *err)
     if (fclose(mem) != 0 && st == HZ_OK)
         st = hz_fail(err, "%s: out of memory", path);
     if (st == HZ_OK && text)
-        fwrite(text, 1, size, out);
+        print_escaped(out, text, size);
     free(text);
     return st;
 }

@@ -1,12 +1,16 @@
 #include "core/error.h"
 
+#include "core/text.h"
+
 #include <stdio.h>
 #include <string.h>
 
 hz_status hz_vfail(hz_error *err, const char *fmt, va_list ap)
 {
-    if (err)
+    if (err) {
         vsnprintf(err->message, sizeof err->message, fmt, ap);
+        text_escape_inplace(err->message, sizeof err->message);
+    }
     return HZ_ERROR;
 }
 
@@ -31,5 +35,6 @@ hz_status hz_fail_at(hz_error *err, file_loc loc, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(err->message + n, sizeof err->message - (size_t)n, fmt, ap);
     va_end(ap);
+    text_escape_inplace(err->message, sizeof err->message);
     return HZ_ERROR;
 }

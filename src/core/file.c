@@ -31,9 +31,7 @@ static const char *kind_of(mode_t mode)
     return "not a regular file";
 }
 
-/* Opens without blocking (a FIFO would wait for a writer) and keeps the
- * descriptor only for a regular file. */
-static hz_status open_regular(const char *path, int *fd_out, off_t *size, hz_error *err)
+hz_status file_open_regular(const char *path, int *fd_out, off_t *size, hz_error *err)
 {
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0)
@@ -150,7 +148,7 @@ hz_status file_read_all(const char *path, size_t limit, char **data, size_t *len
 {
     int fd = -1;
     off_t size = 0;
-    if (open_regular(path, &fd, &size, err) != HZ_OK)
+    if (file_open_regular(path, &fd, &size, err) != HZ_OK)
         return HZ_ERROR;
     if (ends_with(path, ".gz"))
         return read_gzip(fd, limit, data, len, err);

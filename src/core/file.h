@@ -3,6 +3,7 @@
 #define HAZE_CORE_FILE_H
 
 #include <stddef.h>
+#include <sys/types.h>
 
 #include "core/error.h"
 
@@ -11,6 +12,12 @@
  * process is killed; real scenes stay far below them. */
 #define FILE_LIMIT_SCENE ((size_t)1 << 30) /* scene text: 1 GiB */
 #define FILE_LIMIT_MESH ((size_t)8 << 30)  /* a PLY mesh: 8 GiB */
+
+/* Opens `path` for reading (*fd, blocking reads) and gives its size, only when
+ * it is a regular file: a directory, device, FIFO or socket is refused
+ * without blocking on it (a FIFO's open would wait for a writer). The message
+ * is the reason only. */
+hz_status file_open_regular(const char *path, int *fd, off_t *size, hz_error *err);
 
 /* Reads `path` whole into a malloc'ed buffer (*data, NUL-terminated; *len
  * excludes the NUL). Only regular files are read: a directory, device, FIFO or

@@ -559,6 +559,8 @@ static hz_status exr_read_header(const char *path, exr_context_t ctx, exr_io *io
     out->display_height = (int)dsph;
     out->data_x0 = (int)((int64_t)dw->min.x - disp.min.x);
     out->data_y0 = (int)((int64_t)dw->min.y - disp.min.y);
+    out->file_display_x0 = disp.min.x;
+    out->file_display_y0 = disp.min.y;
     for (int c = 0; c < chl->num_channels; c++) {
         memcpy(out->channels[c].name, chl->entries[c].name.str, (size_t)chl->entries[c].name.length);
         out->channels[c].half = chl->entries[c].pixel_type == EXR_PIXEL_HALF;

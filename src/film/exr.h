@@ -18,6 +18,9 @@ typedef struct {
     int width, height;            /* data window size */
     int data_x0, data_y0;         /* data window origin */
     int display_width, display_height; /* display window is [0,w) x [0,h) */
+    /* exr_read: where the file's display window starts (the data window in
+     * the file is data_x0/y0 plus this); ignored by exr_write. */
+    int file_display_x0, file_display_y0;
     int channel_count;
     exr_channel *channels;
     /* Optional string attributes written to / read from the header. */

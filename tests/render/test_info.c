@@ -197,6 +197,47 @@ static void test_pbrt(void **state)
     assert_string_equal(one_line(line_with(out, "media"), line, sizeof line), "media           0");
 }
 
+/* Windows in the file's own coordinates, however they are offset. */
+static void test_exr_offset_windows(void **state)
+{
+    (void)state;
+    char exr[1024], cmd[2048], out[16384];
+    snprintf(exr, sizeof exr, "%s/info_offset.exr", HAZE_TMP);
+    snprintf(cmd, sizeof cmd,
+             "oiiotool --create 24x8 3 --fullsize 32x32-16-16 --origin -8+2 -o '%s'", exr);
+    if (system(cmd) != 0)
+        skip(); /* oiiotool (openimageio-tools) missing */
+    snprintf(cmd, sizeof cmd, "info '%s'", exr);
+    assert_int_equal(run_haze(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "data window     (-8, 2) .. (15, 9)\n"));
+    assert_non_null(strstr(out, "display window  (-16, -16) .. (15, 15)  (32 x 32)\n"));
+}
+
+/* Names from files reach the terminal escaped: a scene's film filename
+ * holding an escape sequence that would clear the screen. */
+static void test_control_bytes_escaped(void **state)
+{
+    (void)state;
+    char path[1024], args[2048], out[16384];
+    snprintf(path, sizeof path, "%s/info_escape.pbrt", HAZE_TMP);
+    /* haze info tells text from binary by the first 4 KiB: pad them. */
+    char text[8192];
+    snprintf(text, sizeof text, "#%4200s\nFilm \"rgb\" \"string filename\" \"a\x1b[2J\x9b\xff.exr\"\n"
+             "WorldBegin\n", "");
+    write_text_file(path, text);
+    snprintf(args, sizeof args, "info '%s'", path);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    assert_null(strchr(out, 0x1b));
+    assert_non_null(strstr(out, "\"a\\x1b[2J\\x9b\\xff.exr\""));
+    /* And in error messages. */
+    write_text_file(path, "WorldBegin\nShape \"\x1b]0;owned\x07\"\n");
+    snprintf(args, sizeof args, "render '%s' -o '%s/info_escape.exr'", path, HAZE_TMP);
+    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    assert_non_null(strstr(out, "\\x1b]0;owned\\x07"));
+    assert_null(strchr(out, 0x1b));
+    assert_null(strchr(out, 0x07));
+}
+
 static void test_bad_files_exit_1(void **state)
 {
     (void)state;
@@ -265,6 +306,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_vdb_smoke),       cmocka_unit_test(test_nvdb_box),
         cmocka_unit_test(test_exr_from_render), cmocka_unit_test(test_pbrt),
+        cmocka_unit_test(test_exr_offset_windows), cmocka_unit_test(test_control_bytes_escaped),
         cmocka_unit_test(test_bad_files_exit_1), cmocka_unit_test(test_usage_exit_2),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
