@@ -16,14 +16,23 @@ hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad
         return HZ_OK; /* empty: no cells, every walk misses */
     double l3[3] = {lo.x, lo.y, lo.z}, h3[3] = {hi.x, hi.y, hi.z};
     int64_t first[3], last[3];
+    for (int a = 0; a < 3; ++a) { /* index space is int32: so is the support */
+        l3[a] = fmin(fmax(l3[a], (double)INT32_MIN), (double)INT32_MAX);
+        h3[a] = fmin(fmax(h3[a], (double)INT32_MIN), (double)INT32_MAX);
+    }
     for (;;) {
-        int64_t cells = 1;
+        /* The product in checked arithmetic: voxels 3.3e7 apart once
+         * overflowed it. Cells of 2^28 voxels make at most 17 per axis. */
+        uint64_t cells = 1;
         for (int a = 0; a < 3; ++a) {
             first[a] = floor_div((int64_t)floor(l3[a]), out->cell);
             last[a] = floor_div((int64_t)floor(h3[a]), out->cell);
-            cells *= last[a] - first[a] + 1;
+            uint64_t res = (uint64_t)(last[a] - first[a] + 1);
+            cells = res > (uint64_t)MAJORANT_MAX_CELLS || cells > (uint64_t)MAJORANT_MAX_CELLS
+                        ? (uint64_t)MAJORANT_MAX_CELLS + 1
+                        : cells * res;
         }
-        if (cells <= (int64_t)MAJORANT_MAX_CELLS || out->cell >= (1 << 28))
+        if (cells <= (uint64_t)MAJORANT_MAX_CELLS || out->cell >= (1 << 28))
             break;
         out->cell *= 2;
     }

@@ -195,6 +195,32 @@ static void empty_support_has_no_cells(void **state)
     destroy(&f);
 }
 
+/* Supports spanning most of index space (voxels 3.3e7 and 2e9 apart, and
+ * the whole int32 range) once overflowed the cell count (signed overflow,
+ * then malloc(0) and writes). The grid stays within MAJORANT_MAX_CELLS, its
+ * memory bounded, and every cell still bounds the data (box.vdb: 1 on
+ * [0,31]^3): the cell holding the box has the upper bound 1. */
+static void huge_supports_stay_bounded(void **state)
+{
+    (void)state;
+    fixture f = build(VOLUMES "box.vdb", 0);
+    const double spans[][2] = {{-1.65e7, 1.65e7}, {-1e9, 1e9}, {-3e9, 3e9}, {0, 2147483647.0}};
+    for (size_t k = 0; k < sizeof spans / sizeof spans[0]; ++k) {
+        majorant_grid mg;
+        hz_error err = {{0}};
+        int32_t pad[3] = {0, 0, 0};
+        vec3 lo = v3(spans[k][0], spans[k][0], spans[k][0]);
+        vec3 hi = v3(spans[k][1], spans[k][1], spans[k][1]);
+        assert_int_equal(majorant_grid_build(f.g, lo, hi, pad, &mg, &err), HZ_OK);
+        uint64_t cells = (uint64_t)mg.res[0] * (uint64_t)mg.res[1] * (uint64_t)mg.res[2];
+        assert_true(cells >= 1 && cells <= MAJORANT_MAX_CELLS);
+        assert_true(majorant_grid_bytes(&mg) <= 2 * sizeof(float) * MAJORANT_MAX_CELLS);
+        assert_int_equal(mg.max[cell_of(&mg, v3(16, 16, 16))], 1.0f);
+        majorant_grid_free(&mg);
+    }
+    destroy(&f);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -203,6 +229,7 @@ int main(void)
         cmocka_unit_test(padding_widens),
         cmocka_unit_test(walk_visits_crossed_cells),
         cmocka_unit_test(empty_support_has_no_cells),
+        cmocka_unit_test(huge_supports_stay_bounded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
