@@ -1,5 +1,6 @@
 # libFuzzer targets (HAZE_FUZZ=ON, clang only): fuzz_scene feeds bytes to the
-# scene parser (and the render-scene factories), fuzz_exr to the EXR reader.
+# scene parser (and the render-scene factories), fuzz_exr to the EXR reader,
+# fuzz_nvdb to the .nvdb loader, the majorant build and grid lookups.
 # Run them with `make fuzz`; see docs/fuzzing.md. Included from CMakeLists.txt.
 option(HAZE_FUZZ "Build the libFuzzer targets (needs clang)" OFF)
 if(NOT HAZE_FUZZ)
@@ -26,3 +27,4 @@ endfunction()
 
 haze_fuzzer(fuzz_scene haze_render)
 haze_fuzzer(fuzz_exr haze_film)
+haze_fuzzer(fuzz_nvdb haze_media)

@@ -1,5 +1,7 @@
 #include "media/grid.h"
 
+#include "media/nvdb_check.h"
+
 #include <assert.h>
 #include <float.h>
 #include <math.h>
@@ -88,6 +90,9 @@ static hz_status validate(const vdb_buffer *b, const char *name, hz_error *err)
     if (type != FLOAT_GRID && type != VEC3_GRID)
         return hz_fail(err, "grid \"%s\" is %s, expected float or vec3f", name,
                        nanovdb_type_name(type));
+    char why[256];
+    if (nvdb_check_tree(b->data, b->size, why, sizeof why) != 0)
+        return hz_fail(err, "grid \"%s\" is corrupt (%s)", name, why);
     /* The majorant and the motion bounds come from the min/max statistics. */
     pnanovdb_tree_handle_t tree = pnanovdb_grid_get_tree(buf, h);
     if (pnanovdb_tree_get_voxel_count(buf, tree) > 0 &&

@@ -8,6 +8,7 @@
 
 #include "media/vdb_bridge.hpp"
 #include "media/vdb_module.h"
+#include "media/nvdb_check.h"
 
 #include <iostream> // before NanoVDB: GridValidator.h uses std::cerr without it
 #include <nanovdb/NanoVDB.h>
@@ -146,6 +147,10 @@ void check_nvdb(const std::string &path, const std::string &name,
     const nanovdb::NanoGrid<ValueT> *grid = handle.template grid<ValueT>();
     if (!grid)
         throw load_error(path + ": could not read grid \"" + name + "\"");
+    // NanoVDB's validator follows offsets it does not check: bound them first.
+    char why[256];
+    if (nvdb_check_tree(handle.data(), handle.size(), why, sizeof why) != 0)
+        throw load_error(path + ": grid \"" + name + "\" is corrupt (" + why + ")");
     if (!nanovdb::isValid(*grid, /*detailed=*/true))
         throw load_error(path + ": grid \"" + name + "\" is corrupt (failed validation)");
 }

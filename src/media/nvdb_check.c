@@ -1,0 +1,164 @@
+#include "media/nvdb_check.h"
+
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdio.h>
+
+#define PNANOVDB_C
+#include <nanovdb/PNanoVDB.h>
+
+typedef struct {
+    pnanovdb_buf_t buf;
+    uint64_t size;
+    pnanovdb_grid_type_t type;
+    char *why;
+    size_t why_size;
+    /* Children met so far per level, against the counts the tree declares. */
+    uint64_t uppers, lowers, leaves;
+    uint64_t max_uppers, max_lowers, max_leaves;
+} checker;
+
+static int fail(checker *c, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(c->why, c->why_size, fmt, ap);
+    va_end(ap);
+    return -1;
+}
+
+/* [offset, offset + bytes) inside the buffer, 32-byte aligned as NanoVDB's
+ * nodes are; offsets are signed 64-bit relative to `base` in the file. */
+static bool node_fits(const checker *c, uint64_t base, int64_t rel, uint64_t bytes, uint64_t *at)
+{
+    if (rel < -(int64_t)base || rel > (int64_t)c->size)
+        return false;
+    uint64_t a = (uint64_t)((int64_t)base + rel);
+    if (a % 32 != 0 || a > c->size || bytes > c->size - a)
+        return false;
+    *at = a;
+    return true;
+}
+
+static pnanovdb_address_t addr(uint64_t a)
+{
+    pnanovdb_address_t r = {(pnanovdb_uint32_t)a};
+    return r;
+}
+
+static int check_lower(checker *c, uint64_t lower_at)
+{
+    pnanovdb_lower_handle_t lower = {addr(lower_at)};
+    uint32_t leaf_size = PNANOVDB_GRID_TYPE_GET(c->type, leaf_size);
+    for (uint32_t n = 0; n < PNANOVDB_LOWER_TABLE_COUNT; ++n) {
+        if (!pnanovdb_lower_get_child_mask(c->buf, lower, n))
+            continue;
+        if (++c->leaves > c->max_leaves)
+            return fail(c, "more leaf children than the tree's %llu leaf nodes",
+                        (unsigned long long)c->max_leaves);
+        int64_t rel = pnanovdb_lower_get_table_child(c->type, c->buf, lower, n);
+        uint64_t at;
+        if (!node_fits(c, lower_at, rel, leaf_size, &at))
+            return fail(c, "a lower node's child %u points outside the buffer", n);
+    }
+    return 0;
+}
+
+static int check_upper(checker *c, uint64_t upper_at)
+{
+    pnanovdb_upper_handle_t upper = {addr(upper_at)};
+    uint32_t lower_size = PNANOVDB_GRID_TYPE_GET(c->type, lower_size);
+    for (uint32_t n = 0; n < PNANOVDB_UPPER_TABLE_COUNT; ++n) {
+        if (!pnanovdb_upper_get_child_mask(c->buf, upper, n))
+            continue;
+        if (++c->lowers > c->max_lowers)
+            return fail(c, "more lower children than the tree's %llu lower nodes",
+                        (unsigned long long)c->max_lowers);
+        int64_t rel = pnanovdb_upper_get_table_child(c->type, c->buf, upper, n);
+        uint64_t at;
+        if (!node_fits(c, upper_at, rel, lower_size, &at))
+            return fail(c, "an upper node's child %u points outside the buffer", n);
+        if (check_lower(c, at) != 0)
+            return -1;
+    }
+    return 0;
+}
+
+/* The tree's first node of a level and its count: a whole array of nodes. */
+static int check_level(checker *c, uint64_t tree_at, uint64_t offset, uint64_t count,
+                       uint64_t node_size, const char *level)
+{
+    if (count == 0)
+        return 0;
+    uint64_t at;
+    if (offset > c->size || !node_fits(c, tree_at, (int64_t)offset, 0, &at) ||
+        count > (c->size - at) / node_size)
+        return fail(c, "the tree's %llu %s nodes at offset %llu do not fit in the buffer",
+                    (unsigned long long)count, level, (unsigned long long)offset);
+    return 0;
+}
+
+int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size)
+{
+    checker c = {pnanovdb_make_buf((pnanovdb_uint32_t *)data, size / 4), size, 0, why, why_size,
+                 0, 0, 0, 0, 0, 0};
+    if (size > UINT32_MAX)
+        return fail(&c, "grid buffers over 4 GiB are not supported");
+    if (size < PNANOVDB_GRID_SIZE + PNANOVDB_TREE_SIZE)
+        return fail(&c, "buffer too small to hold a NanoVDB grid");
+    pnanovdb_grid_handle_t grid = {addr(0)};
+    if (pnanovdb_grid_get_magic(c.buf, grid) != PNANOVDB_MAGIC_NUMBER)
+        return fail(&c, "not a NanoVDB grid (bad magic number)");
+    if (pnanovdb_grid_get_grid_size(c.buf, grid) > size)
+        return fail(&c, "grid larger than its buffer");
+    c.type = pnanovdb_grid_get_grid_type(c.buf, grid);
+    if (c.type != PNANOVDB_GRID_TYPE_FLOAT && c.type != PNANOVDB_GRID_TYPE_VEC3F)
+        return fail(&c, "not a float or vec3f grid");
+    uint32_t blind = pnanovdb_grid_get_blind_metadata_count(c.buf, grid);
+    if (blind > 0) {
+        uint64_t at;
+        if (!node_fits(&c, 0, pnanovdb_grid_get_blind_metadata_offset(c.buf, grid), 0, &at) ||
+            blind > (size - at) / PNANOVDB_GRIDBLINDMETADATA_SIZE)
+            return fail(&c, "blind metadata outside the buffer");
+    }
+
+    pnanovdb_tree_handle_t tree = pnanovdb_grid_get_tree(c.buf, grid);
+    uint64_t tree_at = tree.address.byte_offset;
+    c.max_leaves = pnanovdb_tree_get_node_count_leaf(c.buf, tree);
+    c.max_lowers = pnanovdb_tree_get_node_count_lower(c.buf, tree);
+    c.max_uppers = pnanovdb_tree_get_node_count_upper(c.buf, tree);
+    if (check_level(&c, tree_at, pnanovdb_tree_get_node_offset_leaf(c.buf, tree), c.max_leaves,
+                    PNANOVDB_GRID_TYPE_GET(c.type, leaf_size), "leaf") != 0 ||
+        check_level(&c, tree_at, pnanovdb_tree_get_node_offset_lower(c.buf, tree), c.max_lowers,
+                    PNANOVDB_GRID_TYPE_GET(c.type, lower_size), "lower") != 0 ||
+        check_level(&c, tree_at, pnanovdb_tree_get_node_offset_upper(c.buf, tree), c.max_uppers,
+                    PNANOVDB_GRID_TYPE_GET(c.type, upper_size), "upper") != 0)
+        return -1;
+
+    uint64_t root_off = pnanovdb_tree_get_node_offset_root(c.buf, tree), root_at;
+    uint64_t root_size = PNANOVDB_GRID_TYPE_GET(c.type, root_size);
+    uint64_t tile_size = PNANOVDB_GRID_TYPE_GET(c.type, root_tile_size);
+    if (root_off > size || !node_fits(&c, tree_at, (int64_t)root_off, root_size, &root_at))
+        return fail(&c, "the root node lies outside the buffer");
+    pnanovdb_root_handle_t root = {addr(root_at)};
+    uint64_t tiles = pnanovdb_root_get_tile_count(c.buf, root);
+    if (tiles > (size - root_at - root_size) / tile_size)
+        return fail(&c, "the root's %llu tiles do not fit in the buffer",
+                    (unsigned long long)tiles);
+    uint32_t upper_size = PNANOVDB_GRID_TYPE_GET(c.type, upper_size);
+    for (uint32_t t = 0; t < tiles; ++t) {
+        pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(c.type, root, t);
+        int64_t rel = pnanovdb_root_tile_get_child(c.buf, tile);
+        if (rel == 0)
+            continue; /* a value tile */
+        if (++c.uppers > c.max_uppers)
+            return fail(&c, "more root children than the tree's %llu upper nodes",
+                        (unsigned long long)c.max_uppers);
+        uint64_t at;
+        if (!node_fits(&c, root_at, rel, upper_size, &at))
+            return fail(&c, "root tile %u points outside the buffer", t);
+        if (check_upper(&c, at) != 0)
+            return -1;
+    }
+    return 0;
+}

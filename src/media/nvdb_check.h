@@ -1,0 +1,31 @@
+/* Structural validation of a NanoVDB grid buffer from an untrusted file,
+ * before anything follows an offset in it. NanoVDB's own validator and every
+ * tree walk (lookups, node statistics) follow the tree's node offsets, the
+ * root's tile table and each node's child pointers without checking them: a
+ * file with its checksum marked absent and one offset changed crashed haze.
+ * Kept free of PNanoVDB so the C++ loader can call it too. */
+#ifndef HAZE_MEDIA_NVDB_CHECK_H
+#define HAZE_MEDIA_NVDB_CHECK_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Checks that the grid at the start of `data` (`size` bytes, 32-byte aligned)
+ * is a float or vec3f NanoVDB grid whose every offset haze or NanoVDB follows
+ * stays inside the buffer: grid size, blind metadata, the tree's first-node
+ * offsets and node counts, the root's tile table, and every child pointer of
+ * the root, upper and lower nodes (each pointing at a whole node of the right
+ * level, no more children per level than the tree declares nodes). Returns 0,
+ * or -1 with a reason (no file name) in why. Work is proportional to the
+ * number of nodes the buffer can hold. */
+int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

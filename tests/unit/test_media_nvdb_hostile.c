@@ -1,0 +1,155 @@
+/* Hostile .nvdb files: a real grid (volumes/box.nvdb) with its checksum
+ * marked absent, so nothing but the structure stands between a changed offset
+ * and a wild read, then offsets pointed outside the buffer and random bytes
+ * of the tree changed. Every load must end in the grid (whose lookups and
+ * majorant are then safe to use) or in one error naming the grid, never in a
+ * crash (this test runs under ASan + UBSan too). */
+#define _POSIX_C_SOURCE 200809L
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "media/grid.h"
+#include "media/majorant.h"
+
+#define VOLUMES HAZE_SCENES "/../volumes/"
+#define GRID_SIZE 672 /* NanoVDB 32.x GridData */
+
+static unsigned char *file_bytes(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    *n = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    unsigned char *b = malloc(*n);
+    assert_non_null(b);
+    assert_int_equal(fread(b, 1, *n, f), *n);
+    fclose(f);
+    return b;
+}
+
+/* Where the grid starts in the file: the second "NanoVDB0" (the first is the
+ * file header's). */
+static size_t grid_offset(const unsigned char *b, size_t n)
+{
+    for (size_t i = 8; i + 8 <= n; ++i)
+        if (memcmp(b + i, "NanoVDB0", 8) == 0)
+            return i;
+    fail_msg("no grid in the file");
+    return 0;
+}
+
+static void put64(unsigned char *p, uint64_t v) { memcpy(p, &v, 8); }
+static void put32(unsigned char *p, uint32_t v) { memcpy(p, &v, 4); }
+
+/* Loads `bytes`, builds its majorant and looks up a few points when it loads;
+ * returns whether it loaded. */
+static bool try_load(const unsigned char *bytes, size_t n, char *message, size_t msize)
+{
+    const char *path = HAZE_TMP "/hostile.nvdb";
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, n, f), n);
+    fclose(f);
+    grid *g = NULL;
+    hz_error err = {{0}};
+    if (grid_load(path, "density", &g, &err) != HZ_OK) {
+        assert_non_null(strstr(err.message, "hostile.nvdb"));
+        assert_null(strchr(err.message, '\n'));
+        snprintf(message, msize, "%s", err.message);
+        return false;
+    }
+    vec3 lo, hi;
+    if (grid_support_bounds(g, &lo, &hi)) {
+        majorant_grid mg;
+        int32_t pad[3] = {0, 0, 0};
+        if (majorant_grid_build(g, lo, hi, pad, &mg, &err) == HZ_OK)
+            majorant_grid_free(&mg);
+    }
+    grid_accessor acc;
+    grid_accessor_init(g, &acc);
+    for (int i = -8; i < 48; i += 3)
+        (void)grid_density_index(g, &acc, v3(i, i * 0.5, 31 - i));
+    grid_destroy(g);
+    message[0] = '\0';
+    return true;
+}
+
+static void test_offsets_outside(void **state)
+{
+    (void)state;
+    size_t n;
+    unsigned char *orig = file_bytes(VOLUMES "box.nvdb", &n);
+    size_t g = grid_offset(orig, n);
+    unsigned char *b = malloc(n);
+    char msg[1024];
+    memcpy(b, orig, n);
+    assert_true(try_load(b, n, msg, sizeof msg)); /* untouched: loads */
+
+    const uint64_t bad[] = {0x7fff0000u, 0xfffffff0u, (uint64_t)-64, (uint64_t)1 << 40, 8};
+    for (int level = 0; level < 4; ++level) /* leaf, lower, upper, root offsets */
+        for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+            memcpy(b, orig, n);
+            put64(b + g + 8, ~(uint64_t)0); /* checksum: absent */
+            put64(b + g + GRID_SIZE + 8 * (size_t)level, bad[k]);
+            assert_false(try_load(b, n, msg, sizeof msg));
+            assert_non_null(strstr(msg, "is corrupt"));
+        }
+    /* Node counts far beyond the buffer. */
+    for (int level = 0; level < 3; ++level) {
+        memcpy(b, orig, n);
+        put64(b + g + 8, ~(uint64_t)0);
+        put32(b + g + GRID_SIZE + 32 + 4 * (size_t)level, 0x7fffffffu);
+        assert_false(try_load(b, n, msg, sizeof msg));
+    }
+    free(b);
+    free(orig);
+}
+
+/* Random changes of the tree's first kilobytes and of the node tables, with
+ * the checksum absent: never a crash. */
+static void test_random_tree_bytes(void **state)
+{
+    (void)state;
+    size_t n;
+    unsigned char *orig = file_bytes(VOLUMES "box.nvdb", &n);
+    size_t g = grid_offset(orig, n);
+    unsigned char *b = malloc(n);
+    char msg[1024];
+    uint64_t s = 0x9e3779b97f4a7c15u;
+    int loaded = 0, refused = 0;
+    for (int iter = 0; iter < 150; ++iter) {
+        memcpy(b, orig, n);
+        put64(b + g + 8, ~(uint64_t)0);
+        for (int e = 0; e < 1 + iter % 6; ++e) {
+            s = s * 6364136223846793005u + 1442695040888963407u;
+            size_t span = n - g - GRID_SIZE < 40000 ? n - g - GRID_SIZE : 40000;
+            size_t at = g + GRID_SIZE + (size_t)(s >> 33) % span;
+            b[at] = (unsigned char)(s >> 20);
+        }
+        if (try_load(b, n, msg, sizeof msg))
+            ++loaded;
+        else
+            ++refused;
+    }
+    assert_int_equal(loaded + refused, 150);
+    free(b);
+    free(orig);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_offsets_outside),
+        cmocka_unit_test(test_random_tree_bytes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
