@@ -136,12 +136,96 @@ static void test_emitting_room_furnace(void **state)
     }
 }
 
+/* ---- maxdepth 1 is single scattering ---- */
+
+/* Fog in a box around a diffuse floor and sphere, lit by every kind of light
+ * (spot, point, distant, sky, an emitting sphere inside the fog). */
+static char *one_bounce_scene(const char *medium, const char *integrator)
+{
+    char *box = box_mesh(v3(-1.6, -0.5, -1.6), v3(1.6, 2.2, 1.6));
+    char *s = sfmt(
+        "LookAt 0 1.2 -4.5  0 0.6 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n"
+        "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+        "Sampler \"independent\" \"integer pixelsamples\" 16\n%s\nWorldBegin\n"
+        "LightSource \"spot\" \"rgb I\" [6 5 4] \"point3 from\" [0.3 2 0] \"point3 to\" [0 0 0] "
+        "\"float coneangle\" 35\n"
+        "LightSource \"point\" \"rgb I\" [1 0.6 0.3] \"point3 from\" [1 1 -1]\n"
+        "LightSource \"distant\" \"rgb L\" [0.4 0.4 0.5] \"point3 from\" [1 2 -1] "
+        "\"point3 to\" [0 0 0]\n"
+        "LightSource \"infinite\" \"rgb L\" [0.05 0.08 0.1]\n"
+        "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [3 3 2]\nTranslate -0.9 1.2 0.6\n"
+        "Shape \"sphere\" \"float radius\" 0.2\nAttributeEnd\n"
+        "MakeNamedMedium \"m\" %s\n"
+        "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n%sAttributeEnd\n"
+        "Material \"diffuse\" \"rgb reflectance\" [0.6 0.5 0.4]\n"
+        "Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] "
+        "\"integer indices\" [0 1 2 0 2 3]\n"
+        "AttributeBegin\nTranslate 0.4 0.45 0.3\nShape \"sphere\" \"float radius\" 0.45\n"
+        "AttributeEnd\n",
+        integrator, medium, box);
+    free(box);
+    return s;
+}
+
+/* Block means (4x4 blocks of 4x4 pixels) of volpath maxdepth 1 and of
+ * singlescatter agree within noise. */
+static void test_maxdepth_1_matches_singlescatter(void **state)
+{
+    (void)state;
+    const char *media[] = {
+        "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.2 0.1] "
+        "\"rgb sigma_s\" [0.4 0.3 0.6] \"float g\" 0.3",
+        "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+        "\"rgb sigma_a\" [0.5 0.5 0.5] \"rgb sigma_s\" [2 3 1] \"float g\" -0.4",
+    };
+    const char *ss = "Integrator \"singlescatter\" \"string transmittance\" \"ratio\"";
+    const char *vp = "Integrator \"volpath\" \"integer maxdepth\" 1";
+    for (size_t k = 0; k < 2; ++k) {
+        char *ta = one_bounce_scene(media[k], ss), *tb = one_bounce_scene(media[k], vp);
+        render_scene *ra = build(ta), *rb = build(tb);
+        pstat *a = image_stats(ra, 16, 16, 1024), *b = image_stats(rb, 16, 16, 1024);
+        double worst = 0.0, sum_a = 0.0, sum_b = 0.0, var_a = 0.0, var_b = 0.0;
+        for (int by = 0; by < 4; ++by)
+            for (int bx = 0; bx < 4; ++bx)
+                for (int c = 0; c < 3; ++c) {
+                    double ma = 0, mb = 0, va = 0, vb = 0;
+                    for (int y = 4 * by; y < 4 * by + 4; ++y)
+                        for (int x = 4 * bx; x < 4 * bx + 4; ++x) {
+                            const pstat *pa = &a[y * 16 + x], *pb = &b[y * 16 + x];
+                            ma += ch(pa->mean, c) / 16;
+                            mb += ch(pb->mean, c) / 16;
+                            va += ch(pa->se, c) * ch(pa->se, c) / 256;
+                            vb += ch(pb->se, c) * ch(pb->se, c) / 256;
+                        }
+                    sum_a += ma;
+                    sum_b += mb;
+                    var_a += va;
+                    var_b += vb;
+                    double z = fabs(ma - mb) / sqrt(va + vb + 1e-300);
+                    worst = fmax(worst, z);
+                }
+        double z_all = fabs(sum_a - sum_b) / sqrt(var_a + var_b);
+        if (verbose())
+            print_message("medium %zu: image mean %.5f vs %.5f (z %.2f), worst block z %.2f\n",
+                          k, sum_a / 48, sum_b / 48, z_all, worst);
+        assert_true(z_all < 4.0);
+        assert_true(worst < 4.5);
+        free(a);
+        free(b);
+        render_scene_destroy(ra);
+        render_scene_destroy(rb);
+        free(ta);
+        free(tb);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_grey_sky_furnace_is_exact),
         cmocka_unit_test(test_chromatic_sky_furnace),
         cmocka_unit_test(test_emitting_room_furnace),
+        cmocka_unit_test(test_maxdepth_1_matches_singlescatter),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
