@@ -16,11 +16,15 @@ hz_status light_sampler_create(light_sampler_kind kind, const light *lights, siz
         return hz_fail(err, "out of memory");
     }
     double total = 0.0;
+    size_t distant = 0;
     for (size_t i = 0; i < light_count; ++i) {
         if (lights[i].kind == LIGHT_INFINITE)
             continue;
         double w = 1.0;
-        if (kind == LIGHT_SAMPLER_POWER) {
+        if (kind == LIGHT_SAMPLER_BVH_SPLIT && lights[i].kind == LIGHT_DISTANT) {
+            w = -1.0; /* set below, once the bounded lights' power is known */
+            ++distant;
+        } else if (kind != LIGHT_SAMPLER_UNIFORM) {
             rgb phi = light_phi(&lights[i], scene_radius);
             w = (phi.r + phi.g + phi.b) / 3.0;
             if (!(w > 0.0) || !isfinite(w))
@@ -28,7 +32,17 @@ hz_status light_sampler_create(light_sampler_kind kind, const light *lights, siz
         }
         out->index[out->count] = i;
         out->cdf[out->count++] = w;
-        total += w;
+        if (w > 0.0)
+            total += w;
+    }
+    if (distant > 0) {
+        /* pbrt-v4's BVHLightSampler: each unbounded light as likely as the
+         * whole tree of bounded ones (when it holds any power). */
+        double share = total > 0.0 ? total : 1.0;
+        for (size_t k = 0; k < out->count; ++k)
+            if (out->cdf[k] < 0.0)
+                out->cdf[k] = share;
+        total += share * (double)distant;
     }
     /* No power anywhere: every light alike (as pbrt-v4). */
     bool uniform = !(total > 0.0);

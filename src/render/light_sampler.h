@@ -1,8 +1,13 @@
 /* Choosing one light per light sample in path tracing (pbrt-v4's
  * LightSampler): "uniform" (every light alike) or "power" (probability
  * proportional to each light's emitted power, light_phi averaged over RGB, as
- * PowerLightSampler; all powers zero: uniform). pbrt-v4's default "bvh" is
- * mapped to "power" by the caller (docs/differences-from-pbrt.md).
+ * PowerLightSampler; all powers zero: uniform). For pbrt-v4's default "bvh",
+ * haze keeps the BVH sampler's split without its tree: distant lights
+ * (unbounded) each get the probability 1 / (number of distant lights + 1 if
+ * there is any bounded light), and the bounded lights (point, spot, area)
+ * share the rest in proportion to their power. Without that split a distant
+ * light's power (π r² L over the scene's whole bounding sphere) starves small
+ * bright lamps of samples (docs/differences-from-pbrt.md).
  *
  * Infinite lights are never chosen: volpath (like pbrt-v4, whose uniform
  * infinite light returns no sample when an incomplete pdf is allowed) finds
@@ -15,7 +20,11 @@
 #include "core/error.h"
 #include "render/lights.h"
 
-typedef enum { LIGHT_SAMPLER_UNIFORM, LIGHT_SAMPLER_POWER } light_sampler_kind;
+typedef enum {
+    LIGHT_SAMPLER_UNIFORM,
+    LIGHT_SAMPLER_POWER,
+    LIGHT_SAMPLER_BVH_SPLIT, /* "bvh": distant lights apart, power among the rest */
+} light_sampler_kind;
 
 typedef struct {
     light_sampler_kind kind;

@@ -23,21 +23,23 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
     if (out->max_depth < 0)
         params_reject(pl, "maxdepth", "\"maxdepth\" must be >= 0");
     out->regularize = params_bool(pl, "regularize", false);
-    out->light_sampler = LIGHT_SAMPLER_POWER;
+    out->light_sampler = LIGHT_SAMPLER_BVH_SPLIT;
     const char *ls = params_string(pl, "lightsampler", "bvh");
     if (strcmp(ls, "uniform") == 0) {
         out->light_sampler = LIGHT_SAMPLER_UNIFORM;
+    } else if (strcmp(ls, "power") == 0) {
+        out->light_sampler = LIGHT_SAMPLER_POWER;
     } else if (strcmp(ls, "bvh") == 0 || strcmp(ls, "exhaustive") == 0) {
-        /* Only an explicit choice is worth a warning: "power" is haze's
-         * default (docs/differences-from-pbrt.md). */
+        /* Only an explicit choice is worth a warning: the default is
+         * light_sampler.h's stand-in for "bvh". */
         if (warn && params_has(pl, "lightsampler")) {
             file_loc l = params_loc(pl, "lightsampler");
             fprintf(warn,
-                    "%s:%d:%d: warning: Integrator \"volpath\" \"lightsampler\" \"%s\" is not "
-                    "supported; using \"power\"\n",
+                    "%s:%d:%d: warning: Integrator \"volpath\" \"lightsampler\" \"%s\" "
+                    "runs as \"power\" with distant lights apart (no light BVH)\n",
                     l.file ? l.file : "<input>", l.line, l.column, ls);
         }
-    } else if (strcmp(ls, "power") != 0) {
+    } else {
         params_reject(pl, "lightsampler",
                       "\"lightsampler\" \"%s\" is not one of \"uniform\", \"power\", \"bvh\", "
                       "\"exhaustive\"",
