@@ -26,10 +26,11 @@ typedef struct {
     volpath_event_fn fn;
     void *ctx;
     rgb T_maj;
+    uint32_t collisions;
 } tracker;
 
 /* Collisions over [a, b] at the majorant sigma_t * bound. False when the
- * callback ended the walk. */
+ * callback ended the walk or the collision budget ran out (then T_maj = 0). */
 static bool track_span(tracker *tr, double a, double b, double bound)
 {
     const medium *m = tr->src.m;
@@ -44,6 +45,10 @@ static bool track_span(tracker *tr, double a, double b, double bound)
         if (!(tn < b)) {
             tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, b - t));
             return true;
+        }
+        if (++tr->collisions > VOLPATH_MAX_COLLISIONS) {
+            tr->T_maj = rgb_grey(0.0);
+            return false;
         }
         tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, tn - t));
         double d = tr->src.grid ? medium_density_at(m, &tr->src.acc, &tr->src.r, tn,
@@ -67,7 +72,9 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
                   .fn = fn, .ctx = ctx, .T_maj = rgb_grey(1.0)};
     switch (m->kind) {
     case MEDIUM_HOMOGENEOUS:
-        return track_span(&tr, t0, t1, 1.0) ? tr.T_maj : rgb_grey(1.0);
+        return track_span(&tr, t0, t1, 1.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
+                   ? tr.T_maj
+                   : rgb_grey(1.0);
     case MEDIUM_GRID: {
         majorant_walk mw;
         if (!medium_grid_ray_make(m, o, w, walk->time, &tr.src.r) ||
@@ -81,7 +88,7 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
             if (!(seg.max > 0.0))
                 continue;
             if (!track_span(&tr, seg.t0, seg.t1, seg.max))
-                return rgb_grey(1.0);
+                return tr.collisions > VOLPATH_MAX_COLLISIONS ? tr.T_maj : rgb_grey(1.0);
         }
         return tr.T_maj;
     }

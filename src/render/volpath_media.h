@@ -26,10 +26,18 @@ typedef struct {
 /* Returns false to end the walk. */
 typedef bool (*volpath_event_fn)(void *ctx, const volpath_event *ev);
 
+/* A walk gives up after this many tentative collisions on one segment: a grid
+ * at an absurd density scale (1e12) whose majorant cell covers empty voxels
+ * would otherwise take ~1e12 null collisions per unit length (pbrt-v4 hangs
+ * there). Such a segment counts as opaque (see docs/media.md); real scenes
+ * stay many orders of magnitude below (a few hundred per segment). */
+#define VOLPATH_MAX_COLLISIONS (1u << 16)
+
 /* Walks o + t w (unit w) over [t0, t1] (t1 may be INFINITY) in medium m at the
  * walk's time, calling `fn` at each tentative collision. Returns the majorant
- * transmittance from the last collision to t1, or (1, 1, 1) when `fn` ended
- * the walk. `hero` in 0..2 is the channel whose majorant sets the rate. */
+ * transmittance from the last collision to t1, (1, 1, 1) when `fn` ended the
+ * walk, or (0, 0, 0) past VOLPATH_MAX_COLLISIONS. `hero` in 0..2 is the
+ * channel whose majorant sets the rate. */
 rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero,
                   volume_walk *walk, volpath_event_fn fn, void *ctx);
 

@@ -1,6 +1,7 @@
 /* Integrator "volpath": closed forms of multiple scattering (furnaces), the
  * selection of the integrator and its parameters. */
 #include "media_test_util.h"
+#include "render/volpath_media.h"
 
 /* A sphere of medium (radius 1 at the origin) under a uniform sky, seen from
  * outside: with albedo 1 and no absorption anywhere, every path leaves with
@@ -219,6 +220,39 @@ static void test_maxdepth_1_matches_singlescatter(void **state)
     }
 }
 
+/* fog_sphere.vdb at density scale 1e12: majorant cells that straddle its
+ * surface hold ~1e12 null collisions per unit length. The walk gives up after
+ * VOLPATH_MAX_COLLISIONS per segment (the segment counts as opaque), so each
+ * sample stays bounded and finite instead of running for hours. */
+static void test_absurd_density_is_bounded(void **state)
+{
+    (void)state;
+    char *text = sfmt("LookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
+                      "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                      "Sampler \"independent\" \"integer pixelsamples\" 2\n"
+                      "Integrator \"volpath\" \"integer maxdepth\" 5\nWorldBegin\n"
+                      "LightSource \"point\" \"rgb I\" [5 5 5] \"point3 from\" [2 2 -2]\n"
+                      "LightSource \"infinite\" \"rgb L\" [0.1 0.1 0.1]\n"
+                      "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" "
+                      "\"%s/fog_sphere.vdb\" \"rgb sigma_a\" [0.1 0.1 0.1] "
+                      "\"rgb sigma_s\" [1 1 1] \"float scale\" 1e12\n"
+                      "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n"
+                      "Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+                      VOLUMES);
+    render_scene *rs = build(text);
+    pstat *px = image_stats(rs, 8, 8, 2);
+    uint64_t lookups = 0;
+    for (int i = 0; i < 64; ++i) {
+        assert_true(px[i].min >= 0.0);
+        lookups += px[i].lookups;
+    }
+    /* Well below one budget per sample and segment (64 pixels, 2 samples). */
+    assert_true(lookups < 128u * 4u * VOLPATH_MAX_COLLISIONS);
+    free(px);
+    render_scene_destroy(rs);
+    free(text);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -226,6 +260,7 @@ int main(void)
         cmocka_unit_test(test_chromatic_sky_furnace),
         cmocka_unit_test(test_emitting_room_furnace),
         cmocka_unit_test(test_maxdepth_1_matches_singlescatter),
+        cmocka_unit_test(test_absurd_density_is_bounded),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
