@@ -6,7 +6,7 @@
 hz_status light_sampler_create(light_sampler_kind kind, const light *lights, size_t light_count,
                                double scene_radius, light_sampler *out, hz_error *err)
 {
-    *out = (light_sampler){kind, 0, NULL, NULL, NULL};
+    *out = (light_sampler){.kind = kind};
     size_t n = light_count ? light_count : 1;
     out->index = malloc(n * sizeof *out->index);
     out->cdf = malloc(n * sizeof *out->cdf);
@@ -15,16 +15,14 @@ hz_status light_sampler_create(light_sampler_kind kind, const light *lights, siz
         light_sampler_free(out);
         return hz_fail(err, "out of memory");
     }
+    if (kind == LIGHT_SAMPLER_BVH)
+        return light_bvh_build(lights, light_count, &out->bvh, err);
     double total = 0.0;
-    size_t distant = 0;
     for (size_t i = 0; i < light_count; ++i) {
         if (lights[i].kind == LIGHT_INFINITE)
             continue;
         double w = 1.0;
-        if (kind == LIGHT_SAMPLER_BVH_SPLIT && lights[i].kind == LIGHT_DISTANT) {
-            w = -1.0; /* set below, once the bounded lights' power is known */
-            ++distant;
-        } else if (kind != LIGHT_SAMPLER_UNIFORM) {
+        if (kind == LIGHT_SAMPLER_POWER) {
             rgb phi = light_phi(&lights[i], scene_radius);
             w = (phi.r + phi.g + phi.b) / 3.0;
             if (!(w > 0.0) || !isfinite(w))
@@ -32,17 +30,7 @@ hz_status light_sampler_create(light_sampler_kind kind, const light *lights, siz
         }
         out->index[out->count] = i;
         out->cdf[out->count++] = w;
-        if (w > 0.0)
-            total += w;
-    }
-    if (distant > 0) {
-        /* pbrt-v4's BVHLightSampler: each unbounded light as likely as the
-         * whole tree of bounded ones (when it holds any power). */
-        double share = total > 0.0 ? total : 1.0;
-        for (size_t k = 0; k < out->count; ++k)
-            if (out->cdf[k] < 0.0)
-                out->cdf[k] = share;
-        total += share * (double)distant;
+        total += w;
     }
     /* No power anywhere: every light alike (as pbrt-v4). */
     bool uniform = !(total > 0.0);
@@ -65,13 +53,17 @@ void light_sampler_free(light_sampler *ls)
     free(ls->index);
     free(ls->cdf);
     free(ls->pmf);
+    light_bvh_free(&ls->bvh);
     ls->index = NULL;
     ls->cdf = ls->pmf = NULL;
     ls->count = 0;
 }
 
-bool light_sampler_sample(const light_sampler *ls, double u, size_t *light, double *pmf)
+bool light_sampler_sample(const light_sampler *ls, vec3 p, vec3 n, double u, size_t *light,
+                          double *pmf)
 {
+    if (ls->kind == LIGHT_SAMPLER_BVH)
+        return light_bvh_sample(&ls->bvh, p, n, u, light, pmf);
     if (ls->count == 0)
         return false;
     size_t lo = 0, hi = ls->count - 1;

@@ -23,23 +23,23 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
     if (out->max_depth < 0)
         params_reject(pl, "maxdepth", "\"maxdepth\" must be >= 0");
     out->regularize = params_bool(pl, "regularize", false);
-    out->light_sampler = LIGHT_SAMPLER_BVH_SPLIT;
+    out->light_sampler = LIGHT_SAMPLER_BVH;
     const char *ls = params_string(pl, "lightsampler", "bvh");
     if (strcmp(ls, "uniform") == 0) {
         out->light_sampler = LIGHT_SAMPLER_UNIFORM;
     } else if (strcmp(ls, "power") == 0) {
         out->light_sampler = LIGHT_SAMPLER_POWER;
-    } else if (strcmp(ls, "bvh") == 0 || strcmp(ls, "exhaustive") == 0) {
-        /* Only an explicit choice is worth a warning: the default is
-         * light_sampler.h's stand-in for "bvh". */
-        if (warn && params_has(pl, "lightsampler")) {
+    } else if (strcmp(ls, "exhaustive") == 0) {
+        /* pbrt-v4's exhaustive sampler weighs every light by its BVH
+         * importance at the point; the BVH sampler is its nearest. */
+        if (warn) {
             file_loc l = params_loc(pl, "lightsampler");
             fprintf(warn,
-                    "%s:%d:%d: warning: Integrator \"volpath\" \"lightsampler\" \"%s\" "
-                    "runs as \"power\" with distant lights apart (no light BVH)\n",
-                    l.file ? l.file : "<input>", l.line, l.column, ls);
+                    "%s:%d:%d: warning: Integrator \"volpath\" \"lightsampler\" "
+                    "\"exhaustive\" is not supported; using \"bvh\"\n",
+                    l.file ? l.file : "<input>", l.line, l.column);
         }
-    } else {
+    } else if (strcmp(ls, "bvh") != 0) {
         params_reject(pl, "lightsampler",
                       "\"lightsampler\" \"%s\" is not one of \"uniform\", \"power\", \"bvh\", "
                       "\"exhaustive\"",
@@ -124,7 +124,8 @@ typedef struct {
     rgb L, beta, r_u, r_l;
     int depth;
     bool specular, any_non_specular;
-    vec3 prev_p; /* the last scattering point: light densities for MIS */
+    vec3 prev_p, prev_n; /* the last scattering point and its shading normal
+                          * (zero in a medium): light densities for MIS */
     /* the medium segment being tracked */
     vp_ray ray;
     bool scattered, terminated;
@@ -266,11 +267,11 @@ static rgb sample_ld(path *pa, const vertex *v)
     vec2 ul = sampler_2d(pa->st);
     size_t li;
     double pmf;
-    if (!light_sampler_sample(&sc->sampler, u, &li, &pmf))
+    vec3 n = v->b ? v->b->n : v3(0.0, 0.0, 0.0);
+    if (!light_sampler_sample(&sc->sampler, v->p, n, u, &li, &pmf))
         return rgb_grey(0.0);
     const light *l = &sc->lights[li];
     light_sample ls;
-    vec3 n = v->b ? v->b->n : v3(0.0, 0.0, 0.0);
     if (!light_sample_li(l, v->p, n, pa->walk.time, ul, &ls) || !(ls.pdf > 0.0) ||
         rgb_is_black(ls.L))
         return rgb_grey(0.0);
@@ -328,6 +329,7 @@ static void scatter(path *pa, const volpath_event *ev)
     /* hg_sample draws exactly the density it returns: p / pdf = 1. */
     pa->r_l = rgb_div(pa->r_u, p_pdf);
     pa->prev_p = x;
+    pa->prev_n = v3(0.0, 0.0, 0.0);
     pa->scattered = true;
     pa->ray = ray_from_medium(x, wi, pa->ray.medium);
     pa->specular = false;
@@ -387,7 +389,7 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
         pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(pa->r_u)));
         return;
     }
-    double p_l = light_sampler_pmf(&sc->sampler, (size_t)li) *
+    double p_l = light_sampler_pmf(&sc->sampler, pa->prev_p, pa->prev_n, (size_t)li) *
                  light_pdf_li(l, pa->prev_p, pa->walk.time, h->p, h->ng);
     rgb den = rgb_add(pa->r_u, rgb_scale(pa->r_l, p_l));
     pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(den)));
@@ -413,6 +415,7 @@ static bool bounce(path *pa, const geom_hit *h)
         pa->L = rgb_add(pa->L, sample_ld(pa, &v));
     }
     pa->prev_p = h->p;
+    pa->prev_n = b.n;
     double uc = sampler_1d(pa->st);
     vec2 u = sampler_2d(pa->st);
     bsdf_sample bs;

@@ -34,12 +34,11 @@
 typedef struct {
     int max_depth;                     /* "maxdepth", default 5 */
     bool regularize;                   /* "regularize", default false */
-    light_sampler_kind light_sampler;  /* "lightsampler": uniform, power, bvh (split) */
+    light_sampler_kind light_sampler;  /* "lightsampler": uniform, power, bvh */
 } volpath_settings;
 
-/* Reads `Integrator "volpath"`'s parameters; "bvh" (the default) and
- * "exhaustive" run as light_sampler.h's split power sampler, with a warning
- * naming their place (to `warn` when not NULL) when the scene names them;
+/* Reads `Integrator "volpath"`'s parameters; "exhaustive" runs as "bvh"
+ * (the default) with a warning naming its place (to `warn` when not NULL);
  * other names and a negative maxdepth are errors. Does not call
  * params_finish. */
 hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_settings *out,
