@@ -61,6 +61,12 @@ static void test_default_is_singlescatter(void **state)
     free(a);
     free(b);
     free(c);
+    /* haze info says so too. */
+    char out[8192];
+    char *cmd = sfmt("info '%s/default_integrator.pbrt'", HAZE_TMP);
+    assert_int_equal(run_haze(cmd, out, sizeof out), 0);
+    assert_non_null(strstr(out, "integrator      singlescatter, transmittance jittered"));
+    free(cmd);
 }
 
 /* Builds `text` with warnings captured; returns the status and fills msg with
