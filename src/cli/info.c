@@ -348,9 +348,10 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
     int spp = (int)param_num(&sd.sampler.params, "pixelsamples", 16, &has);
     fprintf(out, "  %-15s %s, %d spp%s\n", "sampler", sd.sampler.type, spp, has ? "" : " (default)");
     fprintf(out, "  %-15s %s\n", "filter", sd.filter.type);
-    if (strcmp(sd.integrator.type, "singlescatter") == 0) {
+    /* No Integrator directive (line 0): haze renders with singlescatter. */
+    if (strcmp(sd.integrator.type, "singlescatter") == 0 || sd.integrator.loc.line == 0) {
         fprintf(out, "  %-15s %s, transmittance %s, step %g voxels, shadow step %g voxels\n",
-                "integrator", sd.integrator.type,
+                "integrator", "singlescatter",
                 param_str(&sd.integrator.params, "transmittance", "jittered"),
                 param_num(&sd.integrator.params, "stepsize", 1.0, &has),
                 param_num(&sd.integrator.params, "shadowstepsize", 2.0, &has));

@@ -548,3 +548,102 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
     }
     return false;
 }
+
+/* ---- density of a sample, power (volpath's MIS and light sampler) ---- */
+
+/* 1 - cos(theta_max) of the cone a sphere (centre c, radius r) subtends at p,
+ * as sample_sphere_cone computes it; 0 where that function refuses (p inside
+ * or on the sphere, or an underflowing cone): area sampling then. */
+static double sphere_cone_omc(vec3 c, double r, vec3 p)
+{
+    double dc2 = v3_length_sq(v3_sub(c, p));
+    if (dc2 <= r * r * (1.0 + 1e-9))
+        return 0.0;
+    double sin_max = r / sqrt(dc2);
+    double sin2_max = sin_max * sin_max;
+    double cos_max = sqrt(fmax(0.0, 1.0 - sin2_max));
+    double omc_max = sin2_max / (1.0 + cos_max);
+    return omc_max >= DBL_MIN ? omc_max : 0.0;
+}
+
+/* Per render-space area: a density per object-space area `pdf_obj` carried
+ * by render_from_object to the point with render-space unit normal nr. */
+static double area_density_render(const transform *render_from_object, vec3 nr, double pdf_obj)
+{
+    transform object_from_render = transform_inverse(*render_from_object);
+    vec3 no = v3_normalize(transform_normal(&object_from_render, nr));
+    double jacobian = abs_det3(render_from_object) * v3_length(transform_normal(render_from_object, no));
+    return jacobian > 0.0 && isfinite(jacobian) ? pdf_obj / jacobian : 0.0;
+}
+
+double light_pdf_li(const light *l, vec3 p, double time, vec3 pl, vec3 nl)
+{
+    if (l->kind != LIGHT_AREA)
+        return 0.0;
+    const geom_shape *s = l->area.shape;
+    vec3 d = v3_sub(pl, p);
+    double d2 = v3_length_sq(d);
+    if (d2 == 0.0)
+        return 0.0;
+    double cos_l = fabs(v3_dot(nl, d)) / sqrt(d2);
+    double pdf_area;
+    if (s->kind == GEOMETRY_SPHERE) {
+        transform render_from_object =
+            s->motion ? geom_motion_at(s->motion, time) : s->space_from_object;
+        double scale = 0.0;
+        vec3 c = l->area.sphere_center;
+        double r = l->area.sphere_radius;
+        if (s->motion) {
+            scale = light_uniform_scale(&render_from_object);
+            r = scale * s->radius;
+            c = transform_point(&render_from_object, v3(0, 0, 0));
+        }
+        bool cone = s->motion ? scale > 0.0 && r > 0.0 && isfinite(r) : l->area.sphere_cone;
+        double omc = cone ? sphere_cone_omc(c, r, p) : 0.0;
+        if (omc > 0.0)
+            return 1.0 / (2.0 * HZ_PI * omc);
+        pdf_area = area_density_render(&render_from_object, nl,
+                                       1.0 / (4.0 * HZ_PI * s->radius * s->radius));
+    } else {
+        if (s->triangle_count == 0 || !(l->area.area > 0.0))
+            return 0.0;
+        pdf_area = 1.0 / l->area.area;
+        if (s->motion) {
+            transform render_from_object = geom_motion_at(s->motion, time);
+            pdf_area = area_density_render(&render_from_object, nl, pdf_area);
+        }
+    }
+    return cos_l > 0.0 ? pdf_area * d2 / cos_l : 0.0;
+}
+
+rgb light_phi(const light *l, double scene_radius)
+{
+    switch (l->kind) {
+    case LIGHT_POINT:
+        return rgb_scale(l->emit, 4.0 * HZ_PI);
+    case LIGHT_SPOT:
+        return rgb_scale(l->emit, 2.0 * HZ_PI *
+                                      (1.0 - 0.5 * (l->spot.cos_falloff_start +
+                                                    l->spot.cos_falloff_end)));
+    case LIGHT_DISTANT:
+        return rgb_scale(l->emit, HZ_PI * scene_radius * scene_radius);
+    case LIGHT_INFINITE:
+        return rgb_scale(l->emit, 4.0 * HZ_PI * HZ_PI * scene_radius * scene_radius);
+    case LIGHT_AREA: {
+        const geom_shape *s = l->area.shape;
+        double area = l->area.area;
+        if (s->kind == GEOMETRY_SPHERE) {
+            transform render_from_object =
+                s->motion ? geom_motion_at(s->motion, s->motion->start_time) : s->space_from_object;
+            double scale = light_uniform_scale(&render_from_object);
+            /* A sphere under a non-uniform scale: its area is not needed
+             * exactly to choose among lights; the mean axis scale will do. */
+            if (!(scale > 0.0))
+                scale = cbrt(abs_det3(&render_from_object));
+            area = 4.0 * HZ_PI * s->radius * s->radius * scale * scale;
+        }
+        return rgb_scale(l->emit, (l->area.two_sided ? 2.0 : 1.0) * HZ_PI * area);
+    }
+    }
+    return rgb_grey(0.0);
+}

@@ -93,4 +93,18 @@ rgb light_area_le(const light *l, vec3 n, vec3 w);
 
 bool light_is_delta(const light *l);
 
+/* The solid-angle density with which light_sample_li(l, p, .., time, ..)
+ * picks the point `pl` (unit geometric normal `nl`) of area light `l`, seen
+ * from `p` (for MIS against BSDF and phase sampling: a path that hits the
+ * light there). 0 for lights other than area lights (delta lights cannot be
+ * hit; the infinite light is not sampled by volpath) and degenerate points. */
+double light_pdf_li(const light *l, vec3 p, double time, vec3 pl, vec3 nl);
+
+/* Emitted power as pbrt-v4's Light::Phi in RGB terms (per channel), for
+ * PowerLightSampler: point 4π I, spot 2π I (1 - (cos_start + cos_end) / 2),
+ * area π A L (twice for two-sided), distant π r² L and infinite 4π² r² L with
+ * r the radius of the scene's bounding sphere `scene_radius`. Area lights on
+ * moving shapes take their area at the start of the shutter. */
+rgb light_phi(const light *l, double scene_radius);
+
 #endif

@@ -9,6 +9,7 @@
 #include "render/integrator.h"
 #include "render/lights.h"
 #include "render/material.h"
+#include "render/volpath.h"
 #include "render/volume.h"
 
 struct render_scene {
@@ -25,27 +26,26 @@ struct render_scene {
     medium *media;
     size_t medium_count;
     integrator_scene isc;
+    bool volpath;       /* Integrator "volpath" named in the scene */
+    volpath_scene vps;
 };
 
-/* "volpath" is pbrt-v4's default; haze computes direct lighting and single
- * scattering only, so its parameters are read (not to be reported unused)
- * and a depth other than 1 is worth one warning. */
+/* "volpath" (pbrt-v4's default) is the path tracer of render/volpath.h when
+ * the scene names it; a scene with no Integrator directive (the default
+ * entity sits at line 0) renders with "singlescatter", haze's default. */
 static hz_status integrator_check(scene_entity *e, FILE *warn, volume_settings *vs,
-                                  hz_error *err)
+                                  bool *volpath, volpath_settings *vp, hz_error *err)
 {
     param_list *pl = &e->params;
     const char *type = e->type ? e->type : "volpath";
     *vs = volume_settings_default();
+    *volpath = false;
+    if (strcmp(type, "volpath") == 0 && e->loc.line == 0)
+        return params_finish(pl, "Integrator", err);
     if (strcmp(type, "volpath") == 0) {
-        bool has_depth = params_has(pl, "maxdepth");
-        int maxdepth = params_int(pl, "maxdepth", 5);
-        params_bool(pl, "regularize", false);
-        params_string(pl, "lightsampler", "bvh");
-        if (has_depth && maxdepth != 1 && warn)
-            fprintf(warn,
-                    "%s:%d:%d: warning: Integrator \"volpath\" \"maxdepth\" %d: haze computes "
-                    "direct lighting and single scattering only (as maxdepth 1)\n",
-                    e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, maxdepth);
+        *volpath = true;
+        if (volpath_settings_from_entity(e, warn, vp, err) != HZ_OK)
+            return HZ_ERROR;
         return params_finish(pl, "Integrator \"volpath\"", err);
     }
     if (strcmp(type, "singlescatter") == 0) {
@@ -198,7 +198,8 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
     /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
     film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
     volume_settings vs;
-    if (integrator_check(&sd->integrator, warn, &vs, err) != HZ_OK)
+    volpath_settings vp;
+    if (integrator_check(&sd->integrator, warn, &vs, &rs->volpath, &vp, err) != HZ_OK)
         return HZ_ERROR;
 
     if (check_motion(sd, warn, err) != HZ_OK)
@@ -220,6 +221,9 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
     rs->isc = (integrator_scene){rs->geom,  rs->lights,       rs->light_count,
                                  rs->media, rs->medium_count, vs,
                                  stochastic};
+    if (rs->volpath)
+        return volpath_scene_init(&rs->vps, rs->geom, rs->lights, rs->light_count, rs->media,
+                                  rs->medium_count, vp, err);
     return HZ_OK;
 }
 
@@ -242,6 +246,8 @@ void render_scene_destroy(render_scene *rs)
 {
     if (!rs)
         return;
+    if (rs->volpath)
+        volpath_scene_free(&rs->vps);
     for (size_t i = 0; i < rs->light_count; ++i)
         light_free(&rs->lights[i]);
     free(rs->lights);
@@ -304,5 +310,7 @@ render_memory render_scene_memory(const render_scene *rs)
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, render_counters *counters)
 {
+    if (rs->volpath)
+        return volpath_li(&rs->vps, &r->r, s, depth, counters);
     return integrator_li(&rs->isc, &r->r, s, depth, counters);
 }

@@ -35,7 +35,8 @@ void scene_desc_init(scene_desc *sd, const char *file)
     sd->film = default_entity(sd, "rgb", start);
     sd->sampler = default_entity(sd, "zsobol", start);
     sd->filter = default_entity(sd, "gaussian", start);
-    sd->integrator = default_entity(sd, "volpath", start);
+    /* Line 0: no Integrator directive (haze then renders with singlescatter). */
+    sd->integrator = default_entity(sd, "volpath", (file_loc){start.file, 0, 0});
     sd->transform_start_time = 0.0;
     sd->transform_end_time = 1.0;
     params_init(&sd->options, start);

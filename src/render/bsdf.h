@@ -1,0 +1,51 @@
+/* Surface scattering for path tracing: a BSDF at one hit, built from the hit's
+ * material, evaluated and sampled in render space. A closed set of kinds
+ * dispatched with a switch (diffuse today; conductors and dielectrics slot in
+ * as further kinds with their own f / sample / pdf cases).
+ *
+ * Conventions as pbrt-v4: wo and wi point away from the surface; f excludes
+ * the cosine; pdfs are per solid angle. The diffuse BSDF reflects on the side
+ * of wo relative to the shading normal (pbrt-v4's DiffuseBxDF, two-sided). */
+#ifndef HAZE_RENDER_BSDF_H
+#define HAZE_RENDER_BSDF_H
+
+#include <stdbool.h>
+
+#include "core/vec.h"
+#include "render/material.h"
+
+typedef enum { BSDF_DIFFUSE } bsdf_kind;
+
+typedef struct {
+    bsdf_kind kind;
+    vec3 n;          /* unit shading normal */
+    rgb reflectance; /* diffuse */
+} bsdf;
+
+/* The BSDF of a material at a hit with unit shading normal `ns`. False for a
+ * material with no surface (interface) or one that scatters nothing (a black
+ * diffuse reflectance): the path goes through, or ends. */
+bool bsdf_from_material(const material *m, vec3 ns, bsdf *out);
+
+/* True when the BSDF has a non-delta part that light sampling can reach. */
+bool bsdf_is_non_specular(const bsdf *b);
+
+rgb bsdf_f(const bsdf *b, vec3 wo, vec3 wi);
+double bsdf_pdf(const bsdf *b, vec3 wo, vec3 wi);
+
+typedef struct {
+    vec3 wi;
+    rgb f;
+    double pdf;
+    bool specular;
+} bsdf_sample;
+
+/* Samples wi given wo with the 1D and 2D numbers `uc`, `u` (pbrt-v4's
+ * Sample_f(wo, uc, u)). False when no direction was produced. */
+bool bsdf_sample_f(const bsdf *b, vec3 wo, double uc, vec2 u, bsdf_sample *out);
+
+/* pbrt-v4's BSDF::Regularize (volpath "regularize"): roughens near-specular
+ * lobes after a non-specular bounce. Diffuse lobes are left as they are. */
+void bsdf_regularize(bsdf *b);
+
+#endif

@@ -1,0 +1,538 @@
+#define _POSIX_C_SOURCE 200809L
+#include "render/volpath.h"
+
+#include <math.h>
+#include <string.h>
+
+#include <embree3/rtcore.h>
+
+#include "core/clock.h"
+#include "media/phase.h"
+#include "render/bsdf.h"
+#include "render/volpath_media.h"
+#include "render/volume.h"
+
+/* ---- settings and scene ---- */
+
+hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_settings *out,
+                                       hz_error *err)
+{
+    (void)err;
+    param_list *pl = &e->params;
+    out->max_depth = params_int(pl, "maxdepth", 5);
+    if (out->max_depth < 0)
+        params_reject(pl, "maxdepth", "\"maxdepth\" must be >= 0");
+    out->regularize = params_bool(pl, "regularize", false);
+    out->light_sampler = LIGHT_SAMPLER_BVH;
+    const char *ls = params_string(pl, "lightsampler", "bvh");
+    if (strcmp(ls, "uniform") == 0) {
+        out->light_sampler = LIGHT_SAMPLER_UNIFORM;
+    } else if (strcmp(ls, "power") == 0) {
+        out->light_sampler = LIGHT_SAMPLER_POWER;
+    } else if (strcmp(ls, "exhaustive") == 0) {
+        /* pbrt-v4's exhaustive sampler weighs every light by its BVH
+         * importance at the point; the BVH sampler is its nearest. */
+        if (warn) {
+            file_loc l = params_loc(pl, "lightsampler");
+            fprintf(warn,
+                    "%s:%d:%d: warning: Integrator \"volpath\" \"lightsampler\" "
+                    "\"exhaustive\" is not supported; using \"bvh\"\n",
+                    l.file ? l.file : "<input>", l.line, l.column);
+        }
+    } else if (strcmp(ls, "bvh") != 0) {
+        params_reject(pl, "lightsampler",
+                      "\"lightsampler\" \"%s\" is not one of \"uniform\", \"power\", \"bvh\", "
+                      "\"exhaustive\"",
+                      ls);
+    }
+    return HZ_OK;
+}
+
+/* Radius of the bounding sphere of the scene's surfaces (0 without any). */
+static double scene_radius(const geometry *geom)
+{
+    struct RTCBounds b;
+    rtcGetSceneBounds(geometry_embree_scene(geom), &b);
+    vec3 d = v3((double)b.upper_x - b.lower_x, (double)b.upper_y - b.lower_y,
+                (double)b.upper_z - b.lower_z);
+    double r = 0.5 * v3_length(d);
+    return isfinite(r) && r > 0.0 ? r : 0.0;
+}
+
+hz_status volpath_scene_init(volpath_scene *out, const geometry *geom, const light *lights,
+                             size_t light_count, const medium *media, size_t medium_count,
+                             volpath_settings settings, hz_error *err)
+{
+    *out = (volpath_scene){geom, lights, light_count, media, medium_count, settings,
+                           {0}, rgb_grey(0.0)};
+    for (size_t i = 0; i < light_count; ++i)
+        if (lights[i].kind == LIGHT_INFINITE)
+            out->sky = rgb_add(out->sky, lights[i].emit);
+    return light_sampler_create(settings.light_sampler, lights, light_count, scene_radius(geom),
+                                &out->sampler, err);
+}
+
+void volpath_scene_free(volpath_scene *sc) { light_sampler_free(&sc->sampler); }
+
+/* ---- rays ---- */
+
+/* A ray of the path: surfaces are searched from tmin on, media fill it from
+ * t_fill on; opaque surfaces before t_fill lie behind its start (and
+ * interfaces there only switch the medium): see ray_from_medium. */
+typedef struct {
+    vec3 o, d; /* unit d */
+    double tmin, t_fill;
+    int medium;
+} vp_ray;
+
+/* Leaving surface hit h along w. With media, the medium also fills the bit
+ * between the surface and the offset origin (as the single-scattering
+ * integrator's shadow rays): the ray starts e behind the offset origin, where
+ * its line crosses the tangent plane. */
+static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media)
+{
+    vec3 o = geometry_offset_origin(h->p, h->ng, w);
+    int after = geometry_medium_after(h, w, medium);
+    if (!media)
+        return (vp_ray){o, w, 0.0, 0.0, after};
+    vec3 off = v3_sub(o, h->p);
+    double wn = fabs(v3_dot(w, h->ng));
+    double e = v3_length(off) * 16.0;
+    if (wn * e > fabs(v3_dot(off, h->ng)))
+        e = fabs(v3_dot(off, h->ng)) / wn;
+    return (vp_ray){v3_sub(o, v3_scale(w, e)), w, e, 0.0, after};
+}
+
+/* Leaving the medium point x along w: Embree sees x rounded to float, which
+ * can put it past its medium's boundary; so surfaces are searched from e
+ * behind x (render/volume.h, VOLUME_SHADOW_BACKOFF) and the medium fills the
+ * ray from x on. */
+static vp_ray ray_from_medium(vec3 x, vec3 w, int medium)
+{
+    double e = VOLUME_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    return (vp_ray){v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium};
+}
+
+/* ---- path state ---- */
+
+typedef struct {
+    const volpath_scene *sc;
+    sampler_state *st;
+    volume_walk walk;
+    render_counters *counters;
+    int hero;
+    rgb L, beta, r_u, r_l;
+    int depth;
+    bool specular, any_non_specular;
+    vec3 prev_p, prev_n; /* the last scattering point and its shading normal
+                          * (zero in a medium): light densities for MIS */
+    /* the medium segment being tracked */
+    vp_ray ray;
+    bool scattered, terminated;
+} path;
+
+static inline rgb rgb_div(rgb a, double s) { return rgb_scale(a, 1.0 / s); }
+
+/* ---- shadow rays: ratio tracking with pbrt-v4's r_u, r_l ---- */
+
+typedef struct {
+    path *pa;
+    rgb T, r_u, r_l;
+} shadow_state;
+
+static bool shadow_event(void *ctx, const volpath_event *ev)
+{
+    shadow_state *s = ctx;
+    int h = s->pa->hero;
+    rgb sigma_n = rgb_make(fmax(0.0, ev->sigma_maj.r - ev->sigma_a.r - ev->sigma_s.r),
+                           fmax(0.0, ev->sigma_maj.g - ev->sigma_a.g - ev->sigma_s.g),
+                           fmax(0.0, ev->sigma_maj.b - ev->sigma_a.b - ev->sigma_s.b));
+    double pdf = rgb_ch(ev->T_maj, h) * rgb_ch(ev->sigma_maj, h);
+    rgb tn = rgb_div(rgb_mul(ev->T_maj, sigma_n), pdf);
+    s->T = rgb_mul(s->T, tn);
+    s->r_l = rgb_mul(s->r_l, rgb_div(rgb_mul(ev->T_maj, ev->sigma_maj), pdf));
+    s->r_u = rgb_mul(s->r_u, tn);
+    rgb Tr = rgb_div(s->T, rgb_avg(rgb_add(s->r_l, s->r_u)));
+    if (rgb_max(Tr) < 0.05) {
+        if (rng_uniform(&s->pa->walk.r) < 0.75)
+            s->T = rgb_grey(0.0);
+        else
+            s->T = rgb_scale(s->T, 4.0);
+    }
+    return !rgb_is_black(s->T);
+}
+
+/* The walk of render/volume.c's shadow rays (interfaces switch the medium,
+ * opaque surfaces block unless they lie before t_fill), with tracking in
+ * media. False when the ray is blocked or its estimate is 0. */
+static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_fill, double tmax,
+                        int medium)
+{
+    path *pa = s->pa;
+    const volpath_scene *sc = pa->sc;
+    pa->walk.shadow_rays++;
+    double t_start = t_fill;
+    for (int crossing = 0;; ++crossing) {
+        geom_hit h;
+        bool hit = geometry_intersect(sc->geom, o, w, tmin, tmax, pa->walk.time, &h);
+        if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
+            if (h.t >= t_fill || crossing == VOLUME_MAX_CROSSINGS)
+                return false;
+            tmin = geometry_step_past(&h, o, w);
+            continue;
+        }
+        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start) : tmax;
+        if (medium >= 0) {
+            rgb T_maj = volpath_track(&sc->media[medium], o, w, t_start, t_end, pa->hero,
+                                      &pa->walk, shadow_event, s);
+            double th = rgb_ch(T_maj, pa->hero);
+            if (rgb_is_black(s->T) || !(th > 0.0))
+                return false;
+            s->T = rgb_mul(s->T, rgb_div(T_maj, th));
+            s->r_u = rgb_mul(s->r_u, rgb_div(T_maj, th));
+            s->r_l = rgb_mul(s->r_l, rgb_div(T_maj, th));
+        }
+        if (!hit)
+            return true;
+        if (crossing == VOLUME_MAX_CROSSINGS)
+            return false;
+        medium = geometry_medium_after(&h, w, medium);
+        t_start = t_end;
+        tmin = geometry_step_past(&h, o, w);
+    }
+}
+
+/* A scattering point for light sampling: a surface hit with its BSDF, or a
+ * medium point with its phase function. */
+typedef struct {
+    vec3 p, wo;
+    const bsdf *b;      /* NULL at a medium point */
+    const geom_hit *h;  /* surface only */
+    double g;           /* medium only */
+    int medium;         /* the medium the point is in (surface: the ray's, before it) */
+} vertex;
+
+/* Transmittance estimate (with r_u, r_l) of the shadow ray of light sample ls
+ * from v; false when blocked. */
+static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_state *s)
+{
+    const volpath_scene *sc = pa->sc;
+    if (v->b) {
+        const geom_hit *h = v->h;
+        vec3 o = geometry_offset_origin(h->p, h->ng, ls->wi);
+        vec3 w = ls->wi;
+        double tmax = INFINITY;
+        bool emitter = v3_length_sq(ls->n_light) > 0.0;
+        if (!ls->infinite) {
+            vec3 target = ls->p_light;
+            if (emitter)
+                target = geometry_offset_origin(target, ls->n_light, v3_neg(ls->wi));
+            w = v3_sub(target, o);
+            tmax = emitter ? 1.0 - GEOMETRY_SHADOW_EPSILON : 1.0;
+        }
+        if (sc->medium_count == 0) {
+            pa->counters->shadow_rays++;
+            return !geometry_occluded(sc->geom, o, w, tmax, pa->walk.time);
+        }
+        if (!ls->infinite) {
+            double dist = v3_length(w);
+            if (!(dist > 0.0))
+                return false;
+            w = v3_scale(w, 1.0 / dist);
+            tmax *= dist;
+        }
+        vec3 off = v3_sub(o, h->p);
+        double wn = fabs(v3_dot(w, h->ng));
+        double e = v3_length(off) * 16.0;
+        if (wn * e > fabs(v3_dot(off, h->ng)))
+            e = fabs(v3_dot(off, h->ng)) / wn;
+        return shadow_walk(s, v3_sub(o, v3_scale(w, e)), w, e, 0.0, tmax + e,
+                           geometry_medium_after(h, w, v->medium));
+    }
+    double tmax = ls->infinite                       ? INFINITY
+                  : v3_length_sq(ls->n_light) > 0.0 ? ls->dist * (1.0 - GEOMETRY_SHADOW_EPSILON)
+                                                    : ls->dist;
+    vec3 x = v->p, w = ls->wi;
+    double e = VOLUME_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    return shadow_walk(s, v3_sub(x, v3_scale(w, e)), w, 0.0, e, tmax + e, v->medium);
+}
+
+/* pbrt-v4's SampleLd: one light chosen by the light sampler, one point of
+ * it, MIS-weighted against BSDF / phase sampling (delta lights: light
+ * sampling only). */
+static rgb sample_ld(path *pa, const vertex *v)
+{
+    const volpath_scene *sc = pa->sc;
+    double u = sampler_1d(pa->st);
+    vec2 ul = sampler_2d(pa->st);
+    size_t li;
+    double pmf;
+    vec3 n = v->b ? v->b->n : v3(0.0, 0.0, 0.0);
+    if (!light_sampler_sample(&sc->sampler, v->p, n, u, &li, &pmf))
+        return rgb_grey(0.0);
+    const light *l = &sc->lights[li];
+    light_sample ls;
+    if (!light_sample_li(l, v->p, n, pa->walk.time, ul, &ls) || !(ls.pdf > 0.0) ||
+        rgb_is_black(ls.L))
+        return rgb_grey(0.0);
+    rgb f_hat;
+    double scatter_pdf;
+    if (v->b) {
+        f_hat = rgb_scale(bsdf_f(v->b, v->wo, ls.wi), fabs(v3_dot(ls.wi, v->b->n)));
+        scatter_pdf = bsdf_pdf(v->b, v->wo, ls.wi);
+    } else {
+        scatter_pdf = hg_phase(v3_dot(v->wo, ls.wi), v->g);
+        f_hat = rgb_grey(scatter_pdf);
+    }
+    if (rgb_is_black(f_hat))
+        return rgb_grey(0.0);
+    shadow_state s = {pa, rgb_grey(1.0), rgb_grey(1.0), rgb_grey(1.0)};
+    bool timed = v->b && pa->counters->timed && sc->medium_count > 0;
+    uint64_t t0 = timed ? hz_clock_ns() : 0;
+    bool lit = shadow(pa, v, &ls, &s);
+    if (timed)
+        pa->counters->media_ns += hz_clock_ns() - t0;
+    if (!lit)
+        return rgb_grey(0.0);
+    rgb r_l = rgb_scale(rgb_mul(s.r_l, pa->r_u), pmf * ls.pdf);
+    rgb r_u = rgb_scale(rgb_mul(s.r_u, pa->r_u), scatter_pdf);
+    rgb c = rgb_mul(rgb_mul(rgb_mul(pa->beta, f_hat), s.T), ls.L);
+    double den = light_is_delta(l) ? rgb_avg(r_l) : rgb_avg(rgb_add(r_l, r_u));
+    return den > 0.0 ? rgb_div(c, den) : rgb_grey(0.0);
+}
+
+/* ---- media events of the path ---- */
+
+/* A real scattering event at ev->t of the current ray: light sampling, then
+ * the phase function chooses the next direction. */
+static void scatter(path *pa, const volpath_event *ev)
+{
+    const volpath_scene *sc = pa->sc;
+    int h = pa->hero;
+    double pdf = rgb_ch(ev->T_maj, h) * rgb_ch(ev->sigma_s, h);
+    rgb ratio = rgb_div(rgb_mul(ev->T_maj, ev->sigma_s), pdf);
+    pa->beta = rgb_mul(pa->beta, ratio);
+    pa->r_u = rgb_mul(pa->r_u, ratio);
+    if (rgb_is_black(pa->beta) || rgb_is_black(pa->r_u))
+        return;
+    const medium *m = &sc->media[pa->ray.medium];
+    vec3 x = v3_add(pa->ray.o, v3_scale(pa->ray.d, ev->t));
+    vec3 wo = v3_neg(pa->ray.d);
+    vertex v = {x, wo, NULL, NULL, m->g, pa->ray.medium};
+    pa->L = rgb_add(pa->L, sample_ld(pa, &v));
+    double p_pdf;
+    vec3 wi = hg_sample(wo, m->g, sampler_2d(pa->st), &p_pdf);
+    if (!(p_pdf > 0.0)) {
+        pa->terminated = true;
+        return;
+    }
+    /* hg_sample draws exactly the density it returns: p / pdf = 1. */
+    pa->r_l = rgb_div(pa->r_u, p_pdf);
+    pa->prev_p = x;
+    pa->prev_n = v3(0.0, 0.0, 0.0);
+    pa->scattered = true;
+    pa->ray = ray_from_medium(x, wi, pa->ray.medium);
+    pa->specular = false;
+    pa->any_non_specular = true;
+}
+
+static bool path_event(void *ctx, const volpath_event *ev)
+{
+    path *pa = ctx;
+    if (rgb_is_black(pa->beta)) {
+        pa->terminated = true;
+        return false;
+    }
+    int h = pa->hero;
+    double sm = rgb_ch(ev->sigma_maj, h);
+    double p_absorb = rgb_ch(ev->sigma_a, h) / sm, p_scatter = rgb_ch(ev->sigma_s, h) / sm;
+    double p_null = fmax(0.0, 1.0 - p_absorb - p_scatter);
+    double u = rng_uniform(&pa->walk.r) * (p_absorb + p_scatter + p_null);
+    if (u < p_absorb) {
+        pa->terminated = true;
+        return false;
+    }
+    if (u < p_absorb + p_scatter) {
+        if (pa->depth++ >= pa->sc->settings.max_depth)
+            pa->terminated = true;
+        else
+            scatter(pa, ev);
+        return false;
+    }
+    rgb sigma_n = rgb_make(fmax(0.0, ev->sigma_maj.r - ev->sigma_a.r - ev->sigma_s.r),
+                           fmax(0.0, ev->sigma_maj.g - ev->sigma_a.g - ev->sigma_s.g),
+                           fmax(0.0, ev->sigma_maj.b - ev->sigma_a.b - ev->sigma_s.b));
+    double pdf = rgb_ch(ev->T_maj, h) * rgb_ch(sigma_n, h);
+    if (!(pdf > 0.0)) {
+        pa->beta = rgb_grey(0.0);
+        return false;
+    }
+    rgb tn = rgb_div(rgb_mul(ev->T_maj, sigma_n), pdf);
+    pa->beta = rgb_mul(pa->beta, tn);
+    pa->r_u = rgb_mul(pa->r_u, tn);
+    pa->r_l = rgb_mul(pa->r_l, rgb_div(rgb_mul(ev->T_maj, ev->sigma_maj), pdf));
+    return !rgb_is_black(pa->beta) && !rgb_is_black(pa->r_u);
+}
+
+/* ---- surfaces ---- */
+
+/* Emission of the area light at hit h, reached along the path. */
+static void add_emission(path *pa, const geom_hit *h, vec3 wo)
+{
+    const volpath_scene *sc = pa->sc;
+    int li = h->shape->area_light;
+    const light *l = &sc->lights[li];
+    rgb Le = light_area_le(l, h->ng, wo);
+    if (rgb_is_black(Le))
+        return;
+    if (pa->depth == 0 || pa->specular) {
+        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(pa->r_u)));
+        return;
+    }
+    double p_l = light_sampler_pmf(&sc->sampler, pa->prev_p, pa->prev_n, (size_t)li) *
+                 light_pdf_li(l, pa->prev_p, pa->walk.time, h->p, h->ng);
+    rgb den = rgb_add(pa->r_u, rgb_scale(pa->r_l, p_l));
+    pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(den)));
+}
+
+/* The bounce at opaque hit h: light sampling, BSDF sampling, roulette.
+ * False when the path ends. */
+static bool bounce(path *pa, const geom_hit *h)
+{
+    const volpath_scene *sc = pa->sc;
+    vec3 wo = v3_neg(pa->ray.d);
+    if (h->shape->area_light >= 0)
+        add_emission(pa, h, wo);
+    bsdf b;
+    if (!bsdf_from_material(h->shape->material, h->ns, &b))
+        return false;
+    if (pa->depth++ >= sc->settings.max_depth)
+        return false;
+    if (sc->settings.regularize && pa->any_non_specular)
+        bsdf_regularize(&b);
+    if (bsdf_is_non_specular(&b)) {
+        vertex v = {h->p, wo, &b, h, 0.0, pa->ray.medium};
+        pa->L = rgb_add(pa->L, sample_ld(pa, &v));
+    }
+    pa->prev_p = h->p;
+    pa->prev_n = b.n;
+    double uc = sampler_1d(pa->st);
+    vec2 u = sampler_2d(pa->st);
+    bsdf_sample bs;
+    if (!bsdf_sample_f(&b, wo, uc, u, &bs))
+        return false;
+    pa->beta = rgb_mul(pa->beta, rgb_scale(bs.f, fabs(v3_dot(bs.wi, b.n)) / bs.pdf));
+    pa->r_l = rgb_div(pa->r_u, bs.pdf);
+    pa->specular = bs.specular;
+    pa->any_non_specular |= !bs.specular;
+    pa->ray = ray_from_surface(h, bs.wi, pa->ray.medium, sc->medium_count > 0);
+    if (rgb_is_black(pa->beta))
+        return false;
+    rgb rr = rgb_div(pa->beta, rgb_avg(pa->r_u));
+    double u_rr = sampler_1d(pa->st);
+    if (rgb_max(rr) < 1.0 && pa->depth > 1) {
+        double q = fmax(0.0, 1.0 - rgb_max(rr));
+        if (u_rr < q)
+            return false;
+        pa->beta = rgb_div(pa->beta, 1.0 - q);
+    }
+    return true;
+}
+
+/* ---- the path ---- */
+
+/* Tracks the current ray's medium over [t_start, t_hit]. False when the
+ * path ended there; pa->scattered when it scattered. */
+static bool cross_medium(path *pa, double t_start, double t_hit)
+{
+    const volpath_scene *sc = pa->sc;
+    pa->scattered = pa->terminated = false;
+    uint64_t t0 = pa->counters->timed ? hz_clock_ns() : 0;
+    rgb T_maj = volpath_track(&sc->media[pa->ray.medium], pa->ray.o, pa->ray.d, t_start, t_hit,
+                              pa->hero, &pa->walk, path_event, pa);
+    if (pa->counters->timed)
+        pa->counters->media_ns += hz_clock_ns() - t0;
+    if (pa->terminated || rgb_is_black(pa->beta) || rgb_is_black(pa->r_u))
+        return false;
+    if (pa->scattered)
+        return true;
+    double th = rgb_ch(T_maj, pa->hero);
+    if (!(th > 0.0))
+        return false;
+    rgb ratio = rgb_div(T_maj, th);
+    pa->beta = rgb_mul(pa->beta, ratio);
+    pa->r_u = rgb_mul(pa->r_u, ratio);
+    pa->r_l = rgb_mul(pa->r_l, ratio);
+    return true;
+}
+
+rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double *depth,
+               render_counters *counters)
+{
+    counters->camera_rays++;
+    *depth = INFINITY;
+    bool media = sc->medium_count > 0;
+    path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
+               .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
+               .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium}};
+    if (media) {
+        pa.walk.r = rng_seeded(sampler_stream_seed(st));
+        pa.hero = (int)fmin(2.0, floor(3.0 * sampler_1d(st)));
+    }
+    bool camera_ray = true;
+    double t_start = 0.0;
+    int crossing = 0;
+    for (;;) {
+        vp_ray *ray = &pa.ray;
+        geom_hit h;
+        bool hit = geometry_intersect(sc->geom, ray->o, ray->d, ray->tmin, INFINITY, r->time, &h);
+        bool opaque = hit && h.shape->material->kind != MATERIAL_INTERFACE;
+        if (hit && h.t < ray->t_fill) { /* behind a medium point the ray leaves */
+            if (++crossing > VOLUME_MAX_CROSSINGS)
+                break;
+            if (!opaque)
+                ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
+            ray->tmin = geometry_step_past(&h, ray->o, ray->d);
+            continue;
+        }
+        double t_hit = !hit    ? INFINITY
+                       : media ? fmax(volume_crossing_t(&h, ray->o, ray->d), t_start)
+                               : h.t;
+        if (ray->medium >= 0) {
+            if (!cross_medium(&pa, t_start, t_hit))
+                break;
+            if (pa.scattered) {
+                camera_ray = false;
+                t_start = pa.ray.t_fill;
+                crossing = 0;
+                continue;
+            }
+        }
+        if (!hit) {
+            /* The sky is never light-sampled (light_sampler.h): full weight. */
+            if (!rgb_is_black(sc->sky))
+                pa.L = rgb_add(pa.L, rgb_div(rgb_mul(pa.beta, sc->sky), rgb_avg(pa.r_u)));
+            break;
+        }
+        if (!opaque) {
+            if (++crossing > VOLUME_MAX_CROSSINGS)
+                break;
+            ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
+            t_start = t_hit;
+            ray->tmin = geometry_step_past(&h, ray->o, ray->d);
+            continue;
+        }
+        if (camera_ray) {
+            *depth = v3_length(v3_sub(h.p, r->o));
+            camera_ray = false;
+        }
+        if (!bounce(&pa, &h))
+            break;
+        t_start = pa.ray.t_fill;
+        crossing = 0;
+    }
+    counters->shadow_rays += pa.walk.shadow_rays;
+    counters->density_lookups += pa.walk.lookups;
+    counters->majorant_steps += pa.walk.majorant_steps;
+    return pa.L;
+}

@@ -1,0 +1,69 @@
+/* The volpath integrator (Integrator "volpath"): multiple scattering by
+ * null-scattering path tracing, as pbrt-v4's VolPathIntegrator. Along each
+ * path, media are crossed by delta tracking against their majorants (one
+ * hero channel per path, picked uniformly; the other channels ride along
+ * through pbrt-v4's rescaled path probabilities r_u, r_l, which make the
+ * estimate a one-sample MIS over the three hero choices); at surfaces and at
+ * real scattering events, one light is sampled (light_sampler.h) with a
+ * shadow ray through media by ratio tracking, combined by MIS (balance
+ * heuristic) with BSDF or phase-function sampling, which also finds area
+ * lights and the sky. Russian roulette after depth 1, `maxdepth` scattering
+ * events (surfaces and media alike; interfaces are not events).
+ *
+ * Random numbers: the pixel sampler for light, BSDF and phase sampling and
+ * the roulette (as pbrt-v4), a per-path rng (core/rng.h, seeded from the
+ * sampler) for the media's tracking decisions: the image depends on the
+ * scene and seed only, not on the thread count. A scene without media runs
+ * no media code. Medium emission is refused by the medium factory. */
+#ifndef HAZE_RENDER_VOLPATH_H
+#define HAZE_RENDER_VOLPATH_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "core/error.h"
+#include "core/ray.h"
+#include "media/medium.h"
+#include "render/geometry.h"
+#include "render/light_sampler.h"
+#include "render/lights.h"
+#include "render/render_scene.h"
+#include "sampler/sampler.h"
+#include "scene/scene_desc.h"
+
+typedef struct {
+    int max_depth;                     /* "maxdepth", default 5 */
+    bool regularize;                   /* "regularize", default false */
+    light_sampler_kind light_sampler;  /* "lightsampler": uniform, power, bvh */
+} volpath_settings;
+
+/* Reads `Integrator "volpath"`'s parameters; "exhaustive" runs as "bvh"
+ * (the default) with a warning naming its place (to `warn` when not NULL);
+ * other names and a negative maxdepth are errors. Does not call
+ * params_finish. */
+hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_settings *out,
+                                       hz_error *err);
+
+typedef struct {
+    const geometry *geom;
+    const light *lights;
+    size_t light_count;
+    const medium *media;
+    size_t medium_count;
+    volpath_settings settings;
+    light_sampler sampler;
+    rgb sky; /* the sum of the infinite lights' radiance */
+} volpath_scene;
+
+hz_status volpath_scene_init(volpath_scene *out, const geometry *geom, const light *lights,
+                             size_t light_count, const medium *media, size_t medium_count,
+                             volpath_settings settings, hz_error *err);
+void volpath_scene_free(volpath_scene *sc);
+
+/* Radiance along the camera ray `r` (unit direction). `depth` receives the
+ * distance to the first opaque surface on the camera ray before any scattering
+ * (INFINITY when none). Thread-safe; allocates nothing. */
+rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double *depth,
+               render_counters *counters);
+
+#endif

@@ -1,0 +1,97 @@
+#include "render/volpath_media.h"
+
+#include <math.h>
+
+/* e^{-sigma d} per channel; a channel that does not attenuate stays 1. */
+static rgb exp_neg(rgb sigma, double d)
+{
+    return rgb_make(sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0,
+                    sigma.g > 0.0 ? exp(-sigma.g * d) : 1.0,
+                    sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0);
+}
+
+/* Where the coefficients come from: constant (homogeneous) or a grid's
+ * density along an index-space ray. */
+typedef struct {
+    const medium *m;
+    bool grid;
+    medium_accessor acc;
+    medium_grid_ray r;
+} density_source;
+
+typedef struct {
+    density_source src;
+    int hero;
+    volume_walk *walk;
+    volpath_event_fn fn;
+    void *ctx;
+    rgb T_maj;
+    uint32_t collisions;
+} tracker;
+
+/* Collisions over [a, b] at the majorant sigma_t * bound. False when the
+ * callback ended the walk or the collision budget ran out (then T_maj = 0). */
+static bool track_span(tracker *tr, double a, double b, double bound)
+{
+    const medium *m = tr->src.m;
+    rgb sigma_maj = rgb_scale(medium_sigma_t(m), bound);
+    double rate = rgb_ch(sigma_maj, tr->hero);
+    if (!(rate > 0.0)) {
+        tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, b - a));
+        return true;
+    }
+    for (double t = a;;) {
+        double tn = t - log1p(-rng_uniform(&tr->walk->r)) / rate;
+        if (!(tn < b)) {
+            tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, b - t));
+            return true;
+        }
+        if (++tr->collisions > VOLPATH_MAX_COLLISIONS) {
+            tr->T_maj = rgb_grey(0.0);
+            return false;
+        }
+        tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, tn - t));
+        double d = tr->src.grid ? medium_density_at(m, &tr->src.acc, &tr->src.r, tn,
+                                                    &tr->walk->lookups)
+                                : 1.0;
+        volpath_event ev = {tn, rgb_scale(m->sigma_a, d), rgb_scale(m->sigma_s, d), sigma_maj,
+                            tr->T_maj};
+        if (!tr->fn(tr->ctx, &ev))
+            return false;
+        tr->T_maj = rgb_grey(1.0);
+        t = tn;
+    }
+}
+
+rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero,
+                  volume_walk *walk, volpath_event_fn fn, void *ctx)
+{
+    if (!(t1 > t0))
+        return rgb_grey(1.0);
+    tracker tr = {.src = {.m = m, .grid = m->kind == MEDIUM_GRID}, .hero = hero, .walk = walk,
+                  .fn = fn, .ctx = ctx, .T_maj = rgb_grey(1.0)};
+    switch (m->kind) {
+    case MEDIUM_HOMOGENEOUS:
+        return track_span(&tr, t0, t1, 1.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
+                   ? tr.T_maj
+                   : rgb_grey(1.0);
+    case MEDIUM_GRID: {
+        majorant_walk mw;
+        if (!medium_grid_ray_make(m, o, w, walk->time, &tr.src.r) ||
+            !medium_grid_ray_clip(m, &tr.src.r, &t0, &t1) ||
+            !majorant_walk_start(&mw, &m->grid.majorant, tr.src.r.o, tr.src.r.d, t0, t1))
+            return rgb_grey(1.0); /* no density anywhere on the segment */
+        medium_accessor_init(m, &tr.src.acc);
+        majorant_segment seg;
+        while (majorant_walk_next(&mw, &seg)) {
+            walk->majorant_steps++;
+            if (!(seg.max > 0.0))
+                continue;
+            if (!track_span(&tr, seg.t0, seg.t1, seg.max))
+                return tr.collisions > VOLPATH_MAX_COLLISIONS ? tr.T_maj : rgb_grey(1.0);
+        }
+        return tr.T_maj;
+    }
+    }
+    return rgb_grey(1.0);
+}

@@ -1,0 +1,266 @@
+/* Integrator "volpath": closed forms of multiple scattering (furnaces), the
+ * selection of the integrator and its parameters. */
+#include "media_test_util.h"
+#include "render/volpath_media.h"
+
+/* A sphere of medium (radius 1 at the origin) under a uniform sky, seen from
+ * outside: with albedo 1 and no absorption anywhere, every path leaves with
+ * the sky's radiance, so L = sky on every pixel, inside the sphere or not. */
+static char *sky_furnace(const char *medium, const char *extra)
+{
+    return sfmt("LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 35\n"
+                "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+                "Integrator \"volpath\" \"integer maxdepth\" 100000 %s\n"
+                "WorldBegin\n"
+                "LightSource \"infinite\" \"rgb L\" [0.5 1 1.5]\n"
+                "MakeNamedMedium \"m\" %s\n"
+                "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n"
+                "Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+                extra, medium);
+}
+
+/* Grey media: scattering and null-collision weights are exactly 1, so each
+ * path returns the sky exactly (a zero-variance furnace). */
+static void test_grey_sky_furnace_is_exact(void **state)
+{
+    (void)state;
+    const char *media[] = {
+        "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [3 3 3] "
+        "\"float g\" 0.6",
+        "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+        "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [8 8 8] \"float g\" -0.3",
+    };
+    for (size_t k = 0; k < 2; ++k) {
+        char *text = sky_furnace(media[k], "");
+        render_scene *rs = build(text);
+        pstat *px = image_stats(rs, 8, 8, 16);
+        for (int i = 0; i < 64; ++i)
+            for (int c = 0; c < 3; ++c)
+                assert_float_equal(ch(px[i].mean, c), 0.5 * (c + 1), 1e-9);
+        free(px);
+        render_scene_destroy(rs);
+        free(text);
+    }
+}
+
+/* Chromatic albedo-1 media: the hero channel's tracking carries the others
+ * through r_u; the mean is still the sky, within noise. */
+static void test_chromatic_sky_furnace(void **state)
+{
+    (void)state;
+    const char *media[] = {
+        "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [0.5 2 4] "
+        "\"float g\" 0.5",
+        "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+        "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [2 6 12]",
+    };
+    for (size_t k = 0; k < 2; ++k) {
+        char *text = sky_furnace(media[k], "");
+        render_scene *rs = build(text);
+        pstat *px = image_stats(rs, 8, 8, 1024);
+        double sum[3] = {0, 0, 0}, var[3] = {0, 0, 0};
+        for (int i = 0; i < 64; ++i)
+            for (int c = 0; c < 3; ++c) {
+                sum[c] += ch(px[i].mean, c);
+                var[c] += ch(px[i].se, c) * ch(px[i].se, c);
+            }
+        for (int c = 0; c < 3; ++c) {
+            double mean = sum[c] / 64, se = sqrt(var[c]) / 64, want = 0.5 * (c + 1);
+            if (verbose())
+                print_message("medium %zu channel %d: %.6f +- %.6f (want %g)\n", k, c, mean, se,
+                              want);
+            assert_true(se < 0.02 * want);
+            assert_true(fabs(mean - want) < 4.0 * se + 1e-12);
+        }
+        free(px);
+        render_scene_destroy(rs);
+        free(text);
+    }
+}
+
+/* A closed room whose walls emit Le and reflect with albedo rho, filled with
+ * an albedo-1 medium: the radiance is Le / (1 - rho) everywhere, in every
+ * direction (the medium neither adds nor removes light from a uniform
+ * field). Exercises area-light MIS (light sampling against BSDF and phase
+ * sampling), shadow rays by ratio tracking, and surface-medium bounces. */
+static char *emitting_room(const char *medium, const char *integrator)
+{
+    char *box = box_mesh(v3(-2, -2, -2), v3(2, 2, 2));
+    char *s = sfmt("MediumInterface \"\" \"m\"\n"
+                   "LookAt 0 0 -1.5  0 0.3 1  0 1 0\nCamera \"perspective\" \"float fov\" 70\n"
+                   "Film \"rgb\" \"integer xresolution\" 6 \"integer yresolution\" 6\n"
+                   "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+                   "%s\nWorldBegin\n"
+                   "MakeNamedMedium \"m\" %s\nMediumInterface \"\" \"\"\n"
+                   "Material \"diffuse\" \"rgb reflectance\" [0.5 0.25 0.75]\n"
+                   "AreaLightSource \"diffuse\" \"rgb L\" [1 2 0.5] \"bool twosided\" true\n%s",
+                   integrator, medium, box);
+    free(box);
+    return s;
+}
+
+static void test_emitting_room_furnace(void **state)
+{
+    (void)state;
+    const char *media[] = {
+        "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [0.3 0.6 0.9] "
+        "\"float g\" 0.4",
+        "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+        "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [3 1 2] \"float g\" -0.2",
+    };
+    const char *integ[] = {"Integrator \"volpath\" \"integer maxdepth\" 400",
+                           "Integrator \"volpath\" \"integer maxdepth\" 400 "
+                           "\"string lightsampler\" \"uniform\""};
+    const double want[3] = {1.0 / 0.5, 2.0 / 0.75, 0.5 / 0.25};
+    for (size_t k = 0; k < 2; ++k) {
+        char *text = emitting_room(media[k], integ[k]);
+        render_scene *rs = build(text);
+        pstat *px = image_stats(rs, 6, 6, 1024);
+        double sum[3] = {0, 0, 0}, var[3] = {0, 0, 0};
+        for (int i = 0; i < 36; ++i)
+            for (int c = 0; c < 3; ++c) {
+                sum[c] += ch(px[i].mean, c);
+                var[c] += ch(px[i].se, c) * ch(px[i].se, c);
+            }
+        for (int c = 0; c < 3; ++c) {
+            double mean = sum[c] / 36, se = sqrt(var[c]) / 36;
+            if (verbose())
+                print_message("room %zu channel %d: %.5f +- %.5f (want %g)\n", k, c, mean, se,
+                              want[c]);
+            assert_true(se < 0.02 * want[c]);
+            assert_true(fabs(mean - want[c]) < 4.0 * se);
+        }
+        free(px);
+        render_scene_destroy(rs);
+        free(text);
+    }
+}
+
+/* ---- maxdepth 1 is single scattering ---- */
+
+/* Fog in a box around a diffuse floor and sphere, lit by every kind of light
+ * (spot, point, distant, sky, an emitting sphere inside the fog). */
+static char *one_bounce_scene(const char *medium, const char *integrator)
+{
+    char *box = box_mesh(v3(-1.6, -0.5, -1.6), v3(1.6, 2.2, 1.6));
+    char *s = sfmt(
+        "LookAt 0 1.2 -4.5  0 0.6 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n"
+        "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+        "Sampler \"independent\" \"integer pixelsamples\" 16\n%s\nWorldBegin\n"
+        "LightSource \"spot\" \"rgb I\" [6 5 4] \"point3 from\" [0.3 2 0] \"point3 to\" [0 0 0] "
+        "\"float coneangle\" 35\n"
+        "LightSource \"point\" \"rgb I\" [1 0.6 0.3] \"point3 from\" [1 1 -1]\n"
+        "LightSource \"distant\" \"rgb L\" [0.4 0.4 0.5] \"point3 from\" [1 2 -1] "
+        "\"point3 to\" [0 0 0]\n"
+        "LightSource \"infinite\" \"rgb L\" [0.05 0.08 0.1]\n"
+        "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [3 3 2]\nTranslate -0.9 1.2 0.6\n"
+        "Shape \"sphere\" \"float radius\" 0.2\nAttributeEnd\n"
+        "MakeNamedMedium \"m\" %s\n"
+        "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n%sAttributeEnd\n"
+        "Material \"diffuse\" \"rgb reflectance\" [0.6 0.5 0.4]\n"
+        "Shape \"trianglemesh\" \"point3 P\" [-3 0 -3  3 0 -3  3 0 3  -3 0 3] "
+        "\"integer indices\" [0 1 2 0 2 3]\n"
+        "AttributeBegin\nTranslate 0.4 0.45 0.3\nShape \"sphere\" \"float radius\" 0.45\n"
+        "AttributeEnd\n",
+        integrator, medium, box);
+    free(box);
+    return s;
+}
+
+/* Block means (4x4 blocks of 4x4 pixels) of volpath maxdepth 1 and of
+ * singlescatter agree within noise. */
+static void test_maxdepth_1_matches_singlescatter(void **state)
+{
+    (void)state;
+    const char *media[] = {
+        "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.2 0.1] "
+        "\"rgb sigma_s\" [0.4 0.3 0.6] \"float g\" 0.3",
+        "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+        "\"rgb sigma_a\" [0.5 0.5 0.5] \"rgb sigma_s\" [2 3 1] \"float g\" -0.4",
+    };
+    const char *ss = "Integrator \"singlescatter\" \"string transmittance\" \"ratio\"";
+    const char *vp = "Integrator \"volpath\" \"integer maxdepth\" 1";
+    for (size_t k = 0; k < 2; ++k) {
+        char *ta = one_bounce_scene(media[k], ss), *tb = one_bounce_scene(media[k], vp);
+        render_scene *ra = build(ta), *rb = build(tb);
+        pstat *a = image_stats(ra, 16, 16, 1024), *b = image_stats(rb, 16, 16, 1024);
+        double worst = 0.0, sum_a = 0.0, sum_b = 0.0, var_a = 0.0, var_b = 0.0;
+        for (int by = 0; by < 4; ++by)
+            for (int bx = 0; bx < 4; ++bx)
+                for (int c = 0; c < 3; ++c) {
+                    double ma = 0, mb = 0, va = 0, vb = 0;
+                    for (int y = 4 * by; y < 4 * by + 4; ++y)
+                        for (int x = 4 * bx; x < 4 * bx + 4; ++x) {
+                            const pstat *pa = &a[y * 16 + x], *pb = &b[y * 16 + x];
+                            ma += ch(pa->mean, c) / 16;
+                            mb += ch(pb->mean, c) / 16;
+                            va += ch(pa->se, c) * ch(pa->se, c) / 256;
+                            vb += ch(pb->se, c) * ch(pb->se, c) / 256;
+                        }
+                    sum_a += ma;
+                    sum_b += mb;
+                    var_a += va;
+                    var_b += vb;
+                    double z = fabs(ma - mb) / sqrt(va + vb + 1e-300);
+                    worst = fmax(worst, z);
+                }
+        double z_all = fabs(sum_a - sum_b) / sqrt(var_a + var_b);
+        if (verbose())
+            print_message("medium %zu: image mean %.5f vs %.5f (z %.2f), worst block z %.2f\n",
+                          k, sum_a / 48, sum_b / 48, z_all, worst);
+        assert_true(z_all < 4.0);
+        assert_true(worst < 4.5);
+        free(a);
+        free(b);
+        render_scene_destroy(ra);
+        render_scene_destroy(rb);
+        free(ta);
+        free(tb);
+    }
+}
+
+/* fog_sphere.vdb at density scale 1e12: majorant cells that straddle its
+ * surface hold ~1e12 null collisions per unit length. The walk gives up after
+ * VOLPATH_MAX_COLLISIONS per segment (the segment counts as opaque), so each
+ * sample stays bounded and finite instead of running for hours. */
+static void test_absurd_density_is_bounded(void **state)
+{
+    (void)state;
+    char *text = sfmt("LookAt 0 0 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
+                      "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                      "Sampler \"independent\" \"integer pixelsamples\" 2\n"
+                      "Integrator \"volpath\" \"integer maxdepth\" 5\nWorldBegin\n"
+                      "LightSource \"point\" \"rgb I\" [5 5 5] \"point3 from\" [2 2 -2]\n"
+                      "LightSource \"infinite\" \"rgb L\" [0.1 0.1 0.1]\n"
+                      "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" "
+                      "\"%s/fog_sphere.vdb\" \"rgb sigma_a\" [0.1 0.1 0.1] "
+                      "\"rgb sigma_s\" [1 1 1] \"float scale\" 1e12\n"
+                      "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n"
+                      "Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+                      VOLUMES);
+    render_scene *rs = build(text);
+    pstat *px = image_stats(rs, 8, 8, 2);
+    uint64_t lookups = 0;
+    for (int i = 0; i < 64; ++i) {
+        assert_true(px[i].min >= 0.0);
+        lookups += px[i].lookups;
+    }
+    /* Well below one budget per sample and segment (64 pixels, 2 samples). */
+    assert_true(lookups < 128u * 4u * VOLPATH_MAX_COLLISIONS);
+    free(px);
+    render_scene_destroy(rs);
+    free(text);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_grey_sky_furnace_is_exact),
+        cmocka_unit_test(test_chromatic_sky_furnace),
+        cmocka_unit_test(test_emitting_room_furnace),
+        cmocka_unit_test(test_maxdepth_1_matches_singlescatter),
+        cmocka_unit_test(test_absurd_density_is_bounded),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
