@@ -7,6 +7,7 @@
 #include <embree3/rtcore.h>
 
 #include "core/clock.h"
+#include "core/ray.h"
 #include "media/phase.h"
 #include "render/bsdf.h"
 #include "render/volpath_media.h"
@@ -176,12 +177,18 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         geom_hit h;
         bool hit = geometry_intersect(sc->geom, o, w, tmin, tmax, pa->walk.time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
-            if (h.t >= t_fill || crossing == VOLUME_MAX_CROSSINGS)
+            if (h.t >= t_fill)
                 return false;
+            if (crossing == VOLUME_MAX_CROSSINGS) {
+                pa->walk.lost++;
+                return false;
+            }
             tmin = geometry_step_past(&h, o, w);
             continue;
         }
-        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start) : tmax;
+        /* Unbounded media end at HZ_FAR_COORD (core/ray.h). */
+        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start)
+                     : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
             rgb T_maj = volpath_track(&sc->media[medium], o, w, t_start, t_end, pa->hero,
                                       &pa->walk, shadow_event, s);
@@ -194,8 +201,10 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         }
         if (!hit)
             return true;
-        if (crossing == VOLUME_MAX_CROSSINGS)
+        if (crossing == VOLUME_MAX_CROSSINGS) {
+            pa->walk.lost++;
             return false;
+        }
         medium = geometry_medium_after(&h, w, medium);
         t_start = t_end;
         tmin = geometry_step_past(&h, o, w);
@@ -488,14 +497,17 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
         bool hit = geometry_intersect(sc->geom, ray->o, ray->d, ray->tmin, INFINITY, r->time, &h);
         bool opaque = hit && h.shape->material->kind != MATERIAL_INTERFACE;
         if (hit && h.t < ray->t_fill) { /* behind a medium point the ray leaves */
-            if (++crossing > VOLUME_MAX_CROSSINGS)
+            if (++crossing > VOLUME_MAX_CROSSINGS) {
+                pa.walk.lost++;
                 break;
+            }
             if (!opaque)
                 ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
             ray->tmin = geometry_step_past(&h, ray->o, ray->d);
             continue;
         }
-        double t_hit = !hit    ? INFINITY
+        /* A path leaving the scene inside a medium ends at HZ_FAR_COORD. */
+        double t_hit = !hit    ? (ray->medium >= 0 ? ray_far_t(ray->o, ray->d) : INFINITY)
                        : media ? fmax(volume_crossing_t(&h, ray->o, ray->d), t_start)
                                : h.t;
         if (ray->medium >= 0) {
@@ -515,8 +527,10 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
             break;
         }
         if (!opaque) {
-            if (++crossing > VOLUME_MAX_CROSSINGS)
+            if (++crossing > VOLUME_MAX_CROSSINGS) {
+                pa.walk.lost++;
                 break;
+            }
             ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
             t_start = t_hit;
             ray->tmin = geometry_step_past(&h, ray->o, ray->d);
@@ -534,5 +548,6 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
     counters->shadow_rays += pa.walk.shadow_rays;
     counters->density_lookups += pa.walk.lookups;
     counters->majorant_steps += pa.walk.majorant_steps;
+    counters->lost_paths += pa.walk.lost;
     return pa.L;
 }
