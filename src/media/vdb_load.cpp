@@ -15,6 +15,7 @@
 #include <nanovdb/util/GridHandle.h>
 #include <nanovdb/util/GridValidator.h>
 #include <nanovdb/util/IO.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -131,78 +132,190 @@ class c_buffer
     uint64_t size_ = 0;
 };
 
-std::vector<nanovdb::io::GridMetaData> nvdb_meta(const std::string &path)
+// The .nvdb file format read with every size checked against the file before
+// it is used: NanoVDB's own reader trusts the name length (and reads past a
+// name without its NUL), the compressed chunk size and the grid size it finds
+// in the file. Layout (NanoVDB 32.x): segments of a 16-byte header, then one
+// 176-byte record plus the name per grid, then the grids' data in order; a
+// ZIP-coded grid's data is its compressed size (8 bytes) and the zlib stream.
+struct nvdb_entry {
+    nanovdb::io::MetaData meta;
+    std::string name;
+    uint64_t data_offset; // where the grid's data starts in the file
+    nanovdb::io::Codec codec;
+};
+
+// NanoVDB's toStr indexes a table with the type read from the file.
+const char *type_name(nanovdb::GridType t)
 {
-    try {
-        return nanovdb::io::readGridMetaData(path);
-    } catch (const std::exception &e) {
-        throw load_error(path + ": not a readable NanoVDB file (" + e.what() + ")");
-    }
+    int i = int(t);
+    return i >= 0 && i < int(nanovdb::GridType::End) ? nanovdb::toStr(t) : "an unknown type";
 }
 
-template <typename ValueT>
-void check_nvdb(const std::string &path, const std::string &name,
-                const nanovdb::GridHandle<c_buffer> &handle)
+load_error corrupt(const std::string &path, const std::string &what)
 {
-    const nanovdb::NanoGrid<ValueT> *grid = handle.template grid<ValueT>();
-    if (!grid)
-        throw load_error(path + ": could not read grid \"" + name + "\"");
-    // NanoVDB's validator follows offsets it does not check: bound them first.
-    char why[256];
-    if (nvdb_check_tree(handle.data(), handle.size(), why, sizeof why) != 0)
-        throw load_error(path + ": grid \"" + name + "\" is corrupt (" + why + ")");
-    if (!nanovdb::isValid(*grid, /*detailed=*/true))
-        throw load_error(path + ": grid \"" + name + "\" is corrupt (failed validation)");
+    return load_error(path + ": not a valid NanoVDB file (" + what + ")");
+}
+
+void read_at(std::ifstream &is, const std::string &path, uint64_t offset, void *dst, uint64_t n)
+{
+    is.seekg(std::streamoff(offset));
+    is.read(static_cast<char *>(dst), std::streamsize(n));
+    if (!is)
+        throw corrupt(path, "read failed at byte " + std::to_string(offset));
+}
+
+std::vector<nvdb_entry> nvdb_index(const std::string &path, uint64_t file_size)
+{
+    static_assert(sizeof(nanovdb::io::Header) == 16 && sizeof(nanovdb::io::MetaData) == 176,
+                  "NanoVDB file records changed size");
+    std::ifstream is(path, std::ios::in | std::ios::binary);
+    if (!is)
+        throw load_error(path + ": cannot open file (" + std::strerror(errno) + ")");
+    std::vector<nvdb_entry> out;
+    uint64_t pos = 0;
+    while (pos < file_size) {
+        nanovdb::io::Header h;
+        if (file_size - pos < sizeof h)
+            throw corrupt(path, "truncated segment header");
+        read_at(is, path, pos, &h, sizeof h);
+        pos += sizeof h;
+        if (h.magic != NANOVDB_MAGIC_NUMBER)
+            throw corrupt(path, "bad magic number");
+        if (h.version.getMajor() != NANOVDB_MAJOR_VERSION_NUMBER)
+            throw load_error(path + ": NanoVDB file version " + std::to_string(h.version.getMajor()) +
+                             ", expected " + std::to_string(NANOVDB_MAJOR_VERSION_NUMBER));
+        if (h.codec != nanovdb::io::Codec::NONE && h.codec != nanovdb::io::Codec::ZIP)
+            throw load_error(path + ": NanoVDB codec " + std::to_string(int(h.codec)) +
+                             " is not supported (uncompressed and ZIP are)");
+        size_t first = out.size();
+        for (unsigned g = 0; g < h.gridCount; ++g) {
+            nvdb_entry e;
+            if (file_size - pos < sizeof e.meta)
+                throw corrupt(path, "truncated grid record");
+            read_at(is, path, pos, &e.meta, sizeof e.meta);
+            pos += sizeof e.meta;
+            if (e.meta.nameSize == 0 || e.meta.nameSize > 4096 || file_size - pos < e.meta.nameSize)
+                throw corrupt(path, "grid name of " + std::to_string(e.meta.nameSize) + " bytes");
+            std::vector<char> name(e.meta.nameSize);
+            read_at(is, path, pos, name.data(), name.size());
+            pos += e.meta.nameSize;
+            if (name.back() != '\0')
+                throw corrupt(path, "grid name without its terminating NUL");
+            e.name = name.data();
+            e.codec = h.codec;
+            out.push_back(std::move(e));
+        }
+        for (size_t i = first; i < out.size(); ++i) {
+            if (out[i].meta.fileSize > file_size - pos)
+                throw load_error(path + ": file is truncated (grid \"" + out[i].name + "\" needs " +
+                                 std::to_string(out[i].meta.fileSize) + " bytes)");
+            out[i].data_offset = pos;
+            pos += out[i].meta.fileSize;
+        }
+    }
+    return out;
+}
+
+// The grid's bytes in a C-owned, 32-byte aligned buffer; for float and vec3f
+// grids, structurally checked (nvdb_check.h) before anything follows an offset.
+c_buffer nvdb_read(const std::string &path, const nvdb_entry &e)
+{
+    const uint64_t grid_size = e.meta.gridSize, file_bytes = e.meta.fileSize;
+    if (grid_size < sizeof(nanovdb::GridData) + sizeof(nanovdb::TreeData<3>))
+        throw corrupt(path, "grid \"" + e.name + "\" of " + std::to_string(grid_size) + " bytes");
+    if (grid_size > std::numeric_limits<uint32_t>::max())
+        throw load_error(path + ": grid \"" + e.name + "\" is over 4 GiB (not supported)");
+    std::ifstream is(path, std::ios::in | std::ios::binary);
+    if (!is)
+        throw load_error(path + ": cannot open file (" + std::strerror(errno) + ")");
+    c_buffer buf;
+    if (e.codec == nanovdb::io::Codec::NONE) {
+        if (grid_size != file_bytes)
+            throw corrupt(path, "grid \"" + e.name + "\" size does not match its data");
+        buf = c_buffer::create(grid_size);
+        read_at(is, path, e.data_offset, buf.data(), grid_size);
+    } else {
+        uint64_t chunk = 0;
+        if (file_bytes < sizeof chunk)
+            throw corrupt(path, "grid \"" + e.name + "\" has no compressed data");
+        read_at(is, path, e.data_offset, &chunk, sizeof chunk);
+        // zlib expands at most ~1032:1.
+        if (chunk > file_bytes - sizeof chunk || grid_size > 1100 * chunk + 4096)
+            throw corrupt(path, "grid \"" + e.name + "\" compressed sizes are inconsistent");
+        std::vector<Bytef> packed(size_t(chunk) ? size_t(chunk) : 1);
+        read_at(is, path, e.data_offset + sizeof chunk, packed.data(), chunk);
+        buf = c_buffer::create(grid_size);
+        uLongf n = uLongf(grid_size);
+        if (uncompress(buf.data(), &n, packed.data(), uLong(chunk)) != Z_OK || n != grid_size)
+            throw corrupt(path, "grid \"" + e.name + "\" does not decompress");
+    }
+    const auto *gd = reinterpret_cast<const nanovdb::GridData *>(buf.data());
+    if (gd->mGridType == nanovdb::GridType::Float || gd->mGridType == nanovdb::GridType::Vec3f) {
+        char why[256];
+        if (nvdb_check_tree(buf.data(), buf.size(), why, sizeof why) != 0)
+            throw load_error(path + ": grid \"" + e.name + "\" is corrupt (" + why + ")");
+    }
+    return buf;
+}
+
+std::string join_names(const std::vector<nvdb_entry> &entries)
+{
+    std::vector<std::string> names;
+    for (const auto &e : entries)
+        names.push_back(e.name);
+    return join(names);
 }
 
 vdb_buffer load_nvdb(const std::string &path, const std::string &name, vdb_value_type type,
                      std::uintmax_t size)
 {
-    std::vector<nanovdb::io::GridMetaData> metas = nvdb_meta(path);
-    std::vector<std::string> names;
-    const nanovdb::io::GridMetaData *found = nullptr;
-    for (const auto &m : metas) {
-        names.push_back(m.gridName);
-        if (!found && m.gridName == name)
-            found = &m;
-    }
+    std::vector<nvdb_entry> entries = nvdb_index(path, size);
+    const nvdb_entry *found = nullptr;
+    for (const auto &e : entries)
+        if (!found && e.name == name)
+            found = &e;
     if (!found)
-        throw load_error(path + ": no grid named \"" + name + "\" (grids: " + join(names) + ")");
+        throw load_error(path + ": no grid named \"" + name + "\" (grids: " + join_names(entries) +
+                         ")");
     nanovdb::GridType want = type == VDB_VEC3 ? nanovdb::GridType::Vec3f : nanovdb::GridType::Float;
-    if (found->gridType != want)
-        throw load_error(path + ": grid \"" + name + "\" is " + nanovdb::toStr(found->gridType) +
-                         ", expected " + nanovdb::toStr(want));
-    if (found->codec == nanovdb::io::Codec::NONE && found->gridSize > size)
-        throw load_error(path + ": file is truncated (grid \"" + name + "\" needs " +
-                         std::to_string(found->gridSize) + " bytes, file has " +
-                         std::to_string(size) + ")");
-    auto handle = nanovdb::io::readGrid<c_buffer>(path, name);
-    if (type == VDB_VEC3)
-        check_nvdb<nanovdb::Vec3f>(path, name, handle);
-    else
-        check_nvdb<float>(path, name, handle);
-    return handle.buffer().release();
+    if (found->meta.gridType != want)
+        throw load_error(path + ": grid \"" + name + "\" is " + type_name(found->meta.gridType) +
+                         ", expected " + type_name(want));
+    c_buffer buf = nvdb_read(path, *found);
+    const auto *gd = reinterpret_cast<const nanovdb::GridData *>(buf.data());
+    if (gd->mGridType != want)
+        throw corrupt(path, "grid \"" + name + "\" type differs from its record");
+    bool valid = type == VDB_VEC3
+                     ? nanovdb::isValid(*reinterpret_cast<const nanovdb::NanoGrid<nanovdb::Vec3f> *>(
+                                            buf.data()),
+                                        /*detailed=*/true)
+                     : nanovdb::isValid(*reinterpret_cast<const nanovdb::NanoGrid<float> *>(buf.data()),
+                                        /*detailed=*/true);
+    if (!valid)
+        throw load_error(path + ": grid \"" + name + "\" is corrupt (failed validation)");
+    return buf.release();
 }
 
-void list_nvdb(const std::string &path, vdb_grid_callback cb, void *user)
+void list_nvdb(const std::string &path, std::uintmax_t size, vdb_grid_callback cb, void *user)
 {
-    std::vector<nanovdb::io::GridMetaData> metas = nvdb_meta(path);
-    for (const auto &m : metas) {
+    std::vector<nvdb_entry> entries = nvdb_index(path, size);
+    for (const auto &e : entries) {
+        const nanovdb::io::MetaData &m = e.meta;
         vdb_grid_info info{};
-        info.name = m.gridName.c_str();
-        info.type = nanovdb::toStr(m.gridType);
+        info.name = e.name.c_str();
+        info.type = type_name(m.gridType);
         info.active_voxels = m.voxelCount;
         for (int a = 0; a < 3; ++a) {
             info.index_min[a] = m.indexBBox[0][a];
             info.index_max[a] = m.indexBBox[1][a];
             info.voxel_size[a] = m.voxelSize[a];
         }
-        auto handle = nanovdb::io::readGrid(path, m.gridName);
-        if (handle.size() < sizeof(nanovdb::GridData))
-            throw load_error(path + ": could not read grid \"" + m.gridName + "\"");
+        c_buffer buf = nvdb_read(path, e);
         // Same convention as for .vdb files (NanoVDB's own world bbox spans
         // [min, max + 1] instead).
-        const nanovdb::Map &map = reinterpret_cast<const nanovdb::GridData *>(handle.data())->mMap;
+        const nanovdb::GridData *gd = reinterpret_cast<const nanovdb::GridData *>(buf.data());
+        const nanovdb::Map &map = gd->mMap;
         for (int a = 0; a < 3; ++a) {
             info.world_min[a] = std::numeric_limits<double>::infinity();
             info.world_max[a] = -std::numeric_limits<double>::infinity();
@@ -217,12 +330,14 @@ void list_nvdb(const std::string &path, vdb_grid_callback cb, void *user)
                 info.world_max[a] = std::max(info.world_max[a], w[a]);
             }
         }
-        if (const nanovdb::NanoGrid<float> *grid = handle.template grid<float>()) {
+        // Only grids nvdb_read checked structurally have their root read.
+        if (gd->mGridType == nanovdb::GridType::Float) {
+            const auto *grid = reinterpret_cast<const nanovdb::NanoGrid<float> *>(buf.data());
             info.has_range = 1;
             info.min_value = grid->tree().root().minimum();
             info.max_value = grid->tree().root().maximum();
-        } else if (const nanovdb::NanoGrid<nanovdb::Vec3f> *vgrid =
-                       handle.template grid<nanovdb::Vec3f>()) {
+        } else if (gd->mGridType == nanovdb::GridType::Vec3f) {
+            const auto *vgrid = reinterpret_cast<const nanovdb::NanoGrid<nanovdb::Vec3f> *>(buf.data());
             // NanoVDB's statistics of vectors: the shortest and longest value.
             info.has_range = 1;
             info.min_value = vgrid->tree().root().minimum().length();
@@ -308,7 +423,7 @@ extern "C" hz_status vdb_list_grids(const char *path, vdb_grid_callback cb, void
         if (kind == file_kind::openvdb)
             st = openvdb_module(path).list_grids(path, size, cb, user, err, err_size);
         else
-            list_nvdb(path, cb, user);
+            list_nvdb(path, size, cb, user);
     });
     return guard == HZ_OK ? st : guard;
 }
