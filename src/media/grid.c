@@ -327,6 +327,17 @@ bool grid_support_bounds(const grid *g, vec3 *lo, vec3 *hi)
 
 float grid_max_value(const grid *g) { return g->max_value; }
 float grid_min_value(const grid *g) { return g->min_value; }
+
+hz_status grid_check_density(grid *g, hz_error *err)
+{
+    float lo, hi;
+    char why[512];
+    if (nvdb_check_density_values(g->owned.data, g->owned.size, &lo, &hi, why, sizeof why) != 0)
+        return hz_fail(err, "%s", why);
+    g->min_value = lo;
+    g->max_value = hi;
+    return HZ_OK;
+}
 float grid_background(const grid *g) { return g->background; }
 size_t grid_buffer_bytes(const grid *g) { return g->owned.size; }
 

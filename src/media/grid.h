@@ -53,6 +53,12 @@ hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error
 hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_error *err);
 void grid_destroy(grid *g);
 
+/* A float grid used as a density: checks the values themselves (every active
+ * voxel and tile finite and >= 0, the background too, every node's stored
+ * range bounding what lies under it) and sets grid_min_value/grid_max_value
+ * to the true range. The message names the first bad value's place. */
+hz_status grid_check_density(grid *g, hz_error *err);
+
 grid_value_type grid_type(const grid *g);
 
 void grid_accessor_init(const grid *g, grid_accessor *a);

@@ -136,6 +136,13 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
     }
 
+    if (grid_check_density(g, &inner) != HZ_OK) {
+        st = hz_fail_at(err, loc, "MakeNamedMedium \"%s\": grid \"%s\" in %s: %s", name,
+                        gridname, path, inner.message);
+        grid_destroy(g);
+        free(path);
+        return st;
+    }
     vec3 lo, hi;
     bool nonempty = grid_support_bounds(g, &lo, &hi);
     double background = grid_background(g);

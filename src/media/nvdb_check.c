@@ -1,5 +1,6 @@
 #include "media/nvdb_check.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -160,5 +161,180 @@ int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size)
         if (check_upper(&c, at) != 0)
             return -1;
     }
+    return 0;
+}
+
+/* ---- values of a density grid ---- */
+
+typedef struct {
+    checker c;
+    bool any;          /* an active value met */
+    float lo, hi;      /* of the active values met */
+} values;
+
+static int bad_value(values *v, float x, const pnanovdb_coord_t *at, const char *where)
+{
+    if (isnan(x))
+        return fail(&v->c, "%s (%d, %d, %d) is NaN", where, at->x, at->y, at->z);
+    if (isinf(x))
+        return fail(&v->c, "%s (%d, %d, %d) is infinite", where, at->x, at->y, at->z);
+    return fail(&v->c, "%s (%d, %d, %d) is negative (%g); densities must be >= 0", where, at->x,
+                at->y, at->z, (double)x);
+}
+
+/* One active value: finite and >= 0, and it widens the running range. */
+static int take(values *v, float x, const pnanovdb_coord_t *at, const char *where, float *lo,
+                float *hi, bool *any)
+{
+    if (!(x >= 0.0f) || isinf(x))
+        return bad_value(v, x, at, where);
+    *lo = *any ? fminf(*lo, x) : x;
+    *hi = *any ? fmaxf(*hi, x) : x;
+    *any = true;
+    return 0;
+}
+
+/* The stored statistics of a node must bound what lies under it: the
+ * majorant grid is built from them. */
+static int stats_bound(values *v, pnanovdb_address_t min_at, pnanovdb_address_t max_at, bool any,
+                       float lo, float hi, const pnanovdb_coord_t *at, const char *level)
+{
+    if (!any)
+        return 0;
+    float smin = pnanovdb_read_float(v->c.buf, min_at), smax = pnanovdb_read_float(v->c.buf, max_at);
+    if (!(smin <= lo && smax >= hi))
+        return fail(&v->c,
+                    "the %s node at (%d, %d, %d) stores the range [%g, %g] but holds values in "
+                    "[%g, %g]",
+                    level, at->x, at->y, at->z, (double)smin, (double)smax, (double)lo,
+                    (double)hi);
+    return 0;
+}
+
+static int leaf_values(values *v, pnanovdb_leaf_handle_t leaf, float *lo, float *hi, bool *any)
+{
+    pnanovdb_coord_t origin = pnanovdb_leaf_get_bbox_min(v->c.buf, leaf);
+    float l = 0, h = 0;
+    bool a = false;
+    for (uint32_t n = 0; n < 512; ++n) {
+        if (!pnanovdb_leaf_get_value_mask(v->c.buf, leaf, n))
+            continue;
+        pnanovdb_coord_t at = {origin.x + (int32_t)(n >> 6), origin.y + (int32_t)((n >> 3) & 7),
+                               origin.z + (int32_t)(n & 7)};
+        float x = pnanovdb_read_float(v->c.buf,
+                                      pnanovdb_leaf_get_table_address(v->c.type, v->c.buf, leaf, n));
+        if (take(v, x, &at, "voxel", &l, &h, &a) != 0)
+            return -1;
+    }
+    if (stats_bound(v, pnanovdb_leaf_get_min_address(v->c.type, v->c.buf, leaf),
+                    pnanovdb_leaf_get_max_address(v->c.type, v->c.buf, leaf), a, l, h, &origin,
+                    "leaf") != 0)
+        return -1;
+    if (a) {
+        *lo = *any ? fminf(*lo, l) : l;
+        *hi = *any ? fmaxf(*hi, h) : h;
+        *any = true;
+    }
+    return 0;
+}
+
+static int lower_values(values *v, pnanovdb_lower_handle_t lower, float *lo, float *hi, bool *any)
+{
+    pnanovdb_coord_t origin = pnanovdb_lower_get_bbox_min(v->c.buf, lower);
+    float l = 0, h = 0;
+    bool a = false;
+    for (uint32_t n = 0; n < PNANOVDB_LOWER_TABLE_COUNT; ++n) {
+        if (pnanovdb_lower_get_child_mask(v->c.buf, lower, n)) {
+            if (leaf_values(v, pnanovdb_lower_get_child(v->c.type, v->c.buf, lower, n), &l, &h,
+                            &a) != 0)
+                return -1;
+        } else if (pnanovdb_lower_get_value_mask(v->c.buf, lower, n)) {
+            float x = pnanovdb_read_float(
+                v->c.buf, pnanovdb_lower_get_table_address(v->c.type, v->c.buf, lower, n));
+            if (take(v, x, &origin, "a tile value of the lower node at", &l, &h, &a) != 0)
+                return -1;
+        }
+    }
+    if (stats_bound(v, pnanovdb_lower_get_min_address(v->c.type, v->c.buf, lower),
+                    pnanovdb_lower_get_max_address(v->c.type, v->c.buf, lower), a, l, h, &origin,
+                    "lower") != 0)
+        return -1;
+    if (a) {
+        *lo = *any ? fminf(*lo, l) : l;
+        *hi = *any ? fmaxf(*hi, h) : h;
+        *any = true;
+    }
+    return 0;
+}
+
+static int upper_values(values *v, pnanovdb_upper_handle_t upper, float *lo, float *hi, bool *any)
+{
+    pnanovdb_coord_t origin = pnanovdb_upper_get_bbox_min(v->c.buf, upper);
+    float l = 0, h = 0;
+    bool a = false;
+    for (uint32_t n = 0; n < PNANOVDB_UPPER_TABLE_COUNT; ++n) {
+        if (pnanovdb_upper_get_child_mask(v->c.buf, upper, n)) {
+            if (lower_values(v, pnanovdb_upper_get_child(v->c.type, v->c.buf, upper, n), &l, &h,
+                             &a) != 0)
+                return -1;
+        } else if (pnanovdb_upper_get_value_mask(v->c.buf, upper, n)) {
+            float x = pnanovdb_read_float(
+                v->c.buf, pnanovdb_upper_get_table_address(v->c.type, v->c.buf, upper, n));
+            if (take(v, x, &origin, "a tile value of the upper node at", &l, &h, &a) != 0)
+                return -1;
+        }
+    }
+    if (stats_bound(v, pnanovdb_upper_get_min_address(v->c.type, v->c.buf, upper),
+                    pnanovdb_upper_get_max_address(v->c.type, v->c.buf, upper), a, l, h, &origin,
+                    "upper") != 0)
+        return -1;
+    if (a) {
+        *lo = *any ? fminf(*lo, l) : l;
+        *hi = *any ? fmaxf(*hi, h) : h;
+        *any = true;
+    }
+    return 0;
+}
+
+int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
+                              char *why, size_t why_size)
+{
+    if (nvdb_check_tree(data, size, why, why_size) != 0)
+        return -1;
+    values v = {{pnanovdb_make_buf((pnanovdb_uint32_t *)data, size / 4), size,
+                 PNANOVDB_GRID_TYPE_FLOAT, why, why_size, 0, 0, 0, 0, 0, 0},
+                false, 0.0f, 0.0f};
+    pnanovdb_grid_handle_t grid = {addr(0)};
+    if (pnanovdb_grid_get_grid_type(v.c.buf, grid) != PNANOVDB_GRID_TYPE_FLOAT)
+        return fail(&v.c, "not a float grid");
+    pnanovdb_root_handle_t root = pnanovdb_tree_get_root(v.c.buf, pnanovdb_grid_get_tree(v.c.buf, grid));
+    float bg = pnanovdb_read_float(
+        v.c.buf, pnanovdb_address_offset(root.address,
+                                         PNANOVDB_GRID_TYPE_GET(v.c.type, root_off_background)));
+    pnanovdb_coord_t nowhere = {0, 0, 0};
+    float l = 0, h = 0;
+    bool a = false;
+    if (!(bg >= 0.0f) || isinf(bg))
+        return bad_value(&v, bg, &nowhere, "the background, given at");
+    uint32_t tiles = pnanovdb_root_get_tile_count(v.c.buf, root);
+    for (uint32_t t = 0; t < tiles; ++t) {
+        pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(v.c.type, root, t);
+        if (pnanovdb_root_tile_get_child(v.c.buf, tile) != 0) {
+            if (upper_values(&v, pnanovdb_root_get_child(v.c.type, v.c.buf, root, tile), &l, &h,
+                             &a) != 0)
+                return -1;
+        } else if (pnanovdb_root_tile_get_state(v.c.buf, tile)) {
+            float x = pnanovdb_read_float(v.c.buf,
+                                          pnanovdb_root_tile_get_value_address(v.c.type, v.c.buf, tile));
+            if (take(&v, x, &nowhere, "a root tile value, given at", &l, &h, &a) != 0)
+                return -1;
+        }
+    }
+    if (stats_bound(&v, pnanovdb_root_get_min_address(v.c.type, v.c.buf, root),
+                    pnanovdb_root_get_max_address(v.c.type, v.c.buf, root), a, l, h, &nowhere,
+                    "root") != 0)
+        return -1;
+    *vmin = a ? l : 0.0f;
+    *vmax = a ? h : 0.0f;
     return 0;
 }

@@ -24,6 +24,15 @@ extern "C" {
  * number of nodes the buffer can hold. */
 int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size);
 
+/* For a float density grid (after nvdb_check_tree): every active value
+ * (voxels, tile values at every level) and the background are finite and
+ * >= 0, and every node's stored min/max bound the values under it (the
+ * majorant grid is built from those statistics). Fills the true range of the
+ * active values (0, 0 when there are none). Returns 0, or -1 with the first
+ * bad value's place in why. One pass over the active values. */
+int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
+                              char *why, size_t why_size);
+
 #ifdef __cplusplus
 }
 #endif

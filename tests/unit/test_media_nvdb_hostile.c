@@ -12,6 +12,7 @@
 
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -145,11 +146,60 @@ static void test_random_tree_bytes(void **state)
     free(orig);
 }
 
+/* The values themselves, not the stored statistics: a NaN, a negative and a
+ * value above its leaf's stored maximum (statistics left alone, checksum
+ * absent) are each refused, naming the voxel. */
+static void test_bad_values(void **state)
+{
+    (void)state;
+    size_t n;
+    unsigned char *orig = file_bytes(VOLUMES "box.nvdb", &n);
+    size_t g = grid_offset(orig, n);
+    uint64_t leaf_offset;
+    memcpy(&leaf_offset, orig + g + GRID_SIZE, 8); /* tree: first leaf, relative to the tree */
+    size_t first_value = g + GRID_SIZE + (size_t)leaf_offset + 96; /* float leaf table */
+    unsigned char *b = malloc(n);
+    const struct {
+        float value;
+        const char *message;
+    } cases[] = {{NAN, "voxel (0, 0, 3) is NaN"},
+                 {-0.5f, "voxel (0, 0, 3) is negative (-0.5)"},
+                 {INFINITY, "voxel (0, 0, 3) is infinite"},
+                 {5.0f, "stores the range [1, 1] but holds values in [1, 5]"}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        memcpy(b, orig, n);
+        put64(b + g + 8, ~(uint64_t)0);
+        memcpy(b + first_value + 3 * 4, &cases[k].value, 4);
+        const char *path = HAZE_TMP "/badvalue.nvdb";
+        FILE *f = fopen(path, "wb");
+        assert_non_null(f);
+        assert_int_equal(fwrite(b, 1, n, f), n);
+        fclose(f);
+        grid *gr = NULL;
+        hz_error err = {{0}};
+        assert_int_equal(grid_load(path, "density", &gr, &err), HZ_OK);
+        assert_int_equal(grid_check_density(gr, &err), HZ_ERROR);
+        if (!strstr(err.message, cases[k].message))
+            fail_msg("got \"%s\", want \"%s\"", err.message, cases[k].message);
+        grid_destroy(gr);
+    }
+    /* The untouched grid passes, with its true range. */
+    grid *gr = NULL;
+    hz_error err = {{0}};
+    assert_int_equal(grid_load(VOLUMES "box.nvdb", "density", &gr, &err), HZ_OK);
+    assert_int_equal(grid_check_density(gr, &err), HZ_OK);
+    assert_true(grid_min_value(gr) == 1.0f && grid_max_value(gr) == 1.0f);
+    grid_destroy(gr);
+    free(b);
+    free(orig);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_offsets_outside),
         cmocka_unit_test(test_random_tree_bytes),
+        cmocka_unit_test(test_bad_values),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
