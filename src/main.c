@@ -90,6 +90,7 @@ typedef struct {
     const char *preview;
     int spp, threads;
     unsigned long long seed;
+    int seed_given;           /* --seed was given (it wins over Option "seed") */
     int quiet;
     int stats;                /* --stats */
     int disable_pixel_jitter; /* --disable-pixel-jitter */
@@ -180,6 +181,7 @@ static int parse_render_args(int argc, char **argv, cli *c)
                 if (parse_count(val, 0, LONG_MAX, &n))
                     return usage_error("--seed needs a non-negative integer, not '%s'", val);
                 c->seed = (unsigned long long)n;
+                c->seed_given = 1;
             }
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
             c->quiet = 1;
@@ -346,7 +348,11 @@ static int run_render(const cli *c, distributed *dist)
         scene_desc_free(&sd);
         return EXIT_USAGE;
     }
-    render_options ro = {.seed = c->seed, .spp = c->spp, .output = c->output, .region = c->region};
+    render_options ro = {.seed = c->seed,
+                         .seed_given = c->seed_given != 0,
+                         .spp = c->spp,
+                         .output = c->output,
+                         .region = c->region};
     render_scene *rs = NULL;
     hz_status st = parsed ? render_scene_create(&sd, &ro, rank0 ? stderr : NULL, &rs, &err)
                           : HZ_ERROR;
@@ -367,7 +373,9 @@ static int run_render(const cli *c, distributed *dist)
     renderer_options opt = {.threads = c->threads,
                             .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
                             .cancel = mpi ? NULL : &interrupted,
-                            .disable_pixel_jitter = c->disable_pixel_jitter != 0,
+                            .disable_pixel_jitter =
+                                c->disable_pixel_jitter != 0 ||
+                                render_scene_options(rs).disable_pixel_jitter,
                             .timing = c->stats != 0};
     render_stats stats;
     if (distributed_render(dist, rs, &opt, &stats, &err) != HZ_OK) {

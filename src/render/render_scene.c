@@ -28,7 +28,10 @@ struct render_scene {
     integrator_scene isc;
     bool volpath;       /* Integrator "volpath" named in the scene */
     volpath_scene vps;
+    scene_options options;
 };
+
+scene_options render_scene_options(const render_scene *rs) { return rs->options; }
 
 /* "volpath" (pbrt-v4's default) is the path tracer of render/volpath.h when
  * the scene names it; a scene with no Integrator directive (the default
@@ -169,9 +172,42 @@ static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_
     return HZ_OK;
 }
 
+/* Reads the Option directives (render_scene.h, scene_options). */
+static hz_status read_options(param_list *pl, const render_options *opt, uint64_t *seed,
+                              scene_options *out, hz_error *err)
+{
+    int s = params_int(pl, "seed", 0);
+    if (params_has(pl, "seed") && !(opt && opt->seed_given)) {
+        if (s < 0)
+            params_reject(pl, "seed", "Option \"seed\" must be >= 0, got %d", s);
+        *seed = (uint64_t)(s < 0 ? 0 : s);
+    }
+    out->disable_pixel_jitter = params_bool(pl, "disablepixeljitter", false);
+    params_bool(pl, "forcediffuse", false); /* haze's materials are all diffuse already */
+    const char *space = params_string(pl, "rendercoordsys", "cameraworld");
+    if (strcmp(space, "cameraworld") != 0 && strcmp(space, "camera") != 0 &&
+        strcmp(space, "world") != 0)
+        params_reject(pl, "rendercoordsys",
+                      "Option \"rendercoordsys\" \"%s\" is not one of \"camera\", "
+                      "\"cameraworld\", \"world\"",
+                      space);
+    /* Everything else pbrt-v4 knows (pixelstats, msereferenceimage,
+     * disabletexturefiltering, wavefront, ...) is reported here as unused. */
+    for (size_t i = 0; i < pl->count; ++i)
+        if (!pl->items[i].used)
+            return hz_fail_at(err, pl->items[i].loc,
+                              "Option \"%s\" is not supported by haze (supported: seed, "
+                              "disablepixeljitter, forcediffuse, rendercoordsys)",
+                              pl->items[i].name);
+    return params_finish(pl, "Option", err);
+}
+
 static hz_status build(render_scene *rs, scene_desc *sd, const render_options *opt, FILE *warn,
                        hz_error *err)
 {
+    uint64_t seed = opt ? opt->seed : 0;
+    if (read_options(&sd->options, opt, &seed, &rs->options, err) != HZ_OK)
+        return HZ_ERROR;
     film_params fp;
     if (film_params_from_entity_region(&sd->film, opt ? &opt->region : NULL, &fp, NULL, err) !=
         HZ_OK)
@@ -184,7 +220,7 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
     rs->filt = filter_create(&sd->filter, err);
     if (!rs->filt)
         return HZ_ERROR;
-    if (sampler_from_entity(&sd->sampler, opt ? opt->seed : 0, &rs->smp, err) != HZ_OK)
+    if (sampler_from_entity(&sd->sampler, seed, &rs->smp, err) != HZ_OK)
         return HZ_ERROR;
     if (opt && opt->spp > 0)
         sampler_set_spp(&rs->smp, opt->spp);

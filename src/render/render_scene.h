@@ -21,6 +21,7 @@
 
 typedef struct {
     uint64_t seed;             /* default for the Sampler's "integer seed" (--seed) */
+    bool seed_given;           /* --seed was given: it wins over Option "seed" */
     int spp;                   /* > 0 overrides the sampler's count (--spp) */
     const char *output;        /* non-NULL overrides the Film's filename (-o) */
     film_region region;        /* replaces the Film's cropwindow/pixelbounds unless NONE
@@ -28,6 +29,18 @@ typedef struct {
 } render_options;
 
 typedef struct render_scene render_scene;
+
+/* pbrt-v4's Option directives haze honours: "integer seed" (as --seed, when
+ * --seed is not given; a Sampler's "integer seed" still wins), "bool
+ * disablepixeljitter" (as --disable-pixel-jitter), "bool forcediffuse" (every
+ * haze material is already diffuse or an interface: no change),
+ * "string rendercoordsys" (haze renders in camera-world space whatever the
+ * value: "camera", "cameraworld" and "world" differ only in float rounding).
+ * Any other Option is refused at its place. */
+typedef struct {
+    bool disable_pixel_jitter;
+} scene_options;
+scene_options render_scene_options(const render_scene *rs);
 
 /* Runs every factory; errors name the file:line:column of the offending entity.
  * Warnings (e.g. an unsupported sampler replaced by sobol) are written to `warn`

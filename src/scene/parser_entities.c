@@ -368,7 +368,7 @@ static hz_status d_option(parser *ps, const token *d, hz_error *err)
         {"disablewavelengthjitter", PARAM_BOOL}, {"displacementedgescale", PARAM_FLOAT},
         {"msereferenceimage", PARAM_STRING}, {"msereferenceout", PARAM_STRING},
         {"seed", PARAM_INTEGER}, {"forcediffuse", PARAM_BOOL}, {"pixelstats", PARAM_BOOL},
-        {"wavefront", PARAM_BOOL},
+        {"wavefront", PARAM_BOOL}, {"rendercoordsys", PARAM_STRING},
     };
     param_list pl;
     if (parser_params(ps, &pl, d->loc, err) != HZ_OK) {
