@@ -567,9 +567,13 @@ void grid_region_range(const grid *g, grid_ibox box, float *min, float *max)
             upper_region_range(g, upper, origin, box, &r);
         }
     }
+    /* Saturating: a box spanning most of index space holds more than 2^63
+     * voxels, and no tree covers that many. */
     int64_t volume = 1;
-    for (int a = 0; a < 3; ++a)
-        volume *= box.max[a] >= box.min[a] ? (int64_t)box.max[a] - box.min[a] + 1 : 0;
+    for (int a = 0; a < 3; ++a) {
+        int64_t side = box.max[a] >= box.min[a] ? (int64_t)box.max[a] - box.min[a] + 1 : 0;
+        volume = side != 0 && volume > INT64_MAX / side ? INT64_MAX : volume * side;
+    }
     /* Voxels no node or tile covers read the background. */
     if (r.covered < volume || volume == 0)
         range_add(&r, g->background, g->background);
