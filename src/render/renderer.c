@@ -33,7 +33,11 @@ typedef struct {
     pthread_cond_t wake;
     int (*tile_source)(void *); /* NULL: the counter next_tile */
     void *tile_ctx;
+    /* Read only by the calling thread, where the signal handler that sets it
+     * runs (render threads block the signals); it passes the request on to
+     * the workers through `stop`, an atomic. */
     const volatile sig_atomic_t *cancel; /* NULL: never */
+    atomic_int stop;
     camera_sample_needs needs;
     render_counters *counters; /* one per thread */
     uint64_t *busy_ns;         /* one per thread */
@@ -124,7 +128,7 @@ static void *worker_main(void *p)
     render_counters *counters = &local;
     uint64_t start = hz_clock_ns();
     for (;;) {
-        if (job->cancel && *job->cancel)
+        if (atomic_load_explicit(&job->stop, memory_order_relaxed))
             break; /* claimed tiles stay a prefix: every one of them is finished */
         int t = job->tile_source ? job->tile_source(job->tile_ctx)
                                : atomic_fetch_add(&job->next_tile, 1);
@@ -171,6 +175,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     atomic_init(&job.next_tile, 0);
     atomic_init(&job.tiles_done, 0);
     atomic_init(&job.running, 0);
+    atomic_init(&job.stop, 0);
     pthread_mutex_init(&job.lock, NULL);
     pthread_condattr_t cattr;
     pthread_condattr_init(&cattr);
@@ -229,7 +234,11 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     } else {
         progress_begin(&bar, opt->progress, job.tile_count, t0);
         pthread_mutex_lock(&job.lock);
-        while (atomic_load(&job.running) > 0 && !(job.cancel && *job.cancel)) {
+        while (atomic_load(&job.running) > 0) {
+            if (job.cancel && *job.cancel) {
+                atomic_store(&job.stop, 1);
+                break;
+            }
             progress_update(&bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx)
                                                    : atomic_load(&job.tiles_done),
                             now_seconds());
