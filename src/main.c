@@ -229,6 +229,7 @@ static int write_partial(const render_outputs *outs, film *f, double ratio,
         {"haze:pixels_done", pixels_done},
         {"haze:pixels_total", pixels_total},
         {"haze:spp", spp},
+        {"haze:render", outs->render_id},
     };
     film_output out = {attrs, (int)(sizeof attrs / sizeof attrs[0]), &output_note};
     char exr_path[PATH_MAX + 16], png_path[PATH_MAX + 16];
@@ -362,7 +363,14 @@ static int run_render(const cli *c, distributed *dist)
     render_outputs outs;
     if (st == HZ_OK && rank0 && outputs_resolve(&sd, fp->filename, c->preview, &outs, &err) != HZ_OK)
         st = HZ_ERROR;
-    if (distributed_agree(dist, st, &err, st == HZ_OK ? distributed_fingerprint(c->scene, rs) : 0,
+    uint64_t inputs_hash = 0;
+    if (st == HZ_OK && scene_inputs_hash(&sd, &inputs_hash, &err) != HZ_OK)
+        st = HZ_ERROR;
+    bool no_jitter = c->disable_pixel_jitter || (rs && render_scene_options(rs).disable_pixel_jitter);
+    snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
+             st == HZ_OK ? (unsigned long long)outputs_render_id(inputs_hash, rs, no_jitter) : 0ull);
+    if (distributed_agree(dist, st, &err,
+                          st == HZ_OK ? distributed_fingerprint(inputs_hash, rs) : 0,
                           stderr) != HZ_OK) {
         exit_code = EXIT_SCENE;
         goto done;
@@ -373,9 +381,7 @@ static int run_render(const cli *c, distributed *dist)
     renderer_options opt = {.threads = c->threads,
                             .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
                             .cancel = mpi ? NULL : &interrupted,
-                            .disable_pixel_jitter =
-                                c->disable_pixel_jitter != 0 ||
-                                render_scene_options(rs).disable_pixel_jitter,
+                            .disable_pixel_jitter = no_jitter,
                             .timing = c->stats != 0};
     render_stats stats;
     if (distributed_render(dist, rs, &opt, &stats, &err) != HZ_OK) {
@@ -391,7 +397,8 @@ static int run_render(const cli *c, distributed *dist)
         exit_code = write_partial(&outs, f, ratio, &stats);
         goto done;
     }
-    film_output out = {NULL, 0, &output_note};
+    const film_attribute id_attr[] = {{"haze:render", outs.render_id}};
+    film_output out = {id_attr, 1, &output_note};
     if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
         (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
         fprintf(stderr, "haze: %s\n", err.message);

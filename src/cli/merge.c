@@ -118,6 +118,19 @@ static hz_status check_like_first(const exr_image *r, const char *rf, const exr_
         format_channels(r, b, sizeof b);
         return hz_fail(err, "merge: %s has channels %s but %s has %s", pf, a, rf, b);
     }
+    /* What identifies the render (main.c, outputs_render_id): the scene and
+     * every file it reads, the sampler, the seed, the haze version. */
+    const char *ip = find_attribute(p, "haze:render"), *ir = find_attribute(r, "haze:render");
+    if (!ip || !ir)
+        return hz_fail(err,
+                       "merge: %s has no \"haze:render\" fingerprint (not rendered by this "
+                       "haze): cannot tell that it belongs to the same render",
+                       !ip ? pf : rf);
+    if (strcmp(ip, ir) != 0)
+        return hz_fail(err,
+                       "merge: %s and %s are parts of different renders (their scene files, "
+                       "samples per pixel or seed differ: haze:render %s vs %s)",
+                       pf, rf, ip, ir);
     for (int i = 0; i < 2; ++i) { /* every attribute of each is in the other, equal */
         const exr_image *x = i ? r : p, *y = i ? p : r;
         const char *xf = i ? rf : pf, *yf = i ? pf : rf;

@@ -1,6 +1,8 @@
 #define _XOPEN_SOURCE 700
 #include "cli/outputs.h"
 
+#include "core/hash.h"
+
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -126,6 +128,20 @@ hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png
     }
     scene_input_files_free(inputs, count);
     return st;
+}
+
+uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, bool disable_pixel_jitter)
+{
+    uint64_t h = fnv1a(inputs_hash, HAZE_VERSION, sizeof HAZE_VERSION);
+    const sampler *s = render_scene_sampler(rs);
+    HASH_FIELD(h, s->kind);
+    HASH_FIELD(h, s->spp);
+    HASH_FIELD(h, s->xsamples);
+    HASH_FIELD(h, s->ysamples);
+    HASH_FIELD(h, s->jitter);
+    HASH_FIELD(h, s->seed);
+    HASH_FIELD(h, disable_pixel_jitter);
+    return h;
 }
 
 void outputs_partial_path(const char *path, char *out, size_t n)

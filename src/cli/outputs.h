@@ -6,12 +6,21 @@
 #include <stdbool.h>
 
 #include "core/error.h"
+#include "render/render_scene.h"
 #include "scene/scene_desc.h"
 
 typedef struct {
     char exr[PATH_MAX]; /* the file the EXR replaces (a symlink's target) */
     char png[PATH_MAX]; /* the same for the --preview PNG; "" without one */
+    char render_id[17]; /* outputs_render_id in hex: the EXR's "haze:render" */
 } render_outputs;
+
+/* What identifies a render, written to every EXR as "haze:render" so that
+ * `haze merge` refuses parts of different renders: the bytes of every input
+ * file (scene_inputs_hash), the haze version, the sampler (kind, spp, strata,
+ * jitter, seed) and pixel jitter. Not the region, the thread count or the
+ * output name: the parts of one render share it. */
+uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, bool disable_pixel_jitter);
 
 /* Resolves and checks the EXR output `exr` and the optional PNG `png` (NULL:
  * none) of a render of `sd`. Refused, each with one line naming the file:

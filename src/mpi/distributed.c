@@ -4,6 +4,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "mpi/distributed.h"
 
+#include "core/hash.h"
+
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -100,29 +102,11 @@ void distributed_destroy(distributed *d)
 int distributed_rank(const distributed *d) { return d->rank; }
 int distributed_size(const distributed *d) { return d->size; }
 
-static uint64_t fnv1a(uint64_t h, const void *p, size_t n)
-{
-    const unsigned char *b = p;
-    for (size_t i = 0; i < n; ++i) {
-        h ^= b[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
 
-#define HASH_FIELD(h, x) ((h) = fnv1a((h), &(x), sizeof(x)))
 
-uint64_t distributed_fingerprint(const char *scene_path, const render_scene *rs)
+uint64_t distributed_fingerprint(uint64_t inputs_hash, const render_scene *rs)
 {
-    uint64_t h = 14695981039346656037ull;
-    FILE *f = fopen(scene_path, "rb");
-    if (f) {
-        unsigned char buf[65536];
-        size_t n;
-        while ((n = fread(buf, 1, sizeof buf, f)) > 0)
-            h = fnv1a(h, buf, n);
-        fclose(f);
-    }
+    uint64_t h = inputs_hash;
     /* Not the file name: only rank 0 writes. */
     const film_params *fp = film_get_params(render_scene_film((render_scene *)rs));
     HASH_FIELD(h, fp->xres);

@@ -32,9 +32,10 @@ int distributed_rank(const distributed *d);
 int distributed_size(const distributed *d);
 
 /* A hash of what must be equal on every rank for their tiles to form one
- * image: the bytes of the scene file, the film parameters but the file name,
- * and the sampler (kind, spp, strata, jitter, seed). */
-uint64_t distributed_fingerprint(const char *scene_path, const render_scene *rs);
+ * image: `inputs_hash` (scene_inputs_hash: the bytes of the scene, its
+ * includes, meshes and volumes), the film parameters but the file name, and
+ * the sampler (kind, spp, strata, jitter, seed). */
+uint64_t distributed_fingerprint(uint64_t inputs_hash, const render_scene *rs);
 
 /* Called by every rank once its scene is built, with its own status and
  * message (`local_err`, used when `local` is HZ_ERROR) and fingerprint.

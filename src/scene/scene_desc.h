@@ -15,6 +15,7 @@
 #define HAZE_SCENE_SCENE_DESC_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "core/error.h"
 #include "core/transform.h"
@@ -135,6 +136,9 @@ void scene_desc_free(scene_desc *sd);
  * nanovdb medium's "filename". Free with scene_input_files_free. */
 hz_status scene_input_files(const scene_desc *sd, char ***files, size_t *count, hz_error *err);
 void scene_input_files_free(char **files, size_t count);
+/* A hash of the bytes of every file scene_input_files lists, in order: what
+ * makes two renders of "the same scene" the same (MPI ranks, merged parts). */
+hz_status scene_inputs_hash(const scene_desc *sd, uint64_t *hash, hz_error *err);
 
 /* The index in sd->media of the medium called `name`; -1 for "" or NULL
  * (vacuum), SCENE_MEDIUM_UNDEFINED when no MakeNamedMedium defines it. */

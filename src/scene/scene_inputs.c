@@ -1,7 +1,12 @@
 /* Every file a render of a scene reads. */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <stdlib.h>
+#include <unistd.h>
 #include <string.h>
 
+#include "core/file.h"
+#include "core/hash.h"
 #include "core/path.h"
 #include "scene/scene_desc.h"
 
@@ -67,6 +72,40 @@ hz_status scene_input_files(const scene_desc *sd, char ***out, size_t *count, hz
     *out = list;
     *count = n;
     return HZ_OK;
+}
+
+hz_status scene_inputs_hash(const scene_desc *sd, uint64_t *out, hz_error *err)
+{
+    char **files;
+    size_t count;
+    if (scene_input_files(sd, &files, &count, err) != HZ_OK)
+        return HZ_ERROR;
+    uint64_t h = HZ_FNV_OFFSET;
+    HASH_FIELD(h, count);
+    hz_status st = HZ_OK;
+    unsigned char *buf = malloc(1 << 16);
+    if (!buf)
+        st = hz_fail(err, "out of memory hashing the scene's files");
+    for (size_t i = 0; st == HZ_OK && i < count; ++i) {
+        int fd;
+        off_t size;
+        hz_error ferr;
+        if (file_open_regular(files[i], &fd, &size, &ferr) != HZ_OK) {
+            st = hz_fail(err, "%s: cannot read: %s", files[i], ferr.message);
+            break;
+        }
+        HASH_FIELD(h, size);
+        ssize_t n;
+        while ((n = read(fd, buf, 1 << 16)) > 0)
+            h = fnv1a(h, buf, (size_t)n);
+        if (n < 0)
+            st = hz_fail(err, "%s: cannot read: %s", files[i], strerror(errno));
+        close(fd);
+    }
+    free(buf);
+    scene_input_files_free(files, count);
+    *out = h;
+    return st;
 }
 
 void scene_input_files_free(char **files, size_t count)

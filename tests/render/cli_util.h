@@ -10,6 +10,8 @@
 #include <string.h>
 #include <sys/wait.h>
 
+#include "film/exr.h"
+
 /* 1 in a build with AddressSanitizer (gcc or clang): tests of timing or
  * resource limits adapt to it. */
 #if defined(__SANITIZE_ADDRESS__)
@@ -99,6 +101,35 @@ static inline int count_temporaries_in(const char *dir)
         n += strstr(e->d_name, ".tmp-") != NULL;
     closedir(d);
     return n;
+}
+
+/* The pixels of an EXR (every channel's floats, in order) as one buffer, or
+ * NULL when it cannot be read: for comparing renders of different scene
+ * files, whose headers differ by their "haze:render" fingerprint. */
+static inline unsigned char *read_exr_pixels(const char *path, size_t *size)
+{
+    exr_image img;
+    hz_error err;
+    if (exr_read(path, &img, &err) != HZ_OK)
+        return NULL;
+    size_t per = (size_t)img.width * (size_t)img.height * sizeof(float);
+    unsigned char *out = malloc(per * (size_t)(img.channel_count ? img.channel_count : 1));
+    for (int c = 0; out && c < img.channel_count; ++c)
+        memcpy(out + per * (size_t)c, img.channels[c].pixels, per);
+    *size = per * (size_t)img.channel_count;
+    exr_image_free(&img);
+    return out;
+}
+
+/* Same channels and pixels, bit for bit (headers aside). */
+static inline bool exr_pixels_equal(const char *a, const char *b)
+{
+    size_t na = 0, nb = 0;
+    unsigned char *pa = read_exr_pixels(a, &na), *pb = read_exr_pixels(b, &nb);
+    bool same = pa && pb && na == nb && memcmp(pa, pb, na) == 0;
+    free(pa);
+    free(pb);
+    return same;
 }
 
 #endif

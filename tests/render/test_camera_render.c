@@ -266,7 +266,7 @@ static void test_lens_radius_zero_is_pinhole(void **state)
     snprintf(a, sizeof a, "%s/pinhole.exr", HAZE_TMP);
     snprintf(b, sizeof b, "%s/lens0.exr", HAZE_TMP);
     size_t na, nb;
-    unsigned char *da = read_whole_file(a, &na), *db = read_whole_file(b, &nb);
+    unsigned char *da = read_exr_pixels(a, &na), *db = read_exr_pixels(b, &nb);
     assert_non_null(da);
     assert_non_null(db);
     assert_int_equal(na, nb);

@@ -327,7 +327,7 @@ static unsigned char *render_bytes(const char *name, const char *a, const char *
         fail();
     }
     snprintf(scene, sizeof scene, "%s/%s.exr", HAZE_TMP, name);
-    unsigned char *bytes = read_whole_file(scene, size);
+    unsigned char *bytes = read_exr_pixels(scene, size); /* headers name their scenes */
     assert_non_null(bytes);
     return bytes;
 }

@@ -24,7 +24,7 @@ static const char scene_text[] =
  * fills out with what it printed. */
 static int render_in_dir(const char *args, char *out, size_t n)
 {
-    char cmd[2048];
+    char cmd[4096];
     snprintf(cmd, sizeof cmd, "render '" DIR "/scene.pbrt' %s --quiet", args);
     return run_haze(cmd, out, n);
 }
@@ -126,6 +126,42 @@ static void test_symlink_written_through(void **state)
     assert_int_equal(count_temporaries_in(DIR), 0);
 }
 
+/* Parts of different renders (another seed, another spp, an include whose
+ * bytes changed) are refused by haze merge; parts of one render merge into
+ * the full render's pixels. */
+static void test_merge_refuses_other_renders(void **state)
+{
+    (void)state;
+    setup_dir();
+    char out[4096];
+    const char *left = "--pixelbounds 0,4,0,8", *right = "--pixelbounds 4,8,0,8";
+    char args[2048];
+#define PART(name, bounds, extra)                                                                 \
+    snprintf(args, sizeof args, "-o '" DIR "/" name ".exr' %s %s", bounds, extra);                \
+    assert_int_equal(render_in_dir(args, out, sizeof out), 0)
+    PART("full", "", "");
+    PART("l", left, "");
+    PART("r", right, "");
+    PART("r_seed", right, "--seed 5");
+    PART("r_spp", right, "--spp 2");
+    write_text_file(DIR "/part.pbrt", "Shape \"sphere\" \"float radius\" 0.9\n");
+    PART("r_include", right, "");
+    write_text_file(DIR "/part.pbrt", "Shape \"sphere\"\n");
+#undef PART
+    assert_int_equal(run_haze("merge '" DIR "/l.exr' '" DIR "/r.exr' -o '" DIR "/merged.exr'", out,
+                              sizeof out),
+                     0);
+    assert_true(exr_pixels_equal(DIR "/merged.exr", DIR "/full.exr"));
+    const char *others[] = {"r_seed", "r_spp", "r_include"};
+    for (int i = 0; i < 3; ++i) {
+        snprintf(args, sizeof args, "merge '" DIR "/l.exr' '" DIR "/%s.exr' -o '" DIR "/bad.exr'",
+                 others[i]);
+        assert_int_equal(run_haze(args, out, sizeof out), 1);
+        if (!strstr(out, "are parts of different renders"))
+            fail_msg("%s: %s", others[i], out);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -133,6 +169,7 @@ int main(void)
         cmocka_unit_test(test_non_regular_outputs),
         cmocka_unit_test(test_inputs_are_not_outputs),
         cmocka_unit_test(test_symlink_written_through),
+        cmocka_unit_test(test_merge_refuses_other_renders),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -56,8 +56,8 @@ static void test_default_is_singlescatter(void **state)
     char *a = render_file("default_integrator", "", "--threads 2");
     char *b = render_file("named_singlescatter", "Integrator \"singlescatter\"", "--threads 2");
     char *c = render_file("named_volpath", "Integrator \"volpath\"", "--threads 2");
-    assert_true(files_equal(a, b));
-    assert_false(files_equal(a, c));
+    assert_true(exr_pixels_equal(a, b)); /* headers name their scenes */
+    assert_false(exr_pixels_equal(a, c));
     free(a);
     free(b);
     free(c);
