@@ -105,10 +105,12 @@ hz_status png_out_write_rgb8_noted(const char *path, int width, int height, cons
     }
     tmp_file_note_set(note, tmp);
     struct stat old;
-    fchmod(fd, stat(path, &old) == 0 ? (old.st_mode & 07777) : 0644);
     hz_status st = HZ_OK;
-    FILE *fp = fdopen(fd, "wb");
-    if (!fp) {
+    FILE *fp = NULL;
+    if (fchmod(fd, stat(path, &old) == 0 ? (old.st_mode & 07777) : 0644) != 0) {
+        st = hz_fail(err, "%s: cannot set the temporary file's mode: %s", path, strerror(errno));
+        close(fd);
+    } else if (!(fp = fdopen(fd, "wb"))) {
         st = hz_fail(err, "%s: cannot open the temporary file: %s", path, strerror(errno));
         close(fd);
     } else {

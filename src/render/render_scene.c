@@ -225,7 +225,9 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
     if (opt && opt->spp > 0)
         sampler_set_spp(&rs->smp, opt->spp);
     if (rs->smp.warning[0] && warn)
-        fprintf(warn, "warning: %s\n", rs->smp.warning);
+        fprintf(warn, "%s:%d:%d: warning: %s\n",
+                sd->sampler.loc.file ? sd->sampler.loc.file : "<input>", sd->sampler.loc.line,
+                sd->sampler.loc.column, rs->smp.warning);
     if (camera_create(&sd->camera, &fp, &rs->cam, err) != HZ_OK)
         return HZ_ERROR;
     rs->film = film_create(&fp, err);

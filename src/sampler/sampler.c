@@ -62,10 +62,20 @@ void sampler_set_spp(sampler *s, int spp)
         s->spp = spp;
         break;
     }
-    case SAMPLER_SOBOL:
+    case SAMPLER_SOBOL: {
+        /* The scene's count was never used: drop its rounding warning. */
+        char *w = strstr(s->warning, "sobol: ");
+        if (w) {
+            char *end = strstr(w, "; ");
+            if (end)
+                memmove(w, end + 2, strlen(end + 2) + 1);
+            else
+                *(w > s->warning ? w - 2 : w) = '\0';
+        }
         s->spp = spp;
         sobol_round_spp(s);
         break;
+    }
     }
 }
 

@@ -69,6 +69,31 @@ static void test_refused_options(void **state)
     assert_non_null(strstr(out, "neg.pbrt:1:8: Option \"seed\" must be >= 0"));
 }
 
+/* Sampler warnings name the Sampler's place, and concern the count used. */
+static void test_sampler_warnings(void **state)
+{
+    (void)state;
+    char out[4096];
+    const char *scene = "Sampler \"zsobol\" \"integer pixelsamples\" 125\n"
+                        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                        "WorldBegin\n";
+    write_text_file(DIR "/spp.pbrt", scene);
+    assert_int_equal(run_haze("render '" DIR "/spp.pbrt' -o '" DIR "/spp.exr' --quiet", out,
+                              sizeof out),
+                     0);
+    assert_non_null(
+        strstr(out, "spp.pbrt:1:1: warning: sobol: 125 pixel samples rounded up to 128"));
+    assert_int_equal(run_haze("render '" DIR "/spp.pbrt' -o '" DIR "/spp.exr' --quiet --spp 4",
+                              out, sizeof out),
+                     0);
+    assert_null(strstr(out, "rounded"));
+    assert_int_equal(run_haze("render '" DIR "/spp.pbrt' -o '" DIR "/spp.exr' --quiet --spp 5",
+                              out, sizeof out),
+                     0);
+    assert_non_null(strstr(out, "warning: sobol: 5 pixel samples rounded up to 8"));
+    assert_null(strstr(out, "125"));
+}
+
 int main(void)
 {
     mkdir(HAZE_TMP, 0755);
@@ -76,6 +101,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_honoured_options),
         cmocka_unit_test(test_refused_options),
+        cmocka_unit_test(test_sampler_warnings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
