@@ -14,6 +14,7 @@
 #include <openexr.h>
 
 #include "film/exr.h"
+#include "fuzz_memfd.h"
 
 /* exr_read accepts images up to 16 GiB: a few flipped header bits make a tiny
  * file claim gigabytes, which exr_read allocates before it finds the pixel
@@ -51,22 +52,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    int fd = memfd_create("haze-fuzz-exr", MFD_CLOEXEC);
-    if (fd < 0) {
-        perror("fuzz_exr: memfd_create");
-        abort();
-    }
-    size_t done = 0;
-    while (done < size) {
-        ssize_t n = write(fd, data + done, size - done);
-        if (n <= 0) {
-            perror("fuzz_exr: write");
-            abort();
-        }
-        done += (size_t)n;
-    }
     char path[64];
-    snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
+    int fd = fuzz_memfd("haze-fuzz-exr", data, size, path, sizeof path);
     exr_image img;
     hz_error err;
     if (!header_too_large(path) && exr_read(path, &img, &err) == HZ_OK) {

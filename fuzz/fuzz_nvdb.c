@@ -13,6 +13,7 @@
 
 #include "media/grid.h"
 #include "media/majorant.h"
+#include "fuzz_memfd.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -39,22 +40,8 @@ static void use_grid(grid *g)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
-    int fd = memfd_create("haze-fuzz-nvdb", MFD_CLOEXEC);
-    if (fd < 0) {
-        perror("fuzz_nvdb: memfd_create");
-        abort();
-    }
-    size_t done = 0;
-    while (done < size) {
-        ssize_t n = write(fd, data + done, size - done);
-        if (n <= 0) {
-            perror("fuzz_nvdb: write");
-            abort();
-        }
-        done += (size_t)n;
-    }
     char path[64];
-    snprintf(path, sizeof path, "/proc/self/fd/%d", fd);
+    int fd = fuzz_memfd("haze-fuzz-nvdb", data, size, path, sizeof path);
     const char *names[2] = {"density", "v"};
     for (int k = 0; k < 2; ++k) {
         grid *g = NULL;

@@ -1,6 +1,7 @@
 #define _XOPEN_SOURCE 700
 #include "cli/outputs.h"
 
+#include "core/file.h"
 #include "core/hash.h"
 
 #include <errno.h>
@@ -15,19 +16,6 @@ static bool has_suffix(const char *s, const char *suffix)
 {
     size_t n = strlen(s), m = strlen(suffix);
     return n > m && strcasecmp(s + n - m, suffix) == 0 && s[n - m - 1] != '/';
-}
-
-static const char *kind_of(mode_t mode)
-{
-    if (S_ISDIR(mode))
-        return "a directory";
-    if (S_ISCHR(mode) || S_ISBLK(mode))
-        return "a device";
-    if (S_ISFIFO(mode))
-        return "a FIFO";
-    if (S_ISSOCK(mode))
-        return "a socket";
-    return "not a regular file";
 }
 
 /* Creates (and removes) a probe file where the temporary file will go, which
@@ -88,7 +76,7 @@ static hz_status resolve(const char *path, const char *ext, const char *what, ch
     }
     if (!S_ISREG(st.st_mode))
         return hz_fail(err, "%s '%s' is %s; haze replaces only regular files", what, out,
-                       kind_of(st.st_mode));
+                       file_kind_name(st.st_mode));
     return check_dir(out, err);
 }
 
@@ -133,13 +121,7 @@ hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png
 uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, bool disable_pixel_jitter)
 {
     uint64_t h = fnv1a(inputs_hash, HAZE_VERSION, sizeof HAZE_VERSION);
-    const sampler *s = render_scene_sampler(rs);
-    HASH_FIELD(h, s->kind);
-    HASH_FIELD(h, s->spp);
-    HASH_FIELD(h, s->xsamples);
-    HASH_FIELD(h, s->ysamples);
-    HASH_FIELD(h, s->jitter);
-    HASH_FIELD(h, s->seed);
+    h = sampler_fingerprint(h, render_scene_sampler(rs));
     HASH_FIELD(h, disable_pixel_jitter);
     return h;
 }

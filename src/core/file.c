@@ -18,7 +18,7 @@ static bool ends_with(const char *s, const char *suffix)
     return n >= m && strcmp(s + n - m, suffix) == 0;
 }
 
-static const char *kind_of(mode_t mode)
+const char *file_kind_name(mode_t mode)
 {
     if (S_ISDIR(mode))
         return "a directory";
@@ -44,7 +44,7 @@ hz_status file_open_regular(const char *path, int *fd_out, off_t *size, hz_error
     }
     if (!S_ISREG(st.st_mode)) {
         close(fd);
-        return hz_fail(err, "is %s; haze reads only regular files", kind_of(st.st_mode));
+        return hz_fail(err, "is %s; haze reads only regular files", file_kind_name(st.st_mode));
     }
     int flags = fcntl(fd, F_GETFL);
     if (flags >= 0)

@@ -13,6 +13,10 @@
 #define FILE_LIMIT_SCENE ((size_t)1 << 30) /* scene text: 1 GiB */
 #define FILE_LIMIT_MESH ((size_t)8 << 30)  /* a PLY mesh: 8 GiB */
 
+/* "a directory", "a device", "a FIFO", "a socket" or "not a regular file":
+ * what a file of this st_mode is, for messages. */
+const char *file_kind_name(mode_t mode);
+
 /* Opens `path` for reading (*fd, blocking reads) and gives its size, only when
  * it is a regular file: a directory, device, FIFO or socket is refused
  * without blocking on it (a FIFO's open would wait for a writer). The message

@@ -122,14 +122,7 @@ uint64_t distributed_fingerprint(uint64_t inputs_hash, const render_scene *rs)
     HASH_FIELD(h, fp->iso);
     HASH_FIELD(h, fp->max_component_value);
     HASH_FIELD(h, fp->diagonal);
-    const sampler *s = render_scene_sampler(rs);
-    HASH_FIELD(h, s->kind);
-    HASH_FIELD(h, s->spp);
-    HASH_FIELD(h, s->xsamples);
-    HASH_FIELD(h, s->ysamples);
-    HASH_FIELD(h, s->jitter);
-    HASH_FIELD(h, s->seed);
-    return h;
+    return sampler_fingerprint(h, render_scene_sampler(rs));
 }
 
 #ifdef HAZE_HAVE_MPI

@@ -4,6 +4,8 @@
  * except the dimension counter, so tiles and threads cannot change an image. */
 #include "sampler/sampler.h"
 
+#include "core/hash.h"
+
 #include <assert.h>
 #include <stdio.h>
 #include <string.h>
@@ -42,6 +44,17 @@ static void sobol_round_spp(sampler *s)
         append_warning(s, msg);
         s->spp = p;
     }
+}
+
+uint64_t sampler_fingerprint(uint64_t h, const sampler *s)
+{
+    HASH_FIELD(h, s->kind);
+    HASH_FIELD(h, s->spp);
+    HASH_FIELD(h, s->xsamples);
+    HASH_FIELD(h, s->ysamples);
+    HASH_FIELD(h, s->jitter);
+    HASH_FIELD(h, s->seed);
+    return h;
 }
 
 void sampler_set_spp(sampler *s, int spp)

@@ -25,6 +25,9 @@ typedef struct {
  * randomization "owen"); "halton"/"paddedsobol"/"pmj02bn" become sobol with a warning.
  * `seed` is the default for a missing "integer seed" (the --seed option). */
 hz_status sampler_from_entity(scene_entity *e, uint64_t seed, sampler *out, hz_error *err);
+/* `h` extended by everything that decides the samples: kind, spp, strata,
+ * jitter, seed (core/hash.h). */
+uint64_t sampler_fingerprint(uint64_t h, const sampler *s);
 /* --spp override: stratified picks the most square xsamples*ysamples == spp. */
 void sampler_set_spp(sampler *s, int spp);
 
