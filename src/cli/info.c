@@ -315,16 +315,6 @@ static double param_num(const param_list *pl, const char *name, double def, bool
     return def;
 }
 
-static const char *param_str(const param_list *pl, const char *name, const char *def)
-{
-    for (size_t i = 0; i < pl->count; i++) {
-        const param *p = &pl->items[i];
-        if (!strcmp(p->name, name) && p->strs && p->count > 0)
-            return p->strs[0];
-    }
-    return def;
-}
-
 static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
 {
     scene_desc sd;
@@ -343,7 +333,7 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
     int xres = (int)param_num(&sd.film.params, "xresolution", 1280, &hx);
     int yres = (int)param_num(&sd.film.params, "yresolution", 720, &hy);
     fprintf(out, "  %-15s %s, %d x %d%s, \"%s\"\n", "film", sd.film.type, xres, yres,
-            hx || hy ? "" : " (default)", param_str(&sd.film.params, "filename", "pbrt.exr"));
+            hx || hy ? "" : " (default)", params_peek_string(&sd.film.params, "filename", "pbrt.exr"));
 
     int spp = (int)param_num(&sd.sampler.params, "pixelsamples", 16, &has);
     fprintf(out, "  %-15s %s, %d spp%s\n", "sampler", sd.sampler.type, spp, has ? "" : " (default)");
@@ -352,7 +342,7 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
     if (strcmp(sd.integrator.type, "singlescatter") == 0 || sd.integrator.loc.line == 0) {
         fprintf(out, "  %-15s %s, transmittance %s, step %g voxels, shadow step %g voxels\n",
                 "integrator", "singlescatter",
-                param_str(&sd.integrator.params, "transmittance", "jittered"),
+                params_peek_string(&sd.integrator.params, "transmittance", "jittered"),
                 param_num(&sd.integrator.params, "stepsize", 1.0, &has),
                 param_num(&sd.integrator.params, "shadowstepsize", 2.0, &has));
     } else {
@@ -396,12 +386,9 @@ static void print_escaped(FILE *out, const char *text, size_t size)
     for (size_t start = 0; start < size;) {
         const char *nl = memchr(text + start, '\n', size - start);
         size_t end = nl ? (size_t)(nl - text) : size;
-        for (size_t chunk = start; chunk < end || chunk == start; chunk += 4096) {
-            size_t n = end - chunk < 4096 ? end - chunk : 4096;
-            text_escape(text + chunk, n, line, sizeof line);
+        for (size_t chunk = start; chunk < end; chunk += 4096) {
+            text_escape(text + chunk, end - chunk < 4096 ? end - chunk : 4096, line, sizeof line);
             fputs(line, out);
-            if (n < 4096)
-                break;
         }
         if (nl)
             fputc('\n', out);

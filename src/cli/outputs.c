@@ -102,15 +102,16 @@ hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png
     size_t count;
     if (scene_input_files(sd, &inputs, &count, err) != HZ_OK)
         return HZ_ERROR;
+    /* Outputs that exist yet: only those can be an input. */
+    struct stat so[2];
+    bool exists[2] = {stat(out->exr, &so[0]) == 0, out->png[0] && stat(out->png, &so[1]) == 0};
     hz_status st = HZ_OK;
-    for (size_t i = 0; st == HZ_OK && i < count; ++i) {
-        struct stat si, so;
+    for (size_t i = 0; st == HZ_OK && i < count && (exists[0] || exists[1]); ++i) {
+        struct stat si;
         if (stat(inputs[i], &si) != 0)
             continue;
-        const char *outs[2] = {out->exr, out->png};
         for (int k = 0; k < 2 && st == HZ_OK; ++k)
-            if (outs[k][0] && stat(outs[k], &so) == 0 && so.st_dev == si.st_dev &&
-                so.st_ino == si.st_ino)
+            if (exists[k] && so[k].st_dev == si.st_dev && so[k].st_ino == si.st_ino)
                 st = hz_fail(err, "%s '%s' is '%s', which the render reads; refusing to replace it",
                              k == 0 ? "output" : "preview", k == 0 ? exr : png, inputs[i]);
     }

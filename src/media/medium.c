@@ -115,10 +115,11 @@ static hz_status load_velocity(medium_entity *e, const char *path, const motion_
     return HZ_OK;
 }
 
-/* Loads the grid and places it. Densities must be >= 0: the majorant-based
- * trackers treat sigma_t(p) / sigma_t_max as a probability, which a negative
- * density breaks (and pbrt-v4 has no meaning for it either), so grids with a
- * negative active value or background are refused rather than clamped. */
+/* Loads the grid and places it. Densities must be finite and >= 0: the
+ * majorant-based trackers treat sigma_t(p) / sigma_t_max as a probability,
+ * which a negative density breaks (and pbrt-v4 has no meaning for it either),
+ * so grid_check_density refuses such values (the voxels themselves, not the
+ * stored statistics) rather than clamping them. */
 static hz_status load_grid(medium_entity *e, transform render_from_world, const char *filename,
                            const char *gridname, const motion_params *mp, medium *out,
                            hz_error *err)
@@ -145,22 +146,15 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     }
     vec3 lo, hi;
     bool nonempty = grid_support_bounds(g, &lo, &hi);
+    /* grid_check_density refused non-finite and negative values (and
+     * background): only a non-zero background is left to refuse. */
     double background = grid_background(g);
-    double vmin = grid_min_value(g), vmax = grid_max_value(g);
-    if (!isfinite(background) || (nonempty && (!isfinite(vmin) || !isfinite(vmax))))
-        st = hz_fail_at(err, loc, "MakeNamedMedium \"%s\": grid \"%s\" in %s has non-finite values",
-                        name, gridname, path);
-    else if (background != 0.0)
+    if (background != 0.0)
         st = hz_fail_at(err, loc,
                         "MakeNamedMedium \"%s\": grid \"%s\" in %s has background %g; haze "
                         "needs a fog volume with background 0 (the medium would otherwise fill "
                         "all space)",
                         name, gridname, path, background);
-    else if (background < 0.0 || (nonempty && vmin < 0.0))
-        st = hz_fail_at(err, loc,
-                        "MakeNamedMedium \"%s\": grid \"%s\" in %s has negative densities "
-                        "(min %g, background %g); densities must be >= 0",
-                        name, gridname, path, nonempty ? vmin : background, background);
     if (st == HZ_OK)
         st = place_grid(e, render_from_world, g, mp, out, err);
     if (st != HZ_OK) {
@@ -178,7 +172,7 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
         out->grid.support_hi = v3(-1, -1, -1);
     }
     out->grid.background = background;
-    out->grid.density_max = fmax(nonempty ? fmax(vmax, background) : background, 0.0);
+    out->grid.density_max = nonempty ? grid_max_value(g) : 0.0; /* values >= 0 = background */
     if (mp->velocityname)
         st = load_velocity(e, path, mp, out, err);
     free(path);

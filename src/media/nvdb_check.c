@@ -299,8 +299,6 @@ static int upper_values(values *v, pnanovdb_upper_handle_t upper, float *lo, flo
 int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
                               char *why, size_t why_size)
 {
-    if (nvdb_check_tree(data, size, why, why_size) != 0)
-        return -1;
     values v = {{pnanovdb_make_buf((pnanovdb_uint32_t *)data, size / 4), size,
                  PNANOVDB_GRID_TYPE_FLOAT, why, why_size, 0, 0, 0, 0, 0, 0},
                 false, 0.0f, 0.0f};

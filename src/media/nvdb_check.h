@@ -24,7 +24,8 @@ extern "C" {
  * number of nodes the buffer can hold. */
 int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size);
 
-/* For a float density grid (after nvdb_check_tree): every active value
+/* For a float density grid whose buffer passed nvdb_check_tree (every grid
+ * buffer does, in grid_create_from_buffer; this does not walk it again): every active value
  * (voxels, tile values at every level) and the background are finite and
  * >= 0, and every node's stored min/max bound the values under it (the
  * majorant grid is built from those statistics). Fills the true range of the

@@ -102,8 +102,6 @@ void distributed_destroy(distributed *d)
 int distributed_rank(const distributed *d) { return d->rank; }
 int distributed_size(const distributed *d) { return d->size; }
 
-
-
 uint64_t distributed_fingerprint(uint64_t inputs_hash, const render_scene *rs)
 {
     uint64_t h = inputs_hash;

@@ -286,6 +286,12 @@ const double *params_point2s(param_list *pl, const char *name, size_t *n)
     return get_array(pl, name, PARAM_POINT2, 2, n);
 }
 
+const char *params_peek_string(const param_list *pl, const char *name, const char *def)
+{
+    const param *p = find(pl, name);
+    return p && p->type == PARAM_STRING && p->count > 0 ? p->strs[0] : def;
+}
+
 bool params_has(const param_list *pl, const char *name)
 {
     return find(pl, name) != NULL;

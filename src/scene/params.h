@@ -86,6 +86,9 @@ const double *params_ints(param_list *pl, const char *name, size_t *n);
 const double *params_point3s(param_list *pl, const char *name, size_t *n);
 const double *params_normals(param_list *pl, const char *name, size_t *n);
 const double *params_point2s(param_list *pl, const char *name, size_t *n);
+/* The first value of string parameter `name`, or `def`; does not mark it
+ * used (for readers outside the factory: haze info, the list of input files). */
+const char *params_peek_string(const param_list *pl, const char *name, const char *def);
 /* True when a parameter of this name is present (does not mark it used). */
 bool params_has(const param_list *pl, const char *name);
 /* The location of a parameter (its directive's location when absent), for

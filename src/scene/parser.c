@@ -115,8 +115,6 @@ hz_status parser_numbers(parser *ps, const token *directive, double *out, int n,
     return HZ_OK;
 }
 
-/* Reads a whole file; NUL bytes are kept (the lexer reports them). */
-
 /* The canonical name used for cycle detection; falls back to the name itself
  * for in-memory scenes whose name is not a file. */
 static char *canonical(const char *path)

@@ -10,16 +10,6 @@
 #include "core/path.h"
 #include "scene/scene_desc.h"
 
-static const char *string_param(const param_list *pl, const char *name)
-{
-    for (size_t i = 0; i < pl->count; ++i) {
-        const param *p = &pl->items[i];
-        if (p->type == PARAM_STRING && p->count == 1 && strcmp(p->name, name) == 0)
-            return p->strs[0];
-    }
-    return NULL;
-}
-
 static bool push(char ***list, size_t *n, size_t *cap, char *path)
 {
     if (!path)
@@ -43,7 +33,7 @@ static bool push_named(char ***list, size_t *n, size_t *cap, const scene_entity 
 {
     if (!e->type || strcmp(e->type, type) != 0)
         return true;
-    const char *name = string_param(&e->params, param_name);
+    const char *name = params_peek_string(&e->params, param_name, NULL);
     return !name || push(list, n, cap, path_relative_to(e->loc.file, name));
 }
 

@@ -51,15 +51,20 @@ static size_t grid_offset(const unsigned char *b, size_t n)
 static void put64(unsigned char *p, uint64_t v) { memcpy(p, &v, 8); }
 static void put32(unsigned char *p, uint32_t v) { memcpy(p, &v, 4); }
 
+static void write_bytes(const char *path, const unsigned char *bytes, size_t n)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bytes, 1, n, f), n);
+    fclose(f);
+}
+
 /* Loads `bytes`, builds its majorant and looks up a few points when it loads;
  * returns whether it loaded. */
 static bool try_load(const unsigned char *bytes, size_t n, char *message, size_t msize)
 {
     const char *path = HAZE_TMP "/hostile.nvdb";
-    FILE *f = fopen(path, "wb");
-    assert_non_null(f);
-    assert_int_equal(fwrite(bytes, 1, n, f), n);
-    fclose(f);
+    write_bytes(path, bytes, n);
     grid *g = NULL;
     hz_error err = {{0}};
     if (grid_load(path, "density", &g, &err) != HZ_OK) {
@@ -141,7 +146,10 @@ static void test_random_tree_bytes(void **state)
         else
             ++refused;
     }
-    assert_int_equal(loaded + refused, 150);
+    /* Both outcomes occur (105 and 45 with this seed): the check neither
+     * accepts every mutated tree nor refuses every change of a byte. The
+     * crash-freedom itself is what ASan checks. */
+    assert_true(loaded > 0 && refused > 0);
     free(b);
     free(orig);
 }
@@ -171,10 +179,7 @@ static void test_bad_values(void **state)
         put64(b + g + 8, ~(uint64_t)0);
         memcpy(b + first_value + 3 * 4, &cases[k].value, 4);
         const char *path = HAZE_TMP "/badvalue.nvdb";
-        FILE *f = fopen(path, "wb");
-        assert_non_null(f);
-        assert_int_equal(fwrite(b, 1, n, f), n);
-        fclose(f);
+        write_bytes(path, b, n);
         grid *gr = NULL;
         hz_error err = {{0}};
         assert_int_equal(grid_load(path, "density", &gr, &err), HZ_OK);
