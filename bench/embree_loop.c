@@ -20,8 +20,8 @@
 #include <string.h>
 #include <time.h>
 
-#include "render/geometry.h"
-#include "render/lights.h"
+#include "geometry/geometry.h"
+#include "lights/lights.h"
 #include "render/render_scene.h"
 #include "render/renderer.h"
 #include "sampler/sampler.h"

@@ -233,11 +233,12 @@ vec3 transform_normal(const transform *t, vec3 n)
               mi[0][2] * n.x + mi[1][2] * n.y + mi[2][2] * n.z);
 }
 
-bool transform_swaps_handedness(const transform *t)
+double transform_det3(const transform *t)
 {
     const double(*m)[4] = t->m.m;
-    double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                 m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                 m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    return det < 0.0;
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+           m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
 }
+
+bool transform_swaps_handedness(const transform *t) { return transform_det3(t) < 0.0; }

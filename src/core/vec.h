@@ -55,6 +55,9 @@ static inline rgb rgb_mul(rgb a, rgb b) { return (rgb){a.r * b.r, a.g * b.g, a.b
 static inline rgb rgb_scale(rgb a, double s) { return (rgb){a.r * s, a.g * s, a.b * s}; }
 static inline bool rgb_is_black(rgb a) { return a.r == 0.0 && a.g == 0.0 && a.b == 0.0; }
 static inline double rgb_max(rgb a) { return fmax(a.r, fmax(a.g, a.b)); }
+static inline double rgb_avg(rgb a) { return (a.r + a.g + a.b) / 3.0; }
+/* Channel i (0 r, 1 g, 2 b). */
+static inline double rgb_ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }
 /* Rec.709 luminance. */
 static inline double rgb_luminance(rgb a) { return 0.2126 * a.r + 0.7152 * a.g + 0.0722 * a.b; }
 

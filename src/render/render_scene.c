@@ -5,12 +5,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render/geometry.h"
-#include "render/integrator.h"
-#include "render/lights.h"
-#include "render/material.h"
-#include "render/volpath.h"
-#include "render/volume.h"
+#include "geometry/geometry.h"
+#include "lights/lights.h"
+#include "materials/material.h"
 
 struct render_scene {
     camera cam;
@@ -25,42 +22,11 @@ struct render_scene {
     size_t light_count;
     medium *media;
     size_t medium_count;
-    integrator_scene isc;
-    bool volpath;       /* Integrator "volpath" named in the scene */
-    volpath_scene vps;
+    integrator integ;
     scene_options options;
 };
 
 scene_options render_scene_options(const render_scene *rs) { return rs->options; }
-
-/* "volpath" (pbrt-v4's default) is the path tracer of render/volpath.h when
- * the scene names it; a scene with no Integrator directive (the default
- * entity sits at line 0) renders with "singlescatter", haze's default. */
-static hz_status integrator_check(scene_entity *e, FILE *warn, volume_settings *vs,
-                                  bool *volpath, volpath_settings *vp, hz_error *err)
-{
-    param_list *pl = &e->params;
-    const char *type = e->type ? e->type : "volpath";
-    *vs = volume_settings_default();
-    *volpath = false;
-    if (strcmp(type, "volpath") == 0 && e->loc.line == 0)
-        return params_finish(pl, "Integrator", err);
-    if (strcmp(type, "volpath") == 0) {
-        *volpath = true;
-        if (volpath_settings_from_entity(e, warn, vp, err) != HZ_OK)
-            return HZ_ERROR;
-        return params_finish(pl, "Integrator \"volpath\"", err);
-    }
-    if (strcmp(type, "singlescatter") == 0) {
-        if (volume_settings_from_entity(e, vs, err) != HZ_OK)
-            return HZ_ERROR;
-        return params_finish(pl, "Integrator \"singlescatter\"", err);
-    }
-    return hz_fail_at(err, e->loc,
-                      "Integrator \"%s\" is not supported (supported: \"volpath\", "
-                      "\"singlescatter\")",
-                      type);
-}
 
 static bool animated(const transform *start, const transform *end)
 {
@@ -235,9 +201,8 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
         return HZ_ERROR;
     /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
     film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
-    volume_settings vs;
-    volpath_settings vp;
-    if (integrator_check(&sd->integrator, warn, &vs, &rs->volpath, &vp, err) != HZ_OK)
+    integrator_params ip;
+    if (integrator_params_from_entity(&sd->integrator, warn, &ip, err) != HZ_OK)
         return HZ_ERROR;
 
     if (check_motion(sd, warn, err) != HZ_OK)
@@ -253,16 +218,8 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
         return HZ_ERROR;
     if (build_media(rs, sd, render_from_world, err) != HZ_OK)
         return HZ_ERROR;
-    bool stochastic = false;
-    for (size_t i = 0; i < rs->medium_count; ++i)
-        stochastic |= rs->media[i].kind == MEDIUM_GRID && vs.mode != TRANSMITTANCE_RAYMARCH;
-    rs->isc = (integrator_scene){rs->geom,  rs->lights,       rs->light_count,
-                                 rs->media, rs->medium_count, vs,
-                                 stochastic};
-    if (rs->volpath)
-        return volpath_scene_init(&rs->vps, rs->geom, rs->lights, rs->light_count, rs->media,
-                                  rs->medium_count, vp, err);
-    return HZ_OK;
+    integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media, rs->medium_count};
+    return integrator_init(&rs->integ, &ip, &in, err);
 }
 
 hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *warn,
@@ -284,8 +241,7 @@ void render_scene_destroy(render_scene *rs)
 {
     if (!rs)
         return;
-    if (rs->volpath)
-        volpath_scene_free(&rs->vps);
+    integrator_free(&rs->integ);
     for (size_t i = 0; i < rs->light_count; ++i)
         light_free(&rs->lights[i]);
     free(rs->lights);
@@ -346,9 +302,7 @@ render_memory render_scene_memory(const render_scene *rs)
 }
 
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
-                    double *depth, render_counters *counters)
+                    double *depth, integrator_counters *counters)
 {
-    if (rs->volpath)
-        return volpath_li(&rs->vps, &r->r, s, depth, counters);
-    return integrator_li(&rs->isc, &r->r, s, depth, counters);
+    return integrator_li(&rs->integ, &r->r, s, depth, counters);
 }

@@ -14,8 +14,9 @@
 #include "core/ray.h"
 #include "film/film.h"
 #include "film/filter.h"
-#include "render/geometry.h"
-#include "render/lights.h"
+#include "geometry/geometry.h"
+#include "integrator/integrator.h"
+#include "lights/lights.h"
 #include "sampler/sampler.h"
 #include "scene/scene_desc.h"
 
@@ -75,21 +76,9 @@ typedef struct {
 } render_memory;
 render_memory render_scene_memory(const render_scene *rs);
 
-/* Per-thread counters, summed by the renderer for the summary. */
-typedef struct {
-    uint64_t camera_rays, shadow_rays;
-    uint64_t density_lookups;
-    uint64_t majorant_steps;   /* majorant-grid cells entered by media walks */
-    uint64_t lost_paths;       /* rays dropped (black) after VOLUME_MAX_CROSSINGS interfaces */
-    /* With `timed` (haze render --stats), the nanoseconds spent in media walks
-     * (camera segments and shadow rays through media) and in the film. */
-    bool timed;
-    uint64_t media_ns, film_ns;
-} render_counters;
-
 /* Radiance arriving along the camera ray `r`. `depth` receives the distance to the
  * first surface hit (INFINITY when none). Thread-safe; allocates nothing. */
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
-                    double *depth, render_counters *counters);
+                    double *depth, integrator_counters *counters);
 
 #endif

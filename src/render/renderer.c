@@ -39,7 +39,7 @@ typedef struct {
     const volatile sig_atomic_t *cancel; /* NULL: never */
     atomic_int stop;
     camera_sample_needs needs;
-    render_counters *counters; /* one per thread */
+    integrator_counters *counters; /* one per thread */
     uint64_t *busy_ns;         /* one per thread */
 } render_job;
 
@@ -78,7 +78,7 @@ camera_sample renderer_camera_sample_needs(const filter *flt, sampler_state *st,
     return cs;
 }
 
-static void render_pixel(render_job *job, int px, int py, render_counters *counters)
+static void render_pixel(render_job *job, int px, int py, integrator_counters *counters)
 {
     const camera *cam = render_scene_camera(job->rs);
     const sampler *smp = render_scene_sampler(job->rs);
@@ -124,8 +124,8 @@ static void *worker_main(void *p)
     flush_denormals();
     /* Counted on this thread's stack, not in the shared array: neighbouring
      * threads' counters would share cache lines. */
-    render_counters local = job->counters[arg->index];
-    render_counters *counters = &local;
+    integrator_counters local = job->counters[arg->index];
+    integrator_counters *counters = &local;
     uint64_t start = hz_clock_ns();
     for (;;) {
         if (atomic_load_explicit(&job->stop, memory_order_relaxed))

@@ -115,7 +115,7 @@ static inline pstat pixel_stats_raw(const render_scene *rs, int px, int py, int 
         out.finite = false;
         return out;
     }
-    render_counters counters = {0};
+    integrator_counters counters = {0};
     double s[3] = {0, 0, 0}, s2[3] = {0, 0, 0};
     /* The scene's sampler with this sample count (sample indices must stay
      * below it). */

@@ -87,7 +87,7 @@ static inline pixel_eval eval_pixel(const render_scene *rs, double fx, double fy
         print_error("no camera ray at %g %g\n", fx, fy);
         fail();
     }
-    render_counters counters = {0};
+    integrator_counters counters = {0};
     rgb sum = rgb_grey(0.0);
     /* The scene's sampler with this sample count (indices stay below it). */
     sampler smp = *render_scene_sampler(rs);

@@ -5,7 +5,7 @@
  * pixel centres. Set HAZE_MEDIA_VERBOSE=1 to print the measured errors. */
 #include "media_test_util.h"
 
-#include "render/geometry.h" /* GEOMETRY_SHADOW_EPSILON */
+#include "geometry/geometry.h" /* GEOMETRY_SHADOW_EPSILON */
 
 /* ---- 1. Beer–Lambert, homogeneous ------------------------------------------ */
 

@@ -70,7 +70,7 @@ static rgb li(const render_scene *rs, const ray_differential *rd, int px, int py
     sampler_set_spp(&smp, spp);
     sampler_state st;
     sampler_start(&smp, px, py, i, &st);
-    render_counters counters = {0};
+    integrator_counters counters = {0};
     double depth;
     return render_scene_li(rs, rd, &st, &depth, &counters);
 }

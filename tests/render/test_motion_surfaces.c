@@ -12,7 +12,7 @@
 
 #include "core/animated_transform.h"
 #include "core/rng.h"
-#include "render/geometry.h"
+#include "geometry/geometry.h"
 #include "render/renderer.h"
 
 static bool verbose(void)
@@ -41,7 +41,7 @@ static pstat pixel_stat(const render_scene *rs, int px, int py, int spp)
     const filter *flt = render_scene_filter(rs);
     sampler smp = *render_scene_sampler(rs);
     sampler_set_spp(&smp, spp);
-    render_counters counters = {0};
+    integrator_counters counters = {0};
     double s = 0.0, s2 = 0.0;
     for (int i = 0; i < spp; ++i) {
         sampler_state st;

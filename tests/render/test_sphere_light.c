@@ -7,7 +7,7 @@
 
 #include <float.h>
 
-#include "render/lights.h"
+#include "lights/lights.h"
 
 #define RES 32
 

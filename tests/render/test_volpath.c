@@ -1,7 +1,7 @@
 /* Integrator "volpath": closed forms of multiple scattering (furnaces), the
  * selection of the integrator and its parameters. */
 #include "media_test_util.h"
-#include "render/volpath_media.h"
+#include "integrator/volpath_media.h"
 
 /* A sphere of medium (radius 1 at the origin) under a uniform sky, seen from
  * outside: with albedo 1 and no absorption anywhere, every path leaves with

@@ -3,7 +3,7 @@
  * unbounded (distant) lights and the tree; power and uniform samplers. */
 #include "media_test_util.h"
 #include "core/rng.h"
-#include "render/light_sampler.h"
+#include "lights/light_sampler.h"
 
 static const char *many_lights =
     "LookAt 0 1 -5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n"

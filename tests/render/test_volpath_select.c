@@ -140,7 +140,7 @@ static void test_no_media_no_media_code(void **state)
         "Shape \"trianglemesh\" \"point3 P\" [-3 -1 -3  3 -1 -3  3 -1 3  -3 -1 3] "
         "\"integer indices\" [0 1 2 0 2 3]\n");
     const camera *cam = render_scene_camera(rs);
-    render_counters c = {.timed = true};
+    integrator_counters c = {.timed = true};
     sampler smp = *render_scene_sampler(rs);
     rgb sum = rgb_grey(0.0);
     for (int i = 0; i < 64; ++i) {

@@ -1,4 +1,4 @@
-#include "render/light_bvh.h"
+#include "lights/light_bvh.h"
 
 #include <math.h>
 #include <stdlib.h>

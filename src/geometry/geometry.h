@@ -10,8 +10,8 @@
  * object space in a scene of its own, instanced with time steps. Shapes and
  * instances whose keyframes are equal are built exactly as without motion, and
  * a scene without motion has no time steps at all. */
-#ifndef HAZE_RENDER_GEOMETRY_H
-#define HAZE_RENDER_GEOMETRY_H
+#ifndef HAZE_GEOMETRY_GEOMETRY_H
+#define HAZE_GEOMETRY_GEOMETRY_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -20,7 +20,7 @@
 #include "core/animated_transform.h"
 #include "core/error.h"
 #include "core/transform.h"
-#include "render/material.h"
+#include "materials/material.h"
 #include "scene/scene_desc.h"
 #include "scene/shape.h"
 
@@ -107,6 +107,13 @@ geom_shape *geometry_shape(geometry *g, size_t i);
  * render_stats.lost_paths: haze warns): bounds the work of pathological nested
  * boundaries. */
 #define GEOMETRY_MAX_CROSSINGS 64
+
+/* Where the double-precision ray o + t w crosses the surface of hit `h` (found
+ * by Embree from o rounded to float, and h->t rounded to float): h->t moved
+ * along w onto the tangent plane at h->p, which lies on the surface. Media
+ * segments start and end there, so a medium denser than float rounding is
+ * bounded where its surface is. */
+double geometry_crossing_t(const geom_hit *h, vec3 o, vec3 w);
 
 /* Closest hit of o + t d for t in (tmin, tmax) at scene time `time` (the
  * ray's time, in TransformTimes units). Interface surfaces are hit

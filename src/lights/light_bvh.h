@@ -10,15 +10,15 @@
  *
  * haze's area lights are whole shapes (pbrt-v4 makes one light per triangle):
  * a mesh's bounds hold all its triangles, its normal cone all their normals. */
-#ifndef HAZE_RENDER_LIGHT_BVH_H
-#define HAZE_RENDER_LIGHT_BVH_H
+#ifndef HAZE_LIGHTS_LIGHT_BVH_H
+#define HAZE_LIGHTS_LIGHT_BVH_H
 
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
 #include "core/error.h"
-#include "render/lights.h"
+#include "lights/lights.h"
 
 typedef struct {
     vec3 lo, hi;        /* box (render space) */

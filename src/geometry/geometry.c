@@ -1,4 +1,4 @@
-#include "render/geometry.h"
+#include "geometry/geometry.h"
 
 #include "core/ray.h"
 
@@ -824,3 +824,12 @@ double geometry_step_past(const geom_hit *h, vec3 o, vec3 d)
     return fmax(t_hit + dt, nextafter(t_hit, INFINITY));
 }
 
+double geometry_crossing_t(const geom_hit *h, vec3 o, vec3 w)
+{
+    double dn = v3_dot(w, h->ng);
+    vec3 off = v3_sub(h->p, v3_add(o, v3_scale(w, h->t)));
+    double c = dn != 0.0 ? v3_dot(off, h->ng) / dn : 0.0;
+    /* A correction beyond float rounding (a ray grazing the surface) keeps h->t. */
+    double scale = fmax(fmax(fabs(h->p.x), fabs(h->p.y)), fmax(fabs(h->p.z), fabs(h->t)));
+    return fabs(c) <= 0x1p-12 * scale ? h->t + c : h->t;
+}

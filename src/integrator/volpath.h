@@ -15,8 +15,8 @@
  * sampler) for the media's tracking decisions: the image depends on the
  * scene and seed only, not on the thread count. A scene without media runs
  * no media code. Medium emission is refused by the medium factory. */
-#ifndef HAZE_RENDER_VOLPATH_H
-#define HAZE_RENDER_VOLPATH_H
+#ifndef HAZE_INTEGRATOR_VOLPATH_H
+#define HAZE_INTEGRATOR_VOLPATH_H
 
 #include <stdbool.h>
 #include <stdio.h>
@@ -24,10 +24,10 @@
 #include "core/error.h"
 #include "core/ray.h"
 #include "media/medium.h"
-#include "render/geometry.h"
-#include "render/light_sampler.h"
-#include "render/lights.h"
-#include "render/render_scene.h"
+#include "geometry/geometry.h"
+#include "lights/light_sampler.h"
+#include "lights/lights.h"
+#include "integrator/path.h"
 #include "sampler/sampler.h"
 #include "scene/scene_desc.h"
 
@@ -64,6 +64,6 @@ void volpath_scene_free(volpath_scene *sc);
  * distance to the first opaque surface on the camera ray before any scattering
  * (INFINITY when none). Thread-safe; allocates nothing. */
 rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double *depth,
-               render_counters *counters);
+               integrator_counters *counters);
 
 #endif

@@ -6,13 +6,13 @@
  * Conventions as pbrt-v4: wo and wi point away from the surface; f excludes
  * the cosine; pdfs are per solid angle. The diffuse BSDF reflects on the side
  * of wo relative to the shading normal (pbrt-v4's DiffuseBxDF, two-sided). */
-#ifndef HAZE_RENDER_BSDF_H
-#define HAZE_RENDER_BSDF_H
+#ifndef HAZE_MATERIALS_BSDF_H
+#define HAZE_MATERIALS_BSDF_H
 
 #include <stdbool.h>
 
 #include "core/vec.h"
-#include "render/material.h"
+#include "materials/material.h"
 
 typedef enum { BSDF_DIFFUSE } bsdf_kind;
 

@@ -7,14 +7,14 @@
  * Infinite lights are never chosen: volpath (like pbrt-v4, whose uniform
  * infinite light returns no sample when an incomplete pdf is allowed) finds
  * the sky by BSDF and phase-function sampling alone. */
-#ifndef HAZE_RENDER_LIGHT_SAMPLER_H
-#define HAZE_RENDER_LIGHT_SAMPLER_H
+#ifndef HAZE_LIGHTS_LIGHT_SAMPLER_H
+#define HAZE_LIGHTS_LIGHT_SAMPLER_H
 
 #include <stddef.h>
 
 #include "core/error.h"
-#include "render/light_bvh.h"
-#include "render/lights.h"
+#include "lights/light_bvh.h"
+#include "lights/lights.h"
 
 typedef enum { LIGHT_SAMPLER_UNIFORM, LIGHT_SAMPLER_POWER, LIGHT_SAMPLER_BVH } light_sampler_kind;
 

@@ -1,5 +1,5 @@
-/* Grid media: the estimators of render/volume.h over the medium's majorant
- * grid. A ray segment is mapped into the grid's index space once, then walked
+/* Grid media: the estimators of integrator/singlescatter_media.h over the
+ * medium's majorant grid. A ray segment is mapped into the grid's index space once, then walked
  * cell by cell (media/majorant.h); cells with no medium cost one DDA step and
  * no density lookup, whatever the estimator.
  *
@@ -18,7 +18,7 @@
  * rays take in-scattering samples on jittered strata with every estimator. */
 #include <math.h>
 
-#include "render/volume_internal.h"
+#include "integrator/singlescatter_internal.h"
 
 typedef struct {
     const medium *m;
@@ -42,13 +42,13 @@ static bool grid_ray_init(grid_ray *gr, majorant_walk *mw, const medium *m, vec3
     return true;
 }
 
-/* Counts density and velocity lookups alike (volume_walk.lookups). */
-static inline double grid_ray_density(grid_ray *gr, double t, volume_walk *walk)
+/* Counts density and velocity lookups alike (media_walk.lookups). */
+static inline double grid_ray_density(grid_ray *gr, double t, media_walk *walk)
 {
     return medium_density_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
 }
 
-static inline bool next_cell(majorant_walk *mw, majorant_segment *seg, volume_walk *walk)
+static inline bool next_cell(majorant_walk *mw, majorant_segment *seg, media_walk *walk)
 {
     if (!majorant_walk_next(mw, seg))
         return false;
@@ -86,8 +86,8 @@ static void strata_make(strata *s, const grid_ray *gr, double t0, double t1, dou
     double n = ceil((t1 - t0) * gr->voxels_per_t / step);
     if (!(n >= 1.0))
         n = 1.0;
-    if (n > VOLUME_MAX_STRATA)
-        n = VOLUME_MAX_STRATA;
+    if (n > SINGLESCATTER_MAX_STRATA)
+        n = SINGLESCATTER_MAX_STRATA;
     s->t0 = t0;
     s->n = (int)n;
     s->dt = (t1 - t0) / n;
@@ -126,7 +126,7 @@ typedef struct {
     bool march;   /* more collisions expected than max_collisions: march instead */
 } cell_rates;
 
-static cell_rates cell_rates_make(const volume_settings *set, transmittance_mode mode,
+static cell_rates cell_rates_make(const singlescatter_settings *set, transmittance_mode mode,
                                   const majorant_segment *seg, double sigma_max)
 {
     cell_rates c;
@@ -151,7 +151,7 @@ static inline double exp1(rng *r) { return -log1p(-rng_uniform(r)); }
 
 /* Jittered marching of the density integral over [a, b] (a cell that ratio
  * tracking would need too many collisions for). */
-static double march_tau(grid_ray *gr, double a, double b, double step, volume_walk *walk)
+static double march_tau(grid_ray *gr, double a, double b, double step, media_walk *walk)
 {
     strata s;
     strata_make(&s, gr, a, b, step, rng_uniform(&walk->r), &walk->r);
@@ -163,14 +163,14 @@ static double march_tau(grid_ray *gr, double a, double b, double step, volume_wa
 
 /* ---- transmittance (shadow rays) ---- */
 
-rgb volume_grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w, double t0,
-                              double t1, volume_walk *walk)
+rgb singlescatter_grid_transmittance(const singlescatter_scene *vs, const medium *m, vec3 o, vec3 w,
+                                     double t0, double t1, media_walk *walk)
 {
     grid_ray gr;
     majorant_walk mw;
     if (!grid_ray_init(&gr, &mw, m, o, w, walk->time, &t0, &t1))
         return rgb_grey(1.0);
-    const volume_settings *set = &vs->settings;
+    const singlescatter_settings *set = &vs->settings;
     rgb sigma_t = medium_sigma_t(m);
     majorant_segment seg;
     switch (set->shadow_mode) {
@@ -214,12 +214,12 @@ rgb volume_grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, v
                     }
                     pos += tau / c.mu;
                     T = collide(T, sigma_t, grid_ray_density(&gr, pos, walk) - c.lo, c.mu);
-                    if (!volume_roulette(&T, &walk->r))
+                    if (!singlescatter_roulette(&T, &walk->r))
                         return T;
                     tau = exp1(&walk->r);
                 }
             }
-            if (!volume_roulette(&T, &walk->r))
+            if (!singlescatter_roulette(&T, &walk->r))
                 return T;
         }
         return T;
@@ -231,7 +231,7 @@ rgb volume_grid_transmittance(const volume_scene *vs, const medium *m, vec3 o, v
 /* ---- camera-ray segments: transmittance and in-scattering ---- */
 
 typedef struct {
-    const volume_scene *vs;
+    const singlescatter_scene *vs;
     int mi;
     const medium *m;
     vec3 o, w, wo;
@@ -242,14 +242,14 @@ typedef struct {
     rgb T, Lseg;
     double tau; /* optical distance left to the next tentative collision */
     sampler_state *u;
-    volume_walk *walk;
+    media_walk *walk;
 } segment_walk;
 
 /* Light scattered toward the camera at the current stratum's sample. */
 static inline rgb inscattered_at(segment_walk *sw, double t)
 {
-    return volume_inscattered(sw->vs, sw->mi, v3_add(sw->o, v3_scale(sw->w, t)), sw->wo, sw->u,
-                              sw->walk);
+    return singlescatter_inscattered(sw->vs, sw->mi, v3_add(sw->o, v3_scale(sw->w, t)), sw->wo,
+                                     sw->u, sw->walk);
 }
 
 /* Marching over the strata whose samples lie in [.., b): piecewise-constant
@@ -274,7 +274,7 @@ static bool march_strata(segment_walk *sw, double b)
             sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, frac), inscattered_at(sw, s->t)));
         }
         sw->T = rgb_mul(sw->T, step_t);
-        if (!volume_roulette(&sw->T, &sw->walk->r)) {
+        if (!singlescatter_roulette(&sw->T, &sw->walk->r)) {
             strata_next(s);
             return false;
         }
@@ -303,7 +303,7 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
             pos = tc;
             double d = grid_ray_density(&sw->gr, tc, sw->walk) - c.lo;
             sw->T = collide(sw->T, sw->sigma_t, d, c.mu);
-            if (!volume_roulette(&sw->T, r))
+            if (!singlescatter_roulette(&sw->T, r))
                 return false;
             sw->tau = exp1(r);
         }
@@ -311,7 +311,7 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
             sw->tau = fmax(sw->tau - c.mu * (x - pos), 0.0);
             if (c.lo > 0.0) {
                 sw->T = rgb_mul(sw->T, rgb_exp_neg(control, x - pos));
-                if (!volume_roulette(&sw->T, r))
+                if (!singlescatter_roulette(&sw->T, r))
                     return false;
             }
             pos = x;
@@ -329,8 +329,8 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
     }
 }
 
-void volume_grid_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double t0, double t1,
-                         rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
+void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, vec3 w, double t0,
+                                double t1, rgb *beta, rgb *L, sampler_state *u, media_walk *walk)
 {
     segment_walk sw = {.vs = vs, .mi = mi, .m = &vs->media[mi], .o = o, .w = w,
                        .wo = v3_neg(w), .T = *beta, .Lseg = rgb_grey(0.0), .u = u,
@@ -340,7 +340,7 @@ void volume_grid_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double 
         return;
     sw.sigma_t = medium_sigma_t(sw.m);
     sw.scatters = !rgb_is_black(sw.m->sigma_s);
-    const volume_settings *set = &vs->settings;
+    const singlescatter_settings *set = &vs->settings;
     transmittance_mode mode = set->mode;
     bool marching = mode == TRANSMITTANCE_RAYMARCH || mode == TRANSMITTANCE_JITTERED;
     double offset = mode == TRANSMITTANCE_JITTERED ? sampler_1d(u)

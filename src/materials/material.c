@@ -1,4 +1,4 @@
-#include "render/material.h"
+#include "materials/material.h"
 
 #include <stdio.h>
 #include <string.h>

@@ -1,4 +1,4 @@
-#include "render/light_sampler.h"
+#include "lights/light_sampler.h"
 
 #include <math.h>
 #include <stdlib.h>

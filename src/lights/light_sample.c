@@ -1,13 +1,13 @@
-#include "render/lights.h"
-
-#include "core/ray.h"
-#include "core/sampling.h"
+/* Light sampling: a point or direction toward a light from a receiving
+ * point, with its density, and that density for a given point on the light
+ * (light_sample_li, light_pdf_li). */
+#include "lights/lights.h"
 
 #include <float.h>
 #include <math.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
+
+#include "core/ray.h"
+#include "core/sampling.h"
 
 /* Cosine-weighted direction around unit `n`. */
 static vec3 cosine_around(vec3 n, vec2 u, double *cos_theta)
@@ -26,242 +26,6 @@ static double smooth_step(double x, double a, double b)
         return x < a ? 0.0 : 1.0;
     double t = hz_clamp((x - a) / (b - a), 0.0, 1.0);
     return t * t * (3.0 - 2.0 * t);
-}
-
-/* ---- factories ---- */
-
-/* pbrt-v4 `power` for point and spot lights: scale *= power / k_e, where k_e
- * is the power of a unit-intensity light (4π for a point light). pbrt-v4
- * first divides scale by SpectrumToPhotometric(I), which for an RGB
- * illuminant looks only at the colour space's illuminant and ignores the RGB
- * value; so in RGB terms I_final = I_rgb * scale * power / k_e (the RGB value
- * is not normalised to unit luminance). */
-static rgb apply_power(rgb I, double scale, double power, double k_e)
-{
-    if (power > 0.0)
-        scale *= power / k_e;
-    return rgb_scale(I, scale);
-}
-
-static hz_status refuse(param_list *pl, const char *name, const char *why, hz_error *err)
-{
-    if (!params_has(pl, name))
-        return HZ_OK;
-    return hz_fail_at(err, params_loc(pl, name), "%s", why);
-}
-
-hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
-                            hz_error *err)
-{
-    memset(out, 0, sizeof *out);
-    param_list *pl = &e->entity.params;
-    const char *type = e->entity.type ? e->entity.type : "";
-    transform render_from_light = transform_compose(render_from_world, e->world_from_light);
-
-    if (strcmp(type, "point") == 0) {
-        rgb I = params_rgb(pl, "I", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        double power = params_float(pl, "power", -1.0);
-        vec3 from = params_point3(pl, "from", v3(0, 0, 0));
-        out->kind = LIGHT_POINT;
-        out->emit = apply_power(I, scale, power, 4.0 * HZ_PI);
-        out->point.p = transform_point(&render_from_light, from);
-    } else if (strcmp(type, "spot") == 0) {
-        rgb I = params_rgb(pl, "I", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        double power = params_float(pl, "power", -1.0);
-        double cone = params_float(pl, "coneangle", 30.0);
-        double delta = params_float(pl, "conedeltaangle", 5.0);
-        vec3 from = params_point3(pl, "from", v3(0, 0, 0));
-        vec3 to = params_point3(pl, "to", v3(0, 0, 1));
-        if (v3_length(v3_sub(to, from)) == 0.0)
-            params_reject(pl, "to", "spot light \"from\" and \"to\" coincide");
-        if (delta < 0.0 || delta > cone)
-            params_reject(pl, "conedeltaangle", "must be within [0, coneangle]");
-        out->kind = LIGHT_SPOT;
-        out->spot.cos_falloff_end = cos(hz_radians(cone));
-        out->spot.cos_falloff_start = cos(hz_radians(cone - delta));
-        double k_e = 2.0 * HZ_PI *
-                     ((1.0 - out->spot.cos_falloff_start) +
-                      (out->spot.cos_falloff_start - out->spot.cos_falloff_end) / 2.0);
-        out->emit = apply_power(I, scale, power, k_e);
-        /* pbrt-v4: renderFromLight * Translate(from) * Inverse(Frame::FromZ(dir)). */
-        vec3 z = v3_sub(to, from);
-        z = v3_length(z) > 0.0 ? v3_normalize(z) : v3(0, 0, 1);
-        vec3 x, y;
-        v3_basis(z, &x, &y);
-        mat4 world_from_frame = mat4_identity();
-        vec3 cols[3] = {x, y, z};
-        for (int c = 0; c < 3; ++c) {
-            world_from_frame.m[0][c] = cols[c].x;
-            world_from_frame.m[1][c] = cols[c].y;
-            world_from_frame.m[2][c] = cols[c].z;
-        }
-        transform frame = {world_from_frame, mat4_transpose(world_from_frame)};
-        transform final = transform_compose(render_from_light,
-                                            transform_compose(transform_translate(from), frame));
-        out->spot.p = transform_point(&final, v3(0, 0, 0));
-        out->spot.light_from_render = transform_inverse(final);
-    } else if (strcmp(type, "distant") == 0) {
-        rgb L = params_rgb(pl, "L", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        vec3 from = params_point3(pl, "from", v3(0, 0, 0));
-        vec3 to = params_point3(pl, "to", v3(0, 0, 1));
-        /* pbrt-v4's distant light takes "illuminance" (not "power"): the
-         * illuminance on a patch facing the light, so L *= E_v. */
-        double illum = params_float(pl, "illuminance", -1.0);
-        if (v3_length(v3_sub(from, to)) == 0.0)
-            params_reject(pl, "to", "distant light \"from\" and \"to\" coincide");
-        if (illum > 0.0)
-            scale *= illum;
-        out->kind = LIGHT_DISTANT;
-        out->emit = rgb_scale(L, scale);
-        vec3 w = transform_vector(&render_from_light, v3_sub(from, to));
-        out->distant.w = v3_length(w) > 0.0 ? v3_normalize(w) : v3(0, 0, 1);
-    } else if (strcmp(type, "infinite") == 0) {
-        if (refuse(pl, "filename",
-                   "image-based infinite lights (\"filename\") are not supported yet; use "
-                   "\"rgb L\"",
-                   err) != HZ_OK ||
-            refuse(pl, "portal", "infinite light \"portal\" is not supported", err) != HZ_OK)
-            return HZ_ERROR;
-        rgb L = params_rgb(pl, "L", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        /* pbrt-v4: illuminance of a uniform sky on an upward patch is π L. */
-        double illum = params_float(pl, "illuminance", -1.0);
-        if (illum > 0.0)
-            scale *= illum / HZ_PI;
-        out->kind = LIGHT_INFINITE;
-        out->emit = rgb_scale(L, scale);
-    } else {
-        return hz_fail_at(err, e->entity.loc,
-                          "LightSource \"%s\" is not supported (supported: \"point\", \"spot\", "
-                          "\"distant\", \"infinite\")",
-                          type);
-    }
-    vec3 p = out->kind == LIGHT_POINT ? out->point.p : out->kind == LIGHT_SPOT ? out->spot.p : v3(0, 0, 0);
-    if (!point_within(p, HZ_MAX_COORD))
-        params_reject(pl, "from",
-                      "light position (%g, %g, %g) in render space is beyond +-%g, where haze "
-                      "cannot trace rays",
-                      p.x, p.y, p.z, HZ_MAX_COORD);
-    char what[128];
-    snprintf(what, sizeof what, "LightSource \"%s\"", type);
-    return params_finish(pl, what, err);
-}
-
-static double triangle_area(const geom_shape *s, size_t t)
-{
-    const uint32_t *i = &s->indices[3 * t];
-    vec3 p0 = v3(s->p[3 * i[0]], s->p[3 * i[0] + 1], s->p[3 * i[0] + 2]);
-    vec3 p1 = v3(s->p[3 * i[1]], s->p[3 * i[1] + 1], s->p[3 * i[1] + 2]);
-    vec3 p2 = v3(s->p[3 * i[2]], s->p[3 * i[2] + 1], s->p[3 * i[2] + 2]);
-    return 0.5 * v3_length(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
-}
-
-hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                 hz_error *err)
-{
-    memset(out, 0, sizeof *out);
-    param_list *pl = &e->params;
-    const char *type = e->type ? e->type : "";
-    if (strcmp(type, "diffuse") != 0)
-        return hz_fail_at(err, e->loc,
-                          "AreaLightSource \"%s\" is not supported (supported: \"diffuse\")",
-                          type);
-    if (refuse(pl, "filename", "image area lights (\"filename\") are not supported yet",
-               err) != HZ_OK ||
-        refuse(pl, "power",
-               "\"power\" on area lights is not supported yet (pbrt-v4 applies it per "
-               "triangle); use \"rgb L\" and \"scale\"",
-               err) != HZ_OK)
-        return HZ_ERROR;
-    rgb L = params_rgb(pl, "L", rgb_grey(1.0));
-    double scale = params_float(pl, "scale", 1.0);
-    out->kind = LIGHT_AREA;
-    out->emit = rgb_scale(L, scale);
-    out->area.two_sided = params_bool(pl, "twosided", false);
-    out->area.shape = shape;
-    if (params_finish(pl, "AreaLightSource \"diffuse\"", err) != HZ_OK)
-        return HZ_ERROR;
-
-    if (shape->kind == GEOMETRY_SPHERE) {
-        out->area.area = 0.0; /* see sample_sphere_cone and sample_sphere */
-        if (shape->motion)
-            return HZ_OK; /* decided at each sample's time (sample_moving_area) */
-        double scale = light_uniform_scale(&shape->space_from_object);
-        double radius = scale * shape->radius;
-        if (scale > 0.0 && radius > 0.0 && isfinite(radius)) {
-            out->area.sphere_cone = true;
-            out->area.sphere_center = transform_point(&shape->space_from_object, v3(0, 0, 0));
-            out->area.sphere_radius = radius;
-        }
-        return HZ_OK;
-    }
-    if (shape->triangle_count == 0)
-        return HZ_OK;
-    out->area.cdf = malloc(shape->triangle_count * sizeof(double));
-    if (!out->area.cdf)
-        return hz_fail(err, "out of memory");
-    double sum = 0.0;
-    for (size_t t = 0; t < shape->triangle_count; ++t) {
-        sum += triangle_area(shape, t);
-        out->area.cdf[t] = sum;
-    }
-    out->area.area = sum;
-    for (size_t t = 0; t < shape->triangle_count; ++t)
-        out->area.cdf[t] = sum > 0.0 ? out->area.cdf[t] / sum
-                                     : (double)(t + 1) / (double)shape->triangle_count;
-    return HZ_OK;
-}
-
-double light_uniform_scale(const transform *t)
-{
-    const double(*m)[4] = t->m.m;
-    /* Affine only: compositions of affine transforms keep this row exact. */
-    if (m[3][0] != 0.0 || m[3][1] != 0.0 || m[3][2] != 0.0 || m[3][3] != 1.0)
-        return 0.0;
-    double g[3][3]; /* Gram matrix of the columns: AᵀA = s² I for A = s Q */
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            g[i][j] = m[0][i] * m[0][j] + m[1][i] * m[1][j] + m[2][i] * m[2][j];
-    double s2 = (g[0][0] + g[1][1] + g[2][2]) / 3.0;
-    if (!(s2 > 0.0) || !isfinite(s2))
-        return 0.0;
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-            if (!(fabs(g[i][j] - (i == j ? s2 : 0.0)) <= LIGHT_UNIFORM_SCALE_TOL * s2))
-                return 0.0;
-    return sqrt(s2);
-}
-
-void light_free(light *l)
-{
-    if (l && l->kind == LIGHT_AREA) {
-        free(l->area.cdf);
-        l->area.cdf = NULL;
-    }
-}
-
-bool light_is_delta(const light *l)
-{
-    switch (l->kind) {
-    case LIGHT_POINT:
-    case LIGHT_SPOT:
-    case LIGHT_DISTANT:
-        return true;
-    case LIGHT_INFINITE:
-    case LIGHT_AREA:
-        return false;
-    }
-    return false;
-}
-
-rgb light_area_le(const light *l, vec3 n, vec3 w)
-{
-    if (!l->area.two_sided && v3_dot(n, w) <= 0.0)
-        return rgb_grey(0.0);
-    return l->emit;
 }
 
 /* A point on the mesh, chosen proportionally to area; pdf per unit area (in
@@ -291,15 +55,6 @@ static bool sample_triangles(const light *l, vec2 u, vec3 *p, vec3 *n, double *p
     return true;
 }
 
-/* |det| of the 3x3 part of t. */
-static double abs_det3(const transform *t)
-{
-    const double(*m)[4] = t->m.m;
-    return fabs(m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]));
-}
-
 /* Uniform by area in object space, with the exact area change of the
  * transform `render_from_object`, so non-uniform scales stay unbiased. */
 static bool sample_sphere(const light *l, const transform *render_from_object, vec2 u, vec3 *p,
@@ -310,7 +65,8 @@ static bool sample_sphere(const light *l, const transform *render_from_object, v
     vec3 po = v3_scale(n_obj, s->radius);
     *p = transform_point(render_from_object, po);
     vec3 nt = transform_normal(render_from_object, n_obj);
-    double jacobian = abs_det3(render_from_object) * v3_length(nt); /* dA_render / dA_object */
+    double jacobian =
+        fabs(transform_det3(render_from_object)) * v3_length(nt); /* dA_render / dA_object */
     if (jacobian == 0.0)
         return false;
     *pdf_area = 1.0 / (4.0 * HZ_PI * s->radius * s->radius * jacobian);
@@ -320,10 +76,10 @@ static bool sample_sphere(const light *l, const transform *render_from_object, v
 }
 
 /* pbrt-v4's Sphere::Sample(ctx, u): uniform over the cone of directions from
- * `p` that the sphere (centre c, radius r, render space) subtends, pdf 1 / (2π (1 − cosθmax)) per solid angle,
- * with the point found through the angle α at the centre rather than by
- * intersecting a ray. Returns false when `p` is inside the sphere (or on it,
- * up to rounding), which the caller samples by area, as pbrt-v4 does.
+ * `p` that the sphere (centre c, radius r, render space) subtends, pdf 1 / (2π (1 − cosθmax)) per
+ * solid angle, with the point found through the angle α at the centre rather than by intersecting a
+ * ray. Returns false when `p` is inside the sphere (or on it, up to rounding), which the caller
+ * samples by area, as pbrt-v4 does.
  *
  * pbrt-v4 computes cosθ = 1 − u (1 − cosθmax) and sin²θ = 1 − cos²θ, which
  * cancel catastrophically for small cones, and switches to the Taylor
@@ -480,7 +236,7 @@ static bool sample_moving_area(const light *l, vec3 p, double time, vec2 u, ligh
     /* Per object-space area so far; dA_render = |det A| |A^-T n| dA_object
      * for the unit normal n (the triangle's area changes with a scale). */
     vec3 nt = transform_normal(&render_from_object, nl);
-    double jacobian = abs_det3(&render_from_object) * v3_length(nt);
+    double jacobian = fabs(transform_det3(&render_from_object)) * v3_length(nt);
     if (!(jacobian > 0.0) || !isfinite(jacobian))
         return false;
     return area_sample_area(l, p, transform_point(&render_from_object, pl), v3_normalize(nt),
@@ -572,7 +328,8 @@ static double area_density_render(const transform *render_from_object, vec3 nr, 
 {
     transform object_from_render = transform_inverse(*render_from_object);
     vec3 no = v3_normalize(transform_normal(&object_from_render, nr));
-    double jacobian = abs_det3(render_from_object) * v3_length(transform_normal(render_from_object, no));
+    double jacobian = fabs(transform_det3(render_from_object)) *
+                      v3_length(transform_normal(render_from_object, no));
     return jacobian > 0.0 && isfinite(jacobian) ? pdf_obj / jacobian : 0.0;
 }
 
@@ -614,36 +371,4 @@ double light_pdf_li(const light *l, vec3 p, double time, vec3 pl, vec3 nl)
         }
     }
     return cos_l > 0.0 ? pdf_area * d2 / cos_l : 0.0;
-}
-
-rgb light_phi(const light *l, double scene_radius)
-{
-    switch (l->kind) {
-    case LIGHT_POINT:
-        return rgb_scale(l->emit, 4.0 * HZ_PI);
-    case LIGHT_SPOT:
-        return rgb_scale(l->emit, 2.0 * HZ_PI *
-                                      (1.0 - 0.5 * (l->spot.cos_falloff_start +
-                                                    l->spot.cos_falloff_end)));
-    case LIGHT_DISTANT:
-        return rgb_scale(l->emit, HZ_PI * scene_radius * scene_radius);
-    case LIGHT_INFINITE:
-        return rgb_scale(l->emit, 4.0 * HZ_PI * HZ_PI * scene_radius * scene_radius);
-    case LIGHT_AREA: {
-        const geom_shape *s = l->area.shape;
-        double area = l->area.area;
-        if (s->kind == GEOMETRY_SPHERE) {
-            transform render_from_object =
-                s->motion ? geom_motion_at(s->motion, s->motion->start_time) : s->space_from_object;
-            double scale = light_uniform_scale(&render_from_object);
-            /* A sphere under a non-uniform scale: its area is not needed
-             * exactly to choose among lights; the mean axis scale will do. */
-            if (!(scale > 0.0))
-                scale = cbrt(abs_det3(&render_from_object));
-            area = 4.0 * HZ_PI * s->radius * s->radius * scale * scale;
-        }
-        return rgb_scale(l->emit, (l->area.two_sided ? 2.0 : 1.0) * HZ_PI * area);
-    }
-    }
-    return rgb_grey(0.0);
 }

@@ -6,14 +6,14 @@
  * walk their majorant grid (media/majorant.h) with sigma_maj = sigma_t times
  * each cell's density bound, so empty cells cost no lookup and no random
  * number. Random numbers come from the walk's rng (thread-count independent). */
-#ifndef HAZE_RENDER_VOLPATH_MEDIA_H
-#define HAZE_RENDER_VOLPATH_MEDIA_H
+#ifndef HAZE_INTEGRATOR_VOLPATH_MEDIA_H
+#define HAZE_INTEGRATOR_VOLPATH_MEDIA_H
 
 #include <stdbool.h>
 
 #include "core/vec.h"
 #include "media/medium.h"
-#include "render/volume.h"
+#include "integrator/path.h"
 
 /* One tentative collision at distance t: the coefficients there, the
  * majorant, and the majorant transmittance since the previous collision (or
@@ -39,9 +39,6 @@ typedef bool (*volpath_event_fn)(void *ctx, const volpath_event *ev);
  * walk, or (0, 0, 0) past VOLPATH_MAX_COLLISIONS. `hero` in 0..2 is the
  * channel whose majorant sets the rate. */
 rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero,
-                  volume_walk *walk, volpath_event_fn fn, void *ctx);
-
-static inline double rgb_ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }
-static inline double rgb_avg(rgb c) { return (c.r + c.g + c.b) / 3.0; }
+                  media_walk *walk, volpath_event_fn fn, void *ctx);
 
 #endif

@@ -1,6 +1,6 @@
 /* Surface materials: a closed set (diffuse, interface). */
-#ifndef HAZE_RENDER_MATERIAL_H
-#define HAZE_RENDER_MATERIAL_H
+#ifndef HAZE_MATERIALS_MATERIAL_H
+#define HAZE_MATERIALS_MATERIAL_H
 
 #include "core/error.h"
 #include "core/vec.h"

@@ -1,4 +1,4 @@
-#include "render/volpath_media.h"
+#include "integrator/volpath_media.h"
 
 #include <math.h>
 
@@ -22,7 +22,7 @@ typedef struct {
 typedef struct {
     density_source src;
     int hero;
-    volume_walk *walk;
+    media_walk *walk;
     volpath_event_fn fn;
     void *ctx;
     rgb T_maj;
@@ -64,7 +64,7 @@ static bool track_span(tracker *tr, double a, double b, double bound)
 }
 
 rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero,
-                  volume_walk *walk, volpath_event_fn fn, void *ctx)
+                  media_walk *walk, volpath_event_fn fn, void *ctx)
 {
     if (!(t1 > t0))
         return rgb_grey(1.0);

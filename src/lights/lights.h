@@ -3,15 +3,15 @@
  * channel, `rgb L [1 1 1]` radiance 1 (pbrt-v4's photometric normalisation of
  * an RGB illuminant divides by the colour space illuminant only, which is
  * exactly what turns its spectra back into these RGB values). */
-#ifndef HAZE_RENDER_LIGHTS_H
-#define HAZE_RENDER_LIGHTS_H
+#ifndef HAZE_LIGHTS_LIGHTS_H
+#define HAZE_LIGHTS_LIGHTS_H
 
 #include <stdbool.h>
 #include <stdio.h>
 
 #include "core/error.h"
 #include "core/transform.h"
-#include "render/geometry.h"
+#include "geometry/geometry.h"
 #include "scene/scene_desc.h"
 
 typedef enum { LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_INFINITE, LIGHT_AREA } light_kind;

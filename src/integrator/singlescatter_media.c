@@ -1,4 +1,4 @@
-#include "render/volume_internal.h"
+#include "integrator/singlescatter_internal.h"
 
 #include <math.h>
 #include <string.h>
@@ -6,74 +6,14 @@
 #include "core/ray.h"
 #include "media/phase.h"
 
-volume_settings volume_settings_default(void)
-{
-    /* jittered: 8x lower RMSE than ratio tracking at equal time on
-     * scenes/smoke.pbrt (docs/media.md), with a bias below the noise. */
-    return (volume_settings){TRANSMITTANCE_JITTERED, TRANSMITTANCE_JITTERED, 1.0, 2.0, 65536.0,
-                             1};
-}
-
-static bool parse_mode(const char *name, transmittance_mode *out)
-{
-    static const struct {
-        const char *name;
-        transmittance_mode mode;
-    } modes[] = {{"raymarch", TRANSMITTANCE_RAYMARCH},
-                 {"jittered", TRANSMITTANCE_JITTERED},
-                 {"ratio", TRANSMITTANCE_RATIO},
-                 {"residual", TRANSMITTANCE_RESIDUAL}};
-    for (size_t i = 0; i < sizeof modes / sizeof modes[0]; ++i)
-        if (strcmp(name, modes[i].name) == 0) {
-            *out = modes[i].mode;
-            return true;
-        }
-    return false;
-}
-
-hz_status volume_settings_from_entity(scene_entity *e, volume_settings *out, hz_error *err)
-{
-    (void)err;
-    *out = volume_settings_default();
-    param_list *pl = &e->params;
-    out->step = params_float(pl, "stepsize", out->step);
-    out->shadow_step = params_float(pl, "shadowstepsize", out->shadow_step);
-    out->light_samples = params_int(pl, "lightsamples", out->light_samples);
-    out->max_collisions = params_float(pl, "maxcollisions", out->max_collisions);
-    if (!(out->max_collisions >= 0.0))
-        params_reject(pl, "maxcollisions",
-                      "\"maxcollisions\" must be >= 0 (0: ratio tracking never falls back)");
-    const char *mode = params_string(pl, "transmittance", "jittered");
-    if (!(out->step > 0.0 && isfinite(out->step)))
-        params_reject(pl, "stepsize", "\"stepsize\" must be a positive number of voxels");
-    if (!(out->shadow_step > 0.0 && isfinite(out->shadow_step)))
-        params_reject(pl, "shadowstepsize",
-                      "\"shadowstepsize\" must be a positive number of voxels");
-    if (out->light_samples < 1 || out->light_samples > 4096)
-        params_reject(pl, "lightsamples", "\"lightsamples\" must be in [1, 4096]");
-    if (!parse_mode(mode, &out->mode))
-        params_reject(pl, "transmittance",
-                      "\"transmittance\" \"%s\" is not one of \"raymarch\", \"jittered\", "
-                      "\"ratio\", \"residual\"",
-                      mode);
-    out->shadow_mode = out->mode;
-    const char *shadow = params_string(pl, "shadowtransmittance", NULL);
-    if (shadow && !parse_mode(shadow, &out->shadow_mode))
-        params_reject(pl, "shadowtransmittance",
-                      "\"shadowtransmittance\" \"%s\" is not one of \"raymarch\", "
-                      "\"jittered\", \"ratio\", \"residual\"",
-                      shadow);
-    return HZ_OK;
-}
-
 /* ---- per-channel helpers ---- */
 
-bool volume_roulette(rgb *beta, rng *r)
+bool singlescatter_roulette(rgb *beta, rng *r)
 {
     double m = rgb_max(*beta);
-    if (m >= VOLUME_RR_THRESHOLD)
+    if (m >= SINGLESCATTER_RR_THRESHOLD)
         return true;
-    double q = m / VOLUME_RR_THRESHOLD;
+    double q = m / SINGLESCATTER_RR_THRESHOLD;
     if (q > 0.0 && rng_uniform(r) < q) {
         *beta = rgb_scale(*beta, 1.0 / q);
         return true;
@@ -82,26 +22,16 @@ bool volume_roulette(rgb *beta, rng *r)
     return false;
 }
 
-static rgb segment_transmittance(const volume_scene *vs, const medium *m, vec3 o, vec3 w,
-                                 double t0, double t1, volume_walk *walk)
+static rgb segment_transmittance(const singlescatter_scene *vs, const medium *m, vec3 o, vec3 w,
+                                 double t0, double t1, media_walk *walk)
 {
     switch (m->kind) {
     case MEDIUM_HOMOGENEOUS:
         return rgb_exp_neg(medium_sigma_t(m), t1 - t0);
     case MEDIUM_GRID:
-        return volume_grid_transmittance(vs, m, o, w, t0, t1, walk);
+        return singlescatter_grid_transmittance(vs, m, o, w, t0, t1, walk);
     }
     return rgb_grey(1.0);
-}
-
-double volume_crossing_t(const geom_hit *h, vec3 o, vec3 w)
-{
-    double dn = v3_dot(w, h->ng);
-    vec3 off = v3_sub(h->p, v3_add(o, v3_scale(w, h->t)));
-    double c = dn != 0.0 ? v3_dot(off, h->ng) / dn : 0.0;
-    /* A correction beyond float rounding (a ray grazing the surface) keeps h->t. */
-    double scale = fmax(fmax(fabs(h->p.x), fabs(h->p.y)), fmax(fabs(h->p.z), fabs(h->t)));
-    return fabs(c) <= 0x1p-12 * scale ? h->t + c : h->t;
 }
 
 /* Transmittance of the media along o + t w over [t_fill, tmax]; surfaces are
@@ -110,8 +40,8 @@ double volume_crossing_t(const geom_hit *h, vec3 o, vec3 w)
  * interfaces there still switch the medium (with no medium between them), so
  * that the walk leaves through a boundary that float rounding put just behind
  * the point. With t_fill = 0 this is the plain walk from o. */
-static rgb shadow_walk(const volume_scene *vs, vec3 o, vec3 w, double tmin, double t_fill,
-                       double tmax, int medium, volume_walk *walk)
+static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmin, double t_fill,
+                       double tmax, int medium, media_walk *walk)
 {
     walk->shadow_rays++;
     rgb T = rgb_grey(1.0);
@@ -124,14 +54,14 @@ static rgb shadow_walk(const volume_scene *vs, vec3 o, vec3 w, double tmin, doub
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
             if (h.t >= t_fill)
                 return rgb_grey(0.0);
-            if (crossing == VOLUME_MAX_CROSSINGS) {
+            if (crossing == GEOMETRY_MAX_CROSSINGS) {
                 walk->lost++;
                 return rgb_grey(0.0);
             }
             tmin = geometry_step_past(&h, o, w);
             continue;
         }
-        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start)
+        double t_end = hit ? fmax(geometry_crossing_t(&h, o, w), t_start)
                      : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
             T = rgb_mul(T,
@@ -141,7 +71,7 @@ static rgb shadow_walk(const volume_scene *vs, vec3 o, vec3 w, double tmin, doub
         }
         if (!hit)
             return T;
-        if (crossing == VOLUME_MAX_CROSSINGS) {
+        if (crossing == GEOMETRY_MAX_CROSSINGS) {
             walk->lost++;
             return rgb_grey(0.0);
         }
@@ -151,8 +81,8 @@ static rgb shadow_walk(const volume_scene *vs, vec3 o, vec3 w, double tmin, doub
     }
 }
 
-rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double tmin, double tmax,
-                                int medium, volume_walk *walk)
+rgb singlescatter_shadow_transmittance(const singlescatter_scene *vs, vec3 o, vec3 w, double tmin,
+                                       double tmax, int medium, media_walk *walk)
 {
     return shadow_walk(vs, o, w, tmin, 0.0, tmax, medium, walk);
 }
@@ -163,13 +93,13 @@ rgb volume_shadow_transmittance(const volume_scene *vs, vec3 o, vec3 w, double t
  * exit and sees the medium as unbounded (dense media, whose scattering happens
  * within a few free paths of the boundary, went dark: 9% at density scale 1e6,
  * black at 1e9). So surfaces are searched from x - e w, e a margin of
- * VOLUME_SHADOW_BACKOFF times x's largest coordinate (some 2^7..2^8 float ULPs,
+ * PATH_SHADOW_BACKOFF times x's largest coordinate (some 2^7..2^8 float ULPs,
  * far above the rounding even where w meets the boundary at a grazing 1/64),
  * and the medium fills the ray from x on. */
-static rgb scatter_shadow(const volume_scene *vs, vec3 x, vec3 w, double tmax, int mi,
-                          volume_walk *walk)
+static rgb scatter_shadow(const singlescatter_scene *vs, vec3 x, vec3 w, double tmax, int mi,
+                          media_walk *walk)
 {
-    double e = VOLUME_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
     return shadow_walk(vs, v3_sub(x, v3_scale(w, e)), w, 0.0, e, tmax + e, mi, walk);
 }
 
@@ -177,8 +107,8 @@ static rgb scatter_shadow(const volume_scene *vs, vec3 x, vec3 w, double tmax, i
 
 /* p(wo, wi) L_i T_shadow / pdf of light `l` at point x in medium `mi`,
  * averaged over its samples. */
-static rgb light_inscattered(const volume_scene *vs, int mi, const light *l, vec3 x, vec3 wo,
-                             sampler_state *u, volume_walk *walk)
+static rgb light_inscattered(const singlescatter_scene *vs, int mi, const light *l, vec3 x, vec3 wo,
+                             sampler_state *u, media_walk *walk)
 {
     const medium *m = &vs->media[mi];
     rgb L = rgb_grey(0.0);
@@ -218,8 +148,8 @@ static rgb light_inscattered(const volume_scene *vs, int mi, const light *l, vec
     return L;
 }
 
-rgb volume_inscattered(const volume_scene *vs, int mi, vec3 x, vec3 wo, sampler_state *u,
-                       volume_walk *walk)
+rgb singlescatter_inscattered(const singlescatter_scene *vs, int mi, vec3 x, vec3 wo,
+                              sampler_state *u, media_walk *walk)
 {
     rgb L = rgb_grey(0.0);
     for (size_t i = 0; i < vs->light_count; ++i)
@@ -241,7 +171,7 @@ static exp_sampler exp_sampler_make(rgb sigma_t, double len)
 {
     exp_sampler e = {sigma_t, len, {0, 0, 0}, 0};
     for (int c = 0; c < 3; ++c)
-        if (volume_ch(sigma_t, c) > 0.0)
+        if (rgb_ch(sigma_t, c) > 0.0)
             e.active[e.n_active++] = c;
     return e;
 }
@@ -262,7 +192,7 @@ static double exp_pdf(const exp_sampler *e, double s)
         return 0.0;
     double p = 0.0;
     for (int k = 0; k < e->n_active; ++k)
-        p += exp_channel_pdf(volume_ch(e->sigma_t, e->active[k]), e->len, s);
+        p += exp_channel_pdf(rgb_ch(e->sigma_t, e->active[k]), e->len, s);
     return p / e->n_active;
 }
 
@@ -272,7 +202,7 @@ static double exp_sample(const exp_sampler *e, double u)
     if (k >= e->n_active)
         k = e->n_active - 1;
     u = u * e->n_active - k;
-    double sigma = volume_ch(e->sigma_t, e->active[k]);
+    double sigma = rgb_ch(e->sigma_t, e->active[k]);
     double s;
     if (isinf(e->len)) {
         s = -log1p(-u) / sigma;
@@ -396,17 +326,17 @@ static equiangular light_equiangular(const light *l, vec3 o, vec3 w, double len)
 }
 
 /* Light of one lamp scattered toward wo at distance s (T(0, s) σ_s applied). */
-static rgb scatter_at(const volume_scene *vs, int mi, const light *l, vec3 o, vec3 w, double s,
-                      sampler_state *u, volume_walk *walk)
+static rgb scatter_at(const singlescatter_scene *vs, int mi, const light *l, vec3 o, vec3 w,
+                      double s, sampler_state *u, media_walk *walk)
 {
     const medium *m = &vs->media[mi];
     rgb Ls = light_inscattered(vs, mi, l, v3_add(o, v3_scale(w, s)), v3_neg(w), u, walk);
     return rgb_mul(rgb_mul(m->sigma_s, rgb_exp_neg(medium_sigma_t(m), s)), Ls);
 }
 
-static void homogeneous_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, double t0,
+static void homogeneous_segment(const singlescatter_scene *vs, int mi, vec3 o, vec3 w, double t0,
                                 double t1, rgb *beta, rgb *L, sampler_state *u,
-                                volume_walk *walk)
+                                media_walk *walk)
 {
     const medium *m = &vs->media[mi];
     rgb sigma_t = medium_sigma_t(m);
@@ -424,7 +354,8 @@ static void homogeneous_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, 
                 double s = exp_sample(&es, sampler_1d(u));
                 double p = exp_pdf(&es, s) + equiangular_pdf(&eq, s);
                 if (p > 0.0)
-                    Lseg = rgb_add(Lseg, rgb_scale(scatter_at(vs, mi, l, a, w, s, u, walk), 1.0 / p));
+                    Lseg =
+                        rgb_add(Lseg, rgb_scale(scatter_at(vs, mi, l, a, w, s, u, walk), 1.0 / p));
             }
             if (eq.valid) {
                 double s = equiangular_sample(&eq, sampler_1d(u));
@@ -441,8 +372,8 @@ static void homogeneous_segment(const volume_scene *vs, int mi, vec3 o, vec3 w, 
     *beta = rgb_mul(*beta, rgb_exp_neg(sigma_t, len));
 }
 
-void volume_segment(const volume_scene *vs, int m, vec3 o, vec3 w, double t0, double t1,
-                    rgb *beta, rgb *L, sampler_state *u, volume_walk *walk)
+void singlescatter_segment(const singlescatter_scene *vs, int m, vec3 o, vec3 w, double t0,
+                           double t1, rgb *beta, rgb *L, sampler_state *u, media_walk *walk)
 {
     if (!(t1 > t0))
         return;
@@ -451,7 +382,7 @@ void volume_segment(const volume_scene *vs, int m, vec3 o, vec3 w, double t0, do
         homogeneous_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
         break;
     case MEDIUM_GRID:
-        volume_grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
+        singlescatter_grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
         break;
     }
 }

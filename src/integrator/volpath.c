@@ -1,5 +1,5 @@
 #define _POSIX_C_SOURCE 200809L
-#include "render/volpath.h"
+#include "integrator/volpath.h"
 
 #include <math.h>
 #include <string.h>
@@ -9,9 +9,9 @@
 #include "core/clock.h"
 #include "core/ray.h"
 #include "media/phase.h"
-#include "render/bsdf.h"
-#include "render/volpath_media.h"
-#include "render/volume.h"
+#include "materials/bsdf.h"
+#include "integrator/volpath_media.h"
+#include "integrator/singlescatter_media.h"
 
 /* ---- settings and scene ---- */
 
@@ -106,11 +106,11 @@ static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media
 
 /* Leaving the medium point x along w: Embree sees x rounded to float, which
  * can put it past its medium's boundary; so surfaces are searched from e
- * behind x (render/volume.h, VOLUME_SHADOW_BACKOFF) and the medium fills the
+ * behind x (integrator/path.h, PATH_SHADOW_BACKOFF) and the medium fills the
  * ray from x on. */
 static vp_ray ray_from_medium(vec3 x, vec3 w, int medium)
 {
-    double e = VOLUME_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
     return (vp_ray){v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium};
 }
 
@@ -119,8 +119,8 @@ static vp_ray ray_from_medium(vec3 x, vec3 w, int medium)
 typedef struct {
     const volpath_scene *sc;
     sampler_state *st;
-    volume_walk walk;
-    render_counters *counters;
+    media_walk walk;
+    integrator_counters *counters;
     int hero;
     rgb L, beta, r_u, r_l;
     int depth;
@@ -163,7 +163,7 @@ static bool shadow_event(void *ctx, const volpath_event *ev)
     return !rgb_is_black(s->T);
 }
 
-/* The walk of render/volume.c's shadow rays (interfaces switch the medium,
+/* The walk of singlescatter_media.c's shadow rays (interfaces switch the medium,
  * opaque surfaces block unless they lie before t_fill), with tracking in
  * media. False when the ray is blocked or its estimate is 0. */
 static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_fill, double tmax,
@@ -179,7 +179,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
             if (h.t >= t_fill)
                 return false;
-            if (crossing == VOLUME_MAX_CROSSINGS) {
+            if (crossing == GEOMETRY_MAX_CROSSINGS) {
                 pa->walk.lost++;
                 return false;
             }
@@ -187,7 +187,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
             continue;
         }
         /* Unbounded media end at HZ_FAR_COORD (core/ray.h). */
-        double t_end = hit ? fmax(volume_crossing_t(&h, o, w), t_start)
+        double t_end = hit ? fmax(geometry_crossing_t(&h, o, w), t_start)
                      : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
             rgb T_maj = volpath_track(&sc->media[medium], o, w, t_start, t_end, pa->hero,
@@ -201,7 +201,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         }
         if (!hit)
             return true;
-        if (crossing == VOLUME_MAX_CROSSINGS) {
+        if (crossing == GEOMETRY_MAX_CROSSINGS) {
             pa->walk.lost++;
             return false;
         }
@@ -262,7 +262,7 @@ static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_sta
                   : v3_length_sq(ls->n_light) > 0.0 ? ls->dist * (1.0 - GEOMETRY_SHADOW_EPSILON)
                                                     : ls->dist;
     vec3 x = v->p, w = ls->wi;
-    double e = VOLUME_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
     return shadow_walk(s, v3_sub(x, v3_scale(w, e)), w, 0.0, e, tmax + e, v->medium);
 }
 
@@ -476,7 +476,7 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
 }
 
 rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double *depth,
-               render_counters *counters)
+               integrator_counters *counters)
 {
     counters->camera_rays++;
     *depth = INFINITY;
@@ -497,7 +497,7 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
         bool hit = geometry_intersect(sc->geom, ray->o, ray->d, ray->tmin, INFINITY, r->time, &h);
         bool opaque = hit && h.shape->material->kind != MATERIAL_INTERFACE;
         if (hit && h.t < ray->t_fill) { /* behind a medium point the ray leaves */
-            if (++crossing > VOLUME_MAX_CROSSINGS) {
+            if (++crossing > GEOMETRY_MAX_CROSSINGS) {
                 pa.walk.lost++;
                 break;
             }
@@ -508,7 +508,7 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
         }
         /* A path leaving the scene inside a medium ends at HZ_FAR_COORD. */
         double t_hit = !hit    ? (ray->medium >= 0 ? ray_far_t(ray->o, ray->d) : INFINITY)
-                       : media ? fmax(volume_crossing_t(&h, ray->o, ray->d), t_start)
+                       : media ? fmax(geometry_crossing_t(&h, ray->o, ray->d), t_start)
                                : h.t;
         if (ray->medium >= 0) {
             if (!cross_medium(&pa, t_start, t_hit))
@@ -527,7 +527,7 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
             break;
         }
         if (!opaque) {
-            if (++crossing > VOLUME_MAX_CROSSINGS) {
+            if (++crossing > GEOMETRY_MAX_CROSSINGS) {
                 pa.walk.lost++;
                 break;
             }

@@ -1,4 +1,4 @@
-#include "render/bsdf.h"
+#include "materials/bsdf.h"
 
 #include <math.h>
 

@@ -1,0 +1,71 @@
+#include "integrator/integrator.h"
+
+#include <string.h>
+
+/* A scene with no Integrator directive (its default entity sits at line 0)
+ * renders with "singlescatter". */
+hz_status integrator_params_from_entity(scene_entity *e, FILE *warn, integrator_params *out,
+                                        hz_error *err)
+{
+    param_list *pl = &e->params;
+    const char *type = e->type ? e->type : "volpath";
+    *out = (integrator_params){.kind = INTEGRATOR_SINGLESCATTER,
+                               .singlescatter = singlescatter_settings_default()};
+    if (strcmp(type, "volpath") == 0 && e->loc.line == 0)
+        return params_finish(pl, "Integrator", err);
+    if (strcmp(type, "volpath") == 0) {
+        out->kind = INTEGRATOR_VOLPATH;
+        if (volpath_settings_from_entity(e, warn, &out->volpath, err) != HZ_OK)
+            return HZ_ERROR;
+        return params_finish(pl, "Integrator \"volpath\"", err);
+    }
+    if (strcmp(type, "singlescatter") == 0) {
+        if (singlescatter_settings_from_entity(e, &out->singlescatter, err) != HZ_OK)
+            return HZ_ERROR;
+        return params_finish(pl, "Integrator \"singlescatter\"", err);
+    }
+    return hz_fail_at(err, e->loc,
+                      "Integrator \"%s\" is not supported (supported: \"volpath\", "
+                      "\"singlescatter\")",
+                      type);
+}
+
+hz_status integrator_init(integrator *out, const integrator_params *p,
+                          const integrator_inputs *in, hz_error *err)
+{
+    out->kind = p->kind;
+    switch (p->kind) {
+    case INTEGRATOR_SINGLESCATTER:
+        out->singlescatter = singlescatter_scene_make(in->geom, in->lights, in->light_count,
+                                                      in->media, in->medium_count,
+                                                      p->singlescatter);
+        return HZ_OK;
+    case INTEGRATOR_VOLPATH:
+        return volpath_scene_init(&out->volpath, in->geom, in->lights, in->light_count,
+                                  in->media, in->medium_count, p->volpath, err);
+    }
+    return hz_fail(err, "unknown integrator kind %d", (int)p->kind);
+}
+
+void integrator_free(integrator *it)
+{
+    switch (it->kind) {
+    case INTEGRATOR_SINGLESCATTER:
+        break;
+    case INTEGRATOR_VOLPATH:
+        volpath_scene_free(&it->volpath);
+        break;
+    }
+}
+
+rgb integrator_li(const integrator *it, const ray *r, sampler_state *st, double *depth,
+                  integrator_counters *counters)
+{
+    switch (it->kind) {
+    case INTEGRATOR_SINGLESCATTER:
+        return singlescatter_li(&it->singlescatter, r, st, depth, counters);
+    case INTEGRATOR_VOLPATH:
+        return volpath_li(&it->volpath, r, st, depth, counters);
+    }
+    return rgb_grey(0.0);
+}

@@ -1,0 +1,62 @@
+/* The integrator a scene renders with: a closed set of kinds, chosen by the
+ * scene's Integrator directive and built once its geometry, lights and media
+ * exist. "volpath" (pbrt-v4's default, integrator/volpath.h) when the scene
+ * names it; "singlescatter" (integrator/singlescatter.h) when it names that or
+ * names no Integrator at all: haze's default. */
+#ifndef HAZE_INTEGRATOR_INTEGRATOR_H
+#define HAZE_INTEGRATOR_INTEGRATOR_H
+
+#include <stdio.h>
+
+#include "core/error.h"
+#include "core/ray.h"
+#include "integrator/path.h"
+#include "integrator/singlescatter.h"
+#include "integrator/volpath.h"
+#include "sampler/sampler.h"
+#include "scene/scene_desc.h"
+
+typedef enum { INTEGRATOR_SINGLESCATTER, INTEGRATOR_VOLPATH } integrator_kind;
+
+/* The Integrator directive's settings, read before the scene is built. */
+typedef struct {
+    integrator_kind kind;
+    union {
+        singlescatter_settings singlescatter;
+        volpath_settings volpath;
+    };
+} integrator_params;
+
+/* Reads the Integrator entity (warnings to `warn` when not NULL) and checks
+ * that every parameter was used; errors name its place. */
+hz_status integrator_params_from_entity(scene_entity *e, FILE *warn, integrator_params *out,
+                                        hz_error *err);
+
+/* What every integrator reads of the built scene (borrowed). */
+typedef struct {
+    const geometry *geom;
+    const light *lights;
+    size_t light_count;
+    const medium *media;
+    size_t medium_count;
+} integrator_inputs;
+
+typedef struct {
+    integrator_kind kind;
+    union {
+        singlescatter_scene singlescatter;
+        volpath_scene volpath;
+    };
+} integrator;
+
+hz_status integrator_init(integrator *out, const integrator_params *p,
+                          const integrator_inputs *in, hz_error *err);
+void integrator_free(integrator *it);
+
+/* Radiance along the camera ray `r` (unit direction). `depth` receives the
+ * distance to the first opaque surface (INFINITY when none). Thread-safe;
+ * allocates nothing. */
+rgb integrator_li(const integrator *it, const ray *r, sampler_state *st, double *depth,
+                  integrator_counters *counters);
+
+#endif

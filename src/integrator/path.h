@@ -1,0 +1,38 @@
+/* What every integrator's paths share: the per-path state of media walks, the
+ * per-thread counters the renderer sums, and the shadow-ray origin rule. */
+#ifndef HAZE_INTEGRATOR_PATH_H
+#define HAZE_INTEGRATOR_PATH_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "core/rng.h"
+
+/* Per-thread counters, summed by the renderer for the summary. */
+typedef struct {
+    uint64_t camera_rays, shadow_rays;
+    uint64_t density_lookups;
+    uint64_t majorant_steps;   /* majorant-grid cells entered by media walks */
+    uint64_t lost_paths;       /* rays dropped (black) after GEOMETRY_MAX_CROSSINGS interfaces */
+    /* With `timed` (haze render --stats), the nanoseconds spent in media walks
+     * (camera segments and shadow rays through media) and in the film. */
+    bool timed;
+    uint64_t media_ns, film_ns;
+} integrator_counters;
+
+/* Per-walk state: random numbers beyond the sampler's dimensions and counters. */
+typedef struct {
+    double time;          /* the camera ray's scene time: shadow rays and lookups use it */
+    rng r;
+    uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
+    uint64_t shadow_rays;
+    uint64_t majorant_steps; /* majorant-grid cells entered */
+    uint64_t lost;           /* shadow rays dropped after GEOMETRY_MAX_CROSSINGS interfaces */
+} media_walk;
+
+/* Shadow rays from scattering points search surfaces from this fraction of
+ * the point's largest render-space coordinate behind it (2^-16), so that
+ * float rounding of the point cannot hide its medium's boundary. */
+#define PATH_SHADOW_BACKOFF 0x1p-16
+
+#endif
