@@ -218,6 +218,14 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
         return HZ_ERROR;
     if (build_media(rs, sd, render_from_world, err) != HZ_OK)
         return HZ_ERROR;
+    /* pbrt-v4 renders such a scene with "volpath" (maxdepth 5): say once
+     * that haze's default is single scattering. */
+    if (warn && sd->integrator.loc.line == 0 && rs->medium_count > 0)
+        fprintf(warn,
+                "%s: warning: the scene names no Integrator: haze renders single scattering "
+                "(\"singlescatter\", its default), pbrt-v4 multiple scattering (\"volpath\", "
+                "maxdepth 5); name Integrator \"volpath\" for pbrt-v4's image\n",
+                sd->file_count ? sd->files[0] : "<input>");
     integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media, rs->medium_count};
     return integrator_init(&rs->integ, &ip, &in, err);
 }
