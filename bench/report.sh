@@ -29,6 +29,7 @@ time_to() {
 }
 
 report_ladder() {
+    [ -s "$RESULTS/ladder.tsv" ] || return 0
     echo "## The ladder"
     echo
     echo "Error against each scene's converged reference ($ladder_ref_est tracking, cached"
@@ -59,7 +60,7 @@ report_ladder() {
 PEER_TARGETS="0.1 0.03 0.01 0.003 0.001 0.0003 0.0001 3e-05 1e-05 3e-06"
 
 report_peer() {
-    [ "$(wc -l <"$RESULTS/peer.tsv")" -gt 1 ] || return 0
+    [ -s "$RESULTS/peer.tsv" ] && [ "$(wc -l <"$RESULTS/peer.tsv")" -gt 1 ] || return 0
     echo "## The peer: vdb_render"
     echo
     echo "How close the models come: haze's converged image against vdb_render's"
@@ -122,7 +123,29 @@ report_peer() {
     echo
 }
 
+report_bounce() {
+    [ -s "$RESULTS/bounce.tsv" ] || return 0
+    echo "## The bounce axis"
+    echo
+    echo "Against each scene's converged \`volpath\` reference (maxdepth 1000), every rung at the"
+    echo "same spp, 2 threads, seed 1. *mean* is the relative error of the image mean over R, G, B:"
+    echo "the light a missing bounce leaves out (the mean's noise is far below it); relMSE adds"
+    echo "each rung's own noise. *time* is the process wall clock (median of three under 2 s)."
+    echo
+    for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/bounce.tsv" | uniq); do
+        awk -F'\t' -v s="$scene" '$1 == s && $2 == "reference" { printf "### %s (reference: %s spp, image mean %s)\n", s, $4, $8 }' "$RESULTS/bounce.tsv"
+        echo
+        echo "| integrator | maxdepth | spp | time (s) | time / singlescatter | RMSE | relMSE | mean |"
+        echo "|---|---|---|---|---|---|---|---|"
+        awk -F'\t' -v s="$scene" 'NR > 1 && $1 == s && $2 != "reference" {
+            if ($2 == "singlescatter") t0 = $5
+            printf "| %s | %s | %s | %s | %.2f | %s | %s | %+.1f%% |\n", $2, $3, $4, $5, (t0 > 0 ? $5 / t0 : 0), $6, $7, 100 * $8 }' "$RESULTS/bounce.tsv"
+        echo
+    done
+}
+
 report_yardsticks() {
+    [ -s "$RESULTS/yardsticks.tsv" ] || return 0
     echo "## Yardsticks"
     echo
     echo "| measure | value | target | verdict | how |"
@@ -135,6 +158,7 @@ report_plot() {
     command -v gnuplot >/dev/null || { echo "bench: no gnuplot: trade.png not drawn" >&2; return 0; }
     d=$CACHE/plot; rm -rf "$d"; mkdir -p "$d"
     # One file per scene and estimator: that estimator's front.
+    touch "$RESULTS/ladder.tsv" "$RESULTS/peer.tsv"
     for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/ladder.tsv" | uniq); do
         for est in $(awk -F'\t' -v s="$scene" 'NR > 1 && $1 == s { print $2 }' "$RESULTS/ladder.tsv" | sort -u); do
             awk -F'\t' -v s="$scene" -v e="$est" 'NR > 1 && $1 == s && $2 == e { print $5, $7 }' "$RESULTS/ladder.tsv" | front >"$d/$scene.$est.front"
@@ -177,6 +201,19 @@ report_plot() {
                 echo
             fi
         done
+        if [ -s "$RESULTS/bounce.tsv" ]; then
+            echo "set title 'bounce axis: volpath maxdepth 1..64 (labels), singlescatter (x)'"
+            printf 'plot'
+            sep=' '
+            for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/bounce.tsv" | uniq); do
+                awk -F'\t' -v s="$scene" 'NR > 1 && $1 == s && $2 == "volpath" { print $5, $7, $3 }' "$RESULTS/bounce.tsv" >"$d/bounce-$scene.vp"
+                awk -F'\t' -v s="$scene" 'NR > 1 && $1 == s && $2 == "singlescatter" { print $5, $7 }' "$RESULTS/bounce.tsv" >"$d/bounce-$scene.ss"
+                printf "%s'%s' using 1:2 with linespoints lw 2 title '%s volpath', '%s' using 1:2:3 with labels offset 1,0.7 notitle, '%s' using 1:2 with points pt 2 ps 2 title '%s singlescatter'" \
+                    "$sep" "$d/bounce-$scene.vp" "$scene" "$d/bounce-$scene.vp" "$d/bounce-$scene.ss" "$scene"
+                sep=', '
+            done
+            echo
+        fi
         echo 'unset multiplot'
     } >"$d/trade.gp"
     gnuplot "$d/trade.gp" || echo "bench: gnuplot failed (see $d/trade.gp)" >&2
@@ -188,12 +225,13 @@ report_run() {
         echo
         echo "Written by \`make bench\`$([ -n "$BENCH_QUICK" ] && echo " (BENCH_QUICK=1: the short smoke run, not the full ladder)") on $(date -u '+%Y-%m-%d %H:%M UTC'),"
         echo "$(nproc) CPUs ($(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)), load average before the run $BENCH_LOAD,"
-        [ "$PARTS" = "ladder peer yardsticks" ] || echo "parts run this time: ${PARTS:-none} (the other tables are from the previous run),"
+        [ "$PARTS" = "ladder peer bounce yardsticks" ] || echo "parts run this time: ${PARTS:-none} (the other tables are from the previous run),"
         echo "$(haze_id) (version and src/ tree). The plot is [trade.png](trade.png); bench/README.md says what"
         echo "each part measures."
         echo
         report_ladder
         report_peer
+        report_bounce
         report_yardsticks
     } >"$RESULTS/trade.md"
     report_plot

@@ -21,11 +21,12 @@ BENCH_LOAD=$(cut -d' ' -f1-3 /proc/loadavg)
 . "$BENCH/ladder.sh"
 . "$BENCH/peer.sh"
 . "$BENCH/yardsticks.sh"
+. "$BENCH/bounce.sh"
 . "$BENCH/report.sh"
 
-# BENCH_PARTS: a subset of "ladder peer yardsticks" (the others' tables of
+# BENCH_PARTS: a subset of "ladder peer bounce yardsticks" (the others' tables of
 # the last run are reused by the report).
-PARTS=${BENCH_PARTS-ladder peer yardsticks}
+PARTS=${BENCH_PARTS-ladder peer bounce yardsticks}
 start=$(now)
 for part in $PARTS; do
     echo "bench: $part" >&2
