@@ -5,6 +5,7 @@
 
 #include "scene/parser.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <limits.h>
 #include <stdio.h>
@@ -15,7 +16,7 @@
 #include "core/path.h"
 #include "scene/mem.h"
 
-/* Deep enough for any real scene, shallow enough that the C stack is safe. */
+/* Deep enough for any real scene; bounds the files open at once. */
 #define MAX_INCLUDE_DEPTH 64
 
 const char *parser_intern(parser *ps, const char *s)
@@ -35,6 +36,21 @@ const char *parser_intern(parser *ps, const char *s)
     return sd->strings[sd->string_count - 1];
 }
 
+/* The next token of the stream: the end of an included file continues its
+ * includer; only the outermost file's end is TOK_EOF. */
+static hz_status lex(parser *ps, token *tok, hz_error *err)
+{
+    for (;;) {
+        parser_file *f = &ps->files[ps->file_depth - 1];
+        if (lexer_next(&f->lx, tok, err) != HZ_OK)
+            return HZ_ERROR;
+        if (tok->kind != TOK_EOF || ps->file_depth == 1)
+            return HZ_OK;
+        free(f->canon);
+        ps->file_depth--;
+    }
+}
+
 hz_status parser_next(parser *ps, token *tok, hz_error *err)
 {
     if (ps->has_peek) {
@@ -42,13 +58,13 @@ hz_status parser_next(parser *ps, token *tok, hz_error *err)
         ps->has_peek = false;
         return HZ_OK;
     }
-    return lexer_next(ps->lx, tok, err);
+    return lex(ps, tok, err);
 }
 
 hz_status parser_peek(parser *ps, token *tok, hz_error *err)
 {
     if (!ps->has_peek) {
-        if (lexer_next(ps->lx, &ps->peek, err) != HZ_OK)
+        if (lex(ps, &ps->peek, err) != HZ_OK)
             return HZ_ERROR;
         ps->has_peek = true;
     }
@@ -123,47 +139,16 @@ static char *canonical(const char *path)
     return r ? r : scene_xstrdup(path);
 }
 
-static void chain_push(parser *ps, char *canon)
+/* Pushes a file onto the token stream; takes `canon` (and `text` unless it
+ * is the caller's: the outermost file). */
+static void push_file(parser *ps, const char *text, size_t len, const char *file, char *canon)
 {
-    ps->chain = scene_grow(ps->chain, &ps->chain_cap, ps->chain_len, sizeof *ps->chain);
-    ps->chain[ps->chain_len++] = canon;
+    assert(!ps->has_peek); /* the next token must come from the new file */
+    ps->files = scene_grow(ps->files, &ps->file_cap, ps->file_depth, sizeof *ps->files);
+    parser_file *f = &ps->files[ps->file_depth++];
+    lexer_init(&f->lx, text, len, file);
+    f->canon = canon;
 }
-
-static hz_status parse_text(parser *ps, const char *text, size_t len, const char *file,
-                            file_loc *end, hz_error *err)
-{
-    lexer lx;
-    lexer_init(&lx, text, len, file);
-    lexer *saved_lx = ps->lx;
-    token saved_peek = ps->peek;
-    bool saved_has = ps->has_peek;
-    ps->lx = &lx;
-    ps->has_peek = false;
-    hz_status st = HZ_OK;
-    for (;;) {
-        token t;
-        if ((st = parser_next(ps, &t, err)) != HZ_OK)
-            break;
-        if (t.kind == TOK_EOF) {
-            if (end)
-                *end = t.loc;
-            break;
-        }
-        if (t.kind != TOK_IDENT) {
-            char got[48];
-            token_describe(&t, got, sizeof got);
-            st = hz_fail_at(err, t.loc, "expected a directive, found %s", got);
-            break;
-        }
-        if ((st = parser_directive(ps, &t, err)) != HZ_OK)
-            break;
-    }
-    ps->lx = saved_lx;
-    ps->peek = saved_peek;
-    ps->has_peek = saved_has;
-    return st;
-}
-
 hz_status parser_include(parser *ps, const token *directive, const char *path, hz_error *err)
 {
     char name[48];
@@ -178,14 +163,14 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
         free(full);
         return st;
     }
-    for (size_t i = 0; i < ps->chain_len; ++i) {
-        if (strcmp(ps->chain[i], canon) != 0)
+    for (size_t i = 0; i < ps->file_depth; ++i) {
+        if (strcmp(ps->files[i].canon, canon) != 0)
             continue;
         char chain[700] = "";
-        for (size_t j = i; j < ps->chain_len; ++j) {
-            const char *base = strrchr(ps->chain[j], '/');
+        for (size_t j = i; j < ps->file_depth; ++j) {
+            const char *c = ps->files[j].canon, *base = strrchr(c, '/');
             size_t used = strlen(chain);
-            snprintf(chain + used, sizeof chain - used, "%s -> ", base ? base + 1 : ps->chain[j]);
+            snprintf(chain + used, sizeof chain - used, "%s -> ", base ? base + 1 : c);
         }
         const char *base = strrchr(canon, '/');
         size_t used = strlen(chain);
@@ -195,7 +180,7 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
         free(canon);
         return st;
     }
-    if (ps->chain_len >= MAX_INCLUDE_DEPTH) {
+    if (ps->file_depth >= MAX_INCLUDE_DEPTH) {
         free(full);
         free(canon);
         return hz_fail_at(err, directive->loc, "%s: files nested more than %d deep", name,
@@ -214,11 +199,10 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
     const char *file = parser_intern(ps, full);
     free(full);
     scene_desc_add_file(ps->sd, file);
-    chain_push(ps, canon);
-    hz_status st = parse_text(ps, text, len, file, NULL, err);
-    free(ps->chain[--ps->chain_len]);
-    free(text);
-    return st;
+    ps->texts = scene_grow(ps->texts, &ps->text_cap, ps->text_count, sizeof *ps->texts);
+    ps->texts[ps->text_count++] = text;
+    push_file(ps, text, len, file, canon);
+    return HZ_OK;
 }
 
 static hz_status parse_root(const char *text, size_t len, const char *name, scene_desc *out,
@@ -237,10 +221,27 @@ static hz_status parse_root(const char *text, size_t len, const char *name, scen
     for (int i = 0; i < ATTR_COUNT; ++i)
         params_init(&ps.gs.attrs[i], (file_loc){file, 1, 1});
     ps.current_object = -1;
-    chain_push(&ps, canonical(name));
+    push_file(&ps, text, len, file, canonical(name));
 
     file_loc end = {file, 1, 1};
-    hz_status st = parse_text(&ps, text, len, file, &end, err);
+    hz_status st = HZ_OK;
+    for (;;) {
+        token t;
+        if ((st = parser_next(&ps, &t, err)) != HZ_OK)
+            break;
+        if (t.kind == TOK_EOF) {
+            end = t.loc;
+            break;
+        }
+        if (t.kind != TOK_IDENT) {
+            char got[48];
+            token_describe(&t, got, sizeof got);
+            st = hz_fail_at(err, t.loc, "expected a directive, found %s", got);
+            break;
+        }
+        if ((st = parser_directive(&ps, &t, err)) != HZ_OK)
+            break;
+    }
     if (st == HZ_OK)
         st = parser_finish(&ps, end, err);
     parser_state_free(&ps);

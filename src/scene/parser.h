@@ -31,6 +31,12 @@ typedef struct {
     transform ctm[2];
 } named_coordsys;
 
+/* A file being read: its lexer and canonical path (Include cycles). */
+typedef struct {
+    lexer lx;
+    char *canon;
+} parser_file;
+
 typedef struct {
     scene_desc *sd;
     gstate gs;
@@ -42,13 +48,17 @@ typedef struct {
     file_loc seen_camera, seen_film, seen_sampler, seen_filter, seen_integrator;
     long current_object;      /* index being defined, -1 outside ObjectBegin */
 
-    /* The token stream of the file being read; one token of lookahead. */
-    lexer *lx;
+    /* One token stream, as pbrt-v4 reads it: Include pushes the included
+     * file, whose end pops it and continues the includer's stream, so a
+     * directive at the end of an included file takes the parameters that
+     * follow the Include. Outermost first; one token of lookahead. */
+    parser_file *files;
+    size_t file_depth, file_cap;
     token peek;
     bool has_peek;
-    /* Canonical paths of the files being read, outermost first (cycles). */
-    char **chain;
-    size_t chain_len, chain_cap;
+    /* Every included file's text, kept to the end (tokens point into it). */
+    char **texts;
+    size_t text_count, text_cap;
 } parser;
 
 /* parser.c */

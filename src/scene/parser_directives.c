@@ -46,9 +46,12 @@ void parser_state_free(parser *ps)
         gstate_free(&ps->stack[i]);
     free(ps->stack);
     free(ps->coords);
-    for (size_t i = 0; i < ps->chain_len; ++i)
-        free(ps->chain[i]);
-    free(ps->chain);
+    for (size_t i = 0; i < ps->file_depth; ++i)
+        free(ps->files[i].canon);
+    free(ps->files);
+    for (size_t i = 0; i < ps->text_count; ++i)
+        free(ps->texts[i]);
+    free(ps->texts);
     memset(ps, 0, sizeof *ps);
 }
 

@@ -555,6 +555,50 @@ static void test_include(void **state)
     assert_non_null(strstr(err.message, "/nonexistent/x.pbrt: cannot read scene"));
 }
 
+/* pbrt-v4 reads one token stream: the end of an included file continues the
+ * includer's, so a directive that ends an included file takes the parameters
+ * (even the rest of a bracket) after the Include. */
+static void test_include_continues_stream(void **state)
+{
+    (void)state;
+    char dir[512], path[700];
+    snprintf(dir, sizeof dir, "%s/scene_include_stream", HAZE_TMP);
+    mkdir(dir, 0755);
+    snprintf(path, sizeof path, "%s/mat.pbrt", dir);
+    write_file(path, "Material \"diffuse\"\n");
+    snprintf(path, sizeof path, "%s/shape.pbrt", dir);
+    write_file(path, "Shape \"sphere\" \"float radius\" [\n");
+    snprintf(path, sizeof path, "%s/main.pbrt", dir);
+    write_file(path, "WorldBegin\nInclude \"mat.pbrt\"\n  \"rgb reflectance\" [0.1 0.2 0.3]\n"
+                     "Include \"shape.pbrt\" 2.5 ]\nShape \"disk\"\n");
+    scene_desc sd;
+    hz_error err;
+    if (scene_parse_file(path, &sd, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(sd.material_count, 1);
+    param_list *pl = &sd.materials[0].entity.params;
+    assert_true(params_has(pl, "reflectance"));
+    assert_int_equal(sd.shape_count, 2);
+    assert_true(params_float(&sd.shapes[0].entity.params, "radius", 0.0) == 2.5);
+    assert_non_null(strstr(sd.shapes[0].entity.loc.file, "shape.pbrt"));
+    assert_string_equal(sd.shapes[1].entity.loc.file, path);
+    scene_desc_free(&sd);
+
+    /* Includes one after another do not nest: 100 of them (deeper than the
+     * nesting limit) in a row are fine. */
+    char *text = malloc(100 * 32 + 64);
+    assert_non_null(text);
+    strcpy(text, "WorldBegin\n");
+    for (int i = 0; i < 100; ++i)
+        strcat(text, "Include \"mat.pbrt\"\n");
+    write_file(path, text);
+    free(text);
+    if (scene_parse_file(path, &sd, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(sd.material_count, 100);
+    scene_desc_free(&sd);
+}
+
 static void write_bytes(const char *path, const char *bytes, size_t n)
 {
     FILE *f = fopen(path, "wb");
@@ -694,6 +738,7 @@ int main(void)
         cmocka_unit_test(test_param_errors),
         cmocka_unit_test(test_param_values),
         cmocka_unit_test(test_include),
+        cmocka_unit_test(test_include_continues_stream),
         cmocka_unit_test(test_garbage),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
