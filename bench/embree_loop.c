@@ -147,7 +147,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: embree_loop SCENE.pbrt [--spp N] [--threads N]\n");
         return 2;
     }
-    hz_error err = {{0}};
+    hz_error err = {0};
     scene_desc sd;
     if (scene_parse_file(path, &sd, &err) != HZ_OK) {
         fprintf(stderr, "embree_loop: %s\n", err.message);

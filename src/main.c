@@ -234,16 +234,16 @@ static int write_partial(const render_outputs *outs, film *f, double ratio,
     film_output out = {attrs, (int)(sizeof attrs / sizeof attrs[0]), &output_note};
     char exr_path[PATH_MAX + 16], png_path[PATH_MAX + 16];
     outputs_partial_path(outs->exr, exr_path, sizeof exr_path);
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (film_write_exr_with(f, exr_path, ratio, &out, &err) != HZ_OK) {
-        fprintf(stderr, "haze: %s\n", err.message);
+        hz_error_print(stderr, &err);
         return EXIT_SCENE;
     }
     bool preview = outs->png[0] != '\0';
     if (preview) {
         outputs_partial_path(outs->png, png_path, sizeof png_path);
         if (film_write_png_with(f, png_path, ratio, &out, &err) != HZ_OK) {
-            fprintf(stderr, "haze: %s\n", err.message);
+            hz_error_print(stderr, &err);
             return EXIT_SCENE;
         }
     }
@@ -326,7 +326,7 @@ static void format_motion(render_motion m, char *buf, size_t n)
 static int check_region(const cli *c, scene_desc *sd)
 {
     film_params fp;
-    hz_error err = {{0}};
+    hz_error err = {0};
     bool bad = false;
     if (c->region.kind == FILM_REGION_NONE ||
         film_params_from_entity_region(&sd->film, &c->region, &fp, &bad, &err) == HZ_OK || !bad)
@@ -339,7 +339,7 @@ static int check_region(const cli *c, scene_desc *sd)
  * output and prints (docs/mpi.md). */
 static int run_render(const cli *c, distributed *dist)
 {
-    hz_error err = {{0}};
+    hz_error err = {0};
     double baseline_mib = c->stats ? resident_memory_mib() : 0.0;
     scene_desc sd;
     bool rank0 = distributed_rank(dist) == 0, mpi = distributed_size(dist) > 1;
@@ -386,7 +386,7 @@ static int run_render(const cli *c, distributed *dist)
     render_stats stats;
     if (distributed_render(dist, rs, &opt, &stats, &err) != HZ_OK) {
         if (rank0)
-            fprintf(stderr, "haze: %s\n", err.message);
+            hz_error_print(stderr, &err);
         exit_code = EXIT_SCENE;
         goto done;
     }
@@ -401,7 +401,7 @@ static int run_render(const cli *c, distributed *dist)
     film_output out = {id_attr, 1, &output_note};
     if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
         (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
-        fprintf(stderr, "haze: %s\n", err.message);
+        hz_error_print(stderr, &err);
         exit_code = EXIT_SCENE;
         goto done;
     }
@@ -465,9 +465,9 @@ static int run_info(int argc, char **argv)
     }
     if (!file)
         return usage_error("%s", "info needs a file");
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (info_describe(file, stdout, &err) != HZ_OK) {
-        fprintf(stderr, "haze: %s\n", err.message);
+        hz_error_print(stderr, &err);
         return EXIT_SCENE;
     }
     return 0;
@@ -500,9 +500,9 @@ int main(int argc, char **argv)
         if (rc >= 0)
             return rc;
         distributed *dist = NULL;
-        hz_error err = {{0}};
+        hz_error err = {0};
         if (distributed_create(&dist, &err) != HZ_OK) {
-            fprintf(stderr, "haze: %s\n", err.message);
+            hz_error_print(stderr, &err);
             return EXIT_SCENE;
         }
         rc = run_render(&c, dist);

@@ -842,7 +842,7 @@ int diff_command(int argc, char **argv, FILE *out, FILE *errs)
 {
     diff_options opt;
     bool help = false;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (diff_parse_args(argc, argv, &opt, &help, &err) != HZ_OK) {
         fprintf(errs, "haze: %s\nTry 'haze diff --help'.\n", err.message);
         return 2;
@@ -865,7 +865,7 @@ int diff_command(int argc, char **argv, FILE *out, FILE *errs)
     fclose(mem);
     if (rc != HZ_OK) {
         free(buf);
-        fprintf(errs, "haze: %s\n", err.message);
+        hz_error_print(errs, &err);
         return 2;
     }
     fwrite(buf, 1, size, out);

@@ -286,7 +286,7 @@ int merge_command(int argc, char **argv, FILE *out, FILE *errs)
 {
     merge_options opt;
     bool help = false;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (merge_parse_args(argc, argv, &opt, &help, &err) != HZ_OK) {
         merge_options_free(&opt);
         fprintf(errs, "haze: %s\nTry 'haze merge --help'.\n", err.message);
@@ -300,7 +300,7 @@ int merge_command(int argc, char **argv, FILE *out, FILE *errs)
     hz_status st = merge_run(&opt, &err);
     merge_options_free(&opt);
     if (st != HZ_OK) {
-        fprintf(errs, "haze: %s\n", err.message);
+        hz_error_print(errs, &err);
         return 1;
     }
     return 0;

@@ -3,11 +3,13 @@
 #include "core/text.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 hz_status hz_vfail(hz_error *err, const char *fmt, va_list ap)
 {
     if (err) {
+        err->loc = (file_loc){0};
         vsnprintf(err->message, sizeof err->message, fmt, ap);
         text_escape_inplace(err->message, sizeof err->message);
     }
@@ -27,6 +29,7 @@ hz_status hz_fail_at(hz_error *err, file_loc loc, const char *fmt, ...)
 {
     if (!err)
         return HZ_ERROR;
+    err->loc = loc;
     int n = snprintf(err->message, sizeof err->message, "%s:%d:%d: ",
                      loc.file ? loc.file : "<input>", loc.line, loc.column);
     if (n < 0 || (size_t)n >= sizeof err->message)
@@ -37,4 +40,84 @@ hz_status hz_fail_at(hz_error *err, file_loc loc, const char *fmt, ...)
     va_end(ap);
     text_escape_inplace(err->message, sizeof err->message);
     return HZ_ERROR;
+}
+
+void hz_errors_add(hz_errors *l, const hz_error *e)
+{
+    if (l->count == HZ_ERRORS_MAX) {
+        l->dropped++;
+        return;
+    }
+    if (!l->items) {
+        l->items = malloc(HZ_ERRORS_MAX * sizeof *l->items);
+        if (!l->items) {
+            l->dropped++;
+            return;
+        }
+    }
+    l->items[l->count++] = *e;
+}
+
+typedef struct {
+    size_t file, order;
+    int line, column;
+} error_key;
+
+static int key_cmp(const void *pa, const void *pb)
+{
+    const error_key *a = pa, *b = pb;
+    if (a->file != b->file)
+        return a->file < b->file ? -1 : 1;
+    if (a->line != b->line)
+        return a->line < b->line ? -1 : 1;
+    if (a->column != b->column)
+        return a->column < b->column ? -1 : 1;
+    return a->order < b->order ? -1 : a->order > b->order;
+}
+
+hz_status hz_errors_finish(hz_errors *l, const char *const *files, size_t file_count,
+                           hz_error *err)
+{
+    if (l->count == 0 && l->dropped == 0) {
+        free(l->items);
+        *l = (hz_errors){0};
+        return HZ_OK;
+    }
+    error_key keys[HZ_ERRORS_MAX];
+    for (size_t i = 0; i < l->count; ++i) {
+        const file_loc *loc = &l->items[i].loc;
+        size_t f = file_count;
+        for (size_t k = 0; loc->file && k < file_count && f == file_count; ++k)
+            if (files[k] && strcmp(files[k], loc->file) == 0)
+                f = k;
+        keys[i] = (error_key){f, i, loc->line, loc->column};
+    }
+    qsort(keys, l->count, sizeof *keys, key_cmp);
+    if (err) {
+        err->message[0] = '\0';
+        err->loc = l->count ? l->items[keys[0].order].loc : (file_loc){0};
+        size_t used = 0, cap = sizeof err->message;
+        for (size_t i = 0; i < l->count && used < cap; ++i) {
+            int n = snprintf(err->message + used, cap - used, "%s%s", i ? "\n" : "",
+                             l->items[keys[i].order].message);
+            used += n > 0 ? (size_t)n : 0;
+        }
+        if (l->dropped && used < cap)
+            snprintf(err->message + used, cap - used, "%s... and %zu more error%s",
+                     l->count ? "\n" : "", l->dropped, l->dropped == 1 ? "" : "s");
+    }
+    free(l->items);
+    *l = (hz_errors){0};
+    return HZ_ERROR;
+}
+
+void hz_error_print(FILE *f, const hz_error *err)
+{
+    const char *p = err->message;
+    do {
+        const char *nl = strchr(p, '\n');
+        int n = nl ? (int)(nl - p) : (int)strlen(p);
+        fprintf(f, "haze: %.*s\n", n, p);
+        p = nl ? nl + 1 : NULL;
+    } while (p);
 }

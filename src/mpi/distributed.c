@@ -202,7 +202,7 @@ hz_status distributed_agree(distributed *d, hz_status local, const hz_error *loc
 {
     if (d->size == 1) {
         if (local != HZ_OK)
-            fprintf(report, "haze: %s\n", local_err->message);
+            hz_error_print(report, local_err);
         return local;
     }
 #ifdef HAZE_HAVE_MPI
@@ -245,7 +245,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     double t0 = now_seconds();
     film *f = render_scene_film(rs);
     const film_params *fp = film_get_params(f);
-    hz_error local = {{0}};
+    hz_error local = {0};
     tile_service *ts = NULL;
     if (tile_service_create(MPI_COMM_WORLD, tile_count_of(fp), &ts, &local) != HZ_OK) {
         /* Without its service (rank 0) or its requests (others) the run

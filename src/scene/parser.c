@@ -42,8 +42,10 @@ static hz_status lex(parser *ps, token *tok, hz_error *err)
 {
     for (;;) {
         parser_file *f = &ps->files[ps->file_depth - 1];
-        if (lexer_next(&f->lx, tok, err) != HZ_OK)
+        if (lexer_next(&f->lx, tok, err) != HZ_OK) {
+            ps->lex_failed = true;
             return HZ_ERROR;
+        }
         if (tok->kind != TOK_EOF || ps->file_depth == 1)
             return HZ_OK;
         free(f->canon);
@@ -205,6 +207,22 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
     return HZ_OK;
 }
 
+/* After an error: consumes the rest of the failed directive, up to the next
+ * word that starts with a capital letter (a directive; bare true/false are
+ * values) or the end. */
+static hz_status skip_to_directive(parser *ps, hz_error *err)
+{
+    for (;;) {
+        token t;
+        if (parser_peek(ps, &t, err) != HZ_OK)
+            return HZ_ERROR;
+        if (t.kind == TOK_EOF || (t.kind == TOK_IDENT && t.len > 0 && t.text[0] >= 'A' &&
+                                  t.text[0] <= 'Z'))
+            return HZ_OK;
+        ps->has_peek = false;
+    }
+}
+
 static hz_status parse_root(const char *text, size_t len, const char *name, scene_desc *out,
                             hz_error *err)
 {
@@ -223,27 +241,39 @@ static hz_status parse_root(const char *text, size_t len, const char *name, scen
     ps.current_object = -1;
     push_file(&ps, text, len, file, canonical(name));
 
+    /* Every error of the file in one run: after a directive's error the
+     * stream goes on at the next directive (up to HZ_ERRORS_MAX kept); a
+     * lexer error ends it. */
+    hz_errors errs = {0};
     file_loc end = {file, 1, 1};
-    hz_status st = HZ_OK;
     for (;;) {
         token t;
-        if ((st = parser_next(&ps, &t, err)) != HZ_OK)
+        if (parser_next(&ps, &t, err) != HZ_OK) {
+            hz_errors_add(&errs, err);
             break;
+        }
         if (t.kind == TOK_EOF) {
             end = t.loc;
             break;
         }
+        if (t.kind == TOK_IDENT && parser_directive(&ps, &t, err) == HZ_OK)
+            continue;
         if (t.kind != TOK_IDENT) {
             char got[48];
             token_describe(&t, got, sizeof got);
-            st = hz_fail_at(err, t.loc, "expected a directive, found %s", got);
+            hz_fail_at(err, t.loc, "expected a directive, found %s", got);
+        }
+        hz_errors_add(&errs, err);
+        if (ps.lex_failed)
+            break;
+        if (skip_to_directive(&ps, err) != HZ_OK) {
+            hz_errors_add(&errs, err); /* the lexer's, met while skipping */
             break;
         }
-        if ((st = parser_directive(&ps, &t, err)) != HZ_OK)
-            break;
     }
-    if (st == HZ_OK)
-        st = parser_finish(&ps, end, err);
+    if (!ps.lex_failed && parser_finish(&ps, end, err) != HZ_OK)
+        hz_errors_add(&errs, err);
+    hz_status st = hz_errors_finish(&errs, out->files, out->file_count, err);
     parser_state_free(&ps);
     if (st != HZ_OK)
         scene_desc_free(out);

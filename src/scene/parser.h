@@ -56,6 +56,7 @@ typedef struct {
     size_t file_depth, file_cap;
     token peek;
     bool has_peek;
+    bool lex_failed; /* the lexer reported an error: the stream cannot go on */
     /* Every included file's text, kept to the end (tokens point into it). */
     char **texts;
     size_t text_count, text_cap;

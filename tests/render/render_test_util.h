@@ -31,7 +31,7 @@ static inline char *cat(const char *a, const char *b, const char *c)
 static inline render_scene *build_scene_or_fail(const char *text, render_options *opt)
 {
     scene_desc sd;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (scene_parse_string(text, "test.pbrt", &sd, &err) != HZ_OK) {
         print_error("parse: %s\n", err.message);
         fail();
@@ -47,14 +47,24 @@ static inline render_scene *build_scene_or_fail(const char *text, render_options
     return rs;
 }
 
+/* Copies the string `src` into dst[n], truncated. */
+static inline void copy_text(char *dst, size_t n, const char *src)
+{
+    size_t len = strlen(src);
+    if (len >= n)
+        len = n - 1;
+    memcpy(dst, src, len);
+    dst[len] = '\0';
+}
+
 /* Builds and expects failure; returns the message in `msg`. */
 static inline void build_scene_expect_error(const char *text, char *msg, size_t n)
 {
     scene_desc sd;
-    hz_error err = {{0}};
+    hz_error err = {0};
     msg[0] = '\0';
     if (scene_parse_string(text, "test.pbrt", &sd, &err) != HZ_OK) {
-        snprintf(msg, n, "%s", err.message);
+        copy_text(msg, n, err.message);
         return;
     }
     render_options def = {.seed = 0};
@@ -66,7 +76,7 @@ static inline void build_scene_expect_error(const char *text, char *msg, size_t 
         print_error("expected an error, scene built fine\n");
         fail();
     }
-    snprintf(msg, n, "%s", err.message);
+    copy_text(msg, n, err.message);
 }
 
 typedef struct {
@@ -116,7 +126,7 @@ static inline void render_expect_finite(render_scene *rs)
 {
     renderer_options opt = {.threads = 2, .progress = NULL};
     render_stats stats;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (renderer_run(rs, &opt, &stats, &err) != HZ_OK)
         fail_msg("render: %s", err.message);
     assert_int_equal(film_nonfinite_count(render_scene_film(rs)), 0);

@@ -29,7 +29,7 @@ static int render_text(const char *name, const char *text, const char *extra, ch
 static void read_exr_or_fail(const char *name, exr_image *img)
 {
     char path[1024];
-    hz_error err = {{0}};
+    hz_error err = {0};
     snprintf(path, sizeof path, "%s/%s.exr", HAZE_TMP, name);
     if (exr_read(path, img, &err) != HZ_OK) {
         print_error("%s\n", err.message);

@@ -170,7 +170,7 @@ static const char edge_scene[] =
 static int count_partial_pixels(const char *exr_path)
 {
     exr_image img;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(exr_read(exr_path, &img, &err), HZ_OK);
     int partial = -1;
     for (int c = 0; c < img.channel_count; ++c)

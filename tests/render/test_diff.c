@@ -52,7 +52,7 @@ static void write_planes(const char *path, int w, int h, int x0, int y0, int nc,
                          const char *const *names, float *const *planes)
 {
     exr_image img;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(exr_image_alloc(&img, w, h, nc, &err), HZ_OK);
     img.data_x0 = x0;
     img.data_y0 = y0;
@@ -345,7 +345,7 @@ static void test_heatmaps(void **state)
     snprintf(args, sizeof args, "diff '%s' '%s' --heatmap '%s'", spike_exr, ref_exr, heat);
     assert_int_equal(run_haze(args, out, sizeof out), 0);
     exr_image h;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (exr_read(heat, &h, &err) != HZ_OK)
         fail_msg("%s", err.message);
     assert_int_equal(h.width, W);
@@ -812,7 +812,7 @@ static void test_ztest_outlier(void **state)
     assert_non_null(strstr(list, "\n  (42, 60)..(49, 67) G: sum(a-b) "));
     /* The heatmap: |z| per pixel, largest at the outlier. */
     exr_image h;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (exr_read(heat, &h, &err) != HZ_OK)
         fail_msg("%s", err.message);
     assert_int_equal(h.data_x0, 10);

@@ -199,7 +199,7 @@ static int interrupt_render(const char *scene, const char *out, const char *prev
  * same pixels bit for bit; the others are zero with a zero sample count. */
 static void check_partial(const char *partial, const char *scene_dir_name, int spp)
 {
-    hz_error err = {{0}};
+    hz_error err = {0};
     exr_image img;
     assert_int_equal(exr_read(partial, &img, &err), HZ_OK);
     assert_string_equal(attribute(&img, "haze:partial"), "true");
@@ -319,7 +319,7 @@ static void test_partial_does_not_replace_existing(void **state)
     assert_non_null(kept);
     assert_memory_equal(kept, "a complete preview\n", n);
     free(kept);
-    hz_error err = {{0}};
+    hz_error err = {0};
     exr_image img;
     assert_int_equal(exr_read(pout, &img, &err), HZ_OK);
     assert_string_equal(attribute(&img, "haze:partial"), "true");
@@ -406,7 +406,7 @@ static void test_failed_png_write_keeps_previous(void **state)
         struct rlimit rl = {8192, 8192};
         signal(SIGXFSZ, SIG_IGN);
         setrlimit(RLIMIT_FSIZE, &rl);
-        hz_error err = {{0}};
+        hz_error err = {0};
         hz_status st = png_out_write_rgb8(path, PW, PH, noise, &err);
         if (write(p[1], err.message, strlen(err.message)) < 0)
             _exit(3);

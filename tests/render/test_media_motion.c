@@ -338,7 +338,7 @@ static image render_image(const char *text, int threads)
     render_scene *rs = build_scene_or_fail(text, NULL);
     renderer_options opt = {.threads = threads, .progress = NULL};
     render_stats stats;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (renderer_run(rs, &opt, &stats, &err) != HZ_OK)
         fail_msg("render: %s", err.message);
     film *f = render_scene_film(rs);
@@ -468,7 +468,7 @@ static void test_example_scene_builds(void **state)
 {
     (void)state;
     scene_desc sd;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (scene_parse_file(HAZE_SCENES "/moving-smoke.pbrt", &sd, &err) != HZ_OK)
         fail_msg("%s", err.message);
     render_options opt = {.spp = 1};

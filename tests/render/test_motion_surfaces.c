@@ -560,7 +560,7 @@ static void test_hits_follow_the_motion(void **state)
 {
     (void)state;
     scene_desc sd;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(scene_parse_string(shear_scene, "shear.pbrt", &sd, &err), HZ_OK);
     material def = material_default();
     geometry *g = NULL;

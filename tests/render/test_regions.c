@@ -107,7 +107,7 @@ static void assert_same_bytes(const char *a, const char *b)
 static void read_exr(const char *name, exr_image *img)
 {
     char p[1200];
-    hz_error err = {{0}};
+    hz_error err = {0};
     path_in(p, sizeof p, name);
     if (exr_read(p, img, &err) != HZ_OK)
         fail_msg("%s", err.message);
@@ -309,7 +309,7 @@ static void rewrite(const char *in, const char *out, int x0, int y0, const char 
                     const char *value)
 {
     exr_image img;
-    hz_error err = {{0}};
+    hz_error err = {0};
     char p[1200];
     read_exr(in, &img);
     img.data_x0 = x0;

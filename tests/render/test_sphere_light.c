@@ -125,7 +125,7 @@ static void make_sphere_light(sphere_light *s, transform space_from_object, doub
     snprintf(text, sizeof text,
              "WorldBegin\nAreaLightSource \"diffuse\" %s\nShape \"sphere\" \"float radius\" 1\n",
              params);
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (scene_parse_string(text, "test.pbrt", &s->sd, &err) != HZ_OK) {
         print_error("parse: %s\n", err.message);
         fail();

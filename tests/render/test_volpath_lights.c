@@ -32,7 +32,7 @@ static void test_bvh_probabilities(void **state)
     size_t n = render_scene_light_count(rs);
     assert_int_equal(n, 9);
     light_sampler ls;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(light_sampler_create(LIGHT_SAMPLER_BVH, lights, n, 10.0, &ls, &err), HZ_OK);
     /* One distant light, one tree: each has probability 1/2. */
     assert_int_equal(ls.bvh.unbounded_count, 1);
@@ -96,7 +96,7 @@ static void test_power_and_uniform(void **state)
     const light *lights = render_scene_lights(rs);
     size_t n = render_scene_light_count(rs);
     light_sampler ls;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(light_sampler_create(LIGHT_SAMPLER_POWER, lights, n, 10.0, &ls, &err), HZ_OK);
     double phi0 = 4.0 * HZ_PI * 2.0, phi1 = 4.0 * HZ_PI * 5.0; /* the two point lights */
     vec3 o = v3(0, 0, 0);

@@ -76,7 +76,7 @@ static void test_default_is_singlescatter(void **state)
 static hz_status build_with_warnings(const char *text, char *msg, size_t n)
 {
     scene_desc sd;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(scene_parse_string(text, "test.pbrt", &sd, &err), HZ_OK);
     FILE *warn = tmpfile();
     assert_non_null(warn);
@@ -86,7 +86,7 @@ static hz_status build_with_warnings(const char *text, char *msg, size_t n)
     scene_desc_free(&sd);
     render_scene_destroy(rs);
     if (st != HZ_OK) {
-        snprintf(msg, n, "%s", err.message);
+        copy_text(msg, n, err.message);
     } else {
         rewind(warn);
         size_t got = fread(msg, 1, n - 1, warn);
@@ -227,7 +227,7 @@ static void spread_pixel(void *ctx, int x, int y)
 static pstat *spread_stats(const char *path, const char *text, int spp)
 {
     scene_desc sd;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (scene_parse_string(text, path, &sd, &err) != HZ_OK)
         fail_msg("%s: %s", path, err.message);
     render_options opt = {.seed = 0};

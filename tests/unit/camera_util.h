@@ -14,7 +14,7 @@
 static inline camera make_camera(camera_config cfg)
 {
     camera c;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (camera_init(&cfg, &c, &err) != HZ_OK)
         fail_msg("camera_init: %s", err.message);
     return c;

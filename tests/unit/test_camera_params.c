@@ -84,7 +84,7 @@ static film_params film_of(int xres, int yres)
 static camera create_ok(fixture *f, film_params fp)
 {
     camera c;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (camera_create(&f->e, &fp, &c, &err) != HZ_OK)
         fail_msg("camera_create: %s", err.message);
     params_free(&f->e.entity.params);
@@ -94,7 +94,7 @@ static camera create_ok(fixture *f, film_params fp)
 static void expect_error(fixture *f, film_params fp, const char *want)
 {
     camera c;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(camera_create(&f->e, &fp, &c, &err), HZ_ERROR);
     if (strcmp(err.message, want) != 0)
         fail_msg("message\n  \"%s\"\nwanted\n  \"%s\"", err.message, want);
@@ -348,7 +348,7 @@ static void test_unknown_and_mistyped_parameters(void **state)
     fixture_init(&f, "perspective");
     add_int(&f, "fov", 4, 9, 20);
     camera c;
-    hz_error err = {{0}};
+    hz_error err = {0};
     film_params fp = film_of(32, 32);
     assert_int_equal(camera_create(&f.e, &fp, &c, &err), HZ_ERROR);
     if (!strstr(err.message, "scene.pbrt:4:9: ") || !strstr(err.message, "fov"))
@@ -400,7 +400,7 @@ static void test_animated_camera(void **state)
 {
     (void)state;
     camera c;
-    hz_error err = {{0}};
+    hz_error err = {0};
     /* camera_from_world_end = Translate(1,0,0): the camera moves from x = 0 to -1. */
     assert_int_equal(create_from_text("ActiveTransform EndTime\nTranslate 1 0 0\n"
                                       "ActiveTransform All\nCamera \"perspective\"\n"
@@ -473,7 +473,7 @@ static void test_from_scene_text(void **state)
 {
     (void)state;
     camera c;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(create_from_text("LookAt 0 0 -5  0 0 0  0 1 0\n"
                                       "Camera \"perspective\"\n"
                                       "  \"float fov\" [ 0 ]\n"

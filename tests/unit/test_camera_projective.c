@@ -346,7 +346,7 @@ static void test_extreme_legal_values_give_finite_normalised_rays(void **state)
 
 static void expect_invalid(camera_config cfg, const char *param, const char *text)
 {
-    hz_error err = {{0}};
+    hz_error err = {0};
     camera c;
     const char *bad = camera_config_check(&cfg, &err);
     if (!bad)

@@ -88,7 +88,7 @@ static void test_disjoint_films_sum_exactly(void **state)
 {
     (void)state;
     film_params p = test_params();
-    hz_error err = {{0}};
+    hz_error err = {0};
     film *all = film_create(&p, &err), *parts[PARTS], *again[PARTS];
     assert_non_null(all);
     for (int k = 0; k < PARTS; ++k) {
@@ -146,7 +146,7 @@ static void test_untouched_and_zero_samples_are_plus_zero(void **state)
 {
     (void)state;
     film_params p = test_params();
-    hz_error err = {{0}};
+    hz_error err = {0};
     film *f = film_create(&p, &err);
     assert_non_null(f);
     film_add_sample(f, 5, 5, rgb_grey(0.0), -1.0, INFINITY);

@@ -128,7 +128,7 @@ static void round_trip(bool half)
     tmp_path(path, sizeof path, half ? "half.exr" : "float.exr");
     exr_image img, back;
     make_image(&img, half);
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(exr_write(path, &img, &err), HZ_OK);
     assert_no_temp_files(path);
     assert_int_equal(exr_read(path, &back, &err), HZ_OK);
@@ -186,7 +186,7 @@ static void test_bad_files(void **state)
     tmp_path(bad, sizeof bad, "bad.exr");
     exr_image img, back;
     make_image(&img, false);
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(exr_write(good, &img, &err), HZ_OK);
     exr_image_free(&img);
     size_t len = 0;
@@ -232,7 +232,7 @@ static void test_write_missing_directory(void **state)
     (void)state;
     exr_image img;
     make_image(&img, false);
-    hz_error err = {{0}};
+    hz_error err = {0};
     const char *path = HAZE_TMP "/film_exr_missing_dir/out.exr";
     assert_int_equal(exr_write(path, &img, &err), HZ_ERROR);
     assert_non_null(strstr(err.message, "film_exr_missing_dir"));
@@ -248,7 +248,7 @@ static void test_failed_write_keeps_old_file(void **state)
     tmp_path(path, sizeof path, "atomic.exr");
     exr_image img;
     make_image(&img, false);
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(exr_write(path, &img, &err), HZ_OK);
     size_t len0 = 0, len1 = 0;
     unsigned char *before = slurp(path, &len0);
@@ -294,7 +294,7 @@ static void test_invalid_images(void **state)
     tmp_path(path, sizeof path, "invalid.exr");
     exr_image img;
     assert_int_equal(exr_image_alloc(&img, 2, 2, 2, NULL), HZ_OK);
-    hz_error err = {{0}};
+    hz_error err = {0};
     /* Unnamed channel. */
     assert_int_equal(exr_write(path, &img, &err), HZ_ERROR);
     snprintf(img.channels[0].name, 64, "R");
@@ -342,7 +342,7 @@ static void test_read_tiled(void **state)
     tmp_path(path, sizeof path, "tiled.exr");
     assert_int_equal(write_tiled(path), 0);
     exr_image img;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(exr_read(path, &img, &err), HZ_OK);
     assert_int_equal(img.width, 37);
     assert_int_equal(img.height, 21);

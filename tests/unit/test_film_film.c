@@ -34,7 +34,7 @@ static void add_floats4(scene_entity *e, const char *name, double a, double b, d
 static film_params params_ok(scene_entity *e)
 {
     film_params p;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (film_params_from_entity(e, &p, &err) != HZ_OK)
         fail_msg("%s", err.message);
     entity_free(e);
@@ -44,7 +44,7 @@ static film_params params_ok(scene_entity *e)
 static void params_fail(scene_entity *e, const char *needle)
 {
     film_params p;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(film_params_from_entity(e, &p, &err), HZ_ERROR);
     if (!strstr(err.message, needle))
         fail_msg("error \"%s\" does not mention \"%s\"", err.message, needle);
@@ -204,7 +204,7 @@ static void test_params_errors(void **state)
 
 static film *film_with(const film_params *p)
 {
-    hz_error err = {{0}};
+    hz_error err = {0};
     film *f = film_create(p, &err);
     if (!f)
         fail_msg("%s", err.message);
@@ -272,7 +272,7 @@ static void test_accumulation(void **state)
 
     /* Invalid bounds are refused. */
     p.bounds = (pixel_bounds){0, 0, 3, 2};
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_null(film_create(&p, &err));
     assert_non_null(strstr(err.message, "bounds"));
 }
@@ -293,7 +293,7 @@ static void test_write_exr(void **state)
             }
         char path[512];
         snprintf(path, sizeof path, "%s/film_film_%d.exr", HAZE_TMP, fp16);
-        hz_error err = {{0}};
+        hz_error err = {0};
         assert_int_equal(film_write_exr(f, path, 2.0, &err), HZ_OK);
         exr_image img;
         assert_int_equal(exr_read(path, &img, &err), HZ_OK);
@@ -498,7 +498,7 @@ static void test_write_statistics(void **state)
                                     1.0, INFINITY);
         char path[512];
         snprintf(path, sizeof path, "%s/film_stats_%d.exr", HAZE_TMP, fp16);
-        hz_error err = {{0}};
+        hz_error err = {0};
         assert_int_equal(film_write_exr(f, path, 1.5, &err), HZ_OK);
         exr_image img;
         assert_int_equal(exr_read(path, &img, &err), HZ_OK);
@@ -564,7 +564,7 @@ static void test_write_png(void **state)
     film_add_sample(f, 3, 1, rgb_make(5.0, -1.0, 0.001), 1.0, INFINITY);
     char path[512];
     snprintf(path, sizeof path, "%s/film_film.png", HAZE_TMP);
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(film_write_png(f, path, 2.0, &err), HZ_OK);
     int w = 0, h = 0;
     uint8_t *px = read_png(path, &w, &h);

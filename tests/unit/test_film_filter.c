@@ -16,7 +16,7 @@ static filter *make_filter(const char *type)
 {
     scene_entity e;
     entity_init(&e, type);
-    hz_error err = {{0}};
+    hz_error err = {0};
     filter *f = filter_create(&e, &err);
     if (!f)
         fail_msg("%s", err.message);
@@ -181,7 +181,7 @@ static void test_parameters(void **state)
     add_float(&e, "xradius", 2.0);
     add_float(&e, "yradius", 1.0);
     add_float(&e, "sigma", 0.7);
-    hz_error err = {{0}};
+    hz_error err = {0};
     filter *f = filter_create(&e, &err);
     assert_non_null(f);
     assert_true(filter_radius(f).x == 2.0 && filter_radius(f).y == 1.0);
@@ -202,7 +202,7 @@ static void test_parameters(void **state)
 
 static void expect_error(scene_entity *e, const char *needle)
 {
-    hz_error err = {{0}};
+    hz_error err = {0};
     filter *f = filter_create(e, &err);
     assert_null(f);
     if (!strstr(err.message, needle))

@@ -25,7 +25,7 @@ static void assert_exact(double got, double want)
 static grid *load(const char *file)
 {
     grid *g = NULL;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (grid_load(file, "density", &g, &err) != HZ_OK)
         fail_msg("%s", err.message);
     return g;
@@ -311,7 +311,7 @@ static void region_max_is_a_majorant(void **state)
 static void rejects_bad_buffers(void **state)
 {
     (void)state;
-    hz_error err = {{0}};
+    hz_error err = {0};
     grid *g = NULL;
     vdb_buffer small = {aligned_alloc(32, 64), 64};
     assert_int_equal(grid_create_from_buffer(&small, "x", &g, &err), HZ_ERROR);
@@ -330,7 +330,7 @@ static void rejects_bad_buffers(void **state)
 static grid *load_vec3(const char *file, const char *name)
 {
     grid *g = NULL;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (grid_load_vec3(file, name, &g, &err) != HZ_OK)
         fail_msg("%s", err.message);
     return g;
@@ -395,7 +395,7 @@ static void vec3_type_mismatch(void **state)
 {
     (void)state;
     grid *g = NULL;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(grid_load_vec3(VOLUMES "vec_ramp.vdb", "density", &g, &err), HZ_ERROR);
     assert_non_null(strstr(err.message, "grid \"density\" is float, expected vec3s"));
     assert_int_equal(grid_load_vec3(VOLUMES "vec_ramp.nvdb", "density", &g, &err), HZ_ERROR);

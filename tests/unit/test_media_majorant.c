@@ -25,7 +25,7 @@ typedef struct {
 static fixture build(const char *file, int32_t pad)
 {
     fixture f = {NULL, {{0}, {0}, 0, NULL, NULL}};
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (grid_load(file, "density", &f.g, &err) != HZ_OK)
         fail_msg("%s", err.message);
     vec3 lo, hi;
@@ -185,7 +185,7 @@ static void empty_support_has_no_cells(void **state)
     (void)state;
     fixture f = build(VOLUMES "box.vdb", 0);
     majorant_grid empty;
-    hz_error err = {{0}};
+    hz_error err = {0};
     int32_t pad[3] = {0, 0, 0};
     assert_int_equal(majorant_grid_build(f.g, v3(1, 1, 1), v3(-1, -1, -1), pad, &empty, &err),
                      HZ_OK);
@@ -207,7 +207,7 @@ static void huge_supports_stay_bounded(void **state)
     const double spans[][2] = {{-1.65e7, 1.65e7}, {-1e9, 1e9}, {-3e9, 3e9}, {0, 2147483647.0}};
     for (size_t k = 0; k < sizeof spans / sizeof spans[0]; ++k) {
         majorant_grid mg;
-        hz_error err = {{0}};
+        hz_error err = {0};
         int32_t pad[3] = {0, 0, 0};
         vec3 lo = v3(spans[k][0], spans[k][0], spans[k][0]);
         vec3 hi = v3(spans[k][1], spans[k][1], spans[k][1]);

@@ -66,7 +66,7 @@ static bool try_load(const unsigned char *bytes, size_t n, char *message, size_t
     const char *path = HAZE_TMP "/hostile.nvdb";
     write_bytes(path, bytes, n);
     grid *g = NULL;
-    hz_error err = {{0}};
+    hz_error err = {0};
     if (grid_load(path, "density", &g, &err) != HZ_OK) {
         assert_non_null(strstr(err.message, "hostile.nvdb"));
         assert_null(strchr(err.message, '\n'));
@@ -96,7 +96,7 @@ static void test_offsets_outside(void **state)
     unsigned char *orig = file_bytes(VOLUMES "box.nvdb", &n);
     size_t g = grid_offset(orig, n);
     unsigned char *b = malloc(n);
-    char msg[1024];
+    char msg[sizeof(hz_error){0}.message];
     memcpy(b, orig, n);
     assert_true(try_load(b, n, msg, sizeof msg)); /* untouched: loads */
 
@@ -129,7 +129,7 @@ static void test_random_tree_bytes(void **state)
     unsigned char *orig = file_bytes(VOLUMES "box.nvdb", &n);
     size_t g = grid_offset(orig, n);
     unsigned char *b = malloc(n);
-    char msg[1024];
+    char msg[sizeof(hz_error){0}.message];
     uint64_t s = 0x9e3779b97f4a7c15u;
     int loaded = 0, refused = 0;
     for (int iter = 0; iter < 150; ++iter) {
@@ -181,7 +181,7 @@ static void test_bad_values(void **state)
         const char *path = HAZE_TMP "/badvalue.nvdb";
         write_bytes(path, b, n);
         grid *gr = NULL;
-        hz_error err = {{0}};
+        hz_error err = {0};
         assert_int_equal(grid_load(path, "density", &gr, &err), HZ_OK);
         assert_int_equal(grid_check_density(gr, &err), HZ_ERROR);
         if (!strstr(err.message, cases[k].message))
@@ -190,7 +190,7 @@ static void test_bad_values(void **state)
     }
     /* The untouched grid passes, with its true range. */
     grid *gr = NULL;
-    hz_error err = {{0}};
+    hz_error err = {0};
     assert_int_equal(grid_load(VOLUMES "box.nvdb", "density", &gr, &err), HZ_OK);
     assert_int_equal(grid_check_density(gr, &err), HZ_OK);
     assert_true(grid_min_value(gr) == 1.0f && grid_max_value(gr) == 1.0f);

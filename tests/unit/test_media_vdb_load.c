@@ -156,7 +156,7 @@ static void truncated_files(void **state)
 static void nvdb_matches_vdb(void **state)
 {
     (void)state;
-    hz_error err = {{0}};
+    hz_error err = {0};
     grid *a = NULL, *b = NULL;
     if (grid_load(VOLUMES "box.vdb", "density", &a, &err) != HZ_OK ||
         grid_load(VOLUMES "box.nvdb", "density", &b, &err) != HZ_OK)

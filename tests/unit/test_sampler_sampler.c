@@ -262,7 +262,7 @@ static void test_from_entity(void **state)
     (void)state;
     scene_entity e;
     sampler s;
-    hz_error err = {{0}};
+    hz_error err = {0};
     entity_init(&e, "zsobol");
     assert_int_equal(sampler_from_entity(&e, 42, &s, &err), HZ_OK);
     assert_int_equal(s.kind, SAMPLER_SOBOL);

@@ -555,6 +555,49 @@ static void test_include(void **state)
     assert_non_null(strstr(err.message, "/nonexistent/x.pbrt: cannot read scene"));
 }
 
+/* Every error of a scene in one run, in file order (the scene, then its
+ * includes in the order opened; line, column), at most HZ_ERRORS_MAX. */
+static void test_all_errors_in_one_run(void **state)
+{
+    (void)state;
+    char dir[512], path[700];
+    snprintf(dir, sizeof dir, "%s/scene_errors", HAZE_TMP);
+    mkdir(dir, 0755);
+    snprintf(path, sizeof path, "%s/inc.pbrt", dir);
+    write_file(path, "Shape \"sphere\" \"float radius\" true\n");
+    snprintf(path, sizeof path, "%s/main.pbrt", dir);
+    write_file(path, "Frobnicate 1 2 [ 3 ] \"x\" true\nWorldBegin\nInclude \"inc.pbrt\"\n"
+                     "AttributeEnd\nShape \"sphere\" \"float\" 1\nShape \"disk\"\n");
+    scene_desc sd;
+    hz_error err;
+    assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
+    char want[2048];
+    snprintf(want, sizeof want,
+             "%s/main.pbrt:1:1: unknown directive 'Frobnicate'; supported: ", dir);
+    assert_memory_equal(err.message, want, strlen(want));
+    const char *l2 = strchr(err.message, '\n');
+    assert_non_null(l2);
+    snprintf(want, sizeof want,
+             "\n%s/main.pbrt:4:1: AttributeEnd without a matching AttributeBegin\n"
+             "%s/main.pbrt:5:16: parameter declaration \"float\" must be \"type name\"\n"
+             "%s/inc.pbrt:1:31: parameter \"float radius\" expects numbers, got bool 'true'",
+             dir, dir, dir);
+    assert_string_equal(l2, want);
+
+    /* 30 errors: the first 20 (in order) and a count of the rest. */
+    char text[2048] = "WorldBegin\n";
+    for (int i = 0; i < 30; ++i)
+        strcat(text, "AttributeEnd\n");
+    assert_int_equal(scene_parse_string(text, "t.pbrt", &sd, &err), HZ_ERROR);
+    int lines = 1;
+    for (const char *c = err.message; *c; ++c)
+        lines += *c == '\n';
+    assert_int_equal(lines, 21);
+    assert_non_null(strstr(err.message, "t.pbrt:21:1: AttributeEnd"));
+    assert_null(strstr(err.message, "t.pbrt:22:1"));
+    assert_non_null(strstr(err.message, "\n... and 10 more errors"));
+}
+
 /* pbrt-v4 reads one token stream: the end of an included file continues the
  * includer's, so a directive that ends an included file takes the parameters
  * (even the rest of a bracket) after the Include. */
@@ -739,6 +782,7 @@ int main(void)
         cmocka_unit_test(test_param_values),
         cmocka_unit_test(test_include),
         cmocka_unit_test(test_include_continues_stream),
+        cmocka_unit_test(test_all_errors_in_one_run),
         cmocka_unit_test(test_garbage),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
