@@ -141,6 +141,11 @@ report_bounce() {
             if ($2 == "singlescatter") t0 = $5
             printf "| %s | %s | %s | %s | %.2f | %s | %s | %+.1f%% |\n", $2, $3, $4, $5, (t0 > 0 ? $5 / t0 : 0), $6, $7, 100 * $8 }' "$RESULTS/bounce.tsv"
         echo
+        # Against pbrt-v4 (PBRT set): for unbiased estimators relMSE x time is
+        # constant, so their ratio is haze's time over pbrt-v4's at equal error.
+        awk -F'\t' -v s="$scene" 'NR > 1 && $1 == s && $2 == "volpath" && $3 == 64 { h = $5 * $7 }
+            NR > 1 && $1 == s && $2 == "pbrt-v4" { p = $5 * $7 }
+            END { if (h > 0 && p > 0) printf "haze volpath (maxdepth 64) needs %.2fx pbrt-v4'"'"'s time for the same error (relMSE x time ratio; target <= 1, aim 0.5).\n\n", h / p }' "$RESULTS/bounce.tsv"
     done
 }
 
