@@ -314,9 +314,21 @@ static RTCScene new_scene(RTCDevice device)
     return s;
 }
 
+/* A shape's own error (it has a place) goes to `errs` when there is one: the
+ * shape is left out and the build goes on. */
+static hz_status shape_failed(geom_shape *s, hz_errors *errs, hz_error *err)
+{
+    if (!errs || !err->loc.file)
+        return HZ_ERROR;
+    hz_errors_add(errs, err);
+    s->left_out = true;
+    s->area_light = -1;
+    return HZ_OK;
+}
+
 static hz_status build_objects(geometry *g, scene_desc *sd, const material *materials,
                                size_t material_count, const material *default_material,
-                               hz_error *err)
+                               hz_errors *errs, hz_error *err)
 {
     g->objects = calloc(sd->object_count ? sd->object_count : 1, sizeof *g->objects);
     if (!g->objects)
@@ -334,17 +346,22 @@ static hz_status build_objects(geometry *g, scene_desc *sd, const material *mate
         pr->shape_count = oe->shape_count;
         for (size_t i = 0; i < oe->shape_count; ++i) {
             shape_entity *se = &sd->object_shapes[oe->first_shape + i];
-            if (se->has_area_light)
-                return hz_fail_at(err, se->entity.loc,
-                                  "area lights inside object instances are not supported "
-                                  "(pbrt-v4 refuses them too)");
+            if (se->has_area_light) {
+                hz_fail_at(err, se->entity.loc,
+                           "area lights inside object instances are not supported "
+                           "(pbrt-v4 refuses them too)");
+                if (shape_failed(&pr->shapes[i], errs, err) != HZ_OK)
+                    return HZ_ERROR;
+                continue;
+            }
             /* Prototype space = the object's world space; instances carry
              * render_from_world to the instance transform. */
             transform space_from_object =
                 transform_compose(transform_identity(), se->world_from_object);
             if (build_shape(g->device, pr->scene, (unsigned)i, sd, se, space_from_object,
                             materials, material_count, default_material, &pr->shapes[i],
-                            err) != HZ_OK)
+                            err) != HZ_OK &&
+                shape_failed(&pr->shapes[i], errs, err) != HZ_OK)
                 return HZ_ERROR;
         }
         rtcCommitScene(pr->scene);
@@ -470,7 +487,7 @@ static hz_status build_moving_shape(geometry *g, scene_desc *sd, size_t i,
 
 static hz_status build_shapes(geometry *g, scene_desc *sd, transform render_from_world,
                               const material *materials, size_t material_count,
-                              const material *default_material, hz_error *err)
+                              const material *default_material, hz_errors *errs, hz_error *err)
 {
     for (size_t i = 0; i < sd->shape_count; ++i) {
         shape_entity *se = &sd->shapes[i];
@@ -487,13 +504,15 @@ static hz_status build_shapes(geometry *g, scene_desc *sd, transform render_from
                         return hz_fail(err, "out of memory");
                 }
                 if (build_moving_shape(g, sd, i, &a, materials, material_count, default_material,
-                                       err) != HZ_OK)
+                                       err) != HZ_OK &&
+                    shape_failed(&g->shapes[i], errs, err) != HZ_OK)
                     return HZ_ERROR;
                 continue;
             }
         }
         if (build_shape(g->device, g->scene, (unsigned)i, sd, se, render_from_object, materials,
-                        material_count, default_material, &g->shapes[i], err) != HZ_OK)
+                        material_count, default_material, &g->shapes[i], err) != HZ_OK &&
+            shape_failed(&g->shapes[i], errs, err) != HZ_OK)
             return HZ_ERROR;
     }
     return HZ_OK;
@@ -552,7 +571,7 @@ static RTCDevice new_device(void)
 
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
-                          geometry **out, hz_error *err)
+                          hz_errors *errs, geometry **out, hz_error *err)
 {
     *out = NULL;
     geometry *g = calloc(1, sizeof *g);
@@ -579,9 +598,9 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
         return hz_fail(err, "out of memory");
     }
     g->shape_count = sd->shape_count;
-    if (build_shapes(g, sd, render_from_world, materials, material_count, default_material,
+    if (build_shapes(g, sd, render_from_world, materials, material_count, default_material, errs,
                      err) != HZ_OK ||
-        build_objects(g, sd, materials, material_count, default_material, err) != HZ_OK ||
+        build_objects(g, sd, materials, material_count, default_material, errs, err) != HZ_OK ||
         build_instances(g, sd, render_from_world, err) != HZ_OK) {
         geometry_destroy(g);
         return HZ_ERROR;

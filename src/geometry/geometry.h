@@ -49,6 +49,7 @@ typedef struct {
     geometry_kind kind;
     const material *material; /* never NULL (the default material when none is named) */
     int area_light;           /* index into the scene's lights, -1 = not an emitter */
+    bool left_out;            /* refused with an error (geometry_create's errs): not built */
     /* pbrt-v4: ReverseOrientation XOR a handedness-swapping transform flips
      * the geometric normal (triangles and spheres alike). */
     bool flip_normal;
@@ -86,10 +87,13 @@ typedef struct geometry geometry;
  * `materials` are indexed by shape_entity.material; `default_material` is used
  * for -1. Moving shapes and instances move over sd's TransformTimes; keyframes
  * of different handedness are an error. Errors name the shape's
- * file:line:column. */
+ * file:line:column. With `errs` (may be NULL), a shape's own error (its
+ * parameters, material, media) is added there and the shape left out
+ * (geom_shape.left_out), so one run reports every shape's; what is not a
+ * shape's (memory, Embree) still ends the build. */
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
-                          geometry **out, hz_error *err);
+                          hz_errors *errs, geometry **out, hz_error *err);
 void geometry_destroy(geometry *g);
 
 /* The committed Embree scene (RTCScene; declared without Embree's header),

@@ -57,7 +57,19 @@ static hz_status check_motion(scene_desc *sd, FILE *warn, hz_error *err)
     return HZ_OK;
 }
 
-static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_error *err)
+/* Every error of the scene in one run: an error with a place (an entity's)
+ * is collected and the build goes on without that entity (HZ_OK); one
+ * without (memory, devices) is left in `err` and ends the build (HZ_ERROR). */
+static hz_status collect(hz_errors *errs, const hz_error *err)
+{
+    if (!err->loc.file)
+        return HZ_ERROR;
+    hz_errors_add(errs, err);
+    return HZ_OK;
+}
+
+static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_errors *errs,
+                                 hz_error *err)
 {
     rs->default_material = material_default();
     rs->materials = calloc(sd->material_count ? sd->material_count : 1, sizeof *rs->materials);
@@ -65,13 +77,16 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_error *err
         return hz_fail(err, "out of memory");
     rs->material_count = sd->material_count;
     for (size_t i = 0; i < sd->material_count; ++i)
-        if (material_from_entity(&sd->materials[i], &rs->materials[i], err) != HZ_OK)
-            return HZ_ERROR;
+        if (material_from_entity(&sd->materials[i], &rs->materials[i], err) != HZ_OK) {
+            if (collect(errs, err) != HZ_OK)
+                return HZ_ERROR;
+            rs->materials[i] = material_default();
+        }
     return HZ_OK;
 }
 
 static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render_from_world,
-                              FILE *warn, hz_error *err)
+                              FILE *warn, hz_errors *errs, hz_error *err)
 {
     size_t n = sd->light_count;
     for (size_t i = 0; i < sd->shape_count; ++i)
@@ -81,14 +96,15 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
         return hz_fail(err, "out of memory");
     for (size_t i = 0; i < sd->light_count; ++i) {
         if (light_from_entity(&sd->lights[i], render_from_world, &rs->lights[rs->light_count],
-                              err) != HZ_OK)
+                              err) == HZ_OK)
+            rs->light_count++;
+        else if (collect(errs, err) != HZ_OK)
             return HZ_ERROR;
-        rs->light_count++;
     }
-    for (size_t i = 0; i < sd->shape_count; ++i) {
-        if (!sd->shapes[i].has_area_light)
-            continue;
+    for (size_t i = 0; rs->geom && i < sd->shape_count; ++i) {
         geom_shape *gs = geometry_shape(rs->geom, i);
+        if (!sd->shapes[i].has_area_light || gs->left_out)
+            continue;
         if (gs->material->kind == MATERIAL_INTERFACE) {
             /* As pbrt-v4: an interface is no surface, so it cannot emit. */
             file_loc l = sd->shapes[i].area_light.loc;
@@ -100,9 +116,10 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
             continue;
         }
         if (light_area_from_entity(&sd->shapes[i].area_light, gs, &rs->lights[rs->light_count],
-                                   err) != HZ_OK)
+                                   err) == HZ_OK)
+            gs->area_light = (int)rs->light_count++;
+        else if (collect(errs, err) != HZ_OK)
             return HZ_ERROR;
-        gs->area_light = (int)rs->light_count++;
     }
     return HZ_OK;
 }
@@ -110,31 +127,40 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
 /* Media in scene_desc order (shapes refer to them by that index); the camera's
  * medium is resolved by name now that the whole file is read. */
 static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_from_world,
-                             hz_error *err)
+                             hz_errors *errs, hz_error *err)
 {
     rs->media = calloc(sd->medium_count ? sd->medium_count : 1, sizeof *rs->media);
     if (!rs->media)
         return hz_fail(err, "out of memory");
     for (size_t i = 0; i < sd->medium_count; ++i) {
+        /* A refused medium keeps its slot (shapes refer to media by index),
+         * empty. */
         if (medium_from_entity(&sd->media[i], render_from_world, sd->transform_start_time,
-                               sd->transform_end_time, &rs->media[i], err) != HZ_OK)
-            return HZ_ERROR;
+                               sd->transform_end_time, &rs->media[i], err) != HZ_OK) {
+            if (collect(errs, err) != HZ_OK)
+                return HZ_ERROR;
+            memset(&rs->media[i], 0, sizeof rs->media[i]);
+        }
         rs->medium_count++;
     }
     rs->cam.medium = scene_find_medium(sd, sd->camera.medium);
-    if (rs->cam.medium == SCENE_MEDIUM_UNDEFINED)
-        return hz_fail_at(err, sd->camera.entity.loc,
-                          "the camera sits in medium \"%s\", which is not defined "
-                          "(MakeNamedMedium)",
-                          sd->camera.medium);
+    if (rs->cam.medium == SCENE_MEDIUM_UNDEFINED &&
+        collect(errs, (hz_fail_at(err, sd->camera.entity.loc,
+                                  "the camera sits in medium \"%s\", which is not defined "
+                                  "(MakeNamedMedium)",
+                                  sd->camera.medium),
+                       err)) != HZ_OK)
+        return HZ_ERROR;
     /* pbrt-v4 checks a light's medium name too (haze does not use it: shadow
      * rays take the medium of the point they leave). */
     for (size_t i = 0; i < sd->light_count; ++i)
-        if (scene_find_medium(sd, sd->lights[i].medium) == SCENE_MEDIUM_UNDEFINED)
-            return hz_fail_at(err, sd->lights[i].entity.loc,
-                              "the light sits in medium \"%s\", which is not defined "
-                              "(MakeNamedMedium)",
-                              sd->lights[i].medium);
+        if (scene_find_medium(sd, sd->lights[i].medium) == SCENE_MEDIUM_UNDEFINED &&
+            collect(errs, (hz_fail_at(err, sd->lights[i].entity.loc,
+                                      "the light sits in medium \"%s\", which is not defined "
+                                      "(MakeNamedMedium)",
+                                      sd->lights[i].medium),
+                           err)) != HZ_OK)
+            return HZ_ERROR;
     return HZ_OK;
 }
 
@@ -168,56 +194,72 @@ static hz_status read_options(param_list *pl, const render_options *opt, uint64_
     return params_finish(pl, "Option", err);
 }
 
-static hz_status build(render_scene *rs, scene_desc *sd, const render_options *opt, FILE *warn,
-                       hz_error *err)
+/* Builds what it can; see collect(). */
+static hz_status build_all(render_scene *rs, scene_desc *sd, const render_options *opt,
+                           FILE *warn, hz_errors *errs, hz_error *err)
 {
+#define CHECK(call)                                                                                \
+    if ((call) != HZ_OK && collect(errs, err) != HZ_OK)                                            \
+    return HZ_ERROR
     uint64_t seed = opt ? opt->seed : 0;
-    if (read_options(&sd->options, opt, &seed, &rs->options, err) != HZ_OK)
-        return HZ_ERROR;
+    CHECK(read_options(&sd->options, opt, &seed, &rs->options, err));
     film_params fp;
-    if (film_params_from_entity_region(&sd->film, opt ? &opt->region : NULL, &fp, NULL, err) !=
-        HZ_OK)
+    bool have_film =
+        film_params_from_entity_region(&sd->film, opt ? &opt->region : NULL, &fp, NULL, err) ==
+        HZ_OK;
+    if (!have_film && collect(errs, err) != HZ_OK)
         return HZ_ERROR;
-    if (opt && opt->output) {
+    if (have_film && opt && opt->output) {
         if (strlen(opt->output) >= sizeof fp.filename)
             return hz_fail(err, "output file name too long: %s", opt->output);
         snprintf(fp.filename, sizeof fp.filename, "%s", opt->output);
     }
     rs->filt = filter_create(&sd->filter, err);
-    if (!rs->filt)
+    if (!rs->filt && collect(errs, err) != HZ_OK)
         return HZ_ERROR;
-    if (sampler_from_entity(&sd->sampler, seed, &rs->smp, err) != HZ_OK)
+    if (sampler_from_entity(&sd->sampler, seed, &rs->smp, err) == HZ_OK) {
+        if (opt && opt->spp > 0)
+            sampler_set_spp(&rs->smp, opt->spp);
+        if (rs->smp.warning[0] && warn)
+            fprintf(warn, "%s:%d:%d: warning: %s\n",
+                    sd->sampler.loc.file ? sd->sampler.loc.file : "<input>",
+                    sd->sampler.loc.line, sd->sampler.loc.column, rs->smp.warning);
+    } else if (collect(errs, err) != HZ_OK) {
         return HZ_ERROR;
-    if (opt && opt->spp > 0)
-        sampler_set_spp(&rs->smp, opt->spp);
-    if (rs->smp.warning[0] && warn)
-        fprintf(warn, "%s:%d:%d: warning: %s\n",
-                sd->sampler.loc.file ? sd->sampler.loc.file : "<input>", sd->sampler.loc.line,
-                sd->sampler.loc.column, rs->smp.warning);
-    if (camera_create(&sd->camera, &fp, &rs->cam, err) != HZ_OK)
-        return HZ_ERROR;
-    rs->film = film_create(&fp, err);
-    if (!rs->film)
-        return HZ_ERROR;
-    /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
-    film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
+    }
+    bool have_camera = false;
+    if (have_film) {
+        have_camera = camera_create(&sd->camera, &fp, &rs->cam, err) == HZ_OK;
+        if (!have_camera && collect(errs, err) != HZ_OK)
+            return HZ_ERROR;
+    }
+    if (have_camera) {
+        rs->film = film_create(&fp, err);
+        if (!rs->film) {
+            /* The film's own failures (its size) name the Film. */
+            char msg[sizeof err->message];
+            memcpy(msg, err->message, sizeof msg);
+            return hz_fail_at(err, sd->film.loc, "%s", msg);
+        }
+        /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
+        film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
+    }
     integrator_params ip;
-    if (integrator_params_from_entity(&sd->integrator, warn, &ip, err) != HZ_OK)
-        return HZ_ERROR;
-
-    if (check_motion(sd, warn, err) != HZ_OK)
-        return HZ_ERROR;
-    if (build_materials(rs, sd, err) != HZ_OK)
+    CHECK(integrator_params_from_entity(&sd->integrator, warn, &ip, err));
+    CHECK(check_motion(sd, warn, err));
+    if (build_materials(rs, sd, errs, err) != HZ_OK)
         return HZ_ERROR;
     /* Render space: the world translated so the camera sits at the origin. */
-    transform render_from_world = transform_inverse(rs->cam.world_from_render);
-    if (geometry_create(sd, render_from_world, rs->materials, rs->material_count,
-                        &rs->default_material, &rs->geom, err) != HZ_OK)
+    transform render_from_world =
+        have_camera ? transform_inverse(rs->cam.world_from_render) : transform_identity();
+    CHECK(geometry_create(sd, render_from_world, rs->materials, rs->material_count,
+                          &rs->default_material, errs, &rs->geom, err));
+    if (build_lights(rs, sd, render_from_world, warn, errs, err) != HZ_OK ||
+        build_media(rs, sd, render_from_world, errs, err) != HZ_OK)
         return HZ_ERROR;
-    if (build_lights(rs, sd, render_from_world, warn, err) != HZ_OK)
-        return HZ_ERROR;
-    if (build_media(rs, sd, render_from_world, err) != HZ_OK)
-        return HZ_ERROR;
+#undef CHECK
+    if (errs->count || errs->dropped)
+        return HZ_OK; /* reported by the caller; nothing to render */
     /* pbrt-v4 renders such a scene with "volpath" (maxdepth 5): say once
      * that haze's default is single scattering. */
     if (warn && sd->integrator.loc.line == 0 && rs->medium_count > 0)
@@ -228,6 +270,17 @@ static hz_status build(render_scene *rs, scene_desc *sd, const render_options *o
                 sd->file_count ? sd->files[0] : "<input>");
     integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media, rs->medium_count};
     return integrator_init(&rs->integ, &ip, &in, err);
+}
+
+/* Every error with a place in one run (sorted in file order, at most
+ * HZ_ERRORS_MAX), ended early only by one without a place. */
+static hz_status build(render_scene *rs, scene_desc *sd, const render_options *opt, FILE *warn,
+                       hz_error *err)
+{
+    hz_errors errs = {0};
+    if (build_all(rs, sd, opt, warn, &errs, err) != HZ_OK)
+        hz_errors_add(&errs, err);
+    return hz_errors_finish(&errs, sd->files, sd->file_count, err);
 }
 
 hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *warn,

@@ -90,6 +90,53 @@ static void test_scene_corpus(void **state)
     }
 }
 
+/* A scene's errors come all at once, one "haze:" line each, in file order
+ * (the scene, then its include), whether the parser or the scene build finds
+ * them; the good output stays. */
+static void test_all_errors_in_one_run(void **state)
+{
+    (void)state;
+    const char *inc = HAZE_TMP "/bad_input_many.inc";
+    const char *scene = HAZE_TMP "/bad_input_many.pbrt";
+    write_text_file(inc, "Shape \"sphere\" \"float radius\" 1 \"float nonsense\" 2\n");
+    write_text_file(scene,
+                    "Camera \"perspective\" \"float fov\" 45 \"float bogus\" 1\n"
+                    "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                    "WorldBegin\n"
+                    "Include \"bad_input_many.inc\"\n"
+                    "Material \"conductor\"\n"
+                    "Shape \"cylinder\" \"float radius\" 1\n"
+                    "LightSource \"goniometric\" \"rgb I\" [1 1 1]\n"
+                    "MakeNamedMedium \"m\" \"string type\" \"cloud\"\n"
+                    "AttributeBegin\nAreaLightSource \"diffuse\" \"float what\" 3\n"
+                    "Shape \"sphere\"\nAttributeEnd\n");
+    const char *good = HAZE_TMP "/bad_input_good.exr";
+    write_good_output(good);
+    char args[2048], out[8192];
+    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet", scene, good);
+    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    static const char *want[] = {
+        "bad_input_many.pbrt:1:37: unused parameter \"float bogus\"",
+        "bad_input_many.pbrt:5:1: Material \"conductor\" is not supported",
+        "bad_input_many.pbrt:6:1: unknown shape \"cylinder\"",
+        "bad_input_many.pbrt:7:1: LightSource \"goniometric\" is not supported",
+        "bad_input_many.pbrt:8:1: MakeNamedMedium \"m\": medium type \"cloud\"",
+        "bad_input_many.pbrt:10:27: unused parameter \"float what\"",
+        "bad_input_many.inc:1:33: unused parameter \"float nonsense\"",
+    };
+    const char *line = out;
+    for (size_t i = 0; i < sizeof want / sizeof want[0]; ++i) {
+        assert_non_null(line);
+        if (strncmp(line, "haze: ", 6) != 0 || !strstr(line, want[i]) ||
+            (strchr(line, '\n') && strstr(line, want[i]) > strchr(line, '\n')))
+            fail_msg("line %zu lacks '%s': %s", i + 1, want[i], out);
+        line = strchr(line, '\n');
+        line = line ? line + 1 : NULL;
+    }
+    assert_true(line == NULL || *line == '\0');
+    assert_good_output_kept(good);
+}
+
 /* Corrupt images given to haze diff: exit 2 (unreadable input), one line. */
 static void test_corrupt_exr_diff(void **state)
 {
@@ -130,6 +177,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_scene_corpus),
+        cmocka_unit_test(test_all_errors_in_one_run),
         cmocka_unit_test(test_corrupt_exr_diff),
         cmocka_unit_test(test_unwritable_output),
     };
