@@ -334,6 +334,19 @@ static rgb scatter_at(const singlescatter_scene *vs, int mi, const light *l, vec
     return rgb_mul(rgb_mul(m->sigma_s, rgb_exp_neg(medium_sigma_t(m), s)), Ls);
 }
 
+/* Emission gathered over a homogeneous segment of length len, exactly:
+ * the integral of T(s) sigma_a Le over [0, len] = sigma_a Le (1 - e^{-sigma_t len}) / sigma_t
+ * per channel (a channel that does not attenuate does not absorb: 0). */
+static rgb homogeneous_emission(const medium *m, rgb sigma_t, double len)
+{
+    double e[3];
+    for (int c = 0; c < 3; ++c) {
+        double st = rgb_ch(sigma_t, c), sa = rgb_ch(m->sigma_a, c);
+        e[c] = st > 0.0 ? sa * rgb_ch(m->Le, c) * -expm1(-st * len) / st : 0.0;
+    }
+    return rgb_make(e[0], e[1], e[2]);
+}
+
 static void homogeneous_segment(const singlescatter_scene *vs, int mi, vec3 o, vec3 w, double t0,
                                 double t1, rgb *beta, rgb *L, sampler_state *u,
                                 media_walk *walk)
@@ -369,6 +382,8 @@ static void homogeneous_segment(const singlescatter_scene *vs, int mi, vec3 o, v
         }
         *L = rgb_add(*L, rgb_mul(*beta, Lseg));
     }
+    if (m->emissive && len > 0.0)
+        *L = rgb_add(*L, rgb_mul(*beta, homogeneous_emission(m, sigma_t, len)));
     *beta = rgb_mul(*beta, rgb_exp_neg(sigma_t, len));
 }
 

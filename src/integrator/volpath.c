@@ -354,6 +354,17 @@ static bool path_event(void *ctx, const volpath_event *ev)
     }
     int h = pa->hero;
     double sm = rgb_ch(ev->sigma_maj, h);
+    /* Medium emission at every tentative collision (pbrt-v4's estimator:
+     * beta T_maj sigma_a Le / (T_maj sigma_maj) in the hero channel, MIS
+     * over the channels through r_e). */
+    if (pa->depth < pa->sc->settings.max_depth && !rgb_is_black(ev->Le)) {
+        double pdf = rgb_ch(ev->T_maj, h) * sm;
+        rgb betap = rgb_div(rgb_mul(pa->beta, ev->T_maj), pdf);
+        rgb r_e = rgb_div(rgb_mul(pa->r_u, rgb_mul(ev->sigma_maj, ev->T_maj)), pdf);
+        double r = rgb_avg(r_e);
+        if (r > 0.0)
+            pa->L = rgb_add(pa->L, rgb_div(rgb_mul(betap, rgb_mul(ev->sigma_a, ev->Le)), r));
+    }
     double p_absorb = rgb_ch(ev->sigma_a, h) / sm, p_scatter = rgb_ch(ev->sigma_s, h) / sm;
     double p_null = fmax(0.0, 1.0 - p_absorb - p_scatter);
     double u = rng_uniform(&pa->walk.r) * (p_absorb + p_scatter + p_null);

@@ -14,7 +14,8 @@
  * the roulette (as pbrt-v4), a per-path rng (core/rng.h, seeded from the
  * sampler) for the media's tracking decisions: the image depends on the
  * scene and seed only, not on the thread count. A scene without media runs
- * no media code. Medium emission is refused by the medium factory. */
+ * no media code. Emitting media add their emission at every tentative
+ * collision (pbrt-v4's estimator), while depth < maxdepth. */
 #ifndef HAZE_INTEGRATOR_VOLPATH_H
 #define HAZE_INTEGRATOR_VOLPATH_H
 

@@ -55,7 +55,7 @@ static bool track_span(tracker *tr, double a, double b, double bound)
                                                     &tr->walk->lookups)
                                 : 1.0;
         volpath_event ev = {tn, rgb_scale(m->sigma_a, d), rgb_scale(m->sigma_s, d), sigma_maj,
-                            tr->T_maj};
+                            tr->T_maj, m->Le};
         if (!tr->fn(tr->ctx, &ev))
             return false;
         tr->T_maj = rgb_grey(1.0);

@@ -16,11 +16,12 @@
 #include "integrator/path.h"
 
 /* One tentative collision at distance t: the coefficients there, the
- * majorant, and the majorant transmittance since the previous collision (or
- * the segment's start). */
+ * majorant, the majorant transmittance since the previous collision (or
+ * the segment's start), and the emission. */
 typedef struct {
     double t;
     rgb sigma_a, sigma_s, sigma_maj, T_maj;
+    rgb Le; /* emitted radiance there (the source term is sigma_a Le) */
 } volpath_event;
 
 /* Returns false to end the walk. */

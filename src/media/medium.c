@@ -228,13 +228,15 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
     double g = params_float(pl, "g", 0.0);
     if (!(fabs(g) < 1.0))
         params_reject(pl, "g", "\"g\" must lie in (-1, 1), got %g", g);
-    /* Emission: pbrt-v4's "Le" times "Lescale". Only zero emission is accepted. */
-    rgb Le = params_rgb(pl, "Le", rgb_grey(0.0));
+    /* Emission: pbrt-v4's "Le" (homogeneous media only) times "Lescale". */
+    rgb Le = is_grid ? rgb_grey(0.0) : params_rgb(pl, "Le", rgb_grey(0.0));
     double Le_scale = params_float(pl, "Lescale", 1.0);
-    if (!isfinite(Le_scale))
-        params_reject(pl, "Lescale", "\"Lescale\" must be finite, got %g", Le_scale);
-    else if (!rgb_is_black(Le) && Le_scale != 0.0)
-        params_reject(pl, "Le", "emission (\"Le\") is not supported");
+    if (!(isfinite(Le_scale) && Le_scale >= 0.0))
+        params_reject(pl, "Lescale", "\"Lescale\" must be finite and non-negative, got %g",
+                      Le_scale);
+    else if (!(rgb_is_finite(rgb_scale(Le, Le_scale)) && Le.r >= 0.0 && Le.g >= 0.0 &&
+               Le.b >= 0.0))
+        params_reject(pl, "Le", "\"Le\" times \"Lescale\" must be finite and non-negative");
 
     const char *filename = NULL, *gridname = NULL;
     motion_params mp = {NULL, 1.0, time_start, time_start, time_end};
@@ -279,8 +281,11 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
     out->sigma_a = sa;
     out->sigma_s = ss;
     out->g = g;
-    if (!is_grid)
+    if (!is_grid) {
+        out->Le = rgb_scale(Le, Le_scale);
+        out->emissive = !rgb_is_black(out->Le) && !rgb_is_black(sa);
         return HZ_OK;
+    }
 
     if (!filename || !filename[0]) {
         memset(out, 0, sizeof *out);

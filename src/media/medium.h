@@ -2,7 +2,13 @@
  * dispatched with a switch. Built from MakeNamedMedium entities:
  *
  *   "homogeneous": sigma_a, sigma_s (spectra, default 1), scale (default 1),
- *                  g (Henyey–Greenstein, default 0).
+ *                  g (Henyey–Greenstein, default 0), Le (an illuminant
+ *                  spectrum, default 0, normalised as a light's: "rgb Le"
+ *                  stays that RGB, "blackbody Le" has luminance 1) times
+ *                  Lescale (default 1).
+ *
+ * Emission is absorbing emission, as in pbrt-v4: the source term along a ray
+ * is sigma_a(x) Le(x), so a medium that does not absorb does not glow.
  *   "nanovdb":     filename (.vdb or .nvdb, relative to the scene file that
  *                  declares the medium), gridname (default "density"), and the
  *                  same sigma_a, sigma_s, scale, g; the coefficients are per unit
@@ -46,6 +52,8 @@ typedef struct {
     const char *name;        /* the MakeNamedMedium name (points into the scene_desc) */
     rgb sigma_a, sigma_s;    /* `scale` applied; grid media: per unit density */
     double g;                /* Henyey–Greenstein asymmetry */
+    rgb Le;                  /* homogeneous emission (Lescale applied); source sigma_a Le */
+    bool emissive;           /* some emission: the integrators gather it */
     struct {
         grid *grid;                  /* owned */
         /* Grid index space from render space: affine, so a ray o + t d in render
@@ -83,8 +91,7 @@ typedef struct {
 
 /* Builds the medium of `e` in render space. Unknown types, missing or unreadable
  * files, a missing grid, non-float grids, negative coefficients and |g| >= 1
- * are errors naming the entity's file:line:column; unused parameters too.
- * Emission (pbrt-v4's "Le") is refused unless it is zero. */
+ * are errors naming the entity's file:line:column; unused parameters too. */
 /* `time_start`/`time_end` are the scene's TransformTimes (a medium whose start and
  * end transforms differ moves between them). */
 hz_status medium_from_entity(medium_entity *e, transform render_from_world, double time_start,
