@@ -28,6 +28,10 @@
 //                      voxel size 1/64, world [-1, 1] x [0, 2] x [-1, 1]: the
 //                      active voxels are about 1% of the bounding box (make
 //                      bench's occupancy benchmark)
+//   box_fire.vdb/.nvdb box.vdb's "density" and a "temperature" of 2500 (kelvin)
+//                      on the same voxels, and "temperature_coarse": 2500 on
+//                      voxels [-2,17]^3 of size 1/16 (its own transform,
+//                      covering the box and one density voxel beyond it)
 //   vec_ramp.vdb/.nvdb "v": the linear field v(i,j,k) = (0.5 i - 1, 0.25 j, 2 - k)
 //                      on voxels [0,7]^3 (voxel size 0.25, offset (1, 2, 3)), and
 //                      "density": 1 on the same voxels (for type checks); the
@@ -139,6 +143,20 @@ FloatGrid::Ptr box()
         for (int j = 0; j < 32; ++j)
             for (int k = 0; k < 32; ++k)
                 acc.setValue(Coord(i, j, k), 1.0f);
+    return grid;
+}
+
+// A float grid named `name` holding `value` on voxels [lo, hi]^3 of size h.
+FloatGrid::Ptr constant_cube(const char *name, double h, int lo, int hi, float value)
+{
+    FloatGrid::Ptr grid = make_density(h, openvdb::Vec3d(0.0));
+    grid->setName(name);
+    grid->setGridClass(openvdb::GRID_UNKNOWN);
+    auto acc = grid->getAccessor();
+    for (int i = lo; i <= hi; ++i)
+        for (int j = lo; j <= hi; ++j)
+            for (int k = lo; k <= hi; ++k)
+                acc.setValue(Coord(i, j, k), value);
     return grid;
 }
 
@@ -382,13 +400,26 @@ void write_nvdb(const std::string &path,
 
 int main(int argc, char **argv)
 {
-    if (argc != 2) {
-        std::fprintf(stderr, "usage: %s OUTDIR\n", argv[0]);
+    if (argc != 2 && argc != 3) {
+        std::fprintf(stderr, "usage: %s OUTDIR [--only-new]\n", argv[0]);
         return 2;
     }
     const std::string dir = argv[1];
     try {
         openvdb::initialize();
+        {
+            FloatGrid::Ptr b = box();
+            FloatGrid::Ptr t = constant_cube("temperature", 1.0 / 32.0, 0, 31, 2500.0f);
+            FloatGrid::Ptr tc = constant_cube("temperature_coarse", 1.0 / 16.0, -2, 17, 2500.0f);
+            write_vdb(dir + "/box_fire.vdb", {b, t, tc});
+            std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
+            h.push_back(to_nano(*b));
+            h.push_back(to_nano(*t));
+            h.push_back(to_nano(*tc));
+            write_nvdb(dir + "/box_fire.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
+        }
+        if (argc > 2 && std::string(argv[2]) == "--only-new")
+            return 0;
         FloatGrid::Ptr b = box();
         write_vdb(dir + "/box.vdb", {b});
         {

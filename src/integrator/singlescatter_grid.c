@@ -48,6 +48,16 @@ static inline double grid_ray_density(grid_ray *gr, double t, media_walk *walk)
     return medium_density_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
 }
 
+/* Density and emitted radiance at o + t d (an emissive medium). */
+static inline double grid_ray_density_Le(grid_ray *gr, double t, media_walk *walk, rgb *Le)
+{
+    vec3 p = medium_point_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
+    ++walk->lookups;
+    double d = grid_density_index(gr->m->grid.grid, &gr->acc.density, p);
+    *Le = d > 0.0 ? medium_grid_Le(gr->m, &gr->acc, p, &walk->lookups) : rgb_grey(0.0);
+    return d;
+}
+
 static inline bool next_cell(majorant_walk *mw, majorant_segment *seg, media_walk *walk)
 {
     if (!majorant_walk_next(mw, seg))
@@ -236,7 +246,7 @@ typedef struct {
     const medium *m;
     vec3 o, w, wo;
     rgb sigma_t;
-    bool scatters;
+    bool scatters, emissive;
     grid_ray gr;
     strata s;
     rgb T, Lseg;
@@ -262,10 +272,20 @@ static bool march_strata(segment_walk *sw, double b)
     const medium *m = sw->m;
     rgb sigma_t = sw->sigma_t;
     for (; strata_before(s, b); strata_next(s)) {
-        double dens = grid_ray_density(&sw->gr, s->t, sw->walk);
+        rgb Le = rgb_grey(0.0);
+        double dens = sw->emissive ? grid_ray_density_Le(&sw->gr, s->t, sw->walk, &Le)
+                                   : grid_ray_density(&sw->gr, s->t, sw->walk);
         if (dens <= 0.0)
             continue;
         rgb step_t = rgb_exp_neg(sigma_t, dens * s->dt);
+        if (sw->emissive) {
+            /* Emission sigma_a Le over the stratum, exactly for its constant
+             * density: (1 - e^{-sigma_t dt}) sigma_a / sigma_t Le. */
+            rgb e = rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) * m->sigma_a.r / sigma_t.r : 0.0,
+                             sigma_t.g > 0.0 ? (1.0 - step_t.g) * m->sigma_a.g / sigma_t.g : 0.0,
+                             sigma_t.b > 0.0 ? (1.0 - step_t.b) * m->sigma_a.b / sigma_t.b : 0.0);
+            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, e), Le));
+        }
         if (sw->scatters) {
             rgb frac =
                 rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) * m->sigma_s.r / sigma_t.r : 0.0,
@@ -318,12 +338,23 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
         }
         if (!at_sample)
             return true;
-        if (sw->scatters) {
-            double dens = grid_ray_density(&sw->gr, s->t, sw->walk);
-            if (dens > 0.0)
+        if (sw->scatters || sw->emissive) {
+            /* The stratum's sample of in-scattering and emission, weighted by
+             * the tracked transmittance to it: unbiased, as the collisions do
+             * not depend on the sample. (Emission is gathered here rather
+             * than at the collisions: a residual-tracking cell of constant
+             * density has none.) */
+            rgb Le = rgb_grey(0.0);
+            double dens = sw->emissive ? grid_ray_density_Le(&sw->gr, s->t, sw->walk, &Le)
+                                       : grid_ray_density(&sw->gr, s->t, sw->walk);
+            if (dens > 0.0 && sw->scatters)
                 sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, rgb_scale(sw->m->sigma_s,
                                                                              dens * s->dt)),
                                                      inscattered_at(sw, s->t)));
+            if (dens > 0.0 && sw->emissive)
+                sw->Lseg = rgb_add(sw->Lseg,
+                                   rgb_mul(rgb_mul(sw->T, rgb_scale(sw->m->sigma_a, dens * s->dt)),
+                                           Le));
         }
         strata_next(s);
     }
@@ -340,6 +371,7 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
         return;
     sw.sigma_t = medium_sigma_t(sw.m);
     sw.scatters = !rgb_is_black(sw.m->sigma_s);
+    sw.emissive = sw.m->emissive;
     const singlescatter_settings *set = &vs->settings;
     transmittance_mode mode = set->mode;
     bool marching = mode == TRANSMITTANCE_RAYMARCH || mode == TRANSMITTANCE_JITTERED;

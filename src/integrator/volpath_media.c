@@ -51,11 +51,17 @@ static bool track_span(tracker *tr, double a, double b, double bound)
             return false;
         }
         tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, tn - t));
-        double d = tr->src.grid ? medium_density_at(m, &tr->src.acc, &tr->src.r, tn,
-                                                    &tr->walk->lookups)
-                                : 1.0;
+        double d = 1.0;
+        rgb Le = m->Le;
+        if (tr->src.grid) {
+            vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, tn, &tr->walk->lookups);
+            ++tr->walk->lookups;
+            d = grid_density_index(m->grid.grid, &tr->src.acc.density, p);
+            if (m->emissive && d > 0.0)
+                Le = medium_grid_Le(m, &tr->src.acc, p, &tr->walk->lookups);
+        }
         volpath_event ev = {tn, rgb_scale(m->sigma_a, d), rgb_scale(m->sigma_s, d), sigma_maj,
-                            tr->T_maj, m->Le};
+                            tr->T_maj, Le};
         if (!tr->fn(tr->ctx, &ev))
             return false;
         tr->T_maj = rgb_grey(1.0);

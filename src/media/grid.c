@@ -187,6 +187,17 @@ hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_
     return load_typed(path, gridname, VDB_VEC3, out, err);
 }
 
+hz_status grid_load_if_present(const char *path, const char *gridname, grid **out,
+                               hz_error *err)
+{
+    *out = NULL;
+    if (load_typed(path, gridname, VDB_FLOAT, out, err) == HZ_OK)
+        return HZ_OK;
+    /* Both readers (the .nvdb reader and the OpenVDB module) say this, and
+     * only this, for a file that holds no grid of that name. */
+    return strstr(err->message, ": no grid named \"") ? HZ_OK : HZ_ERROR;
+}
+
 grid_value_type grid_type(const grid *g) { return g->type == VEC3_GRID ? GRID_VEC3 : GRID_FLOAT; }
 
 void grid_destroy(grid *g)
@@ -328,16 +339,20 @@ bool grid_support_bounds(const grid *g, vec3 *lo, vec3 *hi)
 float grid_max_value(const grid *g) { return g->max_value; }
 float grid_min_value(const grid *g) { return g->min_value; }
 
-hz_status grid_check_density(grid *g, hz_error *err)
+static hz_status check_values(grid *g, int nonnegative, hz_error *err)
 {
     float lo, hi;
     char why[512];
-    if (nvdb_check_density_values(g->owned.data, g->owned.size, &lo, &hi, why, sizeof why) != 0)
+    if (nvdb_check_float_values(g->owned.data, g->owned.size, nonnegative, &lo, &hi, why,
+                                sizeof why) != 0)
         return hz_fail(err, "%s", why);
     g->min_value = lo;
     g->max_value = hi;
     return HZ_OK;
 }
+
+hz_status grid_check_density(grid *g, hz_error *err) { return check_values(g, 1, err); }
+hz_status grid_check_finite(grid *g, hz_error *err) { return check_values(g, 0, err); }
 float grid_background(const grid *g) { return g->background; }
 size_t grid_buffer_bytes(const grid *g) { return g->owned.size; }
 

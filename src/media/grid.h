@@ -49,6 +49,10 @@ typedef enum { GRID_FLOAT, GRID_VEC3 } grid_value_type;
 hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out, hz_error *err);
 /* vdb_load_typed_grid + grid_create_from_buffer: a float grid. */
 hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error *err);
+/* grid_load, but a file without a grid of that name is not an error: *out
+ * is then NULL. */
+hz_status grid_load_if_present(const char *path, const char *gridname, grid **out,
+                               hz_error *err);
 /* The same for a vec3 grid (OpenVDB Vec3SGrid, NanoVDB Vec3f). */
 hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_error *err);
 void grid_destroy(grid *g);
@@ -58,6 +62,8 @@ void grid_destroy(grid *g);
  * range bounding what lies under it) and sets grid_min_value/grid_max_value
  * to the true range. The message names the first bad value's place. */
 hz_status grid_check_density(grid *g, hz_error *err);
+/* The same for a float grid of any sign (a temperature): finite values. */
+hz_status grid_check_finite(grid *g, hz_error *err);
 
 grid_value_type grid_type(const grid *g);
 

@@ -28,6 +28,14 @@ static bool transform_is_finite(const transform *t)
     return true;
 }
 
+/* What MakeNamedMedium says about a grid's emission. */
+typedef struct {
+    const char *name;     /* temperaturename */
+    bool named;           /* given explicitly: the grid must exist */
+    double offset, scale; /* temperatureoffset (or temperaturecutoff), temperaturescale */
+    double Le_scale;      /* Lescale */
+} temperature_params;
+
 /* What MakeNamedMedium says about a grid's motion. */
 typedef struct {
     const char *velocityname; /* NULL: no velocity grid */
@@ -115,14 +123,68 @@ static hz_status load_velocity(medium_entity *e, const char *path, const motion_
     return HZ_OK;
 }
 
+/* Loads the temperature grid of `path` when there is one (or must be one),
+ * and tabulates its blackbody over the range its values map to. */
+static hz_status load_temperature(medium_entity *e, const char *path, const temperature_params *tp,
+                                  medium *out, hz_error *err)
+{
+    const char *name = e->name ? e->name : "";
+    file_loc loc = tp->named ? params_loc(&e->entity.params, "temperaturename") : e->entity.loc;
+    hz_error inner;
+    grid *t = NULL;
+    hz_status st = tp->named ? grid_load(path, tp->name, &t, &inner)
+                             : grid_load_if_present(path, tp->name, &t, &inner);
+    if (st != HZ_OK)
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature grid: %s", name,
+                          inner.message);
+    if (!t) {
+        /* No temperature grid: no emission, as pbrt-v4; but what would shape
+         * it is not silently ignored. */
+        static const char *const shaping[] = {"Lescale", "temperatureoffset", "temperaturecutoff",
+                                              "temperaturescale"};
+        for (size_t i = 0; i < sizeof shaping / sizeof shaping[0]; ++i)
+            if (params_has(&e->entity.params, shaping[i]))
+                return hz_fail_at(err, params_loc(&e->entity.params, shaping[i]),
+                                  "MakeNamedMedium \"%s\": \"%s\" needs a temperature grid, "
+                                  "and %s has no grid \"%s\"",
+                                  name, shaping[i], path, tp->name);
+        return HZ_OK;
+    }
+    if (grid_check_finite(t, &inner) != HZ_OK) {
+        grid_destroy(t);
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature grid \"%s\" in %s: %s",
+                          name, tp->name, path, inner.message);
+    }
+    out->grid.temperature = t;
+    transform d_world_from_index = grid_world_from_index_transform(out->grid.grid);
+    transform t_world_from_index = grid_world_from_index_transform(t);
+    out->grid.temperature_aligned = transforms_equal(&d_world_from_index, &t_world_from_index);
+    out->grid.tindex_from_index =
+        transform_compose(transform_inverse(t_world_from_index), d_world_from_index);
+    out->grid.temperature_offset = tp->offset;
+    out->grid.temperature_scale = tp->scale;
+    out->grid.Le_scale = tp->Le_scale;
+    /* Trilinear values lie within the active values and the background. */
+    double bg = grid_background(t);
+    double v0 = fmin(grid_min_value(t), bg), v1 = fmax(grid_max_value(t), bg);
+    double a = (v0 - tp->offset) * tp->scale, b = (v1 - tp->offset) * tp->scale;
+    bool emits = false;
+    if (blackbody_table_build(&out->grid.blackbody, fmin(a, b), fmax(a, b), &emits, &inner) !=
+        HZ_OK)
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature grid \"%s\" in %s: %s",
+                          name, tp->name, path, inner.message);
+    out->emissive = emits && tp->Le_scale > 0.0 && !rgb_is_black(out->sigma_a);
+    return HZ_OK;
+}
+
 /* Loads the grid and places it. Densities must be finite and >= 0: the
  * majorant-based trackers treat sigma_t(p) / sigma_t_max as a probability,
  * which a negative density breaks (and pbrt-v4 has no meaning for it either),
  * so grid_check_density refuses such values (the voxels themselves, not the
  * stored statistics) rather than clamping them. */
 static hz_status load_grid(medium_entity *e, transform render_from_world, const char *filename,
-                           const char *gridname, const motion_params *mp, medium *out,
-                           hz_error *err)
+                           const char *gridname, const motion_params *mp,
+                           const temperature_params *tp, medium *out, hz_error *err)
 {
     file_loc loc = e->entity.loc;
     const char *name = e->name ? e->name : "";
@@ -175,6 +237,8 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     out->grid.density_max = nonempty ? grid_max_value(g) : 0.0; /* values >= 0 = background */
     if (mp->velocityname)
         st = load_velocity(e, path, mp, out, err);
+    if (st == HZ_OK)
+        st = load_temperature(e, path, tp, out, err);
     free(path);
     return st; /* on failure, the caller frees what was loaded */
 }
@@ -240,6 +304,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
 
     const char *filename = NULL, *gridname = NULL;
     motion_params mp = {NULL, 1.0, time_start, time_start, time_end};
+    temperature_params tp = {"temperature", false, 0.0, 1.0, 1.0};
     if (is_grid) {
         filename = params_string(pl, "filename", NULL);
         gridname = params_string(pl, "gridname", "density");
@@ -259,12 +324,27 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
                           "\"velocityscale\" must be finite and non-negative, got %g", mp.scale);
         if (!isfinite(mp.time))
             params_reject(pl, "velocitytime", "\"velocitytime\" must be finite, got %g", mp.time);
-        /* pbrt-v4 turns a "temperature" grid into emission with these; emission is
-         * not supported, so they are read (to be accepted) and ignored. */
-        (void)params_float(pl, "temperaturecutoff", 0.0);
-        (void)params_float(pl, "temperatureoffset", 0.0);
-        (void)params_float(pl, "temperaturescale", 1.0);
-        (void)params_string(pl, "temperaturename", "temperature");
+        /* Emission from a temperature grid, as pbrt-v4 (temperatureoffset
+         * falls back to its older name temperaturecutoff). */
+        tp.named = params_has(pl, "temperaturename");
+        tp.name = params_string(pl, "temperaturename", "temperature");
+        if (!tp.name[0])
+            params_reject(pl, "temperaturename", "\"temperaturename\" is empty");
+        if (params_has(pl, "temperatureoffset") && params_has(pl, "temperaturecutoff"))
+            params_reject(pl, "temperaturecutoff",
+                          "give one of \"temperatureoffset\" and \"temperaturecutoff\" (its "
+                          "older name), not both");
+        tp.offset = params_float(pl, "temperatureoffset",
+                                 params_float(pl, "temperaturecutoff", 0.0));
+        tp.scale = params_float(pl, "temperaturescale", 1.0);
+        tp.Le_scale = Le_scale;
+        const char *bad = !isfinite(tp.scale)  ? "temperaturescale"
+                          : !isfinite(tp.offset) ? (params_has(pl, "temperatureoffset")
+                                                        ? "temperatureoffset"
+                                                        : "temperaturecutoff")
+                                                 : NULL;
+        if (bad)
+            params_reject(pl, bad, "\"%s\" must be finite", bad);
     }
 
     rgb sa = rgb_scale(sigma_a, scale), ss = rgb_scale(sigma_s, scale);
@@ -298,7 +378,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
         return hz_fail_at(err, params_loc(pl, "gridname"),
                           "MakeNamedMedium \"%s\": \"gridname\" is empty", name);
     }
-    if (load_grid(e, render_from_world, filename, gridname, &mp, out, err) != HZ_OK ||
+    if (load_grid(e, render_from_world, filename, gridname, &mp, &tp, out, err) != HZ_OK ||
         build_majorants(out, time_start, time_end, err) != HZ_OK) {
         medium_free(out);
         memset(out, 0, sizeof *out);
@@ -314,10 +394,13 @@ void medium_free(medium *m)
     if (m->kind == MEDIUM_GRID) {
         grid_destroy(m->grid.grid);
         grid_destroy(m->grid.velocity);
+        grid_destroy(m->grid.temperature);
+        blackbody_table_free(&m->grid.blackbody);
         majorant_grid_free(&m->grid.majorant);
     }
     m->grid.grid = NULL;
     m->grid.velocity = NULL;
+    m->grid.temperature = NULL;
 }
 
 bool medium_grid_ray_make(const medium *m, vec3 o, vec3 d, double time, medium_grid_ray *out)
@@ -405,4 +488,6 @@ void medium_accessor_init(const medium *m, medium_accessor *a)
     grid_accessor_init(m->grid.grid, &a->density);
     if (m->grid.velocity)
         grid_accessor_init(m->grid.velocity, &a->velocity);
+    if (m->grid.temperature)
+        grid_accessor_init(m->grid.temperature, &a->temperature);
 }

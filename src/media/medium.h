@@ -16,6 +16,15 @@
  *                  Motion blur from a velocity grid: velocityname (a vec3 grid of
  *                  the same file; absent: none), velocityscale (default 1, >= 0),
  *                  velocitytime (default: the TransformTimes start).
+ *                  Emission from a temperature grid, as pbrt-v4: temperaturename
+ *                  (default "temperature": used when the file has such a grid;
+ *                  named explicitly, it must exist), temperatureoffset (or its
+ *                  older name temperaturecutoff; default 0), temperaturescale
+ *                  (default 1), Lescale (default 1): Le(x) = Lescale B(T) with
+ *                  T = (value - offset) * scale, zero at or below 100 K, B
+ *                  pbrt-v4's peak-normalised blackbody as its film sees it
+ *                  (media/blackbody.h). The temperature grid has its own
+ *                  transform and moves with the density (placement, velocity).
  *
  * A medium is placed by the transform current at its MakeNamedMedium. A grid's
  * density is the trilinear field of its voxel values (values at integer index
@@ -41,6 +50,7 @@
 #include "core/error.h"
 #include "core/transform.h"
 #include "core/vec.h"
+#include "media/blackbody.h"
 #include "media/grid.h"
 #include "media/majorant.h"
 #include "scene/scene_desc.h"
@@ -76,6 +86,13 @@ typedef struct {
         animated_transform render_from_medium; /* moving only */
         /* The grid's own map (index from its world space, i.e. medium space). */
         transform index_from_medium;
+
+        /* Temperature (emission); NULL: none. */
+        grid *temperature;               /* owned; a float grid */
+        bool temperature_aligned;        /* same index space as the density grid */
+        transform tindex_from_index;     /* temperature index from density index */
+        double temperature_offset, temperature_scale, Le_scale;
+        blackbody_table blackbody;       /* over the grid's temperature range */
 
         /* Velocity (Eulerian motion blur); NULL: none. */
         grid *velocity;                  /* owned; a vec3 grid, medium units per time */
@@ -125,7 +142,7 @@ bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, doubl
 
 /* Per-thread lookup caches of a grid medium's grids. */
 typedef struct {
-    grid_accessor density, velocity;
+    grid_accessor density, velocity, temperature;
 } medium_accessor;
 
 void medium_accessor_init(const medium *m, medium_accessor *a);
@@ -136,11 +153,11 @@ static inline double medium_density_index(const medium *m, grid_accessor *a, vec
     return grid_density_index(m->grid.grid, a, p_index);
 }
 
-/* Density at o + t d of a grid ray, moved by the velocity field when the ray
- * has a shift. Adds the grid lookups it made (1, or 2 with a velocity lookup)
- * to *lookups. */
-static inline double medium_density_at(const medium *m, medium_accessor *a,
-                                       const medium_grid_ray *r, double t, uint64_t *lookups)
+/* The index-space point whose values o + t d of a grid ray shows: the ray's
+ * point, moved back along the velocity field when the ray has a shift. Adds
+ * the velocity lookup it made, if any, to *lookups. */
+static inline vec3 medium_point_at(const medium *m, medium_accessor *a, const medium_grid_ray *r,
+                                   double t, uint64_t *lookups)
 {
     vec3 p = v3_add(r->o, v3_scale(r->d, t));
     if (r->shift != 0.0) {
@@ -149,8 +166,29 @@ static inline double medium_density_at(const medium *m, medium_accessor *a,
         p = v3_sub(p, v3_scale(transform_vector(&m->grid.index_from_medium, v), r->shift));
         ++*lookups;
     }
+    return p;
+}
+
+/* Density at o + t d of a grid ray (medium_point_at). Adds the grid lookups
+ * it made (1, or 2 with a velocity lookup) to *lookups. */
+static inline double medium_density_at(const medium *m, medium_accessor *a,
+                                       const medium_grid_ray *r, double t, uint64_t *lookups)
+{
+    vec3 p = medium_point_at(m, a, r, t, lookups);
     ++*lookups;
     return grid_density_index(m->grid.grid, &a->density, p);
+}
+
+/* Emitted radiance at a density-index point p of an emissive grid medium
+ * (the source term is sigma_a density Le). */
+static inline rgb medium_grid_Le(const medium *m, medium_accessor *a, vec3 p, uint64_t *lookups)
+{
+    vec3 q = m->grid.temperature_aligned ? p : transform_point(&m->grid.tindex_from_index, p);
+    ++*lookups;
+    double T = (grid_density_index(m->grid.temperature, &a->temperature, q) -
+                m->grid.temperature_offset) *
+               m->grid.temperature_scale;
+    return rgb_scale(blackbody_table_at(&m->grid.blackbody, T), m->grid.Le_scale);
 }
 
 #endif

@@ -170,6 +170,7 @@ typedef struct {
     checker c;
     bool any;          /* an active value met */
     float lo, hi;      /* of the active values met */
+    bool signed_ok;    /* negative values allowed (not a density) */
 } values;
 
 static int bad_value(values *v, float x, const pnanovdb_coord_t *at, const char *where)
@@ -182,11 +183,12 @@ static int bad_value(values *v, float x, const pnanovdb_coord_t *at, const char 
                 at->y, at->z, (double)x);
 }
 
-/* One active value: finite and >= 0, and it widens the running range. */
+/* One active value: finite (and >= 0 for a density), and it widens the
+ * running range. */
 static int take(values *v, float x, const pnanovdb_coord_t *at, const char *where, float *lo,
                 float *hi, bool *any)
 {
-    if (!(x >= 0.0f) || isinf(x))
+    if (!isfinite(x) || (!v->signed_ok && !(x >= 0.0f)))
         return bad_value(v, x, at, where);
     *lo = *any ? fminf(*lo, x) : x;
     *hi = *any ? fmaxf(*hi, x) : x;
@@ -296,12 +298,12 @@ static int upper_values(values *v, pnanovdb_upper_handle_t upper, float *lo, flo
     return 0;
 }
 
-int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
-                              char *why, size_t why_size)
+int nvdb_check_float_values(const void *data, uint64_t size, int nonnegative, float *vmin,
+                            float *vmax, char *why, size_t why_size)
 {
     values v = {{pnanovdb_make_buf((pnanovdb_uint32_t *)data, size / 4), size,
                  PNANOVDB_GRID_TYPE_FLOAT, why, why_size, 0, 0, 0, 0, 0, 0},
-                false, 0.0f, 0.0f};
+                false, 0.0f, 0.0f, !nonnegative};
     pnanovdb_grid_handle_t grid = {addr(0)};
     if (pnanovdb_grid_get_grid_type(v.c.buf, grid) != PNANOVDB_GRID_TYPE_FLOAT)
         return fail(&v.c, "not a float grid");
@@ -312,7 +314,7 @@ int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, floa
     pnanovdb_coord_t nowhere = {0, 0, 0};
     float l = 0, h = 0;
     bool a = false;
-    if (!(bg >= 0.0f) || isinf(bg))
+    if (!isfinite(bg) || (nonnegative && !(bg >= 0.0f)))
         return bad_value(&v, bg, &nowhere, "the background, given at");
     uint32_t tiles = pnanovdb_root_get_tile_count(v.c.buf, root);
     for (uint32_t t = 0; t < tiles; ++t) {
@@ -335,4 +337,10 @@ int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, floa
     *vmin = a ? l : 0.0f;
     *vmax = a ? h : 0.0f;
     return 0;
+}
+
+int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
+                              char *why, size_t why_size)
+{
+    return nvdb_check_float_values(data, size, 1, vmin, vmax, why, why_size);
 }

@@ -33,6 +33,9 @@ int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size)
  * bad value's place in why. One pass over the active values. */
 int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
                               char *why, size_t why_size);
+/* The same for any float grid: finite values, and >= 0 when `nonnegative`. */
+int nvdb_check_float_values(const void *data, uint64_t size, int nonnegative, float *vmin,
+                            float *vmax, char *why, size_t why_size);
 
 #ifdef __cplusplus
 }

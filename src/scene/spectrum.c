@@ -66,11 +66,46 @@ static double planck(double lambda_nm, double kelvin)
     return (2.0 * h * c * c) / (pow(l, 5) * (exp((h * c) / (l * kb * kelvin)) - 1.0));
 }
 
-rgb spectrum_blackbody_to_rgb(double kelvin)
+static vec3 blackbody_xyz(double kelvin)
 {
     vec3 xyz = v3(0, 0, 0);
     for (double l = LAMBDA_MIN; l <= LAMBDA_MAX; l += 1.0)
         xyz = v3_add(xyz, v3_scale(spectrum_cie_xyz(l), planck(l, kelvin)));
+    return xyz;
+}
+
+/* Planck's law over its value at the peak wavelength (Wien's displacement
+ * law), from the XYZ integrals of the unnormalised spectrum. */
+static rgb peak_normalised(vec3 xyz, double kelvin)
+{
+    double peak = planck(2.8977721e6 / kelvin, kelvin);
+    if (!(peak > 0.0) || !v3_is_finite(xyz) || !(xyz.y > 0.0))
+        return rgb_grey(0.0);
+    return spectrum_srgb_from_xyz(v3_scale(xyz, 1.0 / peak));
+}
+
+rgb spectrum_blackbody_peak_to_rgb(double kelvin)
+{
+    return peak_normalised(blackbody_xyz(kelvin), kelvin);
+}
+
+void spectrum_blackbody_peak_to_rgb_n(const double *kelvin, rgb *out, size_t n)
+{
+    enum { STEPS = 830 - 360 + 1 }; /* LAMBDA_MIN..LAMBDA_MAX in 1 nm steps */
+    vec3 cmf[STEPS];
+    for (int i = 0; i < STEPS; ++i)
+        cmf[i] = spectrum_cie_xyz(LAMBDA_MIN + i);
+    for (size_t k = 0; k < n; ++k) {
+        vec3 xyz = v3(0, 0, 0);
+        for (int i = 0; i < STEPS; ++i)
+            xyz = v3_add(xyz, v3_scale(cmf[i], planck(LAMBDA_MIN + i, kelvin[k])));
+        out[k] = peak_normalised(xyz, kelvin[k]);
+    }
+}
+
+rgb spectrum_blackbody_to_rgb(double kelvin)
+{
+    vec3 xyz = blackbody_xyz(kelvin);
     if (!(xyz.y > 0.0) || !v3_is_finite(xyz))
         return rgb_grey(0.0); /* too cold to emit visible light in double precision */
     return spectrum_srgb_from_xyz(v3_scale(xyz, 1.0 / xyz.y));

@@ -25,6 +25,15 @@
 rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n);
 /* T > 0. */
 rgb spectrum_blackbody_to_rgb(double kelvin);
+/* pbrt-v4's BlackbodySpectrum (Planck's law divided by its value at the
+ * peak wavelength, so at most 1) as pbrt-v4's film sees a radiance of that
+ * spectrum: its XYZ integrals over 360..830 nm in nanometres, without the
+ * division by the CIE Y integral that lights get (about 20 at 2500 K), to
+ * linear sRGB. What a temperature grid's emission is. T > 0. */
+rgb spectrum_blackbody_peak_to_rgb(double kelvin);
+/* The same for n temperatures at once (the colour matching functions are
+ * evaluated once); out[i] for kelvin[i]. */
+void spectrum_blackbody_peak_to_rgb_n(const double *kelvin, rgb *out, size_t n);
 /* CIE 1931 colour matching functions (the analytic fit), lambda in nm. */
 vec3 spectrum_cie_xyz(double lambda);
 rgb spectrum_srgb_from_xyz(vec3 xyz);

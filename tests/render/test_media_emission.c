@@ -1,6 +1,7 @@
 /* Emitting media: closed forms of absorbing emission (the source term is
  * sigma_a Le, as pbrt-v4) under both integrators, and what does not glow. */
 #include "media_test_util.h"
+#include "scene/spectrum.h"
 
 /* An orthographic camera looks head-on (+z) through a slab of medium
  * z in [0, d] (a box much wider than the view), with no light at all. */
@@ -158,12 +159,149 @@ static void test_parameters(void **state)
     free(text);
 }
 
+/* ---- temperature grids (volumes/box_fire.vdb) ---- */
+
+/* An orthographic camera looks along +z through the middle of box_fire's
+ * density (1 on voxels [0,31]^3 of size 1/32, trilinear, so 1/64 of a ramp
+ * beyond each face: the density integrates to exactly 1 along z). */
+static char *fire_scene(const char *integrator, const char *file, const char *extra)
+{
+    return sfmt("LookAt 0.5 0.5 -1  0.5 0.5 0  0 1 0\n"
+                "Camera \"orthographic\" \"float screenwindow\" [-0.2 0.2 -0.2 0.2]\n"
+                "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                "Sampler \"independent\" \"integer pixelsamples\" 16\n%s\nWorldBegin\n"
+                "MakeNamedMedium \"fire\" \"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES
+                "/%s\" \"rgb sigma_a\" [0.5 1 2] \"rgb sigma_s\" [0 0 0] %s\n"
+                "AttributeBegin\nMediumInterface \"fire\" \"\"\nMaterial \"interface\"\n"
+                "Shape \"sphere\" \"float radius\" 0.2\nTranslate 0.5 0.5 0.5\n"
+                "Shape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n",
+                integrator, file, extra);
+}
+
+/* With a constant temperature the source is constant: L = Le sigma_a /
+ * sigma_t (1 - e^{-sigma_t D}) whatever the density profile, D = 1. */
+static rgb fire_closed_form(double kelvin, double Le_scale)
+{
+    rgb Le = rgb_scale(spectrum_blackbody_peak_to_rgb(kelvin), Le_scale);
+    rgb sa = rgb_make(0.5, 1, 2);
+    return slab_closed_form(Le, sa, sa, 1.0);
+}
+
+/* temperature_coarse (its own transform) is 2500 K wherever the density is
+ * not 0: the closed form, through .vdb and .nvdb, with pbrt-v4's offset,
+ * scale and Lescale; at or below 100 K nothing glows. */
+static void test_temperature_closed_form(void **state)
+{
+    (void)state;
+    const char *march = "Integrator \"singlescatter\" \"string transmittance\" \"raymarch\" "
+                        "\"float stepsize\" 0.125";
+    struct {
+        const char *file, *extra;
+        double kelvin, Le_scale;
+    } cases[] = {
+        {"box_fire.vdb", "\"string temperaturename\" \"temperature_coarse\"", 2500, 1},
+        {"box_fire.nvdb", "\"string temperaturename\" \"temperature_coarse\"", 2500, 1},
+        {"box_fire.vdb",
+         "\"string temperaturename\" \"temperature_coarse\" \"float temperatureoffset\" -500 "
+         "\"float temperaturescale\" 0.5 \"float Lescale\" 3",
+         1500, 3},
+        {"box_fire.vdb",
+         "\"string temperaturename\" \"temperature_coarse\" \"float temperaturecutoff\" 2450",
+         0, 0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        char *text = fire_scene(march, cases[k].file, cases[k].extra);
+        render_scene *rs = build(text);
+        rgb want = cases[k].kelvin > 0 ? fire_closed_form(cases[k].kelvin, cases[k].Le_scale)
+                                       : rgb_grey(0.0);
+        pstat p = pixel_stats_raw(rs, 1, 2, 1);
+        if (verbose())
+            print_message("case %zu: %.6f %.6f %.6f want %.6f %.6f %.6f\n", k, p.mean.r,
+                          p.mean.g, p.mean.b, want.r, want.g, want.b);
+        expect_rgb_close(p.mean, want, 1e-3, 1e-12, "temperature closed form", (int)k, 0);
+        render_scene_destroy(rs);
+        free(text);
+    }
+    /* volpath, and singlescatter with ratio tracking: unbiased, within noise. */
+    const char *integ[] = {"Integrator \"volpath\"",
+                           "Integrator \"singlescatter\" \"string transmittance\" \"ratio\""};
+    for (int k = 0; k < 2; ++k) {
+        char *text = fire_scene(integ[k], "box_fire.vdb",
+                                "\"string temperaturename\" \"temperature_coarse\"");
+        render_scene *rs = build(text);
+        rgb mean, se, want = fire_closed_form(2500, 1);
+        image_mean(rs, 1024, &mean, &se);
+        for (int c = 0; c < 3; ++c) {
+            if (verbose())
+                print_message("%s c%d: %.5f +- %.5f, want %.5f\n", integ[k], c, ch(mean, c),
+                              ch(se, c), ch(want, c));
+            assert_true(ch(se, c) < 0.01 * ch(want, c));
+            assert_true(fabs(ch(mean, c) - ch(want, c)) < 4.0 * ch(se, c));
+        }
+        render_scene_destroy(rs);
+        free(text);
+    }
+}
+
+/* The aligned "temperature" grid ramps with the density at the faces (and
+ * falls below 100 K on the last 4% of the ramp): against a fine numerical
+ * integral of the same trilinear fields with the exact spectral blackbody. */
+static void test_temperature_ramp(void **state)
+{
+    (void)state;
+    const double sa[3] = {0.5, 1, 2};
+    double want[3] = {0, 0, 0}, tau = 0.0;
+    const int n = 20000; /* over index z in [-1, 33] */
+    double dz = 34.0 / n;
+    for (int i = 0; i < n; ++i) {
+        double z = -1.0 + (i + 0.5) * dz;
+        double ramp = z < 0 ? 1 + z : z > 31 ? fmax(0.0, 32 - z) : 1.0;
+        if (ramp <= 0.0)
+            continue;
+        double ds = dz / 32.0, kelvin = 2500.0 * ramp;
+        rgb Le = kelvin > 100.0 ? spectrum_blackbody_peak_to_rgb(kelvin) : rgb_grey(0.0);
+        for (int c = 0; c < 3; ++c)
+            want[c] += exp(-sa[c] * tau) * sa[c] * ramp * ch(Le, c) * ds;
+        tau += ramp * ds;
+    }
+    assert_true(fabs(tau - 1.0) < 1e-6);
+    char *text = fire_scene("Integrator \"singlescatter\" \"string transmittance\" "
+                            "\"raymarch\" \"float stepsize\" 0.0625",
+                            "box_fire.vdb", "");
+    render_scene *rs = build(text);
+    pstat p = pixel_stats_raw(rs, 2, 1, 1);
+    expect_rgb_close(p.mean, rgb_make(want[0], want[1], want[2]), 2e-3, 1e-12, "temperature ramp",
+                     0, 0);
+    render_scene_destroy(rs);
+    free(text);
+}
+
+/* pbrt-v4's temperature blackbody reaches its film without the division by
+ * the CIE Y integral that a light's spectrum gets: at 2500 K, ~20x a
+ * "blackbody Le" of luminance 1 (the integral of ybar is 106.9 nm). */
+static void test_temperature_brightness(void **state)
+{
+    (void)state;
+    rgb peak = spectrum_blackbody_peak_to_rgb(2500), unit = spectrum_blackbody_to_rgb(2500);
+    double ratio = rgb_luminance(peak) / rgb_luminance(unit);
+    if (verbose())
+        print_message("2500 K: peak-normalised luminance %.4f (x %.2f)\n", rgb_luminance(peak),
+                      ratio);
+    /* Same chromaticity, a brightness factor: the peak-normalised spectrum's
+     * Y integral in nm. */
+    expect_close(peak.g / peak.r, unit.g / unit.r, 1e-9, 0.0, "chromaticity", 0, 0);
+    assert_true(ratio > 15.0 && ratio < 25.0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_homogeneous_slab),
         cmocka_unit_test(test_unbounded_and_dark),
         cmocka_unit_test(test_parameters),
+        cmocka_unit_test(test_temperature_closed_form),
+        cmocka_unit_test(test_temperature_ramp),
+        cmocka_unit_test(test_temperature_brightness),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

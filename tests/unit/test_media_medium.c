@@ -177,9 +177,9 @@ static void homogeneous_errors(void **state)
     build_err(homog("\"float scale\" 1e308 \"rgb sigma_s\" [1e10 1 1]"), "t.pbrt:2:", "\"scale\"");
     build_err(homog("\"float fog\" 1"), "t.pbrt:2:",
               "unused parameter \"float fog\" for MakeNamedMedium \"fog\"");
-    build_err(homog("\"rgb Le\" [0 0.1 0]"), "t.pbrt:2:", "emission (\"Le\") is not supported");
-    build_err(homog("\"spectrum Le\" 2 \"float Lescale\" 0.5"), "t.pbrt:2:",
-              "emission (\"Le\") is not supported");
+    build_err(homog("\"rgb Le\" [0 -0.1 0]"), "t.pbrt:2:", "\"Le\" times \"Lescale\" must be");
+    build_err(homog("\"spectrum Le\" 2 \"float Lescale\" -0.5"), "t.pbrt:2:",
+              "\"Lescale\" must be finite and non-negative");
     build_err(homog("\"float sigma_a\" 1"), "t.pbrt:2:", "sigma_a");
     build_err(homog("\"string preset\" \"Skin1\""), "t.pbrt:2:", "\"preset\"");
     /* Grid-only parameters are unknown to homogeneous media. */
@@ -256,17 +256,27 @@ static void nanovdb_absolute_path(void **state)
     free_all(&sd, &m);
 }
 
-/* pbrt-v4's temperature parameters are accepted and ignored. */
-static void nanovdb_temperature_ignored(void **state)
+/* Without a temperature grid in the file there is no emission (as pbrt-v4),
+ * and what would shape it is refused rather than ignored; both names of the
+ * offset at once are refused. */
+static void nanovdb_temperature_params(void **state)
 {
     (void)state;
     scene_desc sd;
     medium m;
-    build_ok(nanovdb(VOLUMES "box.vdb", "\"float temperaturecutoff\" 1 \"float temperaturescale\" "
-                                        "100 \"float temperatureoffset\" 2 \"float Lescale\" 5"),
-             &sd, &m);
+    build_ok(nanovdb(VOLUMES "box.vdb", ""), &sd, &m);
+    assert_null(m.grid.temperature);
+    assert_false(m.emissive);
     check_box(&m);
     free_all(&sd, &m);
+    build_err(nanovdb(VOLUMES "box.vdb", "\"float temperaturescale\" 100"), "t.pbrt:2:",
+              "\"temperaturescale\" needs a temperature grid");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"float Lescale\" 5"), "t.pbrt:2:",
+              "\"Lescale\" needs a temperature grid");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"float temperaturecutoff\" 1 \"float temperatureoffset\" 2"),
+              "t.pbrt:2:", "give one of \"temperatureoffset\" and \"temperaturecutoff\"");
+    build_err(nanovdb(VOLUMES "box.vdb", "\"string temperaturename\" \"heat\""), "t.pbrt:2:",
+              "temperature grid:");
 }
 
 static void nanovdb_relative_path(void **state)
@@ -304,7 +314,7 @@ static void nanovdb_errors(void **state)
     build_err(nanovdb("", ""), "t.pbrt:2:1:", "needs \"string filename\"");
     build_err(nanovdb(VOLUMES "box.vdb", "\"float g\" -1"), "t.pbrt:2:", "\"g\"");
     build_err(nanovdb(VOLUMES "box.vdb", "\"rgb Le\" [1 1 1]"), "t.pbrt:2:",
-              "emission (\"Le\") is not supported");
+              "unused parameter \"rgb Le\"");
     build_err(nanovdb(VOLUMES "box.vdb", "\"float density\" 1"), "t.pbrt:2:",
               "unused parameter \"float density\"");
     build_err(nanovdb(VOLUMES "box.vdb", "\"rgb sigma_s\" [1 -1 1]"), "t.pbrt:2:", "sigma_s");
@@ -730,7 +740,7 @@ int main(void)
         cmocka_unit_test(homogeneous_under_transform),
         cmocka_unit_test(homogeneous_errors),
         cmocka_unit_test(nanovdb_absolute_path),
-        cmocka_unit_test(nanovdb_temperature_ignored),
+        cmocka_unit_test(nanovdb_temperature_params),
         cmocka_unit_test(nanovdb_relative_path),
         cmocka_unit_test(nanovdb_errors),
         cmocka_unit_test(clip_box),
