@@ -243,28 +243,34 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     return st; /* on failure, the caller frees what was loaded */
 }
 
-/* The majorant grid over the support; with a velocity grid every cell's box
- * grows by the largest displacement over the shutter, so one grid bounds the
- * density at every time. */
-static hz_status build_majorants(medium *m, double time_start, double time_end, hz_error *err)
+/* The majorant grid over the support; with a velocity grid the support
+ * grows by the largest displacement at any ray time, and every cell's box of
+ * voxels read by as much, so one grid bounds the density wherever it is
+ * carried, at every time. */
+static hz_status build_majorants(medium *m, const medium_times *times, hz_error *err)
 {
     int32_t pad[3] = {0, 0, 0};
-    if (m->grid.velocity) {
-        double shift = m->grid.velocity_scale * fmax(fabs(time_start - m->grid.velocity_time),
-                                                     fabs(time_end - m->grid.velocity_time));
+    vec3 lo = m->grid.support_lo, hi = m->grid.support_hi;
+    if (m->grid.velocity && lo.x <= hi.x) {
+        double t0 = fmin(times->ray_min, times->transform_start);
+        double t1 = fmax(times->ray_max, times->transform_end);
+        double shift = m->grid.velocity_scale * fmax(fabs(t0 - m->grid.velocity_time),
+                                                     fabs(t1 - m->grid.velocity_time));
         const double d3[3] = {m->grid.dilation.x, m->grid.dilation.y, m->grid.dilation.z};
         for (int a = 0; a < 3; ++a) {
             double p = ceil(d3[a] * shift);
             pad[a] = p < (double)(1 << 28) ? (int32_t)p : (1 << 28);
         }
+        lo = v3_sub(lo, v3(pad[0], pad[1], pad[2]));
+        hi = v3_add(hi, v3(pad[0], pad[1], pad[2]));
     }
-    return majorant_grid_build(m->grid.grid, m->grid.support_lo, m->grid.support_hi, pad,
-                               &m->grid.majorant, err);
+    return majorant_grid_build(m->grid.grid, lo, hi, pad, &m->grid.majorant, err);
 }
 
-hz_status medium_from_entity(medium_entity *e, transform render_from_world, double time_start,
-                             double time_end, medium *out, hz_error *err)
+hz_status medium_from_entity(medium_entity *e, transform render_from_world,
+                             const medium_times *times, medium *out, hz_error *err)
 {
+    double time_start = times->transform_start, time_end = times->transform_end;
     memset(out, 0, sizeof *out);
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
@@ -379,7 +385,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world, doub
                           "MakeNamedMedium \"%s\": \"gridname\" is empty", name);
     }
     if (load_grid(e, render_from_world, filename, gridname, &mp, &tp, out, err) != HZ_OK ||
-        build_majorants(out, time_start, time_end, err) != HZ_OK) {
+        build_majorants(out, times, err) != HZ_OK) {
         medium_free(out);
         memset(out, 0, sizeof *out);
         return HZ_ERROR;

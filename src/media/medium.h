@@ -106,13 +106,20 @@ typedef struct {
     } grid;                  /* MEDIUM_GRID only */
 } medium;
 
+/* When a medium lives: TransformTimes (a medium whose start and end
+ * transforms differ moves between them; velocitytime defaults to the start),
+ * and the times rays can have (the camera's shutter, which may reach beyond
+ * them): a velocity grid's bounds cover its displacement at every ray time. */
+typedef struct {
+    double transform_start, transform_end;
+    double ray_min, ray_max;
+} medium_times;
+
 /* Builds the medium of `e` in render space. Unknown types, missing or unreadable
  * files, a missing grid, non-float grids, negative coefficients and |g| >= 1
  * are errors naming the entity's file:line:column; unused parameters too. */
-/* `time_start`/`time_end` are the scene's TransformTimes (a medium whose start and
- * end transforms differ moves between them). */
-hz_status medium_from_entity(medium_entity *e, transform render_from_world, double time_start,
-                             double time_end, medium *out, hz_error *err);
+hz_status medium_from_entity(medium_entity *e, transform render_from_world,
+                             const medium_times *times, medium *out, hz_error *err);
 void medium_free(medium *m);
 
 static inline rgb medium_sigma_t(const medium *m) { return rgb_add(m->sigma_a, m->sigma_s); }

@@ -132,11 +132,16 @@ static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_
     rs->media = calloc(sd->medium_count ? sd->medium_count : 1, sizeof *rs->media);
     if (!rs->media)
         return hz_fail(err, "out of memory");
+    /* Rays take times in the camera's shutter (the TransformTimes when the
+     * camera could not be built: only errors are reported then). */
+    medium_times times = {sd->transform_start_time, sd->transform_end_time,
+                          rs->film ? rs->cam.shutter_open : sd->transform_start_time,
+                          rs->film ? rs->cam.shutter_close : sd->transform_end_time};
     for (size_t i = 0; i < sd->medium_count; ++i) {
         /* A refused medium keeps its slot (shapes refer to media by index),
          * empty. */
-        if (medium_from_entity(&sd->media[i], render_from_world, sd->transform_start_time,
-                               sd->transform_end_time, &rs->media[i], err) != HZ_OK) {
+        if (medium_from_entity(&sd->media[i], render_from_world, &times, &rs->media[i], err) !=
+            HZ_OK) {
             if (collect(errs, err) != HZ_OK)
                 return HZ_ERROR;
             memset(&rs->media[i], 0, sizeof rs->media[i]);

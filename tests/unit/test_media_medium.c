@@ -30,8 +30,9 @@ static hz_status build_named(const char *src, const char *name, transform render
     if (scene_parse_string(src, name, sd, &perr) != HZ_OK)
         fail_msg("parse error: %s", perr.message);
     assert_int_equal(sd->medium_count, 1);
-    hz_status st = medium_from_entity(&sd->media[0], render_from_world, sd->transform_start_time,
-                                      sd->transform_end_time, m, err);
+    medium_times times = {sd->transform_start_time, sd->transform_end_time,
+                          sd->transform_start_time, sd->transform_end_time};
+    hz_status st = medium_from_entity(&sd->media[0], render_from_world, &times, m, err);
     if (st != HZ_OK) {
         /* A failed build leaves a medium that medium_free accepts. */
         medium_free(m);
@@ -723,7 +724,8 @@ static void velocity_errors(void **state)
         if (strcmp(pl->items[i].name, "velocityscale") == 0)
             pl->items[i].nums[0] = NAN;
     medium m;
-    assert_int_equal(medium_from_entity(&sd.media[0], transform_identity(), 0, 1, &m, &err),
+    medium_times times = {0, 1, 0, 1};
+    assert_int_equal(medium_from_entity(&sd.media[0], transform_identity(), &times, &m, &err),
                      HZ_ERROR);
     snprintf(want, sizeof want, "t.pbrt:2:%d:", column_of(src, "\"float velocityscale\""));
     assert_non_null(strstr(err.message, want));
