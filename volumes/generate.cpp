@@ -32,6 +32,14 @@
 //                      on the same voxels, and "temperature_coarse": 2500 on
 //                      voxels [-2,17]^3 of size 1/16 (its own transform,
 //                      covering the box and one density voxel beyond it)
+//   explosion.vdb      a fireball rising on a stem of smoke (scenes/explosion.pbrt):
+//                      "density" in [0,1] on voxels of size 1/40 within
+//                      x, z in [-0.8, 0.8], y in [0, 2] (world units), a
+//                      "temperature" (kelvin, 0 outside the hot core, up to
+//                      about 2600 in it) on the same voxels, and a velocity
+//                      "v" (world units per second: expanding from the
+//                      fireball's centre and rising) at half the resolution,
+//                      over the density's voxels dilated by 6
 //   vec_ramp.vdb/.nvdb "v": the linear field v(i,j,k) = (0.5 i - 1, 0.25 j, 2 - k)
 //                      on voxels [0,7]^3 (voxel size 0.25, offset (1, 2, 3)), and
 //                      "density": 1 on the same voxels (for type checks); the
@@ -158,6 +166,72 @@ FloatGrid::Ptr constant_cube(const char *name, double h, int lo, int hi, float v
             for (int k = lo; k <= hi; ++k)
                 acc.setValue(Coord(i, j, k), value);
     return grid;
+}
+
+// The fireball: a turbulent ball of hot gas (centre (0, 1.25, 0), radius
+// ~0.5) on a narrowing stem of cooler smoke rising from the ground, with a
+// dark, ragged rim; temperature falls from the core outwards and is cut by
+// noise into flame tongues.
+void explosion(FloatGrid::Ptr &density, FloatGrid::Ptr &temperature, Vec3SGrid::Ptr &velocity)
+{
+    const int n = 40; // voxels per world unit
+    const double vs = 1.0 / n;
+    density = make_density(vs, openvdb::Vec3d(-0.8, 0.0, -0.8));
+    temperature = FloatGrid::create(0.0f);
+    temperature->setName("temperature");
+    temperature->setGridClass(openvdb::GRID_UNKNOWN);
+    temperature->setTransform(density->transform().copy());
+    auto dacc = density->getAccessor();
+    auto tacc = temperature->getAccessor();
+    const uint32_t seed = 90210u;
+    const double cy = 1.25;
+    for (int j = 0; j < 2 * n; ++j)
+        for (int i = 0; i < 64; ++i)
+            for (int k = 0; k < 64; ++k) {
+                double x = (i + 0.5) * vs - 0.8, y = (j + 0.5) * vs, z = (k + 0.5) * vs - 0.8;
+                double nz = fbm(x * 5.0 + 11.0, y * 5.0, z * 5.0 - 7.0, 5, seed);
+                double nf = fbm(x * 11.0, y * 11.0 + 3.0, z * 11.0, 4, seed + 17u);
+                // Ball: distance from the centre, squashed, with a noisy surface.
+                double dx = x, dy = (y - cy) * 1.15, dz = z;
+                double q = std::sqrt(dx * dx + dy * dy + dz * dz) / 0.5 + 0.9 * (nz - 0.5);
+                double ball = 1.0 - smoothstep(0.75, 1.0, q);
+                // Stem: a column narrowing upwards from the ground to the ball.
+                double rs = 0.09 + 0.1 * (1.0 - y / cy);
+                double qs = std::sqrt(x * x + z * z) / rs + 0.8 * (nz - 0.5);
+                double stem = y < cy ? (1.0 - smoothstep(0.6, 1.0, qs)) * smoothstep(0.0, 0.15, y)
+                                     : 0.0;
+                double d = std::max(ball, 0.6 * stem) * (0.3 + 0.7 * nz);
+                if (d < 0.02)
+                    continue;
+                d = std::min(d, 1.0);
+                dacc.setValue(Coord(i, j, k), float(d));
+                // Hot core with flame tongues: 0 where the tongues end.
+                double hot = 1.0 - smoothstep(0.05, 0.7, q + 0.9 * (nf - 0.5));
+                if (hot > 0.0)
+                    tacc.setValue(Coord(i, j, k), float(700.0 + 1900.0 * hot * hot));
+            }
+    // Velocity at half resolution over the dilated density: outward from the
+    // ball's centre (faster near it) and rising.
+    velocity = Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    velocity->setName("v");
+    velocity->setGridClass(openvdb::GRID_STAGGERED);
+    velocity->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+    auto vxf = openvdb::math::Transform::createLinearTransform(2.0 * vs);
+    vxf->postTranslate(openvdb::Vec3d(-0.8, 0.0, -0.8));
+    velocity->setTransform(vxf);
+    FloatGrid::Ptr mask = density->deepCopy();
+    openvdb::tools::dilateActiveValues(mask->tree(), 6, openvdb::tools::NN_FACE_EDGE_VERTEX);
+    auto vacc = velocity->getAccessor();
+    for (auto it = mask->cbeginValueOn(); it; ++it) {
+        Coord c = it.getCoord();
+        Coord h(c.x() >> 1, c.y() >> 1, c.z() >> 1);
+        double x = (2 * h.x() + 1) * vs - 0.8, y = (2 * h.y() + 1) * vs, z = (2 * h.z() + 1) * vs - 0.8;
+        double dx = x, dy = y - cy, dz = z;
+        double r = std::sqrt(dx * dx + dy * dy + dz * dz) + 1e-6;
+        double out = 0.5 * std::exp(-r * 1.5);
+        vacc.setValue(h, openvdb::Vec3s(float(out * dx / r), float(0.6 + out * dy / r),
+                                        float(out * dz / r)));
+    }
 }
 
 FloatGrid::Ptr fog_sphere()
@@ -417,6 +491,12 @@ int main(int argc, char **argv)
             h.push_back(to_nano(*t));
             h.push_back(to_nano(*tc));
             write_nvdb(dir + "/box_fire.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
+        }
+        {
+            FloatGrid::Ptr d, t;
+            Vec3SGrid::Ptr v;
+            explosion(d, t, v);
+            write_vdb(dir + "/explosion.vdb", {d, t, v});
         }
         if (argc > 2 && std::string(argv[2]) == "--only-new")
             return 0;
