@@ -51,6 +51,17 @@ typedef struct {
  * paths tried. */
 hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_size);
 
+/* api->load_grid run in a child process (fork) that sends the grid back
+ * through a pipe: whatever OpenVDB and its libraries do when memory runs out
+ * or a file is hostile (Blosc dereferences a failed allocation), the renderer
+ * survives and reports one line; and OpenVDB's working memory (tens of MiB for
+ * a small file) is the child's, never the renderer's peak. The module must
+ * already be loaded (vdb_module_get) in this process. */
+hz_status vdb_module_load_grid_isolated(const haze_openvdb_api *api, const char *path,
+                                        uint64_t file_size, const char *gridname,
+                                        vdb_value_type type, vdb_buffer *out, char *err,
+                                        size_t err_size);
+
 #ifdef __cplusplus
 }
 #endif

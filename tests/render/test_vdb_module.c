@@ -120,6 +120,26 @@ static void wrong_abi_is_refused(void **state)
     assert_one_line_with(out, BAD_MODULE);
 }
 
+/* OpenVDB dying inside its reader (out of memory: Blosc writes through a
+ * failed allocation) costs the reader process, not the renderer: one line
+ * naming the file and the signal, exit 1, no image, nothing the library
+ * printed. */
+static void crashing_reader_is_one_line(void **state)
+{
+    (void)state;
+    const char *exr = HAZE_TMP "/vdb_module_crash.exr";
+    remove(exr);
+    char args[2048], out[8192];
+    snprintf(args, sizeof args, "render '%s/smoke.pbrt' --spp 1 --quiet -o '%s'", HAZE_SCENES,
+             exr);
+    assert_int_equal(run_with_module(CRASHING_MODULE, args, out, sizeof out), 1);
+    assert_one_line_with(out, "smoke.vdb: OpenVDB failed reading grid \"density\"");
+    assert_one_line_with(out, "killed by signal 11");
+    assert_null(strstr(out, "Error allocating memory"));
+    FILE *f = fopen(exr, "rb");
+    assert_null(f);
+}
+
 static void module_next_to_haze_loads(void **state)
 {
     (void)state;
@@ -135,6 +155,7 @@ int main(void)
         cmocka_unit_test(vdb_and_nvdb_buffers_identical),
         cmocka_unit_test(missing_module_is_one_line),
         cmocka_unit_test(wrong_abi_is_refused),
+        cmocka_unit_test(crashing_reader_is_one_line),
         cmocka_unit_test(module_next_to_haze_loads),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
