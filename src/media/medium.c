@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/path.h"
+#include "media/uniformgrid.h"
 
 static bool rgb_is_finite(rgb c) { return isfinite(c.r) && isfinite(c.g) && isfinite(c.b); }
 
@@ -267,6 +268,102 @@ static hz_status build_majorants(medium *m, const medium_times *times, hz_error 
     return majorant_grid_build(m->grid.grid, lo, hi, pad, &m->grid.majorant, err);
 }
 
+/* pbrt-v4's "uniformgrid" (media/uniformgrid.h): the dense arrays as NanoVDB
+ * grids placed in medium space, the support clipped to the box p0..p1, the
+ * Lescale grid (one sample of 1 when absent, as pbrt-v4) and the temperature
+ * or Le. */
+static hz_status build_uniformgrid(medium_entity *e, transform render_from_world,
+                                   const uniformgrid_params *u, const temperature_params *tp,
+                                   rgb Le, const medium_times *times, medium *out, hz_error *err)
+{
+    file_loc loc = e->entity.loc;
+    const char *name = e->name ? e->name : "";
+    size_t count = (size_t)u->n[0] * (size_t)u->n[1] * (size_t)u->n[2];
+    hz_error inner;
+    grid *g = NULL;
+    if (uniformgrid_make(u, u->density, count, "density", &g, &inner) != HZ_OK ||
+        grid_check_density(g, &inner) != HZ_OK) {
+        grid_destroy(g);
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+    }
+    motion_params mp = {NULL, 1.0, times->transform_start, times->transform_start,
+                        times->transform_end};
+    if (place_grid(e, render_from_world, g, &mp, out, err) != HZ_OK) {
+        grid_destroy(g);
+        return HZ_ERROR;
+    }
+    out->grid.grid = g;
+    vec3 lo, hi, blo, bhi;
+    uniformgrid_support(u, &blo, &bhi);
+    bool nonempty = grid_support_bounds(g, &lo, &hi);
+    out->grid.support_lo = nonempty ? v3(fmax(lo.x, blo.x), fmax(lo.y, blo.y), fmax(lo.z, blo.z))
+                                    : v3(1, 1, 1);
+    out->grid.support_hi = nonempty ? v3(fmin(hi.x, bhi.x), fmin(hi.y, bhi.y), fmin(hi.z, bhi.z))
+                                    : v3(-1, -1, -1);
+    out->grid.background = 0.0;
+    out->grid.density_max = nonempty ? grid_max_value(g) : 0.0;
+
+    const double one = 1.0;
+    grid *ls = NULL;
+    if (uniformgrid_make(u, u->Le_scale ? u->Le_scale : &one, u->Le_scale ? count : 1, "Lescale",
+                         &ls, &inner) != HZ_OK)
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+    out->grid.Le_scale_grid = ls;
+    out->grid.Le_scale = 1.0;
+    transform d_world_from_index = grid_world_from_index_transform(g);
+    out->grid.lsindex_from_index =
+        transform_compose(transform_inverse(grid_world_from_index_transform(ls)),
+                          d_world_from_index);
+    bool emits = !rgb_is_black(Le);
+    if (u->temperature) {
+        grid *t = NULL;
+        if (uniformgrid_make(u, u->temperature, count, "temperature", &t, &inner) != HZ_OK ||
+            grid_check_finite(t, &inner) != HZ_OK) {
+            grid_destroy(t);
+            return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+        }
+        out->grid.temperature = t;
+        out->grid.temperature_aligned = true;
+        out->grid.tindex_from_index = transform_identity();
+        out->grid.temperature_offset = tp->offset;
+        out->grid.temperature_scale = tp->scale;
+        double v0 = fmin(grid_min_value(t), 0.0), v1 = fmax(grid_max_value(t), 0.0);
+        double a = (v0 - tp->offset) * tp->scale, b = (v1 - tp->offset) * tp->scale;
+        if (blackbody_table_build(&out->grid.blackbody, fmin(a, b), fmax(a, b), &emits, &inner) !=
+            HZ_OK)
+            return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature: %s", name,
+                              inner.message);
+    } else {
+        out->Le = Le;
+    }
+    out->emissive = emits && grid_max_value(ls) > 0.0f && !rgb_is_black(out->sigma_a);
+    return build_majorants(out, times, err);
+}
+
+/* The temperature parameters of a nanovdb or uniformgrid medium (problems
+ * are recorded in pl). */
+static void read_temperature_params(param_list *pl, temperature_params *tp_)
+{
+    temperature_params tp = *tp_;
+    /* As pbrt-v4, temperatureoffset falls back to its older name
+     * temperaturecutoff. */
+    if (params_has(pl, "temperatureoffset") && params_has(pl, "temperaturecutoff"))
+        params_reject(pl, "temperaturecutoff",
+                      "give one of \"temperatureoffset\" and \"temperaturecutoff\" (its "
+                      "older name), not both");
+    tp.offset = params_float(pl, "temperatureoffset",
+                             params_float(pl, "temperaturecutoff", 0.0));
+    tp.scale = params_float(pl, "temperaturescale", 1.0);
+    const char *bad = !isfinite(tp.scale)  ? "temperaturescale"
+                      : !isfinite(tp.offset) ? (params_has(pl, "temperatureoffset")
+                                                    ? "temperatureoffset"
+                                                    : "temperaturecutoff")
+                                             : NULL;
+    if (bad)
+        params_reject(pl, bad, "\"%s\" must be finite", bad);
+    *tp_ = tp;
+}
+
 hz_status medium_from_entity(medium_entity *e, transform render_from_world,
                              const medium_times *times, medium *out, hz_error *err)
 {
@@ -275,15 +372,17 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
     const char *name = e->name ? e->name : "";
-    bool is_grid;
+    bool is_grid, uniform = false;
     if (strcmp(type, "homogeneous") == 0)
         is_grid = false;
     else if (strcmp(type, "nanovdb") == 0)
         is_grid = true;
+    else if (strcmp(type, "uniformgrid") == 0)
+        is_grid = uniform = true;
     else
         return hz_fail_at(err, e->entity.loc,
                           "MakeNamedMedium \"%s\": medium type \"%s\" is not supported "
-                          "(supported: \"homogeneous\", \"nanovdb\")",
+                          "(supported: \"homogeneous\", \"nanovdb\", \"uniformgrid\")",
                           name, type);
 
     if (params_has(pl, "preset"))
@@ -299,8 +398,8 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     if (!(fabs(g) < 1.0))
         params_reject(pl, "g", "\"g\" must lie in (-1, 1), got %g", g);
     /* Emission: pbrt-v4's "Le" (homogeneous media only) times "Lescale". */
-    rgb Le = is_grid ? rgb_grey(0.0) : params_rgb(pl, "Le", rgb_grey(0.0));
-    double Le_scale = params_float(pl, "Lescale", 1.0);
+    rgb Le = is_grid && !uniform ? rgb_grey(0.0) : params_rgb(pl, "Le", rgb_grey(0.0));
+    double Le_scale = uniform ? 1.0 : params_float(pl, "Lescale", 1.0);
     if (!(isfinite(Le_scale) && Le_scale >= 0.0))
         params_reject(pl, "Lescale", "\"Lescale\" must be finite and non-negative, got %g",
                       Le_scale);
@@ -311,7 +410,14 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     const char *filename = NULL, *gridname = NULL;
     motion_params mp = {NULL, 1.0, time_start, time_start, time_end};
     temperature_params tp = {"temperature", false, 0.0, 1.0, 1.0};
-    if (is_grid) {
+    uniformgrid_params ug = {{1, 1, 1}, {0, 0, 0}, {1, 1, 1}, NULL, NULL, NULL};
+    if (uniform) {
+        uniformgrid_read(pl, &ug);
+        read_temperature_params(pl, &tp);
+        tp.Le_scale = 1.0;
+        if (ug.temperature && params_has(pl, "Le"))
+            params_reject(pl, "Le", "give \"Le\" or \"temperature\", not both (as pbrt-v4)");
+    } else if (is_grid) {
         filename = params_string(pl, "filename", NULL);
         gridname = params_string(pl, "gridname", "density");
         mp.velocityname = params_string(pl, "velocityname", NULL);
@@ -330,27 +436,13 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
                           "\"velocityscale\" must be finite and non-negative, got %g", mp.scale);
         if (!isfinite(mp.time))
             params_reject(pl, "velocitytime", "\"velocitytime\" must be finite, got %g", mp.time);
-        /* Emission from a temperature grid, as pbrt-v4 (temperatureoffset
-         * falls back to its older name temperaturecutoff). */
+        /* Emission from a temperature grid of the file, as pbrt-v4. */
         tp.named = params_has(pl, "temperaturename");
         tp.name = params_string(pl, "temperaturename", "temperature");
         if (!tp.name[0])
             params_reject(pl, "temperaturename", "\"temperaturename\" is empty");
-        if (params_has(pl, "temperatureoffset") && params_has(pl, "temperaturecutoff"))
-            params_reject(pl, "temperaturecutoff",
-                          "give one of \"temperatureoffset\" and \"temperaturecutoff\" (its "
-                          "older name), not both");
-        tp.offset = params_float(pl, "temperatureoffset",
-                                 params_float(pl, "temperaturecutoff", 0.0));
-        tp.scale = params_float(pl, "temperaturescale", 1.0);
+        read_temperature_params(pl, &tp);
         tp.Le_scale = Le_scale;
-        const char *bad = !isfinite(tp.scale)  ? "temperaturescale"
-                          : !isfinite(tp.offset) ? (params_has(pl, "temperatureoffset")
-                                                        ? "temperatureoffset"
-                                                        : "temperaturecutoff")
-                                                 : NULL;
-        if (bad)
-            params_reject(pl, bad, "\"%s\" must be finite", bad);
     }
 
     rgb sa = rgb_scale(sigma_a, scale), ss = rgb_scale(sigma_s, scale);
@@ -373,6 +465,14 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
         return HZ_OK;
     }
 
+    if (uniform) {
+        if (build_uniformgrid(e, render_from_world, &ug, &tp, Le, times, out, err) != HZ_OK) {
+            medium_free(out);
+            memset(out, 0, sizeof *out);
+            return HZ_ERROR;
+        }
+        return HZ_OK;
+    }
     if (!filename || !filename[0]) {
         memset(out, 0, sizeof *out);
         return hz_fail_at(err, e->entity.loc,
@@ -401,12 +501,14 @@ void medium_free(medium *m)
         grid_destroy(m->grid.grid);
         grid_destroy(m->grid.velocity);
         grid_destroy(m->grid.temperature);
+        grid_destroy(m->grid.Le_scale_grid);
         blackbody_table_free(&m->grid.blackbody);
         majorant_grid_free(&m->grid.majorant);
     }
     m->grid.grid = NULL;
     m->grid.velocity = NULL;
     m->grid.temperature = NULL;
+    m->grid.Le_scale_grid = NULL;
 }
 
 bool medium_grid_ray_make(const medium *m, vec3 o, vec3 d, double time, medium_grid_ray *out)
@@ -496,4 +598,6 @@ void medium_accessor_init(const medium *m, medium_accessor *a)
         grid_accessor_init(m->grid.velocity, &a->velocity);
     if (m->grid.temperature)
         grid_accessor_init(m->grid.temperature, &a->temperature);
+    if (m->grid.Le_scale_grid)
+        grid_accessor_init(m->grid.Le_scale_grid, &a->Le_scale);
 }

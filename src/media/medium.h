@@ -9,6 +9,13 @@
  *
  * Emission is absorbing emission, as in pbrt-v4: the source term along a ray
  * is sigma_a(x) Le(x), so a medium that does not absorb does not glow.
+ *   "uniformgrid": pbrt-v4's dense grid (media/uniformgrid.h): nx, ny, nz,
+ *                  density (nx ny nz floats), p0, p1, the same sigma_a, sigma_s,
+ *                  scale, g; emission from temperature (as many floats, with
+ *                  temperatureoffset/cutoff and temperaturescale) or Le, times
+ *                  the Lescale grid (as many floats; absent: one sample of 1
+ *                  at the box's centre, which pbrt-v4 interpolates to 1/8 at
+ *                  the corners).
  *   "nanovdb":     filename (.vdb or .nvdb, relative to the scene file that
  *                  declares the medium), gridname (default "density"), and the
  *                  same sigma_a, sigma_s, scale, g; the coefficients are per unit
@@ -93,6 +100,11 @@ typedef struct {
         transform tindex_from_index;     /* temperature index from density index */
         double temperature_offset, temperature_scale, Le_scale;
         blackbody_table blackbody;       /* over the grid's temperature range */
+        /* uniformgrid: pbrt-v4's Lescale grid (NULL otherwise), the same index
+         * space as the density or one sample spanning the box; emission is
+         * Le_scale_grid(p) times the temperature's blackbody, or times Le. */
+        grid *Le_scale_grid;             /* owned */
+        transform lsindex_from_index;    /* its index from the density's index */
 
         /* Velocity (Eulerian motion blur); NULL: none. */
         grid *velocity;                  /* owned; a vec3 grid, medium units per time */
@@ -149,7 +161,7 @@ bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, doubl
 
 /* Per-thread lookup caches of a grid medium's grids. */
 typedef struct {
-    grid_accessor density, velocity, temperature;
+    grid_accessor density, velocity, temperature, Le_scale;
 } medium_accessor;
 
 void medium_accessor_init(const medium *m, medium_accessor *a);
@@ -190,12 +202,22 @@ static inline double medium_density_at(const medium *m, medium_accessor *a,
  * (the source term is sigma_a density Le). */
 static inline rgb medium_grid_Le(const medium *m, medium_accessor *a, vec3 p, uint64_t *lookups)
 {
+    double s = m->grid.Le_scale;
+    if (m->grid.Le_scale_grid) {
+        ++*lookups;
+        s *= grid_density_index(m->grid.Le_scale_grid, &a->Le_scale,
+                                transform_point(&m->grid.lsindex_from_index, p));
+        if (!(s > 0.0))
+            return rgb_grey(0.0);
+    }
+    if (!m->grid.temperature)
+        return rgb_scale(m->Le, s);
     vec3 q = m->grid.temperature_aligned ? p : transform_point(&m->grid.tindex_from_index, p);
     ++*lookups;
     double T = (grid_density_index(m->grid.temperature, &a->temperature, q) -
                 m->grid.temperature_offset) *
                m->grid.temperature_scale;
-    return rgb_scale(blackbody_table_at(&m->grid.blackbody, T), m->grid.Le_scale);
+    return rgb_scale(blackbody_table_at(&m->grid.blackbody, T), s);
 }
 
 #endif

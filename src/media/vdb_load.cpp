@@ -12,6 +12,7 @@
 
 #include <iostream> // before NanoVDB: GridValidator.h uses std::cerr without it
 #include <nanovdb/NanoVDB.h>
+#include <nanovdb/util/GridBuilder.h>
 #include <nanovdb/util/GridHandle.h>
 #include <nanovdb/util/GridValidator.h>
 #include <nanovdb/util/IO.h>
@@ -427,4 +428,33 @@ extern "C" hz_status vdb_list_grids(const char *path, vdb_grid_callback cb, void
             list_nvdb(path, size, cb, user);
     });
     return guard == HZ_OK ? st : guard;
+}
+
+extern "C" hz_status vdb_grid_from_dense(const float *values, int nx, int ny, int nz,
+                                         const double scale[3], const double origin[3],
+                                         const char *name, vdb_buffer *out, char *err,
+                                         size_t err_size)
+{
+    if (err && err_size)
+        err[0] = '\0';
+    *out = vdb_buffer{nullptr, 0};
+    return guarded(name, err, err_size, [&] {
+        nanovdb::GridBuilder<float> builder(0.0f, nanovdb::GridClass::FogVolume);
+        auto acc = builder.getAccessor();
+        for (int k = 0; k < nz; ++k)
+            for (int j = 0; j < ny; ++j)
+                for (int i = 0; i < nx; ++i) {
+                    float v = values[(size_t(k) * size_t(ny) + size_t(j)) * size_t(nx) + size_t(i)];
+                    if (v != 0.0f)
+                        acc.setValue(nanovdb::Coord(i, j, k), v);
+                }
+        builder.setStats(nanovdb::StatsMode::MinMax);
+        builder.setChecksum(nanovdb::ChecksumMode::Partial);
+        const double mat[3][3] = {{scale[0], 0, 0}, {0, scale[1], 0}, {0, 0, scale[2]}};
+        const double inv[3][3] = {{1 / scale[0], 0, 0}, {0, 1 / scale[1], 0}, {0, 0, 1 / scale[2]}};
+        nanovdb::Map map;
+        map.set(mat, inv, nanovdb::Vec3d(origin[0], origin[1], origin[2]), 1.0);
+        auto handle = builder.getHandle(map, name);
+        *out = to_buffer(handle);
+    });
 }

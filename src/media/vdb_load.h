@@ -58,6 +58,14 @@ typedef struct {
 
 typedef void (*vdb_grid_callback)(const vdb_grid_info *info, void *user);
 
+/* A NanoVDB float grid (with min/max statistics) from nx*ny*nz dense values,
+ * x fastest: voxel (i, j, k) holds values[(k ny + j) nx + i]; zeros are left
+ * inactive (the background is 0). Placed by world = origin + scale * ijk per
+ * axis (scale > 0). Values must be finite. */
+hz_status vdb_grid_from_dense(const float *values, int nx, int ny, int nz, const double scale[3],
+                              const double origin[3], const char *name, vdb_buffer *out,
+                              char *err, size_t err_size);
+
 /* Calls `cb` once per grid in the file, in file order. */
 hz_status vdb_list_grids(const char *path, vdb_grid_callback cb, void *user, char *err,
                          size_t err_size);

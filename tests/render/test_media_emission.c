@@ -293,6 +293,113 @@ static void test_temperature_brightness(void **state)
     assert_true(ratio > 15.0 && ratio < 25.0);
 }
 
+/* ---- uniformgrid (pbrt-v4's dense grid) ---- */
+
+/* Orthographic rays along +z through a 4 x 4 x nz uniformgrid of constant
+ * density over the box [0, 1]^2 x [0, 1], seen in the middle (x, y in 0.4 ..
+ * 0.6: interior cells). pbrt-v4's samples sit at cell centres and fall to 0
+ * one cell beyond, and the box clips: along z the density is 1 except the
+ * outer half cells, where it falls linearly to 1/2 at the faces. */
+static char *ugrid_scene(const char *integrator, int nz, const char *density,
+                         const char *extra)
+{
+    return sfmt("LookAt 0.5 0.5 -1  0.5 0.5 0  0 1 0\n"
+                "Camera \"orthographic\" \"float screenwindow\" [-0.1 0.1 -0.1 0.1]\n"
+                "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                "Sampler \"independent\" \"integer pixelsamples\" 16\n%s\nWorldBegin\n"
+                "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                "MakeNamedMedium \"u\" \"string type\" \"uniformgrid\" \"integer nx\" 4 "
+                "\"integer ny\" 4 \"integer nz\" %d \"float density\" [%s] %s\n"
+                "AttributeBegin\nMediumInterface \"u\" \"\"\nMaterial \"interface\"\n"
+                "Translate 0.5 0.5 0.5\nShape \"sphere\" \"float radius\" 1.5\nAttributeEnd\n",
+                integrator, nz, density, extra);
+}
+
+static char *repeat_value(const char *v, int n)
+{
+    char *s = calloc((size_t)n * (strlen(v) + 1) + 1, 1);
+    assert_non_null(s);
+    for (int i = 0; i < n; ++i) {
+        strcat(s, v);
+        strcat(s, " ");
+    }
+    return s;
+}
+
+/* Transmittance exp(-sigma_t h (nz - 1/4)) (the two half cells at the faces
+ * hold 3/4 of a cell each); and emission with a constant Lescale grid, whose
+ * source sigma_a d Le ls has d = ls on the ramps: against the 1D integral. */
+static void test_uniformgrid_closed_forms(void **state)
+{
+    (void)state;
+    const int nz = 5;
+    const double h = 1.0 / nz, st = 2.0;
+    char *ones = repeat_value("1", 16 * nz);
+    char *text = ugrid_scene("Integrator \"singlescatter\" \"string transmittance\" \"raymarch\" "
+                             "\"float stepsize\" 0.05",
+                             nz, ones, "\"rgb sigma_a\" [2 2 2] \"rgb sigma_s\" [0 0 0]");
+    render_scene *rs = build(text);
+    pstat p = pixel_stats_raw(rs, 1, 2, 1);
+    double want = exp(-st * h * (nz - 0.25));
+    expect_rgb_close(p.mean, rgb_grey(want), 1e-4, 1e-12, "uniformgrid transmittance", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+
+    char extra[4096];
+    snprintf(extra, sizeof extra,
+             "\"rgb sigma_a\" [2 2 2] \"rgb sigma_s\" [0 0 0] \"rgb Le\" [1 2 3] "
+             "\"float Lescale\" [%s]",
+             ones);
+    text = ugrid_scene("Integrator \"singlescatter\" \"string transmittance\" \"raymarch\" "
+                       "\"float stepsize\" 0.05",
+                       nz, ones, extra);
+    /* No sky for the emission: replace the light with nothing. */
+    char *sky = strstr(text, "LightSource");
+    memset(sky, ' ', strchr(sky, '\n') - sky);
+    rs = build(text);
+    p = pixel_stats_raw(rs, 1, 2, 1);
+    /* Along z (world units): r(z) = 1 in [h/2, 1 - h/2], linear to 1/2 at 0 and 1. */
+    double tau = 0.0, e = 0.0;
+    const int n = 100000;
+    for (int i = 0; i < n; ++i) {
+        double z = (i + 0.5) / n, dz = 1.0 / n;
+        double r = z < h / 2 ? 0.5 + z / h : z > 1 - h / 2 ? 0.5 + (1 - z) / h : 1.0;
+        e += exp(-st * tau) * st * r * r * dz;
+        tau += r * dz;
+    }
+    expect_rgb_close(p.mean, rgb_make(e, 2 * e, 3 * e), 1e-4, 1e-12, "uniformgrid emission", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+    free(ones);
+}
+
+/* What pbrt-v4 refuses or requires, at its place: counts, both Le and
+ * temperature, no density. */
+static void test_uniformgrid_errors(void **state)
+{
+    (void)state;
+    char msg[4096];
+    char *text = ugrid_scene("", 2, "1 2 3", "");
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "\"density\" has 3 values; expected nx*ny*nz = 4*4*2 = 32"));
+    free(text);
+    char *d = repeat_value("1", 32);
+    char extra[4096];
+    snprintf(extra, sizeof extra, "\"rgb Le\" [1 1 1] \"float temperature\" [%s]", d);
+    text = ugrid_scene("", 2, d, extra);
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "give \"Le\" or \"temperature\", not both"));
+    free(text);
+    char *neg = repeat_value("-1", 32);
+    text = ugrid_scene("", 2, neg, "");
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "values must be finite and >= 0"));
+    assert_non_null(strstr(msg, "test.pbrt:8:1:"));
+    free(text);
+    free(neg);
+    free(d);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -302,6 +409,8 @@ int main(void)
         cmocka_unit_test(test_temperature_closed_form),
         cmocka_unit_test(test_temperature_ramp),
         cmocka_unit_test(test_temperature_brightness),
+        cmocka_unit_test(test_uniformgrid_closed_forms),
+        cmocka_unit_test(test_uniformgrid_errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
