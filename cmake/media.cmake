@@ -28,7 +28,8 @@ target_include_directories(haze_media SYSTEM PRIVATE ${haze_nanovdb_include})
 target_compile_options(haze_media PRIVATE ${HAZE_WARNINGS})
 target_compile_definitions(haze_media PRIVATE NANOVDB_USE_ZIP
   HAZE_OPENVDB_MODULE_NAME="$<TARGET_FILE_NAME:haze_openvdb>"
-  HAZE_OPENVDB_MODULE_BUILD_PATH="$<TARGET_FILE:haze_openvdb>")
+  HAZE_OPENVDB_MODULE_BUILD_PATH="$<TARGET_FILE:haze_openvdb>"
+  HAZE_VDB_READER_BUILD_PATH="$<TARGET_FILE_DIR:haze_openvdb>/haze_vdb_reader")
 target_link_libraries(haze_media
   PUBLIC haze_core haze_scene
   PRIVATE ZLIB::ZLIB Threads::Threads ${CMAKE_DL_LIBS})
@@ -49,6 +50,13 @@ target_link_options(haze_openvdb PRIVATE
 set_property(TARGET haze_openvdb APPEND PROPERTY LINK_DEPENDS
   ${CMAKE_SOURCE_DIR}/src/media/openvdb_module.map)
 add_dependencies(haze_media haze_openvdb)
+
+# The process that reads .vdb grids with the module (vdb_module_load_grid_isolated):
+# next to haze and the module.
+add_executable(haze_vdb_reader ${CMAKE_SOURCE_DIR}/src/vdb_reader.c)
+target_compile_options(haze_vdb_reader PRIVATE ${HAZE_WARNINGS})
+target_link_libraries(haze_vdb_reader PRIVATE haze_media)
+set_target_properties(haze_vdb_reader PROPERTIES LINKER_LANGUAGE CXX)
 
 # The generator of the small test/demo volumes in volumes/.
 add_executable(haze_volumes ${CMAKE_SOURCE_DIR}/volumes/generate.cpp)

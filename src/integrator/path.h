@@ -7,6 +7,9 @@
 #include <stdint.h>
 
 #include "core/rng.h"
+#include "core/vec.h"
+#include "geometry/geometry.h"
+#include "lights/lights.h"
 
 /* Per-thread counters, summed by the renderer for the summary. */
 typedef struct {
@@ -34,5 +37,26 @@ typedef struct {
  * the point's largest render-space coordinate behind it (2^-16), so that
  * float rounding of the point cannot hide its medium's boundary. */
 #define PATH_SHADOW_BACKOFF 0x1p-16
+
+/* The shadow ray from surface hit h toward light sample ls, as both
+ * integrators trace it: from h's point offset off the surface, toward the
+ * light's point (lifted off an emitting surface toward the receiver), over
+ * t in [0, tmax] along w (not unit: tmax is 1, or just short of an emitter),
+ * or along ls->wi to infinity for an infinite light. For geometry_occluded. */
+typedef struct {
+    vec3 o, w;
+    double tmax;
+} path_shadow_ray;
+
+path_shadow_ray path_surface_shadow_ray(const geom_hit *h, const light_sample *ls);
+
+/* The same ray for a walk through media: w made unit (tmax a distance), and
+ * *back, how far behind o the walk starts: where the ray's line crosses h's
+ * tangent plane (at most a few offsets back, for grazing rays), so the medium
+ * also fills the bit between the surface and the offset origin; surfaces are
+ * still searched from o (t >= *back). False when the light's point is the
+ * origin. */
+bool path_shadow_ray_for_media(const geom_hit *h, const light_sample *ls, path_shadow_ray *r,
+                               double *back);
 
 #endif

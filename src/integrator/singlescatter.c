@@ -94,42 +94,18 @@ static rgb sky(const singlescatter_scene *sc)
 static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
                   const light_sample *ls, media_walk *walk, integrator_counters *counters)
 {
-    vec3 o = geometry_offset_origin(h->p, h->ng, ls->wi);
-    vec3 w = ls->wi;
-    double tmax = INFINITY;
-    if (!ls->infinite) {
-        vec3 target = ls->p_light;
-        /* Area-light points sit on a surface Embree can hit: lift them off it
-         * toward the receiver, like the origin. */
-        if (v3_length_sq(ls->n_light) > 0.0)
-            target = geometry_offset_origin(target, ls->n_light, v3_neg(ls->wi));
-        w = v3_sub(target, o);
-        /* Only an emitting surface needs the shadow ray to stop short of it. */
-        tmax = v3_length_sq(ls->n_light) > 0.0 ? 1.0 - GEOMETRY_SHADOW_EPSILON : 1.0;
-    }
+    path_shadow_ray sr = path_surface_shadow_ray(h, ls);
     if (sc->medium_count == 0) {
         counters->shadow_rays++;
-        return rgb_grey(geometry_occluded(sc->geom, o, w, tmax, walk->time) ? 0.0 : 1.0);
+        return rgb_grey(geometry_occluded(sc->geom, sr.o, sr.w, sr.tmax, walk->time) ? 0.0 : 1.0);
     }
-    if (!ls->infinite) {
-        double dist = v3_length(w);
-        if (!(dist > 0.0))
-            return rgb_grey(0.0);
-        w = v3_scale(w, 1.0 / dist);
-        tmax *= dist;
-    }
-    /* Surfaces are searched from the offset origin, as without media; the
-     * medium also fills the bit between the surface and that origin: the ray
-     * starts e behind it on the same line, where that line crosses the
-     * tangent plane (at most a few offsets back, for grazing rays). */
-    vec3 off = v3_sub(o, h->p);
-    double wn = fabs(v3_dot(w, h->ng));
-    double e = v3_length(off) * 16.0;
-    if (wn * e > fabs(v3_dot(off, h->ng)))
-        e = fabs(v3_dot(off, h->ng)) / wn;
+    double e;
+    if (!path_shadow_ray_for_media(h, ls, &sr, &e))
+        return rgb_grey(0.0);
     uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
-    rgb T = singlescatter_shadow_transmittance(sc, v3_sub(o, v3_scale(w, e)), w, e, tmax + e,
-                                        geometry_medium_after(h, w, medium), walk);
+    rgb T = singlescatter_shadow_transmittance(sc, v3_sub(sr.o, v3_scale(sr.w, e)), sr.w, e,
+                                               sr.tmax + e, geometry_medium_after(h, sr.w, medium),
+                                               walk);
     if (counters->timed)
         counters->media_ns += hz_clock_ns() - t0;
     return T;

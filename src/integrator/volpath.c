@@ -228,35 +228,16 @@ static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_sta
     const volpath_scene *sc = pa->sc;
     if (v->b) {
         const geom_hit *h = v->h;
-        vec3 o = geometry_offset_origin(h->p, h->ng, ls->wi);
-        vec3 w = ls->wi;
-        double tmax = INFINITY;
-        bool emitter = v3_length_sq(ls->n_light) > 0.0;
-        if (!ls->infinite) {
-            vec3 target = ls->p_light;
-            if (emitter)
-                target = geometry_offset_origin(target, ls->n_light, v3_neg(ls->wi));
-            w = v3_sub(target, o);
-            tmax = emitter ? 1.0 - GEOMETRY_SHADOW_EPSILON : 1.0;
-        }
+        path_shadow_ray sr = path_surface_shadow_ray(h, ls);
         if (sc->medium_count == 0) {
             pa->counters->shadow_rays++;
-            return !geometry_occluded(sc->geom, o, w, tmax, pa->walk.time);
+            return !geometry_occluded(sc->geom, sr.o, sr.w, sr.tmax, pa->walk.time);
         }
-        if (!ls->infinite) {
-            double dist = v3_length(w);
-            if (!(dist > 0.0))
-                return false;
-            w = v3_scale(w, 1.0 / dist);
-            tmax *= dist;
-        }
-        vec3 off = v3_sub(o, h->p);
-        double wn = fabs(v3_dot(w, h->ng));
-        double e = v3_length(off) * 16.0;
-        if (wn * e > fabs(v3_dot(off, h->ng)))
-            e = fabs(v3_dot(off, h->ng)) / wn;
-        return shadow_walk(s, v3_sub(o, v3_scale(w, e)), w, e, 0.0, tmax + e,
-                           geometry_medium_after(h, w, v->medium));
+        double e;
+        if (!path_shadow_ray_for_media(h, ls, &sr, &e))
+            return false;
+        return shadow_walk(s, v3_sub(sr.o, v3_scale(sr.w, e)), sr.w, e, 0.0, sr.tmax + e,
+                           geometry_medium_after(h, sr.w, v->medium));
     }
     double tmax = ls->infinite                       ? INFINITY
                   : v3_length_sq(ls->n_light) > 0.0 ? ls->dist * (1.0 - GEOMETRY_SHADOW_EPSILON)

@@ -399,8 +399,8 @@ extern "C" hz_status vdb_load_typed_grid(const char *path, const char *gridname,
         file_kind kind;
         std::uintmax_t size = check_file(path, &kind);
         if (kind == file_kind::openvdb)
-            st = vdb_module_load_grid_isolated(&openvdb_module(path), path, size, gridname, type,
-                                               out, err, err_size);
+            st = (openvdb_module(path), vdb_module_load_grid_isolated(path, size, gridname, type,
+                                                                      out, err, err_size));
         else
             *out = load_nvdb(path, gridname, type, size);
     });

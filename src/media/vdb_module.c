@@ -17,6 +17,12 @@
 #ifndef HAZE_OPENVDB_MODULE_BUILD_PATH
 #define HAZE_OPENVDB_MODULE_BUILD_PATH ""
 #endif
+#ifndef HAZE_VDB_READER_NAME
+#define HAZE_VDB_READER_NAME "haze_vdb_reader"
+#endif
+#ifndef HAZE_VDB_READER_BUILD_PATH
+#define HAZE_VDB_READER_BUILD_PATH ""
+#endif
 
 #define MODULE_PATH_MAX 4096
 
@@ -26,6 +32,7 @@
  * stays loaded until the process exits. */
 typedef struct {
     const haze_openvdb_api *api; /* NULL if the search failed */
+    char path[MODULE_PATH_MAX];  /* the module loaded */
     char error[3 * MODULE_PATH_MAX];
 } module_state;
 
@@ -110,8 +117,10 @@ static void module_search(void)
     for (int i = 0; i < count; ++i) {
         char why[MODULE_PATH_MAX + 256];
         the_module.api = try_load(candidates[i], why, sizeof why);
-        if (the_module.api)
+        if (the_module.api) {
+            message(the_module.path, sizeof the_module.path, "%s", candidates[i]);
             return;
+        }
         size_t used = strlen(reasons);
         message(reasons + used, sizeof reasons - used, "%s%s", i ? "; " : "", why);
     }
@@ -130,4 +139,32 @@ hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_siz
     if (err && err_size)
         message(err, err_size, "%s", the_module.error);
     return HZ_ERROR;
+}
+
+const char *vdb_module_path(void)
+{
+    pthread_once(&module_once, module_search);
+    return the_module.api ? the_module.path : NULL;
+}
+
+void vdb_reader_path(char *out, size_t size)
+{
+    const char *env = getenv("HAZE_VDB_READER");
+    if (env && env[0]) {
+        message(out, size, "%s", env);
+        return;
+    }
+    char exe[MODULE_PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n > 0) {
+        exe[n] = '\0';
+        char *slash = strrchr(exe, '/');
+        if (slash) {
+            slash[1] = '\0';
+            message(out, size, "%s%s", exe, HAZE_VDB_READER_NAME);
+            if (access(out, X_OK) == 0)
+                return;
+        }
+    }
+    message(out, size, "%s", HAZE_VDB_READER_BUILD_PATH);
 }

@@ -51,16 +51,30 @@ typedef struct {
  * paths tried. */
 hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_size);
 
-/* api->load_grid run in a child process (fork) that sends the grid back
- * through a pipe: whatever OpenVDB and its libraries do when memory runs out
- * or a file is hostile (Blosc dereferences a failed allocation), the renderer
- * survives and reports one line; and OpenVDB's working memory (tens of MiB for
- * a small file) is the child's, never the renderer's peak. The module must
- * already be loaded (vdb_module_get) in this process. */
-hz_status vdb_module_load_grid_isolated(const haze_openvdb_api *api, const char *path,
-                                        uint64_t file_size, const char *gridname,
-                                        vdb_value_type type, vdb_buffer *out, char *err,
-                                        size_t err_size);
+/* The path of the module vdb_module_get loaded (NULL if none). */
+const char *vdb_module_path(void);
+
+/* Reads a grid of a .vdb file with the module in a separate process, the
+ * reader (haze_vdb_reader, src/media/vdb_reader_main.c), which sends the
+ * NanoVDB buffer back through a pipe: whatever OpenVDB and its libraries do
+ * when memory runs out or a file is hostile (Blosc writes through a failed
+ * allocation), the renderer survives and reports one line, and OpenVDB's
+ * working memory is the reader's. The reader is a fresh program (started with
+ * posix_spawn), so the renderer's threads (Embree's, MPI's) and their locks
+ * do not follow it. */
+hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
+                                        const char *gridname, vdb_value_type type,
+                                        vdb_buffer *out, char *err, size_t err_size);
+
+/* Where the reader is: $HAZE_VDB_READER if set, else next to the executable,
+ * else the build tree's (baked in at compile time, for the test programs). */
+void vdb_reader_path(char *out, size_t size);
+
+/* The reader's side: loads the grid with the module at `module` and writes
+ * the reply (header, then the buffer or the message) to fd. Returns the exit
+ * status. */
+int vdb_reader_run(const char *module, const char *path, uint64_t file_size,
+                   const char *gridname, vdb_value_type type, int fd);
 
 #ifdef __cplusplus
 }
