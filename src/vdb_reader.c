@@ -1,6 +1,7 @@
-/* haze_vdb_reader MODULE FILE FILE_SIZE GRID TYPE: reads one grid of an
- * OpenVDB file with haze's OpenVDB module and writes it, as a NanoVDB buffer,
- * to stdout (see src/media/vdb_module.h, vdb_module_load_grid_isolated). Run
+/* haze_vdb_reader MODULE FILE FILE_SIZE N (GRID TYPE)...: reads N grids of an
+ * OpenVDB file with haze's OpenVDB module and writes them, as NanoVDB buffers,
+ * to stdout; TYPE is two digits, the value type and whether the grid is
+ * optional (see src/media/vdb_module.h, vdb_module_load_grid_isolated). Run
  * by haze, not by users. */
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,11 +11,20 @@
 
 int main(int argc, char **argv)
 {
-    if (argc != 6) {
-        fprintf(stderr, "usage: %s MODULE FILE FILE_SIZE GRID TYPE (run by haze)\n", argv[0]);
+    enum { MAX_REQUESTS = 8 };
+    int n = argc > 4 ? atoi(argv[4]) : -1;
+    if (n < 1 || n > MAX_REQUESTS || argc != 5 + 2 * n) {
+        fprintf(stderr, "usage: %s MODULE FILE FILE_SIZE N (GRID TYPE)... (run by haze)\n",
+                argv[0]);
         return 2;
     }
-    uint64_t size = strtoull(argv[3], NULL, 10);
-    vdb_value_type type = atoi(argv[5]) == VDB_VEC3 ? VDB_VEC3 : VDB_FLOAT;
-    return vdb_reader_run(argv[1], argv[2], size, argv[4], type, STDOUT_FILENO);
+    vdb_grid_request req[MAX_REQUESTS];
+    for (int i = 0; i < n; ++i) {
+        const char *t = argv[6 + 2 * i];
+        req[i].name = argv[5 + 2 * i];
+        req[i].type = t[0] == '1' ? VDB_VEC3 : VDB_FLOAT;
+        req[i].optional = t[0] && t[1] == '1';
+    }
+    return vdb_reader_run(argv[1], argv[2], strtoull(argv[3], NULL, 10), req, (size_t)n,
+                          STDOUT_FILENO);
 }

@@ -187,15 +187,47 @@ hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_
     return load_typed(path, gridname, VDB_VEC3, out, err);
 }
 
+hz_status grid_load_set(const char *path, const grid_request *req, size_t n, grid **outs,
+                        size_t *failed, hz_error *err)
+{
+    enum { MAX = 8 };
+    vdb_grid_request r[MAX] = {{0}};
+    vdb_buffer bufs[MAX];
+    int present[MAX];
+    *failed = 0;
+    for (size_t i = 0; i < n; ++i)
+        outs[i] = NULL;
+    if (n > MAX)
+        return hz_fail(err, "%s: too many grids asked for at once", path);
+    for (size_t i = 0; i < n; ++i)
+        r[i] = (vdb_grid_request){req[i].name, req[i].type == GRID_VEC3 ? VDB_VEC3 : VDB_FLOAT,
+                                  req[i].optional};
+    char msg[sizeof err->message];
+    if (vdb_load_grid_set(path, r, n, bufs, present, failed, msg, sizeof msg) != HZ_OK)
+        return hz_fail(err, "%s", msg);
+    for (size_t i = 0; i < n; ++i) {
+        if (!present[i])
+            continue;
+        if (grid_create_from_buffer(&bufs[i], req[i].name, &outs[i], err) != HZ_OK) {
+            *failed = i;
+            for (size_t k = i; k < n; ++k)
+                vdb_buffer_free(&bufs[k]);
+            for (size_t k = 0; k < i; ++k) {
+                grid_destroy(outs[k]);
+                outs[k] = NULL;
+            }
+            return HZ_ERROR;
+        }
+    }
+    return HZ_OK;
+}
+
 hz_status grid_load_if_present(const char *path, const char *gridname, grid **out,
                                hz_error *err)
 {
-    *out = NULL;
-    if (load_typed(path, gridname, VDB_FLOAT, out, err) == HZ_OK)
-        return HZ_OK;
-    /* Both readers (the .nvdb reader and the OpenVDB module) say this, and
-     * only this, for a file that holds no grid of that name. */
-    return strstr(err->message, ": no grid named \"") ? HZ_OK : HZ_ERROR;
+    grid_request r = {gridname, GRID_FLOAT, true};
+    size_t failed;
+    return grid_load_set(path, &r, 1, out, &failed, err);
 }
 
 grid_value_type grid_type(const grid *g) { return g->type == VEC3_GRID ? GRID_VEC3 : GRID_FLOAT; }

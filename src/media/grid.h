@@ -49,6 +49,16 @@ typedef enum { GRID_FLOAT, GRID_VEC3 } grid_value_type;
 hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out, hz_error *err);
 /* vdb_load_typed_grid + grid_create_from_buffer: a float grid. */
 hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error *err);
+/* Several grids of one file at once (one OpenVDB reader process for a .vdb
+ * file): outs[i] for req[i], NULL for an optional grid the file lacks. On
+ * failure nothing is kept and *failed names the request that failed. */
+typedef struct {
+    const char *name;
+    grid_value_type type;
+    bool optional;
+} grid_request;
+hz_status grid_load_set(const char *path, const grid_request *req, size_t n, grid **outs,
+                        size_t *failed, hz_error *err);
 /* grid_load, but a file without a grid of that name is not an error: *out
  * is then NULL. */
 hz_status grid_load_if_present(const char *path, const char *gridname, grid **out,

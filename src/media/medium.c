@@ -80,15 +80,10 @@ static hz_status place_grid(medium_entity *e, transform render_from_world, const
 /* Loads the velocity grid `mp->velocityname` of `path` and derives what the
  * lookups and the motion bounds need. */
 static hz_status load_velocity(medium_entity *e, const char *path, const motion_params *mp,
-                               medium *out, hz_error *err)
+                               grid *v, medium *out, hz_error *err)
 {
     const char *name = e->name ? e->name : "";
     file_loc loc = params_loc(&e->entity.params, "velocityname");
-    hz_error inner;
-    grid *v = NULL;
-    if (grid_load_vec3(path, mp->velocityname, &v, &inner) != HZ_OK)
-        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": velocity grid: %s", name,
-                          inner.message);
     double vmax = grid_max_value(v), vbg = grid_background(v);
     if (!isfinite(vmax) || !isfinite(vbg)) {
         grid_destroy(v);
@@ -127,17 +122,11 @@ static hz_status load_velocity(medium_entity *e, const char *path, const motion_
 /* Loads the temperature grid of `path` when there is one (or must be one),
  * and tabulates its blackbody over the range its values map to. */
 static hz_status load_temperature(medium_entity *e, const char *path, const temperature_params *tp,
-                                  medium *out, hz_error *err)
+                                  grid *t, medium *out, hz_error *err)
 {
     const char *name = e->name ? e->name : "";
     file_loc loc = tp->named ? params_loc(&e->entity.params, "temperaturename") : e->entity.loc;
     hz_error inner;
-    grid *t = NULL;
-    hz_status st = tp->named ? grid_load(path, tp->name, &t, &inner)
-                             : grid_load_if_present(path, tp->name, &t, &inner);
-    if (st != HZ_OK)
-        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature grid: %s", name,
-                          inner.message);
     if (!t) {
         /* No temperature grid: no emission, as pbrt-v4; but what would shape
          * it is not silently ignored. */
@@ -192,13 +181,33 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     char *path = path_relative_to(loc.file, filename);
     if (!path)
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": out of memory", name);
+    /* Every grid the medium needs, in one read of the file (one OpenVDB
+     * reader process for a .vdb file): density, velocity, temperature. */
+    grid_request req[3] = {{gridname, GRID_FLOAT, false}};
+    size_t nreq = 1, vi = 0, ti;
+    if (mp->velocityname) {
+        vi = nreq;
+        req[nreq++] = (grid_request){mp->velocityname, GRID_VEC3, false};
+    }
+    ti = nreq;
+    req[nreq++] = (grid_request){tp->name, GRID_FLOAT, !tp->named};
+    grid *grids[3] = {NULL, NULL, NULL};
+    size_t failed = 0;
     hz_error inner;
-    grid *g = NULL;
-    hz_status st = grid_load(path, gridname, &g, &inner);
+    hz_status st = grid_load_set(path, req, nreq, grids, &failed, &inner);
     if (st != HZ_OK) {
         free(path);
-        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+        if (failed == 0)
+            return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+        if (failed == vi && mp->velocityname)
+            return hz_fail_at(err, params_loc(&e->entity.params, "velocityname"),
+                              "MakeNamedMedium \"%s\": velocity grid: %s", name, inner.message);
+        return hz_fail_at(err,
+                          tp->named ? params_loc(&e->entity.params, "temperaturename")
+                                    : e->entity.loc,
+                          "MakeNamedMedium \"%s\": temperature grid: %s", name, inner.message);
     }
+    grid *g = grids[0];
 
     if (grid_check_density(g, &inner) != HZ_OK) {
         st = hz_fail_at(err, loc, "MakeNamedMedium \"%s\": grid \"%s\" in %s: %s", name,
@@ -222,7 +231,8 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
         st = place_grid(e, render_from_world, g, mp, out, err);
     if (st != HZ_OK) {
         free(path);
-        grid_destroy(g);
+        for (size_t i = 0; i < nreq; ++i)
+            grid_destroy(grids[i]);
         return HZ_ERROR;
     }
 
@@ -236,12 +246,18 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     }
     out->grid.background = background;
     out->grid.density_max = nonempty ? grid_max_value(g) : 0.0; /* values >= 0 = background */
+    /* The medium owns each grid from here (the caller frees what was
+     * adopted when a later step fails). */
     if (mp->velocityname)
-        st = load_velocity(e, path, mp, out, err);
+        st = load_velocity(e, path, mp, grids[vi], out, err);
+    else
+        grids[vi] = NULL;
     if (st == HZ_OK)
-        st = load_temperature(e, path, tp, out, err);
+        st = load_temperature(e, path, tp, grids[ti], out, err);
+    else
+        grid_destroy(grids[ti]);
     free(path);
-    return st; /* on failure, the caller frees what was loaded */
+    return st;
 }
 
 /* The majorant grid over the support; with a velocity grid the support

@@ -57,22 +57,36 @@ static bool read_all(int fd, void *data, size_t n)
     return true;
 }
 
+/* Reply statuses. */
+enum { REPLY_OK = 0, REPLY_ERROR = 1, REPLY_ABSENT = 2 };
+
 int vdb_reader_run(const char *module, const char *path, uint64_t file_size,
-                   const char *gridname, vdb_value_type type, int fd)
+                   const vdb_grid_request *req, size_t n, int fd)
 {
     char msg[1024] = "";
-    vdb_buffer b = {NULL, 0};
     const haze_openvdb_api *api = NULL;
-    hz_status st = HZ_ERROR;
-    if (setenv("HAZE_OPENVDB_MODULE", module, 1) == 0 &&
-        vdb_module_get(&api, msg, sizeof msg) == HZ_OK)
-        st = api->load_grid(path, file_size, gridname, type, &b, msg, sizeof msg);
-    else if (!msg[0])
-        snprintf(msg, sizeof msg, "%s: cannot load the OpenVDB module %s", path, module);
-    reply_header h = {st == HZ_OK, st == HZ_OK ? (uint64_t)b.size : (uint64_t)strlen(msg)};
-    bool sent = write_all(fd, &h, sizeof h) && write_all(fd, st == HZ_OK ? b.data : msg, h.length);
-    vdb_buffer_free(&b);
-    return sent ? 0 : 1;
+    bool loaded = setenv("HAZE_OPENVDB_MODULE", module, 1) == 0 &&
+                  vdb_module_get(&api, msg, sizeof msg) == HZ_OK;
+    for (size_t i = 0; i < n; ++i) {
+        vdb_buffer b = {NULL, 0};
+        hz_status st = loaded ? api->load_grid(path, file_size, req[i].name, req[i].type, &b, msg,
+                                               sizeof msg)
+                              : HZ_ERROR;
+        uint64_t status = st == HZ_OK                                          ? REPLY_OK
+                          : req[i].optional && vdb_error_is_missing_grid(msg) ? REPLY_ABSENT
+                                                                               : REPLY_ERROR;
+        reply_header h = {status, status == REPLY_OK      ? (uint64_t)b.size
+                                  : status == REPLY_ERROR ? (uint64_t)strlen(msg)
+                                                          : 0};
+        bool sent = write_all(fd, &h, sizeof h) &&
+                    (h.length == 0 || write_all(fd, status == REPLY_OK ? b.data : msg, h.length));
+        vdb_buffer_free(&b);
+        if (!sent)
+            return 1;
+        if (status == REPLY_ERROR)
+            return 0;
+    }
+    return 0;
 }
 
 /* Starts the reader with its stdout on `fd_out` and its stderr on /dev/null
@@ -92,22 +106,83 @@ static int spawn_reader(const char *reader, char *const argv[], int fd_out, pid_
     return e;
 }
 
-hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
-                                        const char *gridname, vdb_value_type type,
-                                        vdb_buffer *out, char *err, size_t err_size)
+/* Reads one reply into outs/present (or err); false when the pipe ended
+ * early. *ok tells whether the request succeeded (a grid or an absence). */
+static bool read_reply(int fd, const char *path, vdb_buffer *out, int *present, bool *ok,
+                       bool *oom, char *err, size_t err_size)
 {
-    *out = (vdb_buffer){NULL, 0};
-    const char *module = vdb_module_path();
-    if (!module) {
-        const haze_openvdb_api *api;
-        return vdb_module_get(&api, err, err_size);
+    reply_header h;
+    *ok = false;
+    if (!read_all(fd, &h, sizeof h))
+        return false;
+    if (h.ok == REPLY_ABSENT) {
+        *present = 0;
+        *ok = true;
+        return true;
     }
-    char reader[4096], size_arg[32], type_arg[8];
+    if (h.ok == REPLY_OK) {
+        /* NanoVDB wants 32-byte alignment; aligned_alloc wants a multiple. */
+        size_t n = (size_t)h.length;
+        void *data = n > 0 && n <= SIZE_MAX - 31 ? aligned_alloc(32, (n + 31) / 32 * 32) : NULL;
+        if (!data) {
+            *oom = true;
+            snprintf(err, err_size, "%s: out of memory for a grid of %" PRIu64 " bytes", path,
+                     h.length);
+            return true;
+        }
+        if (!read_all(fd, data, n)) {
+            free(data);
+            return false;
+        }
+        *out = (vdb_buffer){data, n};
+        *present = 1;
+        *ok = true;
+        return true;
+    }
+    char msg[1024];
+    size_t n = h.length < sizeof msg - 1 ? (size_t)h.length : sizeof msg - 1;
+    if (!read_all(fd, msg, n))
+        return false;
+    msg[n] = '\0';
+    snprintf(err, err_size, "%s", msg);
+    return true;
+}
+
+hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
+                                        const vdb_grid_request *req, size_t n, vdb_buffer *outs,
+                                        int *present, size_t *failed, char *err,
+                                        size_t err_size)
+{
+    enum { MAX_REQUESTS = 8 };
+    *failed = 0;
+    for (size_t i = 0; i < n; ++i) {
+        outs[i] = (vdb_buffer){NULL, 0};
+        present[i] = 0;
+    }
+    char module[4096];
+    if (n > MAX_REQUESTS) {
+        snprintf(err, err_size, "%s: too many grids asked for at once", path);
+        return HZ_ERROR;
+    }
+    if (vdb_module_locate(module, sizeof module, err, err_size) != HZ_OK)
+        return HZ_ERROR;
+    char reader[4096], size_arg[32], count_arg[16], type_arg[MAX_REQUESTS][4];
     vdb_reader_path(reader, sizeof reader);
     snprintf(size_arg, sizeof size_arg, "%" PRIu64, file_size);
-    snprintf(type_arg, sizeof type_arg, "%d", (int)type);
-    char *argv[] = {reader, (char *)module, (char *)path, size_arg, (char *)gridname, type_arg,
-                    NULL};
+    snprintf(count_arg, sizeof count_arg, "%zu", n);
+    char *argv[6 + 3 * MAX_REQUESTS + 1];
+    size_t a = 0;
+    argv[a++] = reader;
+    argv[a++] = module;
+    argv[a++] = (char *)path;
+    argv[a++] = size_arg;
+    argv[a++] = count_arg;
+    for (size_t i = 0; i < n; ++i) {
+        snprintf(type_arg[i], sizeof type_arg[i], "%d%d", (int)req[i].type, req[i].optional != 0);
+        argv[a++] = (char *)req[i].name;
+        argv[a++] = type_arg[i];
+    }
+    argv[a] = NULL;
     int fds[2];
     if (pipe(fds) != 0) {
         snprintf(err, err_size, "%s: cannot start the OpenVDB reader: %s", path, strerror(errno));
@@ -123,52 +198,33 @@ hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
                  strerror(e));
         return HZ_ERROR;
     }
-    reply_header h;
-    bool got = read_all(fds[0], &h, sizeof h);
-    void *data = NULL;
-    bool oom = false;
-    if (got && h.ok) {
-        /* NanoVDB wants 32-byte alignment; aligned_alloc wants a multiple. */
-        size_t n = (size_t)h.length;
-        data = n > 0 && n <= SIZE_MAX - 31 ? aligned_alloc(32, (n + 31) / 32 * 32) : NULL;
-        oom = !data;
-        got = data && read_all(fds[0], data, n);
-    } else if (got) {
-        char msg[1024];
-        size_t n = h.length < sizeof msg - 1 ? (size_t)h.length : sizeof msg - 1;
-        got = read_all(fds[0], msg, n);
-        msg[got ? n : 0] = '\0';
-        snprintf(err, err_size, "%s", msg);
-    }
+    bool complete = true, ok = true, oom = false;
+    size_t i = 0;
+    for (; i < n && ok && complete; ++i)
+        complete = read_reply(fds[0], path, &outs[i], &present[i], &ok, &oom, err, err_size);
     close(fds[0]);
     if (oom)
         kill(pid, SIGKILL);
     int status = 0;
     while (waitpid(pid, &status, 0) < 0 && errno == EINTR)
         ;
-    if (oom) {
-        snprintf(err, err_size, "%s: out of memory for a grid of %" PRIu64 " bytes", path,
-                 h.length);
-        return HZ_ERROR;
-    }
-    /* A complete reply stands, whatever the reader did after sending it. */
-    if (!got) {
-        free(data);
+    if (complete && ok)
+        return HZ_OK; /* every reply stands, whatever the reader did after them */
+    *failed = i > 0 ? i - 1 : 0;
+    for (size_t k = 0; k < n; ++k)
+        vdb_buffer_free(&outs[k]);
+    if (!complete) {
         if (WIFSIGNALED(status))
             snprintf(err, err_size,
                      "%s: OpenVDB failed reading grid \"%s\" (its reader was killed by signal "
                      "%d, %s; out of memory?)",
-                     path, gridname, WTERMSIG(status), strsignal(WTERMSIG(status)));
+                     path, req[*failed].name, WTERMSIG(status), strsignal(WTERMSIG(status)));
         else
             snprintf(err, err_size,
                      "%s: OpenVDB failed reading grid \"%s\" (its reader, %s, exited with "
                      "status %d without a result)",
-                     path, gridname, reader, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-        return HZ_ERROR;
+                     path, req[*failed].name, reader,
+                     WIFEXITED(status) ? WEXITSTATUS(status) : -1);
     }
-    if (!h.ok)
-        return HZ_ERROR;
-    out->data = data;
-    out->size = (size_t)h.length;
-    return HZ_OK;
+    return HZ_ERROR;
 }

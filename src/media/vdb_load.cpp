@@ -387,24 +387,57 @@ extern "C" void vdb_buffer_free(vdb_buffer *b)
     b->size = 0;
 }
 
+extern "C" int vdb_error_is_missing_grid(const char *message)
+{
+    // Both readers (load_nvdb here, the OpenVDB module) say this, and only
+    // this, for a file that holds no grid of the name asked for.
+    return std::strstr(message, ": no grid named \"") != nullptr;
+}
+
+extern "C" hz_status vdb_load_grid_set(const char *path, const vdb_grid_request *req, size_t n,
+                                       vdb_buffer *outs, int *present, size_t *failed, char *err,
+                                       size_t err_size)
+{
+    if (err && err_size)
+        err[0] = '\0';
+    *failed = 0;
+    for (size_t i = 0; i < n; ++i) {
+        outs[i] = vdb_buffer{nullptr, 0};
+        present[i] = 0;
+    }
+    file_kind kind = file_kind::unknown;
+    std::uintmax_t size = 0;
+    hz_status st = guarded(path, err, err_size, [&] { size = check_file(path, &kind); });
+    if (st != HZ_OK)
+        return st;
+    if (kind == file_kind::openvdb)
+        return vdb_module_load_grid_isolated(path, size, req, n, outs, present, failed, err,
+                                             err_size);
+    for (size_t i = 0; i < n; ++i) {
+        st = guarded(path, err, err_size,
+                     [&] { outs[i] = load_nvdb(path, req[i].name, req[i].type, size); });
+        if (st == HZ_OK) {
+            present[i] = 1;
+        } else if (!(req[i].optional && vdb_error_is_missing_grid(err))) {
+            *failed = i;
+            for (size_t k = 0; k < n; ++k)
+                vdb_buffer_free(&outs[k]);
+            return HZ_ERROR;
+        }
+    }
+    if (err && err_size)
+        err[0] = '\0';
+    return HZ_OK;
+}
+
 extern "C" hz_status vdb_load_typed_grid(const char *path, const char *gridname,
                                          vdb_value_type type, vdb_buffer *out, char *err,
                                          size_t err_size)
 {
-    if (err && err_size)
-        err[0] = '\0';
-    *out = vdb_buffer{nullptr, 0};
-    hz_status st = HZ_OK;
-    hz_status guard = guarded(path, err, err_size, [&] {
-        file_kind kind;
-        std::uintmax_t size = check_file(path, &kind);
-        if (kind == file_kind::openvdb)
-            st = (openvdb_module(path), vdb_module_load_grid_isolated(path, size, gridname, type,
-                                                                      out, err, err_size));
-        else
-            *out = load_nvdb(path, gridname, type, size);
-    });
-    return guard == HZ_OK ? st : guard;
+    vdb_grid_request req = {gridname, type, 0};
+    int present;
+    size_t failed;
+    return vdb_load_grid_set(path, &req, 1, out, &present, &failed, err, err_size);
 }
 
 extern "C" hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out,

@@ -35,6 +35,20 @@ typedef enum { VDB_FLOAT, VDB_VEC3 } vdb_value_type;
  * empty and `err` (of `err_size` bytes, may be NULL) holds the message. */
 hz_status vdb_load_typed_grid(const char *path, const char *gridname, vdb_value_type type,
                               vdb_buffer *out, char *err, size_t err_size);
+/* Several grids of one file at once (for a .vdb file, one run of the OpenVDB
+ * reader process): outs[i] for req[i]; an optional grid the file lacks leaves
+ * outs[i] empty and present[i] 0. On failure every buffer is freed, *failed
+ * names the request that failed and err its message. */
+typedef struct {
+    const char *name;
+    vdb_value_type type;
+    int optional;
+} vdb_grid_request;
+hz_status vdb_load_grid_set(const char *path, const vdb_grid_request *req, size_t n,
+                            vdb_buffer *outs, int *present, size_t *failed, char *err,
+                            size_t err_size);
+/* True for the message of a file that holds no grid of the name asked for. */
+int vdb_error_is_missing_grid(const char *message);
 /* vdb_load_typed_grid of a float grid. */
 hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out, char *err,
                         size_t err_size);

@@ -3,6 +3,7 @@
 #include "media/vdb_module.h"
 
 #include <dlfcn.h>
+#include <errno.h>
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -97,9 +98,9 @@ static void next_to_executable(char *out, size_t size)
         out[0] = '\0';
 }
 
-static void module_search(void)
+/* Where the module is looked for, in order (vdb_module.h); returns the count. */
+static int candidates_of(char candidates[2][MODULE_PATH_MAX])
 {
-    char candidates[2][MODULE_PATH_MAX];
     int count = 0;
     const char *env = getenv("HAZE_OPENVDB_MODULE");
     if (env && env[0]) {
@@ -112,7 +113,21 @@ static void module_search(void)
         if (built[0] && (count == 0 || strcmp(candidates[0], built) != 0))
             message(candidates[count++], MODULE_PATH_MAX, "%s", built);
     }
+    return count;
+}
 
+static void not_found(char *out, size_t size, int count, const char *reasons)
+{
+    message(out, size,
+            "cannot load the OpenVDB module that reading .vdb files needs (tried %s); "
+            "convert the file to .nvdb, or set HAZE_OPENVDB_MODULE to the module's path",
+            count ? reasons : "no path");
+}
+
+static void module_search(void)
+{
+    char candidates[2][MODULE_PATH_MAX];
+    int count = candidates_of(candidates);
     char reasons[2 * MODULE_PATH_MAX + 8] = "";
     for (int i = 0; i < count; ++i) {
         char why[MODULE_PATH_MAX + 256];
@@ -124,10 +139,26 @@ static void module_search(void)
         size_t used = strlen(reasons);
         message(reasons + used, sizeof reasons - used, "%s%s", i ? "; " : "", why);
     }
-    message(the_module.error, sizeof the_module.error,
-             "cannot load the OpenVDB module that reading .vdb files needs (tried %s); "
-             "convert the file to .nvdb, or set HAZE_OPENVDB_MODULE to the module's path",
-             count ? reasons : "no path");
+    not_found(the_module.error, sizeof the_module.error, count, reasons);
+}
+
+hz_status vdb_module_locate(char *path, size_t path_size, char *err, size_t err_size)
+{
+    char candidates[2][MODULE_PATH_MAX];
+    int count = candidates_of(candidates);
+    char reasons[2 * MODULE_PATH_MAX + 8] = "";
+    for (int i = 0; i < count; ++i) {
+        if (access(candidates[i], R_OK) == 0) {
+            message(path, path_size, "%s", candidates[i]);
+            return HZ_OK;
+        }
+        size_t used = strlen(reasons);
+        message(reasons + used, sizeof reasons - used, "%s%s: %s", i ? "; " : "", candidates[i],
+                strerror(errno));
+    }
+    if (err && err_size)
+        not_found(err, err_size, count, reasons);
+    return HZ_ERROR;
 }
 
 hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_size)
@@ -139,12 +170,6 @@ hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_siz
     if (err && err_size)
         message(err, err_size, "%s", the_module.error);
     return HZ_ERROR;
-}
-
-const char *vdb_module_path(void)
-{
-    pthread_once(&module_once, module_search);
-    return the_module.api ? the_module.path : NULL;
 }
 
 void vdb_reader_path(char *out, size_t size)

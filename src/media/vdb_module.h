@@ -51,8 +51,10 @@ typedef struct {
  * paths tried. */
 hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_size);
 
-/* The path of the module vdb_module_get loaded (NULL if none). */
-const char *vdb_module_path(void);
+/* The module's path, found as vdb_module_get finds it but without loading it
+ * (the reader process loads it): the first of the places to look that
+ * exists. On failure err names every place tried. */
+hz_status vdb_module_locate(char *path, size_t path_size, char *err, size_t err_size);
 
 /* Reads a grid of a .vdb file with the module in a separate process, the
  * reader (haze_vdb_reader, src/media/vdb_reader_main.c), which sends the
@@ -63,18 +65,19 @@ const char *vdb_module_path(void);
  * posix_spawn), so the renderer's threads (Embree's, MPI's) and their locks
  * do not follow it. */
 hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
-                                        const char *gridname, vdb_value_type type,
-                                        vdb_buffer *out, char *err, size_t err_size);
+                                        const vdb_grid_request *req, size_t n, vdb_buffer *outs,
+                                        int *present, size_t *failed, char *err,
+                                        size_t err_size);
 
 /* Where the reader is: $HAZE_VDB_READER if set, else next to the executable,
  * else the build tree's (baked in at compile time, for the test programs). */
 void vdb_reader_path(char *out, size_t size);
 
-/* The reader's side: loads the grid with the module at `module` and writes
- * the reply (header, then the buffer or the message) to fd. Returns the exit
- * status. */
+/* The reader's side: loads each requested grid with the module at `module`
+ * and writes one reply per request (a header, then the buffer or the
+ * message) to fd, stopping after the first failure. Returns the exit status. */
 int vdb_reader_run(const char *module, const char *path, uint64_t file_size,
-                   const char *gridname, vdb_value_type type, int fd);
+                   const vdb_grid_request *req, size_t n, int fd);
 
 #ifdef __cplusplus
 }
