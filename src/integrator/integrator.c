@@ -36,13 +36,10 @@ hz_status integrator_init(integrator *out, const integrator_params *p,
     out->kind = p->kind;
     switch (p->kind) {
     case INTEGRATOR_SINGLESCATTER:
-        out->singlescatter = singlescatter_scene_make(in->geom, in->lights, in->light_count,
-                                                      in->media, in->medium_count,
-                                                      p->singlescatter);
+        out->singlescatter = singlescatter_scene_make(in, p->singlescatter);
         return HZ_OK;
     case INTEGRATOR_VOLPATH:
-        return volpath_scene_init(&out->volpath, in->geom, in->lights, in->light_count,
-                                  in->media, in->medium_count, p->volpath, err);
+        return volpath_scene_init(&out->volpath, in, p->volpath, err);
     }
     return hz_fail(err, "unknown integrator kind %d", (int)p->kind);
 }

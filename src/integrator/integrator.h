@@ -32,15 +32,6 @@ typedef struct {
 hz_status integrator_params_from_entity(scene_entity *e, FILE *warn, integrator_params *out,
                                         hz_error *err);
 
-/* What every integrator reads of the built scene (borrowed). */
-typedef struct {
-    const geometry *geom;
-    const light *lights;
-    size_t light_count;
-    const medium *media;
-    size_t medium_count;
-} integrator_inputs;
-
 typedef struct {
     integrator_kind kind;
     union {

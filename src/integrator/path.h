@@ -4,12 +4,23 @@
 #define HAZE_INTEGRATOR_PATH_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "core/rng.h"
 #include "core/vec.h"
 #include "geometry/geometry.h"
 #include "lights/lights.h"
+#include "media/medium.h"
+
+/* What every integrator reads of the built scene (borrowed). */
+typedef struct {
+    const geometry *geom;
+    const light *lights;
+    size_t light_count;
+    const medium *media;
+    size_t medium_count;
+} integrator_inputs;
 
 /* Per-thread counters, summed by the renderer for the summary. */
 typedef struct {

@@ -69,23 +69,21 @@ hz_status singlescatter_settings_from_entity(scene_entity *e, singlescatter_sett
     return HZ_OK;
 }
 
-singlescatter_scene singlescatter_scene_make(const geometry *geom, const light *lights,
-                                             size_t light_count, const medium *media,
-                                             size_t medium_count, singlescatter_settings settings)
+singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
+                                             singlescatter_settings settings)
 {
     bool stochastic = false;
-    for (size_t i = 0; i < medium_count; ++i)
-        stochastic |= media[i].kind == MEDIUM_GRID && settings.mode != TRANSMITTANCE_RAYMARCH;
-    return (singlescatter_scene){geom,  lights,       light_count, media,
-                                 medium_count, settings, stochastic};
+    for (size_t i = 0; i < in->medium_count; ++i)
+        stochastic |= in->media[i].kind == MEDIUM_GRID && settings.mode != TRANSMITTANCE_RAYMARCH;
+    return (singlescatter_scene){*in, settings, stochastic};
 }
 
 static rgb sky(const singlescatter_scene *sc)
 {
     rgb L = rgb_grey(0.0);
-    for (size_t i = 0; i < sc->light_count; ++i)
-        if (sc->lights[i].kind == LIGHT_INFINITE)
-            L = rgb_add(L, sc->lights[i].emit);
+    for (size_t i = 0; i < sc->in.light_count; ++i)
+        if (sc->in.lights[i].kind == LIGHT_INFINITE)
+            L = rgb_add(L, sc->in.lights[i].emit);
     return L;
 }
 
@@ -95,9 +93,9 @@ static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
                   const light_sample *ls, media_walk *walk, integrator_counters *counters)
 {
     path_shadow_ray sr = path_surface_shadow_ray(h, ls);
-    if (sc->medium_count == 0) {
+    if (sc->in.medium_count == 0) {
         counters->shadow_rays++;
-        return rgb_grey(geometry_occluded(sc->geom, sr.o, sr.w, sr.tmax, walk->time) ? 0.0 : 1.0);
+        return rgb_grey(geometry_occluded(sc->in.geom, sr.o, sr.w, sr.tmax, walk->time) ? 0.0 : 1.0);
     }
     double e;
     if (!path_shadow_ray_for_media(h, ls, &sr, &e))
@@ -119,8 +117,8 @@ static rgb direct_diffuse(const singlescatter_scene *sc, const geom_hit *h, int 
     vec3 ns = v3_dot(h->ns, wo) < 0.0 ? v3_neg(h->ns) : h->ns;
     rgb f = rgb_scale(reflectance, HZ_INV_PI);
     rgb L = rgb_grey(0.0);
-    for (size_t i = 0; i < sc->light_count; ++i) {
-        const light *l = &sc->lights[i];
+    for (size_t i = 0; i < sc->in.light_count; ++i) {
+        const light *l = &sc->in.lights[i];
         /* Non-delta lights always take their 2D sample, hit or not, so the
          * sampler dimensions do not depend on what happened before. */
         vec2 u = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(st);
@@ -146,7 +144,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     vec3 o = r->o, d = r->d;
     int medium = r->medium;
     media_walk walk = {.time = r->time};
-    if (sc->medium_count > 0)
+    if (sc->in.medium_count > 0)
         walk.r = rng_seeded(sampler_stream_seed(st));
     rgb beta = rgb_grey(1.0), L = rgb_grey(0.0);
     geom_hit h;
@@ -154,11 +152,11 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
      * starts past the surface (tmin). */
     double tmin = 0.0, t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
-        bool hit = geometry_intersect(sc->geom, o, d, tmin, INFINITY, r->time, &h);
+        bool hit = geometry_intersect(sc->in.geom, o, d, tmin, INFINITY, r->time, &h);
         /* A ray that leaves the scene inside a medium ends at HZ_FAR_COORD
          * (core/ray.h): no medium point beyond it is traced. */
         double t_hit = !hit ? (medium >= 0 ? ray_far_t(o, d) : INFINITY)
-                       : sc->medium_count > 0 ? geometry_crossing_t(&h, o, d)
+                       : sc->in.medium_count > 0 ? geometry_crossing_t(&h, o, d)
                                               : h.t;
         if (medium >= 0) {
             uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
@@ -187,7 +185,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     vec3 wo = v3_normalize(v3_neg(d));
     rgb Ls = rgb_grey(0.0);
     if (h.shape->area_light >= 0)
-        Ls = light_area_le(&sc->lights[h.shape->area_light], h.ng, wo);
+        Ls = light_area_le(&sc->in.lights[h.shape->area_light], h.ng, wo);
     switch (h.shape->material->kind) {
     case MATERIAL_DIFFUSE:
         if (rgb_is_black(h.shape->material->reflectance))

@@ -49,11 +49,7 @@ singlescatter_settings singlescatter_settings_default(void);
 
 /* What the integrator and its media walks see of the scene. */
 typedef struct {
-    const geometry *geom;
-    const light *lights;
-    size_t light_count;
-    const medium *media;
-    size_t medium_count;
+    integrator_inputs in;
     singlescatter_settings settings;
     /* Shadow transmittance is random (grid media with jittered or ratio
      * estimators): only then do delta lights take more than one sample. */
@@ -61,9 +57,8 @@ typedef struct {
 } singlescatter_scene;
 
 /* The scene as single scattering sees it (borrowed pointers). */
-singlescatter_scene singlescatter_scene_make(const geometry *geom, const light *lights,
-                                             size_t light_count, const medium *media,
-                                             size_t medium_count, singlescatter_settings settings);
+singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
+                                             singlescatter_settings settings);
 
 /* `r->d` must be unit. */
 rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state *st,

@@ -363,7 +363,7 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
 void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, vec3 w, double t0,
                                 double t1, rgb *beta, rgb *L, sampler_state *u, media_walk *walk)
 {
-    segment_walk sw = {.vs = vs, .mi = mi, .m = &vs->media[mi], .o = o, .w = w,
+    segment_walk sw = {.vs = vs, .mi = mi, .m = &vs->in.media[mi], .o = o, .w = w,
                        .wo = v3_neg(w), .T = *beta, .Lseg = rgb_grey(0.0), .u = u,
                        .walk = walk};
     majorant_walk mw;

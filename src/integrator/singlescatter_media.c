@@ -50,7 +50,7 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
     double t_start = t_fill;
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
-        bool hit = geometry_intersect(vs->geom, o, w, tmin, tmax, walk->time, &h);
+        bool hit = geometry_intersect(vs->in.geom, o, w, tmin, tmax, walk->time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
             if (h.t >= t_fill)
                 return rgb_grey(0.0);
@@ -65,7 +65,7 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
                      : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
             T = rgb_mul(T,
-                        segment_transmittance(vs, &vs->media[medium], o, w, t_start, t_end, walk));
+                        segment_transmittance(vs, &vs->in.media[medium], o, w, t_start, t_end, walk));
             if (rgb_is_black(T))
                 return T;
         }
@@ -110,7 +110,7 @@ static rgb scatter_shadow(const singlescatter_scene *vs, vec3 x, vec3 w, double 
 static rgb light_inscattered(const singlescatter_scene *vs, int mi, const light *l, vec3 x, vec3 wo,
                              sampler_state *u, media_walk *walk)
 {
-    const medium *m = &vs->media[mi];
+    const medium *m = &vs->in.media[mi];
     rgb L = rgb_grey(0.0);
     /* More samples of a delta light through deterministic transmittance
      * would repeat the same computation. */
@@ -152,8 +152,8 @@ rgb singlescatter_inscattered(const singlescatter_scene *vs, int mi, vec3 x, vec
                               sampler_state *u, media_walk *walk)
 {
     rgb L = rgb_grey(0.0);
-    for (size_t i = 0; i < vs->light_count; ++i)
-        L = rgb_add(L, light_inscattered(vs, mi, &vs->lights[i], x, wo, u, walk));
+    for (size_t i = 0; i < vs->in.light_count; ++i)
+        L = rgb_add(L, light_inscattered(vs, mi, &vs->in.lights[i], x, wo, u, walk));
     return L;
 }
 
@@ -329,7 +329,7 @@ static equiangular light_equiangular(const light *l, vec3 o, vec3 w, double len)
 static rgb scatter_at(const singlescatter_scene *vs, int mi, const light *l, vec3 o, vec3 w,
                       double s, sampler_state *u, media_walk *walk)
 {
-    const medium *m = &vs->media[mi];
+    const medium *m = &vs->in.media[mi];
     rgb Ls = light_inscattered(vs, mi, l, v3_add(o, v3_scale(w, s)), v3_neg(w), u, walk);
     return rgb_mul(rgb_mul(m->sigma_s, rgb_exp_neg(medium_sigma_t(m), s)), Ls);
 }
@@ -351,15 +351,15 @@ static void homogeneous_segment(const singlescatter_scene *vs, int mi, vec3 o, v
                                 double t1, rgb *beta, rgb *L, sampler_state *u,
                                 media_walk *walk)
 {
-    const medium *m = &vs->media[mi];
+    const medium *m = &vs->in.media[mi];
     rgb sigma_t = medium_sigma_t(m);
     double len = t1 - t0;
     vec3 a = v3_add(o, v3_scale(w, t0)); /* the segment starts at s = 0 */
     if (!rgb_is_black(m->sigma_s) && len > 0.0) {
         exp_sampler es = exp_sampler_make(sigma_t, len);
         rgb Lseg = rgb_grey(0.0);
-        for (size_t i = 0; i < vs->light_count; ++i) {
-            const light *l = &vs->lights[i];
+        for (size_t i = 0; i < vs->in.light_count; ++i) {
+            const light *l = &vs->in.lights[i];
             equiangular eq = light_equiangular(l, a, w, len);
             /* One sample per strategy, combined with the balance heuristic:
              * f / (p_exp + p_eq) for each. */
@@ -392,7 +392,7 @@ void singlescatter_segment(const singlescatter_scene *vs, int m, vec3 o, vec3 w,
 {
     if (!(t1 > t0))
         return;
-    switch (vs->media[m].kind) {
+    switch (vs->in.media[m].kind) {
     case MEDIUM_HOMOGENEOUS:
         homogeneous_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
         break;

@@ -60,17 +60,15 @@ static double scene_radius(const geometry *geom)
     return isfinite(r) && r > 0.0 ? r : 0.0;
 }
 
-hz_status volpath_scene_init(volpath_scene *out, const geometry *geom, const light *lights,
-                             size_t light_count, const medium *media, size_t medium_count,
+hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
                              volpath_settings settings, hz_error *err)
 {
-    *out = (volpath_scene){geom, lights, light_count, media, medium_count, settings,
-                           {0}, rgb_grey(0.0)};
-    for (size_t i = 0; i < light_count; ++i)
-        if (lights[i].kind == LIGHT_INFINITE)
-            out->sky = rgb_add(out->sky, lights[i].emit);
-    return light_sampler_create(settings.light_sampler, lights, light_count, scene_radius(geom),
-                                &out->sampler, err);
+    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0)};
+    for (size_t i = 0; i < in->light_count; ++i)
+        if (in->lights[i].kind == LIGHT_INFINITE)
+            out->sky = rgb_add(out->sky, in->lights[i].emit);
+    return light_sampler_create(settings.light_sampler, in->lights, in->light_count,
+                                scene_radius(in->geom), &out->sampler, err);
 }
 
 void volpath_scene_free(volpath_scene *sc) { light_sampler_free(&sc->sampler); }
@@ -175,7 +173,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
     double t_start = t_fill;
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
-        bool hit = geometry_intersect(sc->geom, o, w, tmin, tmax, pa->walk.time, &h);
+        bool hit = geometry_intersect(sc->in.geom, o, w, tmin, tmax, pa->walk.time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
             if (h.t >= t_fill)
                 return false;
@@ -190,7 +188,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         double t_end = hit ? fmax(geometry_crossing_t(&h, o, w), t_start)
                      : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
-            rgb T_maj = volpath_track(&sc->media[medium], o, w, t_start, t_end, pa->hero,
+            rgb T_maj = volpath_track(&sc->in.media[medium], o, w, t_start, t_end, pa->hero,
                                       &pa->walk, shadow_event, s);
             double th = rgb_ch(T_maj, pa->hero);
             if (rgb_is_black(s->T) || !(th > 0.0))
@@ -229,9 +227,9 @@ static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_sta
     if (v->b) {
         const geom_hit *h = v->h;
         path_shadow_ray sr = path_surface_shadow_ray(h, ls);
-        if (sc->medium_count == 0) {
+        if (sc->in.medium_count == 0) {
             pa->counters->shadow_rays++;
-            return !geometry_occluded(sc->geom, sr.o, sr.w, sr.tmax, pa->walk.time);
+            return !geometry_occluded(sc->in.geom, sr.o, sr.w, sr.tmax, pa->walk.time);
         }
         double e;
         if (!path_shadow_ray_for_media(h, ls, &sr, &e))
@@ -260,7 +258,7 @@ static rgb sample_ld(path *pa, const vertex *v)
     vec3 n = v->b ? v->b->n : v3(0.0, 0.0, 0.0);
     if (!light_sampler_sample(&sc->sampler, v->p, n, u, &li, &pmf))
         return rgb_grey(0.0);
-    const light *l = &sc->lights[li];
+    const light *l = &sc->in.lights[li];
     light_sample ls;
     if (!light_sample_li(l, v->p, n, pa->walk.time, ul, &ls) || !(ls.pdf > 0.0) ||
         rgb_is_black(ls.L))
@@ -277,7 +275,7 @@ static rgb sample_ld(path *pa, const vertex *v)
     if (rgb_is_black(f_hat))
         return rgb_grey(0.0);
     shadow_state s = {pa, rgb_grey(1.0), rgb_grey(1.0), rgb_grey(1.0)};
-    bool timed = v->b && pa->counters->timed && sc->medium_count > 0;
+    bool timed = v->b && pa->counters->timed && sc->in.medium_count > 0;
     uint64_t t0 = timed ? hz_clock_ns() : 0;
     bool lit = shadow(pa, v, &ls, &s);
     if (timed)
@@ -305,7 +303,7 @@ static void scatter(path *pa, const volpath_event *ev)
     pa->r_u = rgb_mul(pa->r_u, ratio);
     if (rgb_is_black(pa->beta) || rgb_is_black(pa->r_u))
         return;
-    const medium *m = &sc->media[pa->ray.medium];
+    const medium *m = &sc->in.media[pa->ray.medium];
     vec3 x = v3_add(pa->ray.o, v3_scale(pa->ray.d, ev->t));
     vec3 wo = v3_neg(pa->ray.d);
     vertex v = {x, wo, NULL, NULL, m->g, pa->ray.medium};
@@ -382,7 +380,7 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
 {
     const volpath_scene *sc = pa->sc;
     int li = h->shape->area_light;
-    const light *l = &sc->lights[li];
+    const light *l = &sc->in.lights[li];
     rgb Le = light_area_le(l, h->ng, wo);
     if (rgb_is_black(Le))
         return;
@@ -426,7 +424,7 @@ static bool bounce(path *pa, const geom_hit *h)
     pa->r_l = rgb_div(pa->r_u, bs.pdf);
     pa->specular = bs.specular;
     pa->any_non_specular |= !bs.specular;
-    pa->ray = ray_from_surface(h, bs.wi, pa->ray.medium, sc->medium_count > 0);
+    pa->ray = ray_from_surface(h, bs.wi, pa->ray.medium, sc->in.medium_count > 0);
     if (rgb_is_black(pa->beta))
         return false;
     rgb rr = rgb_div(pa->beta, rgb_avg(pa->r_u));
@@ -449,7 +447,7 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
     const volpath_scene *sc = pa->sc;
     pa->scattered = pa->terminated = false;
     uint64_t t0 = pa->counters->timed ? hz_clock_ns() : 0;
-    rgb T_maj = volpath_track(&sc->media[pa->ray.medium], pa->ray.o, pa->ray.d, t_start, t_hit,
+    rgb T_maj = volpath_track(&sc->in.media[pa->ray.medium], pa->ray.o, pa->ray.d, t_start, t_hit,
                               pa->hero, &pa->walk, path_event, pa);
     if (pa->counters->timed)
         pa->counters->media_ns += hz_clock_ns() - t0;
@@ -472,7 +470,7 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
 {
     counters->camera_rays++;
     *depth = INFINITY;
-    bool media = sc->medium_count > 0;
+    bool media = sc->in.medium_count > 0;
     path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
                .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium}};
@@ -486,7 +484,7 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
     for (;;) {
         vp_ray *ray = &pa.ray;
         geom_hit h;
-        bool hit = geometry_intersect(sc->geom, ray->o, ray->d, ray->tmin, INFINITY, r->time, &h);
+        bool hit = geometry_intersect(sc->in.geom, ray->o, ray->d, ray->tmin, INFINITY, r->time, &h);
         bool opaque = hit && h.shape->material->kind != MATERIAL_INTERFACE;
         if (hit && h.t < ray->t_fill) { /* behind a medium point the ray leaves */
             if (++crossing > GEOMETRY_MAX_CROSSINGS) {

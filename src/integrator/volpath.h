@@ -46,18 +46,13 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
                                        hz_error *err);
 
 typedef struct {
-    const geometry *geom;
-    const light *lights;
-    size_t light_count;
-    const medium *media;
-    size_t medium_count;
+    integrator_inputs in;
     volpath_settings settings;
     light_sampler sampler;
     rgb sky; /* the sum of the infinite lights' radiance */
 } volpath_scene;
 
-hz_status volpath_scene_init(volpath_scene *out, const geometry *geom, const light *lights,
-                             size_t light_count, const medium *media, size_t medium_count,
+hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
                              volpath_settings settings, hz_error *err);
 void volpath_scene_free(volpath_scene *sc);
 

@@ -137,7 +137,10 @@ static void crashing_reader_is_one_line(void **state)
              exr);
     assert_int_equal(run_with_module(CRASHING_MODULE, args, out, sizeof out), 1);
     assert_one_line_with(out, "smoke.vdb: OpenVDB failed reading grid \"density\"");
-    assert_one_line_with(out, "killed by signal 11");
+    /* Killed by SIGSEGV; a sanitizer build's reader catches the signal and
+     * exits instead. */
+    if (!strstr(out, "killed by signal 11") && !strstr(out, "exited with status"))
+        fail_msg("the reader's death is not reported: %s", out);
     assert_null(strstr(out, "Error allocating memory"));
     FILE *f = fopen(exr, "rb");
     assert_null(f);
