@@ -25,17 +25,7 @@ image_mean() {
 # bounce_reference SCENE NAME SPP: prints the path of the cached reference.
 bounce_reference() {
     line="Integrator \"volpath\" \"integer maxdepth\" $bounce_ref_depth"
-    key=$(cache_key "$1" -- "bounce-ref $line $3 threads-independent")
-    ref=$CACHE/bounce-ref-$2-$key.exr
-    if [ ! -f "$ref" ]; then
-        v=$CACHE/bounce-ref-$2.pbrt
-        variant "$v" "$1" "$line"
-        echo "  reference $2: volpath maxdepth $bounce_ref_depth, $3 spp (cached as $(basename "$ref"))" >&2
-        t=$(timed "$HAZE" render "$v" --spp "$3" --threads "$THREADS" --seed 4321 -o "$ref.tmp.exr" --quiet)
-        mv "$ref.tmp.exr" "$ref"
-        echo "  reference $2 took $t s" >&2
-    fi
-    echo "$ref"
+    cached_reference "$1" "$2" bounce-ref "bounce-ref $line $3 threads-independent" "$line" "$3" 4321
 }
 
 # bounce_scene SCENE NAME REF_SPP SPP "DEPTHS"

@@ -10,17 +10,8 @@ has_estimator residual && ladder_ref_est=residual
 
 # ladder_reference SCENE NAME SPP: prints the path of the cached reference.
 ladder_reference() {
-    key=$(cache_key "$1" -- "ladder-ref $ladder_ref_est $3 threads-independent")
-    ref=$CACHE/ref-$2-$key.exr
-    if [ ! -f "$ref" ]; then
-        v=$CACHE/ref-$2.pbrt
-        variant "$v" "$1" "$(integrator "$ladder_ref_est" 1)"
-        echo "  reference $2: $ladder_ref_est, $3 spp (cached as $(basename "$ref"))" >&2
-        t=$(timed "$HAZE" render "$v" --spp "$3" --threads "$THREADS" --seed 12345 -o "$ref.tmp.exr" --quiet)
-        mv "$ref.tmp.exr" "$ref"
-        echo "  reference $2 took $t s" >&2
-    fi
-    echo "$ref"
+    cached_reference "$1" "$2" ref "ladder-ref $ladder_ref_est $3 threads-independent" \
+        "$(integrator "$ladder_ref_est" 1)" "$3" 12345
 }
 
 # ladder_scene SCENE NAME REF_SPP "ESTIMATORS" "STEPS" "SPPS"

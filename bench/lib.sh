@@ -42,6 +42,24 @@ variant() {
     printf '%s\nInclude "%s"\n' "$3" "$(cd "$(dirname "$2")" && pwd)/$(basename "$2")" >"$1"
 }
 
+# cached_reference SCENE NAME PREFIX KEYWORDS INTEGRATOR-LINE SPP SEED: the path
+# of SCENE's reference rendered with INTEGRATOR-LINE at SPP, SEED, rendered
+# once and cached in $CACHE/PREFIX-NAME-KEY.exr (KEY from the scene, KEYWORDS
+# and haze_id).
+cached_reference() {
+    key=$(cache_key "$1" -- "$4")
+    ref=$CACHE/$3-$2-$key.exr
+    if [ ! -f "$ref" ]; then
+        v=$CACHE/$3-$2.pbrt
+        variant "$v" "$1" "$5"
+        echo "  reference $2: $5, $6 spp (cached as $(basename "$ref"))" >&2
+        t=$(timed "$HAZE" render "$v" --spp "$6" --threads "$THREADS" --seed "$7" -o "$ref.tmp.exr" --quiet)
+        mv "$ref.tmp.exr" "$ref"
+        echo "  reference $2 took $t s" >&2
+    fi
+    echo "$ref"
+}
+
 # integrator EST STEP: the Integrator line of one ladder rung (shadow step
 # twice the camera-ray step, as haze's defaults 1 / 2).
 integrator() {
