@@ -37,13 +37,16 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
         rgb r = out->reflectance;
         if (r.r < 0 || r.g < 0 || r.b < 0 || r.r > 1 || r.g > 1 || r.b > 1)
             params_reject(pl, "reflectance", "diffuse reflectance must be within [0, 1]");
-    } else if (strcmp(type, "interface") == 0) {
+    } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 ||
+               strcmp(type, "none") == 0) {
+        /* pbrt-v4 makes no material for all three: rays pass the surface,
+         * which only bounds media. */
         out->kind = MATERIAL_INTERFACE;
         out->reflectance = rgb_grey(0.0);
     } else {
         return hz_fail_at(err, e->entity.loc,
                           "Material \"%s\" is not supported (supported: \"diffuse\", "
-                          "\"interface\")",
+                          "\"interface\", \"\" or \"none\" as \"interface\")",
                           type);
     }
     char what[128];

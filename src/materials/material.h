@@ -19,8 +19,9 @@ typedef struct {
 /* pbrt-v4's default material: diffuse, reflectance 0.5. */
 material material_default(void);
 
-/* Material "diffuse" ("rgb reflectance", default 0.5) and "interface"; other
- * types are errors listing the supported ones. */
+/* Material "diffuse" ("rgb reflectance", default 0.5) and "interface" (also
+ * "" and "none", which pbrt-v4 treats alike: no surface); other types are
+ * errors listing the supported ones. */
 hz_status material_from_entity(material_entity *e, material *out, hz_error *err);
 
 #endif

@@ -71,6 +71,36 @@ static void test_default_is_singlescatter(void **state)
     free(cmd);
 }
 
+/* Material "" and "none" are pbrt-v4's no-material: the same as
+ * "interface" (the medium's boundary sphere here), pixel for pixel. */
+static void test_empty_material_is_interface(void **state)
+{
+    (void)state;
+    const char *names[] = {"\"\"", "\"none\""};
+    char *a = render_file("material_interface", "Integrator \"volpath\"", "--threads 2");
+    for (int k = 0; k < 2; ++k) {
+        char *scene = sfmt("%s/material_empty_%d.pbrt", HAZE_TMP, k);
+        char *exr = sfmt("%s/material_empty_%d.exr", HAZE_TMP, k);
+        char *body = strdup(scene_body);
+        char *m = strstr(body, "Material \"interface\"");
+        assert_non_null(m);
+        char *text = sfmt("%sIntegrator \"volpath\"\n%.*sMaterial %s%s", camera_text,
+                          (int)(m - body), body, names[k], m + strlen("Material \"interface\""));
+        write_text_file(scene, text);
+        char *cmd = sfmt("render '%s' --quiet --threads 2 -o '%s'", scene, exr);
+        char out[4096];
+        if (run_haze(cmd, out, sizeof out) != 0)
+            fail_msg("haze %s: %s", cmd, out);
+        assert_true(exr_pixels_equal(a, exr));
+        free(cmd);
+        free(text);
+        free(body);
+        free(exr);
+        free(scene);
+    }
+    free(a);
+}
+
 /* Builds `text` with warnings captured; returns the status and fills msg with
  * the error or the warnings. */
 static hz_status build_with_warnings(const char *text, char *msg, size_t n)
@@ -322,6 +352,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_threads_byte_identical),
         cmocka_unit_test(test_default_is_singlescatter),
+        cmocka_unit_test(test_empty_material_is_interface),
         cmocka_unit_test(test_parameters),
         cmocka_unit_test(test_no_media_no_media_code),
         cmocka_unit_test(test_scenes_maxdepth_1_matches_singlescatter),
