@@ -38,7 +38,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
     transform render_from_light = transform_compose(render_from_world, e->world_from_light);
 
     if (strcmp(type, "point") == 0) {
-        rgb I = params_rgb(pl, "I", rgb_grey(1.0));
+        rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
         double scale = params_float(pl, "scale", 1.0);
         double power = params_float(pl, "power", -1.0);
         vec3 from = params_point3(pl, "from", v3(0, 0, 0));
@@ -46,7 +46,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         out->emit = apply_power(I, scale, power, 4.0 * HZ_PI);
         out->point.p = transform_point(&render_from_light, from);
     } else if (strcmp(type, "spot") == 0) {
-        rgb I = params_rgb(pl, "I", rgb_grey(1.0));
+        rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
         double scale = params_float(pl, "scale", 1.0);
         double power = params_float(pl, "power", -1.0);
         double cone = params_float(pl, "coneangle", 30.0);
@@ -82,7 +82,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         out->spot.p = transform_point(&final, v3(0, 0, 0));
         out->spot.light_from_render = transform_inverse(final);
     } else if (strcmp(type, "distant") == 0) {
-        rgb L = params_rgb(pl, "L", rgb_grey(1.0));
+        rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
         double scale = params_float(pl, "scale", 1.0);
         vec3 from = params_point3(pl, "from", v3(0, 0, 0));
         vec3 to = params_point3(pl, "to", v3(0, 0, 1));
@@ -104,7 +104,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
                    err) != HZ_OK ||
             refuse(pl, "portal", "infinite light \"portal\" is not supported", err) != HZ_OK)
             return HZ_ERROR;
-        rgb L = params_rgb(pl, "L", rgb_grey(1.0));
+        rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
         double scale = params_float(pl, "scale", 1.0);
         /* pbrt-v4: illuminance of a uniform sky on an upward patch is π L. */
         double illum = params_float(pl, "illuminance", -1.0);
@@ -157,7 +157,7 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
                "triangle); use \"rgb L\" and \"scale\"",
                err) != HZ_OK)
         return HZ_ERROR;
-    rgb L = params_rgb(pl, "L", rgb_grey(1.0));
+    rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
     double scale = params_float(pl, "scale", 1.0);
     out->kind = LIGHT_AREA;
     out->emit = rgb_scale(L, scale);

@@ -414,7 +414,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     if (!(fabs(g) < 1.0))
         params_reject(pl, "g", "\"g\" must lie in (-1, 1), got %g", g);
     /* Emission: pbrt-v4's "Le" (homogeneous media only) times "Lescale". */
-    rgb Le = is_grid && !uniform ? rgb_grey(0.0) : params_rgb(pl, "Le", rgb_grey(0.0));
+    rgb Le = is_grid && !uniform ? rgb_grey(0.0) : params_illuminant(pl, "Le", rgb_grey(0.0));
     double Le_scale = uniform ? 1.0 : params_float(pl, "Lescale", 1.0);
     if (!(isfinite(Le_scale) && Le_scale >= 0.0))
         params_reject(pl, "Lescale", "\"Lescale\" must be finite and non-negative, got %g",

@@ -245,6 +245,15 @@ rgb params_rgb(param_list *pl, const char *name, rgb def)
     return rgb_make(p->nums[0], p->nums[1], p->nums[2]);
 }
 
+rgb params_illuminant(param_list *pl, const char *name, rgb def)
+{
+    rgb c = params_rgb(pl, name, def);
+    for (size_t i = 0; i < pl->count; ++i)
+        if (strcmp(pl->items[i].name, name) == 0 && pl->items[i].type == PARAM_SPECTRUM)
+            return pl->items[i].illuminant;
+    return c;
+}
+
 static const double *get_array(param_list *pl, const char *name, param_type type, size_t tuple,
                                size_t *n)
 {

@@ -41,6 +41,7 @@ typedef struct {
     bool *bools;    /* bool */
     bool used;
     bool optional;  /* a default from Attribute: never reported as unused (pbrt-v4's mayBeUnused) */
+    rgb illuminant; /* spectrum: the RGB of the spectrum as a light's (params_illuminant) */
 } param;
 
 typedef struct {
@@ -79,6 +80,13 @@ vec3 params_point3(param_list *pl, const char *name, vec3 def);
 vec3 params_vector3(param_list *pl, const char *name, vec3 def);
 /* Accepts rgb, spectrum and blackbody parameters. */
 rgb params_rgb(param_list *pl, const char *name, rgb def);
+/* A light's (or an emitting medium's) radiance, normalised as pbrt-v4
+ * normalises illuminant spectra: rgb values as given; blackbody and spectrum
+ * values scaled to luminance 1 (pbrt-v4 divides them by their photometric
+ * integral), a spectrum keeping its own chromaticity (no division by the RGB
+ * of a constant spectrum, which reflectances get): "spectrum I" [360 5 830 5]
+ * is as bright as "rgb I" [1 1 1], slightly pink (equal-energy white). */
+rgb params_illuminant(param_list *pl, const char *name, rgb def);
 /* Arrays: NULL and *n = 0 when absent. For point3/normal/vector3/point2 *n counts
  * tuples, not scalars. */
 const double *params_floats(param_list *pl, const char *name, size_t *n);

@@ -155,6 +155,8 @@ static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_erro
     rgb c;
     if (n == 1) {
         c = rgb_grey(vals[0].num);
+        p->illuminant = vals[0].num > 0.0 ? spectrum_sampled_to_illuminant(NULL, NULL, 1)
+                                          : rgb_grey(0.0);
     } else {
         if (n % 2 != 0)
             return hz_fail_at(err, p->loc,
@@ -175,6 +177,7 @@ static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_erro
             }
         }
         c = spectrum_sampled_to_rgb(lambda, value, pairs);
+        p->illuminant = spectrum_sampled_to_illuminant(lambda, value, pairs);
         free(lambda);
         free(value);
     }

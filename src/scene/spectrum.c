@@ -65,6 +65,14 @@ rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n)
     return rgb_make(c.r / white.r, c.g / white.g, c.b / white.b);
 }
 
+rgb spectrum_sampled_to_illuminant(const double *lambda, const double *value, size_t n)
+{
+    vec3 xyz = n == 1 ? integrate_xyz(NULL, NULL, 0) : integrate_xyz(lambda, value, n);
+    if (!(xyz.y > 0.0) || !v3_is_finite(xyz))
+        return rgb_grey(0.0);
+    return spectrum_srgb_from_xyz(v3_scale(xyz, 1.0 / xyz.y));
+}
+
 static double planck(double lambda_nm, double kelvin)
 {
     const double c = 299792458.0, h = 6.62606957e-34, kb = 1.3806488e-23;

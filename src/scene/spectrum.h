@@ -23,6 +23,11 @@
 
 /* Wavelengths must be strictly increasing (checked by the caller); n >= 1. */
 rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n);
+/* The same spectrum as an illuminant, as pbrt-v4 normalises a light's: its
+ * XYZ to linear sRGB (no per-channel division by a constant spectrum's RGB),
+ * scaled to luminance 1; n == 1 is a constant. Zero for a spectrum without
+ * visible light. */
+rgb spectrum_sampled_to_illuminant(const double *lambda, const double *value, size_t n);
 /* T > 0. */
 rgb spectrum_blackbody_to_rgb(double kelvin);
 /* pbrt-v4's BlackbodySpectrum (Planck's law divided by its value at the

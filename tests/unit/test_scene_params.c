@@ -137,6 +137,36 @@ static void test_spectrum_values(void **state)
     scene_desc_free(&sd);
 }
 
+/* Lights' spectra as pbrt-v4 normalises them: luminance 1 whatever the
+ * spectrum's scale, its own chromaticity (an equal-energy spectrum is
+ * pinkish beside sRGB's D65 white); rgb values untouched; blackbody as rgb. */
+static void test_illuminant_values(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    param_list *pl = camera_params(&sd, "\"spectrum a\" 5 \"spectrum b\" [360 5 830 5] "
+                                        "\"spectrum c\" [400 0 500 3 600 1 700 2] "
+                                        "\"rgb d\" [2 3 4] \"blackbody e\" 3000 "
+                                        "\"spectrum f\" [300 0 350 1]");
+    rgb a = params_illuminant(pl, "a", rgb_grey(-1)), b = params_illuminant(pl, "b", rgb_grey(-1));
+    assert_float_equal(rgb_luminance(a), 1.0, 1e-3);
+    assert_float_equal(a.r, b.r, 1e-12);
+    assert_float_equal(a.b, b.b, 1e-12);
+    assert_true(a.r > a.g && a.g > a.b); /* equal energy: redder than D65 */
+    rgb c = params_illuminant(pl, "c", rgb_grey(-1));
+    assert_float_equal(rgb_luminance(c), 1.0, 1e-3);
+    assert_true(c.g > c.b && c.b > c.r);
+    rgb d = params_illuminant(pl, "d", rgb_grey(-1));
+    assert_true(d.r == 2 && d.g == 3 && d.b == 4);
+    rgb e = params_illuminant(pl, "e", rgb_grey(-1)), e_rgb = params_rgb(pl, "e", rgb_grey(-1));
+    assert_true(e.r == e_rgb.r && e.g == e_rgb.g && e.b == e_rgb.b);
+    rgb f = params_illuminant(pl, "f", rgb_grey(-1)); /* ultraviolet only: no light */
+    assert_true(f.r == 0 && f.g == 0 && f.b == 0);
+    /* The reflectance reading of the same spectra is unchanged. */
+    assert_float_equal(params_rgb(pl, "a", rgb_grey(-1)).g, 5.0, 1e-12);
+    scene_desc_free(&sd);
+}
+
 static void test_cmf_fit(void **state)
 {
     (void)state;
@@ -155,7 +185,7 @@ int main(void)
         cmocka_unit_test(test_getters_and_defaults), cmocka_unit_test(test_unused_is_reported),
         cmocka_unit_test(test_type_mismatch),        cmocka_unit_test(test_reject_and_loc),
         cmocka_unit_test(test_copy_is_deep),         cmocka_unit_test(test_spectrum_values),
-        cmocka_unit_test(test_cmf_fit),
+        cmocka_unit_test(test_cmf_fit),       cmocka_unit_test(test_illuminant_values),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
