@@ -30,6 +30,8 @@ static rgb segment_transmittance(const singlescatter_scene *vs, const medium *m,
         return rgb_exp_neg(medium_sigma_t(m), t1 - t0);
     case MEDIUM_GRID:
         return singlescatter_grid_transmittance(vs, m, o, w, t0, t1, walk);
+    case MEDIUM_CLOUD: /* refused by the scene build under singlescatter */
+        break;
     }
     return rgb_grey(1.0);
 }
@@ -398,6 +400,8 @@ void singlescatter_segment(const singlescatter_scene *vs, int m, vec3 o, vec3 w,
         break;
     case MEDIUM_GRID:
         singlescatter_grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
+        break;
+    case MEDIUM_CLOUD: /* refused by the scene build under singlescatter */
         break;
     }
 }

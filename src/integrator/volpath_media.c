@@ -10,13 +10,14 @@ static rgb exp_neg(rgb sigma, double d)
                     sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0);
 }
 
-/* Where the coefficients come from: constant (homogeneous) or a grid's
- * density along an index-space ray. */
+/* Where the coefficients come from: constant (homogeneous), a grid's
+ * density along an index-space ray, or a cloud's along a medium-space ray. */
 typedef struct {
     const medium *m;
-    bool grid;
+    bool grid, cloud;
     medium_accessor acc;
     medium_grid_ray r;
+    vec3 om, dm; /* cloud: the ray in medium space, same t */
 } density_source;
 
 typedef struct {
@@ -53,7 +54,10 @@ static bool track_span(tracker *tr, double a, double b, double bound)
         tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, tn - t));
         double d = 1.0;
         rgb Le = m->Le;
-        if (tr->src.grid) {
+        if (tr->src.cloud) {
+            d = cloud_density(&m->cloud.params, v3_add(tr->src.om, v3_scale(tr->src.dm, tn)));
+            ++tr->walk->lookups;
+        } else if (tr->src.grid) {
             vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, tn, &tr->walk->lookups);
             ++tr->walk->lookups;
             d = grid_density_index(m->grid.grid, &tr->src.acc.density, p);
@@ -78,6 +82,16 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
                   .fn = fn, .ctx = ctx, .T_maj = rgb_grey(1.0)};
     switch (m->kind) {
     case MEDIUM_HOMOGENEOUS:
+        return track_span(&tr, t0, t1, 1.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
+                   ? tr.T_maj
+                   : rgb_grey(1.0);
+    case MEDIUM_CLOUD:
+        /* The density is at most 1: sigma_t is the majorant over the box. */
+        if (!medium_cloud_clip(m, o, w, &t0, &t1))
+            return rgb_grey(1.0);
+        tr.src.cloud = true;
+        tr.src.om = transform_point(&m->cloud.medium_from_render, o);
+        tr.src.dm = transform_vector(&m->cloud.medium_from_render, w);
         return track_span(&tr, t0, t1, 1.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
                    ? tr.T_maj
                    : rgb_grey(1.0);

@@ -388,9 +388,11 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
     const char *name = e->name ? e->name : "";
-    bool is_grid, uniform = false;
+    bool is_grid, uniform = false, cloud = false;
     if (strcmp(type, "homogeneous") == 0)
         is_grid = false;
+    else if (strcmp(type, "cloud") == 0)
+        is_grid = cloud = true;
     else if (strcmp(type, "nanovdb") == 0)
         is_grid = true;
     else if (strcmp(type, "uniformgrid") == 0)
@@ -398,7 +400,8 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     else
         return hz_fail_at(err, e->entity.loc,
                           "MakeNamedMedium \"%s\": medium type \"%s\" is not supported "
-                          "(supported: \"homogeneous\", \"nanovdb\", \"uniformgrid\")",
+                          "(supported: \"homogeneous\", \"nanovdb\", \"uniformgrid\", "
+                          "\"cloud\")",
                           name, type);
 
     if (params_has(pl, "preset"))
@@ -415,7 +418,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
         params_reject(pl, "g", "\"g\" must lie in (-1, 1), got %g", g);
     /* Emission: pbrt-v4's "Le" (homogeneous media only) times "Lescale". */
     rgb Le = is_grid && !uniform ? rgb_grey(0.0) : params_illuminant(pl, "Le", rgb_grey(0.0));
-    double Le_scale = uniform ? 1.0 : params_float(pl, "Lescale", 1.0);
+    double Le_scale = uniform || cloud ? 1.0 : params_float(pl, "Lescale", 1.0);
     if (!(isfinite(Le_scale) && Le_scale >= 0.0))
         params_reject(pl, "Lescale", "\"Lescale\" must be finite and non-negative, got %g",
                       Le_scale);
@@ -427,7 +430,25 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     motion_params mp = {NULL, 1.0, time_start, time_start, time_end};
     temperature_params tp = {"temperature", false, 0.0, 1.0, 1.0};
     uniformgrid_params ug = {{1, 1, 1}, {0, 0, 0}, {1, 1, 1}, NULL, NULL, NULL};
-    if (uniform) {
+    cloud_params cp = {1.0f, 1.0f, 5.0f};
+    vec3 cp0 = v3(0, 0, 0), cp1 = v3(1, 1, 1);
+    if (cloud) {
+        double v[3] = {params_float(pl, "density", 1.0), params_float(pl, "wispiness", 1.0),
+                       params_float(pl, "frequency", 5.0)};
+        const char *names[3] = {"density", "wispiness", "frequency"};
+        for (int k = 0; k < 3; ++k)
+            if (!(isfinite(v[k]) && v[k] >= 0.0 && v[k] < 1e30))
+                params_reject(pl, names[k], "\"%s\" must be finite and >= 0", names[k]);
+        cp = (cloud_params){(float)v[0], (float)v[1], (float)v[2]};
+        cp0 = params_point3(pl, "p0", cp0);
+        cp1 = params_point3(pl, "p1", cp1);
+        if (!(cp0.x < cp1.x && cp0.y < cp1.y && cp0.z < cp1.z) || !v3_is_finite(cp0) ||
+            !v3_is_finite(cp1))
+            params_reject(pl, "p1", "the box \"p0\" .. \"p1\" must be finite and non-empty");
+        if (memcmp(&e->world_from_medium.m, &e->world_from_medium_end.m,
+                   sizeof e->world_from_medium.m) != 0)
+            params_reject(pl, "density", "a moving \"cloud\" medium is not supported");
+    } else if (uniform) {
         uniformgrid_read(pl, &ug);
         read_temperature_params(pl, &tp);
         tp.Le_scale = 1.0;
@@ -481,6 +502,22 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
         return HZ_OK;
     }
 
+    if (cloud) {
+        out->kind = MEDIUM_CLOUD;
+        out->cloud.params = cp;
+        out->cloud.p0 = cp0;
+        out->cloud.p1 = cp1;
+        out->cloud.medium_from_render =
+            transform_inverse(transform_compose(render_from_world, e->world_from_medium));
+        if (!transform_is_finite(&out->cloud.medium_from_render)) {
+            memset(out, 0, sizeof *out);
+            return hz_fail_at(err, e->entity.loc,
+                              "MakeNamedMedium \"%s\": the cloud's placement is singular or not "
+                              "finite",
+                              name);
+        }
+        return HZ_OK;
+    }
     if (uniform) {
         if (build_uniformgrid(e, render_from_world, &ug, &tp, Le, times, out, err) != HZ_OK) {
             medium_free(out);
@@ -601,8 +638,10 @@ bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, doubl
 {
     if (!(*t0 <= *t1)) /* also NaN */
         return false;
-    if (m->kind == MEDIUM_HOMOGENEOUS || m->grid.background != 0.0)
+    if (m->kind == MEDIUM_HOMOGENEOUS || (m->kind == MEDIUM_GRID && m->grid.background != 0.0))
         return true;
+    if (m->kind == MEDIUM_CLOUD)
+        return medium_cloud_clip(m, o, d, t0, t1);
     medium_grid_ray r;
     return medium_grid_ray_make(m, o, d, time, &r) && medium_grid_ray_clip(m, &r, t0, t1);
 }
@@ -616,4 +655,34 @@ void medium_accessor_init(const medium *m, medium_accessor *a)
         grid_accessor_init(m->grid.temperature, &a->temperature);
     if (m->grid.Le_scale_grid)
         grid_accessor_init(m->grid.Le_scale_grid, &a->Le_scale);
+}
+
+bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1)
+{
+    vec3 om = transform_point(&m->cloud.medium_from_render, o);
+    vec3 dm = transform_vector(&m->cloud.medium_from_render, d);
+    const double o3[3] = {om.x, om.y, om.z}, d3[3] = {dm.x, dm.y, dm.z};
+    const double lo3[3] = {m->cloud.p0.x, m->cloud.p0.y, m->cloud.p0.z};
+    const double hi3[3] = {m->cloud.p1.x, m->cloud.p1.y, m->cloud.p1.z};
+    double lo = *t0, hi = *t1;
+    for (int a = 0; a < 3; ++a) {
+        if (d3[a] == 0.0) {
+            if (!(o3[a] >= lo3[a] && o3[a] <= hi3[a]))
+                return false;
+            continue;
+        }
+        double tn = (lo3[a] - o3[a]) / d3[a], tf = (hi3[a] - o3[a]) / d3[a];
+        if (tn > tf) {
+            double t = tn;
+            tn = tf;
+            tf = t;
+        }
+        lo = tn > lo ? tn : lo;
+        hi = tf < hi ? tf : hi;
+        if (!(lo <= hi))
+            return false;
+    }
+    *t0 = lo;
+    *t1 = hi;
+    return true;
 }

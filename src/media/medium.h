@@ -16,6 +16,9 @@
  *                  the Lescale grid (as many floats; absent: one sample of 1
  *                  at the box's centre, which pbrt-v4 interpolates to 1/8 at
  *                  the corners).
+ *   "cloud":       pbrt-v4's procedural cloud (media/cloud.h): density (1),
+ *                  wispiness (1), frequency (5), p0, p1 (0 0 0, 1 1 1), the
+ *                  same sigma_a, sigma_s, scale, g; rendered by volpath only.
  *   "nanovdb":     filename (.vdb or .nvdb, relative to the scene file that
  *                  declares the medium), gridname (default "density"), and the
  *                  same sigma_a, sigma_s, scale, g; the coefficients are per unit
@@ -58,11 +61,12 @@
 #include "core/transform.h"
 #include "core/vec.h"
 #include "media/blackbody.h"
+#include "media/cloud.h"
 #include "media/grid.h"
 #include "media/majorant.h"
 #include "scene/scene_desc.h"
 
-typedef enum { MEDIUM_HOMOGENEOUS, MEDIUM_GRID } medium_kind;
+typedef enum { MEDIUM_HOMOGENEOUS, MEDIUM_GRID, MEDIUM_CLOUD } medium_kind;
 
 typedef struct {
     medium_kind kind;
@@ -116,6 +120,11 @@ typedef struct {
          * length of each row of index_from_medium's linear part. */
         vec3 dilation;
     } grid;                  /* MEDIUM_GRID only */
+    struct {
+        cloud_params params;
+        vec3 p0, p1;                 /* the box, medium space */
+        transform medium_from_render;
+    } cloud;                 /* MEDIUM_CLOUD only: volpath renders it */
 } medium;
 
 /* When a medium lives: TransformTimes (a medium whose start and end
@@ -158,6 +167,10 @@ bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0,
  * for grids with a non-zero background), the support box at that time for
  * grids. False when nothing is left. */
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1);
+
+/* Clips the render-space ray o + t d, t in [*t0, *t1], to a cloud medium's
+ * box. False when nothing is left. */
+bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1);
 
 /* Per-thread lookup caches of a grid medium's grids. */
 typedef struct {

@@ -249,7 +249,7 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
         film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
     }
-    integrator_params ip;
+    integrator_params ip = {.kind = INTEGRATOR_SINGLESCATTER};
     CHECK(integrator_params_from_entity(&sd->integrator, warn, &ip, err));
     CHECK(check_motion(sd, warn, err));
     if (build_materials(rs, sd, errs, err) != HZ_OK)
@@ -263,6 +263,16 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         build_media(rs, sd, render_from_world, errs, err) != HZ_OK)
         return HZ_ERROR;
 #undef CHECK
+    /* pbrt-v4's procedural cloud is rendered by volpath's tracking only. */
+    for (size_t i = 0; ip.kind == INTEGRATOR_SINGLESCATTER && i < rs->medium_count; ++i)
+        if (rs->media[i].kind == MEDIUM_CLOUD &&
+            collect(errs, (hz_fail_at(err, sd->media[i].entity.loc,
+                                      "MakeNamedMedium \"%s\": a \"cloud\" medium needs "
+                                      "Integrator \"volpath\" (singlescatter renders grid and "
+                                      "homogeneous media)",
+                                      rs->media[i].name ? rs->media[i].name : ""),
+                           err)) != HZ_OK)
+            return HZ_ERROR;
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
     /* pbrt-v4 renders such a scene with "volpath" (maxdepth 5): say once
@@ -338,6 +348,7 @@ render_motion render_scene_motion(const render_scene *rs)
         const medium *md = &rs->media[i];
         switch (md->kind) {
         case MEDIUM_HOMOGENEOUS:
+        case MEDIUM_CLOUD:
             break;
         case MEDIUM_GRID:
             m.media += md->grid.moving || md->grid.velocity != NULL;
@@ -355,6 +366,7 @@ render_memory render_scene_memory(const render_scene *rs)
         const medium *md = &rs->media[i];
         switch (md->kind) {
         case MEDIUM_HOMOGENEOUS:
+        case MEDIUM_CLOUD:
             break;
         case MEDIUM_GRID:
             mem.grids += (double)grid_buffer_bytes(md->grid.grid);

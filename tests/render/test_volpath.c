@@ -220,6 +220,49 @@ static void test_maxdepth_1_matches_singlescatter(void **state)
     }
 }
 
+/* pbrt-v4's procedural cloud below y = 0 is solid (density 1): a slab of it,
+ * seen along x under a white sky with absorption only, transmits
+ * exp(-sigma_a) per unit length; singlescatter refuses the medium. */
+static void test_cloud_solid_slab(void **state)
+{
+    (void)state;
+    const char *fmt =
+        "LookAt -1 -0.75 0.5  0 -0.75 0.5  0 1 0\n"
+        "Camera \"orthographic\" \"float screenwindow\" [-0.1 0.1 -0.1 0.1]\n"
+        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+        "Sampler \"independent\" \"integer pixelsamples\" 16\n%s\nWorldBegin\n"
+        "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+        "MakeNamedMedium \"c\" \"string type\" \"cloud\" \"rgb sigma_a\" [0.5 1 2] "
+        "\"rgb sigma_s\" [0 0 0] \"point3 p0\" [0 -1 0] \"point3 p1\" [1 -0.5 1]\n"
+        "AttributeBegin\nMediumInterface \"c\" \"\"\nMaterial \"\"\n"
+        "Translate 0.5 -0.75 0.5\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n";
+    char *text = sfmt(fmt, "Integrator \"volpath\"");
+    render_scene *rs = build(text);
+    pstat *px = image_stats(rs, 4, 4, 4096);
+    const double sa[3] = {0.5, 1, 2};
+    for (int c = 0; c < 3; ++c) {
+        double m = 0.0, v = 0.0;
+        for (int i = 0; i < 16; ++i) {
+            m += ch(px[i].mean, c) / 16;
+            v += ch(px[i].se, c) * ch(px[i].se, c) / 256;
+        }
+        double want = exp(-sa[c]);
+        if (verbose())
+            print_message("cloud slab c%d: %.5f +- %.5f (want %.5f)\n", c, m, sqrt(v), want);
+        assert_true(fabs(m - want) < 4.0 * sqrt(v) + 1e-9);
+        assert_true(sqrt(v) < 0.01 * want);
+    }
+    free(px);
+    render_scene_destroy(rs);
+    free(text);
+    text = sfmt(fmt, "Integrator \"singlescatter\"");
+    char msg[4096];
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "test.pbrt:8:1: MakeNamedMedium \"c\": a \"cloud\" medium needs "
+                                "Integrator \"volpath\""));
+    free(text);
+}
+
 /* fog_sphere.vdb at density scale 1e12: majorant cells that straddle its
  * surface hold ~1e12 null collisions per unit length. The walk gives up after
  * VOLPATH_MAX_COLLISIONS per segment (the segment counts as opaque), so each
@@ -261,6 +304,7 @@ int main(void)
         cmocka_unit_test(test_emitting_room_furnace),
         cmocka_unit_test(test_maxdepth_1_matches_singlescatter),
         cmocka_unit_test(test_absurd_density_is_bounded),
+        cmocka_unit_test(test_cloud_solid_slab),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
