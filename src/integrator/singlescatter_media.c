@@ -31,6 +31,7 @@ static rgb segment_transmittance(const singlescatter_scene *vs, const medium *m,
     case MEDIUM_GRID:
         return singlescatter_grid_transmittance(vs, m, o, w, t0, t1, walk);
     case MEDIUM_CLOUD: /* refused by the scene build under singlescatter */
+    case MEDIUM_RGBGRID:
         break;
     }
     return rgb_grey(1.0);
@@ -402,6 +403,7 @@ void singlescatter_segment(const singlescatter_scene *vs, int m, vec3 o, vec3 w,
         singlescatter_grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
         break;
     case MEDIUM_CLOUD: /* refused by the scene build under singlescatter */
+    case MEDIUM_RGBGRID:
         break;
     }
 }

@@ -57,6 +57,16 @@ static bool track_span(tracker *tr, double a, double b, double bound)
         if (tr->src.cloud) {
             d = cloud_density(&m->cloud.params, v3_add(tr->src.om, v3_scale(tr->src.dm, tn)));
             ++tr->walk->lookups;
+        } else if (tr->src.grid && m->kind == MEDIUM_RGBGRID) {
+            vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, tn, &tr->walk->lookups);
+            rgb sa, ss;
+            medium_rgbgrid_at(m, &tr->src.acc, p, &sa, &ss, &Le, &tr->walk->lookups);
+            volpath_event ev = {tn, sa, ss, sigma_maj, tr->T_maj, Le};
+            if (!tr->fn(tr->ctx, &ev))
+                return false;
+            tr->T_maj = rgb_grey(1.0);
+            t = tn;
+            continue;
         } else if (tr->src.grid) {
             vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, tn, &tr->walk->lookups);
             ++tr->walk->lookups;
@@ -78,7 +88,8 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
 {
     if (!(t1 > t0))
         return rgb_grey(1.0);
-    tracker tr = {.src = {.m = m, .grid = m->kind == MEDIUM_GRID}, .hero = hero, .walk = walk,
+    tracker tr = {.src = {.m = m, .grid = m->kind == MEDIUM_GRID || m->kind == MEDIUM_RGBGRID},
+                  .hero = hero, .walk = walk,
                   .fn = fn, .ctx = ctx, .T_maj = rgb_grey(1.0)};
     switch (m->kind) {
     case MEDIUM_HOMOGENEOUS:
@@ -95,7 +106,8 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
         return track_span(&tr, t0, t1, 1.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
                    ? tr.T_maj
                    : rgb_grey(1.0);
-    case MEDIUM_GRID: {
+    case MEDIUM_GRID:
+    case MEDIUM_RGBGRID: {
         majorant_walk mw;
         if (!medium_grid_ray_make(m, o, w, walk->time, &tr.src.r) ||
             !medium_grid_ray_clip(m, &tr.src.r, &t0, &t1) ||

@@ -7,6 +7,7 @@
 
 #include "core/path.h"
 #include "media/uniformgrid.h"
+#include "scene/spectrum.h"
 
 static bool rgb_is_finite(rgb c) { return isfinite(c.r) && isfinite(c.g) && isfinite(c.b); }
 
@@ -356,6 +357,72 @@ static hz_status build_uniformgrid(medium_entity *e, transform render_from_world
     return build_majorants(out, times, err);
 }
 
+/* pbrt-v4's "rgbgrid": grid.grid holds the largest channel of
+ * sigma_a + sigma_s per sample (the majorant's source; an absent array
+ * counts 1), the channels are grids of their own in the same index space. */
+static hz_status build_rgbgrid(medium_entity *e, transform render_from_world,
+                               const rgbgrid_params *r, double scale, double Le_scale,
+                               const medium_times *times, medium *out, hz_error *err)
+{
+    file_loc loc = e->entity.loc;
+    const char *name = e->name ? e->name : "";
+    const uniformgrid_params *u = &r->box;
+    size_t count = (size_t)u->n[0] * (size_t)u->n[1] * (size_t)u->n[2];
+    out->kind = MEDIUM_RGBGRID;
+    /* sigma_t = 1 per unit of grid.grid: the majorant is the grid's bound. */
+    out->sigma_a = rgb_grey(0.0);
+    out->sigma_s = rgb_grey(1.0);
+    out->rgbg.scale = scale;
+    /* pbrt-v4 takes each sample's Le as an RGB illuminant spectrum without
+     * dividing it by its luminance (unlike a light's or a homogeneous
+     * medium's Le): its film sees rgb (1, 1, 1) as luminance 106.86. */
+    out->rgbg.Le_scale = Le_scale * SPECTRUM_CIE_Y_INTEGRAL;
+    double *mx = malloc(count * sizeof *mx);
+    if (!mx)
+        return hz_fail(err, "out of memory");
+    for (size_t i = 0; i < count; ++i) {
+        double a = 1.0, b = 1.0;
+        if (r->sigma_a)
+            a = fmax(r->sigma_a[3 * i], fmax(r->sigma_a[3 * i + 1], r->sigma_a[3 * i + 2]));
+        if (r->sigma_s)
+            b = fmax(r->sigma_s[3 * i], fmax(r->sigma_s[3 * i + 1], r->sigma_s[3 * i + 2]));
+        mx[i] = scale * (a + b);
+    }
+    hz_error inner;
+    grid *g = NULL;
+    hz_status st = uniformgrid_make(u, mx, count, "sigma_a + sigma_s", &g, &inner);
+    free(mx);
+    if (st != HZ_OK || grid_check_density(g, &inner) != HZ_OK) {
+        grid_destroy(g);
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+    }
+    motion_params mp = {NULL, 1.0, times->transform_start, times->transform_start,
+                        times->transform_end};
+    if (place_grid(e, render_from_world, g, &mp, out, err) != HZ_OK) {
+        grid_destroy(g);
+        return HZ_ERROR;
+    }
+    out->grid.grid = g;
+    vec3 lo, hi, blo, bhi;
+    uniformgrid_support(u, &blo, &bhi);
+    bool nonempty = grid_support_bounds(g, &lo, &hi);
+    out->grid.support_lo = nonempty ? v3(fmax(lo.x, blo.x), fmax(lo.y, blo.y), fmax(lo.z, blo.z))
+                                    : v3(1, 1, 1);
+    out->grid.support_hi = nonempty ? v3(fmin(hi.x, bhi.x), fmin(hi.y, bhi.y), fmin(hi.z, bhi.z))
+                                    : v3(-1, -1, -1);
+    out->grid.density_max = nonempty ? grid_max_value(g) : 0.0;
+    const double *arrays[3] = {r->sigma_a, r->sigma_s, r->Le};
+    const char *names[3] = {"sigma_a", "sigma_s", "Le"};
+    grid **slots[3] = {out->rgbg.sigma_a, out->rgbg.sigma_s, out->rgbg.Le};
+    for (int k = 0; k < 3; ++k)
+        for (int c = 0; arrays[k] && c < 3; ++c)
+            if (uniformgrid_make_channel(u, arrays[k], c, names[k], &slots[k][c], &inner) !=
+                HZ_OK)
+                return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+    out->emissive = r->Le && Le_scale > 0.0;
+    return build_majorants(out, times, err);
+}
+
 /* The temperature parameters of a nanovdb or uniformgrid medium (problems
  * are recorded in pl). */
 static void read_temperature_params(param_list *pl, temperature_params *tp_)
@@ -388,9 +455,11 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
     const char *name = e->name ? e->name : "";
-    bool is_grid, uniform = false, cloud = false;
+    bool is_grid, uniform = false, cloud = false, rgbgrid = false;
     if (strcmp(type, "homogeneous") == 0)
         is_grid = false;
+    else if (strcmp(type, "rgbgrid") == 0)
+        is_grid = rgbgrid = true;
     else if (strcmp(type, "cloud") == 0)
         is_grid = cloud = true;
     else if (strcmp(type, "nanovdb") == 0)
@@ -401,15 +470,15 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
         return hz_fail_at(err, e->entity.loc,
                           "MakeNamedMedium \"%s\": medium type \"%s\" is not supported "
                           "(supported: \"homogeneous\", \"nanovdb\", \"uniformgrid\", "
-                          "\"cloud\")",
+                          "\"cloud\", \"rgbgrid\")",
                           name, type);
 
     if (params_has(pl, "preset"))
         params_reject(pl, "preset",
                       "named scattering properties (\"preset\") are not supported; give "
                       "\"sigma_a\" and \"sigma_s\"");
-    rgb sigma_a = read_sigma(pl, "sigma_a");
-    rgb sigma_s = read_sigma(pl, "sigma_s");
+    rgb sigma_a = rgbgrid ? rgb_grey(0.0) : read_sigma(pl, "sigma_a");
+    rgb sigma_s = rgbgrid ? rgb_grey(1.0) : read_sigma(pl, "sigma_s");
     double scale = params_float(pl, "scale", 1.0);
     if (!isfinite(scale) || scale < 0.0)
         params_reject(pl, "scale", "\"scale\" must be finite and non-negative, got %g", scale);
@@ -419,6 +488,9 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     /* Emission: pbrt-v4's "Le" (homogeneous media only) times "Lescale". */
     rgb Le = is_grid && !uniform ? rgb_grey(0.0) : params_illuminant(pl, "Le", rgb_grey(0.0));
     double Le_scale = uniform || cloud ? 1.0 : params_float(pl, "Lescale", 1.0);
+    rgbgrid_params rg = {{{1, 1, 1}, {0, 0, 0}, {1, 1, 1}, NULL, NULL, NULL}, NULL, NULL, NULL};
+    if (rgbgrid)
+        rgbgrid_read(pl, &rg);
     if (!(isfinite(Le_scale) && Le_scale >= 0.0))
         params_reject(pl, "Lescale", "\"Lescale\" must be finite and non-negative, got %g",
                       Le_scale);
@@ -448,6 +520,8 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
         if (memcmp(&e->world_from_medium.m, &e->world_from_medium_end.m,
                    sizeof e->world_from_medium.m) != 0)
             params_reject(pl, "density", "a moving \"cloud\" medium is not supported");
+    } else if (rgbgrid) {
+        /* read above, before Le (an rgb array here) */
     } else if (uniform) {
         uniformgrid_read(pl, &ug);
         read_temperature_params(pl, &tp);
@@ -502,6 +576,14 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
         return HZ_OK;
     }
 
+    if (rgbgrid) {
+        if (build_rgbgrid(e, render_from_world, &rg, scale, Le_scale, times, out, err) != HZ_OK) {
+            medium_free(out);
+            memset(out, 0, sizeof *out);
+            return HZ_ERROR;
+        }
+        return HZ_OK;
+    }
     if (cloud) {
         out->kind = MEDIUM_CLOUD;
         out->cloud.params = cp;
@@ -550,7 +632,14 @@ void medium_free(medium *m)
 {
     if (!m)
         return;
-    if (m->kind == MEDIUM_GRID) {
+    if (m->kind == MEDIUM_RGBGRID)
+        for (int c = 0; c < 3; ++c) {
+            grid_destroy(m->rgbg.sigma_a[c]);
+            grid_destroy(m->rgbg.sigma_s[c]);
+            grid_destroy(m->rgbg.Le[c]);
+            m->rgbg.sigma_a[c] = m->rgbg.sigma_s[c] = m->rgbg.Le[c] = NULL;
+        }
+    if (m->kind == MEDIUM_GRID || m->kind == MEDIUM_RGBGRID) {
         grid_destroy(m->grid.grid);
         grid_destroy(m->grid.velocity);
         grid_destroy(m->grid.temperature);
@@ -655,6 +744,13 @@ void medium_accessor_init(const medium *m, medium_accessor *a)
         grid_accessor_init(m->grid.temperature, &a->temperature);
     if (m->grid.Le_scale_grid)
         grid_accessor_init(m->grid.Le_scale_grid, &a->Le_scale);
+    if (m->kind == MEDIUM_RGBGRID) {
+        grid *const *g[3] = {m->rgbg.sigma_a, m->rgbg.sigma_s, m->rgbg.Le};
+        for (int k = 0; k < 3; ++k)
+            for (int c = 0; c < 3; ++c)
+                if (g[k][c])
+                    grid_accessor_init(g[k][c], &a->rgb[3 * k + c]);
+    }
 }
 
 bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1)

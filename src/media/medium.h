@@ -19,6 +19,9 @@
  *   "cloud":       pbrt-v4's procedural cloud (media/cloud.h): density (1),
  *                  wispiness (1), frequency (5), p0, p1 (0 0 0, 1 1 1), the
  *                  same sigma_a, sigma_s, scale, g; rendered by volpath only.
+ *   "rgbgrid":     pbrt-v4's grid of rgb sigma_a, sigma_s, Le samples (nx ny nz,
+ *                  p0, p1, scale, Lescale, g), as uniformgrid places them;
+ *                  rendered by volpath only.
  *   "nanovdb":     filename (.vdb or .nvdb, relative to the scene file that
  *                  declares the medium), gridname (default "density"), and the
  *                  same sigma_a, sigma_s, scale, g; the coefficients are per unit
@@ -66,7 +69,7 @@
 #include "media/majorant.h"
 #include "scene/scene_desc.h"
 
-typedef enum { MEDIUM_HOMOGENEOUS, MEDIUM_GRID, MEDIUM_CLOUD } medium_kind;
+typedef enum { MEDIUM_HOMOGENEOUS, MEDIUM_GRID, MEDIUM_CLOUD, MEDIUM_RGBGRID } medium_kind;
 
 typedef struct {
     medium_kind kind;
@@ -125,6 +128,15 @@ typedef struct {
         vec3 p0, p1;                 /* the box, medium space */
         transform medium_from_render;
     } cloud;                 /* MEDIUM_CLOUD only: volpath renders it */
+    /* MEDIUM_RGBGRID: pbrt-v4's rgbgrid. grid.grid holds, per sample, the
+     * largest channel of sigma_a + sigma_s (scale applied): the placement,
+     * support and majorant of grid media; these hold the channels (same
+     * index space; NULL: 1 everywhere in the box for sigma_a/sigma_s, no
+     * emission for Le). volpath renders it. */
+    struct {
+        grid *sigma_a[3], *sigma_s[3], *Le[3];
+        double scale, Le_scale;
+    } rgbg;
 } medium;
 
 /* When a medium lives: TransformTimes (a medium whose start and end
@@ -175,6 +187,7 @@ bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1);
 /* Per-thread lookup caches of a grid medium's grids. */
 typedef struct {
     grid_accessor density, velocity, temperature, Le_scale;
+    grid_accessor rgb[9]; /* rgbgrid: sigma_a, sigma_s, Le channels */
 } medium_accessor;
 
 void medium_accessor_init(const medium *m, medium_accessor *a);
@@ -209,6 +222,27 @@ static inline double medium_density_at(const medium *m, medium_accessor *a,
     vec3 p = medium_point_at(m, a, r, t, lookups);
     ++*lookups;
     return grid_density_index(m->grid.grid, &a->density, p);
+}
+
+/* An rgbgrid's coefficients and emission at a density-index point p. */
+static inline void medium_rgbgrid_at(const medium *m, medium_accessor *a, vec3 p, rgb *sigma_a,
+                                     rgb *sigma_s, rgb *Le, uint64_t *lookups)
+{
+    double v[3][3];
+    grid *const *g[3] = {m->rgbg.sigma_a, m->rgbg.sigma_s, m->rgbg.Le};
+    for (int k = 0; k < 3; ++k)
+        for (int c = 0; c < 3; ++c) {
+            if (g[k][c]) {
+                ++*lookups;
+                v[k][c] = grid_density_index(g[k][c], &a->rgb[3 * k + c], p);
+            } else {
+                v[k][c] = k < 2 ? 1.0 : 0.0;
+            }
+        }
+    double s = m->rgbg.scale, e = m->rgbg.Le_scale;
+    *sigma_a = rgb_make(s * v[0][0], s * v[0][1], s * v[0][2]);
+    *sigma_s = rgb_make(s * v[1][0], s * v[1][1], s * v[1][2]);
+    *Le = rgb_make(e * v[2][0], e * v[2][1], e * v[2][2]);
 }
 
 /* Emitted radiance at a density-index point p of an emissive grid medium

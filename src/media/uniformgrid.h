@@ -27,6 +27,19 @@ typedef struct {
  * recorded in pl for params_finish. */
 void uniformgrid_read(param_list *pl, uniformgrid_params *u);
 
+/* pbrt-v4's "rgbgrid": the same box and counts, and "rgb sigma_a",
+ * "rgb sigma_s" (at least one; an absent one is 1 everywhere) and "rgb Le"
+ * (needs sigma_a) arrays of nx ny nz triples. */
+typedef struct {
+    uniformgrid_params box;
+    const double *sigma_a, *sigma_s, *Le; /* triples, or NULL */
+} rgbgrid_params;
+void rgbgrid_read(param_list *pl, rgbgrid_params *r);
+
+/* Channel c of an array of triples, as a float grid (uniformgrid_make). */
+hz_status uniformgrid_make_channel(const uniformgrid_params *u, const double *triples, int c,
+                                   const char *what, grid **out, hz_error *err);
+
 /* A float grid of `values` (count: the grid's, or 1 for a single sample
  * spanning the whole box, as pbrt-v4's default Lescale), placed in medium
  * space. Negative or non-finite values are errors naming `what`. */

@@ -265,12 +265,13 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
 #undef CHECK
     /* pbrt-v4's procedural cloud is rendered by volpath's tracking only. */
     for (size_t i = 0; ip.kind == INTEGRATOR_SINGLESCATTER && i < rs->medium_count; ++i)
-        if (rs->media[i].kind == MEDIUM_CLOUD &&
+        if ((rs->media[i].kind == MEDIUM_CLOUD || rs->media[i].kind == MEDIUM_RGBGRID) &&
             collect(errs, (hz_fail_at(err, sd->media[i].entity.loc,
-                                      "MakeNamedMedium \"%s\": a \"cloud\" medium needs "
-                                      "Integrator \"volpath\" (singlescatter renders grid and "
-                                      "homogeneous media)",
-                                      rs->media[i].name ? rs->media[i].name : ""),
+                                      "MakeNamedMedium \"%s\": a \"%s\" medium needs "
+                                      "Integrator \"volpath\" (singlescatter renders nanovdb, "
+                                      "uniformgrid and homogeneous media)",
+                                      rs->media[i].name ? rs->media[i].name : "",
+                                      rs->media[i].kind == MEDIUM_CLOUD ? "cloud" : "rgbgrid"),
                            err)) != HZ_OK)
             return HZ_ERROR;
     if (errs->count || errs->dropped)
@@ -351,6 +352,7 @@ render_motion render_scene_motion(const render_scene *rs)
         case MEDIUM_CLOUD:
             break;
         case MEDIUM_GRID:
+        case MEDIUM_RGBGRID:
             m.media += md->grid.moving || md->grid.velocity != NULL;
             break;
         }
@@ -368,6 +370,14 @@ render_memory render_scene_memory(const render_scene *rs)
         case MEDIUM_HOMOGENEOUS:
         case MEDIUM_CLOUD:
             break;
+        case MEDIUM_RGBGRID:
+            for (int c = 0; c < 3; ++c) {
+                const grid *g[3] = {md->rgbg.sigma_a[c], md->rgbg.sigma_s[c], md->rgbg.Le[c]};
+                for (int k = 0; k < 3; ++k)
+                    mem.grids += g[k] ? (double)grid_buffer_bytes(g[k]) : 0.0;
+            }
+            /* and the majorant's source grid, below */
+            /* fall through */
         case MEDIUM_GRID:
             mem.grids += (double)grid_buffer_bytes(md->grid.grid);
             if (md->grid.velocity)

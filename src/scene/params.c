@@ -280,6 +280,11 @@ const double *params_ints(param_list *pl, const char *name, size_t *n)
     return get_array(pl, name, PARAM_INTEGER, 1, n);
 }
 
+const double *params_rgbs(param_list *pl, const char *name, size_t *n)
+{
+    return get_array(pl, name, PARAM_RGB, 3, n);
+}
+
 const double *params_point3s(param_list *pl, const char *name, size_t *n)
 {
     return get_array(pl, name, PARAM_POINT3, 3, n);

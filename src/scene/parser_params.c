@@ -249,15 +249,15 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
     case PARAM_NORMAL:
         tuple = 3;
         break;
-    case PARAM_RGB:
+    case PARAM_RGB: /* one triple, or an array of them (rgbgrid) */
+        tuple = 3;
+        break;
     case PARAM_INTEGER:
     case PARAM_FLOAT:
         break;
     }
     if (want_numbers(p, vals, n, err) != HZ_OK)
         return HZ_ERROR;
-    if (p->type == PARAM_RGB && n != 3)
-        return hz_fail_at(err, p->loc, "parameter \"rgb %s\" takes 3 values, got %zu", p->name, n);
     if (n % tuple != 0)
         return hz_fail_at(err, p->loc, "parameter \"%s %s\" needs a multiple of %zu values, got %zu",
                           param_type_name(p->type), p->name, tuple, n);

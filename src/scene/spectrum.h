@@ -21,6 +21,11 @@
 
 #include "core/vec.h"
 
+/* The integral of the CIE 1931 y-bar over 360..830 nm in nanometres: what a
+ * radiance of unit-luminance spectrum reaches pbrt-v4's film as when the
+ * spectrum is not divided by it (rgbgrid Le, temperature blackbodies). */
+#define SPECTRUM_CIE_Y_INTEGRAL 106.856895
+
 /* Wavelengths must be strictly increasing (checked by the caller); n >= 1. */
 rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n);
 /* The same spectrum as an illuminant, as pbrt-v4 normalises a light's: its

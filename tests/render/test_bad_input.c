@@ -107,7 +107,7 @@ static void test_all_errors_in_one_run(void **state)
                     "Material \"conductor\"\n"
                     "Shape \"cylinder\" \"float radius\" 1\n"
                     "LightSource \"goniometric\" \"rgb I\" [1 1 1]\n"
-                    "MakeNamedMedium \"m\" \"string type\" \"rgbgrid\"\n"
+                    "MakeNamedMedium \"m\" \"string type\" \"fluffy\"\n"
                     "AttributeBegin\nAreaLightSource \"diffuse\" \"float what\" 3\n"
                     "Shape \"sphere\"\nAttributeEnd\n");
     const char *good = HAZE_TMP "/bad_input_good.exr";
@@ -120,7 +120,7 @@ static void test_all_errors_in_one_run(void **state)
         "bad_input_many.pbrt:5:1: Material \"conductor\" is not supported",
         "bad_input_many.pbrt:6:1: unknown shape \"cylinder\"",
         "bad_input_many.pbrt:7:1: LightSource \"goniometric\" is not supported",
-        "bad_input_many.pbrt:8:1: MakeNamedMedium \"m\": medium type \"rgbgrid\"",
+        "bad_input_many.pbrt:8:1: MakeNamedMedium \"m\": medium type \"fluffy\"",
         "bad_input_many.pbrt:10:27: unused parameter \"float what\"",
         "bad_input_many.inc:1:33: unused parameter \"float nonsense\"",
     };

@@ -263,6 +263,54 @@ static void test_cloud_solid_slab(void **state)
     free(text);
 }
 
+/* pbrt-v4's rgbgrid: constant per-channel sigma_a samples (4 per axis over
+ * the unit box, cell-centred, falling to half at the faces) transmit
+ * exp(-sigma_a h (n - 1/4)) along an axis, per channel; singlescatter
+ * refuses the medium. */
+static void test_rgbgrid_slab(void **state)
+{
+    (void)state;
+    char sa[64 * 16] = "", ss[64 * 8] = "";
+    for (int i = 0; i < 64; ++i) {
+        strcat(sa, "0.5 1 2 ");
+        strcat(ss, "0 0 0 ");
+    }
+    const char *fmt =
+        "LookAt 0.5 0.5 -1  0.5 0.5 0  0 1 0\n"
+        "Camera \"orthographic\" \"float screenwindow\" [-0.1 0.1 -0.1 0.1]\n"
+        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+        "Sampler \"independent\" \"integer pixelsamples\" 16\n%s\nWorldBegin\n"
+        "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+        "MakeNamedMedium \"g\" \"string type\" \"rgbgrid\" \"integer nx\" 4 \"integer ny\" 4 "
+        "\"integer nz\" 4 \"rgb sigma_a\" [%s] \"rgb sigma_s\" [%s]\n"
+        "AttributeBegin\nMediumInterface \"g\" \"\"\nMaterial \"\"\n"
+        "Translate 0.5 0.5 0.5\nShape \"sphere\" \"float radius\" 1\nAttributeEnd\n";
+    char *text = sfmt(fmt, "Integrator \"volpath\"", sa, ss);
+    render_scene *rs = build(text);
+    pstat *px = image_stats(rs, 4, 4, 4096);
+    const double sigma[3] = {0.5, 1, 2};
+    for (int c = 0; c < 3; ++c) {
+        double m = 0.0, v = 0.0;
+        for (int i = 0; i < 16; ++i) {
+            m += ch(px[i].mean, c) / 16;
+            v += ch(px[i].se, c) * ch(px[i].se, c) / 256;
+        }
+        double want = exp(-sigma[c] * 0.25 * (4 - 0.25));
+        if (verbose())
+            print_message("rgbgrid slab c%d: %.5f +- %.5f (want %.5f)\n", c, m, sqrt(v), want);
+        assert_true(fabs(m - want) < 4.0 * sqrt(v) + 1e-9);
+        assert_true(sqrt(v) < 0.01 * want);
+    }
+    free(px);
+    render_scene_destroy(rs);
+    free(text);
+    text = sfmt(fmt, "Integrator \"singlescatter\"", sa, ss);
+    char msg[4096];
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "a \"rgbgrid\" medium needs Integrator \"volpath\""));
+    free(text);
+}
+
 /* fog_sphere.vdb at density scale 1e12: majorant cells that straddle its
  * surface hold ~1e12 null collisions per unit length. The walk gives up after
  * VOLPATH_MAX_COLLISIONS per segment (the segment counts as opaque), so each
@@ -305,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_maxdepth_1_matches_singlescatter),
         cmocka_unit_test(test_absurd_density_is_bounded),
         cmocka_unit_test(test_cloud_solid_slab),
+        cmocka_unit_test(test_rgbgrid_slab),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

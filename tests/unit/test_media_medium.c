@@ -167,9 +167,9 @@ static void homogeneous_under_transform(void **state)
 static void homogeneous_errors(void **state)
 {
     (void)state;
-    build_err("WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"rgbgrid\"\n", "t.pbrt:2:1:",
-              "\"rgbgrid\" is not supported (supported: \"homogeneous\", \"nanovdb\", "
-              "\"uniformgrid\", \"cloud\")");
+    build_err("WorldBegin\nMakeNamedMedium \"fog\" \"string type\" \"fluffy\"\n", "t.pbrt:2:1:",
+              "\"fluffy\" is not supported (supported: \"homogeneous\", \"nanovdb\", "
+              "\"uniformgrid\", \"cloud\", \"rgbgrid\")");
     build_err(homog("\"rgb sigma_a\" [0.5 -1 0]"), "t.pbrt:2:", "\"sigma_a\" must be");
     build_err(homog("\"spectrum sigma_s\" -0.5"), "t.pbrt:2:", "\"sigma_s\" must be");
     build_err(homog("\"float g\" 1"), "t.pbrt:2:", "\"g\" must lie in (-1, 1)");

@@ -430,7 +430,7 @@ static void test_param_errors(void **state)
     parse_err("Camera \"perspective\" \"float fov\" \"abc\"",
               "t.pbrt:1:34: parameter \"float fov\" expects numbers, got string \"abc\"");
     parse_err("WorldBegin\nLightSource \"point\" \"rgb I\" [1 1]",
-              "t.pbrt:2:21: parameter \"rgb I\" takes 3 values, got 2");
+              "t.pbrt:2:21: parameter \"rgb I\" needs a multiple of 3 values, got 2");
     parse_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1]",
               "t.pbrt:2:22: parameter \"point3 P\" needs a multiple of 3 values, got 4");
     parse_err("Camera \"perspective\" \"float fov\" 30\n   \"float fov\" 40",
