@@ -766,7 +766,13 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
     rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
     init_ray(&rh.ray, o, d, tmax, embree_time(g, time));
-    rh.ray.tnear = (float)tmin;
+    /* Rounded up, so Embree searches no nearer than tmin: rounded to the
+     * nearest, a step past a hit far from the origin (step_past's few ulps
+     * of double) could land on the hit's own float t and find it again. */
+    float tnear = (float)tmin;
+    if ((double)tnear < tmin)
+        tnear = nextafterf(tnear, INFINITY);
+    rh.ray.tnear = tnear;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(g->scene, &ctx, &rh);
@@ -840,7 +846,9 @@ double geometry_step_past(const geom_hit *h, vec3 o, vec3 d)
     double dn = v3_dot(d, h->ng);
     vec3 past = geometry_offset_origin(h->p, h->ng, d);
     double dt = dn != 0.0 ? v3_dot(v3_sub(past, h->p), h->ng) / dn : 0.0;
-    return fmax(t_hit + dt, nextafter(t_hit, INFINITY));
+    /* Past Embree's own (float) t of the hit too, whatever rounding put
+     * h->p at. */
+    return fmax(fmax(t_hit + dt, nextafter(t_hit, INFINITY)), nextafter(h->t, INFINITY));
 }
 
 double geometry_crossing_t(const geom_hit *h, vec3 o, vec3 w)
