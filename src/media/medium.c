@@ -285,23 +285,22 @@ static hz_status build_majorants(medium *m, const medium_times *times, hz_error 
     return majorant_grid_build(m->grid.grid, lo, hi, pad, &m->grid.majorant, err);
 }
 
-/* pbrt-v4's "uniformgrid" (media/uniformgrid.h): the dense arrays as NanoVDB
- * grids placed in medium space, the support clipped to the box p0..p1, the
- * Lescale grid (one sample of 1 when absent, as pbrt-v4) and the temperature
- * or Le. */
-static hz_status build_uniformgrid(medium_entity *e, transform render_from_world,
-                                   const uniformgrid_params *u, const temperature_params *tp,
-                                   rgb Le, const medium_times *times, medium *out, hz_error *err)
+/* The dense samples `values` (uniformgrid_params' counts) as the medium's
+ * density grid: placed by the CTM, the support clipped to the box p0..p1, as
+ * pbrt-v4's SampledGrid clips. */
+static hz_status adopt_dense_grid(medium_entity *e, transform render_from_world,
+                                  const uniformgrid_params *u, const double *values,
+                                  const char *what, const medium_times *times, medium *out,
+                                  hz_error *err)
 {
-    file_loc loc = e->entity.loc;
-    const char *name = e->name ? e->name : "";
     size_t count = (size_t)u->n[0] * (size_t)u->n[1] * (size_t)u->n[2];
     hz_error inner;
     grid *g = NULL;
-    if (uniformgrid_make(u, u->density, count, "density", &g, &inner) != HZ_OK ||
+    if (uniformgrid_make(u, values, count, what, &g, &inner) != HZ_OK ||
         grid_check_density(g, &inner) != HZ_OK) {
         grid_destroy(g);
-        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+        return hz_fail_at(err, e->entity.loc, "MakeNamedMedium \"%s\": %s",
+                          e->name ? e->name : "", inner.message);
     }
     motion_params mp = {NULL, 1.0, times->transform_start, times->transform_start,
                         times->transform_end};
@@ -319,6 +318,25 @@ static hz_status build_uniformgrid(medium_entity *e, transform render_from_world
                                     : v3(-1, -1, -1);
     out->grid.background = 0.0;
     out->grid.density_max = nonempty ? grid_max_value(g) : 0.0;
+    return HZ_OK;
+}
+
+/* pbrt-v4's "uniformgrid" (media/uniformgrid.h): the dense arrays as NanoVDB
+ * grids placed in medium space, the support clipped to the box p0..p1, the
+ * Lescale grid (one sample of 1 when absent, as pbrt-v4) and the temperature
+ * or Le. */
+static hz_status build_uniformgrid(medium_entity *e, transform render_from_world,
+                                   const uniformgrid_params *u, const temperature_params *tp,
+                                   rgb Le, const medium_times *times, medium *out, hz_error *err)
+{
+    file_loc loc = e->entity.loc;
+    const char *name = e->name ? e->name : "";
+    size_t count = (size_t)u->n[0] * (size_t)u->n[1] * (size_t)u->n[2];
+    hz_error inner;
+    if (adopt_dense_grid(e, render_from_world, u, u->density, "density", times, out, err) !=
+        HZ_OK)
+        return HZ_ERROR;
+    grid *g = out->grid.grid;
 
     const double one = 1.0;
     grid *ls = NULL;
@@ -389,28 +407,11 @@ static hz_status build_rgbgrid(medium_entity *e, transform render_from_world,
         mx[i] = scale * (a + b);
     }
     hz_error inner;
-    grid *g = NULL;
-    hz_status st = uniformgrid_make(u, mx, count, "sigma_a + sigma_s", &g, &inner);
+    hz_status st =
+        adopt_dense_grid(e, render_from_world, u, mx, "sigma_a + sigma_s", times, out, err);
     free(mx);
-    if (st != HZ_OK || grid_check_density(g, &inner) != HZ_OK) {
-        grid_destroy(g);
-        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
-    }
-    motion_params mp = {NULL, 1.0, times->transform_start, times->transform_start,
-                        times->transform_end};
-    if (place_grid(e, render_from_world, g, &mp, out, err) != HZ_OK) {
-        grid_destroy(g);
+    if (st != HZ_OK)
         return HZ_ERROR;
-    }
-    out->grid.grid = g;
-    vec3 lo, hi, blo, bhi;
-    uniformgrid_support(u, &blo, &bhi);
-    bool nonempty = grid_support_bounds(g, &lo, &hi);
-    out->grid.support_lo = nonempty ? v3(fmax(lo.x, blo.x), fmax(lo.y, blo.y), fmax(lo.z, blo.z))
-                                    : v3(1, 1, 1);
-    out->grid.support_hi = nonempty ? v3(fmin(hi.x, bhi.x), fmin(hi.y, bhi.y), fmin(hi.z, bhi.z))
-                                    : v3(-1, -1, -1);
-    out->grid.density_max = nonempty ? grid_max_value(g) : 0.0;
     const double *arrays[3] = {r->sigma_a, r->sigma_s, r->Le};
     const char *names[3] = {"sigma_a", "sigma_s", "Le"};
     grid **slots[3] = {out->rgbg.sigma_a, out->rgbg.sigma_s, out->rgbg.Le};
