@@ -11,7 +11,7 @@
 
 int main(int argc, char **argv)
 {
-    enum { MAX_REQUESTS = 8 };
+    enum { MAX_REQUESTS = VDB_MAX_GRID_REQUESTS };
     int n = argc > 4 ? atoi(argv[4]) : -1;
     if (n < 1 || n > MAX_REQUESTS || argc != 5 + 2 * n) {
         fprintf(stderr, "usage: %s MODULE FILE FILE_SIZE N (GRID TYPE)... (run by haze)\n",

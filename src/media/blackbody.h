@@ -12,8 +12,10 @@
 #include "core/error.h"
 #include "core/vec.h"
 
-/* Entries of a table: relative interpolation error below 1e-4 from 100 K to
- * 1e6 K (tests/unit/test_media_blackbody.c). */
+/* Entries of a table. Measured against spectrum_blackbody_peak_to_rgb
+ * (worst relative luminance error over 20000 temperatures from 800 K up):
+ * 4.6e-5 for a table over 100..3000 K, 3.4e-4 over 100 K..1e6 K; below
+ * 800 K, where nothing visibly glows, up to 1e-3 and 8e-3. */
 enum { BLACKBODY_TABLE_SIZE = 4096 };
 
 /* Temperatures at or below this emit nothing (pbrt-v4's cut-off). */

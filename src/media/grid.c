@@ -162,42 +162,16 @@ hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out,
     return HZ_OK;
 }
 
-static hz_status load_typed(const char *path, const char *gridname, vdb_value_type type,
-                            grid **out, hz_error *err)
-{
-    vdb_buffer buf;
-    char msg[sizeof err->message];
-    *out = NULL;
-    if (vdb_load_typed_grid(path, gridname, type, &buf, msg, sizeof msg) != HZ_OK)
-        return hz_fail(err, "%s", msg);
-    if (grid_create_from_buffer(&buf, gridname, out, err) != HZ_OK) {
-        vdb_buffer_free(&buf);
-        return HZ_ERROR;
-    }
-    return HZ_OK;
-}
-
-hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error *err)
-{
-    return load_typed(path, gridname, VDB_FLOAT, out, err);
-}
-
-hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_error *err)
-{
-    return load_typed(path, gridname, VDB_VEC3, out, err);
-}
-
 hz_status grid_load_set(const char *path, const grid_request *req, size_t n, grid **outs,
                         size_t *failed, hz_error *err)
 {
-    enum { MAX = 8 };
-    vdb_grid_request r[MAX] = {{0}};
-    vdb_buffer bufs[MAX];
-    int present[MAX];
+    vdb_grid_request r[VDB_MAX_GRID_REQUESTS] = {{0}};
+    vdb_buffer bufs[VDB_MAX_GRID_REQUESTS];
+    int present[VDB_MAX_GRID_REQUESTS];
     *failed = 0;
     for (size_t i = 0; i < n; ++i)
         outs[i] = NULL;
-    if (n > MAX)
+    if (n > VDB_MAX_GRID_REQUESTS)
         return hz_fail(err, "%s: too many grids asked for at once", path);
     for (size_t i = 0; i < n; ++i)
         r[i] = (vdb_grid_request){req[i].name, req[i].type == GRID_VEC3 ? VDB_VEC3 : VDB_FLOAT,
@@ -222,12 +196,22 @@ hz_status grid_load_set(const char *path, const grid_request *req, size_t n, gri
     return HZ_OK;
 }
 
-hz_status grid_load_if_present(const char *path, const char *gridname, grid **out,
-                               hz_error *err)
+static hz_status load_one(const char *path, const char *gridname, grid_value_type type,
+                          grid **out, hz_error *err)
 {
-    grid_request r = {gridname, GRID_FLOAT, true};
+    grid_request r = {gridname, type, false};
     size_t failed;
     return grid_load_set(path, &r, 1, out, &failed, err);
+}
+
+hz_status grid_load(const char *path, const char *gridname, grid **out, hz_error *err)
+{
+    return load_one(path, gridname, GRID_FLOAT, out, err);
+}
+
+hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_error *err)
+{
+    return load_one(path, gridname, GRID_VEC3, out, err);
 }
 
 grid_value_type grid_type(const grid *g) { return g->type == VEC3_GRID ? GRID_VEC3 : GRID_FLOAT; }

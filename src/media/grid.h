@@ -59,10 +59,6 @@ typedef struct {
 } grid_request;
 hz_status grid_load_set(const char *path, const grid_request *req, size_t n, grid **outs,
                         size_t *failed, hz_error *err);
-/* grid_load, but a file without a grid of that name is not an error: *out
- * is then NULL. */
-hz_status grid_load_if_present(const char *path, const char *gridname, grid **out,
-                               hz_error *err);
 /* The same for a vec3 grid (OpenVDB Vec3SGrid, NanoVDB Vec3f). */
 hz_status grid_load_vec3(const char *path, const char *gridname, grid **out, hz_error *err);
 void grid_destroy(grid *g);

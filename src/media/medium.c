@@ -120,6 +120,22 @@ static hz_status load_velocity(medium_entity *e, const char *path, const motion_
     return HZ_OK;
 }
 
+/* The temperature grid t (its values lie within the active values and the
+ * background, trilinear values too) adopted by `out`: the offset and scale,
+ * and the blackbody tabulated over the kelvins they map to. *emits: some of
+ * them are above 100 K. */
+static hz_status adopt_temperature(grid *t, const temperature_params *tp, medium *out,
+                                   bool *emits, hz_error *err)
+{
+    out->grid.temperature = t;
+    out->grid.temperature_offset = tp->offset;
+    out->grid.temperature_scale = tp->scale;
+    double bg = grid_background(t);
+    double v0 = fmin(grid_min_value(t), bg), v1 = fmax(grid_max_value(t), bg);
+    double a = (v0 - tp->offset) * tp->scale, b = (v1 - tp->offset) * tp->scale;
+    return blackbody_table_build(&out->grid.blackbody, fmin(a, b), fmax(a, b), emits, err);
+}
+
 /* Loads the temperature grid of `path` when there is one (or must be one),
  * and tabulates its blackbody over the range its values map to. */
 static hz_status load_temperature(medium_entity *e, const char *path, const temperature_params *tp,
@@ -146,22 +162,14 @@ static hz_status load_temperature(medium_entity *e, const char *path, const temp
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature grid \"%s\" in %s: %s",
                           name, tp->name, path, inner.message);
     }
-    out->grid.temperature = t;
     transform d_world_from_index = grid_world_from_index_transform(out->grid.grid);
     transform t_world_from_index = grid_world_from_index_transform(t);
     out->grid.temperature_aligned = transforms_equal(&d_world_from_index, &t_world_from_index);
     out->grid.tindex_from_index =
         transform_compose(transform_inverse(t_world_from_index), d_world_from_index);
-    out->grid.temperature_offset = tp->offset;
-    out->grid.temperature_scale = tp->scale;
     out->grid.Le_scale = tp->Le_scale;
-    /* Trilinear values lie within the active values and the background. */
-    double bg = grid_background(t);
-    double v0 = fmin(grid_min_value(t), bg), v1 = fmax(grid_max_value(t), bg);
-    double a = (v0 - tp->offset) * tp->scale, b = (v1 - tp->offset) * tp->scale;
     bool emits = false;
-    if (blackbody_table_build(&out->grid.blackbody, fmin(a, b), fmax(a, b), &emits, &inner) !=
-        HZ_OK)
+    if (adopt_temperature(t, tp, out, &emits, &inner) != HZ_OK)
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature grid \"%s\" in %s: %s",
                           name, tp->name, path, inner.message);
     out->emissive = emits && tp->Le_scale > 0.0 && !rgb_is_black(out->sigma_a);
@@ -251,8 +259,6 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
      * adopted when a later step fails). */
     if (mp->velocityname)
         st = load_velocity(e, path, mp, grids[vi], out, err);
-    else
-        grids[vi] = NULL;
     if (st == HZ_OK)
         st = load_temperature(e, path, tp, grids[ti], out, err);
     else
@@ -357,15 +363,9 @@ static hz_status build_uniformgrid(medium_entity *e, transform render_from_world
             grid_destroy(t);
             return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
         }
-        out->grid.temperature = t;
         out->grid.temperature_aligned = true;
         out->grid.tindex_from_index = transform_identity();
-        out->grid.temperature_offset = tp->offset;
-        out->grid.temperature_scale = tp->scale;
-        double v0 = fmin(grid_min_value(t), 0.0), v1 = fmax(grid_max_value(t), 0.0);
-        double a = (v0 - tp->offset) * tp->scale, b = (v1 - tp->offset) * tp->scale;
-        if (blackbody_table_build(&out->grid.blackbody, fmin(a, b), fmax(a, b), &emits, &inner) !=
-            HZ_OK)
+        if (adopt_temperature(t, tp, out, &emits, &inner) != HZ_OK)
             return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature: %s", name,
                               inner.message);
     } else {
@@ -426,26 +426,24 @@ static hz_status build_rgbgrid(medium_entity *e, transform render_from_world,
 
 /* The temperature parameters of a nanovdb or uniformgrid medium (problems
  * are recorded in pl). */
-static void read_temperature_params(param_list *pl, temperature_params *tp_)
+static void read_temperature_params(param_list *pl, temperature_params *tp)
 {
-    temperature_params tp = *tp_;
     /* As pbrt-v4, temperatureoffset falls back to its older name
      * temperaturecutoff. */
     if (params_has(pl, "temperatureoffset") && params_has(pl, "temperaturecutoff"))
         params_reject(pl, "temperaturecutoff",
                       "give one of \"temperatureoffset\" and \"temperaturecutoff\" (its "
                       "older name), not both");
-    tp.offset = params_float(pl, "temperatureoffset",
-                             params_float(pl, "temperaturecutoff", 0.0));
-    tp.scale = params_float(pl, "temperaturescale", 1.0);
-    const char *bad = !isfinite(tp.scale)  ? "temperaturescale"
-                      : !isfinite(tp.offset) ? (params_has(pl, "temperatureoffset")
+    tp->offset = params_float(pl, "temperatureoffset",
+                              params_float(pl, "temperaturecutoff", 0.0));
+    tp->scale = params_float(pl, "temperaturescale", 1.0);
+    const char *bad = !isfinite(tp->scale)  ? "temperaturescale"
+                      : !isfinite(tp->offset) ? (params_has(pl, "temperatureoffset")
                                                     ? "temperatureoffset"
                                                     : "temperaturecutoff")
                                              : NULL;
     if (bad)
         params_reject(pl, bad, "\"%s\" must be finite", bad);
-    *tp_ = tp;
 }
 
 hz_status medium_from_entity(medium_entity *e, transform render_from_world,

@@ -153,7 +153,7 @@ hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
                                         int *present, size_t *failed, char *err,
                                         size_t err_size)
 {
-    enum { MAX_REQUESTS = 8 };
+    enum { MAX_REQUESTS = VDB_MAX_GRID_REQUESTS };
     *failed = 0;
     for (size_t i = 0; i < n; ++i) {
         outs[i] = (vdb_buffer){NULL, 0};
@@ -170,7 +170,7 @@ hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
     vdb_reader_path(reader, sizeof reader);
     snprintf(size_arg, sizeof size_arg, "%" PRIu64, file_size);
     snprintf(count_arg, sizeof count_arg, "%zu", n);
-    char *argv[6 + 3 * MAX_REQUESTS + 1];
+    char *argv[5 + 2 * MAX_REQUESTS + 1]; /* reader module file size n (name type)... */
     size_t a = 0;
     argv[a++] = reader;
     argv[a++] = module;

@@ -44,6 +44,8 @@ typedef struct {
     vdb_value_type type;
     int optional;
 } vdb_grid_request;
+/* At most this many grids in one set (a medium needs three). */
+enum { VDB_MAX_GRID_REQUESTS = 8 };
 hz_status vdb_load_grid_set(const char *path, const vdb_grid_request *req, size_t n,
                             vdb_buffer *outs, int *present, size_t *failed, char *err,
                             size_t err_size);
