@@ -4,8 +4,103 @@
 #include <stdlib.h>
 #include <string.h>
 
+#define B MAJORANT_BRICK
+#define CELLS_PER_BRICK (B * B * B)
+/* A brick of the largest cells is 2^30 voxels: at most 5 per axis of the
+ * int32 index space, so the layout always fits. */
+#define MAX_CELL (1 << 27)
+
 /* floor(v / c) for a positive c, in 64 bits. */
 static int64_t floor_div(int64_t v, int64_t c) { return v >= 0 ? v / c : -((-v + c - 1) / c); }
+
+/* What the majorant reads: the grid and the box of its active voxels
+ * (outside it, every voxel is the background). */
+typedef struct {
+    const grid *g;
+    grid_ibox active;
+    bool empty;
+    const int32_t *pad;
+} source;
+
+/* The bounds of the trilinear density over `n` cells starting at voxel
+ * `first` per axis: voxels first - 1 .. first + n + 1, widened by `pad`. */
+static majorant_bounds span_bounds(const source *src, const int64_t first[3], int64_t n)
+{
+    grid_ibox box;
+    bool apart = src->empty;
+    for (int a = 0; a < 3; ++a) {
+        int64_t v0 = first[a] - 1 - src->pad[a], v1 = first[a] + n + 1 + src->pad[a];
+        box.min[a] = (int32_t)(v0 < INT32_MIN ? INT32_MIN : v0);
+        box.max[a] = (int32_t)(v1 > INT32_MAX ? INT32_MAX : v1);
+        apart = apart || box.max[a] < src->active.min[a] || box.min[a] > src->active.max[a];
+    }
+    float vmin, vmax;
+    if (apart) /* background only: no need to ask the tree */
+        vmin = vmax = grid_background(src->g);
+    else
+        grid_region_range(src->g, box, &vmin, &vmax);
+    majorant_bounds b = {fmaxf(vmax, 0.0f), 0.0f};
+    b.min = fminf(fmaxf(vmin, 0.0f), b.max);
+    return b;
+}
+
+/* Bricks per axis for cells of `cell` voxels over [l3, h3]; the count in
+ * checked arithmetic, saturated above MAJORANT_MAX_BRICKS. */
+static uint64_t layout(const double l3[3], const double h3[3], int32_t cell, int64_t first[3],
+                       int64_t res[3])
+{
+    int64_t edge = (int64_t)cell * B;
+    uint64_t count = 1;
+    for (int a = 0; a < 3; ++a) {
+        first[a] = floor_div((int64_t)floor(l3[a]), edge);
+        res[a] = floor_div((int64_t)floor(h3[a]), edge) - first[a] + 1;
+        count = (uint64_t)res[a] > MAJORANT_MAX_BRICKS || count > MAJORANT_MAX_BRICKS
+                    ? (uint64_t)MAJORANT_MAX_BRICKS + 1
+                    : count * (uint64_t)res[a];
+    }
+    return count;
+}
+
+/* Every brick's bounds; returns how many bricks are not uniform (their
+ * cells may differ). */
+static size_t bound_bricks(const source *src, majorant_grid *mg)
+{
+    size_t varied = 0, i = 0;
+    int64_t edge = (int64_t)mg->cell * B;
+    for (int32_t z = 0; z < mg->res[2]; ++z)
+        for (int32_t y = 0; y < mg->res[1]; ++y)
+            for (int32_t x = 0; x < mg->res[0]; ++x, ++i) {
+                const int64_t first[3] = {mg->origin[0] + x * edge, mg->origin[1] + y * edge,
+                                          mg->origin[2] + z * edge};
+                majorant_brick *br = &mg->bricks[i];
+                br->bounds = span_bounds(src, first, edge);
+                br->cells = -1;
+                varied += br->bounds.max != br->bounds.min;
+            }
+    return varied;
+}
+
+/* The cells of brick (x, y, z) into `cells`; true when they differ (the
+ * brick must keep them), false when all are equal (their bounds are then the
+ * brick's, tighter than the brick's own query). */
+static bool bound_cells(const source *src, majorant_grid *mg, const int32_t brick[3],
+                        majorant_bounds *cells, majorant_bounds *uniform)
+{
+    size_t i = 0;
+    bool differ = false;
+    for (int32_t z = 0; z < B; ++z)
+        for (int32_t y = 0; y < B; ++y)
+            for (int32_t x = 0; x < B; ++x, ++i) {
+                const int32_t c3[3] = {x, y, z};
+                int64_t first[3];
+                for (int a = 0; a < 3; ++a)
+                    first[a] = mg->origin[a] + ((int64_t)brick[a] * B + c3[a]) * mg->cell;
+                cells[i] = span_bounds(src, first, mg->cell);
+                differ = differ || cells[i].max != cells[0].max || cells[i].min != cells[0].min;
+            }
+    *uniform = cells[0];
+    return differ;
+}
 
 hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad[3],
                               majorant_grid *out, hz_error *err)
@@ -13,75 +108,122 @@ hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad
     memset(out, 0, sizeof *out);
     out->cell = 8;
     if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z))
-        return HZ_OK; /* empty: no cells, every walk misses */
+        return HZ_OK; /* empty: no bricks, every walk misses */
     double l3[3] = {lo.x, lo.y, lo.z}, h3[3] = {hi.x, hi.y, hi.z};
-    int64_t first[3], last[3];
     for (int a = 0; a < 3; ++a) { /* index space is int32: so is the support */
         l3[a] = fmin(fmax(l3[a], (double)INT32_MIN), (double)INT32_MAX);
         h3[a] = fmin(fmax(h3[a], (double)INT32_MIN), (double)INT32_MAX);
     }
+    source src = {g, {{0}, {0}}, false, pad};
+    src.empty = !grid_index_bounds(g, &src.active);
+    /* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose
+     * varied bricks fit MAJORANT_MAX_STORED_CELLS. */
+    size_t varied;
     for (;;) {
-        /* The product in checked arithmetic: voxels 3.3e7 apart once
-         * overflowed it. Cells of 2^28 voxels make at most 17 per axis. */
-        uint64_t cells = 1;
-        for (int a = 0; a < 3; ++a) {
-            first[a] = floor_div((int64_t)floor(l3[a]), out->cell);
-            last[a] = floor_div((int64_t)floor(h3[a]), out->cell);
-            uint64_t res = (uint64_t)(last[a] - first[a] + 1);
-            cells = res > (uint64_t)MAJORANT_MAX_CELLS || cells > (uint64_t)MAJORANT_MAX_CELLS
-                        ? (uint64_t)MAJORANT_MAX_CELLS + 1
-                        : cells * res;
+        int64_t first[3], res[3];
+        uint64_t count = layout(l3, h3, out->cell, first, res);
+        if (count > MAJORANT_MAX_BRICKS && out->cell < MAX_CELL) {
+            out->cell *= 2;
+            continue;
         }
-        if (cells <= (uint64_t)MAJORANT_MAX_CELLS || out->cell >= (1 << 28))
+        for (int a = 0; a < 3; ++a) {
+            out->res[a] = (int32_t)res[a];
+            out->origin[a] = (int32_t)(first[a] * out->cell * B);
+        }
+        out->bricks = malloc((size_t)count * sizeof *out->bricks);
+        if (!out->bricks) {
+            majorant_grid_free(out);
+            return hz_fail(err, "out of memory for a majorant grid of %zu bricks", (size_t)count);
+        }
+        varied = bound_bricks(&src, out);
+        if (varied <= MAJORANT_MAX_STORED_CELLS / CELLS_PER_BRICK || out->cell >= MAX_CELL)
             break;
+        free(out->bricks);
+        out->bricks = NULL;
         out->cell *= 2;
     }
-    size_t n = 1;
-    for (int a = 0; a < 3; ++a) {
-        out->res[a] = (int32_t)(last[a] - first[a] + 1);
-        out->origin[a] = (int32_t)(first[a] * out->cell);
-        n *= (size_t)out->res[a];
-    }
-    out->max = malloc(n * sizeof *out->max);
-    out->min = malloc(n * sizeof *out->min);
-    if (!out->max || !out->min) {
+    if (varied == 0)
+        return HZ_OK;
+    out->cells = malloc(varied * CELLS_PER_BRICK * sizeof *out->cells);
+    if (!out->cells) {
         majorant_grid_free(out);
-        return hz_fail(err, "out of memory for a majorant grid of %zu cells", n);
+        return hz_fail(err, "out of memory for a majorant grid of %zu cells",
+                       varied * CELLS_PER_BRICK);
     }
     size_t i = 0;
     for (int32_t z = 0; z < out->res[2]; ++z)
         for (int32_t y = 0; y < out->res[1]; ++y)
             for (int32_t x = 0; x < out->res[0]; ++x, ++i) {
-                /* Trilinear lookups in [a, a + cell] read voxels a .. a + cell + 1;
-                 * one more voxel below absorbs a sample point rounded just out
-                 * of its cell. */
-                int32_t c3[3] = {x, y, z};
-                grid_ibox box;
-                for (int a = 0; a < 3; ++a) {
-                    int64_t first = (int64_t)out->origin[a] + (int64_t)c3[a] * out->cell;
-                    int64_t v0 = first - 1 - pad[a], v1 = first + out->cell + 1 + pad[a];
-                    box.min[a] = (int32_t)(v0 < INT32_MIN ? INT32_MIN : v0);
-                    box.max[a] = (int32_t)(v1 > INT32_MAX ? INT32_MAX : v1);
-                }
-                float vmin, vmax;
-                grid_region_range(g, box, &vmin, &vmax);
-                out->max[i] = fmaxf(vmax, 0.0f);
-                out->min[i] = fminf(fmaxf(vmin, 0.0f), out->max[i]);
+                majorant_brick *br = &out->bricks[i];
+                if (br->bounds.max == br->bounds.min)
+                    continue;
+                const int32_t b3[3] = {x, y, z};
+                majorant_bounds *cells = out->cells + out->stored_bricks * CELLS_PER_BRICK;
+                if (bound_cells(&src, out, b3, cells, &br->bounds))
+                    br->cells = (int32_t)out->stored_bricks++;
             }
+    if (out->stored_bricks < varied) { /* give back what uniform bricks did not keep */
+        void *kept = out->stored_bricks
+                         ? realloc(out->cells,
+                                   out->stored_bricks * CELLS_PER_BRICK * sizeof *out->cells)
+                         : NULL;
+        if (kept || !out->stored_bricks) {
+            if (!kept)
+                free(out->cells);
+            out->cells = kept;
+        }
+    }
     return HZ_OK;
 }
 
 void majorant_grid_free(majorant_grid *mg)
 {
-    free(mg->max);
-    free(mg->min);
-    mg->max = mg->min = NULL;
+    free(mg->bricks);
+    free(mg->cells);
+    mg->bricks = NULL;
+    mg->cells = NULL;
+    mg->stored_bricks = 0;
     mg->res[0] = mg->res[1] = mg->res[2] = 0;
 }
 
 size_t majorant_grid_bytes(const majorant_grid *mg)
 {
-    return (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2] * 2 * sizeof(float);
+    return (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2] * sizeof *mg->bricks +
+           mg->stored_bricks * CELLS_PER_BRICK * sizeof *mg->cells;
+}
+
+static size_t brick_index(const majorant_grid *mg, const int32_t b[3])
+{
+    return ((size_t)b[2] * (size_t)mg->res[1] + (size_t)b[1]) * (size_t)mg->res[0] +
+           (size_t)b[0];
+}
+
+static size_t cell_index(const int32_t c[3]) { return ((size_t)c[2] * B + c[1]) * B + c[0]; }
+
+bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *out)
+{
+    const double p3[3] = {p.x, p.y, p.z};
+    int32_t b[3], c[3];
+    for (int a = 0; a < 3; ++a) {
+        double u = floor((p3[a] - mg->origin[a]) / mg->cell);
+        if (!(u >= 0.0 && u < (double)mg->res[a] * B))
+            return false;
+        b[a] = (int32_t)u / B;
+        c[a] = (int32_t)u % B;
+    }
+    const majorant_brick *br = &mg->bricks[brick_index(mg, b)];
+    *out = br->cells < 0 ? br->bounds : mg->cells[(size_t)br->cells * CELLS_PER_BRICK + cell_index(c)];
+    return true;
+}
+
+/* floor(u) clamped to [0, n - 1], without a libm call (u is finite). */
+static inline int32_t clamped_floor(double u, int32_t n)
+{
+    if (!(u > 0.0))
+        return 0;
+    if (u >= (double)n)
+        return n - 1;
+    return (int32_t)u; /* truncation is floor for u > 0 */
 }
 
 bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3 d, double t0,
@@ -89,21 +231,22 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
 {
     w->mg = mg;
     w->done = true;
-    if (mg->res[0] <= 0 || !(t0 <= t1))
+    w->cell = NULL;
+    if (!mg->bricks || !(t0 <= t1))
         return false;
     const double o3[3] = {o.x, o.y, o.z}, d3[3] = {d.x, d.y, d.z};
-    /* Clip [t0, t1] to the grid's box (slab test), as cell coordinates
-     * u = (p - origin) / cell in [0, res]. */
-    double u0[3], du[3];
+    /* Clip [t0, t1] to the grid's box (slab test), in cell coordinates
+     * u = (p - origin) / cell in [0, B res]. */
     for (int a = 0; a < 3; ++a) {
-        u0[a] = (o3[a] - mg->origin[a]) / mg->cell;
-        du[a] = d3[a] / mg->cell;
-        if (du[a] == 0.0) {
-            if (!(u0[a] >= 0.0 && u0[a] <= mg->res[a]))
+        w->u0[a] = (o3[a] - mg->origin[a]) / mg->cell;
+        w->du[a] = d3[a] / mg->cell;
+        double end = (double)mg->res[a] * B;
+        if (w->du[a] == 0.0) {
+            if (!(w->u0[a] >= 0.0 && w->u0[a] <= end))
                 return false;
             continue;
         }
-        double ta = (0.0 - u0[a]) / du[a], tb = (mg->res[a] - u0[a]) / du[a];
+        double ta = (0.0 - w->u0[a]) / w->du[a], tb = (end - w->u0[a]) / w->du[a];
         if (ta > tb) {
             double t = ta;
             ta = tb;
@@ -116,25 +259,27 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
     }
     if (!(t0 < t1))
         return false;
-    /* The cell at the middle of the first step is robust against the entry
-     * point rounding onto a face: take the cell of t0, clamped. */
+    /* The brick of t0, clamped: robust against the entry point rounding
+     * onto a face. */
+    const ptrdiff_t stride[3] = {1, B, B * B};
     for (int a = 0; a < 3; ++a) {
-        double u = floor(u0[a] + t0 * du[a]);
-        int32_t c = u < 0.0 ? 0 : u > mg->res[a] - 1.0 ? mg->res[a] - 1 : (int32_t)u;
-        w->ijk[a] = c;
-        if (du[a] > 0.0) {
+        int32_t c = clamped_floor((w->u0[a] + t0 * w->du[a]) / B, mg->res[a]);
+        w->brick[a] = c;
+        if (w->du[a] > 0.0) {
             w->step[a] = 1;
-            w->t_next[a] = (c + 1 - u0[a]) / du[a];
-            w->t_delta[a] = 1.0 / du[a];
-        } else if (du[a] < 0.0) {
+            w->brick_next[a] = ((c + 1.0) * B - w->u0[a]) / w->du[a];
+            w->brick_delta[a] = B / w->du[a];
+            w->cell_delta[a] = 1.0 / w->du[a];
+        } else if (w->du[a] < 0.0) {
             w->step[a] = -1;
-            w->t_next[a] = (c - u0[a]) / du[a];
-            w->t_delta[a] = -1.0 / du[a];
+            w->brick_next[a] = ((double)c * B - w->u0[a]) / w->du[a];
+            w->brick_delta[a] = -B / w->du[a];
+            w->cell_delta[a] = -1.0 / w->du[a];
         } else {
             w->step[a] = 0;
-            w->t_next[a] = INFINITY;
-            w->t_delta[a] = INFINITY;
+            w->brick_next[a] = w->brick_delta[a] = w->cell_delta[a] = INFINITY;
         }
+        w->cell_stride[a] = w->step[a] * stride[a];
     }
     w->t = t0;
     w->t_end = t1;
@@ -142,28 +287,75 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
     return true;
 }
 
+static inline int nearest_axis(const double t[3])
+{
+    return t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
+}
+
+static inline void emit(majorant_walk *w, majorant_segment *seg, double t1, majorant_bounds b)
+{
+    seg->t0 = w->t;
+    seg->t1 = t1 > w->t ? t1 : w->t;
+    seg->max = b.max;
+    seg->min = b.min;
+    w->t = seg->t1;
+}
+
+/* Steps the brick level past the current brick (whose exit is on axis a). */
+static inline void next_brick(majorant_walk *w, int a)
+{
+    if (!(w->brick_next[a] < w->t_end)) {
+        w->done = true;
+        return;
+    }
+    w->brick[a] += w->step[a];
+    w->brick_next[a] += w->brick_delta[a];
+    if (w->brick[a] < 0 || w->brick[a] >= w->mg->res[a])
+        w->done = true; /* rounding left the box a little early: the rest is outside */
+}
+
+/* Starts the cell level in a brick that stores its cells, at w->t. */
+static void enter_brick(majorant_walk *w, const majorant_brick *br, double exit)
+{
+    w->brick_exit = exit;
+    for (int a = 0; a < 3; ++a) {
+        double first = (double)w->brick[a] * B;
+        int32_t c = clamped_floor(w->u0[a] + w->t * w->du[a] - first, B);
+        w->cell_ijk[a] = c;
+        w->cell_next[a] = w->step[a] > 0   ? (first + c + 1.0 - w->u0[a]) / w->du[a]
+                          : w->step[a] < 0 ? (first + c - w->u0[a]) / w->du[a]
+                                           : INFINITY;
+    }
+    w->cell = w->mg->cells + (size_t)br->cells * CELLS_PER_BRICK + cell_index(w->cell_ijk);
+}
+
 bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
 {
-    if (w->done)
-        return false;
-    int a = w->t_next[0] < w->t_next[1] ? (w->t_next[0] < w->t_next[2] ? 0 : 2)
-                                        : (w->t_next[1] < w->t_next[2] ? 1 : 2);
-    double t_exit = w->t_next[a] < w->t_end ? w->t_next[a] : w->t_end;
-    const majorant_grid *mg = w->mg;
-    size_t i = ((size_t)w->ijk[2] * (size_t)mg->res[1] + (size_t)w->ijk[1]) * (size_t)mg->res[0] +
-               (size_t)w->ijk[0];
-    seg->t0 = w->t;
-    seg->t1 = t_exit > w->t ? t_exit : w->t;
-    seg->max = mg->max[i];
-    seg->min = mg->min[i];
-    w->t = seg->t1;
-    if (!(w->t_next[a] < w->t_end)) {
-        w->done = true;
-        return true;
+    while (!w->done) {
+        if (w->cell) {
+            int a = nearest_axis(w->cell_next);
+            int32_t c = w->cell_ijk[a] + w->step[a];
+            bool leave = !(w->cell_next[a] < w->brick_exit) || (uint32_t)c >= B;
+            emit(w, seg, leave ? w->brick_exit : w->cell_next[a], *w->cell);
+            if (leave) {
+                w->cell = NULL;
+                next_brick(w, nearest_axis(w->brick_next));
+            } else {
+                w->cell_ijk[a] = c;
+                w->cell += w->cell_stride[a];
+                w->cell_next[a] += w->cell_delta[a];
+            }
+            return true;
+        }
+        int a = nearest_axis(w->brick_next);
+        double exit = w->brick_next[a] < w->t_end ? w->brick_next[a] : w->t_end;
+        const majorant_brick *br = &w->mg->bricks[brick_index(w->mg, w->brick)];
+        if (br->cells < 0) {
+            emit(w, seg, exit, br->bounds);
+            next_brick(w, a);
+            return true;
+        }
+        enter_brick(w, br, exit);
     }
-    w->ijk[a] += w->step[a];
-    w->t_next[a] += w->t_delta[a];
-    if (w->ijk[a] < 0 || w->ijk[a] >= mg->res[a])
-        w->done = true; /* rounding left the box a little early: the rest is outside */
-    return true;
+    return false;
 }

@@ -1,21 +1,28 @@
-/* The majorant grid of a grid medium: a coarse box grid over the density's
+/* The majorant grid of a grid medium: a coarse grid over the density's
  * support, in the density grid's index space, holding per cell an upper and a
  * lower bound of the trilinear density anywhere in the cell. Built once from
  * the NanoVDB tree's node statistics (grid_region_range: leaf min/max, tile
  * values, the background), never from the voxels themselves.
  *
- * Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two multiple of it
- * when the support is large, so that there are at most MAJORANT_MAX_CELLS),
- * aligned to multiples of `cell` in index space, like the tree's nodes. A cell
- * [a, a + cell) reads voxels a .. a + cell + 1 through trilinear lookups; its
- * bounds come from voxels a - 1 .. a + cell + 1 (a point rounded just out of
- * its cell is still bounded), dilated further by `pad` voxels per axis (the
- * largest displacement of a velocity field over the shutter).
+ * Two levels, so that memory follows the data and not its bounding box:
+ * bricks of MAJORANT_BRICK^3 cells cover the support (at most
+ * MAJORANT_MAX_BRICKS of them), and only a brick whose cells differ (one that
+ * holds the edge or the inside of the medium) stores its cells; a brick whose
+ * every cell has the same bounds (empty space, a constant tile) is one pair of
+ * floats. Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
+ * multiple of it when the support is large or densely active), aligned to
+ * multiples of `cell` in index space, like the tree's nodes; bricks to
+ * multiples of MAJORANT_BRICK * cell. A cell [a, a + cell) reads voxels
+ * a .. a + cell + 1 through trilinear lookups; its bounds come from voxels
+ * a - 1 .. a + cell + 1 (a point rounded just out of its cell is still
+ * bounded), dilated further by `pad` voxels per axis (the largest
+ * displacement of a velocity field over the shutter).
  *
- * A ray crosses the grid with a 3D DDA (Amanatides & Woo): majorant_walk
- * returns the cells the ray passes through, in order, as t intervals with the
- * cell's bounds. Cells whose upper bound is 0 hold no medium: estimators skip
- * them without a single density lookup. */
+ * A ray crosses the grid with a two-level 3D DDA (Amanatides & Woo):
+ * majorant_walk returns, in order, one t interval per uniform brick crossed
+ * and one per cell of the other bricks, with its bounds. Intervals whose upper
+ * bound is 0 hold no medium: estimators skip them without a single density
+ * lookup. */
 #ifndef HAZE_MEDIA_MAJORANT_H
 #define HAZE_MEDIA_MAJORANT_H
 
@@ -27,38 +34,63 @@
 #include "core/vec.h"
 #include "media/grid.h"
 
-/* At most this many cells (64^3): a few MiB, and a DDA of at most ~200 steps
- * across the grid. */
-#define MAJORANT_MAX_CELLS (1u << 18)
+/* Cells per brick edge. */
+#define MAJORANT_BRICK 8
+/* At most this many bricks (32^3: 384 KiB) and this many stored cells (2^22:
+ * 32 MiB, a support of 1024^3 voxels active everywhere at leaf resolution);
+ * beyond either, cells grow. */
+#define MAJORANT_MAX_BRICKS (1u << 15)
+#define MAJORANT_MAX_STORED_CELLS (1u << 22)
 
 typedef struct {
-    int32_t res[3];    /* cells per axis */
-    int32_t origin[3]; /* index coordinate of cell (0,0,0)'s first voxel */
-    int32_t cell;      /* edge of a cell in voxels */
-    float *max;        /* res[0]*res[1]*res[2] upper bounds, x fastest */
-    float *min;        /* lower bounds (0 unless a cell is covered by stored values) */
+    float max, min;
+} majorant_bounds;
+
+typedef struct {
+    majorant_bounds bounds; /* of the whole brick (exact for every cell when uniform) */
+    int32_t cells;          /* its first cell in majorant_grid.cells, or -1: uniform */
+} majorant_brick;
+
+typedef struct {
+    int32_t res[3];          /* bricks per axis */
+    int32_t origin[3];       /* index coordinate of brick (0,0,0)'s first voxel */
+    int32_t cell;            /* edge of a cell in voxels */
+    majorant_brick *bricks;  /* res[0]*res[1]*res[2], x fastest */
+    majorant_bounds *cells;  /* MAJORANT_BRICK^3 per non-uniform brick, x fastest */
+    size_t stored_bricks;    /* bricks that store their cells */
 } majorant_grid;
 
 /* Builds the grid covering the index box [lo, hi] (the support; lo > hi: an
- * empty grid with no cells). `pad` (>= 0, per axis) widens every cell's box of
- * voxels read. Fails only when out of memory. */
+ * empty grid with no bricks). `pad` (>= 0, per axis) widens every cell's box
+ * of voxels read. Fails only when out of memory. */
 hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad[3],
                               majorant_grid *out, hz_error *err);
 void majorant_grid_free(majorant_grid *mg);
 size_t majorant_grid_bytes(const majorant_grid *mg);
+/* The bounds of the cell holding the index-space point p; false outside the
+ * grid. */
+bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *out);
 
-/* A ray's walk through the cells: o + t d in index space (same t as the
+/* A ray's walk through the grid: o + t d in index space (same t as the
  * caller's ray), over [t0, t1]. */
 typedef struct {
     const majorant_grid *mg;
     double t, t_end;
-    int32_t ijk[3];
+    double u0[3], du[3]; /* the ray in cell units: u = u0 + t du */
     int32_t step[3];
-    double t_next[3], t_delta[3];
+    /* brick level */
+    int32_t brick[3];
+    double brick_next[3], brick_delta[3];
+    /* cell level, while inside a brick that stores its cells */
+    const majorant_bounds *cell;  /* the current cell; NULL at brick level */
+    int32_t cell_ijk[3];          /* its place in the brick: 0 .. MAJORANT_BRICK - 1 */
+    ptrdiff_t cell_stride[3];     /* step[a] x the cell's stride along a */
+    double cell_next[3], cell_delta[3];
+    double brick_exit;
     bool done;
 } majorant_walk;
 
-/* One cell crossed: the interval [t0, t1] and the density bounds in it. */
+/* One interval crossed: [t0, t1] and the density bounds in it. */
 typedef struct {
     double t0, t1;
     double max, min;
@@ -67,8 +99,8 @@ typedef struct {
 /* Starts a walk over [t0, t1] (finite). False when the ray misses the grid. */
 bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3 d, double t0,
                          double t1);
-/* The next cell, or false at the end of [t0, t1]. Segments are contiguous and
- * cover the part of [t0, t1] inside the grid. */
+/* The next interval, or false at the end of [t0, t1]. Segments are
+ * contiguous and cover the part of [t0, t1] inside the grid. */
 bool majorant_walk_next(majorant_walk *w, majorant_segment *seg);
 
 #endif

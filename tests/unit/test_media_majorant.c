@@ -1,7 +1,8 @@
 /* media/majorant: the per-cell bounds hold the trilinear density everywhere in
  * their cell (checked against dense lookups on the generated volumes), they
  * are tight where the data is known exactly (box.vdb), empty space reads 0,
- * and the DDA walk visits exactly the cells a ray crosses, in order. */
+ * the two-level DDA walk reports exactly the bounds along a ray, in order, and
+ * memory follows the active data, not the support's box. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -24,7 +25,7 @@ typedef struct {
 
 static fixture build(const char *file, int32_t pad)
 {
-    fixture f = {NULL, {{0}, {0}, 0, NULL, NULL}};
+    fixture f = {0};
     hz_error err = {0};
     if (grid_load(file, "density", &f.g, &err) != HZ_OK)
         fail_msg("%s", err.message);
@@ -41,15 +42,23 @@ static void destroy(fixture *f)
     grid_destroy(f->g);
 }
 
-static size_t cell_of(const majorant_grid *mg, vec3 p)
+/* The bounds of the cell holding p, which must be inside the grid. */
+static majorant_bounds cell_of(const majorant_grid *mg, vec3 p)
 {
-    const double p3[3] = {p.x, p.y, p.z};
-    int32_t c[3];
-    for (int a = 0; a < 3; ++a) {
-        c[a] = (int32_t)floor((p3[a] - mg->origin[a]) / mg->cell);
-        assert_in_range(c[a], 0, mg->res[a] - 1);
-    }
-    return ((size_t)c[2] * mg->res[1] + c[1]) * mg->res[0] + c[0];
+    majorant_bounds b;
+    if (!majorant_grid_bounds_at(mg, p, &b))
+        fail_msg("(%g %g %g) is outside the majorant grid", p.x, p.y, p.z);
+    return b;
+}
+
+/* Cells per axis (bricks times their cells). */
+static int32_t cells_along(const majorant_grid *mg, int a) { return mg->res[a] * MAJORANT_BRICK; }
+
+/* The centre of cell (x, y, z). */
+static vec3 cell_centre(const majorant_grid *mg, int32_t x, int32_t y, int32_t z)
+{
+    return v3(mg->origin[0] + (x + 0.5) * mg->cell, mg->origin[1] + (y + 0.5) * mg->cell,
+              mg->origin[2] + (z + 0.5) * mg->cell);
 }
 
 /* Random points of the support: min <= density <= max of their cell. */
@@ -66,10 +75,10 @@ static void bounds_hold(const char *file)
         vec3 p = v3(lo.x + rng_uniform(&r) * (hi.x - lo.x), lo.y + rng_uniform(&r) * (hi.y - lo.y),
                     lo.z + rng_uniform(&r) * (hi.z - lo.z));
         double d = grid_density_index(f.g, &acc, p);
-        size_t c = cell_of(&f.mg, p);
-        if (d > f.mg.max[c] || d < f.mg.min[c])
+        majorant_bounds c = cell_of(&f.mg, p);
+        if (d > c.max || d < c.min)
             fail_msg("%s: density %.9g at (%g %g %g) outside its cell's [%g, %g]", file, d, p.x,
-                     p.y, p.z, f.mg.min[c], f.mg.max[c]);
+                     p.y, p.z, c.min, c.max);
         inside += d > 0.0;
     }
     assert_true(inside > 1000); /* the test looked at the medium, not only at empty space */
@@ -88,27 +97,36 @@ static void bounds_hold_on_every_volume(void **state)
 
 /* box.vdb is 1 on voxels [0,31]^3 (fully active leaves): the cells wholly
  * inside have min = max = 1 (residual tracking is then exact and free), the
- * edge cells [0, 1], and cells beyond the support would be 0. */
+ * cells whose voxels read touch the box [0, 1], every other cell 0. */
 static void box_bounds_are_tight(void **state)
 {
     (void)state;
     fixture f = build(VOLUMES "box.vdb", 0);
     assert_int_equal(f.mg.cell, 8);
-    assert_int_equal(f.mg.origin[0], -8);
-    assert_int_equal(f.mg.res[0], 6); /* support [-1, 32]: cells -8 .. 40 */
-    size_t n = (size_t)f.mg.res[0] * f.mg.res[1] * f.mg.res[2];
-    int full = 0, empty = 0;
-    for (size_t i = 0; i < n; ++i) {
-        assert_true(f.mg.max[i] == 0.0f || f.mg.max[i] == 1.0f);
-        full += f.mg.min[i] == 1.0f;
-        empty += f.mg.max[i] == 0.0f;
-    }
-    /* Interior cells [8,16) and [16,24) per axis read voxels 7..25: inside. */
+    /* Support [-1, 32]: bricks of 64 voxels from -64 to 64. */
+    assert_int_equal(f.mg.origin[0], -64);
+    assert_int_equal(f.mg.res[0], 2);
+    int full = 0, touching = 0;
+    for (int32_t z = 0; z < cells_along(&f.mg, 2); ++z)
+        for (int32_t y = 0; y < cells_along(&f.mg, 1); ++y)
+            for (int32_t x = 0; x < cells_along(&f.mg, 0); ++x) {
+                majorant_bounds b = cell_of(&f.mg, cell_centre(&f.mg, x, y, z));
+                /* Cell [a, a + 8) reads voxels a - 1 .. a + 9: it touches
+                 * [0, 31] for a in -8 .. 24 + 8 and is inside for a in 8, 16. */
+                const int32_t c3[3] = {x, y, z};
+                bool touches = true, inside = true;
+                for (int a = 0; a < 3; ++a) {
+                    int32_t first = f.mg.origin[a] + c3[a] * f.mg.cell;
+                    touches = touches && first >= -8 && first <= 32;
+                    inside = inside && first >= 8 && first <= 16;
+                }
+                assert_true(b.max == (touches ? 1.0f : 0.0f));
+                assert_true(b.min == (inside ? 1.0f : 0.0f));
+                full += inside;
+                touching += touches;
+            }
     assert_int_equal(full, 2 * 2 * 2);
-    /* Cells [-8,0) read voxels -9..1 (touch the box); [32,40) read 31..41. So
-     * only cells beyond 40 could be empty, and there are none: every cell
-     * touches the box. */
-    assert_int_equal(empty, 0);
+    assert_int_equal(touching, 6 * 6 * 6);
     destroy(&f);
 }
 
@@ -117,10 +135,18 @@ static void padding_widens(void **state)
 {
     (void)state;
     fixture a = build(VOLUMES "sheet.vdb", 0), b = build(VOLUMES "sheet.vdb", 9);
-    size_t n = (size_t)a.mg.res[0] * a.mg.res[1] * a.mg.res[2];
-    assert_int_equal(n, (size_t)b.mg.res[0] * b.mg.res[1] * b.mg.res[2]);
-    for (size_t i = 0; i < n; ++i)
-        assert_true(b.mg.max[i] >= a.mg.max[i] && b.mg.min[i] <= a.mg.min[i]);
+    for (int ax = 0; ax < 3; ++ax)
+        assert_int_equal(a.mg.res[ax], b.mg.res[ax]);
+    int wider = 0;
+    for (int32_t z = 0; z < cells_along(&a.mg, 2); ++z)
+        for (int32_t y = 0; y < cells_along(&a.mg, 1); ++y)
+            for (int32_t x = 0; x < cells_along(&a.mg, 0); ++x) {
+                vec3 p = cell_centre(&a.mg, x, y, z);
+                majorant_bounds ba = cell_of(&a.mg, p), bb = cell_of(&b.mg, p);
+                assert_true(bb.max >= ba.max && bb.min <= ba.min);
+                wider += bb.max > ba.max || bb.min < ba.min;
+            }
+    assert_true(wider > 0);
     destroy(&a);
     destroy(&b);
 }
@@ -134,8 +160,8 @@ static void walk_visits_crossed_cells(void **state)
     const majorant_grid *mg = &f.mg;
     rng r = rng_seeded(3);
     vec3 lo = v3(mg->origin[0], mg->origin[1], mg->origin[2]);
-    vec3 size = v3((double)mg->res[0] * mg->cell, (double)mg->res[1] * mg->cell,
-                   (double)mg->res[2] * mg->cell);
+    vec3 size = v3((double)cells_along(mg, 0) * mg->cell, (double)cells_along(mg, 1) * mg->cell,
+                   (double)cells_along(mg, 2) * mg->cell);
     int hits = 0;
     for (int i = 0; i < 20000; ++i) {
         /* Origins around the grid, directions random; every 8th axis-parallel. */
@@ -163,10 +189,11 @@ static void walk_visits_crossed_cells(void **state)
             ++n;
             if (s.t1 - s.t0 > 1e-6) {
                 double tm = 0.5 * (s.t0 + s.t1);
-                size_t c = cell_of(mg, v3(o.x + tm * d.x, o.y + tm * d.y, o.z + tm * d.z));
-                assert_true(mg->max[c] == (float)s.max && mg->min[c] == (float)s.min);
+                majorant_bounds c =
+                    cell_of(mg, v3(o.x + tm * d.x, o.y + tm * d.y, o.z + tm * d.z));
+                assert_true(c.max == (float)s.max && c.min == (float)s.min);
             }
-            assert_true(n < 3 * (mg->res[0] + mg->res[1] + mg->res[2]));
+            assert_true(n < 3 * (cells_along(mg, 0) + cells_along(mg, 1) + cells_along(mg, 2)));
         }
         assert_true(n >= 1);
         assert_true(first >= t0 && prev <= t1);
@@ -197,9 +224,9 @@ static void empty_support_has_no_cells(void **state)
 
 /* Supports spanning most of index space (voxels 3.3e7 and 2e9 apart, and
  * the whole int32 range) once overflowed the cell count (signed overflow,
- * then malloc(0) and writes). The grid stays within MAJORANT_MAX_CELLS, its
- * memory bounded, and every cell still bounds the data (box.vdb: 1 on
- * [0,31]^3): the cell holding the box has the upper bound 1. */
+ * then malloc(0) and writes). The grid stays within MAJORANT_MAX_BRICKS and
+ * MAJORANT_MAX_STORED_CELLS, and every cell still bounds the data (box.vdb: 1
+ * on [0,31]^3): the cell holding the box has the upper bound 1. */
 static void huge_supports_stay_bounded(void **state)
 {
     (void)state;
@@ -212,12 +239,59 @@ static void huge_supports_stay_bounded(void **state)
         vec3 lo = v3(spans[k][0], spans[k][0], spans[k][0]);
         vec3 hi = v3(spans[k][1], spans[k][1], spans[k][1]);
         assert_int_equal(majorant_grid_build(f.g, lo, hi, pad, &mg, &err), HZ_OK);
-        uint64_t cells = (uint64_t)mg.res[0] * (uint64_t)mg.res[1] * (uint64_t)mg.res[2];
-        assert_true(cells >= 1 && cells <= MAJORANT_MAX_CELLS);
-        assert_true(majorant_grid_bytes(&mg) <= 2 * sizeof(float) * MAJORANT_MAX_CELLS);
-        assert_int_equal(mg.max[cell_of(&mg, v3(16, 16, 16))], 1.0f);
+        uint64_t bricks = (uint64_t)mg.res[0] * (uint64_t)mg.res[1] * (uint64_t)mg.res[2];
+        assert_true(bricks >= 1 && bricks <= MAJORANT_MAX_BRICKS);
+        assert_true(mg.stored_bricks * MAJORANT_BRICK * MAJORANT_BRICK * MAJORANT_BRICK <=
+                    MAJORANT_MAX_STORED_CELLS);
+        assert_true(cell_of(&mg, v3(16, 16, 16)).max == 1.0f);
         majorant_grid_free(&mg);
     }
+    destroy(&f);
+}
+
+/* Memory follows the active data, not the support's box: box.vdb (32^3
+ * voxels) over a support of 2048^3 keeps leaf-sized cells, stores the cells
+ * of the 8 bricks that touch it only (the dense grid of cells would be
+ * 256^3 x 8 bytes = 128 MiB; this is under 0.5 MiB), and a ray through empty
+ * space crosses one interval per brick, not per cell. */
+static void memory_follows_active_data(void **state)
+{
+    (void)state;
+    fixture f = build(VOLUMES "box.vdb", 0);
+    majorant_grid mg;
+    hz_error err = {0};
+    int32_t pad[3] = {0, 0, 0};
+    assert_int_equal(
+        majorant_grid_build(f.g, v3(-1024, -1024, -1024), v3(1023, 1023, 1023), pad, &mg, &err),
+        HZ_OK);
+    assert_int_equal(mg.cell, 8);
+    assert_int_equal(mg.res[0], 32);
+    assert_int_equal(mg.stored_bricks, 8);
+    assert_true(majorant_grid_bytes(&mg) < 512 * 1024);
+    assert_true(cell_of(&mg, v3(16, 16, 16)).min == 1.0f);
+    assert_true(cell_of(&mg, v3(500, -700, 3)).max == 0.0f);
+
+    majorant_walk w;
+    majorant_segment s;
+    assert_true(majorant_walk_start(&w, &mg, v3(-2000, -500, -500), v3(1, 0, 0), 0.0, 5000.0));
+    int n = 0;
+    while (majorant_walk_next(&w, &s)) {
+        assert_true(s.max == 0.0);
+        ++n;
+    }
+    assert_int_equal(n, 32);
+    /* Through the box: 8 cells in each of the two stored bricks it crosses,
+     * one interval for each of the other 30 bricks. */
+    assert_true(majorant_walk_start(&w, &mg, v3(-2000, 12, 12), v3(1, 0, 0), 0.0, 5000.0));
+    n = 0;
+    double lit = 0.0;
+    while (majorant_walk_next(&w, &s)) {
+        ++n;
+        lit += s.max > 0.0 ? s.t1 - s.t0 : 0.0;
+    }
+    assert_int_equal(n, 30 + 2 * MAJORANT_BRICK);
+    assert_true(fabs(lit - 48.0) < 1e-9); /* cells [-8, 40) */
+    majorant_grid_free(&mg);
     destroy(&f);
 }
 
@@ -230,6 +304,7 @@ int main(void)
         cmocka_unit_test(walk_visits_crossed_cells),
         cmocka_unit_test(empty_support_has_no_cells),
         cmocka_unit_test(huge_supports_stay_bounded),
+        cmocka_unit_test(memory_follows_active_data),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
