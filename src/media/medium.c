@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "core/path.h"
+#include "media/presets.h"
 #include "media/uniformgrid.h"
 #include "scene/spectrum.h"
 
@@ -19,6 +20,35 @@ static rgb read_sigma(param_list *pl, const char *name)
         params_reject(pl, name, "\"%s\" must be finite and non-negative, got (%g, %g, %g)", name,
                       s.r, s.g, s.b);
     return s;
+}
+
+/* pbrt-v4's named measured media (homogeneous only, as pbrt-v4): the preset
+ * gives sigma_a and sigma_s, so those may not be given beside it. */
+static void read_preset(param_list *pl, bool is_grid, rgb *sigma_a, rgb *sigma_s)
+{
+    *sigma_a = rgb_grey(1.0);
+    *sigma_s = rgb_grey(1.0);
+    const char *name = params_string(pl, "preset", "");
+    if (is_grid) {
+        params_reject(pl, "preset",
+                      "\"preset\" names a homogeneous medium's coefficients (pbrt-v4 reads it "
+                      "for \"homogeneous\" only)");
+        return;
+    }
+    if (!medium_preset(name, sigma_a, sigma_s)) {
+        params_reject(pl, "preset",
+                      "no preset \"%s\" (pbrt-v4's %zu measured media, e.g. \"Skin1\", "
+                      "\"Wholemilk\", \"Espresso\": docs/media.md lists them)",
+                      name, medium_preset_count());
+        return;
+    }
+    const char *given[2] = {"sigma_a", "sigma_s"};
+    for (int k = 0; k < 2; ++k)
+        if (params_has(pl, given[k]))
+            params_reject(pl, given[k],
+                          "\"%s\" beside \"preset\" \"%s\": the preset gives both "
+                          "coefficients (pbrt-v4 does not read them either)",
+                          given[k], name);
 }
 
 static bool transform_is_finite(const transform *t)
@@ -472,12 +502,13 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
                           "\"cloud\", \"rgbgrid\")",
                           name, type);
 
+    rgb sigma_a, sigma_s;
     if (params_has(pl, "preset"))
-        params_reject(pl, "preset",
-                      "named scattering properties (\"preset\") are not supported; give "
-                      "\"sigma_a\" and \"sigma_s\"");
-    rgb sigma_a = rgbgrid ? rgb_grey(0.0) : read_sigma(pl, "sigma_a");
-    rgb sigma_s = rgbgrid ? rgb_grey(1.0) : read_sigma(pl, "sigma_s");
+        read_preset(pl, is_grid, &sigma_a, &sigma_s);
+    else {
+        sigma_a = rgbgrid ? rgb_grey(0.0) : read_sigma(pl, "sigma_a");
+        sigma_s = rgbgrid ? rgb_grey(1.0) : read_sigma(pl, "sigma_s");
+    }
     double scale = params_float(pl, "scale", 1.0);
     if (!isfinite(scale) || scale < 0.0)
         params_reject(pl, "scale", "\"scale\" must be finite and non-negative, got %g", scale);

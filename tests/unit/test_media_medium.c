@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "media/medium.h"
+#include "media/presets.h"
 #include "scene/scene_desc.h"
 #include "unit/assert_util.h"
 
@@ -183,11 +184,43 @@ static void homogeneous_errors(void **state)
     build_err(homog("\"spectrum Le\" 2 \"float Lescale\" -0.5"), "t.pbrt:2:",
               "\"Lescale\" must be finite and non-negative");
     build_err(homog("\"float sigma_a\" 1"), "t.pbrt:2:", "sigma_a");
-    build_err(homog("\"string preset\" \"Skin1\""), "t.pbrt:2:", "\"preset\"");
     /* Grid-only parameters are unknown to homogeneous media. */
     build_err(homog("\"string filename\" \"box.vdb\""), "t.pbrt:2:",
               "unused parameter \"string filename\"");
     build_err(homog("\"float temperaturescale\" 2"), "t.pbrt:2:", "unused parameter");
+}
+
+/* pbrt-v4's named measured media: the coefficients of the published tables
+ * (Jensen et al. 2001: Skin1 sigma_s' = (0.74, 0.88, 1.01), sigma_a =
+ * (0.032, 0.17, 0.48) per mm; Narasimhan et al. 2006: Espresso), times
+ * "scale"; names match exactly; the preset gives both coefficients. */
+static void homogeneous_presets(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    build_ok(homog("\"string preset\" \"Skin1\""), &sd, &m);
+    assert_rgb_near(m.sigma_s, rgb_make(0.74, 0.88, 1.01), 1e-7);
+    assert_rgb_near(m.sigma_a, rgb_make(0.032, 0.17, 0.48), 1e-7);
+    free_all(&sd, &m);
+    build_ok(homog("\"string preset\" \"Espresso\" \"float scale\" 10 \"float g\" 0.3"), &sd, &m);
+    assert_rgb_near(m.sigma_s, rgb_make(7.2378, 8.4557, 10.247), 1e-5);
+    assert_rgb_near(m.sigma_a, rgb_make(47.984, 65.751, 88.493), 1e-4);
+    assert_near(m.g, 0.3, 0);
+    free_all(&sd, &m);
+    size_t n = medium_preset_count();
+    assert_int_equal(n, 47);
+    for (size_t i = 0; i < n; ++i) { /* every name resolves to finite, non-negative values */
+        rgb a, b;
+        assert_true(medium_preset(medium_preset_name(i), &a, &b));
+        assert_true(a.r >= 0 && a.g >= 0 && a.b >= 0 && b.r > 0 && isfinite(a.r + a.g + a.b));
+    }
+    build_err(homog("\"string preset\" \"skin1\""), "t.pbrt:2:", "no preset \"skin1\"");
+    build_err(homog("\"string preset\" \"Skin1\" \"rgb sigma_a\" [1 1 1]"), "t.pbrt:2:",
+              "\"sigma_a\" beside \"preset\" \"Skin1\"");
+    build_err("WorldBegin\nMakeNamedMedium \"c\" \"string type\" \"cloud\" \"string preset\" "
+              "\"Skin1\"\n",
+              "t.pbrt:2:", "for \"homogeneous\" only");
 }
 
 /* ---- nanovdb ---- */
@@ -742,6 +775,7 @@ int main(void)
         cmocka_unit_test(homogeneous_parameters),
         cmocka_unit_test(homogeneous_under_transform),
         cmocka_unit_test(homogeneous_errors),
+        cmocka_unit_test(homogeneous_presets),
         cmocka_unit_test(nanovdb_absolute_path),
         cmocka_unit_test(nanovdb_temperature_params),
         cmocka_unit_test(nanovdb_relative_path),
