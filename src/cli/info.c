@@ -19,6 +19,7 @@
 #include <openexr.h>
 
 #include "film/exr.h"
+#include "integrator/integrator.h"
 #include "media/vdb_load.h"
 #include "scene/scene_desc.h"
 
@@ -338,8 +339,11 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
     int spp = (int)param_num(&sd.sampler.params, "pixelsamples", 16, &has);
     fprintf(out, "  %-15s %s, %d spp%s\n", "sampler", sd.sampler.type, spp, has ? "" : " (default)");
     fprintf(out, "  %-15s %s\n", "filter", sd.filter.type);
-    /* No Integrator directive (line 0): haze renders with singlescatter. */
-    if (strcmp(sd.integrator.type, "singlescatter") == 0 || sd.integrator.loc.line == 0) {
+    /* No Integrator directive (line 0): haze renders with its default. */
+    const char *why;
+    if (strcmp(sd.integrator.type, "singlescatter") == 0 ||
+        (sd.integrator.loc.line == 0 &&
+         integrator_default_kind(&sd, &why) == INTEGRATOR_SINGLESCATTER)) {
         fprintf(out, "  %-15s %s, transmittance %s, step %g voxels, shadow step %g voxels\n",
                 "integrator", "singlescatter",
                 params_peek_string(&sd.integrator.params, "transmittance", "jittered"),

@@ -4,14 +4,29 @@
 
 /* A scene with no Integrator directive (its default entity sits at line 0)
  * renders with "singlescatter". */
-hz_status integrator_params_from_entity(scene_entity *e, FILE *warn, integrator_params *out,
-                                        hz_error *err)
+integrator_kind integrator_default_kind(const scene_desc *sd, const char **why)
 {
+    *why = NULL;
+    for (size_t i = 0; i < sd->medium_count; ++i) {
+        const char *type = sd->media[i].entity.type;
+        if (type && (strcmp(type, "cloud") == 0 || strcmp(type, "rgbgrid") == 0)) {
+            *why = type;
+            return INTEGRATOR_VOLPATH;
+        }
+    }
+    return INTEGRATOR_SINGLESCATTER;
+}
+
+hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_params *out,
+                                       hz_error *err)
+{
+    scene_entity *e = &sd->integrator;
     param_list *pl = &e->params;
     const char *type = e->type ? e->type : "volpath";
     *out = (integrator_params){.kind = INTEGRATOR_SINGLESCATTER,
                                .singlescatter = singlescatter_settings_default()};
-    if (strcmp(type, "volpath") == 0 && e->loc.line == 0)
+    const char *why;
+    if (e->loc.line == 0 && integrator_default_kind(sd, &why) == INTEGRATOR_SINGLESCATTER)
         return params_finish(pl, "Integrator", err);
     if (strcmp(type, "volpath") == 0) {
         out->kind = INTEGRATOR_VOLPATH;

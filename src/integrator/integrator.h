@@ -27,10 +27,16 @@ typedef struct {
     };
 } integrator_params;
 
-/* Reads the Integrator entity (warnings to `warn` when not NULL) and checks
- * that every parameter was used; errors name its place. */
-hz_status integrator_params_from_entity(scene_entity *e, FILE *warn, integrator_params *out,
-                                        hz_error *err);
+/* What a scene that names no Integrator renders with: "singlescatter",
+ * haze's default, unless it declares a medium only "volpath" renders (a
+ * "cloud" or an "rgbgrid"): then pbrt-v4's default, "volpath" with maxdepth 5.
+ * `*why` receives that medium's type (NULL otherwise). */
+integrator_kind integrator_default_kind(const scene_desc *sd, const char **why);
+
+/* Reads the Integrator entity of `sd` (warnings to `warn` when not NULL) and
+ * checks that every parameter was used; errors name its place. */
+hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_params *out,
+                                       hz_error *err);
 
 typedef struct {
     integrator_kind kind;

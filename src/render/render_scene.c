@@ -250,7 +250,7 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
     }
     integrator_params ip = {.kind = INTEGRATOR_SINGLESCATTER};
-    CHECK(integrator_params_from_entity(&sd->integrator, warn, &ip, err));
+    CHECK(integrator_params_from_scene(sd, warn, &ip, err));
     CHECK(check_motion(sd, warn, err));
     if (build_materials(rs, sd, errs, err) != HZ_OK)
         return HZ_ERROR;
@@ -277,13 +277,23 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
     /* pbrt-v4 renders such a scene with "volpath" (maxdepth 5): say once
-     * that haze's default is single scattering. */
-    if (warn && sd->integrator.loc.line == 0 && rs->medium_count > 0)
-        fprintf(warn,
-                "%s: warning: the scene names no Integrator: haze renders single scattering "
-                "(\"singlescatter\", its default), pbrt-v4 multiple scattering (\"volpath\", "
-                "maxdepth 5); name Integrator \"volpath\" for pbrt-v4's image\n",
-                sd->file_count ? sd->files[0] : "<input>");
+     * which haze renders. */
+    const char *why;
+    if (warn && sd->integrator.loc.line == 0 && rs->medium_count > 0) {
+        const char *file = sd->file_count ? sd->files[0] : "<input>";
+        if (integrator_default_kind(sd, &why) == INTEGRATOR_VOLPATH)
+            fprintf(warn,
+                    "%s: warning: the scene names no Integrator and has a \"%s\" medium, which "
+                    "only \"volpath\" renders: haze renders pbrt-v4's default, \"volpath\" "
+                    "with maxdepth 5\n",
+                    file, why);
+        else
+            fprintf(warn,
+                    "%s: warning: the scene names no Integrator: haze renders single scattering "
+                    "(\"singlescatter\", its default), pbrt-v4 multiple scattering (\"volpath\", "
+                    "maxdepth 5); name Integrator \"volpath\" for pbrt-v4's image\n",
+                    file);
+    }
     integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media, rs->medium_count};
     return integrator_init(&rs->integ, &ip, &in, err);
 }

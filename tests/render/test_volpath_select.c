@@ -175,6 +175,60 @@ static void test_parameters(void **state)
     free(text);
 }
 
+/* A scene naming no Integrator whose media include one only volpath renders
+ * (a cloud, an rgbgrid) renders pbrt-v4's default, volpath maxdepth 5, with
+ * one warning: the same radiance, sample for sample, as naming it; naming
+ * singlescatter stays an error. */
+static void test_cloud_without_integrator(void **state)
+{
+    (void)state;
+    const char *world =
+        "LookAt 0 0 -3  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n%s"
+        "WorldBegin\n"
+        "LightSource \"distant\" \"point3 from\" [0 1 -1] \"point3 to\" [0 0 0] \"rgb L\" [3 3 3]\n"
+        "MakeNamedMedium \"c\" \"string type\" \"cloud\" \"point3 p0\" [-1 -1 -1] "
+        "\"point3 p1\" [1 1 1] \"float density\" 4\n"
+        "AttributeBegin\nMediumInterface \"c\" \"\"\nMaterial \"interface\"\n"
+        "Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n";
+    char msg[1024];
+    char *text = sfmt(world, "");
+    assert_int_equal(build_with_warnings(text, msg, sizeof msg), HZ_OK);
+    assert_string_equal(msg, "test.pbrt: warning: the scene names no Integrator and has a "
+                             "\"cloud\" medium, which only \"volpath\" renders: haze renders "
+                             "pbrt-v4's default, \"volpath\" with maxdepth 5\n");
+    render_scene *a = build(text);
+    free(text);
+    text = sfmt(world, "Integrator \"volpath\" \"integer maxdepth\" 5\n");
+    render_scene *b = build(text);
+    free(text);
+    const camera *cam = render_scene_camera(a);
+    integrator_counters ca = {0}, cb = {0};
+    sampler sa = *render_scene_sampler(a), sb = *render_scene_sampler(b);
+    double lit = 0.0;
+    for (int i = 0; i < 256; ++i) {
+        camera_sample cs = {v2(280.0 + i % 16 * 45.0, 200.0 + i / 16 * 20.0), v2(0.5, 0.5), 0.5,
+                            1.0};
+        ray_differential rd;
+        assert_true(camera_generate_ray_differential(cam, cs, &rd));
+        sampler_state sta, stb;
+        sampler_start(&sa, i % 16, i / 16, 0, &sta);
+        sampler_start(&sb, i % 16, i / 16, 0, &stb);
+        double da, db;
+        rgb la = render_scene_li(a, &rd, &sta, &da, &ca);
+        rgb lb = render_scene_li(b, &rd, &stb, &db, &cb);
+        assert_true(la.r == lb.r && la.g == lb.g && la.b == lb.b);
+        lit += la.r;
+    }
+    assert_true(lit > 0.0);
+    assert_true(ca.density_lookups > 0);
+    render_scene_destroy(a);
+    render_scene_destroy(b);
+    text = sfmt(world, "Integrator \"singlescatter\"\n");
+    assert_int_equal(build_with_warnings(text, msg, sizeof msg), HZ_ERROR);
+    assert_non_null(strstr(msg, "a \"cloud\" medium needs Integrator \"volpath\""));
+    free(text);
+}
+
 /* Surfaces only: the media counters stay at zero, even timed. */
 static void test_no_media_no_media_code(void **state)
 {
@@ -354,6 +408,7 @@ int main(void)
         cmocka_unit_test(test_default_is_singlescatter),
         cmocka_unit_test(test_empty_material_is_interface),
         cmocka_unit_test(test_parameters),
+        cmocka_unit_test(test_cloud_without_integrator),
         cmocka_unit_test(test_no_media_no_media_code),
         cmocka_unit_test(test_scenes_maxdepth_1_matches_singlescatter),
     };
