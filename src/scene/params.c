@@ -55,41 +55,62 @@ void params_free(param_list *pl)
     pl->count = pl->capacity = 0;
 }
 
-static param param_copy(const param *s)
+/* A deep copy of `s` into *d; false when out of memory (*d then owns
+ * nothing). */
+static bool param_copy(param *d, const param *s)
 {
-    param d = *s;
-    d.name = scene_xstrdup(s->name);
-    d.nums = NULL;
-    d.strs = NULL;
-    d.bools = NULL;
-    if (s->nums) {
-        d.nums = scene_xarray(s->count, sizeof *d.nums);
-        memcpy(d.nums, s->nums, s->count * sizeof *d.nums);
+    *d = *s;
+    d->nums = NULL;
+    d->strs = NULL;
+    d->bools = NULL;
+    d->name = scene_strdup(s->name);
+    bool ok = d->name != NULL;
+    if (ok && s->nums) {
+        d->nums = scene_array(s->count, sizeof *d->nums);
+        ok = d->nums != NULL;
+        if (ok)
+            memcpy(d->nums, s->nums, s->count * sizeof *d->nums);
     }
-    if (s->bools) {
-        d.bools = scene_xarray(s->count, sizeof *d.bools);
-        memcpy(d.bools, s->bools, s->count * sizeof *d.bools);
+    if (ok && s->bools) {
+        d->bools = scene_array(s->count, sizeof *d->bools);
+        ok = d->bools != NULL;
+        if (ok)
+            memcpy(d->bools, s->bools, s->count * sizeof *d->bools);
     }
-    if (s->strs) {
-        d.strs = scene_xarray(s->count, sizeof *d.strs);
-        for (size_t i = 0; i < s->count; ++i)
-            d.strs[i] = scene_xstrdup(s->strs[i]);
+    if (ok && s->strs) {
+        d->strs = scene_array(s->count, sizeof *d->strs);
+        ok = d->strs != NULL;
+        for (size_t i = 0; ok && i < s->count; ++i)
+            d->strs[i] = NULL; /* param_free may see them before they are set */
+        for (size_t i = 0; ok && i < s->count; ++i) {
+            d->strs[i] = scene_strdup(s->strs[i]);
+            ok = d->strs[i] != NULL;
+        }
     }
-    return d;
+    if (!ok)
+        param_free(d);
+    return ok;
 }
 
-void params_copy(param_list *dst, const param_list *src)
+bool params_copy(param_list *dst, const param_list *src)
 {
     *dst = *src;
     dst->items = NULL;
     dst->count = dst->capacity = 0;
-    if (src->count) {
-        dst->items = scene_xarray(src->count, sizeof *dst->items);
-        dst->capacity = src->count;
-        for (size_t i = 0; i < src->count; ++i)
-            dst->items[i] = param_copy(&src->items[i]);
-        dst->count = src->count;
+    if (!src->count)
+        return true;
+    dst->items = scene_array(src->count, sizeof *dst->items);
+    if (!dst->items)
+        return false;
+    dst->capacity = src->count;
+    for (size_t i = 0; i < src->count; ++i) {
+        if (!param_copy(&dst->items[i], &src->items[i])) {
+            params_free(dst);
+            return false;
+        }
+        dst->count = i + 1;
     }
+    return true;
 }
 
 static param *find(const param_list *pl, const char *name)
@@ -100,35 +121,42 @@ static param *find(const param_list *pl, const char *name)
     return NULL;
 }
 
-static void push(param_list *pl, param p)
+bool params_reserve(param_list *pl)
 {
-    pl->items = scene_grow(pl->items, &pl->capacity, pl->count, sizeof *pl->items);
-    pl->items[pl->count++] = p;
+    param *grown = scene_grow(pl->items, &pl->capacity, pl->count, sizeof *pl->items);
+    if (grown)
+        pl->items = grown;
+    return grown != NULL;
 }
 
 hz_status params_add(param_list *pl, param p, hz_error *err)
 {
     const param *old = find(pl, p.name);
-    if (old) {
-        hz_status st = hz_fail_at(err, p.loc, "parameter \"%s\" given twice (first at line %d)",
-                                  p.name, old->loc.line);
+    hz_status st = HZ_OK;
+    if (old)
+        st = hz_fail_at(err, p.loc, "parameter \"%s\" given twice (first at line %d)", p.name,
+                        old->loc.line);
+    else if (!params_reserve(pl))
+        st = hz_fail_at(err, p.loc, "out of memory");
+    if (st != HZ_OK) {
         param_free(&p);
         return st;
     }
-    push(pl, p);
+    pl->items[pl->count++] = p;
     return HZ_OK;
 }
 
 hz_status params_add_defaults(param_list *pl, const param_list *defaults, hz_error *err)
 {
-    (void)err;
     for (size_t i = 0; i < defaults->count; ++i) {
         if (find(pl, defaults->items[i].name))
             continue;
-        param p = param_copy(&defaults->items[i]);
+        param p;
+        if (!params_reserve(pl) || !param_copy(&p, &defaults->items[i]))
+            return hz_fail_at(err, pl->loc, "out of memory");
         p.used = false;
         p.optional = true;
-        push(pl, p);
+        pl->items[pl->count++] = p;
     }
     return HZ_OK;
 }

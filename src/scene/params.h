@@ -54,13 +54,20 @@ typedef struct {
 
 void params_init(param_list *pl, file_loc directive);
 void params_free(param_list *pl);
-/* Deep copy (used when entities outlive the parser's graphics state). */
-void params_copy(param_list *dst, const param_list *src);
+/* Deep copy (used when entities outlive the parser's graphics state). False
+ * when out of memory; *dst is then an empty list. */
+bool params_copy(param_list *dst, const param_list *src);
 /* Takes ownership of p's arrays (freed here on error too). Returns HZ_ERROR if
- * the name is repeated, naming the place of the repetition. */
+ * the name is repeated, naming the place of the repetition, or when out of
+ * memory ("out of memory" at p's place; not after params_reserve). */
 hz_status params_add(param_list *pl, param p, hz_error *err);
+/* Room for one more parameter, so that the next params_add can fail only on a
+ * repeated name (callers that must tell the two apart). False when out of
+ * memory, pl unchanged. */
+bool params_reserve(param_list *pl);
 /* Adds a deep copy of every parameter of `defaults` whose name pl lacks, marked
- * optional (Attribute "shape" etc. semantics). Only fails when out of memory. */
+ * optional (Attribute "shape" etc. semantics). Only fails when out of memory
+ * ("out of memory" at pl's directive; the copies made so far stay in pl). */
 hz_status params_add_defaults(param_list *pl, const param_list *defaults, hz_error *err);
 /* Removes parameter `name` (if present) and frees it. */
 void params_remove(param_list *pl, const char *name);

@@ -19,6 +19,12 @@
 /* Deep enough for any real scene; bounds the files open at once. */
 #define MAX_INCLUDE_DEPTH 64
 
+hz_status parser_oom(parser *ps, file_loc loc, hz_error *err)
+{
+    ps->out_of_memory = true;
+    return hz_fail_at(err, loc, "out of memory");
+}
+
 const char *parser_intern(parser *ps, const char *s)
 {
     scene_desc *sd = ps->sd;
@@ -30,10 +36,7 @@ const char *parser_intern(parser *ps, const char *s)
         if (strcmp(c, s) == 0)
             return c;
     }
-    sd->strings = scene_grow(sd->strings, &sd->string_capacity, sd->string_count,
-                             sizeof *sd->strings);
-    sd->strings[sd->string_count++] = scene_xstrdup(s);
-    return sd->strings[sd->string_count - 1];
+    return scene_desc_own(sd, s);
 }
 
 /* The next token of the stream: the end of an included file continues its
@@ -93,10 +96,10 @@ hz_status parser_string_arg(parser *ps, const token *directive, const char **out
     }
     char *s = token_string_dup(&t);
     if (!s)
-        return hz_fail_at(err, t.loc, "out of memory");
+        return parser_oom(ps, t.loc, err);
     *out = parser_intern(ps, s);
     free(s);
-    return HZ_OK;
+    return *out ? HZ_OK : parser_oom(ps, t.loc, err);
 }
 
 hz_status parser_numbers(parser *ps, const token *directive, double *out, int n, bool brackets_ok,
@@ -134,31 +137,56 @@ hz_status parser_numbers(parser *ps, const token *directive, double *out, int n,
 }
 
 /* The canonical name used for cycle detection; falls back to the name itself
- * for in-memory scenes whose name is not a file. */
+ * for in-memory scenes whose name is not a file. NULL when out of memory. */
 static char *canonical(const char *path)
 {
     char *r = realpath(path, NULL);
-    return r ? r : scene_xstrdup(path);
+    return r ? r : scene_strdup(path);
 }
 
-/* Pushes a file onto the token stream; takes `canon` (and `text` unless it
- * is the caller's: the outermost file). */
-static void push_file(parser *ps, const char *text, size_t len, const char *file, char *canon)
+/* Pushes a file onto the token stream; takes `canon` (freed here when out of
+ * memory, the only failure). The text stays the caller's. */
+static bool push_file(parser *ps, const char *text, size_t len, const char *file, char *canon)
 {
     assert(!ps->has_peek); /* the next token must come from the new file */
-    ps->files = scene_grow(ps->files, &ps->file_cap, ps->file_depth, sizeof *ps->files);
+    parser_file *grown = scene_grow(ps->files, &ps->file_cap, ps->file_depth, sizeof *ps->files);
+    if (!grown) {
+        free(canon);
+        return false;
+    }
+    ps->files = grown;
     parser_file *f = &ps->files[ps->file_depth++];
     lexer_init(&f->lx, text, len, file);
     f->canon = canon;
+    return true;
 }
+
+/* Keeps an included file's text to the end of the parse (tokens point into
+ * it); frees it when out of memory, the only failure. */
+static bool keep_text(parser *ps, char *text)
+{
+    char **grown = scene_grow(ps->texts, &ps->text_cap, ps->text_count, sizeof *ps->texts);
+    if (!grown) {
+        free(text);
+        return false;
+    }
+    ps->texts = grown;
+    ps->texts[ps->text_count++] = text;
+    return true;
+}
+
 hz_status parser_include(parser *ps, const token *directive, const char *path, hz_error *err)
 {
     char name[48];
     directive_name(directive, name, sizeof name);
     char *full = path_relative_to(directive->loc.file, path);
     if (!full)
-        return hz_fail_at(err, directive->loc, "%s: out of memory", name);
+        return parser_oom(ps, directive->loc, err);
     char *canon = realpath(full, NULL);
+    if (!canon && errno == ENOMEM) {
+        free(full);
+        return parser_oom(ps, directive->loc, err);
+    }
     if (!canon) {
         hz_status st = hz_fail_at(err, directive->loc, "%s: cannot open \"%s\": %s", name, full,
                                   strerror(errno));
@@ -200,10 +228,17 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
     }
     const char *file = parser_intern(ps, full);
     free(full);
-    scene_desc_add_file(ps->sd, file);
-    ps->texts = scene_grow(ps->texts, &ps->text_cap, ps->text_count, sizeof *ps->texts);
-    ps->texts[ps->text_count++] = text;
-    push_file(ps, text, len, file, canon);
+    if (!file || !scene_desc_add_file(ps->sd, file)) {
+        free(text);
+        free(canon);
+        return parser_oom(ps, directive->loc, err);
+    }
+    if (!keep_text(ps, text)) {
+        free(canon);
+        return parser_oom(ps, directive->loc, err);
+    }
+    if (!push_file(ps, text, len, file, canon))
+        return parser_oom(ps, directive->loc, err);
     return HZ_OK;
 }
 
@@ -223,57 +258,87 @@ static hz_status skip_to_directive(parser *ps, hz_error *err)
     }
 }
 
-static hz_status parse_root(const char *text, size_t len, const char *name, scene_desc *out,
-                            hz_error *err)
+/* The parser at the start of `text`, with pbrt-v4's initial graphics state;
+ * false when out of memory (ps and out can still be freed). */
+static bool parser_start(parser *ps, const char *text, size_t len, const char *name,
+                         scene_desc *out)
 {
-    memset(out, 0, sizeof *out);
-    parser ps;
-    memset(&ps, 0, sizeof ps);
-    ps.sd = out;
-    scene_desc_init(out, name);
-    const char *file = out->camera.entity.loc.file;
-    ps.gs.ctm[0] = ps.gs.ctm[1] = transform_identity();
-    ps.gs.active = 3;
-    ps.gs.material = -1;
-    ps.gs.inside = ps.gs.outside = parser_intern(&ps, "");
+    memset(ps, 0, sizeof *ps);
+    ps->sd = out;
+    ps->gs.ctm[0] = ps->gs.ctm[1] = transform_identity();
+    ps->gs.active = 3;
+    ps->gs.material = -1;
+    ps->current_object = -1;
+    if (!scene_desc_init(out, name))
+        return false;
+    const char *file = out->files[0];
     for (int i = 0; i < ATTR_COUNT; ++i)
-        params_init(&ps.gs.attrs[i], (file_loc){file, 1, 1});
-    ps.current_object = -1;
-    push_file(&ps, text, len, file, canonical(name));
+        params_init(&ps->gs.attrs[i], (file_loc){file, 1, 1});
+    ps->gs.inside = ps->gs.outside = parser_intern(ps, "");
+    if (!ps->gs.inside)
+        return false;
+    char *canon = canonical(name);
+    return canon && push_file(ps, text, len, file, canon);
+}
 
-    /* Every error of the file in one run: after a directive's error the
-     * stream goes on at the next directive (up to HZ_ERRORS_MAX kept); a
-     * lexer error ends it. */
-    hz_errors errs = {0};
-    file_loc end = {file, 1, 1};
+/* Every error of the file in one run: after a directive's error the stream
+ * goes on at the next directive (up to HZ_ERRORS_MAX kept); a lexer error or
+ * running out of memory ends it. *end is set where the input ended. */
+static void parse_directives(parser *ps, hz_errors *errs, file_loc *end, hz_error *err)
+{
     for (;;) {
         token t;
-        if (parser_next(&ps, &t, err) != HZ_OK) {
-            hz_errors_add(&errs, err);
-            break;
+        if (parser_next(ps, &t, err) != HZ_OK) {
+            hz_errors_add(errs, err);
+            return;
         }
         if (t.kind == TOK_EOF) {
-            end = t.loc;
-            break;
+            *end = t.loc;
+            return;
         }
-        if (t.kind == TOK_IDENT && parser_directive(&ps, &t, err) == HZ_OK)
+        if (t.kind == TOK_IDENT && parser_directive(ps, &t, err) == HZ_OK)
             continue;
         if (t.kind != TOK_IDENT) {
             char got[48];
             token_describe(&t, got, sizeof got);
             hz_fail_at(err, t.loc, "expected a directive, found %s", got);
         }
-        hz_errors_add(&errs, err);
-        if (ps.lex_failed)
-            break;
-        if (skip_to_directive(&ps, err) != HZ_OK) {
-            hz_errors_add(&errs, err); /* the lexer's, met while skipping */
-            break;
+        hz_errors_add(errs, err);
+        if (ps->lex_failed || ps->out_of_memory)
+            return;
+        if (skip_to_directive(ps, err) != HZ_OK) {
+            hz_errors_add(errs, err); /* the lexer's, met while skipping */
+            return;
         }
     }
-    if (!ps.lex_failed && parser_finish(&ps, end, err) != HZ_OK)
+}
+
+static hz_status parse_root(const char *text, size_t len, const char *name, scene_desc *out,
+                            hz_error *err)
+{
+    parser ps;
+    if (!parser_start(&ps, text, len, name, out)) {
+        /* The caller's name: the scene's own copy of it may be what failed. */
+        hz_status st = parser_oom(&ps, (file_loc){name, 1, 1}, err);
+        parser_state_free(&ps);
+        scene_desc_free(out);
+        return st;
+    }
+    hz_errors errs = {0};
+    file_loc end = {out->files[0], 1, 1};
+    parse_directives(&ps, &errs, &end, err);
+    if (!ps.lex_failed && !ps.out_of_memory && parser_finish(&ps, end, err) != HZ_OK)
         hz_errors_add(&errs, err);
-    hz_status st = hz_errors_finish(&errs, out->files, out->file_count, err);
+    hz_status st;
+    if (errs.count == 0 && errs.dropped > 0) {
+        /* Not even the list of errors could be allocated: *err still holds
+         * the last error (out of memory ends the parse), better than "... and
+         * 1 more error". */
+        hz_errors_finish(&errs, NULL, 0, NULL);
+        st = HZ_ERROR;
+    } else {
+        st = hz_errors_finish(&errs, out->files, out->file_count, err);
+    }
     parser_state_free(&ps);
     if (st != HZ_OK)
         scene_desc_free(out);

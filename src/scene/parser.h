@@ -57,12 +57,20 @@ typedef struct {
     token peek;
     bool has_peek;
     bool lex_failed; /* the lexer reported an error: the stream cannot go on */
+    /* An allocation failed (parser_oom): the parse ends there rather than going
+     * on to the next directive, whose allocations would most likely fail too
+     * and bury the cause under a list of consequences. */
+    bool out_of_memory;
     /* Every included file's text, kept to the end (tokens point into it). */
     char **texts;
     size_t text_count, text_cap;
 } parser;
 
 /* parser.c */
+/* Out of memory at `loc`: fills err ("file:line:column: out of memory"),
+ * ends the parse (ps->out_of_memory) and returns HZ_ERROR. */
+hz_status parser_oom(parser *ps, file_loc loc, hz_error *err);
+/* An owned copy of `s` (NULL when out of memory: report it with parser_oom). */
 const char *parser_intern(parser *ps, const char *s);
 hz_status parser_next(parser *ps, token *tok, hz_error *err);
 hz_status parser_peek(parser *ps, token *tok, hz_error *err);
@@ -84,9 +92,11 @@ hz_status parser_need_world(parser *ps, const token *d, const char *name, hz_err
 /* `seen` (may be NULL) detects a second Camera, Film... */
 hz_status parser_need_options(parser *ps, const token *d, const char *name, file_loc *seen,
                               hz_error *err);
-void parser_push_state(parser *ps, char kind, file_loc at);
+/* Both fail only when out of memory (reported at `at` / `loc`). */
+hz_status parser_push_state(parser *ps, char kind, file_loc at, hz_error *err);
 void parser_pop_state(parser *ps);
-void parser_set_coordsys(parser *ps, const char *name, const transform ctm[2]);
+hz_status parser_set_coordsys(parser *ps, const char *name, const transform ctm[2], file_loc loc,
+                              hz_error *err);
 
 /* parser_entities.c: directives that create entities or change what later
  * entities get (materials, media, area lights, objects). *handled is false
@@ -95,9 +105,12 @@ hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_
 void parser_state_free(parser *ps);
 void gstate_free(gstate *g);
 
-/* scene_desc.c */
-void scene_desc_init(scene_desc *sd, const char *file);
+/* scene_desc.c: both return false when out of memory; sd can still be
+ * freed with scene_desc_free. */
+bool scene_desc_init(scene_desc *sd, const char *file);
 /* Records a file the parser read; `owned_name` must point into sd->strings. */
-void scene_desc_add_file(scene_desc *sd, const char *owned_name);
+bool scene_desc_add_file(scene_desc *sd, const char *owned_name);
+/* A copy of `s` owned by sd->strings (NULL when out of memory). */
+char *scene_desc_own(scene_desc *sd, const char *s);
 
 #endif

@@ -29,14 +29,26 @@ void gstate_free(gstate *g)
         params_free(&g->attrs[i]);
 }
 
-static gstate gstate_copy(const gstate *g)
+/* A deep copy; false when out of memory (nothing then left to free). */
+static bool gstate_copy(gstate *c, const gstate *g)
 {
-    gstate c = *g;
-    if (g->has_area_light)
-        params_copy(&c.area_light.params, &g->area_light.params);
+    *c = *g;
+    /* Empty lists first: a failure midway then leaves only copies to free. */
+    c->has_area_light = false;
     for (int i = 0; i < ATTR_COUNT; ++i)
-        params_copy(&c.attrs[i], &g->attrs[i]);
-    return c;
+        params_init(&c->attrs[i], g->attrs[i].loc);
+    if (g->has_area_light) {
+        if (!params_copy(&c->area_light.params, &g->area_light.params))
+            return false;
+        c->has_area_light = true;
+    }
+    for (int i = 0; i < ATTR_COUNT; ++i) {
+        if (!params_copy(&c->attrs[i], &g->attrs[i])) {
+            gstate_free(c);
+            return false;
+        }
+    }
+    return true;
 }
 
 void parser_state_free(parser *ps)
@@ -55,13 +67,19 @@ void parser_state_free(parser *ps)
     memset(ps, 0, sizeof *ps);
 }
 
-void parser_push_state(parser *ps, char kind, file_loc at)
+hz_status parser_push_state(parser *ps, char kind, file_loc at, hz_error *err)
 {
-    ps->stack = scene_grow(ps->stack, &ps->stack_cap, ps->depth, sizeof *ps->stack);
-    gstate c = gstate_copy(&ps->gs);
+    gstate *grown = scene_grow(ps->stack, &ps->stack_cap, ps->depth, sizeof *ps->stack);
+    if (!grown)
+        return parser_oom(ps, at, err);
+    ps->stack = grown;
+    gstate c;
+    if (!gstate_copy(&c, &ps->gs))
+        return parser_oom(ps, at, err);
     c.kind = kind;
     c.pushed_at = at;
     ps->stack[ps->depth++] = c;
+    return HZ_OK;
 }
 
 void parser_pop_state(parser *ps)
@@ -201,16 +219,25 @@ static named_coordsys *find_coordsys(parser *ps, const char *name)
     return NULL;
 }
 
-void parser_set_coordsys(parser *ps, const char *name, const transform ctm[2])
+hz_status parser_set_coordsys(parser *ps, const char *name, const transform ctm[2], file_loc loc,
+                              hz_error *err)
 {
     named_coordsys *c = find_coordsys(ps, name);
     if (!c) {
-        ps->coords = scene_grow(ps->coords, &ps->coord_cap, ps->coord_count, sizeof *ps->coords);
+        const char *owned = parser_intern(ps, name);
+        if (!owned)
+            return parser_oom(ps, loc, err);
+        named_coordsys *grown =
+            scene_grow(ps->coords, &ps->coord_cap, ps->coord_count, sizeof *ps->coords);
+        if (!grown)
+            return parser_oom(ps, loc, err);
+        ps->coords = grown;
         c = &ps->coords[ps->coord_count++];
-        c->name = parser_intern(ps, name);
+        c->name = owned;
     }
     c->ctm[0] = ctm[0];
     c->ctm[1] = ctm[1];
+    return HZ_OK;
 }
 
 static hz_status d_coordsys(parser *ps, const token *d, hz_error *err)
@@ -218,8 +245,7 @@ static hz_status d_coordsys(parser *ps, const token *d, hz_error *err)
     const char *name;
     if (parser_string_arg(ps, d, &name, err) != HZ_OK)
         return HZ_ERROR;
-    parser_set_coordsys(ps, name, ps->gs.ctm);
-    return HZ_OK;
+    return parser_set_coordsys(ps, name, ps->gs.ctm, d->loc, err);
 }
 
 static hz_status d_coordsys_transform(parser *ps, const token *d, hz_error *err)
@@ -277,8 +303,7 @@ static hz_status d_attribute_begin(parser *ps, const token *d, hz_error *err)
 {
     if (parser_need_world(ps, d, "AttributeBegin", err) != HZ_OK)
         return HZ_ERROR;
-    parser_push_state(ps, 'a', d->loc);
-    return HZ_OK;
+    return parser_push_state(ps, 'a', d->loc, err);
 }
 
 static hz_status d_attribute_end(parser *ps, const token *d, hz_error *err)
@@ -302,8 +327,7 @@ static hz_status d_world_begin(parser *ps, const token *d, hz_error *err)
     ps->in_world = true;
     ps->gs.ctm[0] = ps->gs.ctm[1] = transform_identity();
     ps->gs.active = 3;
-    parser_set_coordsys(ps, "world", ps->gs.ctm);
-    return HZ_OK;
+    return parser_set_coordsys(ps, "world", ps->gs.ctm, d->loc, err);
 }
 
 static hz_status d_world_end(parser *ps, const token *d, hz_error *err)

@@ -23,8 +23,10 @@ static hz_status read_entity(parser *ps, const token *d, int attr, scene_entity 
         params_free(&e->params);
         return HZ_ERROR;
     }
-    if (attr != ATTR_NONE)
-        params_add_defaults(&e->params, &ps->gs.attrs[attr], err);
+    if (attr != ATTR_NONE && params_add_defaults(&e->params, &ps->gs.attrs[attr], err) != HZ_OK) {
+        params_free(&e->params);
+        return parser_oom(ps, d->loc, err);
+    }
     return HZ_OK;
 }
 
@@ -39,7 +41,10 @@ static hz_status read_named(parser *ps, const token *d, const char *what, int at
     e->loc = d->loc;
     if (parser_params(ps, &e->params, d->loc, err) != HZ_OK)
         goto fail;
-    params_add_defaults(&e->params, &ps->gs.attrs[attr], err);
+    if (params_add_defaults(&e->params, &ps->gs.attrs[attr], err) != HZ_OK) {
+        parser_oom(ps, d->loc, err);
+        goto fail;
+    }
     const char *type = params_string(&e->params, "type", NULL);
     if (e->params.failed) {
         *err = e->params.error;
@@ -50,6 +55,10 @@ static hz_status read_named(parser *ps, const token *d, const char *what, int at
         goto fail;
     }
     e->type = (char *)parser_intern(ps, type);
+    if (!e->type) {
+        parser_oom(ps, d->loc, err);
+        goto fail;
+    }
     /* The factory must not see "type" as an unused parameter. */
     params_remove(&e->params, "type");
     return HZ_OK;
@@ -83,13 +92,34 @@ static hz_status d_camera(parser *ps, const token *d, hz_error *err)
     /* pbrt-v4: namedCoordinateSystems["camera"] = Inverse(cameraFromWorld). */
     transform world_from_camera[2] = {transform_inverse(ps->gs.ctm[0]),
                                       transform_inverse(ps->gs.ctm[1])};
-    parser_set_coordsys(ps, "camera", world_from_camera);
-    return HZ_OK;
+    return parser_set_coordsys(ps, "camera", world_from_camera, d->loc, err);
+}
+
+/* Appends s to the object being defined, else to the top-level shapes; false
+ * when out of memory (s is then still the caller's). */
+static bool add_shape(parser *ps, const shape_entity *s)
+{
+    scene_desc *sd = ps->sd;
+    if (ps->current_object >= 0) {
+        shape_entity *grown = scene_grow_implicit(sd->object_shapes, sd->object_shape_count,
+                                                  sizeof *sd->object_shapes);
+        if (!grown)
+            return false;
+        sd->object_shapes = grown;
+        sd->object_shapes[sd->object_shape_count++] = *s;
+        sd->objects[ps->current_object].shape_count++;
+    } else {
+        shape_entity *grown = scene_grow_implicit(sd->shapes, sd->shape_count, sizeof *sd->shapes);
+        if (!grown)
+            return false;
+        sd->shapes = grown;
+        sd->shapes[sd->shape_count++] = *s;
+    }
+    return true;
 }
 
 static hz_status d_shape(parser *ps, const token *d, hz_error *err)
 {
-    scene_desc *sd = ps->sd;
     shape_entity s;
     memset(&s, 0, sizeof s);
     if (parser_need_world(ps, d, "Shape", err) != HZ_OK)
@@ -106,23 +136,22 @@ static hz_status d_shape(parser *ps, const token *d, hz_error *err)
     s.world_from_object_end = ps->gs.ctm[1];
     s.reverse_orientation = ps->gs.reverse_orientation;
     s.material = ps->gs.material;
-    s.has_area_light = ps->gs.has_area_light;
-    if (s.has_area_light) {
-        s.area_light = ps->gs.area_light;
-        params_copy(&s.area_light.params, &ps->gs.area_light.params);
-    }
     s.inside_medium = (char *)ps->gs.inside;
     s.outside_medium = (char *)ps->gs.outside;
-    if (ps->current_object >= 0) {
-        sd->object_shapes = scene_grow_implicit(sd->object_shapes, sd->object_shape_count,
-                                                sizeof *sd->object_shapes);
-        sd->object_shapes[sd->object_shape_count++] = s;
-        sd->objects[ps->current_object].shape_count++;
-    } else {
-        sd->shapes = scene_grow_implicit(sd->shapes, sd->shape_count, sizeof *sd->shapes);
-        sd->shapes[sd->shape_count++] = s;
+    if (ps->gs.has_area_light) {
+        s.area_light = ps->gs.area_light;
+        if (!params_copy(&s.area_light.params, &ps->gs.area_light.params)) {
+            params_free(&s.entity.params);
+            return parser_oom(ps, d->loc, err);
+        }
+        s.has_area_light = true;
     }
-    return HZ_OK;
+    if (add_shape(ps, &s))
+        return HZ_OK;
+    params_free(&s.entity.params);
+    if (s.has_area_light)
+        params_free(&s.area_light.params);
+    return parser_oom(ps, d->loc, err);
 }
 
 static hz_status d_light(parser *ps, const token *d, hz_error *err)
@@ -136,7 +165,12 @@ static hz_status d_light(parser *ps, const token *d, hz_error *err)
     l.world_from_light = ps->gs.ctm[0];
     l.world_from_light_end = ps->gs.ctm[1];
     l.medium = (char *)ps->gs.outside;
-    sd->lights = scene_grow_implicit(sd->lights, sd->light_count, sizeof *sd->lights);
+    light_entity *grown = scene_grow_implicit(sd->lights, sd->light_count, sizeof *sd->lights);
+    if (!grown) {
+        params_free(&l.entity.params);
+        return parser_oom(ps, d->loc, err);
+    }
+    sd->lights = grown;
     sd->lights[sd->light_count++] = l;
     return HZ_OK;
 }
@@ -154,12 +188,23 @@ static hz_status d_area_light(parser *ps, const token *d, hz_error *err)
     return HZ_OK;
 }
 
-static int add_material(parser *ps, material_entity m)
+/* Takes m (frees it when out of memory, the only failure); *index (may be
+ * NULL) is where it went in sd->materials. */
+static hz_status add_material(parser *ps, const token *d, material_entity m, int *index,
+                              hz_error *err)
 {
     scene_desc *sd = ps->sd;
-    sd->materials = scene_grow_implicit(sd->materials, sd->material_count, sizeof *sd->materials);
-    sd->materials[sd->material_count] = m;
-    return (int)sd->material_count++;
+    material_entity *grown =
+        scene_grow_implicit(sd->materials, sd->material_count, sizeof *sd->materials);
+    if (!grown) {
+        params_free(&m.entity.params);
+        return parser_oom(ps, d->loc, err);
+    }
+    sd->materials = grown;
+    if (index)
+        *index = (int)sd->material_count;
+    sd->materials[sd->material_count++] = m;
+    return HZ_OK;
 }
 
 static hz_status d_material(parser *ps, const token *d, hz_error *err)
@@ -169,8 +214,7 @@ static hz_status d_material(parser *ps, const token *d, hz_error *err)
     if (parser_need_world(ps, d, "Material", err) != HZ_OK ||
         read_entity(ps, d, ATTR_MATERIAL, &m.entity, err) != HZ_OK)
         return HZ_ERROR;
-    ps->gs.material = add_material(ps, m);
-    return HZ_OK;
+    return add_material(ps, d, m, &ps->gs.material, err);
 }
 
 static long find_named_material(const scene_desc *sd, const char *name)
@@ -197,8 +241,7 @@ static hz_status d_make_named_material(parser *ps, const token *d, hz_error *err
                           at.file, at.line, at.column);
     }
     m.name = (char *)name;
-    add_material(ps, m);
-    return HZ_OK;
+    return add_material(ps, d, m, NULL, err);
 }
 
 static hz_status d_named_material(parser *ps, const token *d, hz_error *err)
@@ -238,7 +281,12 @@ static hz_status d_make_named_medium(parser *ps, const token *d, hz_error *err)
     m.name = (char *)name;
     m.world_from_medium = ps->gs.ctm[0];
     m.world_from_medium_end = ps->gs.ctm[1];
-    sd->media = scene_grow_implicit(sd->media, sd->medium_count, sizeof *sd->media);
+    medium_entity *grown = scene_grow_implicit(sd->media, sd->medium_count, sizeof *sd->media);
+    if (!grown) {
+        params_free(&m.entity.params);
+        return parser_oom(ps, d->loc, err);
+    }
+    sd->media = grown;
     sd->media[sd->medium_count++] = m;
     return HZ_OK;
 }
@@ -287,10 +335,15 @@ static hz_status d_object_begin(parser *ps, const token *d, hz_error *err)
     }
     if (find_object(sd, name) >= 0)
         return hz_fail_at(err, d->loc, "object \"%s\" redefined", name);
-    sd->objects = scene_grow_implicit(sd->objects, sd->object_count, sizeof *sd->objects);
+    object_entity *grown =
+        scene_grow_implicit(sd->objects, sd->object_count, sizeof *sd->objects);
+    if (!grown)
+        return parser_oom(ps, d->loc, err);
+    sd->objects = grown;
+    if (parser_push_state(ps, 'o', d->loc, err) != HZ_OK)
+        return HZ_ERROR;
     sd->objects[sd->object_count] = (object_entity){(char *)name, d->loc, sd->object_shape_count, 0};
     ps->current_object = (long)sd->object_count++;
-    parser_push_state(ps, 'o', d->loc);
     return HZ_OK;
 }
 
@@ -322,7 +375,11 @@ static hz_status d_object_instance(parser *ps, const token *d, hz_error *err)
     long obj = find_object(sd, name);
     if (obj < 0)
         return hz_fail_at(err, d->loc, "ObjectInstance: no object named \"%s\"", name);
-    sd->instances = scene_grow_implicit(sd->instances, sd->instance_count, sizeof *sd->instances);
+    instance_entity *grown =
+        scene_grow_implicit(sd->instances, sd->instance_count, sizeof *sd->instances);
+    if (!grown)
+        return parser_oom(ps, d->loc, err);
+    sd->instances = grown;
     sd->instances[sd->instance_count++] =
         (instance_entity){(size_t)obj, ps->gs.ctm[0], ps->gs.ctm[1], d->loc};
     return HZ_OK;
@@ -352,7 +409,14 @@ static hz_status d_attribute(parser *ps, const token *d, hz_error *err)
     param_list *dst = &ps->gs.attrs[k];
     for (size_t i = 0; i < pl.count; ++i) {
         params_remove(dst, pl.items[i].name);
-        params_add(dst, pl.items[i], err); /* cannot fail: the name was just removed */
+        /* The name was just removed: fails only when out of memory (and then
+         * frees items[i]; the rest are still pl's). */
+        if (params_add(dst, pl.items[i], err) != HZ_OK) {
+            for (size_t j = i + 1; j < pl.count; ++j)
+                param_free(&pl.items[j]);
+            free(pl.items);
+            return parser_oom(ps, d->loc, err);
+        }
     }
     free(pl.items);
     return HZ_OK;
@@ -388,7 +452,10 @@ static hz_status d_option(parser *ps, const token *d, hz_error *err)
         else if (known[i].type != p->type || p->count != 1)
             st = hz_fail_at(err, p->loc, "option \"%s\" takes one %s value", p->name,
                             param_type_name(known[i].type));
+        else if (!params_reserve(&ps->sd->options))
+            st = parser_oom(ps, d->loc, err);
         else {
+            /* Reserved: fails only on an Option given twice. */
             st = params_add(&ps->sd->options, *p, err);
             pl.count = 0; /* ownership moved (or freed by params_add) */
         }

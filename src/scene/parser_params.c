@@ -89,7 +89,9 @@ static hz_status read_values(parser *ps, const char *decl, file_loc decl_loc, to
             return hz_fail_at(err, decl_loc, "parameter \"%.60s\" has no value (found %s)", decl,
                               got);
         }
-        *vals = scene_xmalloc(sizeof **vals);
+        *vals = scene_malloc(sizeof **vals);
+        if (!*vals)
+            return parser_oom(ps, t.loc, err);
         (*vals)[0] = t;
         *count = 1;
         return HZ_OK;
@@ -105,7 +107,10 @@ static hz_status read_values(parser *ps, const char *decl, file_loc decl_loc, to
             return hz_fail_at(err, open, "'[' is not closed (found %s at line %d, column %d)", got,
                               t.loc.line, t.loc.column);
         }
-        *vals = scene_grow(*vals, &cap, *count, sizeof **vals);
+        token *grown = scene_grow(*vals, &cap, *count, sizeof **vals);
+        if (!grown)
+            return parser_oom(ps, t.loc, err); /* the caller frees *vals */
+        *vals = grown;
         (*vals)[(*count)++] = t;
     }
 }
@@ -134,16 +139,20 @@ static hz_status want_numbers(const param *p, const token *vals, size_t n, hz_er
 }
 
 /* Spectrum and blackbody parameters become three rgb numbers. */
-static void set_rgb(param *p, rgb c)
+static hz_status set_rgb(parser *ps, param *p, rgb c, hz_error *err)
 {
+    p->nums = scene_array(3, sizeof *p->nums);
+    if (!p->nums)
+        return parser_oom(ps, p->loc, err);
     p->count = 3;
-    p->nums = scene_xarray(3, sizeof *p->nums);
     p->nums[0] = c.r;
     p->nums[1] = c.g;
     p->nums[2] = c.b;
+    return HZ_OK;
 }
 
-static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_error *err)
+static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_t n,
+                                  hz_error *err)
 {
     if (vals[0].kind == TOK_STRING)
         return hz_fail_at(err, vals[0].loc,
@@ -164,8 +173,13 @@ static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_erro
                               "values",
                               p->name, n);
         size_t pairs = n / 2;
-        double *lambda = scene_xarray(pairs, sizeof *lambda);
-        double *value = scene_xarray(pairs, sizeof *value);
+        double *lambda = scene_array(pairs, sizeof *lambda);
+        double *value = scene_array(pairs, sizeof *value);
+        if (!lambda || !value) {
+            free(lambda);
+            free(value);
+            return parser_oom(ps, p->loc, err);
+        }
         for (size_t i = 0; i < pairs; ++i) {
             lambda[i] = vals[2 * i].num;
             value[i] = vals[2 * i + 1].num;
@@ -181,11 +195,11 @@ static hz_status convert_spectrum(param *p, const token *vals, size_t n, hz_erro
         free(lambda);
         free(value);
     }
-    set_rgb(p, c);
-    return HZ_OK;
+    return set_rgb(ps, p, c, err);
 }
 
-static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
+/* The values as p's type; on error p may own arrays (param_free). */
+static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_error *err)
 {
     if (n == 0)
         return hz_fail_at(err, p->loc, "parameter \"%s %s\" has no values",
@@ -193,7 +207,9 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
     size_t tuple = 1;
     switch (p->type) {
     case PARAM_STRING:
-        p->strs = scene_xarray(n, sizeof *p->strs);
+        p->strs = scene_array(n, sizeof *p->strs);
+        if (!p->strs)
+            return parser_oom(ps, p->loc, err);
         for (size_t i = 0; i < n; ++i)
             p->strs[i] = NULL;
         p->count = n;
@@ -206,11 +222,13 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
             }
             p->strs[i] = token_string_dup(&vals[i]);
             if (!p->strs[i])
-                return hz_fail_at(err, vals[i].loc, "out of memory");
+                return parser_oom(ps, vals[i].loc, err);
         }
         return HZ_OK;
     case PARAM_BOOL:
-        p->bools = scene_xarray(n, sizeof *p->bools);
+        p->bools = scene_array(n, sizeof *p->bools);
+        if (!p->bools)
+            return parser_oom(ps, p->loc, err);
         p->count = n;
         for (size_t i = 0; i < n; ++i) {
             /* pbrt-v4 takes true/false bare or quoted. */
@@ -228,7 +246,7 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
         }
         return HZ_OK;
     case PARAM_SPECTRUM:
-        return convert_spectrum(p, vals, n, err);
+        return convert_spectrum(ps, p, vals, n, err);
     case PARAM_BLACKBODY:
         if (want_numbers(p, vals, n, err) != HZ_OK)
             return HZ_ERROR;
@@ -238,8 +256,7 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
         if (!(vals[0].num > 0.0))
             return hz_fail_at(err, vals[0].loc, "parameter \"blackbody %s\": temperature must be > 0",
                               p->name);
-        set_rgb(p, spectrum_blackbody_to_rgb(vals[0].num));
-        return HZ_OK;
+        return set_rgb(ps, p, spectrum_blackbody_to_rgb(vals[0].num), err);
     case PARAM_POINT2:
     case PARAM_VECTOR2:
         tuple = 2;
@@ -267,7 +284,9 @@ static hz_status convert(param *p, const token *vals, size_t n, hz_error *err)
             vals[i].num != (double)(long long)vals[i].num)
             return hz_fail_at(err, vals[i].loc, "parameter \"integer %s\" expects integers, got %.*s",
                               p->name, (int)(vals[i].len < 30 ? vals[i].len : 30), vals[i].text);
-    p->nums = scene_xarray(n, sizeof *p->nums);
+    p->nums = scene_array(n, sizeof *p->nums);
+    if (!p->nums)
+        return parser_oom(ps, p->loc, err);
     p->count = n;
     for (size_t i = 0; i < n; ++i)
         p->nums[i] = vals[i].num;
@@ -278,7 +297,7 @@ static hz_status parse_one(parser *ps, const token *decl_tok, param_list *out, h
 {
     char *decl = token_string_dup(decl_tok);
     if (!decl)
-        return hz_fail_at(err, decl_tok->loc, "out of memory");
+        return parser_oom(ps, decl_tok->loc, err);
     char type[128], name[128];
     param p;
     memset(&p, 0, sizeof p);
@@ -291,8 +310,14 @@ static hz_status parse_one(parser *ps, const token *decl_tok, param_list *out, h
     if (st == HZ_OK)
         st = read_values(ps, decl, p.loc, &vals, &n, err);
     if (st == HZ_OK) {
-        p.name = scene_xstrdup(name);
-        st = convert(&p, vals, n, err);
+        p.name = scene_strdup(name);
+        if (!p.name)
+            st = parser_oom(ps, p.loc, err);
+        else
+            st = convert(ps, &p, vals, n, err);
+        /* Reserved first, params_add can only report a repeated name. */
+        if (st == HZ_OK && !params_reserve(out))
+            st = parser_oom(ps, p.loc, err);
         if (st == HZ_OK)
             st = params_add(out, p, err); /* frees p on failure */
         else

@@ -279,9 +279,11 @@ static hz_status read_vertices(ply_reader *r, const ply_element *el, shape_geome
     int has_n = ix[3] >= 0 && ix[4] >= 0 && ix[5] >= 0;
     int has_uv = ix[6] >= 0 && ix[7] >= 0;
     g->vertex_count = el->count;
-    g->p = scene_xarray(el->count, 3 * sizeof *g->p);
-    g->n = has_n ? scene_xarray(el->count, 3 * sizeof *g->n) : NULL;
-    g->uv = has_uv ? scene_xarray(el->count, 2 * sizeof *g->uv) : NULL;
+    g->p = scene_array(el->count, 3 * sizeof *g->p);
+    g->n = has_n ? scene_array(el->count, 3 * sizeof *g->n) : NULL;
+    g->uv = has_uv ? scene_array(el->count, 2 * sizeof *g->uv) : NULL;
+    if (!g->p || (has_n && !g->n) || (has_uv && !g->uv)) /* freed by ply_read */
+        return hz_fail(err, "%s: out of memory for %zu vertices", r->path, el->count);
     double vals[MAX_PROPS];
     for (size_t i = 0; i < el->count; ++i) {
         for (int k = 0; k < el->prop_count; ++k)
@@ -327,8 +329,12 @@ static hz_status read_faces(ply_reader *r, const ply_element *el, shape_geometry
         static const int split[2][3] = {{0, 1, 2}, {0, 2, 3}};
         for (size_t t = 0; t < n - 2; ++t) {
             if (g->triangle_count == *cap) {
-                *cap = *cap ? *cap * 2 : 64;
-                g->indices = scene_xrealloc(g->indices, *cap * 3 * sizeof *g->indices);
+                size_t want = *cap ? *cap * 2 : 64;
+                uint32_t *grown = scene_realloc_array(g->indices, want, 3 * sizeof *g->indices);
+                if (!grown) /* g->indices is still g's: freed by ply_read */
+                    return hz_fail(err, "%s: out of memory for %zu triangles", r->path, want);
+                g->indices = grown;
+                *cap = want;
             }
             for (int c = 0; c < 3; ++c)
                 g->indices[3 * g->triangle_count + (size_t)c] = (uint32_t)idx[split[t][c]];
@@ -387,9 +393,9 @@ hz_status ply_read(const char *path, shape_geometry *out, hz_error *err)
         return hz_fail(err, "%s: cannot open: %s", path, ferr.message);
     unsigned char *data = (unsigned char *)text;
     ply_reader r = {path, data, len, 0, FMT_ASCII, 0};
-    ply_element *els = scene_xarray(MAX_ELEMENTS, sizeof *els);
-    int nel;
-    hz_status st = parse_header(&r, els, &nel, err);
+    ply_element *els = scene_array(MAX_ELEMENTS, sizeof *els);
+    int nel = 0;
+    hz_status st = els ? parse_header(&r, els, &nel, err) : hz_fail(err, "%s: out of memory", path);
     if (st == HZ_OK)
         st = read_body(&r, els, nel, out, err);
     free(els);

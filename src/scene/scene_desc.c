@@ -4,48 +4,58 @@
 #include "scene/mem.h"
 #include "scene/parser.h"
 
-static const char *own(scene_desc *sd, const char *s)
+char *scene_desc_own(scene_desc *sd, const char *s)
 {
-    sd->strings = scene_grow(sd->strings, &sd->string_capacity, sd->string_count,
-                             sizeof *sd->strings);
-    sd->strings[sd->string_count++] = scene_xstrdup(s);
-    return sd->strings[sd->string_count - 1];
+    char **grown = scene_grow(sd->strings, &sd->string_capacity, sd->string_count,
+                              sizeof *sd->strings);
+    if (!grown)
+        return NULL;
+    sd->strings = grown;
+    char *copy = scene_strdup(s);
+    if (copy)
+        sd->strings[sd->string_count++] = copy;
+    return copy;
 }
 
-static scene_entity default_entity(scene_desc *sd, const char *type, file_loc loc)
+static bool default_entity(scene_desc *sd, scene_entity *e, const char *type, file_loc loc)
 {
-    scene_entity e;
-    e.type = (char *)own(sd, type);
-    e.loc = loc;
-    params_init(&e.params, loc);
-    return e;
+    e->type = scene_desc_own(sd, type);
+    e->loc = loc;
+    params_init(&e->params, loc);
+    return e->type != NULL;
 }
 
-void scene_desc_init(scene_desc *sd, const char *file)
+bool scene_desc_init(scene_desc *sd, const char *file)
 {
     memset(sd, 0, sizeof *sd);
-    file_loc start = {own(sd, file), 1, 1};
-    scene_desc_add_file(sd, start.file);
-    sd->camera.entity = default_entity(sd, "perspective", start);
     sd->camera.camera_from_world = transform_identity();
     sd->camera.camera_from_world_end = transform_identity();
-    sd->camera.medium = (char *)own(sd, "");
     sd->camera.transform_start_time = 0.0;
     sd->camera.transform_end_time = 1.0;
-    sd->film = default_entity(sd, "rgb", start);
-    sd->sampler = default_entity(sd, "zsobol", start);
-    sd->filter = default_entity(sd, "gaussian", start);
-    /* Line 0: no Integrator directive (haze then renders with singlescatter). */
-    sd->integrator = default_entity(sd, "volpath", (file_loc){start.file, 0, 0});
     sd->transform_start_time = 0.0;
     sd->transform_end_time = 1.0;
+    file_loc start = {scene_desc_own(sd, file), 1, 1};
+    /* Line 0: no Integrator directive (haze then renders with singlescatter). */
+    file_loc no_integrator = {start.file, 0, 0};
     params_init(&sd->options, start);
+    if (!start.file || !scene_desc_add_file(sd, start.file))
+        return false;
+    sd->camera.medium = scene_desc_own(sd, "");
+    return sd->camera.medium && default_entity(sd, &sd->camera.entity, "perspective", start) &&
+           default_entity(sd, &sd->film, "rgb", start) &&
+           default_entity(sd, &sd->sampler, "zsobol", start) &&
+           default_entity(sd, &sd->filter, "gaussian", start) &&
+           default_entity(sd, &sd->integrator, "volpath", no_integrator);
 }
 
-void scene_desc_add_file(scene_desc *sd, const char *owned_name)
+bool scene_desc_add_file(scene_desc *sd, const char *owned_name)
 {
-    sd->files = scene_grow_implicit(sd->files, sd->file_count, sizeof *sd->files);
+    const char **grown = scene_grow_implicit(sd->files, sd->file_count, sizeof *sd->files);
+    if (!grown)
+        return false;
+    sd->files = grown;
     sd->files[sd->file_count++] = owned_name;
+    return true;
 }
 
 static void free_shapes(shape_entity *s, size_t n)

@@ -30,10 +30,12 @@ static hz_status finish(shape_entity *se, hz_error *err)
     return params_finish(&se->entity.params, what, err);
 }
 
+/* NULL when out of memory. */
 static double *dup_doubles(const double *src, size_t n)
 {
-    double *d = scene_xarray(n, sizeof *d);
-    memcpy(d, src, n * sizeof *d);
+    double *d = scene_array(n, sizeof *d);
+    if (d)
+        memcpy(d, src, n * sizeof *d);
     return d;
 }
 
@@ -86,7 +88,9 @@ static hz_status create_mesh(shape_entity *se, int per_face, shape_geometry *g, 
     g->n = N ? dup_doubles(N, 3 * np) : NULL;
     g->uv = uv ? dup_doubles(uv, 2 * np) : NULL;
     g->triangle_count = faces * (size_t)(per_face - 2);
-    g->indices = scene_xarray(g->triangle_count, 3 * sizeof *g->indices);
+    g->indices = scene_array(g->triangle_count, 3 * sizeof *g->indices);
+    if (!g->p || (N && !g->n) || (uv && !g->uv) || !g->indices) /* g freed by the caller */
+        return hz_fail_at(err, se->entity.loc, "%s: out of memory for %zu vertices", type, np);
     static const int tri[1][3] = {{0, 1, 2}};
     static const int quad[2][3] = {{0, 1, 3}, {0, 3, 2}}; /* p00 p10 p11, p00 p11 p01 */
     size_t o = 0;
@@ -165,9 +169,13 @@ static hz_status create_disk(shape_entity *se, shape_geometry *g, hz_error *err)
     size_t ring = DISK_SEGMENTS + 1;
     g->kind = GEOMETRY_TRIANGLES;
     g->vertex_count = 2 * ring;
-    g->p = scene_xarray(g->vertex_count, 3 * sizeof *g->p);
-    g->n = scene_xarray(g->vertex_count, 3 * sizeof *g->n);
-    g->uv = scene_xarray(g->vertex_count, 2 * sizeof *g->uv);
+    g->p = scene_array(g->vertex_count, 3 * sizeof *g->p);
+    g->n = scene_array(g->vertex_count, 3 * sizeof *g->n);
+    g->uv = scene_array(g->vertex_count, 2 * sizeof *g->uv);
+    g->triangle_count = ri > 0.0 ? 2 * DISK_SEGMENTS : DISK_SEGMENTS;
+    g->indices = scene_array(g->triangle_count, 3 * sizeof *g->indices);
+    if (!g->p || !g->n || !g->uv || !g->indices) /* g freed by the caller */
+        return hz_fail_at(err, se->entity.loc, "disk: out of memory");
     for (size_t k = 0; k < 2; ++k) {
         double rad = k == 0 ? r : ri;
         for (size_t i = 0; i < ring; ++i) {
@@ -183,8 +191,6 @@ static hz_status create_disk(shape_entity *se, shape_geometry *g, hz_error *err)
             g->uv[2 * v + 1] = (r - rad) / (r - ri);
         }
     }
-    g->triangle_count = ri > 0.0 ? 2 * DISK_SEGMENTS : DISK_SEGMENTS;
-    g->indices = scene_xarray(g->triangle_count, 3 * sizeof *g->indices);
     size_t o = 0;
     for (uint32_t i = 0; i < DISK_SEGMENTS; ++i) {
         uint32_t a = i, b = i + 1, c = (uint32_t)ring + i, d = (uint32_t)ring + i + 1;

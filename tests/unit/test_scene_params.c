@@ -95,7 +95,7 @@ static void test_copy_is_deep(void **state)
     scene_desc sd;
     param_list *pl = camera_params(&sd, "\"string s\" \"abc\" \"float f\" [1 2]");
     param_list c;
-    params_copy(&c, pl);
+    assert_true(params_copy(&c, pl));
     assert_int_equal(c.count, 2);
     assert_ptr_not_equal(c.items[0].strs[0], pl->items[0].strs[0]);
     assert_string_equal(params_string(&c, "s", ""), "abc");
