@@ -25,7 +25,7 @@ static void use_grid(grid *g)
         majorant_grid mg;
         hz_error err;
         int32_t pad[3] = {1, 0, 2};
-        if (majorant_grid_build(g, lo, hi, pad, &mg, &err) == HZ_OK)
+        if (majorant_grid_build(g, NULL, lo, hi, pad, &mg, &err) == HZ_OK)
             majorant_grid_free(&mg);
         grid_accessor acc;
         grid_accessor_init(g, &acc);

@@ -32,11 +32,17 @@
 //                      on the same voxels, and "temperature_coarse": 2500 on
 //                      voxels [-2,17]^3 of size 1/16 (its own transform,
 //                      covering the box and one density voxel beyond it)
+//   box_color.vdb      box.vdb's "density" and a vec3 "color" (0.2, 0.5, 1) on
+//                      voxels [-2,33]^3 of the same index space: constant
+//                      wherever the density's trilinear field is not 0
 //   explosion.vdb      a fireball rising on a stem of smoke (scenes/explosion.pbrt):
 //                      "density" in [0,1] on voxels of size 1/40 within
 //                      x, z in [-0.8, 0.8], y in [0, 2] (world units), a
 //                      "temperature" (kelvin, 0 outside the hot core, up to
-//                      about 2600 in it) on the same voxels, and a velocity
+//                      about 2600 in it) on the same voxels, a "flame" (the
+//                      core's heat in [0,1], a simulation tool's flame grid)
+//                      and a vec3 soot "color" (grey-brown smoke, lighter and
+//                      warmer towards the fire) on the same voxels, and a velocity
 //                      "v" (world units per second: expanding from the
 //                      fireball's centre and rising) at half the resolution,
 //                      over the density's voxels dilated by 6
@@ -172,7 +178,8 @@ FloatGrid::Ptr constant_cube(const char *name, double h, int lo, int hi, float v
 // ~0.5) on a narrowing stem of cooler smoke rising from the ground, with a
 // dark, ragged rim; temperature falls from the core outwards and is cut by
 // noise into flame tongues.
-void explosion(FloatGrid::Ptr &density, FloatGrid::Ptr &temperature, Vec3SGrid::Ptr &velocity)
+void explosion(FloatGrid::Ptr &density, FloatGrid::Ptr &temperature, Vec3SGrid::Ptr &velocity,
+               FloatGrid::Ptr &flame, Vec3SGrid::Ptr &color)
 {
     const int n = 40; // voxels per world unit
     const double vs = 1.0 / n;
@@ -181,8 +188,17 @@ void explosion(FloatGrid::Ptr &density, FloatGrid::Ptr &temperature, Vec3SGrid::
     temperature->setName("temperature");
     temperature->setGridClass(openvdb::GRID_UNKNOWN);
     temperature->setTransform(density->transform().copy());
+    flame = FloatGrid::create(0.0f);
+    flame->setName("flame");
+    flame->setGridClass(openvdb::GRID_UNKNOWN);
+    flame->setTransform(density->transform().copy());
+    color = Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    color->setName("color");
+    color->setTransform(density->transform().copy());
     auto dacc = density->getAccessor();
     auto tacc = temperature->getAccessor();
+    auto facc = flame->getAccessor();
+    auto cacc = color->getAccessor();
     const uint32_t seed = 90210u;
     const double cy = 1.25;
     for (int j = 0; j < 2 * n; ++j)
@@ -207,8 +223,14 @@ void explosion(FloatGrid::Ptr &density, FloatGrid::Ptr &temperature, Vec3SGrid::
                 dacc.setValue(Coord(i, j, k), float(d));
                 // Hot core with flame tongues: 0 where the tongues end.
                 double hot = 1.0 - smoothstep(0.05, 0.7, q + 0.9 * (nf - 0.5));
-                if (hot > 0.0)
+                if (hot > 0.0) {
                     tacc.setValue(Coord(i, j, k), float(700.0 + 1900.0 * hot * hot));
+                    facc.setValue(Coord(i, j, k), float(hot));
+                }
+                double warm = std::max(hot, 0.0);
+                cacc.setValue(Coord(i, j, k),
+                              openvdb::Vec3s(float(0.45 + 0.5 * warm), float(0.42 + 0.33 * warm),
+                                             float(0.38 + 0.1 * warm)));
             }
     // Velocity at half resolution over the dilated density: outward from the
     // ball's centre (faster near it) and rising.
@@ -493,10 +515,21 @@ int main(int argc, char **argv)
             write_nvdb(dir + "/box_fire.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
         }
         {
-            FloatGrid::Ptr d, t;
-            Vec3SGrid::Ptr v;
-            explosion(d, t, v);
-            write_vdb(dir + "/explosion.vdb", {d, t, v});
+            FloatGrid::Ptr d, t, f;
+            Vec3SGrid::Ptr v, c;
+            explosion(d, t, v, f, c);
+            write_vdb(dir + "/explosion.vdb", {d, t, v, f, c});
+        }
+        {
+            Vec3SGrid::Ptr c = Vec3SGrid::create(openvdb::Vec3s(0.0f));
+            c->setName("color");
+            c->setTransform(openvdb::math::Transform::createLinearTransform(1.0 / 32.0));
+            auto acc = c->getAccessor();
+            for (int i = -2; i <= 33; ++i)
+                for (int j = -2; j <= 33; ++j)
+                    for (int k = -2; k <= 33; ++k)
+                        acc.setValue(Coord(i, j, k), openvdb::Vec3s(0.2f, 0.5f, 1.0f));
+            write_vdb(dir + "/box_color.vdb", {box(), c});
         }
         if (argc > 2 && std::string(argv[2]) == "--only-new")
             return 0;

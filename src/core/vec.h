@@ -52,6 +52,7 @@ static inline rgb rgb_make(double r, double g, double b) { return (rgb){r, g, b}
 static inline rgb rgb_grey(double v) { return (rgb){v, v, v}; }
 static inline rgb rgb_add(rgb a, rgb b) { return (rgb){a.r + b.r, a.g + b.g, a.b + b.b}; }
 static inline rgb rgb_mul(rgb a, rgb b) { return (rgb){a.r * b.r, a.g * b.g, a.b * b.b}; }
+static inline rgb rgb_sub(rgb a, rgb b) { return (rgb){a.r - b.r, a.g - b.g, a.b - b.b}; }
 static inline rgb rgb_scale(rgb a, double s) { return (rgb){a.r * s, a.g * s, a.b * s}; }
 static inline bool rgb_is_black(rgb a) { return a.r == 0.0 && a.g == 0.0 && a.b == 0.0; }
 static inline double rgb_max(rgb a) { return fmax(a.r, fmax(a.g, a.b)); }

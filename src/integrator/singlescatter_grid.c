@@ -247,6 +247,7 @@ typedef struct {
     vec3 o, w, wo;
     rgb sigma_t;
     bool scatters, emissive;
+    bool free_emission, coloured; /* haze's emission and colour grids */
     grid_ray gr;
     strata s;
     rgb T, Lseg;
@@ -262,12 +263,99 @@ static inline rgb inscattered_at(segment_walk *sw, double t)
                                      sw->u, sw->walk);
 }
 
+/* What a camera-ray sample of a medium with emission or colour grids sees:
+ * the density, and where they apply the absorbing emission's Le, the free
+ * emission eps (per unit length) and the albedo scale C. */
+typedef struct {
+    double density;
+    rgb Le, eps, C;
+} grid_sample;
+
+static grid_sample sample_at(segment_walk *sw, double t)
+{
+    grid_sample g = {0.0, rgb_grey(0.0), rgb_grey(0.0), rgb_grey(1.0)};
+    grid_ray *gr = &sw->gr;
+    uint64_t *lookups = &sw->walk->lookups;
+    vec3 p = medium_point_at(gr->m, &gr->acc, &gr->r, t, lookups);
+    ++*lookups;
+    g.density = grid_density_index(gr->m->grid.grid, &gr->acc.density, p);
+    if (sw->free_emission)
+        g.eps = medium_grid_emission(gr->m, &gr->acc, p, lookups);
+    if (g.density > 0.0 && sw->emissive)
+        g.Le = medium_grid_Le(gr->m, &gr->acc, p, lookups);
+    if (g.density > 0.0 && sw->coloured)
+        g.C = medium_grid_color(gr->m, &gr->acc, p, lookups);
+    return g;
+}
+
+/* sigma_s and sigma_a at a sample with albedo scale C: what is not
+ * scattered is absorbed, sigma_t unchanged. */
+static inline rgb coloured_sigma_s(const medium *m, rgb C) { return rgb_mul(m->sigma_s, C); }
+
+static inline rgb coloured_sigma_a(const medium *m, rgb C)
+{
+    return rgb_add(m->sigma_a, rgb_mul(m->sigma_s, rgb_sub(rgb_grey(1.0), C)));
+}
+
+/* Free emission over a stratum of constant density d and emission eps:
+ * eps (1 - e^{-sigma_t d dt}) / (sigma_t d) per channel (eps dt where
+ * nothing attenuates). */
+static inline rgb free_emission_over(rgb eps, rgb sigma_t, double d, double dt, rgb step_t)
+{
+    double w[3];
+    for (int c = 0; c < 3; ++c) {
+        double k = rgb_ch(sigma_t, c) * d;
+        w[c] = k > 0.0 ? (1.0 - rgb_ch(step_t, c)) / k : dt;
+    }
+    return rgb_mul(eps, rgb_make(w[0], w[1], w[2]));
+}
+
+/* Marching with emission or colour grids: march_strata's estimate with the
+ * per-sample free emission and albedo. */
+static bool march_strata_extras(segment_walk *sw, double b)
+{
+    strata *s = &sw->s;
+    const medium *m = sw->m;
+    rgb sigma_t = sw->sigma_t;
+    for (; strata_before(s, b); strata_next(s)) {
+        grid_sample g = sample_at(sw, s->t);
+        if (g.density <= 0.0) {
+            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, rgb_scale(g.eps, s->dt)));
+            continue;
+        }
+        rgb step_t = rgb_exp_neg(sigma_t, g.density * s->dt);
+        rgb frac_of = rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) / sigma_t.r : 0.0,
+                               sigma_t.g > 0.0 ? (1.0 - step_t.g) / sigma_t.g : 0.0,
+                               sigma_t.b > 0.0 ? (1.0 - step_t.b) / sigma_t.b : 0.0);
+        if (sw->free_emission)
+            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, free_emission_over(g.eps, sigma_t,
+                                                                          g.density, s->dt,
+                                                                          step_t)));
+        if (sw->emissive)
+            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, rgb_mul(frac_of,
+                                                                        coloured_sigma_a(m, g.C))),
+                                                 g.Le));
+        if (sw->scatters)
+            sw->Lseg = rgb_add(sw->Lseg,
+                               rgb_mul(rgb_mul(sw->T, rgb_mul(frac_of, coloured_sigma_s(m, g.C))),
+                                       inscattered_at(sw, s->t)));
+        sw->T = rgb_mul(sw->T, step_t);
+        if (!singlescatter_roulette(&sw->T, &sw->walk->r)) {
+            strata_next(s);
+            return false;
+        }
+    }
+    return true;
+}
+
 /* Marching over the strata whose samples lie in [.., b): piecewise-constant
  * density per stratum, integrated exactly inside it (scattering (1 -
  * e^{-sigma_t dt}) sigma_s / sigma_t), sound in dense media. False when the
  * walk ended. */
 static bool march_strata(segment_walk *sw, double b)
 {
+    if (sw->free_emission || sw->coloured)
+        return march_strata_extras(sw, b);
     strata *s = &sw->s;
     const medium *m = sw->m;
     rgb sigma_t = sw->sigma_t;
@@ -300,6 +388,22 @@ static bool march_strata(segment_walk *sw, double b)
         }
     }
     return true;
+}
+
+/* track_cell's sample of in-scattering and emission with emission or colour
+ * grids, at the current stratum. */
+static void gather_sample_extras(segment_walk *sw)
+{
+    const strata *s = &sw->s;
+    grid_sample g = sample_at(sw, s->t);
+    rgb add = rgb_scale(g.eps, s->dt);
+    if (g.density > 0.0 && sw->scatters)
+        add = rgb_add(add, rgb_mul(rgb_scale(coloured_sigma_s(sw->m, g.C), g.density * s->dt),
+                                   inscattered_at(sw, s->t)));
+    if (g.density > 0.0 && sw->emissive)
+        add = rgb_add(add, rgb_mul(rgb_scale(coloured_sigma_a(sw->m, g.C), g.density * s->dt),
+                                   g.Le));
+    sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, add));
 }
 
 /* Ratio or residual tracking through one cell, with in-scattering at the
@@ -338,7 +442,9 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
         }
         if (!at_sample)
             return true;
-        if (sw->scatters || sw->emissive) {
+        if (sw->free_emission || sw->coloured) {
+            gather_sample_extras(sw);
+        } else if (sw->scatters || sw->emissive) {
             /* The stratum's sample of in-scattering and emission, weighted by
              * the tracked transmittance to it: unbiased, as the collisions do
              * not depend on the sample. (Emission is gathered here rather
@@ -372,6 +478,8 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     sw.sigma_t = medium_sigma_t(sw.m);
     sw.scatters = !rgb_is_black(sw.m->sigma_s);
     sw.emissive = sw.m->emissive;
+    sw.free_emission = sw.m->free_emission;
+    sw.coloured = sw.m->coloured;
     const singlescatter_settings *set = &vs->settings;
     transmittance_mode mode = set->mode;
     bool marching = mode == TRANSMITTANCE_RAYMARCH || mode == TRANSMITTANCE_JITTERED;
@@ -386,7 +494,11 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     majorant_segment seg;
     while (alive && next_cell(&mw, &seg, walk)) {
         if (!(seg.max > 0.0)) {
-            strata_skip_to(&sw.s, seg.t1);
+            /* No density: only free emission, integrated over the strata. */
+            if (sw.free_emission && seg.emit > 0.0)
+                alive = march_strata(&sw, seg.t1);
+            else
+                strata_skip_to(&sw.s, seg.t1);
             continue;
         }
         if (marching) {

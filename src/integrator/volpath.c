@@ -189,7 +189,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
                      : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
             rgb T_maj = volpath_track(&sc->in.media[medium], o, w, t_start, t_end, pa->hero,
-                                      &pa->walk, shadow_event, s);
+                                      false, &pa->walk, shadow_event, s);
             double th = rgb_ch(T_maj, pa->hero);
             if (rgb_is_black(s->T) || !(th > 0.0))
                 return false;
@@ -336,13 +336,13 @@ static bool path_event(void *ctx, const volpath_event *ev)
     /* Medium emission at every tentative collision (pbrt-v4's estimator:
      * beta T_maj sigma_a Le / (T_maj sigma_maj) in the hero channel, MIS
      * over the channels through r_e). */
-    if (pa->depth < pa->sc->settings.max_depth && !rgb_is_black(ev->Le)) {
+    if (pa->depth < pa->sc->settings.max_depth && !rgb_is_black(ev->emission)) {
         double pdf = rgb_ch(ev->T_maj, h) * sm;
         rgb betap = rgb_div(rgb_mul(pa->beta, ev->T_maj), pdf);
         rgb r_e = rgb_div(rgb_mul(pa->r_u, rgb_mul(ev->sigma_maj, ev->T_maj)), pdf);
         double r = rgb_avg(r_e);
         if (r > 0.0)
-            pa->L = rgb_add(pa->L, rgb_div(rgb_mul(betap, rgb_mul(ev->sigma_a, ev->Le)), r));
+            pa->L = rgb_add(pa->L, rgb_div(rgb_mul(betap, ev->emission), r));
     }
     double p_absorb = rgb_ch(ev->sigma_a, h) / sm, p_scatter = rgb_ch(ev->sigma_s, h) / sm;
     double p_null = fmax(0.0, 1.0 - p_absorb - p_scatter);
@@ -448,7 +448,7 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
     pa->scattered = pa->terminated = false;
     uint64_t t0 = pa->counters->timed ? hz_clock_ns() : 0;
     rgb T_maj = volpath_track(&sc->in.media[pa->ray.medium], pa->ray.o, pa->ray.d, t_start, t_hit,
-                              pa->hero, &pa->walk, path_event, pa);
+                              pa->hero, true, &pa->walk, path_event, pa);
     if (pa->counters->timed)
         pa->counters->media_ns += hz_clock_ns() - t0;
     if (pa->terminated || rgb_is_black(pa->beta) || rgb_is_black(pa->r_u))

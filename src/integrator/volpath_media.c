@@ -23,6 +23,7 @@ typedef struct {
 typedef struct {
     density_source src;
     int hero;
+    bool emission;
     media_walk *walk;
     volpath_event_fn fn;
     void *ctx;
@@ -30,12 +31,39 @@ typedef struct {
     uint32_t collisions;
 } tracker;
 
-/* Collisions over [a, b] at the majorant sigma_t * bound. False when the
- * callback ended the walk or the collision budget ran out (then T_maj = 0). */
-static bool track_span(tracker *tr, double a, double b, double bound)
+/* A grid medium's coefficients and emission at a tentative collision. */
+static volpath_event grid_event(tracker *tr, double t)
+{
+    const medium *m = tr->src.m;
+    uint64_t *lookups = &tr->walk->lookups;
+    vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, t, lookups);
+    ++*lookups;
+    double d = grid_density_index(m->grid.grid, &tr->src.acc.density, p);
+    volpath_event ev = {t, rgb_scale(m->sigma_a, d), rgb_scale(m->sigma_s, d), rgb_grey(0.0),
+                        rgb_grey(0.0), rgb_grey(0.0)};
+    if (m->coloured && d > 0.0) {
+        /* The albedo scaled per channel; what is not scattered is absorbed. */
+        rgb C = medium_grid_color(m, &tr->src.acc, p, lookups);
+        rgb ss = rgb_mul(m->sigma_s, C);
+        ev.sigma_a = rgb_scale(rgb_add(m->sigma_a, rgb_sub(m->sigma_s, ss)), d);
+        ev.sigma_s = rgb_scale(ss, d);
+    }
+    if (tr->emission && m->emissive && d > 0.0)
+        ev.emission = rgb_mul(ev.sigma_a, medium_grid_Le(m, &tr->src.acc, p, lookups));
+    if (tr->emission && m->free_emission)
+        ev.emission = rgb_add(ev.emission, medium_grid_emission(m, &tr->src.acc, p, lookups));
+    return ev;
+}
+
+/* Collisions over [a, b] at the majorant sigma_t * bound (+ extra, a rate
+ * for free emission). False when the callback ended the walk or the
+ * collision budget ran out (then T_maj = 0). */
+static bool track_span(tracker *tr, double a, double b, double bound, double extra)
 {
     const medium *m = tr->src.m;
     rgb sigma_maj = rgb_scale(medium_sigma_t(m), bound);
+    if (extra > 0.0)
+        sigma_maj = rgb_add(sigma_maj, rgb_grey(extra));
     double rate = rgb_ch(sigma_maj, tr->hero);
     if (!(rate > 0.0)) {
         tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, b - a));
@@ -52,30 +80,28 @@ static bool track_span(tracker *tr, double a, double b, double bound)
             return false;
         }
         tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, tn - t));
-        double d = 1.0;
-        rgb Le = m->Le;
-        if (tr->src.cloud) {
-            d = cloud_density(&m->cloud.params, v3_add(tr->src.om, v3_scale(tr->src.dm, tn)));
-            ++tr->walk->lookups;
-        } else if (tr->src.grid && m->kind == MEDIUM_RGBGRID) {
+        volpath_event ev;
+        if (tr->src.grid && m->kind == MEDIUM_RGBGRID) {
             vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, tn, &tr->walk->lookups);
-            rgb sa, ss;
+            rgb sa, ss, Le;
             medium_rgbgrid_at(m, &tr->src.acc, p, &sa, &ss, &Le, &tr->walk->lookups);
-            volpath_event ev = {tn, sa, ss, sigma_maj, tr->T_maj, Le};
-            if (!tr->fn(tr->ctx, &ev))
-                return false;
-            tr->T_maj = rgb_grey(1.0);
-            t = tn;
-            continue;
+            ev = (volpath_event){tn, sa, ss, sigma_maj, tr->T_maj,
+                                 tr->emission ? rgb_mul(sa, Le) : rgb_grey(0.0)};
         } else if (tr->src.grid) {
-            vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, tn, &tr->walk->lookups);
-            ++tr->walk->lookups;
-            d = grid_density_index(m->grid.grid, &tr->src.acc.density, p);
-            if (m->emissive && d > 0.0)
-                Le = medium_grid_Le(m, &tr->src.acc, p, &tr->walk->lookups);
+            ev = grid_event(tr, tn);
+            ev.sigma_maj = sigma_maj;
+            ev.T_maj = tr->T_maj;
+        } else {
+            double d = 1.0;
+            if (tr->src.cloud) {
+                d = cloud_density(&m->cloud.params,
+                                  v3_add(tr->src.om, v3_scale(tr->src.dm, tn)));
+                ++tr->walk->lookups;
+            }
+            rgb sa = rgb_scale(m->sigma_a, d);
+            ev = (volpath_event){tn, sa, rgb_scale(m->sigma_s, d), sigma_maj, tr->T_maj,
+                                 tr->emission ? rgb_mul(sa, m->Le) : rgb_grey(0.0)};
         }
-        volpath_event ev = {tn, rgb_scale(m->sigma_a, d), rgb_scale(m->sigma_s, d), sigma_maj,
-                            tr->T_maj, Le};
         if (!tr->fn(tr->ctx, &ev))
             return false;
         tr->T_maj = rgb_grey(1.0);
@@ -83,17 +109,17 @@ static bool track_span(tracker *tr, double a, double b, double bound)
     }
 }
 
-rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero,
+rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero, bool emission,
                   media_walk *walk, volpath_event_fn fn, void *ctx)
 {
     if (!(t1 > t0))
         return rgb_grey(1.0);
     tracker tr = {.src = {.m = m, .grid = m->kind == MEDIUM_GRID || m->kind == MEDIUM_RGBGRID},
-                  .hero = hero, .walk = walk,
+                  .hero = hero, .emission = emission, .walk = walk,
                   .fn = fn, .ctx = ctx, .T_maj = rgb_grey(1.0)};
     switch (m->kind) {
     case MEDIUM_HOMOGENEOUS:
-        return track_span(&tr, t0, t1, 1.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
+        return track_span(&tr, t0, t1, 1.0, 0.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
                    ? tr.T_maj
                    : rgb_grey(1.0);
     case MEDIUM_CLOUD:
@@ -103,7 +129,7 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
         tr.src.cloud = true;
         tr.src.om = transform_point(&m->cloud.medium_from_render, o);
         tr.src.dm = transform_vector(&m->cloud.medium_from_render, w);
-        return track_span(&tr, t0, t1, 1.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
+        return track_span(&tr, t0, t1, 1.0, 0.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
                    ? tr.T_maj
                    : rgb_grey(1.0);
     case MEDIUM_GRID:
@@ -115,11 +141,17 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
             return rgb_grey(1.0); /* no density anywhere on the segment */
         medium_accessor_init(m, &tr.src.acc);
         majorant_segment seg;
+        bool free_emission = emission && m->free_emission;
         while (majorant_walk_next(&mw, &seg)) {
             walk->majorant_steps++;
-            if (!(seg.max > 0.0))
+            /* Free emission where the cell glows: two tentative collisions
+             * expected across it, whatever the density. */
+            double extra = free_emission && seg.emit > 0.0 && seg.t1 > seg.t0
+                               ? 2.0 / (seg.t1 - seg.t0)
+                               : 0.0;
+            if (!(seg.max > 0.0) && !(extra > 0.0))
                 continue;
-            if (!track_span(&tr, seg.t0, seg.t1, seg.max))
+            if (!track_span(&tr, seg.t0, seg.t1, seg.max, extra))
                 return tr.collisions > VOLPATH_MAX_COLLISIONS ? tr.T_maj : rgb_grey(1.0);
         }
         return tr.T_maj;

@@ -21,7 +21,9 @@
 typedef struct {
     double t;
     rgb sigma_a, sigma_s, sigma_maj, T_maj;
-    rgb Le; /* emitted radiance there (the source term is sigma_a Le) */
+    rgb emission; /* the source term there, per unit length: sigma_a Le (pbrt-v4's
+                   * absorbing emission) plus a free emission grid's; 0 when the
+                   * walk does not gather emission */
 } volpath_event;
 
 /* Returns false to end the walk. */
@@ -38,8 +40,11 @@ typedef bool (*volpath_event_fn)(void *ctx, const volpath_event *ev);
  * walk's time, calling `fn` at each tentative collision. Returns the majorant
  * transmittance from the last collision to t1, (1, 1, 1) when `fn` ended the
  * walk, or (0, 0, 0) past VOLPATH_MAX_COLLISIONS. `hero` in 0..2 is the
- * channel whose majorant sets the rate. */
-rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero,
+ * channel whose majorant sets the rate. With `emission` (a path's segment,
+ * not a shadow ray's) the events carry the emission, and cells where a free
+ * emission grid glows but there is no density get tentative collisions too
+ * (two expected per cell). */
+rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero, bool emission,
                   media_walk *walk, volpath_event_fn fn, void *ctx);
 
 #endif

@@ -20,28 +20,86 @@ typedef struct {
     grid_ibox active;
     bool empty;
     const int32_t *pad;
+    const majorant_emission *em; /* NULL: none */
+    grid_ibox em_active;
+    bool em_empty;
 } source;
+
+/* The range of `g` over `box` (its index space); the background alone when
+ * the box misses the active voxels (no need to ask the tree). */
+static void range_over(const grid *g, const grid_ibox *active, bool empty, grid_ibox box,
+                       float *vmin, float *vmax)
+{
+    bool apart = empty;
+    for (int a = 0; a < 3; ++a)
+        apart = apart || box.max[a] < active->min[a] || box.min[a] > active->max[a];
+    if (apart)
+        *vmin = *vmax = grid_background(g);
+    else
+        grid_region_range(g, box, vmin, vmax);
+}
+
+static int32_t clamp_index(double v)
+{
+    return v <= (double)INT32_MIN ? INT32_MIN : v >= (double)INT32_MAX ? INT32_MAX : (int32_t)v;
+}
+
+/* The emission grid's upper bound over a box of density voxels: the box's
+ * corners mapped into its index space, rounded out by a voxel (its
+ * trilinear lookups read the next one). */
+static float emission_bound(const source *src, grid_ibox box)
+{
+    const majorant_emission *em = src->em;
+    grid_ibox ebox = box;
+    if (!em->aligned) {
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (int c = 0; c < 8; ++c) {
+            vec3 p = transform_point(&em->eindex_from_index,
+                                     v3(box.min[0] + (c & 1 ? box.max[0] - box.min[0] : 0),
+                                        box.min[1] + (c & 2 ? box.max[1] - box.min[1] : 0),
+                                        box.min[2] + (c & 4 ? box.max[2] - box.min[2] : 0)));
+            const double p3[3] = {p.x, p.y, p.z};
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = fmin(lo[a], p3[a]);
+                hi[a] = fmax(hi[a], p3[a]);
+            }
+        }
+        for (int a = 0; a < 3; ++a) {
+            ebox.min[a] = clamp_index(floor(lo[a]) - 1.0);
+            ebox.max[a] = clamp_index(ceil(hi[a]) + 1.0);
+        }
+    }
+    float vmin, vmax;
+    range_over(em->grid, &src->em_active, src->em_empty, ebox, &vmin, &vmax);
+    return fmaxf(vmax, 0.0f);
+}
 
 /* The bounds of the trilinear density over `n` cells starting at voxel
  * `first` per axis: voxels first - 1 .. first + n + 1, widened by `pad`. */
 static majorant_bounds span_bounds(const source *src, const int64_t first[3], int64_t n)
 {
     grid_ibox box;
-    bool apart = src->empty;
     for (int a = 0; a < 3; ++a) {
         int64_t v0 = first[a] - 1 - src->pad[a], v1 = first[a] + n + 1 + src->pad[a];
         box.min[a] = (int32_t)(v0 < INT32_MIN ? INT32_MIN : v0);
         box.max[a] = (int32_t)(v1 > INT32_MAX ? INT32_MAX : v1);
-        apart = apart || box.max[a] < src->active.min[a] || box.min[a] > src->active.max[a];
     }
     float vmin, vmax;
-    if (apart) /* background only: no need to ask the tree */
-        vmin = vmax = grid_background(src->g);
-    else
-        grid_region_range(src->g, box, &vmin, &vmax);
-    majorant_bounds b = {fmaxf(vmax, 0.0f), 0.0f};
+    range_over(src->g, &src->active, src->empty, box, &vmin, &vmax);
+    majorant_bounds b = {fmaxf(vmax, 0.0f), 0.0f, 0.0f};
     b.min = fminf(fmaxf(vmin, 0.0f), b.max);
+    if (src->em)
+        b.emit = emission_bound(src, box);
     return b;
+}
+
+/* A brick whose bounds are one value holds that value in every cell (the
+ * density's min = max, and no emission or none that could vary). */
+static bool uniform_bounds(majorant_bounds b) { return b.max == b.min && b.emit == 0.0f; }
+
+static bool same_bounds(majorant_bounds a, majorant_bounds b)
+{
+    return a.max == b.max && a.min == b.min && a.emit == b.emit;
 }
 
 /* Bricks per axis for cells of `cell` voxels over [l3, h3]; the count in
@@ -75,7 +133,7 @@ static size_t bound_bricks(const source *src, majorant_grid *mg)
                 majorant_brick *br = &mg->bricks[i];
                 br->bounds = span_bounds(src, first, edge);
                 br->cells = -1;
-                varied += br->bounds.max != br->bounds.min;
+                varied += !uniform_bounds(br->bounds);
             }
     return varied;
 }
@@ -96,14 +154,14 @@ static bool bound_cells(const source *src, majorant_grid *mg, const int32_t bric
                 for (int a = 0; a < 3; ++a)
                     first[a] = mg->origin[a] + ((int64_t)brick[a] * B + c3[a]) * mg->cell;
                 cells[i] = span_bounds(src, first, mg->cell);
-                differ = differ || cells[i].max != cells[0].max || cells[i].min != cells[0].min;
+                differ = differ || !same_bounds(cells[i], cells[0]);
             }
     *uniform = cells[0];
     return differ;
 }
 
-hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad[3],
-                              majorant_grid *out, hz_error *err)
+hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
+                              const int32_t pad[3], majorant_grid *out, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     out->cell = 8;
@@ -114,8 +172,10 @@ hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad
         l3[a] = fmin(fmax(l3[a], (double)INT32_MIN), (double)INT32_MAX);
         h3[a] = fmin(fmax(h3[a], (double)INT32_MIN), (double)INT32_MAX);
     }
-    source src = {g, {{0}, {0}}, false, pad};
+    source src = {g, {{0}, {0}}, false, pad, em, {{0}, {0}}, true};
     src.empty = !grid_index_bounds(g, &src.active);
+    if (em)
+        src.em_empty = !grid_index_bounds(em->grid, &src.em_active);
     /* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose
      * varied bricks fit MAJORANT_MAX_STORED_CELLS. */
     size_t varied;
@@ -155,7 +215,7 @@ hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad
         for (int32_t y = 0; y < out->res[1]; ++y)
             for (int32_t x = 0; x < out->res[0]; ++x, ++i) {
                 majorant_brick *br = &out->bricks[i];
-                if (br->bounds.max == br->bounds.min)
+                if (uniform_bounds(br->bounds))
                     continue;
                 const int32_t b3[3] = {x, y, z};
                 majorant_bounds *cells = out->cells + out->stored_bricks * CELLS_PER_BRICK;
@@ -192,13 +252,9 @@ size_t majorant_grid_bytes(const majorant_grid *mg)
            mg->stored_bricks * CELLS_PER_BRICK * sizeof *mg->cells;
 }
 
-static size_t brick_index(const majorant_grid *mg, const int32_t b[3])
-{
-    return ((size_t)b[2] * (size_t)mg->res[1] + (size_t)b[1]) * (size_t)mg->res[0] +
-           (size_t)b[0];
-}
 
 static size_t cell_index(const int32_t c[3]) { return ((size_t)c[2] * B + c[1]) * B + c[0]; }
+
 
 bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *out)
 {
@@ -211,7 +267,7 @@ bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *o
         b[a] = (int32_t)u / B;
         c[a] = (int32_t)u % B;
     }
-    const majorant_brick *br = &mg->bricks[brick_index(mg, b)];
+    const majorant_brick *br = &mg->bricks[majorant_brick_index(mg, b)];
     *out = br->cells < 0 ? br->bounds : mg->cells[(size_t)br->cells * CELLS_PER_BRICK + cell_index(c)];
     return true;
 }
@@ -287,35 +343,8 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
     return true;
 }
 
-static inline int nearest_axis(const double t[3])
-{
-    return t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
-}
-
-static inline void emit(majorant_walk *w, majorant_segment *seg, double t1, majorant_bounds b)
-{
-    seg->t0 = w->t;
-    seg->t1 = t1 > w->t ? t1 : w->t;
-    seg->max = b.max;
-    seg->min = b.min;
-    w->t = seg->t1;
-}
-
-/* Steps the brick level past the current brick (whose exit is on axis a). */
-static inline void next_brick(majorant_walk *w, int a)
-{
-    if (!(w->brick_next[a] < w->t_end)) {
-        w->done = true;
-        return;
-    }
-    w->brick[a] += w->step[a];
-    w->brick_next[a] += w->brick_delta[a];
-    if (w->brick[a] < 0 || w->brick[a] >= w->mg->res[a])
-        w->done = true; /* rounding left the box a little early: the rest is outside */
-}
-
 /* Starts the cell level in a brick that stores its cells, at w->t. */
-static void enter_brick(majorant_walk *w, const majorant_brick *br, double exit)
+void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, double exit)
 {
     w->brick_exit = exit;
     for (int a = 0; a < 3; ++a) {
@@ -329,33 +358,3 @@ static void enter_brick(majorant_walk *w, const majorant_brick *br, double exit)
     w->cell = w->mg->cells + (size_t)br->cells * CELLS_PER_BRICK + cell_index(w->cell_ijk);
 }
 
-bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
-{
-    while (!w->done) {
-        if (w->cell) {
-            int a = nearest_axis(w->cell_next);
-            int32_t c = w->cell_ijk[a] + w->step[a];
-            bool leave = !(w->cell_next[a] < w->brick_exit) || (uint32_t)c >= B;
-            emit(w, seg, leave ? w->brick_exit : w->cell_next[a], *w->cell);
-            if (leave) {
-                w->cell = NULL;
-                next_brick(w, nearest_axis(w->brick_next));
-            } else {
-                w->cell_ijk[a] = c;
-                w->cell += w->cell_stride[a];
-                w->cell_next[a] += w->cell_delta[a];
-            }
-            return true;
-        }
-        int a = nearest_axis(w->brick_next);
-        double exit = w->brick_next[a] < w->t_end ? w->brick_next[a] : w->t_end;
-        const majorant_brick *br = &w->mg->bricks[brick_index(w->mg, w->brick)];
-        if (br->cells < 0) {
-            emit(w, seg, exit, br->bounds);
-            next_brick(w, a);
-            return true;
-        }
-        enter_brick(w, br, exit);
-    }
-    return false;
-}

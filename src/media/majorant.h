@@ -31,20 +31,30 @@
 #include <stdint.h>
 
 #include "core/error.h"
+#include "core/transform.h"
 #include "core/vec.h"
 #include "media/grid.h"
 
 /* Cells per brick edge. */
 #define MAJORANT_BRICK 8
-/* At most this many bricks (32^3: 384 KiB) and this many stored cells (2^22:
- * 32 MiB, a support of 1024^3 voxels active everywhere at leaf resolution);
+/* At most this many bricks (32^3: 512 KiB) and this many stored cells (2^22:
+ * 48 MiB, a support of 1024^3 voxels active everywhere at leaf resolution);
  * beyond either, cells grow. */
 #define MAJORANT_MAX_BRICKS (1u << 15)
 #define MAJORANT_MAX_STORED_CELLS (1u << 22)
 
 typedef struct {
-    float max, min;
+    float max, min; /* of the density */
+    float emit;     /* upper bound of the emission grid (0 without one) */
 } majorant_bounds;
+
+/* A grid of free emission (a medium's "emissionname") the cells also bound:
+ * where the density is 0 but the emission is not, a cell is not empty. */
+typedef struct {
+    const grid *grid;
+    bool aligned;                /* the density grid's index space */
+    transform eindex_from_index; /* its index from the density's index */
+} majorant_emission;
 
 typedef struct {
     majorant_bounds bounds; /* of the whole brick (exact for every cell when uniform) */
@@ -62,9 +72,10 @@ typedef struct {
 
 /* Builds the grid covering the index box [lo, hi] (the support; lo > hi: an
  * empty grid with no bricks). `pad` (>= 0, per axis) widens every cell's box
- * of voxels read. Fails only when out of memory. */
-hz_status majorant_grid_build(const grid *g, vec3 lo, vec3 hi, const int32_t pad[3],
-                              majorant_grid *out, hz_error *err);
+ * of voxels read. `em` (NULL: none) adds the emission bounds. Fails only when
+ * out of memory. */
+hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
+                              const int32_t pad[3], majorant_grid *out, hz_error *err);
 void majorant_grid_free(majorant_grid *mg);
 size_t majorant_grid_bytes(const majorant_grid *mg);
 /* The bounds of the cell holding the index-space point p; false outside the
@@ -90,17 +101,90 @@ typedef struct {
     bool done;
 } majorant_walk;
 
-/* One interval crossed: [t0, t1] and the density bounds in it. */
+/* One interval crossed: [t0, t1] and the density bounds in it (and the
+ * emission's upper bound). */
 typedef struct {
     double t0, t1;
     double max, min;
+    double emit;
 } majorant_segment;
 
 /* Starts a walk over [t0, t1] (finite). False when the ray misses the grid. */
 bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3 d, double t0,
                          double t1);
+
+/* ---- the walk's steps, inline: they run once per cell crossed ---- */
+
+static inline size_t majorant_brick_index(const majorant_grid *mg, const int32_t b[3])
+{
+    return ((size_t)b[2] * (size_t)mg->res[1] + (size_t)b[1]) * (size_t)mg->res[0] +
+           (size_t)b[0];
+}
+
+/* Starts the cell level in a brick that stores its cells, at w->t. */
+void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, double exit);
+
+static inline int majorant_nearest_axis(const double t[3])
+{
+    return t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
+}
+
+/* Reports [w->t, t1] with bounds b and moves on to t1. */
+static inline void majorant_walk_emit(majorant_walk *w, majorant_segment *seg, double t1,
+                                      majorant_bounds b)
+{
+    seg->t0 = w->t;
+    seg->t1 = t1 > w->t ? t1 : w->t;
+    seg->max = b.max;
+    seg->min = b.min;
+    seg->emit = b.emit;
+    w->t = seg->t1;
+}
+
+/* Steps the brick level past the current brick (whose exit is on axis a). */
+static inline void majorant_walk_next_brick(majorant_walk *w, int a)
+{
+    if (!(w->brick_next[a] < w->t_end)) {
+        w->done = true;
+        return;
+    }
+    w->brick[a] += w->step[a];
+    w->brick_next[a] += w->brick_delta[a];
+    if (w->brick[a] < 0 || w->brick[a] >= w->mg->res[a])
+        w->done = true; /* rounding left the box a little early: the rest is outside */
+}
+
 /* The next interval, or false at the end of [t0, t1]. Segments are
  * contiguous and cover the part of [t0, t1] inside the grid. */
-bool majorant_walk_next(majorant_walk *w, majorant_segment *seg);
+static inline bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
+{
+    while (!w->done) {
+        if (w->cell) {
+            int a = majorant_nearest_axis(w->cell_next);
+            int32_t c = w->cell_ijk[a] + w->step[a];
+            bool leave = !(w->cell_next[a] < w->brick_exit) || (uint32_t)c >= MAJORANT_BRICK;
+            majorant_walk_emit(w, seg, leave ? w->brick_exit : w->cell_next[a], *w->cell);
+            if (leave) {
+                w->cell = NULL;
+                majorant_walk_next_brick(w, majorant_nearest_axis(w->brick_next));
+            } else {
+                w->cell_ijk[a] = c;
+                w->cell += w->cell_stride[a];
+                w->cell_next[a] += w->cell_delta[a];
+            }
+            return true;
+        }
+        int a = majorant_nearest_axis(w->brick_next);
+        double exit = w->brick_next[a] < w->t_end ? w->brick_next[a] : w->t_end;
+        const majorant_brick *br = &w->mg->bricks[majorant_brick_index(w->mg, w->brick)];
+        if (br->cells < 0) {
+            majorant_walk_emit(w, seg, exit, br->bounds);
+            majorant_walk_next_brick(w, a);
+            return true;
+        }
+        majorant_walk_enter_brick(w, br, exit);
+    }
+    return false;
+}
 
 #endif

@@ -68,6 +68,14 @@ typedef struct {
     double Le_scale;      /* Lescale */
 } temperature_params;
 
+/* What MakeNamedMedium says about haze's own grids of a nanovdb medium. */
+typedef struct {
+    const char *emissionname; /* NULL: no free emission */
+    rgb tint;                 /* luminance-normalised "Le" */
+    double scale;             /* "Lescale" */
+    const char *colorname;    /* NULL: no colour grid */
+} extra_params;
+
 /* What MakeNamedMedium says about a grid's motion. */
 typedef struct {
     const char *velocityname; /* NULL: no velocity grid */
@@ -169,7 +177,7 @@ static hz_status adopt_temperature(grid *t, const temperature_params *tp, medium
 /* Loads the temperature grid of `path` when there is one (or must be one),
  * and tabulates its blackbody over the range its values map to. */
 static hz_status load_temperature(medium_entity *e, const char *path, const temperature_params *tp,
-                                  grid *t, medium *out, hz_error *err)
+                                  bool colour_only, grid *t, medium *out, hz_error *err)
 {
     const char *name = e->name ? e->name : "";
     file_loc loc = tp->named ? params_loc(&e->entity.params, "temperaturename") : e->entity.loc;
@@ -179,12 +187,20 @@ static hz_status load_temperature(medium_entity *e, const char *path, const temp
          * it is not silently ignored. */
         static const char *const shaping[] = {"Lescale", "temperatureoffset", "temperaturecutoff",
                                               "temperaturescale"};
-        for (size_t i = 0; i < sizeof shaping / sizeof shaping[0]; ++i)
-            if (params_has(&e->entity.params, shaping[i]))
+        /* Beside a free emission grid, Lescale scales that. */
+        for (size_t i = colour_only ? 1 : 0; i < sizeof shaping / sizeof shaping[0]; ++i) {
+            if (!params_has(&e->entity.params, shaping[i]))
+                continue;
+            if (colour_only)
                 return hz_fail_at(err, params_loc(&e->entity.params, shaping[i]),
-                                  "MakeNamedMedium \"%s\": \"%s\" needs a temperature grid, "
-                                  "and %s has no grid \"%s\"",
-                                  name, shaping[i], path, tp->name);
+                                  "MakeNamedMedium \"%s\": \"%s\" needs a temperature grid "
+                                  "(\"string temperaturename\") to colour the emission",
+                                  name, shaping[i]);
+            return hz_fail_at(err, params_loc(&e->entity.params, shaping[i]),
+                              "MakeNamedMedium \"%s\": \"%s\" needs a temperature grid, "
+                              "and %s has no grid \"%s\"",
+                              name, shaping[i], path, tp->name);
+        }
         return HZ_OK;
     }
     if (grid_check_finite(t, &inner) != HZ_OK) {
@@ -202,7 +218,88 @@ static hz_status load_temperature(medium_entity *e, const char *path, const temp
     if (adopt_temperature(t, tp, out, &emits, &inner) != HZ_OK)
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": temperature grid \"%s\" in %s: %s",
                           name, tp->name, path, inner.message);
-    out->emissive = emits && tp->Le_scale > 0.0 && !rgb_is_black(out->sigma_a);
+    /* Beside a free emission grid the temperature only colours it. */
+    out->grid.emission_by_temperature = colour_only;
+    out->emissive = !colour_only && emits && tp->Le_scale > 0.0 && !rgb_is_black(out->sigma_a);
+    return HZ_OK;
+}
+
+/* The transform from the density grid's index space to `g`'s, and whether
+ * they are the same. */
+static transform index_from_density_index(const grid *density, const grid *g, bool *aligned)
+{
+    transform d_world_from_index = grid_world_from_index_transform(density);
+    transform g_world_from_index = grid_world_from_index_transform(g);
+    *aligned = transforms_equal(&d_world_from_index, &g_world_from_index);
+    return transform_compose(transform_inverse(g_world_from_index), d_world_from_index);
+}
+
+/* Grows the support box (density index space) by the support of the grid
+ * whose index space `gindex_from_index` maps to: its box's corners mapped
+ * back. */
+static void grow_support(medium *out, const grid *g, const transform *gindex_from_index)
+{
+    vec3 lo, hi;
+    if (!grid_support_bounds(g, &lo, &hi))
+        return;
+    transform index_from_gindex = transform_inverse(*gindex_from_index);
+    vec3 *slo = &out->grid.support_lo, *shi = &out->grid.support_hi;
+    bool empty = !(slo->x <= shi->x);
+    for (int c = 0; c < 8; ++c) {
+        vec3 p = transform_point(&index_from_gindex, v3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y,
+                                                        c & 4 ? hi.z : lo.z));
+        if (empty) {
+            *slo = *shi = p;
+            empty = false;
+        }
+        *slo = v3(fmin(slo->x, p.x), fmin(slo->y, p.y), fmin(slo->z, p.z));
+        *shi = v3(fmax(shi->x, p.x), fmax(shi->y, p.y), fmax(shi->z, p.z));
+    }
+}
+
+/* Adopts the free emission grid E (the medium owns it from here): its values
+ * are checked as a density's (finite, >= 0), and where it can glow joins the
+ * support, so that neither clipping nor the majorant grid drops emission
+ * where there is no density. */
+static hz_status adopt_emission(medium_entity *e, const char *path, const extra_params *xp,
+                                grid *E, medium *out, hz_error *err)
+{
+    out->grid.emission = E;
+    hz_error inner;
+    if (grid_check_density(E, &inner) != HZ_OK)
+        return hz_fail_at(err, params_loc(&e->entity.params, "emissionname"),
+                          "MakeNamedMedium \"%s\": emission grid \"%s\" in %s: %s",
+                          e->name ? e->name : "", xp->emissionname, path, inner.message);
+    if (grid_background(E) != 0.0)
+        return hz_fail_at(err, params_loc(&e->entity.params, "emissionname"),
+                          "MakeNamedMedium \"%s\": emission grid \"%s\" in %s has background "
+                          "%g; it must be 0 (all space would glow)",
+                          e->name ? e->name : "", xp->emissionname, path, grid_background(E));
+    out->grid.eindex_from_index =
+        index_from_density_index(out->grid.grid, E, &out->grid.emission_aligned);
+    out->grid.emission_tint = xp->tint;
+    out->grid.emission_scale = xp->scale;
+    out->free_emission = xp->scale > 0.0 && grid_max_value(E) > 0.0 &&
+                         (out->grid.emission_by_temperature || !rgb_is_black(xp->tint));
+    grow_support(out, E, &out->grid.eindex_from_index);
+    return HZ_OK;
+}
+
+/* Adopts the colour grid C (a vec3 grid; the medium owns it from here).
+ * Lookups clamp each channel to [0, 1], a NaN to 0, so no value can make an
+ * albedo above 1 or below 0; non-finite statistics mark a broken file. */
+static hz_status adopt_color(medium_entity *e, const char *path, const extra_params *xp, grid *C,
+                             medium *out, hz_error *err)
+{
+    out->grid.color = C;
+    if (!isfinite(grid_max_value(C)) || !isfinite(grid_background(C)))
+        return hz_fail_at(err, params_loc(&e->entity.params, "colorname"),
+                          "MakeNamedMedium \"%s\": colour grid \"%s\" in %s has non-finite "
+                          "values",
+                          e->name ? e->name : "", xp->colorname, path);
+    out->grid.cindex_from_index =
+        index_from_density_index(out->grid.grid, C, &out->grid.color_aligned);
+    out->coloured = !rgb_is_black(out->sigma_s);
     return HZ_OK;
 }
 
@@ -213,7 +310,8 @@ static hz_status load_temperature(medium_entity *e, const char *path, const temp
  * stored statistics) rather than clamping them. */
 static hz_status load_grid(medium_entity *e, transform render_from_world, const char *filename,
                            const char *gridname, const motion_params *mp,
-                           const temperature_params *tp, medium *out, hz_error *err)
+                           const temperature_params *tp, const extra_params *xp, medium *out,
+                           hz_error *err)
 {
     file_loc loc = e->entity.loc;
     const char *name = e->name ? e->name : "";
@@ -221,16 +319,32 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     if (!path)
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": out of memory", name);
     /* Every grid the medium needs, in one read of the file (one OpenVDB
-     * reader process for a .vdb file): density, velocity, temperature. */
-    grid_request req[3] = {{gridname, GRID_FLOAT, false}};
-    size_t nreq = 1, vi = 0, ti;
+     * reader process for a .vdb file): density, velocity, temperature (of
+     * the file, as pbrt-v4, unless a free emission grid is named: then only
+     * when named), emission, colour. Index 0 (the density) marks the absent. */
+    grid_request req[5] = {{gridname, GRID_FLOAT, false}};
+    const char *what[5] = {"grid", "velocity grid", "temperature grid", "emission grid",
+                           "colour grid"};
+    const char *param[5] = {NULL, "velocityname", "temperaturename", "emissionname",
+                            "colorname"};
+    size_t nreq = 1, at[5] = {0}; /* at[k]: where grid kind k is in req, 0: absent */
     if (mp->velocityname) {
-        vi = nreq;
+        at[1] = nreq;
         req[nreq++] = (grid_request){mp->velocityname, GRID_VEC3, false};
     }
-    ti = nreq;
-    req[nreq++] = (grid_request){tp->name, GRID_FLOAT, !tp->named};
-    grid *grids[3] = {NULL, NULL, NULL};
+    if (!xp->emissionname || tp->named) {
+        at[2] = nreq;
+        req[nreq++] = (grid_request){tp->name, GRID_FLOAT, !tp->named};
+    }
+    if (xp->emissionname) {
+        at[3] = nreq;
+        req[nreq++] = (grid_request){xp->emissionname, GRID_FLOAT, false};
+    }
+    if (xp->colorname) {
+        at[4] = nreq;
+        req[nreq++] = (grid_request){xp->colorname, GRID_VEC3, false};
+    }
+    grid *grids[5] = {NULL, NULL, NULL, NULL, NULL};
     size_t failed = 0;
     hz_error inner;
     hz_status st = grid_load_set(path, req, nreq, grids, &failed, &inner);
@@ -238,13 +352,14 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
         free(path);
         if (failed == 0)
             return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
-        if (failed == vi && mp->velocityname)
-            return hz_fail_at(err, params_loc(&e->entity.params, "velocityname"),
-                              "MakeNamedMedium \"%s\": velocity grid: %s", name, inner.message);
-        return hz_fail_at(err,
-                          tp->named ? params_loc(&e->entity.params, "temperaturename")
-                                    : e->entity.loc,
-                          "MakeNamedMedium \"%s\": temperature grid: %s", name, inner.message);
+        size_t k = 1;
+        while (k < 4 && at[k] != failed)
+            ++k;
+        file_loc where = params_has(&e->entity.params, param[k])
+                             ? params_loc(&e->entity.params, param[k])
+                             : e->entity.loc;
+        return hz_fail_at(err, where, "MakeNamedMedium \"%s\": %s: %s", name, what[k],
+                          inner.message);
     }
     grid *g = grids[0];
 
@@ -285,14 +400,23 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
     }
     out->grid.background = background;
     out->grid.density_max = nonempty ? grid_max_value(g) : 0.0; /* values >= 0 = background */
-    /* The medium owns each grid from here (the caller frees what was
-     * adopted when a later step fails). */
-    if (mp->velocityname)
-        st = load_velocity(e, path, mp, grids[vi], out, err);
+    /* Each step takes its grid (adopts it, or destroys it); after a failure
+     * the rest are destroyed. The caller frees what was adopted. */
+    if (at[1])
+        st = load_velocity(e, path, mp, grids[at[1]], out, err);
+    bool colour_only = xp->emissionname != NULL;
     if (st == HZ_OK)
-        st = load_temperature(e, path, tp, grids[ti], out, err);
-    else
-        grid_destroy(grids[ti]);
+        st = load_temperature(e, path, tp, colour_only, at[2] ? grids[at[2]] : NULL, out, err);
+    else if (at[2])
+        grid_destroy(grids[at[2]]);
+    if (st == HZ_OK && at[3])
+        st = adopt_emission(e, path, xp, grids[at[3]], out, err);
+    else if (at[3])
+        grid_destroy(grids[at[3]]);
+    if (st == HZ_OK && at[4])
+        st = adopt_color(e, path, xp, grids[at[4]], out, err);
+    else if (at[4])
+        grid_destroy(grids[at[4]]);
     free(path);
     return st;
 }
@@ -318,7 +442,10 @@ static hz_status build_majorants(medium *m, const medium_times *times, hz_error 
         lo = v3_sub(lo, v3(pad[0], pad[1], pad[2]));
         hi = v3_add(hi, v3(pad[0], pad[1], pad[2]));
     }
-    return majorant_grid_build(m->grid.grid, lo, hi, pad, &m->grid.majorant, err);
+    majorant_emission em = {m->grid.emission, m->grid.emission_aligned,
+                            m->grid.eindex_from_index};
+    return majorant_grid_build(m->grid.grid, m->free_emission ? &em : NULL, lo, hi, pad,
+                               &m->grid.majorant, err);
 }
 
 /* The dense samples `values` (uniformgrid_params' counts) as the medium's
@@ -515,8 +642,12 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     double g = params_float(pl, "g", 0.0);
     if (!(fabs(g) < 1.0))
         params_reject(pl, "g", "\"g\" must lie in (-1, 1), got %g", g);
-    /* Emission: pbrt-v4's "Le" (homogeneous media only) times "Lescale". */
-    rgb Le = is_grid && !uniform ? rgb_grey(0.0) : params_illuminant(pl, "Le", rgb_grey(0.0));
+    /* Emission: pbrt-v4's "Le" (homogeneous media only) times "Lescale"; on
+     * a nanovdb medium with a free emission grid, "Le" is its colour. */
+    bool free_emission = strcmp(type, "nanovdb") == 0 && params_has(pl, "emissionname");
+    rgb Le = free_emission                ? params_illuminant(pl, "Le", rgb_grey(1.0))
+             : is_grid && !uniform ? rgb_grey(0.0)
+                                   : params_illuminant(pl, "Le", rgb_grey(0.0));
     double Le_scale = uniform || cloud ? 1.0 : params_float(pl, "Lescale", 1.0);
     rgbgrid_params rg = {{{1, 1, 1}, {0, 0, 0}, {1, 1, 1}, NULL, NULL, NULL}, NULL, NULL, NULL};
     if (rgbgrid)
@@ -531,6 +662,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     const char *filename = NULL, *gridname = NULL;
     motion_params mp = {NULL, 1.0, time_start, time_start, time_end};
     temperature_params tp = {"temperature", false, 0.0, 1.0, 1.0};
+    extra_params xp = {NULL, Le, Le_scale, NULL};
     uniformgrid_params ug = {{1, 1, 1}, {0, 0, 0}, {1, 1, 1}, NULL, NULL, NULL};
     cloud_params cp = {1.0f, 1.0f, 5.0f};
     vec3 cp0 = v3(0, 0, 0), cp1 = v3(1, 1, 1);
@@ -584,6 +716,18 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
             params_reject(pl, "temperaturename", "\"temperaturename\" is empty");
         read_temperature_params(pl, &tp);
         tp.Le_scale = Le_scale;
+        /* haze's own: a free emission grid and a colour grid. */
+        xp.emissionname = params_string(pl, "emissionname", NULL);
+        xp.colorname = params_string(pl, "colorname", NULL);
+        const char *names[2] = {"emissionname", "colorname"};
+        const char *given[2] = {xp.emissionname, xp.colorname};
+        for (int k = 0; k < 2; ++k)
+            if (given[k] && !given[k][0])
+                params_reject(pl, names[k], "\"%s\" is empty", names[k]);
+        if (xp.emissionname && tp.named && params_has(pl, "Le"))
+            params_reject(pl, "Le",
+                          "give \"Le\" (one colour) or \"temperaturename\" (each voxel's "
+                          "blackbody colour) to colour the emission grid, not both");
     }
 
     rgb sa = rgb_scale(sigma_a, scale), ss = rgb_scale(sigma_s, scale);
@@ -649,7 +793,7 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
         return hz_fail_at(err, params_loc(pl, "gridname"),
                           "MakeNamedMedium \"%s\": \"gridname\" is empty", name);
     }
-    if (load_grid(e, render_from_world, filename, gridname, &mp, &tp, out, err) != HZ_OK ||
+    if (load_grid(e, render_from_world, filename, gridname, &mp, &tp, &xp, out, err) != HZ_OK ||
         build_majorants(out, times, err) != HZ_OK) {
         medium_free(out);
         memset(out, 0, sizeof *out);
@@ -674,6 +818,8 @@ void medium_free(medium *m)
         grid_destroy(m->grid.velocity);
         grid_destroy(m->grid.temperature);
         grid_destroy(m->grid.Le_scale_grid);
+        grid_destroy(m->grid.emission);
+        grid_destroy(m->grid.color);
         blackbody_table_free(&m->grid.blackbody);
         majorant_grid_free(&m->grid.majorant);
     }
@@ -681,6 +827,8 @@ void medium_free(medium *m)
     m->grid.velocity = NULL;
     m->grid.temperature = NULL;
     m->grid.Le_scale_grid = NULL;
+    m->grid.emission = NULL;
+    m->grid.color = NULL;
 }
 
 bool medium_grid_ray_make(const medium *m, vec3 o, vec3 d, double time, medium_grid_ray *out)
@@ -774,6 +922,10 @@ void medium_accessor_init(const medium *m, medium_accessor *a)
         grid_accessor_init(m->grid.temperature, &a->temperature);
     if (m->grid.Le_scale_grid)
         grid_accessor_init(m->grid.Le_scale_grid, &a->Le_scale);
+    if (m->grid.emission)
+        grid_accessor_init(m->grid.emission, &a->emission);
+    if (m->grid.color)
+        grid_accessor_init(m->grid.color, &a->color);
     if (m->kind == MEDIUM_RGBGRID) {
         grid *const *g[3] = {m->rgbg.sigma_a, m->rgbg.sigma_s, m->rgbg.Le};
         for (int k = 0; k < 3; ++k)

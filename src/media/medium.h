@@ -57,6 +57,7 @@
 #define HAZE_MEDIA_MEDIUM_H
 
 #include <stdbool.h>
+#include <math.h>
 #include <stdint.h>
 
 #include "core/animated_transform.h"
@@ -77,7 +78,9 @@ typedef struct {
     rgb sigma_a, sigma_s;    /* `scale` applied; grid media: per unit density */
     double g;                /* Henyey–Greenstein asymmetry */
     rgb Le;                  /* homogeneous emission (Lescale applied); source sigma_a Le */
-    bool emissive;           /* some emission: the integrators gather it */
+    bool emissive;           /* absorbing emission (sigma_a Le): the integrators gather it */
+    bool free_emission;      /* emission whatever the density (grid.emission) */
+    bool coloured;           /* a colour grid scales the scattering albedo */
     struct {
         grid *grid;                  /* owned */
         /* Grid index space from render space: affine, so a ray o + t d in render
@@ -112,6 +115,23 @@ typedef struct {
          * Le_scale_grid(p) times the temperature's blackbody, or times Le. */
         grid *Le_scale_grid;             /* owned */
         transform lsindex_from_index;    /* its index from the density's index */
+
+        /* Free emission ("emissionname"; NULL: none): radiance emitted per
+         * unit length, emission_scale E(p) times a colour, whatever the
+         * density: emission_tint, or (emission_by_temperature) the blackbody
+         * colour, of luminance 1, of the temperature grid's kelvins. */
+        grid *emission;                  /* owned; a float grid */
+        bool emission_aligned;           /* same index space as the density grid */
+        transform eindex_from_index;     /* its index from the density's index */
+        rgb emission_tint;               /* luminance-normalised Le */
+        double emission_scale;           /* Lescale */
+        bool emission_by_temperature;
+        /* A colour grid ("colorname"; NULL: none): per channel, the
+         * scattering albedo times its value clamped to [0, 1]; sigma_t is
+         * unchanged (what is not scattered is absorbed). */
+        grid *color;                     /* owned; a vec3 grid */
+        bool color_aligned;
+        transform cindex_from_index;
 
         /* Velocity (Eulerian motion blur); NULL: none. */
         grid *velocity;                  /* owned; a vec3 grid, medium units per time */
@@ -186,7 +206,7 @@ bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1);
 
 /* Per-thread lookup caches of a grid medium's grids. */
 typedef struct {
-    grid_accessor density, velocity, temperature, Le_scale;
+    grid_accessor density, velocity, temperature, Le_scale, emission, color;
     grid_accessor rgb[9]; /* rgbgrid: sigma_a, sigma_s, Le channels */
 } medium_accessor;
 
@@ -265,6 +285,40 @@ static inline rgb medium_grid_Le(const medium *m, medium_accessor *a, vec3 p, ui
                 m->grid.temperature_offset) *
                m->grid.temperature_scale;
     return rgb_scale(blackbody_table_at(&m->grid.blackbody, T), s);
+}
+
+/* Free emission at a density-index point p (m->free_emission): the radiance
+ * emitted per unit length there. */
+static inline rgb medium_grid_emission(const medium *m, medium_accessor *a, vec3 p,
+                                       uint64_t *lookups)
+{
+    vec3 q = m->grid.emission_aligned ? p : transform_point(&m->grid.eindex_from_index, p);
+    ++*lookups;
+    double e = grid_density_index(m->grid.emission, &a->emission, q) * m->grid.emission_scale;
+    if (!(e > 0.0))
+        return rgb_grey(0.0);
+    if (!m->grid.emission_by_temperature)
+        return rgb_scale(m->grid.emission_tint, e);
+    vec3 qt = m->grid.temperature_aligned ? p : transform_point(&m->grid.tindex_from_index, p);
+    ++*lookups;
+    double T = (grid_density_index(m->grid.temperature, &a->temperature, qt) -
+                m->grid.temperature_offset) *
+               m->grid.temperature_scale;
+    rgb c = blackbody_table_at(&m->grid.blackbody, T);
+    double y = rgb_luminance(c);
+    return y > 0.0 ? rgb_scale(c, e / y) : rgb_grey(0.0);
+}
+
+/* The colour grid's albedo scale at a density-index point p (m->coloured),
+ * each channel clamped to [0, 1]. */
+static inline rgb medium_grid_color(const medium *m, medium_accessor *a, vec3 p,
+                                    uint64_t *lookups)
+{
+    vec3 q = m->grid.color_aligned ? p : transform_point(&m->grid.cindex_from_index, p);
+    ++*lookups;
+    vec3 c = grid_vec3_index(m->grid.color, &a->color, q);
+    return rgb_make(fmin(fmax(c.x, 0.0), 1.0), fmin(fmax(c.y, 0.0), 1.0),
+                    fmin(fmax(c.z, 0.0), 1.0));
 }
 
 #endif

@@ -174,6 +174,22 @@ static inline pstat *image_stats(const render_scene *rs, int w, int h, int spp)
     return out;
 }
 
+/* Mean and standard error of the mean over a w x h image's pixels. */
+static inline void image_mean_se(const render_scene *rs, int w, int h, int spp, rgb *mean, rgb *se)
+{
+    pstat *px = image_stats(rs, w, h, spp);
+    int n = w * h;
+    double m[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    for (int i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c) {
+            m[c] += ch(px[i].mean, c) / n;
+            v[c] += ch(px[i].se, c) * ch(px[i].se, c) / ((double)n * n);
+        }
+    free(px);
+    *mean = rgb_make(m[0], m[1], m[2]);
+    *se = rgb_make(sqrt(v[0]), sqrt(v[1]), sqrt(v[2]));
+}
+
 static inline render_scene *build(const char *text) { return build_scene_or_fail(text, NULL); }
 
 /* Henyey–Greenstein with pbrt-v4's convention: cos_theta = dot(wo, wi), both

@@ -30,19 +30,10 @@ static rgb slab_closed_form(rgb Le, rgb sigma_a, rgb sigma_t, double d)
     return rgb_make(v[0], v[1], v[2]);
 }
 
-/* Mean and standard error over the image's pixels. */
+/* Mean and standard error over the 4 x 4 image's pixels. */
 static void image_mean(render_scene *rs, int spp, rgb *mean, rgb *se)
 {
-    pstat *px = image_stats(rs, 4, 4, spp);
-    double m[3] = {0, 0, 0}, v[3] = {0, 0, 0};
-    for (int i = 0; i < 16; ++i)
-        for (int c = 0; c < 3; ++c) {
-            m[c] += ch(px[i].mean, c) / 16;
-            v[c] += ch(px[i].se, c) * ch(px[i].se, c) / 256;
-        }
-    free(px);
-    *mean = rgb_make(m[0], m[1], m[2]);
-    *se = rgb_make(sqrt(v[0]), sqrt(v[1]), sqrt(v[2]));
+    image_mean_se(rs, 4, 4, spp, mean, se);
 }
 
 /* Homogeneous: exact under singlescatter (closed form, with or without

@@ -77,7 +77,7 @@ static bool try_load(const unsigned char *bytes, size_t n, char *message, size_t
     if (grid_support_bounds(g, &lo, &hi)) {
         majorant_grid mg;
         int32_t pad[3] = {0, 0, 0};
-        if (majorant_grid_build(g, lo, hi, pad, &mg, &err) == HZ_OK)
+        if (majorant_grid_build(g, NULL, lo, hi, pad, &mg, &err) == HZ_OK)
             majorant_grid_free(&mg);
     }
     grid_accessor acc;
