@@ -288,14 +288,9 @@ static grid_sample sample_at(segment_walk *sw, double t)
     return g;
 }
 
-/* sigma_s and sigma_a at a sample with albedo scale C: what is not
- * scattered is absorbed, sigma_t unchanged. */
+/* sigma_s at a sample with albedo scale C (sigma_t unchanged: what is not
+ * scattered is absorbed). */
 static inline rgb coloured_sigma_s(const medium *m, rgb C) { return rgb_mul(m->sigma_s, C); }
-
-static inline rgb coloured_sigma_a(const medium *m, rgb C)
-{
-    return rgb_add(m->sigma_a, rgb_mul(m->sigma_s, rgb_sub(rgb_grey(1.0), C)));
-}
 
 /* Free emission over a stratum of constant density d and emission eps:
  * eps (1 - e^{-sigma_t d dt}) / (sigma_t d) per channel (eps dt where
@@ -331,10 +326,9 @@ static bool march_strata_extras(segment_walk *sw, double b)
             sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, free_emission_over(g.eps, sigma_t,
                                                                           g.density, s->dt,
                                                                           step_t)));
-        if (sw->emissive)
-            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, rgb_mul(frac_of,
-                                                                        coloured_sigma_a(m, g.C))),
-                                                 g.Le));
+        if (sw->emissive) /* the colour tints the scattering, not the emission */
+            sw->Lseg = rgb_add(sw->Lseg,
+                               rgb_mul(rgb_mul(sw->T, rgb_mul(frac_of, m->sigma_a)), g.Le));
         if (sw->scatters)
             sw->Lseg = rgb_add(sw->Lseg,
                                rgb_mul(rgb_mul(sw->T, rgb_mul(frac_of, coloured_sigma_s(m, g.C))),
@@ -401,8 +395,7 @@ static void gather_sample_extras(segment_walk *sw)
         add = rgb_add(add, rgb_mul(rgb_scale(coloured_sigma_s(sw->m, g.C), g.density * s->dt),
                                    inscattered_at(sw, s->t)));
     if (g.density > 0.0 && sw->emissive)
-        add = rgb_add(add, rgb_mul(rgb_scale(coloured_sigma_a(sw->m, g.C), g.density * s->dt),
-                                   g.Le));
+        add = rgb_add(add, rgb_mul(rgb_scale(sw->m->sigma_a, g.density * s->dt), g.Le));
     sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, add));
 }
 

@@ -48,8 +48,11 @@ static volpath_event grid_event(tracker *tr, double t)
         ev.sigma_a = rgb_scale(rgb_add(m->sigma_a, rgb_sub(m->sigma_s, ss)), d);
         ev.sigma_s = rgb_scale(ss, d);
     }
+    /* Absorbing emission keeps the medium's own sigma_a: the colour tints
+     * the scattering, not the fire. */
     if (tr->emission && m->emissive && d > 0.0)
-        ev.emission = rgb_mul(ev.sigma_a, medium_grid_Le(m, &tr->src.acc, p, lookups));
+        ev.emission =
+            rgb_mul(rgb_scale(m->sigma_a, d), medium_grid_Le(m, &tr->src.acc, p, lookups));
     if (tr->emission && m->free_emission)
         ev.emission = rgb_add(ev.emission, medium_grid_emission(m, &tr->src.acc, p, lookups));
     return ev;

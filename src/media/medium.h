@@ -128,7 +128,8 @@ typedef struct {
         bool emission_by_temperature;
         /* A colour grid ("colorname"; NULL: none): per channel, the
          * scattering albedo times its value clamped to [0, 1]; sigma_t is
-         * unchanged (what is not scattered is absorbed). */
+         * unchanged (what is not scattered is absorbed); absorbing emission
+         * keeps the uncoloured sigma_a. */
         grid *color;                     /* owned; a vec3 grid */
         bool color_aligned;
         transform cindex_from_index;
