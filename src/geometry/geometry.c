@@ -655,6 +655,24 @@ struct RTCSceneTy *geometry_embree_scene(const geometry *g) { return g->scene; }
 
 bool geometry_has_motion(const geometry *g) { return g->motion; }
 
+static bool shapes_reference_media(const geom_shape *shapes, size_t n)
+{
+    for (size_t i = 0; i < n; ++i)
+        if (!shapes[i].left_out && (shapes[i].medium_inside >= 0 || shapes[i].medium_outside >= 0))
+            return true;
+    return false;
+}
+
+bool geometry_references_media(const geometry *g)
+{
+    if (shapes_reference_media(g->shapes, g->shape_count))
+        return true;
+    for (size_t i = 0; i < g->object_count; ++i)
+        if (shapes_reference_media(g->objects[i].shapes, g->objects[i].shape_count))
+            return true;
+    return false;
+}
+
 size_t geometry_shape_count(const geometry *g) { return g->shape_count; }
 geom_shape *geometry_shape(geometry *g, size_t i) { return &g->shapes[i]; }
 

@@ -103,6 +103,11 @@ struct RTCSceneTy *geometry_embree_scene(const geometry *g);
 /* True when some shape or instance moves (the scene has Embree time steps). */
 bool geometry_has_motion(const geometry *g);
 
+/* True when some shape (top-level or of an object) names a medium in its
+ * MediumInterface: the only way, besides the camera's medium, for a ray to
+ * enter one. */
+bool geometry_references_media(const geometry *g);
+
 /* Top-level shapes, in scene_desc.shapes order (index = shape index). */
 size_t geometry_shape_count(const geometry *g);
 geom_shape *geometry_shape(geometry *g, size_t i);

@@ -294,7 +294,13 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
                     "maxdepth 5); name Integrator \"volpath\" for pbrt-v4's image\n",
                     file);
     }
-    integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media, rs->medium_count};
+    /* Media that no ray can enter (no shape names one, the camera sits in
+     * none) cost nothing: the integrators see a scene without media, so its
+     * shadow rays stay occlusion tests and the image is the one without
+     * them, byte for byte. */
+    bool media_used = rs->cam.medium >= 0 || geometry_references_media(rs->geom);
+    integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media,
+                            media_used ? rs->medium_count : 0};
     return integrator_init(&rs->integ, &ip, &in, err);
 }
 

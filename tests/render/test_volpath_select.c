@@ -229,6 +229,57 @@ static void test_cloud_without_integrator(void **state)
     free(text);
 }
 
+/* Media nothing references (no shape names one, the camera sits in none)
+ * cost nothing: the radiance is the scene's without them, sample for sample,
+ * under both integrators (shadow rays stay occlusion tests, no sampler
+ * dimension is spent on media). */
+static void test_unreferenced_media_are_free(void **state)
+{
+    (void)state;
+    const char *fmt =
+        "LookAt 0 0.5 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n%s\n"
+        "WorldBegin\n%s"
+        "LightSource \"point\" \"rgb I\" [5 5 5] \"point3 from\" [0 2 -1]\n"
+        "LightSource \"infinite\" \"rgb L\" [0.2 0.2 0.2]\n"
+        "Shape \"sphere\" \"float radius\" 0.8\n"
+        "Shape \"trianglemesh\" \"point3 P\" [-3 -1 -3  3 -1 -3  3 -1 3  -3 -1 3] "
+        "\"integer indices\" [0 1 2 0 2 3]\n";
+    const char *unused = "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+                         "MakeNamedMedium \"smoke\" \"string type\" \"nanovdb\" "
+                         "\"string filename\" \"" HAZE_SCENES "/../volumes/box.vdb\"\n";
+    const char *integ[] = {"Integrator \"singlescatter\"", "Integrator \"volpath\""};
+    for (int k = 0; k < 2; ++k) {
+        char *ta = sfmt(fmt, integ[k], ""), *tb = sfmt(fmt, integ[k], unused);
+        render_scene *a = build(ta), *b = build(tb);
+        const camera *cam = render_scene_camera(a);
+        sampler sa = *render_scene_sampler(a), sb = *render_scene_sampler(b);
+        integrator_counters ca = {.timed = true}, cb = {.timed = true};
+        double lit = 0.0;
+        for (int i = 0; i < 64; ++i) {
+            camera_sample cs = {v2(560.0 + i % 8 * 20.0, 300.0 + i / 8 * 20.0), v2(0.5, 0.5),
+                                0.5, 1.0};
+            ray_differential rd;
+            assert_true(camera_generate_ray_differential(cam, cs, &rd));
+            sampler_state sta, stb;
+            sampler_start(&sa, i % 8, i / 8, 0, &sta);
+            sampler_start(&sb, i % 8, i / 8, 0, &stb);
+            double da, db;
+            rgb la = render_scene_li(a, &rd, &sta, &da, &ca);
+            rgb lb = render_scene_li(b, &rd, &stb, &db, &cb);
+            assert_true(la.r == lb.r && la.g == lb.g && la.b == lb.b);
+            lit += la.g;
+        }
+        assert_true(lit > 0.0);
+        assert_int_equal(ca.shadow_rays, cb.shadow_rays);
+        assert_int_equal(cb.media_ns, 0);
+        assert_int_equal(cb.majorant_steps, 0);
+        render_scene_destroy(a);
+        render_scene_destroy(b);
+        free(ta);
+        free(tb);
+    }
+}
+
 /* Surfaces only: the media counters stay at zero, even timed. */
 static void test_no_media_no_media_code(void **state)
 {
@@ -409,6 +460,7 @@ int main(void)
         cmocka_unit_test(test_empty_material_is_interface),
         cmocka_unit_test(test_parameters),
         cmocka_unit_test(test_cloud_without_integrator),
+        cmocka_unit_test(test_unreferenced_media_are_free),
         cmocka_unit_test(test_no_media_no_media_code),
         cmocka_unit_test(test_scenes_maxdepth_1_matches_singlescatter),
     };
