@@ -340,10 +340,10 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
     fprintf(out, "  %-15s %s, %d spp%s\n", "sampler", sd.sampler.type, spp, has ? "" : " (default)");
     fprintf(out, "  %-15s %s\n", "filter", sd.filter.type);
     /* No Integrator directive (line 0): haze renders with its default. */
-    const char *why;
+    const char *why, *what;
     if (strcmp(sd.integrator.type, "singlescatter") == 0 ||
         (sd.integrator.loc.line == 0 &&
-         integrator_default_kind(&sd, &why) == INTEGRATOR_SINGLESCATTER)) {
+         integrator_default_kind(&sd, &why, &what) == INTEGRATOR_SINGLESCATTER)) {
         fprintf(out, "  %-15s %s, transmittance %s, step %g voxels, shadow step %g voxels\n",
                 "integrator", "singlescatter",
                 params_peek_string(&sd.integrator.params, "transmittance", "jittered"),

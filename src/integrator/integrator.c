@@ -4,13 +4,27 @@
 
 /* A scene with no Integrator directive (its default entity sits at line 0)
  * renders with "singlescatter". */
-integrator_kind integrator_default_kind(const scene_desc *sd, const char **why)
+/* pbrt-v4's materials that only volpath renders. */
+static bool volpath_material(const char *type)
 {
-    *why = NULL;
+    return type && (strcmp(type, "conductor") == 0 || strcmp(type, "dielectric") == 0 ||
+                    strcmp(type, "thindielectric") == 0);
+}
+
+integrator_kind integrator_default_kind(const scene_desc *sd, const char **why, const char **what)
+{
+    *why = *what = NULL;
+    for (size_t i = 0; i < sd->material_count; ++i)
+        if (volpath_material(sd->materials[i].entity.type)) {
+            *why = sd->materials[i].entity.type;
+            *what = "material";
+            return INTEGRATOR_VOLPATH;
+        }
     for (size_t i = 0; i < sd->medium_count; ++i) {
         const char *type = sd->media[i].entity.type;
         if (type && (strcmp(type, "cloud") == 0 || strcmp(type, "rgbgrid") == 0)) {
             *why = type;
+            *what = "medium";
             return INTEGRATOR_VOLPATH;
         }
     }
@@ -25,8 +39,8 @@ hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_pa
     const char *type = e->type ? e->type : "volpath";
     *out = (integrator_params){.kind = INTEGRATOR_SINGLESCATTER,
                                .singlescatter = singlescatter_settings_default()};
-    const char *why;
-    if (e->loc.line == 0 && integrator_default_kind(sd, &why) == INTEGRATOR_SINGLESCATTER)
+    const char *why, *what;
+    if (e->loc.line == 0 && integrator_default_kind(sd, &why, &what) == INTEGRATOR_SINGLESCATTER)
         return params_finish(pl, "Integrator", err);
     if (strcmp(type, "volpath") == 0) {
         out->kind = INTEGRATOR_VOLPATH;

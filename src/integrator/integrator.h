@@ -28,10 +28,11 @@ typedef struct {
 } integrator_params;
 
 /* What a scene that names no Integrator renders with: "singlescatter",
- * haze's default, unless it declares a medium only "volpath" renders (a
- * "cloud" or an "rgbgrid"): then pbrt-v4's default, "volpath" with maxdepth 5.
- * `*why` receives that medium's type (NULL otherwise). */
-integrator_kind integrator_default_kind(const scene_desc *sd, const char **why);
+ * haze's default, unless it declares a material or a medium only "volpath"
+ * renders (a "conductor", "dielectric" or "thindielectric"; a "cloud" or an
+ * "rgbgrid"): then pbrt-v4's default, "volpath" with maxdepth 5. `*why`
+ * receives that type and `*what` "material" or "medium" (NULL otherwise). */
+integrator_kind integrator_default_kind(const scene_desc *sd, const char **why, const char **what);
 
 /* Reads the Integrator entity of `sd` (warnings to `warn` when not NULL) and
  * checks that every parameter was used; errors name its place. */

@@ -193,8 +193,11 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
         Ls = rgb_add(Ls, direct_diffuse(sc, &h, medium, wo, h.shape->material->reflectance, st,
                                         &walk, counters));
         break;
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_INTERFACE:
-        break;
+        break; /* the first three: refused under singlescatter at scene build */
     }
     L = rgb_add(L, rgb_mul(beta, Ls));
 done:

@@ -24,6 +24,7 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
     if (out->max_depth < 0)
         params_reject(pl, "maxdepth", "\"maxdepth\" must be >= 0");
     out->regularize = params_bool(pl, "regularize", false);
+    out->force_diffuse = false; /* an Option, set by the scene */
     out->light_sampler = LIGHT_SAMPLER_BVH;
     const char *ls = params_string(pl, "lightsampler", "bvh");
     if (strcmp(ls, "uniform") == 0) {
@@ -394,6 +395,20 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
     pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(den)));
 }
 
+/* pbrt-v4's forcediffuse: the BSDF's directional albedo at wo, from one
+ * sample, as the reflectance of a diffuse BSDF in its place. */
+static void force_diffuse(bsdf *b, vec3 wo, sampler_state *st)
+{
+    double uc = sampler_1d(st);
+    vec2 u = sampler_2d(st);
+    bsdf_sample s;
+    rgb r = bsdf_sample_f(b, wo, uc, u, &s) && s.pdf > 0.0
+                ? rgb_scale(s.f, fabs(v3_dot(s.wi, b->n)) / s.pdf)
+                : rgb_grey(0.0);
+    b->kind = BSDF_DIFFUSE;
+    b->reflectance = r;
+}
+
 /* The bounce at opaque hit h: light sampling, BSDF sampling, roulette.
  * False when the path ends. */
 static bool bounce(path *pa, const geom_hit *h)
@@ -409,6 +424,8 @@ static bool bounce(path *pa, const geom_hit *h)
         return false;
     if (sc->settings.regularize && pa->any_non_specular)
         bsdf_regularize(&b);
+    if (sc->settings.force_diffuse && b.kind != BSDF_DIFFUSE)
+        force_diffuse(&b, wo, pa->st);
     if (bsdf_is_non_specular(&b)) {
         vertex v = {h->p, wo, &b, h, 0.0, pa->ray.medium};
         pa->L = rgb_add(pa->L, sample_ld(pa, &v));

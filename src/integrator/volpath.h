@@ -36,6 +36,9 @@ typedef struct {
     int max_depth;                     /* "maxdepth", default 5 */
     bool regularize;                   /* "regularize", default false */
     light_sampler_kind light_sampler;  /* "lightsampler": uniform, power, bvh */
+    /* Option "forcediffuse": each hit's BSDF becomes a diffuse one of its
+     * directional albedo, estimated from one sample (as pbrt-v4). */
+    bool force_diffuse;
 } volpath_settings;
 
 /* Reads `Integrator "volpath"`'s parameters; "exhaustive" runs as "bvh"

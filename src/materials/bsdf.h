@@ -1,11 +1,15 @@
 /* Surface scattering for path tracing: a BSDF at one hit, built from the hit's
  * material, evaluated and sampled in render space. A closed set of kinds
- * dispatched with a switch (diffuse today; conductors and dielectrics slot in
- * as further kinds with their own f / sample / pdf cases).
+ * dispatched with a switch: diffuse, conductor, dielectric, thin dielectric
+ * (pbrt-v4's BxDFs of the same names, with Trowbridge-Reitz microfacets for
+ * the rough ones, materials/microfacet.h).
  *
  * Conventions as pbrt-v4: wo and wi point away from the surface; f excludes
- * the cosine; pdfs are per solid angle. The diffuse BSDF reflects on the side
- * of wo relative to the shading normal (pbrt-v4's DiffuseBxDF, two-sided). */
+ * the cosine; pdfs are per solid angle; transmission is in radiance mode (a
+ * ray refracting into a denser medium carries 1/eta^2 of the radiance). The
+ * diffuse BSDF reflects on the side of wo relative to the shading normal
+ * (pbrt-v4's DiffuseBxDF, two-sided); conductors reflect on both sides too;
+ * a dielectric's inside is where the shading normal points away from. */
 #ifndef HAZE_MATERIALS_BSDF_H
 #define HAZE_MATERIALS_BSDF_H
 
@@ -13,13 +17,18 @@
 
 #include "core/vec.h"
 #include "materials/material.h"
+#include "materials/microfacet.h"
 
-typedef enum { BSDF_DIFFUSE } bsdf_kind;
+typedef enum { BSDF_DIFFUSE, BSDF_CONDUCTOR, BSDF_DIELECTRIC, BSDF_THIN_DIELECTRIC } bsdf_kind;
 
 typedef struct {
     bsdf_kind kind;
-    vec3 n;          /* unit shading normal */
-    rgb reflectance; /* diffuse */
+    vec3 n;           /* unit shading normal */
+    vec3 s, t;        /* tangents: (s, t, n) is the shading frame */
+    rgb reflectance;  /* diffuse */
+    rgb eta_rgb, k;   /* conductor: complex index per channel */
+    double eta;       /* dielectric, thin dielectric: inside over outside */
+    tr_distribution distrib; /* conductor, dielectric */
 } bsdf;
 
 /* The BSDF of a material at a hit with unit shading normal `ns`. False for a
@@ -38,6 +47,7 @@ typedef struct {
     rgb f;
     double pdf;
     bool specular;
+    bool transmission;
 } bsdf_sample;
 
 /* Samples wi given wo with the 1D and 2D numbers `uc`, `u` (pbrt-v4's

@@ -268,7 +268,8 @@ bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *o
         c[a] = (int32_t)u % B;
     }
     const majorant_brick *br = &mg->bricks[majorant_brick_index(mg, b)];
-    *out = br->cells < 0 ? br->bounds : mg->cells[(size_t)br->cells * CELLS_PER_BRICK + cell_index(c)];
+    *out = br->cells < 0 ? br->bounds
+                         : mg->cells[(size_t)br->cells * CELLS_PER_BRICK + cell_index(c)];
     return true;
 }
 

@@ -180,7 +180,7 @@ static hz_status read_options(param_list *pl, const render_options *opt, uint64_
         *seed = (uint64_t)(s < 0 ? 0 : s);
     }
     out->disable_pixel_jitter = params_bool(pl, "disablepixeljitter", false);
-    params_bool(pl, "forcediffuse", false); /* haze's materials are all diffuse already */
+    out->force_diffuse = params_bool(pl, "forcediffuse", false);
     const char *space = params_string(pl, "rendercoordsys", "cameraworld");
     if (strcmp(space, "cameraworld") != 0 && strcmp(space, "camera") != 0 &&
         strcmp(space, "world") != 0)
@@ -251,6 +251,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     }
     integrator_params ip = {.kind = INTEGRATOR_SINGLESCATTER};
     CHECK(integrator_params_from_scene(sd, warn, &ip, err));
+    if (ip.kind == INTEGRATOR_VOLPATH)
+        ip.volpath.force_diffuse = rs->options.force_diffuse;
     CHECK(check_motion(sd, warn, err));
     if (build_materials(rs, sd, errs, err) != HZ_OK)
         return HZ_ERROR;
@@ -274,19 +276,29 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
                                       rs->media[i].kind == MEDIUM_CLOUD ? "cloud" : "rgbgrid"),
                            err)) != HZ_OK)
             return HZ_ERROR;
+    /* Metals and glass need paths: singlescatter shades diffuse surfaces. */
+    for (size_t i = 0; ip.kind == INTEGRATOR_SINGLESCATTER && i < sd->material_count; ++i)
+        if (material_needs_volpath(&rs->materials[i]) &&
+            collect(errs, (hz_fail_at(err, sd->materials[i].entity.loc,
+                                      "Material \"%s\" needs Integrator \"volpath\" "
+                                      "(singlescatter shades \"diffuse\" surfaces only)",
+                                      sd->materials[i].entity.type),
+                           err)) != HZ_OK)
+            return HZ_ERROR;
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
     /* pbrt-v4 renders such a scene with "volpath" (maxdepth 5): say once
      * which haze renders. */
-    const char *why;
-    if (warn && sd->integrator.loc.line == 0 && rs->medium_count > 0) {
+    const char *why, *what;
+    bool forced = integrator_default_kind(sd, &why, &what) == INTEGRATOR_VOLPATH;
+    if (warn && sd->integrator.loc.line == 0 && (rs->medium_count > 0 || forced)) {
         const char *file = sd->file_count ? sd->files[0] : "<input>";
-        if (integrator_default_kind(sd, &why) == INTEGRATOR_VOLPATH)
+        if (forced)
             fprintf(warn,
-                    "%s: warning: the scene names no Integrator and has a \"%s\" medium, which "
+                    "%s: warning: the scene names no Integrator and has a \"%s\" %s, which "
                     "only \"volpath\" renders: haze renders pbrt-v4's default, \"volpath\" "
                     "with maxdepth 5\n",
-                    file, why);
+                    file, why, what);
         else
             fprintf(warn,
                     "%s: warning: the scene names no Integrator: haze renders single scattering "

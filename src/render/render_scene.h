@@ -33,13 +33,14 @@ typedef struct render_scene render_scene;
 
 /* pbrt-v4's Option directives haze honours: "integer seed" (as --seed, when
  * --seed is not given; a Sampler's "integer seed" still wins), "bool
- * disablepixeljitter" (as --disable-pixel-jitter), "bool forcediffuse" (every
- * haze material is already diffuse or an interface: no change),
+ * disablepixeljitter" (as --disable-pixel-jitter), "bool forcediffuse" (volpath
+ * replaces each BSDF by a diffuse one of its albedo, as pbrt-v4),
  * "string rendercoordsys" (haze renders in camera-world space whatever the
  * value: "camera", "cameraworld" and "world" differ only in float rounding).
  * Any other Option is refused at its place. */
 typedef struct {
     bool disable_pixel_jitter;
+    bool force_diffuse; /* "forcediffuse": every BSDF replaced by a diffuse one (volpath) */
 } scene_options;
 scene_options render_scene_options(const render_scene *rs);
 

@@ -1,0 +1,171 @@
+/* pbrt-v4's metals and glass under volpath, against closed forms: a smooth
+ * conductor of "reflectance" r seen head-on under a uniform sky returns r; a
+ * smooth glass slab (or a thin sheet) in front of an emitter transmits
+ * (1 - R) / (1 + R), R the normal-incidence Fresnel reflectance; and how a
+ * scene with them picks its integrator. */
+#include "media_test_util.h"
+#include "materials/microfacet.h"
+
+/* An orthographic camera looks straight down (-y) at a plane of `material`
+ * under a uniform sky of radiance 1. */
+static char *mirror_scene(const char *material)
+{
+    return sfmt("LookAt 0 5 0  0 0 0  0 0 1\nCamera \"orthographic\"\n"
+                "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+                "Integrator \"volpath\" \"integer maxdepth\" 5\nWorldBegin\n"
+                "LightSource \"infinite\" \"rgb L\" [1 1 1]\n%s\n"
+                "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+                "\"point3 P\" [-10 0 -10  10 0 -10  10 0 10  -10 0 10]\n",
+                material);
+}
+
+static void test_conductor_head_on(void **state)
+{
+    (void)state;
+    char *text = mirror_scene("Material \"conductor\" \"rgb reflectance\" [0.2 0.5 0.9]");
+    render_scene *rs = build(text);
+    pstat p = pixel_stats_raw(rs, 1, 2, 4);
+    expect_rgb_close(p.mean, rgb_make(0.2, 0.5, 0.9), 1e-9, 1e-12, "conductor reflectance", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+    /* pbrt-v4's default conductor is copper: its normal-incidence
+     * reflectance under D65, reduced to RGB. */
+    text = mirror_scene("Material \"conductor\"");
+    rs = build(text);
+    p = pixel_stats_raw(rs, 2, 1, 4);
+    expect_rgb_close(p.mean, rgb_make(0.9556, 0.6376, 0.5381), 2e-4, 0.0, "copper", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+}
+
+/* Option "forcediffuse": the smooth conductor becomes a diffuse surface of
+ * its albedo r, which under a uniform sky of radiance 1 returns r. */
+static void test_force_diffuse(void **state)
+{
+    (void)state;
+    char *mat = mirror_scene("Material \"conductor\" \"rgb reflectance\" [0.2 0.5 0.9]");
+    char *text = sfmt("Option \"bool forcediffuse\" true\n%s", mat);
+    render_scene *rs = build(text);
+    rgb mean, se;
+    image_mean_se(rs, 4, 4, 1024, &mean, &se);
+    const rgb want = rgb_make(0.2, 0.5, 0.9);
+    for (int c = 0; c < 3; ++c) {
+        print_message("forcediffuse c%d: %.5f +- %.5f, want %.5f\n", c, ch(mean, c), ch(se, c),
+                      ch(want, c));
+        assert_true(ch(se, c) < 0.01 * ch(want, c));
+        assert_true(fabs(ch(mean, c) - ch(want, c)) < 4.0 * ch(se, c) + 1e-12);
+    }
+    render_scene_destroy(rs);
+    free(text);
+    free(mat);
+}
+
+/* An orthographic camera looks along +z through a slab (or a sheet) of glass
+ * at an emitting quad of radiance 1; nothing else lights the scene. */
+static char *slab_scene(const char *glass)
+{
+    return sfmt("LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\"\n"
+                "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+                "Integrator \"volpath\" \"integer maxdepth\" 100\nWorldBegin\n"
+                "AttributeBegin\nMaterial \"diffuse\" \"rgb reflectance\" [0 0 0]\n"
+                "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+                "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+                "\"point3 P\" [-20 -20 3  -20 20 3  20 20 3  20 -20 3]\nAttributeEnd\n%s\n",
+                glass);
+}
+
+static void expect_transmission(const char *glass, double eta, const char *what)
+{
+    char *text = slab_scene(glass);
+    render_scene *rs = build(text);
+    rgb mean, se;
+    image_mean_se(rs, 4, 4, 4096, &mean, &se);
+    double R = fresnel_dielectric(1.0, eta), want = (1.0 - R) / (1.0 + R);
+    print_message("%s: %.5f +- %.5f, want %.5f\n", what, mean.g, se.g, want);
+    assert_true(se.g < 0.003);
+    assert_true(fabs(mean.g - want) < 4.0 * se.g);
+    assert_true(fabs(mean.r - mean.g) < 1e-12 && fabs(mean.b - mean.g) < 1e-12);
+    render_scene_destroy(rs);
+    free(text);
+}
+
+static void test_glass_slab(void **state)
+{
+    (void)state;
+    char *box = box_mesh(v3(-10, -10, 0), v3(10, 10, 1));
+    char *glass = sfmt("Material \"dielectric\" \"float eta\" 1.5\n%s", box);
+    expect_transmission(glass, 1.5, "glass slab");
+    free(glass);
+    glass = sfmt("Material \"dielectric\" \"float eta\" 2.4\n%s", box);
+    expect_transmission(glass, 2.4, "diamond slab");
+    free(glass);
+    free(box);
+    /* A thin sheet sums its interreflections: the same (1 - R) / (1 + R). */
+    expect_transmission("Material \"thindielectric\" \"float eta\" 1.5\n"
+                        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+                        "\"point3 P\" [-10 -10 1  -10 10 1  10 10 1  10 -10 1]",
+                        1.5, "thin sheet");
+}
+
+/* A scene naming no Integrator with metal or glass renders pbrt-v4's
+ * default (volpath, maxdepth 5) and says so; naming singlescatter is an
+ * error at the material. Parameters are pbrt-v4's and checked. */
+static void test_integrator_and_parameters(void **state)
+{
+    (void)state;
+    char msg[1024];
+    const char *world = "WorldBegin\nMaterial \"dielectric\"\nShape \"sphere\"\n";
+    char *text = sfmt("%s", world);
+    scene_desc sd;
+    hz_error err = {0};
+    assert_int_equal(scene_parse_string(text, "test.pbrt", &sd, &err), HZ_OK);
+    FILE *warn = tmpfile();
+    render_options def = {.seed = 0};
+    render_scene *rs = NULL;
+    assert_int_equal(render_scene_create(&sd, &def, warn, &rs, &err), HZ_OK);
+    rewind(warn);
+    size_t got = fread(msg, 1, sizeof msg - 1, warn);
+    msg[got] = '\0';
+    assert_non_null(strstr(msg, "has a \"dielectric\" material, which only \"volpath\" renders"));
+    fclose(warn);
+    render_scene_destroy(rs);
+    scene_desc_free(&sd);
+    free(text);
+
+    struct {
+        const char *scene, *want;
+    } cases[] = {
+        {"Integrator \"singlescatter\"\nWorldBegin\nMaterial \"conductor\"\n",
+         "test.pbrt:3:1: Material \"conductor\" needs Integrator \"volpath\""},
+        {"WorldBegin\nMaterial \"conductor\" \"rgb reflectance\" [0.5 0.5 0.5] "
+         "\"rgb eta\" [1 1 1]\n",
+         "give \"reflectance\" or \"eta\" and \"k\", not both"},
+        {"WorldBegin\nMaterial \"conductor\" \"float roughness\" -0.1\n", "\"roughness\" must be"},
+        {"WorldBegin\nMaterial \"dielectric\" \"spectrum eta\" [400 1.5 700 1.4]\n",
+         "must be a \"float\""},
+        {"WorldBegin\nMaterial \"dielectric\" \"float eta\" 0\n", "\"eta\" must be finite and > 0"},
+        {"WorldBegin\nMaterial \"thindielectric\" \"float roughness\" 0.1\n",
+         "unused parameter \"float roughness\""},
+        {"WorldBegin\nMaterial \"conductor\" \"texture roughness\" \"t\"\n",
+         "texture parameters are not supported"},
+        {"WorldBegin\nMaterial \"coateddiffuse\"\n", "\"coateddiffuse\" is not supported"},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        build_scene_expect_error(cases[k].scene, msg, sizeof msg);
+        if (!strstr(msg, cases[k].want))
+            fail_msg("case %zu: got \"%s\", want \"%s\"", k, msg, cases[k].want);
+    }
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_conductor_head_on),
+        cmocka_unit_test(test_glass_slab),
+        cmocka_unit_test(test_force_diffuse),
+        cmocka_unit_test(test_integrator_and_parameters),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
