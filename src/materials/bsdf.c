@@ -265,6 +265,16 @@ static bool thin_sample(const bsdf *b, vec3 wo, double uc, bsdf_sample *out)
 
 /* ---- dispatch ---- */
 
+/* Two-sided lobes (conductors, as pbrt-v4's) work on wo's side: a wo below
+ * the surface flips both directions. */
+static void to_wo_side(vec3 *wo, vec3 *wi)
+{
+    if (wo->z < 0.0) {
+        *wo = v3_neg(*wo);
+        *wi = v3_neg(*wi);
+    }
+}
+
 /* Diffuse: reflection only, on wo's side of the surface (in render space:
  * only the normal matters). */
 static bool same_side(vec3 n, vec3 wo, vec3 wi) { return v3_dot(n, wo) * v3_dot(n, wi) > 0.0; }
@@ -278,14 +288,9 @@ rgb bsdf_f(const bsdf *b, vec3 wo_r, vec3 wi_r)
     switch (b->kind) {
     case BSDF_DIFFUSE:
         break;
-    case BSDF_CONDUCTOR: {
-        /* Two-sided, as pbrt-v4's conductor: work on wo's side. */
-        if (wo.z < 0.0) {
-            wo = v3_neg(wo);
-            wi = v3_neg(wi);
-        }
+    case BSDF_CONDUCTOR:
+        to_wo_side(&wo, &wi);
         return conductor_f(b, wo, wi);
-    }
     case BSDF_DIELECTRIC:
         return dielectric_f(b, wo, wi);
     case BSDF_THIN_DIELECTRIC:
@@ -303,10 +308,7 @@ double bsdf_pdf(const bsdf *b, vec3 wo_r, vec3 wi_r)
     case BSDF_DIFFUSE:
         break;
     case BSDF_CONDUCTOR:
-        if (wo.z < 0.0) {
-            wo = v3_neg(wo);
-            wi = v3_neg(wi);
-        }
+        to_wo_side(&wo, &wi);
         return conductor_pdf(b, wo, wi);
     case BSDF_DIELECTRIC:
         return dielectric_pdf(b, wo, wi);

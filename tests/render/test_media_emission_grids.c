@@ -69,6 +69,16 @@ static void expect_within_noise(rgb mean, rgb se, rgb want, const char *what)
     }
 }
 
+/* The 4 x 4 image of `text` at `spp`, within noise of `want`. */
+static void expect_image_within_noise(const char *text, int spp, rgb want, const char *what)
+{
+    render_scene *rs = build(text);
+    rgb mean, se;
+    image_mean_se(rs, 4, 4, spp, &mean, &se);
+    expect_within_noise(mean, se, want, what);
+    render_scene_destroy(rs);
+}
+
 /* A grid that glows where there is no density at all (sigma 0): L is the
  * tint times the emission's integral, 20 voxels of 1/16 = 1.25, also in the
  * voxels beyond the density's support (the clipping and the majorant grid
@@ -91,11 +101,7 @@ static void test_emission_without_density(void **state)
                            "Integrator \"singlescatter\"", "Integrator \"volpath\""};
     for (int k = 0; k < 3; ++k) {
         text = grid_scene(integ[k], "box_fire.vdb", params, "");
-        rs = build(text);
-        rgb mean, se;
-        image_mean_se(rs, 4, 4, 512, &mean, &se);
-        expect_within_noise(mean, se, want, integ[k]);
-        render_scene_destroy(rs);
+        expect_image_within_noise(text, 512, want, integ[k]);
         free(text);
     }
 }
@@ -119,11 +125,7 @@ static void test_emission_through_density(void **state)
                            "Integrator \"singlescatter\" \"string transmittance\" \"ratio\""};
     for (int k = 0; k < 2; ++k) {
         text = grid_scene(integ[k], "box_fire.vdb", params, "");
-        rs = build(text);
-        rgb mean, se;
-        image_mean_se(rs, 4, 4, 1024, &mean, &se);
-        expect_within_noise(mean, se, want, integ[k]);
-        render_scene_destroy(rs);
+        expect_image_within_noise(text, 1024, want, integ[k]);
         free(text);
     }
 }

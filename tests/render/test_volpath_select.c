@@ -175,6 +175,32 @@ static void test_parameters(void **state)
     free(text);
 }
 
+/* Renders n camera rays through a grid of pixels of scene a and of scene b
+ * with the same samples and asserts equal radiance, sample for sample;
+ * returns the sum of the green channel and fills each scene's counters. */
+static double expect_same_radiance(render_scene *a, render_scene *b, int n, int cols, vec2 p0,
+                                   vec2 step, integrator_counters *ca, integrator_counters *cb)
+{
+    const camera *cam = render_scene_camera(a);
+    sampler sa = *render_scene_sampler(a), sb = *render_scene_sampler(b);
+    double lit = 0.0;
+    for (int i = 0; i < n; ++i) {
+        camera_sample cs = {v2(p0.x + i % cols * step.x, p0.y + i / cols * step.y), v2(0.5, 0.5),
+                            0.5, 1.0};
+        ray_differential rd;
+        assert_true(camera_generate_ray_differential(cam, cs, &rd));
+        sampler_state sta, stb;
+        sampler_start(&sa, i % cols, i / cols, 0, &sta);
+        sampler_start(&sb, i % cols, i / cols, 0, &stb);
+        double da, db;
+        rgb la = render_scene_li(a, &rd, &sta, &da, ca);
+        rgb lb = render_scene_li(b, &rd, &stb, &db, cb);
+        assert_true(la.r == lb.r && la.g == lb.g && la.b == lb.b);
+        lit += la.g;
+    }
+    return lit;
+}
+
 /* A scene naming no Integrator whose media include one only volpath renders
  * (a cloud, an rgbgrid) renders pbrt-v4's default, volpath maxdepth 5, with
  * one warning: the same radiance, sample for sample, as naming it; naming
@@ -201,24 +227,8 @@ static void test_cloud_without_integrator(void **state)
     text = sfmt(world, "Integrator \"volpath\" \"integer maxdepth\" 5\n");
     render_scene *b = build(text);
     free(text);
-    const camera *cam = render_scene_camera(a);
     integrator_counters ca = {0}, cb = {0};
-    sampler sa = *render_scene_sampler(a), sb = *render_scene_sampler(b);
-    double lit = 0.0;
-    for (int i = 0; i < 256; ++i) {
-        camera_sample cs = {v2(280.0 + i % 16 * 45.0, 200.0 + i / 16 * 20.0), v2(0.5, 0.5), 0.5,
-                            1.0};
-        ray_differential rd;
-        assert_true(camera_generate_ray_differential(cam, cs, &rd));
-        sampler_state sta, stb;
-        sampler_start(&sa, i % 16, i / 16, 0, &sta);
-        sampler_start(&sb, i % 16, i / 16, 0, &stb);
-        double da, db;
-        rgb la = render_scene_li(a, &rd, &sta, &da, &ca);
-        rgb lb = render_scene_li(b, &rd, &stb, &db, &cb);
-        assert_true(la.r == lb.r && la.g == lb.g && la.b == lb.b);
-        lit += la.r;
-    }
+    double lit = expect_same_radiance(a, b, 256, 16, v2(280.0, 200.0), v2(45.0, 20.0), &ca, &cb);
     assert_true(lit > 0.0);
     assert_true(ca.density_lookups > 0);
     render_scene_destroy(a);
@@ -251,24 +261,9 @@ static void test_unreferenced_media_are_free(void **state)
     for (int k = 0; k < 2; ++k) {
         char *ta = sfmt(fmt, integ[k], ""), *tb = sfmt(fmt, integ[k], unused);
         render_scene *a = build(ta), *b = build(tb);
-        const camera *cam = render_scene_camera(a);
-        sampler sa = *render_scene_sampler(a), sb = *render_scene_sampler(b);
         integrator_counters ca = {.timed = true}, cb = {.timed = true};
-        double lit = 0.0;
-        for (int i = 0; i < 64; ++i) {
-            camera_sample cs = {v2(560.0 + i % 8 * 20.0, 300.0 + i / 8 * 20.0), v2(0.5, 0.5),
-                                0.5, 1.0};
-            ray_differential rd;
-            assert_true(camera_generate_ray_differential(cam, cs, &rd));
-            sampler_state sta, stb;
-            sampler_start(&sa, i % 8, i / 8, 0, &sta);
-            sampler_start(&sb, i % 8, i / 8, 0, &stb);
-            double da, db;
-            rgb la = render_scene_li(a, &rd, &sta, &da, &ca);
-            rgb lb = render_scene_li(b, &rd, &stb, &db, &cb);
-            assert_true(la.r == lb.r && la.g == lb.g && la.b == lb.b);
-            lit += la.g;
-        }
+        double lit =
+            expect_same_radiance(a, b, 64, 8, v2(560.0, 300.0), v2(20.0, 20.0), &ca, &cb);
         assert_true(lit > 0.0);
         assert_int_equal(ca.shadow_rays, cb.shadow_rays);
         assert_int_equal(cb.media_ns, 0);
