@@ -30,6 +30,13 @@ bool bsdf_from_material(const material *m, vec3 ns, bsdf *out)
         out->kind = BSDF_THIN_DIELECTRIC;
         out->eta = m->eta;
         return true;
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        if (rgb_is_black(m->reflectance) && rgb_is_black(m->transmittance))
+            return false;
+        out->kind = BSDF_DIFFUSE_TRANSMISSION;
+        out->reflectance = m->reflectance;
+        out->transmittance = m->transmittance;
+        return true;
     case MATERIAL_INTERFACE:
         return false;
     }
@@ -59,6 +66,7 @@ bool bsdf_is_non_specular(const bsdf *b)
 {
     switch (b->kind) {
     case BSDF_DIFFUSE:
+    case BSDF_DIFFUSE_TRANSMISSION:
         return true;
     case BSDF_CONDUCTOR:
     case BSDF_DIELECTRIC:
@@ -263,6 +271,42 @@ static bool thin_sample(const bsdf *b, vec3 wo, double uc, bsdf_sample *out)
     return true;
 }
 
+/* ---- diffuse transmission (pbrt-v4's DiffuseTransmissionBxDF): the lobe
+ * on each side chosen by its largest channel ---- */
+
+static void dt_probs(const bsdf *b, double *pr, double *pt)
+{
+    *pr = rgb_max(b->reflectance);
+    *pt = rgb_max(b->transmittance);
+}
+
+static rgb dt_f(const bsdf *b, vec3 wo, vec3 wi)
+{
+    return rgb_scale(same_hemisphere(wo, wi) ? b->reflectance : b->transmittance, HZ_INV_PI);
+}
+
+static double dt_pdf(const bsdf *b, vec3 wo, vec3 wi)
+{
+    double pr, pt;
+    dt_probs(b, &pr, &pt);
+    return (same_hemisphere(wo, wi) ? pr : pt) / (pr + pt) * cosine_hemisphere_pdf(fabs(wi.z));
+}
+
+static bool dt_sample(const bsdf *b, vec3 wo, double uc, vec2 u, bsdf_sample *out)
+{
+    double pr, pt;
+    dt_probs(b, &pr, &pt);
+    vec3 wi = sample_cosine_hemisphere(u);
+    bool reflect = uc < pr / (pr + pt);
+    /* Reflection on wo's side, transmission on the other. */
+    if ((wo.z < 0.0) == reflect)
+        wi.z = -wi.z;
+    if (wi.z == 0.0)
+        return false;
+    *out = (bsdf_sample){wi, dt_f(b, wo, wi), dt_pdf(b, wo, wi), false, !reflect};
+    return out->pdf > 0.0;
+}
+
 /* ---- dispatch ---- */
 
 /* Two-sided lobes (conductors, as pbrt-v4's) work on wo's side: a wo below
@@ -295,6 +339,8 @@ rgb bsdf_f(const bsdf *b, vec3 wo_r, vec3 wi_r)
         return dielectric_f(b, wo, wi);
     case BSDF_THIN_DIELECTRIC:
         return rgb_grey(0.0);
+    case BSDF_DIFFUSE_TRANSMISSION:
+        return dt_f(b, wo, wi);
     }
     return rgb_grey(0.0);
 }
@@ -314,6 +360,8 @@ double bsdf_pdf(const bsdf *b, vec3 wo_r, vec3 wi_r)
         return dielectric_pdf(b, wo, wi);
     case BSDF_THIN_DIELECTRIC:
         return 0.0;
+    case BSDF_DIFFUSE_TRANSMISSION:
+        return dt_pdf(b, wo, wi);
     }
     return 0.0;
 }
@@ -358,6 +406,9 @@ bool bsdf_sample_f(const bsdf *b, vec3 wo_r, double uc, vec2 u, bsdf_sample *out
     case BSDF_THIN_DIELECTRIC:
         ok = thin_sample(b, wo, uc, out);
         break;
+    case BSDF_DIFFUSE_TRANSMISSION:
+        ok = dt_sample(b, wo, uc, u, out);
+        break;
     }
     if (!ok)
         return false;
@@ -371,6 +422,7 @@ void bsdf_regularize(bsdf *b)
     switch (b->kind) {
     case BSDF_DIFFUSE:
     case BSDF_THIN_DIELECTRIC:
+    case BSDF_DIFFUSE_TRANSMISSION:
         break;
     case BSDF_CONDUCTOR:
     case BSDF_DIELECTRIC:

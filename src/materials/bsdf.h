@@ -19,13 +19,20 @@
 #include "materials/material.h"
 #include "materials/microfacet.h"
 
-typedef enum { BSDF_DIFFUSE, BSDF_CONDUCTOR, BSDF_DIELECTRIC, BSDF_THIN_DIELECTRIC } bsdf_kind;
+typedef enum {
+    BSDF_DIFFUSE,
+    BSDF_CONDUCTOR,
+    BSDF_DIELECTRIC,
+    BSDF_THIN_DIELECTRIC,
+    BSDF_DIFFUSE_TRANSMISSION,
+} bsdf_kind;
 
 typedef struct {
     bsdf_kind kind;
     vec3 n;           /* unit shading normal */
     vec3 s, t;        /* tangents: (s, t, n) is the shading frame */
-    rgb reflectance;  /* diffuse */
+    rgb reflectance;  /* diffuse, diffuse transmission */
+    rgb transmittance; /* diffuse transmission */
     rgb eta_rgb, k;   /* conductor: complex index per channel */
     double eta;       /* dielectric, thin dielectric: inside over outside */
     tr_distribution distrib; /* conductor, dielectric */

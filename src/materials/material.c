@@ -20,6 +20,7 @@ bool material_needs_volpath(const material *m)
     case MATERIAL_CONDUCTOR:
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_DIFFUSE_TRANSMISSION:
         return true;
     }
     return true;
@@ -115,6 +116,19 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
         rgb r = out->reflectance;
         if (r.r < 0 || r.g < 0 || r.b < 0 || r.r > 1 || r.g > 1 || r.b > 1)
             params_reject(pl, "reflectance", "diffuse reflectance must be within [0, 1]");
+    } else if (strcmp(type, "diffusetransmission") == 0) {
+        /* pbrt-v4: reflectance and transmittance 0.25, times "scale",
+         * clamped to [0, 1]. */
+        out->kind = MATERIAL_DIFFUSE_TRANSMISSION;
+        double scale = params_float(pl, "scale", 1.0);
+        rgb r = params_rgb(pl, "reflectance", rgb_grey(0.25));
+        rgb t = params_rgb(pl, "transmittance", rgb_grey(0.25));
+        if (!(isfinite(scale) && scale >= 0.0))
+            params_reject(pl, "scale", "\"scale\" must be finite and >= 0, got %g", scale);
+        out->reflectance = rgb_make(hz_clamp(scale * r.r, 0, 1), hz_clamp(scale * r.g, 0, 1),
+                                    hz_clamp(scale * r.b, 0, 1));
+        out->transmittance = rgb_make(hz_clamp(scale * t.r, 0, 1), hz_clamp(scale * t.g, 0, 1),
+                                      hz_clamp(scale * t.b, 0, 1));
     } else if (strcmp(type, "conductor") == 0) {
         if (read_conductor(pl, out, err) != HZ_OK)
             return HZ_ERROR;
@@ -129,8 +143,9 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
     } else {
         return hz_fail_at(err, e->entity.loc,
                           "Material \"%s\" is not supported (supported: \"diffuse\", "
-                          "\"conductor\", \"dielectric\", \"thindielectric\", \"interface\", "
-                          "\"\" or \"none\" as \"interface\")",
+                          "\"conductor\", \"dielectric\", \"thindielectric\", "
+                          "\"diffusetransmission\", \"interface\", \"\" or \"none\" as "
+                          "\"interface\")",
                           type);
     }
     char what[128];

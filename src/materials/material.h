@@ -1,6 +1,6 @@
 /* Surface materials: a closed set, pbrt-v4's "diffuse", "conductor",
- * "dielectric", "thindielectric" and "interface" (also "" and "none"), with
- * constant parameters. */
+ * "dielectric", "thindielectric", "diffusetransmission" and "interface" (also
+ * "" and "none"), with constant parameters. */
 #ifndef HAZE_MATERIALS_MATERIAL_H
 #define HAZE_MATERIALS_MATERIAL_H
 
@@ -13,12 +13,14 @@ typedef enum {
     MATERIAL_CONDUCTOR,       /* a metal: complex Fresnel, smooth or rough */
     MATERIAL_DIELECTRIC,      /* glass, water: reflection and refraction */
     MATERIAL_THIN_DIELECTRIC, /* a thin sheet of glass: straight through */
+    MATERIAL_DIFFUSE_TRANSMISSION, /* Lambertian reflection and transmission (leaves, paper) */
     MATERIAL_INTERFACE,       /* a medium boundary: not a surface, rays pass through */
 } material_kind;
 
 typedef struct {
     material_kind kind;
-    rgb reflectance;          /* diffuse */
+    rgb reflectance;          /* diffuse, diffuse transmission */
+    rgb transmittance;        /* diffuse transmission */
     rgb eta_rgb, k;           /* conductor, per channel */
     double eta;               /* dielectric, thin dielectric */
     double alpha_x, alpha_y;  /* conductor, dielectric: Trowbridge-Reitz alphas */

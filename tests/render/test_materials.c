@@ -39,6 +39,30 @@ static void test_conductor_head_on(void **state)
     free(text);
 }
 
+/* A diffuse-transmission sheet under a uniform sky lit from both sides
+ * returns R + T (pbrt-v4's defaults: 0.25 each, times "scale"). */
+static void test_diffuse_transmission(void **state)
+{
+    (void)state;
+    char *text = mirror_scene("Material \"diffusetransmission\" "
+                              "\"rgb reflectance\" [0.3 0.3 0.3] "
+                              "\"rgb transmittance\" [0.5 0.2 0.1]");
+    render_scene *rs = build(text);
+    rgb mean, se;
+    image_mean_se(rs, 4, 4, 1024, &mean, &se);
+    const rgb want = rgb_make(0.8, 0.5, 0.4);
+    for (int c = 0; c < 3; ++c) /* the lobe is chosen by the largest channel: noise */
+        assert_true(fabs(ch(mean, c) - ch(want, c)) < 4.0 * ch(se, c) + 1e-9);
+    render_scene_destroy(rs);
+    free(text);
+    text = mirror_scene("Material \"diffusetransmission\" \"float scale\" 2");
+    rs = build(text);
+    image_mean_se(rs, 4, 4, 64, &mean, &se);
+    expect_rgb_close(mean, rgb_grey(1.0), 1e-9, 1e-12, "diffuse transmission x2", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+}
+
 /* Option "forcediffuse": the smooth conductor becomes a diffuse surface of
  * its albedo r, which under a uniform sky of radiance 1 returns r. */
 static void test_force_diffuse(void **state)
@@ -165,6 +189,7 @@ int main(void)
         cmocka_unit_test(test_conductor_head_on),
         cmocka_unit_test(test_glass_slab),
         cmocka_unit_test(test_force_diffuse),
+        cmocka_unit_test(test_diffuse_transmission),
         cmocka_unit_test(test_integrator_and_parameters),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

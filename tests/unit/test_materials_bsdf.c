@@ -84,7 +84,7 @@ static double gamma_q(double a, double x)
  * as pbrt-v4's test does; refraction's pdf has integrable spikes that the
  * bins' quadrature only approximates). Also checks each sample's f and pdf
  * against bsdf_f and bsdf_pdf. */
-#define CHI2_TESTS 11
+#define CHI2_TESTS 12
 static void chi2_test(const char *what, material m, vec3 wo)
 {
     bsdf b = make(m);
@@ -170,6 +170,9 @@ static void chi2_diffuse(void **state)
     material m = {.kind = MATERIAL_DIFFUSE, .reflectance = rgb_grey(0.5)};
     chi2_test("diffuse", m, dir(0.5, 1.0));
     chi2_test("diffuse from below", m, dir(-0.5, 1.0));
+    material dt = {.kind = MATERIAL_DIFFUSE_TRANSMISSION, .reflectance = rgb_grey(0.3),
+                   .transmittance = rgb_make(0.1, 0.6, 0.2)};
+    chi2_test("diffuse transmission", dt, dir(0.7, 2.0));
 }
 
 /* f(wo, wi) = f(wi, wo) for reflection; through a dielectric (radiance
