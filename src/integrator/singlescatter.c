@@ -197,6 +197,8 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
     case MATERIAL_INTERFACE:
         break; /* the first three: refused under singlescatter at scene build */
     }

@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "core/ray.h"
-#include "media/phase.h"
+#include "core/phase.h"
 
 /* ---- per-channel helpers ---- */
 

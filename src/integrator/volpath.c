@@ -8,7 +8,7 @@
 
 #include "core/clock.h"
 #include "core/ray.h"
-#include "media/phase.h"
+#include "core/phase.h"
 #include "materials/bsdf.h"
 #include "integrator/volpath_media.h"
 #include "integrator/singlescatter_media.h"
@@ -438,7 +438,9 @@ static bool bounce(path *pa, const geom_hit *h)
     if (!bsdf_sample_f(&b, wo, uc, u, &bs))
         return false;
     pa->beta = rgb_mul(pa->beta, rgb_scale(bs.f, fabs(v3_dot(bs.wi, b.n)) / bs.pdf));
-    pa->r_l = rgb_div(pa->r_u, bs.pdf);
+    /* A layered BSDF's sampled pdf is only proportional: MIS uses its pdf
+     * estimate (pbrt-v4's pdfIsProportional). */
+    pa->r_l = rgb_div(pa->r_u, bs.pdf_proportional ? bsdf_pdf(&b, wo, bs.wi) : bs.pdf);
     pa->specular = bs.specular;
     pa->any_non_specular |= !bs.specular;
     pa->ray = ray_from_surface(h, bs.wi, pa->ray.medium, sc->in.medium_count > 0);

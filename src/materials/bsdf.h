@@ -1,8 +1,9 @@
 /* Surface scattering for path tracing: a BSDF at one hit, built from the hit's
  * material, evaluated and sampled in render space. A closed set of kinds
- * dispatched with a switch: diffuse, conductor, dielectric, thin dielectric
- * (pbrt-v4's BxDFs of the same names, with Trowbridge-Reitz microfacets for
- * the rough ones, materials/microfacet.h).
+ * dispatched with a switch: diffuse, conductor, dielectric, thin dielectric,
+ * diffuse transmission and the coated (layered) ones: pbrt-v4's BxDFs of the
+ * same names (materials/bxdfs.h, materials/layered.h), with Trowbridge-Reitz
+ * microfacets for the rough ones (materials/microfacet.h).
  *
  * Conventions as pbrt-v4: wo and wi point away from the surface; f excludes
  * the cosine; pdfs are per solid angle; transmission is in radiance mode (a
@@ -16,8 +17,9 @@
 #include <stdbool.h>
 
 #include "core/vec.h"
+#include "materials/bxdfs.h"
+#include "materials/layered.h"
 #include "materials/material.h"
-#include "materials/microfacet.h"
 
 typedef enum {
     BSDF_DIFFUSE,
@@ -25,6 +27,7 @@ typedef enum {
     BSDF_DIELECTRIC,
     BSDF_THIN_DIELECTRIC,
     BSDF_DIFFUSE_TRANSMISSION,
+    BSDF_COATED, /* coateddiffuse, coatedconductor: a layered BxDF */
 } bsdf_kind;
 
 typedef struct {
@@ -36,6 +39,7 @@ typedef struct {
     rgb eta_rgb, k;   /* conductor: complex index per channel */
     double eta;       /* dielectric, thin dielectric: inside over outside */
     tr_distribution distrib; /* conductor, dielectric */
+    layered coat;            /* coated */
 } bsdf;
 
 /* The BSDF of a material at a hit with unit shading normal `ns`. False for a
@@ -48,14 +52,6 @@ bool bsdf_is_non_specular(const bsdf *b);
 
 rgb bsdf_f(const bsdf *b, vec3 wo, vec3 wi);
 double bsdf_pdf(const bsdf *b, vec3 wo, vec3 wi);
-
-typedef struct {
-    vec3 wi;
-    rgb f;
-    double pdf;
-    bool specular;
-    bool transmission;
-} bsdf_sample;
 
 /* Samples wi given wo with the 1D and 2D numbers `uc`, `u` (pbrt-v4's
  * Sample_f(wo, uc, u)). False when no direction was produced. */

@@ -21,6 +21,8 @@ bool material_needs_volpath(const material *m)
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
         return true;
     }
     return true;
@@ -35,51 +37,143 @@ bool material_needs_volpath(const material *m)
 static const rgb copper_eta = {0.43052, 0.96400, 1.16244};
 static const rgb copper_k = {6.06186, 2.60415, 2.32192};
 
-/* "roughness", or "uroughness"/"vroughness", to Trowbridge-Reitz alphas
- * (remapped unless "remaproughness" is false), as pbrt-v4. */
-static void read_roughness(param_list *pl, material *out)
+/* PREFIX"roughness", or PREFIX"uroughness"/PREFIX"vroughness", to
+ * Trowbridge-Reitz alphas (remapped unless "remaproughness" is false), as
+ * pbrt-v4. */
+static tr_distribution read_roughness_of(param_list *pl, const char *prefix)
 {
-    double r = params_float(pl, "roughness", 0.0);
-    double u = params_float(pl, "uroughness", r), v = params_float(pl, "vroughness", r);
+    char names[3][64];
+    const char *base[3] = {"roughness", "uroughness", "vroughness"};
+    for (int i = 0; i < 3; ++i)
+        snprintf(names[i], sizeof names[i], "%s%s", prefix, base[i]);
+    double r = params_float(pl, names[0], 0.0);
+    double u = params_float(pl, names[1], r), v = params_float(pl, names[2], r);
     bool remap = params_bool(pl, "remaproughness", true);
-    const char *names[3] = {"roughness", "uroughness", "vroughness"};
     const double vals[3] = {r, u, v};
     for (int i = 0; i < 3; ++i)
         if (!(isfinite(vals[i]) && vals[i] >= 0.0))
             params_reject(pl, names[i], "\"%s\" must be finite and >= 0, got %g", names[i],
                           vals[i]);
-    out->alpha_x = remap ? tr_roughness_to_alpha(u) : u;
-    out->alpha_y = remap ? tr_roughness_to_alpha(v) : v;
+    return (tr_distribution){remap ? tr_roughness_to_alpha(u) : u,
+                             remap ? tr_roughness_to_alpha(v) : v};
+}
+
+static void read_roughness(param_list *pl, material *out)
+{
+    tr_distribution d = read_roughness_of(pl, "");
+    out->alpha_x = d.alpha_x;
+    out->alpha_y = d.alpha_y;
+}
+
+/* A float index (pbrt-v4 also takes a spectrum, which disperses: refused
+ * for now), > 0. */
+static hz_status read_eta(param_list *pl, const char *name, double *eta, hz_error *err)
+{
+    for (size_t i = 0; i < pl->count; ++i)
+        if (strcmp(pl->items[i].name, name) == 0 && pl->items[i].type != PARAM_FLOAT)
+            return hz_fail_at(err, params_loc(pl, name),
+                              "\"%s\" must be a \"float\": spectral (dispersive) indices are "
+                              "not supported yet",
+                              name);
+    *eta = params_float(pl, name, 1.5);
+    if (!(isfinite(*eta) && *eta > 0.0))
+        params_reject(pl, name, "\"%s\" must be finite and > 0, got %g", name, *eta);
+    return HZ_OK;
+}
+
+/* A conductor's eta and k (named NAME_ETA, NAME_K; default copper), or
+ * "reflectance" r: eta 1 and k = 2 sqrt(r) / sqrt(1 - r), r within
+ * [0, 0.9999] (as pbrt-v4). */
+static hz_status read_metal(param_list *pl, const char *name_eta, const char *name_k, rgb *eta,
+                            rgb *k, hz_error *err)
+{
+    bool has_r = params_has(pl, "reflectance");
+    if (has_r && (params_has(pl, name_eta) || params_has(pl, name_k)))
+        return hz_fail_at(err, params_loc(pl, "reflectance"),
+                          "give \"reflectance\" or \"%s\" and \"%s\", not both (as pbrt-v4)",
+                          name_eta, name_k);
+    if (has_r) {
+        rgb r = params_rgb(pl, "reflectance", rgb_grey(0.0));
+        if (!(r.r >= 0 && r.g >= 0 && r.b >= 0 && r.r <= 1 && r.g <= 1 && r.b <= 1))
+            params_reject(pl, "reflectance", "conductor reflectance must be within [0, 1]");
+        double c[3] = {r.r, r.g, r.b}, kk[3];
+        for (int i = 0; i < 3; ++i) {
+            double ri = hz_clamp(c[i], 0.0, 0.9999);
+            kk[i] = 2.0 * sqrt(ri) / sqrt(1.0 - ri);
+        }
+        *eta = rgb_grey(1.0);
+        *k = rgb_make(kk[0], kk[1], kk[2]);
+        return HZ_OK;
+    }
+    *eta = params_rgb(pl, name_eta, copper_eta);
+    *k = params_rgb(pl, name_k, copper_k);
+    rgb e = *eta, kv = *k;
+    if (!(e.r > 0 && e.g > 0 && e.b > 0 && isfinite(e.r + e.g + e.b)))
+        params_reject(pl, name_eta, "conductor \"%s\" must be finite and > 0", name_eta);
+    if (!(kv.r >= 0 && kv.g >= 0 && kv.b >= 0 && isfinite(kv.r + kv.g + kv.b)))
+        params_reject(pl, name_k, "conductor \"%s\" must be finite and >= 0", name_k);
+    return HZ_OK;
+}
+
+/* What the coated materials share: thickness (0.01), albedo (0) and g (0)
+ * of the medium between the layers, maxdepth (10) and nsamples (1) of the
+ * random walks. */
+static void read_layers(param_list *pl, layered *l)
+{
+    l->thickness = params_float(pl, "thickness", 0.01);
+    if (!(isfinite(l->thickness) && l->thickness >= 0.0))
+        params_reject(pl, "thickness", "\"thickness\" must be finite and >= 0, got %g",
+                      l->thickness);
+    l->thickness = fmax(l->thickness, 1e-300);
+    rgb a = params_rgb(pl, "albedo", rgb_grey(0.0));
+    l->albedo = rgb_make(hz_clamp(a.r, 0, 1), hz_clamp(a.g, 0, 1), hz_clamp(a.b, 0, 1));
+    l->g = hz_clamp(params_float(pl, "g", 0.0), -1.0, 1.0);
+    l->max_depth = params_int(pl, "maxdepth", 10);
+    l->n_samples = params_int(pl, "nsamples", 1);
+    /* Bounded: each costs a random walk per evaluation. */
+    if (l->max_depth < 0 || l->max_depth > 10000)
+        params_reject(pl, "maxdepth", "\"maxdepth\" must be within 0 .. 10000, got %d",
+                      l->max_depth);
+    if (l->n_samples < 1 || l->n_samples > 10000)
+        params_reject(pl, "nsamples", "\"nsamples\" must be within 1 .. 10000, got %d",
+                      l->n_samples);
+}
+
+static hz_status read_coated_diffuse(param_list *pl, material *out, hz_error *err)
+{
+    out->kind = MATERIAL_COATED_DIFFUSE;
+    layered *l = &out->coat;
+    rgb r = params_rgb(pl, "reflectance", rgb_grey(0.5));
+    l->reflectance = rgb_make(hz_clamp(r.r, 0, 1), hz_clamp(r.g, 0, 1), hz_clamp(r.b, 0, 1));
+    l->top = read_roughness_of(pl, "");
+    if (read_eta(pl, "eta", &l->eta, err) != HZ_OK)
+        return HZ_ERROR;
+    read_layers(pl, l);
+    return HZ_OK;
+}
+
+static hz_status read_coated_conductor(param_list *pl, material *out, hz_error *err)
+{
+    out->kind = MATERIAL_COATED_CONDUCTOR;
+    layered *l = &out->coat;
+    l->conductor = true;
+    l->top = read_roughness_of(pl, "interface.");
+    l->bottom = read_roughness_of(pl, "conductor.");
+    if (read_eta(pl, "interface.eta", &l->eta, err) != HZ_OK ||
+        read_metal(pl, "conductor.eta", "conductor.k", &l->eta_rgb, &l->k, err) != HZ_OK)
+        return HZ_ERROR;
+    /* The base sits under the coating: its index relative to it. */
+    l->eta_rgb = rgb_scale(l->eta_rgb, 1.0 / l->eta);
+    l->k = rgb_scale(l->k, 1.0 / l->eta);
+    read_layers(pl, l);
+    return HZ_OK;
 }
 
 static hz_status read_conductor(param_list *pl, material *out, hz_error *err)
 {
     out->kind = MATERIAL_CONDUCTOR;
-    bool has_r = params_has(pl, "reflectance");
-    if (has_r && (params_has(pl, "eta") || params_has(pl, "k")))
-        return hz_fail_at(err, params_loc(pl, "reflectance"),
-                          "give \"reflectance\" or \"eta\" and \"k\", not both (as pbrt-v4)");
-    if (has_r) {
-        /* pbrt-v4: eta 1 and the k whose normal-incidence Fresnel is r. */
-        rgb r = params_rgb(pl, "reflectance", rgb_grey(0.0));
-        if (!(r.r >= 0 && r.g >= 0 && r.b >= 0 && r.r <= 1 && r.g <= 1 && r.b <= 1))
-            params_reject(pl, "reflectance", "conductor reflectance must be within [0, 1]");
-        double c[3] = {r.r, r.g, r.b}, k[3];
-        for (int i = 0; i < 3; ++i) {
-            double ri = fmin(fmax(c[i], 0.0), 1.0 - 1e-9);
-            k[i] = 2.0 * sqrt(ri) / sqrt(1.0 - ri);
-        }
-        out->eta_rgb = rgb_grey(1.0);
-        out->k = rgb_make(k[0], k[1], k[2]);
-    } else {
-        out->eta_rgb = params_rgb(pl, "eta", copper_eta);
-        out->k = params_rgb(pl, "k", copper_k);
-        rgb e = out->eta_rgb, k = out->k;
-        if (!(e.r > 0 && e.g > 0 && e.b > 0 && isfinite(e.r + e.g + e.b)))
-            params_reject(pl, "eta", "conductor \"eta\" must be finite and > 0");
-        if (!(k.r >= 0 && k.g >= 0 && k.b >= 0 && isfinite(k.r + k.g + k.b)))
-            params_reject(pl, "k", "conductor \"k\" must be finite and >= 0");
-    }
+    if (read_metal(pl, "eta", "k", &out->eta_rgb, &out->k, err) != HZ_OK)
+        return HZ_ERROR;
     read_roughness(pl, out);
     return HZ_OK;
 }
@@ -87,14 +181,8 @@ static hz_status read_conductor(param_list *pl, material *out, hz_error *err)
 static hz_status read_dielectric(param_list *pl, bool thin, material *out, hz_error *err)
 {
     out->kind = thin ? MATERIAL_THIN_DIELECTRIC : MATERIAL_DIELECTRIC;
-    for (size_t i = 0; i < pl->count; ++i)
-        if (strcmp(pl->items[i].name, "eta") == 0 && pl->items[i].type != PARAM_FLOAT)
-            return hz_fail_at(err, params_loc(pl, "eta"),
-                              "a dielectric's \"eta\" must be a \"float\": spectral (dispersive) "
-                              "indices are not supported yet");
-    out->eta = params_float(pl, "eta", 1.5);
-    if (!(isfinite(out->eta) && out->eta > 0.0))
-        params_reject(pl, "eta", "\"eta\" must be finite and > 0, got %g", out->eta);
+    if (read_eta(pl, "eta", &out->eta, err) != HZ_OK)
+        return HZ_ERROR;
     if (!thin)
         read_roughness(pl, out);
     return HZ_OK;
@@ -129,6 +217,12 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
                                     hz_clamp(scale * r.b, 0, 1));
         out->transmittance = rgb_make(hz_clamp(scale * t.r, 0, 1), hz_clamp(scale * t.g, 0, 1),
                                       hz_clamp(scale * t.b, 0, 1));
+    } else if (strcmp(type, "coateddiffuse") == 0) {
+        if (read_coated_diffuse(pl, out, err) != HZ_OK)
+            return HZ_ERROR;
+    } else if (strcmp(type, "coatedconductor") == 0) {
+        if (read_coated_conductor(pl, out, err) != HZ_OK)
+            return HZ_ERROR;
     } else if (strcmp(type, "conductor") == 0) {
         if (read_conductor(pl, out, err) != HZ_OK)
             return HZ_ERROR;
@@ -144,8 +238,8 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
         return hz_fail_at(err, e->entity.loc,
                           "Material \"%s\" is not supported (supported: \"diffuse\", "
                           "\"conductor\", \"dielectric\", \"thindielectric\", "
-                          "\"diffusetransmission\", \"interface\", \"\" or \"none\" as "
-                          "\"interface\")",
+                          "\"diffusetransmission\", \"coateddiffuse\", \"coatedconductor\", "
+                          "\"interface\", \"\" or \"none\" as \"interface\")",
                           type);
     }
     char what[128];

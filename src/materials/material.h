@@ -1,11 +1,13 @@
 /* Surface materials: a closed set, pbrt-v4's "diffuse", "conductor",
- * "dielectric", "thindielectric", "diffusetransmission" and "interface" (also
- * "" and "none"), with constant parameters. */
+ * "dielectric", "thindielectric", "diffusetransmission", "coateddiffuse",
+ * "coatedconductor" and "interface" (also "" and "none"), with constant
+ * parameters. */
 #ifndef HAZE_MATERIALS_MATERIAL_H
 #define HAZE_MATERIALS_MATERIAL_H
 
 #include "core/error.h"
 #include "core/vec.h"
+#include "materials/layered.h"
 #include "scene/scene_desc.h"
 
 typedef enum {
@@ -14,6 +16,8 @@ typedef enum {
     MATERIAL_DIELECTRIC,      /* glass, water: reflection and refraction */
     MATERIAL_THIN_DIELECTRIC, /* a thin sheet of glass: straight through */
     MATERIAL_DIFFUSE_TRANSMISSION, /* Lambertian reflection and transmission (leaves, paper) */
+    MATERIAL_COATED_DIFFUSE,   /* varnish over a diffuse base (plastic, paint) */
+    MATERIAL_COATED_CONDUCTOR, /* varnish over a metal */
     MATERIAL_INTERFACE,       /* a medium boundary: not a surface, rays pass through */
 } material_kind;
 
@@ -24,6 +28,7 @@ typedef struct {
     rgb eta_rgb, k;           /* conductor, per channel */
     double eta;               /* dielectric, thin dielectric */
     double alpha_x, alpha_y;  /* conductor, dielectric: Trowbridge-Reitz alphas */
+    layered coat;             /* coated diffuse, coated conductor */
 } material;
 
 /* pbrt-v4's default material: diffuse, reflectance 0.5. */

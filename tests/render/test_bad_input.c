@@ -104,7 +104,7 @@ static void test_all_errors_in_one_run(void **state)
                     "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
                     "WorldBegin\n"
                     "Include \"bad_input_many.inc\"\n"
-                    "Material \"coateddiffuse\"\n"
+                    "Material \"hair\"\n"
                     "Shape \"cylinder\" \"float radius\" 1\n"
                     "LightSource \"goniometric\" \"rgb I\" [1 1 1]\n"
                     "MakeNamedMedium \"m\" \"string type\" \"fluffy\"\n"
@@ -117,7 +117,7 @@ static void test_all_errors_in_one_run(void **state)
     assert_int_equal(run_haze(args, out, sizeof out), 1);
     static const char *want[] = {
         "bad_input_many.pbrt:1:37: unused parameter \"float bogus\"",
-        "bad_input_many.pbrt:5:1: Material \"coateddiffuse\" is not supported",
+        "bad_input_many.pbrt:5:1: Material \"hair\" is not supported",
         "bad_input_many.pbrt:6:1: unknown shape \"cylinder\"",
         "bad_input_many.pbrt:7:1: LightSource \"goniometric\" is not supported",
         "bad_input_many.pbrt:8:1: MakeNamedMedium \"m\": medium type \"fluffy\"",

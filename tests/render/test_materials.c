@@ -39,6 +39,42 @@ static void test_conductor_head_on(void **state)
     free(text);
 }
 
+/* A coating of index 1 and no thickness is invisible: coateddiffuse is its
+ * base (reflectance r under a uniform sky returns r), coatedconductor its
+ * metal; a real coating (eta 1.5) on a white base loses a little. */
+static void test_coated_closed_forms(void **state)
+{
+    (void)state;
+    struct {
+        const char *mat;
+        rgb want;
+    } cases[] = {
+        {"Material \"coateddiffuse\" \"float eta\" 1 \"float thickness\" 0 "
+         "\"rgb reflectance\" [0.6 0.3 0.1]",
+         {0.6, 0.3, 0.1}},
+        {"Material \"coatedconductor\" \"float interface.eta\" 1 \"float thickness\" 0 "
+         "\"rgb reflectance\" [0.2 0.5 0.9]",
+         {0.2, 0.5, 0.9}},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        char *text = mirror_scene(cases[k].mat);
+        render_scene *rs = build(text);
+        rgb mean, se;
+        image_mean_se(rs, 4, 4, 64, &mean, &se);
+        expect_rgb_close(mean, cases[k].want, 1e-6, 1e-12, "invisible coating", (int)k, 0);
+        render_scene_destroy(rs);
+        free(text);
+    }
+    char *text = mirror_scene("Material \"coateddiffuse\" \"rgb reflectance\" [1 1 1]");
+    render_scene *rs = build(text);
+    rgb mean, se;
+    image_mean_se(rs, 4, 4, 1024, &mean, &se);
+    print_message("white coated diffuse: %.5f +- %.5f\n", mean.g, se.g);
+    assert_true(mean.g < 1.0 && mean.g > 0.85);
+    render_scene_destroy(rs);
+    free(text);
+}
+
 /* A diffuse-transmission sheet under a uniform sky lit from both sides
  * returns R + T (pbrt-v4's defaults: 0.25 each, times "scale"). */
 static void test_diffuse_transmission(void **state)
@@ -174,7 +210,16 @@ static void test_integrator_and_parameters(void **state)
          "unused parameter \"float roughness\""},
         {"WorldBegin\nMaterial \"conductor\" \"texture roughness\" \"t\"\n",
          "texture parameters are not supported"},
-        {"WorldBegin\nMaterial \"coateddiffuse\"\n", "\"coateddiffuse\" is not supported"},
+        {"WorldBegin\nMaterial \"coateddiffuse\" \"integer nsamples\" 0\n",
+         "\"nsamples\" must be within 1 .. 10000"},
+        {"WorldBegin\nMaterial \"coatedconductor\" \"rgb reflectance\" [0.5 0.5 0.5] "
+         "\"rgb conductor.k\" [1 1 1]\n",
+         "give \"reflectance\" or \"conductor.eta\" and \"conductor.k\", not both"},
+        {"WorldBegin\nMaterial \"coateddiffuse\" \"float thickness\" -1\n",
+         "\"thickness\" must be finite and >= 0"},
+        {"WorldBegin\nMaterial \"coatedconductor\" \"float roughness\" 0.1\n",
+         "unused parameter \"float roughness\""},
+        {"WorldBegin\nMaterial \"mix\"\n", "\"mix\" is not supported"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         build_scene_expect_error(cases[k].scene, msg, sizeof msg);
@@ -190,6 +235,7 @@ int main(void)
         cmocka_unit_test(test_glass_slab),
         cmocka_unit_test(test_force_diffuse),
         cmocka_unit_test(test_diffuse_transmission),
+        cmocka_unit_test(test_coated_closed_forms),
         cmocka_unit_test(test_integrator_and_parameters),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

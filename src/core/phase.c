@@ -1,4 +1,4 @@
-#include "media/phase.h"
+#include "core/phase.h"
 
 #include <math.h>
 

@@ -11,7 +11,7 @@
 #include <stdlib.h>
 
 #include "core/rng.h"
-#include "media/phase.h"
+#include "core/phase.h"
 #include "unit/assert_util.h"
 
 #define QUAD_N 200000

@@ -2,8 +2,8 @@
  * directions point away from the scattering point (wo toward the viewer, wi
  * toward the light), so forward scattering (g > 0) peaks at dot(wo, wi) = -1.
  * Valid for -1 < g < 1; finite (if very peaked) up to |g| = 1 - 1e-5 and beyond. */
-#ifndef HAZE_MEDIA_PHASE_H
-#define HAZE_MEDIA_PHASE_H
+#ifndef HAZE_CORE_PHASE_H
+#define HAZE_CORE_PHASE_H
 
 #include "core/vec.h"
 
