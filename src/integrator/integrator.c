@@ -10,7 +10,8 @@ static bool volpath_material(const char *type)
     return type && (strcmp(type, "conductor") == 0 || strcmp(type, "dielectric") == 0 ||
                     strcmp(type, "thindielectric") == 0 ||
                     strcmp(type, "diffusetransmission") == 0 ||
-                    strcmp(type, "coateddiffuse") == 0 || strcmp(type, "coatedconductor") == 0);
+                    strcmp(type, "coateddiffuse") == 0 || strcmp(type, "coatedconductor") == 0 ||
+                    strcmp(type, "mix") == 0);
 }
 
 integrator_kind integrator_default_kind(const scene_desc *sd, const char **why, const char **what)

@@ -186,12 +186,13 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     rgb Ls = rgb_grey(0.0);
     if (h.shape->area_light >= 0)
         Ls = light_area_le(&sc->in.lights[h.shape->area_light], h.ng, wo);
-    switch (h.shape->material->kind) {
+    const material *mat = material_at(h.shape->material, h.p, wo);
+    switch (mat->kind) {
     case MATERIAL_DIFFUSE:
-        if (rgb_is_black(h.shape->material->reflectance))
+        if (rgb_is_black(mat->reflectance))
             break;
-        Ls = rgb_add(Ls, direct_diffuse(sc, &h, medium, wo, h.shape->material->reflectance, st,
-                                        &walk, counters));
+        Ls = rgb_add(Ls, direct_diffuse(sc, &h, medium, wo, mat->reflectance, st, &walk,
+                                        counters));
         break;
     case MATERIAL_CONDUCTOR:
     case MATERIAL_DIELECTRIC:
@@ -199,6 +200,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     case MATERIAL_DIFFUSE_TRANSMISSION:
     case MATERIAL_COATED_DIFFUSE:
     case MATERIAL_COATED_CONDUCTOR:
+    case MATERIAL_MIX: /* material_at resolved it */
     case MATERIAL_INTERFACE:
         break; /* the first three: refused under singlescatter at scene build */
     }

@@ -418,7 +418,7 @@ static bool bounce(path *pa, const geom_hit *h)
     if (h->shape->area_light >= 0)
         add_emission(pa, h, wo);
     bsdf b;
-    if (!bsdf_from_material(h->shape->material, h->ns, &b))
+    if (!bsdf_from_material(material_at(h->shape->material, h->p, wo), h->ns, &b))
         return false;
     if (pa->depth++ >= sc->settings.max_depth)
         return false;

@@ -43,6 +43,7 @@ bool bsdf_from_material(const material *m, vec3 ns, bsdf *out)
         out->kind = BSDF_COATED;
         out->coat = m->coat;
         return true;
+    case MATERIAL_MIX: /* resolved by material_at before */
     case MATERIAL_INTERFACE:
         return false;
     }

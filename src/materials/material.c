@@ -1,6 +1,7 @@
 #include "materials/material.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -9,6 +10,67 @@
 material material_default(void)
 {
     return (material){.kind = MATERIAL_DIFFUSE, .reflectance = rgb_grey(0.5)};
+}
+
+/* A uniform number in [0, 1) from the bits of p and wo (pbrt-v4 hashes
+ * them too; its hash differs, the choice's probability does not). */
+static double hash_unit(vec3 p, vec3 wo)
+{
+    const double v[6] = {p.x, p.y, p.z, wo.x, wo.y, wo.z};
+    uint64_t h = 0x243f6a8885a308d3ull;
+    for (int i = 0; i < 6; ++i) {
+        uint64_t b;
+        memcpy(&b, &v[i], sizeof b);
+        h ^= b;
+        h *= 0xff51afd7ed558ccdull;
+        h ^= h >> 33;
+        h *= 0xc4ceb9fe1a85ec53ull;
+        h ^= h >> 33;
+    }
+    return (double)(h >> 11) * 0x1p-53;
+}
+
+const material *material_at(const material *m, vec3 p, vec3 wo)
+{
+    /* Bounded: mixes refer only to materials defined before them. */
+    while (m->kind == MATERIAL_MIX) {
+        if (m->amount <= 0.0)
+            m = m->mix[0];
+        else if (m->amount >= 1.0)
+            m = m->mix[1];
+        else
+            m = m->amount < hash_unit(p, wo) ? m->mix[0] : m->mix[1];
+    }
+    return m;
+}
+
+hz_status material_resolve_mixes(material *materials, const material_entity *entities, size_t n,
+                                 hz_error *err)
+{
+    for (size_t i = 0; i < n; ++i) {
+        material *m = &materials[i];
+        if (m->kind != MATERIAL_MIX)
+            continue;
+        for (int c = 0; c < 2; ++c) {
+            const material *found = NULL;
+            for (size_t j = 0; j < i && !found; ++j)
+                if (entities[j].name && strcmp(entities[j].name, m->mix_names[c]) == 0)
+                    found = &materials[j];
+            if (!found)
+                return hz_fail_at(err, entities[i].entity.loc,
+                                  "Material \"mix\": no material named \"%s\" defined before "
+                                  "it",
+                                  m->mix_names[c]);
+            if (found->kind == MATERIAL_INTERFACE)
+                return hz_fail_at(err, entities[i].entity.loc,
+                                  "Material \"mix\": \"%s\" is an interface (no surface); a "
+                                  "mix needs two surfaces",
+                                  m->mix_names[c]);
+            m->mix[c] = found;
+        }
+        m->mix_names[0] = m->mix_names[1] = NULL; /* the scene's strings: not kept */
+    }
+    return HZ_OK;
 }
 
 bool material_needs_volpath(const material *m)
@@ -24,6 +86,9 @@ bool material_needs_volpath(const material *m)
     case MATERIAL_COATED_DIFFUSE:
     case MATERIAL_COATED_CONDUCTOR:
         return true;
+    case MATERIAL_MIX:
+        return !m->mix[0] || !m->mix[1] || material_needs_volpath(m->mix[0]) ||
+               material_needs_volpath(m->mix[1]);
     }
     return true;
 }
@@ -217,6 +282,20 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
                                     hz_clamp(scale * r.b, 0, 1));
         out->transmittance = rgb_make(hz_clamp(scale * t.r, 0, 1), hz_clamp(scale * t.g, 0, 1),
                                       hz_clamp(scale * t.b, 0, 1));
+    } else if (strcmp(type, "mix") == 0) {
+        out->kind = MATERIAL_MIX;
+        out->amount = params_float(pl, "amount", 0.5);
+        if (!isfinite(out->amount))
+            params_reject(pl, "amount", "\"amount\" must be finite, got %g", out->amount);
+        size_t n = 0;
+        char *const *names = params_strings(pl, "materials", &n);
+        if (n != 2)
+            return hz_fail_at(err, params_loc(pl, "materials"),
+                              "Material \"mix\" needs \"string materials\" naming two "
+                              "materials, got %zu",
+                              n);
+        out->mix_names[0] = names[0];
+        out->mix_names[1] = names[1];
     } else if (strcmp(type, "coateddiffuse") == 0) {
         if (read_coated_diffuse(pl, out, err) != HZ_OK)
             return HZ_ERROR;
@@ -239,7 +318,7 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
                           "Material \"%s\" is not supported (supported: \"diffuse\", "
                           "\"conductor\", \"dielectric\", \"thindielectric\", "
                           "\"diffusetransmission\", \"coateddiffuse\", \"coatedconductor\", "
-                          "\"interface\", \"\" or \"none\" as \"interface\")",
+                          "\"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
                           type);
     }
     char what[128];

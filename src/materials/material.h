@@ -18,10 +18,11 @@ typedef enum {
     MATERIAL_DIFFUSE_TRANSMISSION, /* Lambertian reflection and transmission (leaves, paper) */
     MATERIAL_COATED_DIFFUSE,   /* varnish over a diffuse base (plastic, paint) */
     MATERIAL_COATED_CONDUCTOR, /* varnish over a metal */
+    MATERIAL_MIX,              /* one of two materials per hit, chosen at random */
     MATERIAL_INTERFACE,       /* a medium boundary: not a surface, rays pass through */
 } material_kind;
 
-typedef struct {
+typedef struct material_s {
     material_kind kind;
     rgb reflectance;          /* diffuse, diffuse transmission */
     rgb transmittance;        /* diffuse transmission */
@@ -29,7 +30,23 @@ typedef struct {
     double eta;               /* dielectric, thin dielectric */
     double alpha_x, alpha_y;  /* conductor, dielectric: Trowbridge-Reitz alphas */
     layered coat;             /* coated diffuse, coated conductor */
+    /* mix: the second material with probability `amount`, decided per hit
+     * by a hash of the point and direction (pbrt-v4's MixMaterial); the
+     * names until material_resolve_mixes points them at the materials. */
+    double amount;
+    const char *mix_names[2];
+    const struct material_s *mix[2];
 } material;
+
+/* The material a hit at p seen from wo uses: m itself, or for a mix the
+ * component its hash picks (mixes of mixes followed). Deterministic. */
+const material *material_at(const material *m, vec3 p, vec3 wo);
+
+/* Points every mix of `materials` (n, the scene's named and anonymous ones,
+ * in scene_desc order with their entities) at its components, found by name
+ * among the named materials defined before it. Errors name the mix's place. */
+hz_status material_resolve_mixes(material *materials, const material_entity *entities, size_t n,
+                                 hz_error *err);
 
 /* pbrt-v4's default material: diffuse, reflectance 0.5. */
 material material_default(void);

@@ -82,6 +82,9 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_errors *er
                 return HZ_ERROR;
             rs->materials[i] = material_default();
         }
+    if (material_resolve_mixes(rs->materials, sd->materials, sd->material_count, err) != HZ_OK &&
+        collect(errs, err) != HZ_OK)
+        return HZ_ERROR;
     return HZ_OK;
 }
 

@@ -308,6 +308,14 @@ const double *params_ints(param_list *pl, const char *name, size_t *n)
     return get_array(pl, name, PARAM_INTEGER, 1, n);
 }
 
+char *const *params_strings(param_list *pl, const char *name, size_t *n)
+{
+    const param_type t = PARAM_STRING;
+    param *p = lookup(pl, name, &t, 1);
+    *n = p ? p->count : 0;
+    return p ? p->strs : NULL;
+}
+
 const double *params_rgbs(param_list *pl, const char *name, size_t *n)
 {
     return get_array(pl, name, PARAM_RGB, 3, n);

@@ -101,6 +101,8 @@ const double *params_ints(param_list *pl, const char *name, size_t *n);
 const double *params_point3s(param_list *pl, const char *name, size_t *n);
 const double *params_normals(param_list *pl, const char *name, size_t *n);
 const double *params_point2s(param_list *pl, const char *name, size_t *n);
+/* String arrays ("string materials" ["a" "b"]): NULL and *n = 0 when absent. */
+char *const *params_strings(param_list *pl, const char *name, size_t *n);
 /* "rgb" arrays (3 values each; *n counts triples), as pbrt-v4's GetRGBArray. */
 const double *params_rgbs(param_list *pl, const char *name, size_t *n);
 /* The first value of string parameter `name`, or `def`; does not mark it

@@ -75,6 +75,61 @@ static void test_coated_closed_forms(void **state)
     free(text);
 }
 
+/* Material "mix": the second material with probability "amount", chosen
+ * per hit by a hash of the point and direction: over 200000 hits the share
+ * is the amount within binomial noise, the same hit always chooses alike,
+ * and amount 1 is all the second material. */
+static void test_mix(void **state)
+{
+    (void)state;
+    material a = {.kind = MATERIAL_DIFFUSE, .reflectance = rgb_grey(0.2)};
+    material b = {.kind = MATERIAL_DIFFUSE, .reflectance = rgb_grey(0.8)};
+    material m = {.kind = MATERIAL_MIX, .amount = 0.25, .mix = {&a, &b}};
+    const int n = 200000;
+    int second = 0;
+    for (int i = 0; i < n; ++i) {
+        vec3 p = v3(i * 0.001, 1.0 + (i % 7) * 0.3, -2.0), wo = v3_normalize(v3(1, 2, i % 5));
+        const material *c = material_at(&m, p, wo);
+        assert_true(c == material_at(&m, p, wo));
+        second += c == &b;
+    }
+    double share = (double)second / n, sd = sqrt(0.25 * 0.75 / n);
+    print_message("mix: %.5f of hits chose the second material (want 0.25 +- %.5f)\n", share,
+                  sd);
+    assert_true(fabs(share - 0.25) < 4.0 * sd);
+    const char *defs = "MakeNamedMaterial \"dark\" \"string type\" \"diffuse\" "
+                       "\"rgb reflectance\" [0.2 0.2 0.2]\n"
+                       "MakeNamedMaterial \"light\" \"string type\" \"diffuse\" "
+                       "\"rgb reflectance\" [0.8 0.8 0.8]\n";
+    rgb mean, se;
+    char *mat = sfmt("%sMaterial \"mix\" \"string materials\" [\"dark\" \"light\"] "
+               "\"float amount\" 1",
+               defs);
+    char *text = mirror_scene(mat);
+    render_scene *rs = build(text);
+    image_mean_se(rs, 4, 4, 64, &mean, &se);
+    expect_rgb_close(mean, rgb_grey(0.8), 1e-9, 1e-12, "mix amount 1", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+    free(mat);
+    char msg[1024];
+    const char *bad[][2] = {
+        {"WorldBegin\nMaterial \"mix\" \"string materials\" [\"a\" \"b\"]\n",
+         "no material named \"a\" defined before it"},
+        {"WorldBegin\nMaterial \"mix\" \"string materials\" \"a\"\n",
+         "needs \"string materials\" naming two materials, got 1"},
+        {"WorldBegin\nMakeNamedMaterial \"i\" \"string type\" \"interface\"\n"
+         "MakeNamedMaterial \"d\" \"string type\" \"diffuse\"\n"
+         "Material \"mix\" \"string materials\" [\"d\" \"i\"]\n",
+         "\"i\" is an interface"},
+    };
+    for (size_t k = 0; k < sizeof bad / sizeof bad[0]; ++k) {
+        build_scene_expect_error(bad[k][0], msg, sizeof msg);
+        if (!strstr(msg, bad[k][1]) || !strstr(msg, "test.pbrt:"))
+            fail_msg("case %zu: got \"%s\", want \"%s\"", k, msg, bad[k][1]);
+    }
+}
+
 /* A diffuse-transmission sheet under a uniform sky lit from both sides
  * returns R + T (pbrt-v4's defaults: 0.25 each, times "scale"). */
 static void test_diffuse_transmission(void **state)
@@ -219,7 +274,7 @@ static void test_integrator_and_parameters(void **state)
          "\"thickness\" must be finite and >= 0"},
         {"WorldBegin\nMaterial \"coatedconductor\" \"float roughness\" 0.1\n",
          "unused parameter \"float roughness\""},
-        {"WorldBegin\nMaterial \"mix\"\n", "\"mix\" is not supported"},
+        {"WorldBegin\nMaterial \"measured\"\n", "\"measured\" is not supported"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         build_scene_expect_error(cases[k].scene, msg, sizeof msg);
@@ -236,6 +291,7 @@ int main(void)
         cmocka_unit_test(test_force_diffuse),
         cmocka_unit_test(test_diffuse_transmission),
         cmocka_unit_test(test_coated_closed_forms),
+        cmocka_unit_test(test_mix),
         cmocka_unit_test(test_integrator_and_parameters),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
