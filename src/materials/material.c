@@ -130,16 +130,25 @@ static void read_roughness(param_list *pl, material *out)
     out->alpha_y = d.alpha_y;
 }
 
-/* A float index (pbrt-v4 also takes a spectrum, which disperses: refused
- * for now), > 0. */
+/* An index > 0: a float, or a spectrum that does not vary (a constant, or
+ * one of pbrt-v4's named glasses, taken at 550 nm); haze does not disperse,
+ * so a varying spectrum is refused. */
 static hz_status read_eta(param_list *pl, const char *name, double *eta, hz_error *err)
 {
-    for (size_t i = 0; i < pl->count; ++i)
-        if (strcmp(pl->items[i].name, name) == 0 && pl->items[i].type != PARAM_FLOAT)
+    for (size_t i = 0; i < pl->count; ++i) {
+        if (strcmp(pl->items[i].name, name) != 0 || pl->items[i].type == PARAM_FLOAT)
+            continue;
+        rgb c = params_rgb(pl, name, rgb_grey(1.5));
+        if (!(c.r == c.g && c.g == c.b))
             return hz_fail_at(err, params_loc(pl, name),
-                              "\"%s\" must be a \"float\": spectral (dispersive) indices are "
-                              "not supported yet",
+                              "\"%s\": an index that varies with wavelength (dispersion) is not "
+                              "supported; give a \"float\" or a named glass",
                               name);
+        *eta = c.g;
+        if (!(isfinite(*eta) && *eta > 0.0))
+            params_reject(pl, name, "\"%s\" must be finite and > 0, got %g", name, *eta);
+        return HZ_OK;
+    }
     *eta = params_float(pl, name, 1.5);
     if (!(isfinite(*eta) && *eta > 0.0))
         params_reject(pl, name, "\"%s\" must be finite and > 0, got %g", name, *eta);

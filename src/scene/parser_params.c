@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "scene/mem.h"
+#include "scene/named_spectra.h"
 #include "scene/parser.h"
 #include "scene/spectrum.h"
 
@@ -154,11 +155,30 @@ static hz_status set_rgb(parser *ps, param *p, rgb c, hz_error *err)
 static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_t n,
                                   hz_error *err)
 {
-    if (vals[0].kind == TOK_STRING)
-        return hz_fail_at(err, vals[0].loc,
-                          "parameter \"spectrum %s\": named spectra and spectrum files are not "
-                          "supported; use rgb",
-                          p->name);
+    if (vals[0].kind == TOK_STRING) {
+        /* pbrt-v4's named spectra, reduced to RGB (scene/named_spectra.h). */
+        rgb named;
+        if (n != 1)
+            return hz_fail_at(err, vals[0].loc,
+                              "parameter \"spectrum %s\" takes one spectrum name, got %zu values",
+                              p->name, n);
+        char *name = token_string_dup(&vals[0]);
+        if (!name)
+            return parser_oom(ps, vals[0].loc, err);
+        bool found = named_spectrum_rgb(name, &named);
+        hz_status st = found ? HZ_OK
+                             : hz_fail_at(err, vals[0].loc,
+                                          "parameter \"spectrum %s\": no named spectrum "
+                                          "\"%.60s\" (haze knows pbrt-v4's metal-*-eta/-k, "
+                                          "glass-* and stdillum-*; spectrum files are not "
+                                          "supported: use rgb)",
+                                          p->name, name);
+        free(name);
+        if (st != HZ_OK)
+            return st;
+        p->illuminant = named;
+        return set_rgb(ps, p, named, err);
+    }
     if (want_numbers(p, vals, n, err) != HZ_OK)
         return HZ_ERROR;
     rgb c;

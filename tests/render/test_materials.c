@@ -29,6 +29,16 @@ static void test_conductor_head_on(void **state)
     expect_rgb_close(p.mean, rgb_make(0.2, 0.5, 0.9), 1e-9, 1e-12, "conductor reflectance", 0, 0);
     render_scene_destroy(rs);
     free(text);
+    /* pbrt-v4's named metals (here gold) reduced to RGB: the normal-
+     * incidence reflectance of the spectral data under D65 (red clamped to
+     * 0.99). */
+    text = mirror_scene("Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" "
+                        "\"spectrum k\" \"metal-Au-k\"");
+    rs = build(text);
+    p = pixel_stats_raw(rs, 1, 1, 4);
+    expect_rgb_close(p.mean, rgb_make(0.990, 0.783, 0.343), 2e-3, 0.0, "gold", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
     /* pbrt-v4's default conductor is copper: its normal-incidence
      * reflectance under D65, reduced to RGB. */
     text = mirror_scene("Material \"conductor\"");
@@ -216,6 +226,10 @@ static void test_glass_slab(void **state)
     glass = sfmt("Material \"dielectric\" \"float eta\" 2.4\n%s", box);
     expect_transmission(glass, 2.4, "diamond slab");
     free(glass);
+    /* pbrt-v4's named glass at 550 nm (haze does not disperse). */
+    glass = sfmt("Material \"dielectric\" \"spectrum eta\" \"glass-BK7\"\n%s", box);
+    expect_transmission(glass, 1.51854, "BK7 slab");
+    free(glass);
     free(box);
     /* A thin sheet sums its interreflections: the same (1 - R) / (1 + R). */
     expect_transmission("Material \"thindielectric\" \"float eta\" 1.5\n"
@@ -259,7 +273,9 @@ static void test_integrator_and_parameters(void **state)
          "give \"reflectance\" or \"eta\" and \"k\", not both"},
         {"WorldBegin\nMaterial \"conductor\" \"float roughness\" -0.1\n", "\"roughness\" must be"},
         {"WorldBegin\nMaterial \"dielectric\" \"spectrum eta\" [400 1.5 700 1.4]\n",
-         "must be a \"float\""},
+         "varies with wavelength (dispersion) is not supported"},
+        {"WorldBegin\nMaterial \"conductor\" \"spectrum eta\" \"metal-Xx-eta\"\n",
+         "no named spectrum \"metal-Xx-eta\""},
         {"WorldBegin\nMaterial \"dielectric\" \"float eta\" 0\n", "\"eta\" must be finite and > 0"},
         {"WorldBegin\nMaterial \"thindielectric\" \"float roughness\" 0.1\n",
          "unused parameter \"float roughness\""},

@@ -453,9 +453,10 @@ static void test_param_errors(void **state)
     parse_err("Camera \"perspective\" \"integer n\" 2147483648", "t.pbrt:1:34: parameter \"integer n\" expects integers");
     parse_err("Camera \"perspective\" \"bool b\" 1", "t.pbrt:1:31: parameter \"bool b\" expects true or false");
     parse_err("Camera \"perspective\" \"float f\" []", "t.pbrt:1:22: parameter \"float f\" has no values");
-    parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"metal-Cu-eta\"",
-              "t.pbrt:2:43: parameter \"spectrum reflectance\": named spectra and spectrum files are "
-              "not supported; use rgb");
+    parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"my.spd\"",
+              "t.pbrt:2:43: parameter \"spectrum reflectance\": no named spectrum \"my.spd\"");
+    parse_err("WorldBegin\nMaterial \"conductor\" \"spectrum eta\" [\"metal-Cu-eta\" \"x\"]",
+              "takes one spectrum name, got 2 values");
     parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum r\" [400 1 500]",
               "needs (wavelength, value) pairs, got 3 values");
     parse_err("WorldBegin\nMaterial \"diffuse\" \"spectrum r\" [500 1 400 1]",
@@ -758,9 +759,32 @@ static void test_garbage(void **state)
     }
 }
 
+/* pbrt-v4's named spectra come back as their RGB reductions: an illuminant
+ * at luminance 1 (stdillum-A, warm), a metal's index, a glass's index. */
+static void named_spectra(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("WorldBegin\nLightSource \"point\" \"spectrum I\" \"stdillum-A\"\n"
+             "Material \"conductor\" \"spectrum eta\" \"metal-Ag-eta\" \"spectrum k\" "
+             "\"metal-Ag-k\"\n"
+             "Material \"dielectric\" \"spectrum eta\" \"glass-F11\"\n",
+             &sd);
+    rgb a = params_illuminant(&sd.lights[0].entity.params, "I", rgb_grey(0.0));
+    assert_true(fabs(a.r - 1.84470) < 1e-5 && fabs(a.g - 0.82622) < 1e-5 &&
+                fabs(a.b - 0.23290) < 1e-5);
+    assert_true(fabs(rgb_luminance(a) - 1.0) < 2e-3);
+    rgb k = params_rgb(&sd.materials[0].entity.params, "k", rgb_grey(0.0));
+    assert_true(fabs(k.g - 3.36834) < 1e-5);
+    rgb g = params_rgb(&sd.materials[1].entity.params, "eta", rgb_grey(0.0));
+    assert_true(g.r == g.g && g.g == g.b && fabs(g.g - 1.79112) < 1e-5);
+    scene_desc_free(&sd);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(named_spectra),
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_input_files),
         cmocka_unit_test(test_look_at),
