@@ -130,26 +130,12 @@ static void read_roughness(param_list *pl, material *out)
     out->alpha_y = d.alpha_y;
 }
 
-/* An index > 0: a float, or a spectrum that does not vary (a constant, or
- * one of pbrt-v4's named glasses, taken at 550 nm); haze does not disperse,
- * so a varying spectrum is refused. */
+/* An index > 0: a float, or a spectrum taken at 550 nm (a named glass
+ * too): haze does not disperse. */
 static hz_status read_eta(param_list *pl, const char *name, double *eta, hz_error *err)
 {
-    for (size_t i = 0; i < pl->count; ++i) {
-        if (strcmp(pl->items[i].name, name) != 0 || pl->items[i].type == PARAM_FLOAT)
-            continue;
-        rgb c = params_rgb(pl, name, rgb_grey(1.5));
-        if (!(c.r == c.g && c.g == c.b))
-            return hz_fail_at(err, params_loc(pl, name),
-                              "\"%s\": an index that varies with wavelength (dispersion) is not "
-                              "supported; give a \"float\" or a named glass",
-                              name);
-        *eta = c.g;
-        if (!(isfinite(*eta) && *eta > 0.0))
-            params_reject(pl, name, "\"%s\" must be finite and > 0, got %g", name, *eta);
-        return HZ_OK;
-    }
-    *eta = params_float(pl, name, 1.5);
+    (void)err;
+    *eta = params_float_or_550(pl, name, 1.5);
     if (!(isfinite(*eta) && *eta > 0.0))
         params_reject(pl, name, "\"%s\" must be finite and > 0, got %g", name, *eta);
     return HZ_OK;

@@ -308,6 +308,21 @@ const double *params_ints(param_list *pl, const char *name, size_t *n)
     return get_array(pl, name, PARAM_INTEGER, 1, n);
 }
 
+double params_float_or_550(param_list *pl, const char *name, double def)
+{
+    const param_type types[2] = {PARAM_FLOAT, PARAM_SPECTRUM};
+    param *p = lookup(pl, name, types, 2);
+    if (!p)
+        return def;
+    if (p->type == PARAM_SPECTRUM)
+        return p->at_550;
+    if (p->count != 1) {
+        record(pl, p->loc, "parameter \"%s\" takes 1 value, got %zu", name, p->count);
+        return def;
+    }
+    return p->nums[0];
+}
+
 char *const *params_strings(param_list *pl, const char *name, size_t *n)
 {
     const param_type t = PARAM_STRING;

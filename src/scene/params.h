@@ -42,6 +42,7 @@ typedef struct {
     bool used;
     bool optional;  /* a default from Attribute: never reported as unused (pbrt-v4's mayBeUnused) */
     rgb illuminant; /* spectrum: the RGB of the spectrum as a light's (params_illuminant) */
+    double at_550;  /* spectrum: its value at 550 nm (an index that does not disperse) */
 } param;
 
 typedef struct {
@@ -101,6 +102,9 @@ const double *params_ints(param_list *pl, const char *name, size_t *n);
 const double *params_point3s(param_list *pl, const char *name, size_t *n);
 const double *params_normals(param_list *pl, const char *name, size_t *n);
 const double *params_point2s(param_list *pl, const char *name, size_t *n);
+/* A float parameter's value, or a spectrum's at 550 nm (pbrt-v4 takes an
+ * index as either); `def` when absent. */
+double params_float_or_550(param_list *pl, const char *name, double def);
 /* String arrays ("string materials" ["a" "b"]): NULL and *n = 0 when absent. */
 char *const *params_strings(param_list *pl, const char *name, size_t *n);
 /* "rgb" arrays (3 values each; *n counts triples), as pbrt-v4's GetRGBArray. */

@@ -177,6 +177,7 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
         if (st != HZ_OK)
             return st;
         p->illuminant = named;
+        p->at_550 = named.g; /* a glass: its index at 550 nm */
         return set_rgb(ps, p, named, err);
     }
     if (want_numbers(p, vals, n, err) != HZ_OK)
@@ -184,6 +185,7 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
     rgb c;
     if (n == 1) {
         c = rgb_grey(vals[0].num);
+        p->at_550 = vals[0].num;
         p->illuminant = vals[0].num > 0.0 ? spectrum_sampled_to_illuminant(NULL, NULL, 1)
                                           : rgb_grey(0.0);
     } else {
@@ -211,6 +213,14 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
             }
         }
         c = spectrum_sampled_to_rgb(lambda, value, pairs);
+        /* Linear between samples, the end values beyond them. */
+        p->at_550 = value[pairs - 1];
+        for (size_t i = 0; i < pairs; ++i)
+            if (lambda[i] >= 550.0) {
+                double t = i == 0 ? 1.0 : (550.0 - lambda[i - 1]) / (lambda[i] - lambda[i - 1]);
+                p->at_550 = i == 0 ? value[0] : value[i - 1] + t * (value[i] - value[i - 1]);
+                break;
+            }
         p->illuminant = spectrum_sampled_to_illuminant(lambda, value, pairs);
         free(lambda);
         free(value);

@@ -779,6 +779,12 @@ static void named_spectra(void **state)
     rgb g = params_rgb(&sd.materials[1].entity.params, "eta", rgb_grey(0.0));
     assert_true(g.r == g.g && g.g == g.b && fabs(g.g - 1.79112) < 1e-5);
     scene_desc_free(&sd);
+    /* A dispersive index is taken at 550 nm, linear between samples. */
+    parse_ok("WorldBegin\nMaterial \"dielectric\" \"spectrum eta\" [400 1.6 500 1.55 700 1.45]\n",
+             &sd);
+    assert_true(fabs(params_float_or_550(&sd.materials[0].entity.params, "eta", 0.0) - 1.525) <
+                1e-12);
+    scene_desc_free(&sd);
 }
 
 int main(void)
