@@ -257,6 +257,15 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
     if (params_has(pl, "type"))
         type = params_string(pl, "type", type);
     *out = (material){.kind = MATERIAL_INTERFACE};
+    /* Out of scope for now (docs/differences-from-pbrt.md): say so rather
+     * than "unused parameter". */
+    if (params_has(pl, "displacement"))
+        return hz_fail_at(err, params_loc(pl, "displacement"),
+                          "\"displacement\" is not supported: haze shades the geometry as given "
+                          "(no displaced or bump-mapped surfaces)");
+    if (params_has(pl, "normalmap"))
+        return hz_fail_at(err, params_loc(pl, "normalmap"),
+                          "\"normalmap\" is not supported: haze has no image textures yet");
 
     if (strcmp(type, "diffuse") == 0) {
         out->kind = MATERIAL_DIFFUSE;

@@ -2,9 +2,13 @@
  * pbrt-v4's type names and aliases. Values are checked against the type here,
  * so factories only see well-formed lists; spectrum and blackbody values are
  * converted to rgb (rules in spectrum.h). */
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
+#include "core/file.h"
+#include "core/path.h"
 #include "scene/mem.h"
 #include "scene/named_spectra.h"
 #include "scene/parser.h"
@@ -152,6 +156,105 @@ static hz_status set_rgb(parser *ps, param *p, rgb c, hz_error *err)
     return HZ_OK;
 }
 
+/* A sampled spectrum (increasing wavelengths) as the param's RGB, its
+ * illuminant RGB and its value at 550 nm (linear between samples, the end
+ * values beyond them). */
+static hz_status set_sampled(parser *ps, param *p, const double *lambda, const double *value,
+                             size_t pairs, hz_error *err)
+{
+    p->at_550 = value[pairs - 1];
+    for (size_t i = 0; i < pairs; ++i)
+        if (lambda[i] >= 550.0) {
+            double t = i == 0 ? 1.0 : (550.0 - lambda[i - 1]) / (lambda[i] - lambda[i - 1]);
+            p->at_550 = i == 0 ? value[0] : value[i - 1] + t * (value[i] - value[i - 1]);
+            break;
+        }
+    p->illuminant = spectrum_sampled_to_illuminant(lambda, value, pairs);
+    return set_rgb(ps, p, spectrum_sampled_to_rgb(lambda, value, pairs), err);
+}
+
+/* pbrt-v4's spectrum file (.spd): "wavelength value" pairs, whitespace
+ * separated, '#' comments; a name not found among the named spectra is read
+ * as one, relative to the scene file. The file joins the scene's inputs. */
+static hz_status read_spd(parser *ps, param *p, const char *name, file_loc loc, hz_error *err)
+{
+    char *full = path_relative_to(loc.file, name);
+    if (!full)
+        return parser_oom(ps, loc, err);
+    char *text;
+    size_t len;
+    hz_error ferr;
+    if (file_read_all(full, FILE_LIMIT_SCENE, &text, &len, &ferr) != HZ_OK) {
+        hz_status st = hz_fail_at(err, loc,
+                                  "parameter \"spectrum %s\": no named spectrum \"%.60s\" and "
+                                  "no spectrum file \"%.200s\" (%s); haze knows pbrt-v4's "
+                                  "metal-*-eta/-k, glass-* and stdillum-*",
+                                  p->name, name, full, ferr.message);
+        free(full);
+        return st;
+    }
+    double *v = NULL;
+    size_t n = 0, cap = 0;
+    hz_status st = HZ_OK;
+    for (char *c = text; st == HZ_OK && *c;) {
+        if (*c == '#') {
+            while (*c && *c != '\n')
+                ++c;
+            continue;
+        }
+        if (*c == ' ' || *c == '\t' || *c == '\n' || *c == '\r') {
+            ++c;
+            continue;
+        }
+        char *end;
+        double x = strtod(c, &end);
+        if (end == c || !isfinite(x)) {
+            st = hz_fail_at(err, loc, "spectrum file \"%.200s\": not a number at byte %zu", full,
+                            (size_t)(c - text));
+            break;
+        }
+        double *grown = scene_grow(v, &cap, n, sizeof *v);
+        if (!grown) {
+            st = parser_oom(ps, loc, err);
+            break;
+        }
+        v = grown;
+        v[n++] = x;
+        c = end;
+    }
+    size_t pairs = n / 2;
+    if (st == HZ_OK && (n % 2 != 0 || pairs == 0))
+        st = hz_fail_at(err, loc, "spectrum file \"%.200s\" needs (wavelength, value) pairs, got "
+                        "%zu values", full, n);
+    double *lambda = NULL, *value = NULL;
+    if (st == HZ_OK) {
+        lambda = scene_array(pairs, sizeof *lambda);
+        value = scene_array(pairs, sizeof *value);
+        if (!lambda || !value)
+            st = parser_oom(ps, loc, err);
+    }
+    for (size_t i = 0; st == HZ_OK && i < pairs; ++i) {
+        lambda[i] = v[2 * i];
+        value[i] = v[2 * i + 1];
+        if (i > 0 && !(lambda[i] > lambda[i - 1]))
+            st = hz_fail_at(err, loc, "spectrum file \"%.200s\": wavelengths must increase",
+                            full);
+    }
+    if (st == HZ_OK)
+        st = set_sampled(ps, p, lambda, value, pairs, err);
+    if (st == HZ_OK) {
+        const char *file = parser_intern(ps, full);
+        if (!file || !scene_desc_add_file(ps->sd, file))
+            st = parser_oom(ps, loc, err);
+    }
+    free(lambda);
+    free(value);
+    free(v);
+    free(text);
+    free(full);
+    return st;
+}
+
 static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_t n,
                                   hz_error *err)
 {
@@ -165,17 +268,12 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
         char *name = token_string_dup(&vals[0]);
         if (!name)
             return parser_oom(ps, vals[0].loc, err);
-        bool found = named_spectrum_rgb(name, &named);
-        hz_status st = found ? HZ_OK
-                             : hz_fail_at(err, vals[0].loc,
-                                          "parameter \"spectrum %s\": no named spectrum "
-                                          "\"%.60s\" (haze knows pbrt-v4's metal-*-eta/-k, "
-                                          "glass-* and stdillum-*; spectrum files are not "
-                                          "supported: use rgb)",
-                                          p->name, name);
-        free(name);
-        if (st != HZ_OK)
+        if (!named_spectrum_rgb(name, &named)) {
+            hz_status st = read_spd(ps, p, name, vals[0].loc, err);
+            free(name);
             return st;
+        }
+        free(name);
         p->illuminant = named;
         p->at_550 = named.g; /* a glass: its index at 550 nm */
         return set_rgb(ps, p, named, err);
@@ -212,18 +310,10 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
                                   "parameter \"spectrum %s\": wavelengths must increase", p->name);
             }
         }
-        c = spectrum_sampled_to_rgb(lambda, value, pairs);
-        /* Linear between samples, the end values beyond them. */
-        p->at_550 = value[pairs - 1];
-        for (size_t i = 0; i < pairs; ++i)
-            if (lambda[i] >= 550.0) {
-                double t = i == 0 ? 1.0 : (550.0 - lambda[i - 1]) / (lambda[i] - lambda[i - 1]);
-                p->at_550 = i == 0 ? value[0] : value[i - 1] + t * (value[i] - value[i - 1]);
-                break;
-            }
-        p->illuminant = spectrum_sampled_to_illuminant(lambda, value, pairs);
+        hz_status st = set_sampled(ps, p, lambda, value, pairs, err);
         free(lambda);
         free(value);
+        return st;
     }
     return set_rgb(ps, p, c, err);
 }

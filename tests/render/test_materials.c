@@ -164,6 +164,47 @@ static void test_diffuse_transmission(void **state)
     free(text);
 }
 
+/* A spectrum file (.spd, pbrt-v4's "wavelength value" pairs with '#'
+ * comments) read relative to the scene: the same as its pairs inline; a
+ * file of odd length is refused. */
+static void test_spd_file(void **state)
+{
+    (void)state;
+    const char *path = HAZE_TMP "/haze_flat.spd";
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("# a flat reflectance\n400 0.5\n550\t0.5 # mid\n700 0.5\n", f);
+    fclose(f);
+    char *mat = sfmt("Material \"diffuse\" \"spectrum reflectance\" \"%s\"", path);
+    char *text = mirror_scene(mat);
+    render_scene *rs = build(text);
+    rgb mean, se;
+    image_mean_se(rs, 4, 4, 16, &mean, &se);
+    render_scene_destroy(rs);
+    free(text);
+    free(mat);
+    /* Exactly as the same pairs inline (grey within the reduction's 1%). */
+    text = mirror_scene("Material \"diffuse\" \"spectrum reflectance\" "
+                        "[400 0.5 550 0.5 700 0.5]");
+    rs = build(text);
+    rgb inline_mean;
+    image_mean_se(rs, 4, 4, 16, &inline_mean, &se);
+    expect_rgb_close(mean, inline_mean, 1e-12, 0.0, "spd as inline", 0, 0);
+    expect_rgb_close(mean, rgb_grey(0.5), 1e-2, 0.0, "spd reflectance", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+    f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("400 0.5 700\n", f);
+    fclose(f);
+    mat = sfmt("WorldBegin\nMaterial \"diffuse\" \"spectrum reflectance\" \"%s\"\n", path);
+    char msg[1024];
+    build_scene_expect_error(mat, msg, sizeof msg);
+    assert_non_null(strstr(msg, "needs (wavelength, value) pairs, got 3 values"));
+    free(mat);
+    remove(path);
+}
+
 /* Option "forcediffuse": the smooth conductor becomes a diffuse surface of
  * its albedo r, which under a uniform sky of radiance 1 returns r. */
 static void test_force_diffuse(void **state)
@@ -291,6 +332,10 @@ static void test_integrator_and_parameters(void **state)
         {"WorldBegin\nMaterial \"coatedconductor\" \"float roughness\" 0.1\n",
          "unused parameter \"float roughness\""},
         {"WorldBegin\nMaterial \"measured\"\n", "\"measured\" is not supported"},
+        {"WorldBegin\nMaterial \"diffuse\" \"float displacement\" 0.1\n",
+         "test.pbrt:2:20: \"displacement\" is not supported"},
+        {"WorldBegin\nMaterial \"coateddiffuse\" \"string normalmap\" \"n.png\"\n",
+         "\"normalmap\" is not supported"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         build_scene_expect_error(cases[k].scene, msg, sizeof msg);
@@ -305,6 +350,7 @@ int main(void)
         cmocka_unit_test(test_conductor_head_on),
         cmocka_unit_test(test_glass_slab),
         cmocka_unit_test(test_force_diffuse),
+        cmocka_unit_test(test_spd_file),
         cmocka_unit_test(test_diffuse_transmission),
         cmocka_unit_test(test_coated_closed_forms),
         cmocka_unit_test(test_mix),
