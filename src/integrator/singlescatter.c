@@ -7,6 +7,7 @@
 
 #include "core/clock.h"
 #include "integrator/singlescatter_media.h"
+#include "materials/bsdf.h"
 
 singlescatter_settings singlescatter_settings_default(void)
 {
@@ -109,29 +110,33 @@ static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
     return T;
 }
 
-static rgb direct_diffuse(const singlescatter_scene *sc, const geom_hit *h, int medium, vec3 wo,
-                          rgb reflectance, sampler_state *st, media_walk *walk,
-                          integrator_counters *counters)
+/* Direct light through the BSDF of a reflective material (diffuse,
+ * conductors, coated materials): a light sample per light at the first hit,
+ * without the paths volpath continues (a perfect mirror reflects no light
+ * sample: black). Diffuse surfaces reflect on the side of wo, as pbrt-v4's
+ * two-sided diffuse BSDF. */
+static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int medium, vec3 wo,
+                       const material *mat, sampler_state *st, media_walk *walk,
+                       integrator_counters *counters)
 {
-    /* pbrt-v4's diffuse BSDF reflects on both sides: work on the side of wo. */
+    bsdf b;
+    if (!bsdf_from_material(mat, h->ns, &b) || !bsdf_is_non_specular(&b))
+        return rgb_grey(0.0);
     vec3 ns = v3_dot(h->ns, wo) < 0.0 ? v3_neg(h->ns) : h->ns;
-    rgb f = rgb_scale(reflectance, HZ_INV_PI);
     rgb L = rgb_grey(0.0);
     for (size_t i = 0; i < sc->in.light_count; ++i) {
         const light *l = &sc->in.lights[i];
-        /* Non-delta lights always take their 2D sample, hit or not, so the
-         * sampler dimensions do not depend on what happened before. */
         vec2 u = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(st);
         light_sample ls;
-        if (!light_sample_li(l, h->p, ns, walk->time, u, &ls))
+        if (!light_sample_li(l, h->p, ns, walk->time, u, &ls) || ls.pdf <= 0.0)
             continue;
-        double cos_theta = v3_dot(ns, ls.wi);
-        if (cos_theta <= 0.0 || ls.pdf <= 0.0)
+        rgb f = bsdf_f(&b, wo, ls.wi);
+        if (rgb_is_black(f))
             continue;
         rgb T = shadow(sc, h, medium, &ls, walk, counters);
         if (rgb_is_black(T))
             continue;
-        L = rgb_add(L, rgb_scale(rgb_mul(rgb_mul(f, ls.L), T), cos_theta / ls.pdf));
+        L = rgb_add(L, rgb_scale(rgb_mul(rgb_mul(f, ls.L), T), fabs(v3_dot(ns, ls.wi)) / ls.pdf));
     }
     return L;
 }
@@ -189,20 +194,17 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     const material *mat = material_at(h.shape->material, h.p, wo);
     switch (mat->kind) {
     case MATERIAL_DIFFUSE:
-        if (rgb_is_black(mat->reflectance))
-            break;
-        Ls = rgb_add(Ls, direct_diffuse(sc, &h, medium, wo, mat->reflectance, st, &walk,
-                                        counters));
-        break;
     case MATERIAL_CONDUCTOR:
-    case MATERIAL_DIELECTRIC:
-    case MATERIAL_THIN_DIELECTRIC:
-    case MATERIAL_DIFFUSE_TRANSMISSION:
     case MATERIAL_COATED_DIFFUSE:
     case MATERIAL_COATED_CONDUCTOR:
-    case MATERIAL_MIX: /* material_at resolved it */
+        Ls = rgb_add(Ls, direct_bsdf(sc, &h, medium, wo, mat, st, &walk, counters));
+        break;
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_DIFFUSE_TRANSMISSION: /* refused under singlescatter at scene build */
+    case MATERIAL_MIX:                  /* material_at resolved it */
     case MATERIAL_INTERFACE:
-        break; /* the first three: refused under singlescatter at scene build */
+        break;
     }
     L = rgb_add(L, rgb_mul(beta, Ls));
 done:

@@ -80,11 +80,12 @@ bool material_needs_volpath(const material *m)
     case MATERIAL_INTERFACE:
         return false;
     case MATERIAL_CONDUCTOR:
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        return false; /* reflection only: singlescatter samples lights through them */
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
-    case MATERIAL_COATED_DIFFUSE:
-    case MATERIAL_COATED_CONDUCTOR:
         return true;
     case MATERIAL_MIX:
         return !m->mix[0] || !m->mix[1] || material_needs_volpath(m->mix[0]) ||

@@ -205,6 +205,45 @@ static void test_spd_file(void **state)
     remove(path);
 }
 
+/* singlescatter shades reflective materials with direct light: under a
+ * distant light (a delta light: light samples only, no noise) it gives what
+ * volpath maxdepth 1 gives for a rough conductor, exactly; a perfect mirror
+ * reflects no light sample. (A coated material's f is itself a random walk
+ * seeded by the directions, which the two integrators round differently:
+ * only its presence is checked here.) */
+static void test_singlescatter_direct(void **state)
+{
+    (void)state;
+    const char *mats[] = {
+        "Material \"conductor\" \"float roughness\" 0.3",
+        "Material \"coateddiffuse\" \"rgb reflectance\" [0.6 0.3 0.1] \"float roughness\" 0.1",
+        "Material \"conductor\" \"rgb reflectance\" [0.9 0.9 0.9]",
+    };
+    for (int k = 0; k < 3; ++k) {
+        rgb L[2];
+        const char *integ[2] = {"Integrator \"singlescatter\"",
+                                "Integrator \"volpath\" \"integer maxdepth\" 1"};
+        for (int i = 0; i < 2; ++i) {
+            char *text = sfmt("LookAt 0 5 -3  0 0 0  0 1 0\nCamera \"orthographic\"\n"
+                              "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                              "%s\nWorldBegin\n"
+                              "LightSource \"distant\" \"point3 from\" [0 5 3] \"point3 to\" "
+                              "[0 0 0] \"rgb L\" [2 2 2]\n%s\n"
+                              "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+                              "\"point3 P\" [-10 0 -10  10 0 -10  10 0 10  -10 0 10]\n",
+                              integ[i], mats[k]);
+            render_scene *rs = build(text);
+            L[i] = pixel_stats_raw(rs, 1, 2, 8).mean;
+            render_scene_destroy(rs);
+            free(text);
+        }
+        print_message("singlescatter %.6f, volpath 1 %.6f\n", L[0].g, L[1].g);
+        if (k != 1)
+            expect_rgb_close(L[0], L[1], 1e-9, 1e-12, "singlescatter direct", k, 0);
+        assert_true(k == 2 ? L[0].g == 0.0 : L[0].g > 0.01);
+    }
+}
+
 /* Option "forcediffuse": the smooth conductor becomes a diffuse surface of
  * its albedo r, which under a uniform sky of radiance 1 returns r. */
 static void test_force_diffuse(void **state)
@@ -307,8 +346,8 @@ static void test_integrator_and_parameters(void **state)
     struct {
         const char *scene, *want;
     } cases[] = {
-        {"Integrator \"singlescatter\"\nWorldBegin\nMaterial \"conductor\"\n",
-         "test.pbrt:3:1: Material \"conductor\" needs Integrator \"volpath\""},
+        {"Integrator \"singlescatter\"\nWorldBegin\nMaterial \"dielectric\"\n",
+         "test.pbrt:3:1: Material \"dielectric\" needs Integrator \"volpath\""},
         {"WorldBegin\nMaterial \"conductor\" \"rgb reflectance\" [0.5 0.5 0.5] "
          "\"rgb eta\" [1 1 1]\n",
          "give \"reflectance\" or \"eta\" and \"k\", not both"},
@@ -351,6 +390,7 @@ int main(void)
         cmocka_unit_test(test_glass_slab),
         cmocka_unit_test(test_force_diffuse),
         cmocka_unit_test(test_spd_file),
+        cmocka_unit_test(test_singlescatter_direct),
         cmocka_unit_test(test_diffuse_transmission),
         cmocka_unit_test(test_coated_closed_forms),
         cmocka_unit_test(test_mix),
