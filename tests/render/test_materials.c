@@ -281,19 +281,28 @@ static char *slab_scene(const char *glass)
                 glass);
 }
 
-static void expect_transmission(const char *glass, double eta, const char *what)
+/* Head-on through a slab of Fresnel reflectance R per face and internal
+ * transmittance t per crossing: (1 - R)^2 t / (1 - R^2 t^2) (t = 1: (1 - R) /
+ * (1 + R)). */
+static void expect_transmission_t(const char *glass, double eta, double t, const char *what)
 {
     char *text = slab_scene(glass);
     render_scene *rs = build(text);
     rgb mean, se;
     image_mean_se(rs, 4, 4, 4096, &mean, &se);
-    double R = fresnel_dielectric(1.0, eta), want = (1.0 - R) / (1.0 + R);
+    double R = fresnel_dielectric(1.0, eta);
+    double want = (1.0 - R) * (1.0 - R) * t / (1.0 - R * R * t * t);
     print_message("%s: %.5f +- %.5f, want %.5f\n", what, mean.g, se.g, want);
     assert_true(se.g < 0.003);
     assert_true(fabs(mean.g - want) < 4.0 * se.g);
     assert_true(fabs(mean.r - mean.g) < 1e-12 && fabs(mean.b - mean.g) < 1e-12);
     render_scene_destroy(rs);
     free(text);
+}
+
+static void expect_transmission(const char *glass, double eta, const char *what)
+{
+    expect_transmission_t(glass, eta, 1.0, what);
 }
 
 static void test_glass_slab(void **state)
@@ -305,6 +314,15 @@ static void test_glass_slab(void **state)
     free(glass);
     glass = sfmt("Material \"dielectric\" \"float eta\" 2.4\n%s", box);
     expect_transmission(glass, 2.4, "diamond slab");
+    free(glass);
+    /* Glass holding an absorbing medium (a MediumInterface on the
+     * dielectric): a refracting medium boundary, e^{-0.5} per crossing. */
+    glass = sfmt("MakeNamedMedium \"ink\" \"string type\" \"homogeneous\" "
+                 "\"rgb sigma_a\" [0.5 0.5 0.5] \"rgb sigma_s\" [0 0 0]\n"
+                 "AttributeBegin\nMediumInterface \"ink\" \"\"\n"
+                 "Material \"dielectric\" \"float eta\" 1.5\n%sAttributeEnd",
+                 box);
+    expect_transmission_t(glass, 1.5, exp(-0.5), "glass of ink");
     free(glass);
     /* pbrt-v4's named glass at 550 nm (haze does not disperse). */
     glass = sfmt("Material \"dielectric\" \"spectrum eta\" \"glass-BK7\"\n%s", box);
