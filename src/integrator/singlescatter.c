@@ -110,11 +110,12 @@ static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
     return T;
 }
 
-/* Direct light through the BSDF of a reflective material (diffuse,
- * conductors, coated materials): a light sample per light at the first hit,
- * without the paths volpath continues (a perfect mirror reflects no light
- * sample: black). Diffuse surfaces reflect on the side of wo, as pbrt-v4's
- * two-sided diffuse BSDF. */
+/* Direct light through the BSDF of the material at the first hit: a light
+ * sample per light, without the paths volpath continues (a perfect mirror or
+ * clear glass passes no light sample: black). Diffuse surfaces reflect on
+ * the side of wo, as pbrt-v4's two-sided diffuse BSDF. The sky is sampled
+ * around the normal on wo's side; through a surface that transmits, on
+ * either side with probability 1/2. */
 static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int medium, vec3 wo,
                        const material *mat, sampler_state *st, media_walk *walk,
                        integrator_counters *counters)
@@ -123,13 +124,22 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
     if (!bsdf_from_material(mat, h->ns, &b) || !bsdf_is_non_specular(&b))
         return rgb_grey(0.0);
     vec3 ns = v3_dot(h->ns, wo) < 0.0 ? v3_neg(h->ns) : h->ns;
+    bool transmits = material_transmits(mat);
     rgb L = rgb_grey(0.0);
     for (size_t i = 0; i < sc->in.light_count; ++i) {
         const light *l = &sc->in.lights[i];
         vec2 u = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(st);
+        vec3 side = ns;
+        bool both = transmits && l->kind == LIGHT_INFINITE;
+        if (both) { /* half the samples on each side */
+            side = u.x < 0.5 ? ns : v3_neg(ns);
+            u.x = u.x < 0.5 ? 2.0 * u.x : 2.0 * u.x - 1.0;
+        }
         light_sample ls;
-        if (!light_sample_li(l, h->p, ns, walk->time, u, &ls) || ls.pdf <= 0.0)
+        if (!light_sample_li(l, h->p, side, walk->time, u, &ls) || ls.pdf <= 0.0)
             continue;
+        if (both)
+            ls.pdf *= 0.5;
         rgb f = bsdf_f(&b, wo, ls.wi);
         if (rgb_is_black(f))
             continue;
@@ -197,12 +207,12 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     case MATERIAL_CONDUCTOR:
     case MATERIAL_COATED_DIFFUSE:
     case MATERIAL_COATED_CONDUCTOR:
-        Ls = rgb_add(Ls, direct_bsdf(sc, &h, medium, wo, mat, st, &walk, counters));
-        break;
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
-    case MATERIAL_DIFFUSE_TRANSMISSION: /* refused under singlescatter at scene build */
-    case MATERIAL_MIX:                  /* material_at resolved it */
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        Ls = rgb_add(Ls, direct_bsdf(sc, &h, medium, wo, mat, st, &walk, counters));
+        break;
+    case MATERIAL_MIX: /* material_at resolved it */
     case MATERIAL_INTERFACE:
         break;
     }

@@ -73,25 +73,22 @@ hz_status material_resolve_mixes(material *materials, const material_entity *ent
     return HZ_OK;
 }
 
-bool material_needs_volpath(const material *m)
+bool material_transmits(const material *m)
 {
     switch (m->kind) {
-    case MATERIAL_DIFFUSE:
-    case MATERIAL_INTERFACE:
-        return false;
-    case MATERIAL_CONDUCTOR:
-    case MATERIAL_COATED_DIFFUSE:
-    case MATERIAL_COATED_CONDUCTOR:
-        return false; /* reflection only: singlescatter samples lights through them */
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
         return true;
+    case MATERIAL_DIFFUSE:
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
     case MATERIAL_MIX:
-        return !m->mix[0] || !m->mix[1] || material_needs_volpath(m->mix[0]) ||
-               material_needs_volpath(m->mix[1]);
+    case MATERIAL_INTERFACE:
+        return false;
     }
-    return true;
+    return false;
 }
 
 /* pbrt-v4's "metal-Cu-eta" and "metal-Cu-k" (its default conductor), reduced

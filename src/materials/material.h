@@ -51,10 +51,9 @@ hz_status material_resolve_mixes(material *materials, const material_entity *ent
 /* pbrt-v4's default material: diffuse, reflectance 0.5. */
 material material_default(void);
 
-/* True for the materials whose light transport needs "volpath": those that
- * transmit (dielectric, thindielectric, diffusetransmission, a mix with
- * one). singlescatter shades the others with direct light. */
-bool material_needs_volpath(const material *m);
+/* True for the materials light passes through (dielectric, thindielectric,
+ * diffusetransmission; not a mix, which material_at resolves first). */
+bool material_transmits(const material *m);
 
 /* The material of a Material or MakeNamedMaterial entity, with pbrt-v4's
  * parameters and defaults; other types and parameters are errors naming

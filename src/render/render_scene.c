@@ -279,15 +279,6 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
                                       rs->media[i].kind == MEDIUM_CLOUD ? "cloud" : "rgbgrid"),
                            err)) != HZ_OK)
             return HZ_ERROR;
-    /* Metals and glass need paths: singlescatter shades diffuse surfaces. */
-    for (size_t i = 0; ip.kind == INTEGRATOR_SINGLESCATTER && i < sd->material_count; ++i)
-        if (material_needs_volpath(&rs->materials[i]) &&
-            collect(errs, (hz_fail_at(err, sd->materials[i].entity.loc,
-                                      "Material \"%s\" needs Integrator \"volpath\" "
-                                      "(singlescatter shades \"diffuse\" surfaces only)",
-                                      sd->materials[i].entity.type),
-                           err)) != HZ_OK)
-            return HZ_ERROR;
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
     /* pbrt-v4 renders such a scene with "volpath" (maxdepth 5): say once
