@@ -10,8 +10,9 @@
 #include "scene/mem.h"
 #include "scene/ply.h"
 
-/* A disk becomes a fan (or ring) of this many segments: the chord error is
- * r(1 - cos(pi/256)) < 8e-5 r, far below a pixel for any sensible framing. */
+/* A disk or cylinder becomes this many segments per full turn: the chord
+ * error is r(1 - cos(pi/256)) < 8e-5 r, far below a pixel for any sensible
+ * framing (shading normals of a cylinder are the exact ones). */
 #define DISK_SEGMENTS 256
 
 void shape_geometry_free(shape_geometry *g)
@@ -149,61 +150,102 @@ static hz_status create_sphere(shape_entity *se, shape_geometry *g, hz_error *er
     return HZ_OK;
 }
 
-static hz_status create_disk(shape_entity *se, shape_geometry *g, hz_error *err)
+/* A strip between two rings of a surface of revolution about z, over phi in
+ * [0, phimax]: ring k at radius rad[k] and height z[k], the first ring the
+ * outer (disk) or lower (cylinder) one. DISK_SEGMENTS per full turn; the seam
+ * is duplicated so u runs 0..1 as pbrt-v4's phi / phimax, v from ring 0 to
+ * ring 1. Triangles wind so that their normal is pbrt-v4's: +z for a disk,
+ * outward for a cylinder; `radial` gives the shading normals (x, y, 0)/r of
+ * a cylinder instead of (0, 0, 1). A ring of radius 0 is a point: one
+ * triangle per segment. */
+static hz_status ring_strip(shape_entity *se, shape_geometry *g, double phimax,
+                            const double rad[2], const double z[2], bool radial, hz_error *err)
 {
-    param_list *pl = &se->entity.params;
-    double h = params_float(pl, "height", 0.0);
-    double r = params_float(pl, "radius", 1.0);
-    double ri = params_float(pl, "innerradius", 0.0);
-    only_default(pl, "phimax", 360.0);
-    if (!(r > 0.0))
-        params_reject(pl, "radius", "disk \"radius\" must be > 0, got %g", r);
-    else if (!(ri >= 0.0 && ri < r))
-        params_reject(pl, "innerradius", "disk \"innerradius\" must be in [0, radius), got %g", ri);
-    if (finish(se, err) != HZ_OK)
-        return HZ_ERROR;
-    /* Two rings of DISK_SEGMENTS + 1 vertices (the seam is duplicated so u
-     * runs 0..1 as pbrt's phi / phimax); the inner ring collapses to the
-     * centre when innerradius is 0. Triangles wind counter-clockwise seen from
-     * +z and carry the normal (0,0,1), as pbrt-v4's Disk. */
-    size_t ring = DISK_SEGMENTS + 1;
+    size_t segs = (size_t)ceil(DISK_SEGMENTS * phimax / (2.0 * HZ_PI));
+    segs = segs < 1 ? 1 : segs;
+    size_t ring = segs + 1;
+    bool two = rad[1] > 0.0;
     g->kind = GEOMETRY_TRIANGLES;
     g->vertex_count = 2 * ring;
     g->p = scene_array(g->vertex_count, 3 * sizeof *g->p);
     g->n = scene_array(g->vertex_count, 3 * sizeof *g->n);
     g->uv = scene_array(g->vertex_count, 2 * sizeof *g->uv);
-    g->triangle_count = ri > 0.0 ? 2 * DISK_SEGMENTS : DISK_SEGMENTS;
+    g->triangle_count = two ? 2 * segs : segs;
     g->indices = scene_array(g->triangle_count, 3 * sizeof *g->indices);
     if (!g->p || !g->n || !g->uv || !g->indices) /* g freed by the caller */
-        return hz_fail_at(err, se->entity.loc, "disk: out of memory");
-    for (size_t k = 0; k < 2; ++k) {
-        double rad = k == 0 ? r : ri;
+        return hz_fail_at(err, se->entity.loc, "%s: out of memory", se->entity.type);
+    for (size_t k = 0; k < 2; ++k)
         for (size_t i = 0; i < ring; ++i) {
-            double u = (double)i / DISK_SEGMENTS, phi = 2.0 * HZ_PI * u;
+            double u = (double)i / segs, phi = phimax * u;
+            /* The full turn's seam lands exactly on phi = 0. */
+            double c = i == segs && phimax >= 2.0 * HZ_PI ? 1.0 : cos(phi);
+            double sn = i == segs && phimax >= 2.0 * HZ_PI ? 0.0 : sin(phi);
             size_t v = k * ring + i;
-            g->p[3 * v] = i == DISK_SEGMENTS ? rad : rad * cos(phi);
-            g->p[3 * v + 1] = i == DISK_SEGMENTS ? 0.0 : rad * sin(phi);
-            g->p[3 * v + 2] = h;
-            g->n[3 * v] = 0.0;
-            g->n[3 * v + 1] = 0.0;
-            g->n[3 * v + 2] = 1.0;
+            g->p[3 * v] = rad[k] * c;
+            g->p[3 * v + 1] = rad[k] * sn;
+            g->p[3 * v + 2] = z[k];
+            g->n[3 * v] = radial ? c : 0.0;
+            g->n[3 * v + 1] = radial ? sn : 0.0;
+            g->n[3 * v + 2] = radial ? 0.0 : 1.0;
             g->uv[2 * v] = u;
-            g->uv[2 * v + 1] = (r - rad) / (r - ri);
+            g->uv[2 * v + 1] = (double)k;
         }
-    }
     size_t o = 0;
-    for (uint32_t i = 0; i < DISK_SEGMENTS; ++i) {
+    for (uint32_t i = 0; i < segs; ++i) {
         uint32_t a = i, b = i + 1, c = (uint32_t)ring + i, d = (uint32_t)ring + i + 1;
         uint32_t t1[3] = {a, b, d};
         for (int j = 0; j < 3; ++j)
             g->indices[o++] = t1[j];
-        if (ri > 0.0) {
+        if (two) {
             uint32_t t2[3] = {a, d, c};
             for (int j = 0; j < 3; ++j)
                 g->indices[o++] = t2[j];
         }
     }
     return HZ_OK;
+}
+
+/* "phimax" in degrees, (0, 360] (pbrt-v4 clamps to [0, 360]), as radians. */
+static double read_phimax(param_list *pl)
+{
+    double deg = params_float(pl, "phimax", 360.0);
+    if (!(deg > 0.0 && deg <= 360.0))
+        params_reject(pl, "phimax", "\"phimax\" must be in (0, 360] degrees, got %g", deg);
+    return deg >= 360.0 ? 2.0 * HZ_PI : hz_radians(hz_clamp(deg, 1e-9, 360.0));
+}
+
+static hz_status create_disk(shape_entity *se, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    double h = params_float(pl, "height", 0.0);
+    double r = params_float(pl, "radius", 1.0);
+    double ri = params_float(pl, "innerradius", 0.0);
+    double phimax = read_phimax(pl);
+    if (!(r > 0.0))
+        params_reject(pl, "radius", "disk \"radius\" must be > 0, got %g", r);
+    else if (!(ri >= 0.0 && ri < r))
+        params_reject(pl, "innerradius", "disk \"innerradius\" must be in [0, radius), got %g", ri);
+    if (finish(se, err) != HZ_OK)
+        return HZ_ERROR;
+    const double rad[2] = {r, ri}, z[2] = {h, h};
+    return ring_strip(se, g, phimax, rad, z, false, err);
+}
+
+/* pbrt-v4's cylinder: radius, zmin, zmax, phimax, normals outward. */
+static hz_status create_cylinder(shape_entity *se, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    double r = params_float(pl, "radius", 1.0);
+    double z0 = params_float(pl, "zmin", -1.0), z1 = params_float(pl, "zmax", 1.0);
+    double phimax = read_phimax(pl);
+    if (!(r > 0.0 && isfinite(r)))
+        params_reject(pl, "radius", "cylinder \"radius\" must be finite and > 0, got %g", r);
+    if (!(isfinite(z0) && isfinite(z1) && z0 != z1))
+        params_reject(pl, "zmax", "cylinder \"zmin\" and \"zmax\" must be finite and differ");
+    if (finish(se, err) != HZ_OK)
+        return HZ_ERROR;
+    const double rad[2] = {r, r}, z[2] = {fmin(z0, z1), fmax(z0, z1)};
+    return ring_strip(se, g, phimax, rad, z, true, err);
 }
 
 hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error *err)
@@ -221,10 +263,12 @@ hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error 
         st = create_sphere(se, out, err);
     else if (strcmp(type, "disk") == 0)
         st = create_disk(se, out, err);
+    else if (strcmp(type, "cylinder") == 0)
+        st = create_cylinder(se, out, err);
     else
         st = hz_fail_at(err, se->entity.loc,
                         "unknown shape \"%.60s\"; supported: trianglemesh plymesh sphere disk "
-                        "bilinearmesh",
+                        "cylinder bilinearmesh",
                         type);
     if (st != HZ_OK)
         shape_geometry_free(out);

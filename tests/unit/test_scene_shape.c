@@ -157,12 +157,61 @@ static void test_plymesh_relative_path(void **state)
     assert_non_null(strstr(err.message, "unused parameter \"float displacement\""));
 }
 
+/* pbrt-v4's cylinder (radius, zmin, zmax, phimax) as 256 segments per turn:
+ * every vertex on the surface, every triangle facing outward with the
+ * outward shading normal at its vertices, the area 2 pi r h (phimax h r for
+ * a part) within the chords' 1e-4; disks take phimax too. */
+static void test_cylinder(void **state)
+{
+    (void)state;
+    shape_geometry g;
+    hz_error err;
+    const double phis[2] = {360.0, 90.0};
+    for (int k = 0; k < 2; ++k) {
+        char src[128];
+        snprintf(src, sizeof src,
+                 "Shape \"cylinder\" \"float radius\" 2 \"float zmin\" -0.5 "
+                 "\"float zmax\" 1 \"float phimax\" %g",
+                 phis[k]);
+        assert_int_equal(build(src, "s.pbrt", &g, &err), HZ_OK);
+        assert_int_equal(g.kind, GEOMETRY_TRIANGLES);
+        double area = 0.0;
+        for (size_t v = 0; v < g.vertex_count; ++v) {
+            const double *p = &g.p[3 * v], *n = &g.n[3 * v];
+            assert_float_equal(hypot(p[0], p[1]), 2.0, 1e-6);
+            assert_true(p[2] == -0.5 || p[2] == 1.0);
+            assert_float_equal(n[0] * p[0] + n[1] * p[1], 2.0, 1e-6); /* outward, unit */
+        }
+        for (size_t t = 0; t < g.triangle_count; ++t) {
+            const double *a = &g.p[3 * g.indices[3 * t]], *b = &g.p[3 * g.indices[3 * t + 1]],
+                         *c = &g.p[3 * g.indices[3 * t + 2]];
+            double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+            double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+            double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
+                   nz = e1[0] * e2[1] - e1[1] * e2[0];
+            double mx = (a[0] + b[0] + c[0]) / 3.0, my = (a[1] + b[1] + c[1]) / 3.0;
+            assert_true(nx * mx + ny * my > 0.0); /* outward */
+            area += 0.5 * sqrt(nx * nx + ny * ny + nz * nz);
+        }
+        double want = hz_radians(phis[k]) * 2.0 * 1.5;
+        assert_float_equal(area, want, 1e-4 * want);
+        shape_geometry_free(&g);
+    }
+    expect_error("Shape \"cylinder\" \"float zmin\" 1 \"float zmax\" 1",
+                 "cylinder \"zmin\" and \"zmax\" must be finite and differ");
+    expect_error("Shape \"cylinder\" \"float phimax\" 400", "\"phimax\" must be in (0, 360]");
+    assert_int_equal(build("Shape \"disk\" \"float phimax\" 180", "s.pbrt", &g, &err), HZ_OK);
+    assert_int_equal(g.triangle_count, 128);
+    shape_geometry_free(&g);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_trianglemesh),
         cmocka_unit_test(test_trianglemesh_errors),
         cmocka_unit_test(test_sphere_disk_bilinear),
+        cmocka_unit_test(test_cylinder),
         cmocka_unit_test(test_plymesh_relative_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
