@@ -91,7 +91,25 @@ static void sphere_bounds(const struct RTCBoundsFunctionArguments *args)
     b->upper_z = (float)hi[2] + pad[2];
 }
 
-/* Nearest root of |o + t d| = r in (tnear, tfar), or -1. pbrt-v4's
+/* Whether the object-space point p (on the sphere) lies on its part: the z
+ * range and phi in [0, phimax], as pbrt-v4's partial sphere tests them. */
+static bool sphere_part_has(const geom_shape *s, vec3 p)
+{
+    if (!s->partial)
+        return true;
+    p = v3_scale(p, s->radius / v3_length(p));
+    if ((s->zmin > -s->radius && p.z < s->zmin) || (s->zmax < s->radius && p.z > s->zmax))
+        return false;
+    if (p.x == 0.0 && p.y == 0.0)
+        p.x = 1e-5 * s->radius;
+    double phi = atan2(p.y, p.x);
+    if (phi < 0.0)
+        phi += 2.0 * HZ_PI;
+    return phi <= s->phimax;
+}
+
+/* Nearest root of |o + t d| = r in (tnear, tfar) on the sphere's part, or
+ * -1. pbrt-v4's
  * formulation: the discriminant from the closest-approach vector avoids the
  * cancellation of b^2 - 4ac for distant origins. */
 static double sphere_hit_t(const geom_shape *s, vec3 o_space, vec3 d_space, double tnear,
@@ -116,9 +134,9 @@ static double sphere_hit_t(const geom_shape *s, vec3 o_space, vec3 d_space, doub
         t0 = t1;
         t1 = t;
     }
-    if (t0 > tnear && t0 < tfar)
+    if (t0 > tnear && t0 < tfar && sphere_part_has(s, v3_add(o, v3_scale(d, t0))))
         return t0;
-    if (t1 > tnear && t1 < tfar)
+    if (t1 > tnear && t1 < tfar && sphere_part_has(s, v3_add(o, v3_scale(d, t1))))
         return t1;
     return -1.0;
 }
@@ -208,6 +226,10 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
     RTCGeometry geom = NULL;
     if (g.kind == GEOMETRY_SPHERE) {
         out->radius = g.radius;
+        out->zmin = g.zmin;
+        out->zmax = g.zmax;
+        out->phimax = g.phimax;
+        out->partial = g.zmin > -g.radius || g.zmax < g.radius || g.phimax < 2.0 * HZ_PI;
         out->space_from_object = space_from_object;
         geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
         rtcSetGeometryUserPrimitiveCount(geom, 1);

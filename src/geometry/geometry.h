@@ -62,8 +62,10 @@ typedef struct {
     const float *p;           /* 3 per vertex */
     const uint32_t *indices;  /* 3 per triangle */
     double *n;                /* 3 per vertex, shading normals in this space, or NULL */
-    /* sphere */
+    /* sphere; a part of it (pbrt-v4's zmin, zmax, phimax) when `partial` */
     double radius;
+    double zmin, zmax, phimax;
+    bool partial;
     transform space_from_object; /* render (or prototype) space from object space */
     /* A moving top-level shape: everything above is in object space (space =
      * object space, space_from_object the identity) and render_from_object at

@@ -166,6 +166,10 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
     if (params_finish(pl, "AreaLightSource \"diffuse\"", err) != HZ_OK)
         return HZ_ERROR;
 
+    if (shape->kind == GEOMETRY_SPHERE && shape->partial)
+        return hz_fail_at(err, e->loc,
+                          "AreaLightSource on a partial sphere (zmin, zmax or phimax) is not "
+                          "supported: its light sampling covers whole spheres");
     if (shape->kind == GEOMETRY_SPHERE) {
         out->area.area = 0.0; /* see sample_sphere_cone and sample_sphere */
         if (shape->motion)

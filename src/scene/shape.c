@@ -124,14 +124,14 @@ static hz_status create_plymesh(shape_entity *se, shape_geometry *g, hz_error *e
     return HZ_OK;
 }
 
-/* Partial spheres and disks are refused rather than silently rendered whole. */
-static void only_default(param_list *pl, const char *name, double def)
+
+/* "phimax" in degrees, (0, 360] (pbrt-v4 clamps to [0, 360]), as radians. */
+static double read_phimax(param_list *pl)
 {
-    if (!params_has(pl, name))
-        return;
-    double v = params_float(pl, name, def);
-    if (v != def)
-        params_reject(pl, name, "\"%s\" other than its default (%g) is not supported", name, def);
+    double deg = params_float(pl, "phimax", 360.0);
+    if (!(deg > 0.0 && deg <= 360.0))
+        params_reject(pl, "phimax", "\"phimax\" must be in (0, 360] degrees, got %g", deg);
+    return deg >= 360.0 ? 2.0 * HZ_PI : hz_radians(hz_clamp(deg, 1e-9, 360.0));
 }
 
 static hz_status create_sphere(shape_entity *se, shape_geometry *g, hz_error *err)
@@ -140,13 +140,21 @@ static hz_status create_sphere(shape_entity *se, shape_geometry *g, hz_error *er
     double r = params_float(pl, "radius", 1.0);
     if (!(r > 0.0))
         params_reject(pl, "radius", "sphere \"radius\" must be > 0, got %g", r);
-    only_default(pl, "zmin", -r);
-    only_default(pl, "zmax", r);
-    only_default(pl, "phimax", 360.0);
+    /* pbrt-v4: the z range clamped to the sphere, phimax to (0, 360]. */
+    double z0 = params_float(pl, "zmin", -r), z1 = params_float(pl, "zmax", r);
+    double phimax = read_phimax(pl);
+    if (!(isfinite(z0) && isfinite(z1)))
+        params_reject(pl, "zmin", "sphere \"zmin\" and \"zmax\" must be finite");
+    double lo = hz_clamp(fmin(z0, z1), -r, r), hi = hz_clamp(fmax(z0, z1), -r, r);
+    if (!(hi > lo) && r > 0.0)
+        params_reject(pl, "zmax", "sphere \"zmin\" and \"zmax\" leave nothing of it");
     if (finish(se, err) != HZ_OK)
         return HZ_ERROR;
     g->kind = GEOMETRY_SPHERE;
     g->radius = r;
+    g->zmin = lo;
+    g->zmax = hi;
+    g->phimax = phimax;
     return HZ_OK;
 }
 
@@ -203,15 +211,6 @@ static hz_status ring_strip(shape_entity *se, shape_geometry *g, double phimax,
         }
     }
     return HZ_OK;
-}
-
-/* "phimax" in degrees, (0, 360] (pbrt-v4 clamps to [0, 360]), as radians. */
-static double read_phimax(param_list *pl)
-{
-    double deg = params_float(pl, "phimax", 360.0);
-    if (!(deg > 0.0 && deg <= 360.0))
-        params_reject(pl, "phimax", "\"phimax\" must be in (0, 360] degrees, got %g", deg);
-    return deg >= 360.0 ? 2.0 * HZ_PI : hz_radians(hz_clamp(deg, 1e-9, 360.0));
 }
 
 static hz_status create_disk(shape_entity *se, shape_geometry *g, hz_error *err)

@@ -21,8 +21,10 @@ typedef struct {
     double *n;          /* 3 * vertex_count, or NULL */
     double *uv;         /* 2 * vertex_count, or NULL */
     uint32_t *indices;  /* 3 * triangle_count */
-    /* sphere, centred at the object-space origin */
+    /* sphere, centred at the object-space origin; a part of it when zmin >
+     * -radius, zmax < radius or phimax < 2 pi (pbrt-v4's partial sphere) */
     double radius;
+    double zmin, zmax, phimax;
 } shape_geometry;
 
 hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error *err);

@@ -93,8 +93,15 @@ static void test_sphere_disk_bilinear(void **state)
     assert_int_equal(g.kind, GEOMETRY_SPHERE);
     assert_true(g.radius == 2.0);
     shape_geometry_free(&g);
-    expect_error("Shape \"sphere\" \"float zmax\" 0.5",
-                 "s.pbrt:2:16: \"zmax\" other than its default (1) is not supported");
+    assert_int_equal(build("Shape \"sphere\" \"float zmax\" -3 \"float zmin\" 0.5 "
+                           "\"float phimax\" 90",
+                           "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_true(g.zmin == -1.0 && g.zmax == 0.5); /* swapped and clamped, as pbrt-v4 */
+    assert_float_equal(g.phimax, HZ_PI / 2.0, 1e-15);
+    shape_geometry_free(&g);
+    expect_error("Shape \"sphere\" \"float zmin\" 2 \"float zmax\" 3",
+                 "sphere \"zmin\" and \"zmax\" leave nothing of it");
     expect_error("Shape \"sphere\" \"float radius\" 0", "s.pbrt:2:16: sphere \"radius\" must be > 0");
 
     assert_int_equal(build("Shape \"disk\" \"float height\" 1 \"float radius\" 2", "s.pbrt", &g, &err),
