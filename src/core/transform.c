@@ -217,6 +217,16 @@ vec3 transform_point(const transform *t, vec3 p)
     return w == 1.0 ? v3(x, y, z) : v3(x / w, y / w, z / w);
 }
 
+void transform_box(const transform *t, vec3 lo, vec3 hi, vec3 *out_lo, vec3 *out_hi)
+{
+    for (int c = 0; c < 8; ++c) {
+        vec3 p = transform_point(t, v3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y,
+                                       c & 4 ? hi.z : lo.z));
+        *out_lo = c == 0 ? p : v3(fmin(out_lo->x, p.x), fmin(out_lo->y, p.y), fmin(out_lo->z, p.z));
+        *out_hi = c == 0 ? p : v3(fmax(out_hi->x, p.x), fmax(out_hi->y, p.y), fmax(out_hi->z, p.z));
+    }
+}
+
 vec3 transform_vector(const transform *t, vec3 v)
 {
     const double(*m)[4] = t->m.m;

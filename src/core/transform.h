@@ -45,6 +45,9 @@ transform transform_orthographic(double z_near, double z_far);
 vec3 transform_point(const transform *t, vec3 p);   /* with homogeneous divide */
 vec3 transform_vector(const transform *t, vec3 v);
 vec3 transform_normal(const transform *t, vec3 n); /* by the inverse transpose */
+/* The bounding box [*out_lo, *out_hi] of the image of the box [lo, hi]
+ * (its eight corners mapped: exact for affine transforms). */
+void transform_box(const transform *t, vec3 lo, vec3 hi, vec3 *out_lo, vec3 *out_hi);
 /* Determinant of the 3x3 (linear) part. */
 double transform_det3(const transform *t);
 /* True when the transform flips handedness (negative determinant of the 3x3). */

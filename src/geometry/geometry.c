@@ -68,17 +68,10 @@ static void sphere_bounds(const struct RTCBoundsFunctionArguments *args)
     const geom_shape *s = args->geometryUserPtr;
     /* Transform the 8 corners of the object-space box: conservative for any
      * affine transform. Widen by a few float ULPs since Embree stores floats. */
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int i = 0; i < 8; ++i) {
-        vec3 c = v3(i & 1 ? s->radius : -s->radius, i & 2 ? s->radius : -s->radius,
-                    i & 4 ? s->radius : -s->radius);
-        vec3 p = transform_point(&s->space_from_object, c);
-        double q[3] = {p.x, p.y, p.z};
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = fmin(lo[k], q[k]);
-            hi[k] = fmax(hi[k], q[k]);
-        }
-    }
+    vec3 blo, bhi;
+    transform_box(&s->space_from_object, v3(-s->radius, -s->radius, -s->radius),
+                  v3(s->radius, s->radius, s->radius), &blo, &bhi);
+    const double lo[3] = {blo.x, blo.y, blo.z}, hi[3] = {bhi.x, bhi.y, bhi.z};
     struct RTCBounds *b = args->bounds_o;
     float pad[3];
     for (int k = 0; k < 3; ++k)

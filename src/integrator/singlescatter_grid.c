@@ -48,16 +48,6 @@ static inline double grid_ray_density(grid_ray *gr, double t, media_walk *walk)
     return medium_density_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
 }
 
-/* Density and emitted radiance at o + t d (an emissive medium). */
-static inline double grid_ray_density_Le(grid_ray *gr, double t, media_walk *walk, rgb *Le)
-{
-    vec3 p = medium_point_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
-    ++walk->lookups;
-    double d = grid_density_index(gr->m->grid.grid, &gr->acc.density, p);
-    *Le = d > 0.0 ? medium_grid_Le(gr->m, &gr->acc, p, &walk->lookups) : rgb_grey(0.0);
-    return d;
-}
-
 static inline bool next_cell(majorant_walk *mw, majorant_segment *seg, media_walk *walk)
 {
     if (!majorant_walk_next(mw, seg))
@@ -305,41 +295,14 @@ static inline rgb free_emission_over(rgb eps, rgb sigma_t, double d, double dt, 
     return rgb_mul(eps, rgb_make(w[0], w[1], w[2]));
 }
 
-/* Marching with emission or colour grids: march_strata's estimate with the
- * per-sample free emission and albedo. */
-static bool march_strata_extras(segment_walk *sw, double b)
+/* sig (1 - e^{-sigma_t d dt}) / sigma_t per channel: the share of the
+ * stratum's light that sig (sigma_a or sigma_s) takes, exactly for its
+ * constant density. */
+static inline rgb over_stratum(rgb sig, rgb sigma_t, rgb step_t)
 {
-    strata *s = &sw->s;
-    const medium *m = sw->m;
-    rgb sigma_t = sw->sigma_t;
-    for (; strata_before(s, b); strata_next(s)) {
-        grid_sample g = sample_at(sw, s->t);
-        if (g.density <= 0.0) {
-            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, rgb_scale(g.eps, s->dt)));
-            continue;
-        }
-        rgb step_t = rgb_exp_neg(sigma_t, g.density * s->dt);
-        rgb frac_of = rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) / sigma_t.r : 0.0,
-                               sigma_t.g > 0.0 ? (1.0 - step_t.g) / sigma_t.g : 0.0,
-                               sigma_t.b > 0.0 ? (1.0 - step_t.b) / sigma_t.b : 0.0);
-        if (sw->free_emission)
-            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, free_emission_over(g.eps, sigma_t,
-                                                                          g.density, s->dt,
-                                                                          step_t)));
-        if (sw->emissive) /* the colour tints the scattering, not the emission */
-            sw->Lseg = rgb_add(sw->Lseg,
-                               rgb_mul(rgb_mul(sw->T, rgb_mul(frac_of, m->sigma_a)), g.Le));
-        if (sw->scatters)
-            sw->Lseg = rgb_add(sw->Lseg,
-                               rgb_mul(rgb_mul(sw->T, rgb_mul(frac_of, coloured_sigma_s(m, g.C))),
-                                       inscattered_at(sw, s->t)));
-        sw->T = rgb_mul(sw->T, step_t);
-        if (!singlescatter_roulette(&sw->T, &sw->walk->r)) {
-            strata_next(s);
-            return false;
-        }
-    }
-    return true;
+    return rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) * sig.r / sigma_t.r : 0.0,
+                    sigma_t.g > 0.0 ? (1.0 - step_t.g) * sig.g / sigma_t.g : 0.0,
+                    sigma_t.b > 0.0 ? (1.0 - step_t.b) * sig.b / sigma_t.b : 0.0);
 }
 
 /* Marching over the strata whose samples lie in [.., b): piecewise-constant
@@ -348,33 +311,32 @@ static bool march_strata_extras(segment_walk *sw, double b)
  * walk ended. */
 static bool march_strata(segment_walk *sw, double b)
 {
-    if (sw->free_emission || sw->coloured)
-        return march_strata_extras(sw, b);
     strata *s = &sw->s;
     const medium *m = sw->m;
     rgb sigma_t = sw->sigma_t;
     for (; strata_before(s, b); strata_next(s)) {
-        rgb Le = rgb_grey(0.0);
-        double dens = sw->emissive ? grid_ray_density_Le(&sw->gr, s->t, sw->walk, &Le)
-                                   : grid_ray_density(&sw->gr, s->t, sw->walk);
-        if (dens <= 0.0)
+        grid_sample g = sample_at(sw, s->t);
+        if (g.density <= 0.0) {
+            if (sw->free_emission) /* a glow where there is no density */
+                sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, rgb_scale(g.eps, s->dt)));
             continue;
-        rgb step_t = rgb_exp_neg(sigma_t, dens * s->dt);
-        if (sw->emissive) {
-            /* Emission sigma_a Le over the stratum, exactly for its constant
-             * density: (1 - e^{-sigma_t dt}) sigma_a / sigma_t Le. */
-            rgb e = rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) * m->sigma_a.r / sigma_t.r : 0.0,
-                             sigma_t.g > 0.0 ? (1.0 - step_t.g) * m->sigma_a.g / sigma_t.g : 0.0,
-                             sigma_t.b > 0.0 ? (1.0 - step_t.b) * m->sigma_a.b / sigma_t.b : 0.0);
-            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, e), Le));
         }
-        if (sw->scatters) {
-            rgb frac =
-                rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) * m->sigma_s.r / sigma_t.r : 0.0,
-                         sigma_t.g > 0.0 ? (1.0 - step_t.g) * m->sigma_s.g / sigma_t.g : 0.0,
-                         sigma_t.b > 0.0 ? (1.0 - step_t.b) * m->sigma_s.b / sigma_t.b : 0.0);
-            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, frac), inscattered_at(sw, s->t)));
-        }
+        rgb step_t = rgb_exp_neg(sigma_t, g.density * s->dt);
+        if (sw->free_emission)
+            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, free_emission_over(g.eps, sigma_t,
+                                                                          g.density, s->dt,
+                                                                          step_t)));
+        /* Absorbing emission sigma_a Le (the colour tints the scattering,
+         * not the emission). */
+        if (sw->emissive)
+            sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, over_stratum(m->sigma_a, sigma_t,
+                                                                             step_t)),
+                                                 g.Le));
+        if (sw->scatters)
+            sw->Lseg = rgb_add(sw->Lseg,
+                               rgb_mul(rgb_mul(sw->T, over_stratum(coloured_sigma_s(m, g.C),
+                                                                   sigma_t, step_t)),
+                                       inscattered_at(sw, s->t)));
         sw->T = rgb_mul(sw->T, step_t);
         if (!singlescatter_roulette(&sw->T, &sw->walk->r)) {
             strata_next(s);
@@ -382,21 +344,6 @@ static bool march_strata(segment_walk *sw, double b)
         }
     }
     return true;
-}
-
-/* track_cell's sample of in-scattering and emission with emission or colour
- * grids, at the current stratum. */
-static void gather_sample_extras(segment_walk *sw)
-{
-    const strata *s = &sw->s;
-    grid_sample g = sample_at(sw, s->t);
-    rgb add = rgb_scale(g.eps, s->dt);
-    if (g.density > 0.0 && sw->scatters)
-        add = rgb_add(add, rgb_mul(rgb_scale(coloured_sigma_s(sw->m, g.C), g.density * s->dt),
-                                   inscattered_at(sw, s->t)));
-    if (g.density > 0.0 && sw->emissive)
-        add = rgb_add(add, rgb_mul(rgb_scale(sw->m->sigma_a, g.density * s->dt), g.Le));
-    sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, add));
 }
 
 /* Ratio or residual tracking through one cell, with in-scattering at the
@@ -435,25 +382,24 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
         }
         if (!at_sample)
             return true;
-        if (sw->free_emission || sw->coloured) {
-            gather_sample_extras(sw);
-        } else if (sw->scatters || sw->emissive) {
+        if (sw->scatters || sw->emissive || sw->free_emission) {
             /* The stratum's sample of in-scattering and emission, weighted by
              * the tracked transmittance to it: unbiased, as the collisions do
              * not depend on the sample. (Emission is gathered here rather
              * than at the collisions: a residual-tracking cell of constant
              * density has none.) */
-            rgb Le = rgb_grey(0.0);
-            double dens = sw->emissive ? grid_ray_density_Le(&sw->gr, s->t, sw->walk, &Le)
-                                       : grid_ray_density(&sw->gr, s->t, sw->walk);
-            if (dens > 0.0 && sw->scatters)
-                sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, rgb_scale(sw->m->sigma_s,
-                                                                             dens * s->dt)),
-                                                     inscattered_at(sw, s->t)));
-            if (dens > 0.0 && sw->emissive)
+            grid_sample g = sample_at(sw, s->t);
+            if (sw->free_emission)
+                sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, rgb_scale(g.eps, s->dt)));
+            if (g.density > 0.0 && sw->scatters)
                 sw->Lseg = rgb_add(sw->Lseg,
-                                   rgb_mul(rgb_mul(sw->T, rgb_scale(sw->m->sigma_a, dens * s->dt)),
-                                           Le));
+                                   rgb_mul(rgb_mul(sw->T, rgb_scale(coloured_sigma_s(sw->m, g.C),
+                                                                    g.density * s->dt)),
+                                           inscattered_at(sw, s->t)));
+            if (g.density > 0.0 && sw->emissive)
+                sw->Lseg = rgb_add(sw->Lseg, rgb_mul(rgb_mul(sw->T, rgb_scale(sw->m->sigma_a,
+                                                                             g.density * s->dt)),
+                                                     g.Le));
         }
         strata_next(s);
     }

@@ -134,11 +134,11 @@ static bool bounds_of(const light *l, light_bounds *out)
             return false;
         b.two_sided = l->area.two_sided;
         if (s->kind == GEOMETRY_SPHERE) {
-            for (int i = 0; i < 8; ++i) {
-                vec3 c = v3(i & 1 ? s->radius : -s->radius, i & 2 ? s->radius : -s->radius,
-                            i & 4 ? s->radius : -s->radius);
-                grow(&b, transform_point(&s->space_from_object, c));
-            }
+            vec3 lo, hi;
+            transform_box(&s->space_from_object, v3(-s->radius, -s->radius, -s->radius),
+                          v3(s->radius, s->radius, s->radius), &lo, &hi);
+            grow(&b, lo);
+            grow(&b, hi);
             /* π A L (light_phi doubles it for two-sided lights; the
              * bounds do not, as pbrt-v4's) */
             b.phi = max_channel(light_phi(l, 0.0)) / (b.two_sided ? 2.0 : 1.0);

@@ -52,21 +52,13 @@ static float emission_bound(const source *src, grid_ibox box)
     const majorant_emission *em = src->em;
     grid_ibox ebox = box;
     if (!em->aligned) {
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (int c = 0; c < 8; ++c) {
-            vec3 p = transform_point(&em->eindex_from_index,
-                                     v3(box.min[0] + (c & 1 ? box.max[0] - box.min[0] : 0),
-                                        box.min[1] + (c & 2 ? box.max[1] - box.min[1] : 0),
-                                        box.min[2] + (c & 4 ? box.max[2] - box.min[2] : 0)));
-            const double p3[3] = {p.x, p.y, p.z};
-            for (int a = 0; a < 3; ++a) {
-                lo[a] = fmin(lo[a], p3[a]);
-                hi[a] = fmax(hi[a], p3[a]);
-            }
-        }
+        vec3 lo, hi;
+        transform_box(&em->eindex_from_index, v3(box.min[0], box.min[1], box.min[2]),
+                      v3(box.max[0], box.max[1], box.max[2]), &lo, &hi);
+        const double lo3[3] = {lo.x, lo.y, lo.z}, hi3[3] = {hi.x, hi.y, hi.z};
         for (int a = 0; a < 3; ++a) {
-            ebox.min[a] = clamp_index(floor(lo[a]) - 1.0);
-            ebox.max[a] = clamp_index(ceil(hi[a]) + 1.0);
+            ebox.min[a] = clamp_index(floor(lo3[a]) - 1.0);
+            ebox.max[a] = clamp_index(ceil(hi3[a]) + 1.0);
         }
     }
     float vmin, vmax;

@@ -243,18 +243,12 @@ static void grow_support(medium *out, const grid *g, const transform *gindex_fro
     if (!grid_support_bounds(g, &lo, &hi))
         return;
     transform index_from_gindex = transform_inverse(*gindex_from_index);
+    vec3 blo, bhi;
+    transform_box(&index_from_gindex, lo, hi, &blo, &bhi);
     vec3 *slo = &out->grid.support_lo, *shi = &out->grid.support_hi;
     bool empty = !(slo->x <= shi->x);
-    for (int c = 0; c < 8; ++c) {
-        vec3 p = transform_point(&index_from_gindex, v3(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y,
-                                                        c & 4 ? hi.z : lo.z));
-        if (empty) {
-            *slo = *shi = p;
-            empty = false;
-        }
-        *slo = v3(fmin(slo->x, p.x), fmin(slo->y, p.y), fmin(slo->z, p.z));
-        *shi = v3(fmax(shi->x, p.x), fmax(shi->y, p.y), fmax(shi->z, p.z));
-    }
+    *slo = empty ? blo : v3(fmin(slo->x, blo.x), fmin(slo->y, blo.y), fmin(slo->z, blo.z));
+    *shi = empty ? bhi : v3(fmax(shi->x, bhi.x), fmax(shi->y, bhi.y), fmax(shi->z, bhi.z));
 }
 
 /* Adopts the free emission grid E (the medium owns it from here): its values
@@ -858,20 +852,17 @@ bool medium_grid_ray_make(const medium *m, vec3 o, vec3 d, double time, medium_g
     return v3_is_finite(out->o) && v3_is_finite(out->d);
 }
 
-bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0, double *t1)
+/* Slab test: [*t0, *t1] clipped to where o + t d lies in the box [lo, hi].
+ * False when nothing is left (also for an empty box). */
+static bool clip_to_box(vec3 o, vec3 d, vec3 lo_box, vec3 hi_box, double *t0, double *t1)
 {
+    const double o3[3] = {o.x, o.y, o.z}, d3[3] = {d.x, d.y, d.z};
+    const double lo3[3] = {lo_box.x, lo_box.y, lo_box.z};
+    const double hi3[3] = {hi_box.x, hi_box.y, hi_box.z};
     double lo = *t0, hi = *t1;
-    if (!(lo <= hi)) /* also NaN */
-        return false;
-    if (m->grid.background != 0.0)
-        return true;
-    /* Slab test of the index-space ray against the support box; same t. */
-    const double o3[3] = {r->o.x, r->o.y, r->o.z}, d3[3] = {r->d.x, r->d.y, r->d.z};
-    const double lo3[3] = {r->lo.x, r->lo.y, r->lo.z};
-    const double hi3[3] = {r->hi.x, r->hi.y, r->hi.z};
     for (int a = 0; a < 3; ++a) {
         if (!(lo3[a] <= hi3[a]))
-            return false; /* empty grid */
+            return false; /* empty box */
         if (d3[a] == 0.0) {
             /* Parallel to the slab: all inside or all outside. */
             if (!(o3[a] >= lo3[a] && o3[a] <= hi3[a]))
@@ -879,9 +870,7 @@ bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0,
             continue;
         }
         /* Divisions (not a reciprocal times a difference): with a finite non-zero
-         * d, (bound - o) / d is never NaN; a tiny d gives ±inf, which is right.
-         * The field is zero on the support's boundary, so rounding at the ends
-         * loses nothing. */
+         * d, (bound - o) / d is never NaN; a tiny d gives ±inf, which is right. */
         double tn = (lo3[a] - o3[a]) / d3[a];
         double tf = (hi3[a] - o3[a]) / d3[a];
         if (tn > tf) {
@@ -899,6 +888,18 @@ bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0,
     *t0 = lo;
     *t1 = hi;
     return true;
+}
+
+bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0, double *t1)
+{
+    if (!(*t0 <= *t1)) /* also NaN */
+        return false;
+    if (m->grid.background != 0.0)
+        return true;
+    /* The index-space ray against the support box; same t. The field is
+     * zero on the support's boundary, so rounding at the ends loses
+     * nothing. */
+    return clip_to_box(r->o, r->d, r->lo, r->hi, t0, t1);
 }
 
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1)
@@ -939,28 +940,5 @@ bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1)
 {
     vec3 om = transform_point(&m->cloud.medium_from_render, o);
     vec3 dm = transform_vector(&m->cloud.medium_from_render, d);
-    const double o3[3] = {om.x, om.y, om.z}, d3[3] = {dm.x, dm.y, dm.z};
-    const double lo3[3] = {m->cloud.p0.x, m->cloud.p0.y, m->cloud.p0.z};
-    const double hi3[3] = {m->cloud.p1.x, m->cloud.p1.y, m->cloud.p1.z};
-    double lo = *t0, hi = *t1;
-    for (int a = 0; a < 3; ++a) {
-        if (d3[a] == 0.0) {
-            if (!(o3[a] >= lo3[a] && o3[a] <= hi3[a]))
-                return false;
-            continue;
-        }
-        double tn = (lo3[a] - o3[a]) / d3[a], tf = (hi3[a] - o3[a]) / d3[a];
-        if (tn > tf) {
-            double t = tn;
-            tn = tf;
-            tf = t;
-        }
-        lo = tn > lo ? tn : lo;
-        hi = tf < hi ? tf : hi;
-        if (!(lo <= hi))
-            return false;
-    }
-    *t0 = lo;
-    *t1 = hi;
-    return true;
+    return clip_to_box(om, dm, m->cloud.p0, m->cloud.p1, t0, t1);
 }
