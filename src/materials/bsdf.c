@@ -7,7 +7,9 @@
 bool bsdf_from_material(const material *m, vec3 ns, bsdf *out)
 {
     *out = (bsdf){.n = ns};
-    v3_basis(ns, &out->s, &out->t);
+    /* Diffuse lobes work in render space; the others in the shading frame. */
+    if (m->kind != MATERIAL_DIFFUSE)
+        v3_basis(ns, &out->s, &out->t);
     tr_distribution d = {m->alpha_x, m->alpha_y};
     switch (m->kind) {
     case MATERIAL_DIFFUSE:

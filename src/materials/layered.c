@@ -1,8 +1,8 @@
 #include "materials/layered.h"
 
 #include <math.h>
-#include <string.h>
 
+#include "core/hash.h"
 #include "core/phase.h"
 #include "core/rng.h"
 
@@ -65,24 +65,11 @@ static double power_heuristic(double f, double g)
     return f * f / (f * f + g * g);
 }
 
-static uint64_t mix64(uint64_t h, double v)
-{
-    uint64_t b;
-    memcpy(&b, &v, sizeof b);
-    h ^= b + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-    h ^= h >> 31;
-    h *= 0xbf58476d1ce4e5b9ull;
-    return h ^ (h >> 29);
-}
-
 /* A stream seeded by the directions (and numbers) it estimates for. */
 static rng stream(vec3 a, vec3 b, double c)
 {
-    uint64_t h = 0x5851f42d4c957f2dull;
     const double v[7] = {a.x, a.y, a.z, b.x, b.y, b.z, c};
-    for (int i = 0; i < 7; ++i)
-        h = mix64(h, v[i]);
-    return rng_seeded(h);
+    return rng_seeded(fnv1a(HZ_FNV_OFFSET, v, sizeof v));
 }
 
 static inline vec2 r2(rng *r)
@@ -95,8 +82,7 @@ bool layered_is_non_specular(const layered *l)
 {
     /* pbrt-v4: diffuse if the base is, or a medium scatters; glossy if
      * either interface is rough. */
-    return !l->conductor || !rgb_is_black(l->albedo) || !if_specular(l, TOP) ||
-           !if_specular(l, BOTTOM);
+    return !rgb_is_black(l->albedo) || !if_specular(l, TOP) || !if_specular(l, BOTTOM);
 }
 
 /* ---- f: random walks from wo into the layers, joined to wi ---- */

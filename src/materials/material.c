@@ -1,9 +1,11 @@
 #include "materials/material.h"
 
 #include <math.h>
-#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
+
+#include "core/hash.h"
+#include "core/rng.h"
 
 #include "materials/microfacet.h"
 
@@ -17,17 +19,8 @@ material material_default(void)
 static double hash_unit(vec3 p, vec3 wo)
 {
     const double v[6] = {p.x, p.y, p.z, wo.x, wo.y, wo.z};
-    uint64_t h = 0x243f6a8885a308d3ull;
-    for (int i = 0; i < 6; ++i) {
-        uint64_t b;
-        memcpy(&b, &v[i], sizeof b);
-        h ^= b;
-        h *= 0xff51afd7ed558ccdull;
-        h ^= h >> 33;
-        h *= 0xc4ceb9fe1a85ec53ull;
-        h ^= h >> 33;
-    }
-    return (double)(h >> 11) * 0x1p-53;
+    rng r = rng_seeded(fnv1a(HZ_FNV_OFFSET, v, sizeof v));
+    return rng_uniform(&r);
 }
 
 const material *material_at(const material *m, vec3 p, vec3 wo)
@@ -130,13 +123,12 @@ static void read_roughness(param_list *pl, material *out)
 
 /* An index > 0: a float, or a spectrum taken at 550 nm (a named glass
  * too): haze does not disperse. */
-static hz_status read_eta(param_list *pl, const char *name, double *eta, hz_error *err)
+static double read_eta(param_list *pl, const char *name)
 {
-    (void)err;
-    *eta = params_float_or_550(pl, name, 1.5);
-    if (!(isfinite(*eta) && *eta > 0.0))
-        params_reject(pl, name, "\"%s\" must be finite and > 0, got %g", name, *eta);
-    return HZ_OK;
+    double eta = params_float_or_550(pl, name, 1.5);
+    if (!(isfinite(eta) && eta > 0.0))
+        params_reject(pl, name, "\"%s\" must be finite and > 0, got %g", name, eta);
+    return eta;
 }
 
 /* A conductor's eta and k (named NAME_ETA, NAME_K; default copper), or
@@ -197,17 +189,15 @@ static void read_layers(param_list *pl, layered *l)
                       l->n_samples);
 }
 
-static hz_status read_coated_diffuse(param_list *pl, material *out, hz_error *err)
+static void read_coated_diffuse(param_list *pl, material *out)
 {
     out->kind = MATERIAL_COATED_DIFFUSE;
     layered *l = &out->coat;
     rgb r = params_rgb(pl, "reflectance", rgb_grey(0.5));
     l->reflectance = rgb_make(hz_clamp(r.r, 0, 1), hz_clamp(r.g, 0, 1), hz_clamp(r.b, 0, 1));
     l->top = read_roughness_of(pl, "");
-    if (read_eta(pl, "eta", &l->eta, err) != HZ_OK)
-        return HZ_ERROR;
+    l->eta = read_eta(pl, "eta");
     read_layers(pl, l);
-    return HZ_OK;
 }
 
 static hz_status read_coated_conductor(param_list *pl, material *out, hz_error *err)
@@ -217,8 +207,8 @@ static hz_status read_coated_conductor(param_list *pl, material *out, hz_error *
     l->conductor = true;
     l->top = read_roughness_of(pl, "interface.");
     l->bottom = read_roughness_of(pl, "conductor.");
-    if (read_eta(pl, "interface.eta", &l->eta, err) != HZ_OK ||
-        read_metal(pl, "conductor.eta", "conductor.k", &l->eta_rgb, &l->k, err) != HZ_OK)
+    l->eta = read_eta(pl, "interface.eta");
+    if (read_metal(pl, "conductor.eta", "conductor.k", &l->eta_rgb, &l->k, err) != HZ_OK)
         return HZ_ERROR;
     /* The base sits under the coating: its index relative to it. */
     l->eta_rgb = rgb_scale(l->eta_rgb, 1.0 / l->eta);
@@ -236,14 +226,12 @@ static hz_status read_conductor(param_list *pl, material *out, hz_error *err)
     return HZ_OK;
 }
 
-static hz_status read_dielectric(param_list *pl, bool thin, material *out, hz_error *err)
+static void read_dielectric(param_list *pl, bool thin, material *out)
 {
     out->kind = thin ? MATERIAL_THIN_DIELECTRIC : MATERIAL_DIELECTRIC;
-    if (read_eta(pl, "eta", &out->eta, err) != HZ_OK)
-        return HZ_ERROR;
+    out->eta = read_eta(pl, "eta");
     if (!thin)
         read_roughness(pl, out);
-    return HZ_OK;
 }
 
 hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
@@ -299,8 +287,7 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
         out->mix_names[0] = names[0];
         out->mix_names[1] = names[1];
     } else if (strcmp(type, "coateddiffuse") == 0) {
-        if (read_coated_diffuse(pl, out, err) != HZ_OK)
-            return HZ_ERROR;
+        read_coated_diffuse(pl, out);
     } else if (strcmp(type, "coatedconductor") == 0) {
         if (read_coated_conductor(pl, out, err) != HZ_OK)
             return HZ_ERROR;
@@ -308,8 +295,7 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
         if (read_conductor(pl, out, err) != HZ_OK)
             return HZ_ERROR;
     } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "thindielectric") == 0) {
-        if (read_dielectric(pl, strcmp(type, "thindielectric") == 0, out, err) != HZ_OK)
-            return HZ_ERROR;
+        read_dielectric(pl, strcmp(type, "thindielectric") == 0, out);
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 ||
                strcmp(type, "none") == 0) {
         /* pbrt-v4 makes no material for all three: rays pass the surface,
