@@ -190,6 +190,21 @@ static inline void image_mean_se(const render_scene *rs, int w, int h, int spp, 
     *se = rgb_make(sqrt(v[0]), sqrt(v[1]), sqrt(v[2]));
 }
 
+/* An image mean within noise of `want`, per channel: within four standard
+ * errors plus `slack` (rounding, for estimates without noise), and the
+ * standard error itself under 1% of `want`. */
+static inline void expect_within_noise(rgb mean, rgb se, rgb want, double slack,
+                                       const char *what)
+{
+    for (int c = 0; c < 3; ++c) {
+        if (verbose())
+            print_message("%s c%d: %.5f +- %.5f, want %.5f\n", what, c, ch(mean, c), ch(se, c),
+                          ch(want, c));
+        assert_true(ch(se, c) < 0.01 * ch(want, c));
+        assert_true(fabs(ch(mean, c) - ch(want, c)) < 4.0 * ch(se, c) + slack);
+    }
+}
+
 static inline render_scene *build(const char *text) { return build_scene_or_fail(text, NULL); }
 
 /* Henyey–Greenstein with pbrt-v4's convention: cos_theta = dot(wo, wi), both

@@ -65,13 +65,7 @@ static void test_homogeneous_slab(void **state)
     render_scene *rs = build(text);
     rgb mean, se, want = slab_closed_form(Le, sa, sa, d);
     image_mean(rs, 4096, &mean, &se);
-    for (int c = 0; c < 3; ++c) {
-        if (verbose())
-            print_message("volpath slab c%d: %.5f +- %.5f, want %.5f\n", c, ch(mean, c),
-                          ch(se, c), ch(want, c));
-        assert_true(ch(se, c) < 0.01 * ch(want, c));
-        assert_true(fabs(ch(mean, c) - ch(want, c)) < 4.0 * ch(se, c));
-    }
+    expect_within_noise(mean, se, want, 0.0, "volpath slab");
     render_scene_destroy(rs);
     free(text);
 }
@@ -222,13 +216,7 @@ static void test_temperature_closed_form(void **state)
         render_scene *rs = build(text);
         rgb mean, se, want = fire_closed_form(2500, 1);
         image_mean(rs, 1024, &mean, &se);
-        for (int c = 0; c < 3; ++c) {
-            if (verbose())
-                print_message("%s c%d: %.5f +- %.5f, want %.5f\n", integ[k], c, ch(mean, c),
-                              ch(se, c), ch(want, c));
-            assert_true(ch(se, c) < 0.01 * ch(want, c));
-            assert_true(fabs(ch(mean, c) - ch(want, c)) < 4.0 * ch(se, c));
-        }
+        expect_within_noise(mean, se, want, 0.0, integ[k]);
         render_scene_destroy(rs);
         free(text);
     }
