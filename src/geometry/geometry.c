@@ -84,12 +84,11 @@ static void sphere_bounds(const struct RTCBoundsFunctionArguments *args)
     b->upper_z = (float)hi[2] + pad[2];
 }
 
-/* Whether the object-space point p (on the sphere) lies on its part: the z
- * range and phi in [0, phimax], as pbrt-v4's partial sphere tests them. */
+/* Whether the object-space point p (on a partial sphere) lies on its part:
+ * the z range and phi in [0, phimax], as pbrt-v4's partial sphere tests
+ * them. */
 static bool sphere_part_has(const geom_shape *s, vec3 p)
 {
-    if (!s->partial)
-        return true;
     p = v3_scale(p, s->radius / v3_length(p));
     if ((s->zmin > -s->radius && p.z < s->zmin) || (s->zmax < s->radius && p.z > s->zmax))
         return false;
@@ -127,9 +126,9 @@ static double sphere_hit_t(const geom_shape *s, vec3 o_space, vec3 d_space, doub
         t0 = t1;
         t1 = t;
     }
-    if (t0 > tnear && t0 < tfar && sphere_part_has(s, v3_add(o, v3_scale(d, t0))))
+    if (t0 > tnear && t0 < tfar && (!s->partial || sphere_part_has(s, v3_add(o, v3_scale(d, t0)))))
         return t0;
-    if (t1 > tnear && t1 < tfar && sphere_part_has(s, v3_add(o, v3_scale(d, t1))))
+    if (t1 > tnear && t1 < tfar && (!s->partial || sphere_part_has(s, v3_add(o, v3_scale(d, t1)))))
         return t1;
     return -1.0;
 }

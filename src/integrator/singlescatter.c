@@ -120,8 +120,11 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
                        const material *mat, sampler_state *st, media_walk *walk,
                        integrator_counters *counters)
 {
+    /* Diffuse surfaces, the common case, skip the BSDF's dispatch: with ns on
+     * wo's side, f is r / pi wherever cos > 0. */
+    bool diffuse = mat->kind == MATERIAL_DIFFUSE;
     bsdf b;
-    if (!bsdf_from_material(mat, h->ns, &b) || !bsdf_is_non_specular(&b))
+    if (!bsdf_from_material(mat, h->ns, &b) || !(diffuse || bsdf_is_non_specular(&b)))
         return rgb_grey(0.0);
     vec3 ns = v3_dot(h->ns, wo) < 0.0 ? v3_neg(h->ns) : h->ns;
     bool transmits = material_transmits(mat);
@@ -140,13 +143,16 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
             continue;
         if (both)
             ls.pdf *= 0.5;
-        rgb f = bsdf_f(&b, wo, ls.wi);
+        double cos_theta = v3_dot(ns, ls.wi);
+        rgb f = !diffuse          ? bsdf_f(&b, wo, ls.wi)
+                : cos_theta > 0.0 ? rgb_scale(b.reflectance, HZ_INV_PI)
+                                  : rgb_grey(0.0);
         if (rgb_is_black(f))
             continue;
         rgb T = shadow(sc, h, medium, &ls, walk, counters);
         if (rgb_is_black(T))
             continue;
-        L = rgb_add(L, rgb_scale(rgb_mul(rgb_mul(f, ls.L), T), fabs(v3_dot(ns, ls.wi)) / ls.pdf));
+        L = rgb_add(L, rgb_scale(rgb_mul(rgb_mul(f, ls.L), T), fabs(cos_theta) / ls.pdf));
     }
     return L;
 }

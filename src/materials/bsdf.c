@@ -6,7 +6,9 @@
 
 bool bsdf_from_material(const material *m, vec3 ns, bsdf *out)
 {
-    *out = (bsdf){.n = ns};
+    /* Only the fields of the kind are set: the struct holds every kind's
+     * (a coated one's layers too), too much to clear on every hit. */
+    out->n = ns;
     /* Diffuse lobes work in render space; the others in the shading frame. */
     if (m->kind != MATERIAL_DIFFUSE)
         v3_basis(ns, &out->s, &out->t);
