@@ -186,13 +186,14 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
     if (!(p->diagonal > 0.0 && isfinite(p->diagonal)))
         params_reject(pl, "diagonal", "\"float diagonal\" must be positive, got %g", p->diagonal);
     const char *sensor = params_string(pl, "sensor", "cie1931");
-    if (strcmp(sensor, "cie1931") != 0)
-        params_reject(pl, "sensor",
-                      "Film \"string sensor\" \"%s\" is not supported: haze renders RGB, only \"cie1931\" is",
-                      sensor);
     double wb = params_float(pl, "whitebalance", 0.0);
-    if (wb != 0.0)
-        params_reject(pl, "whitebalance", "Film \"float whitebalance\" is not supported (only 0, no white balance)");
+    if (wb != 0.0 && !(wb >= SENSOR_MIN_KELVIN && wb <= SENSOR_MAX_KELVIN))
+        params_reject(pl, "whitebalance",
+                      "Film \"float whitebalance\" must be 0 (none) or in [%g, %g] kelvin, got %g",
+                      SENSOR_MIN_KELVIN, SENSOR_MAX_KELVIN, wb);
+    else if (!sensor_lookup(sensor, wb, &p->sensor))
+        params_reject(pl, "sensor", "Film \"string sensor\" \"%s\" is unknown (known: %s)", sensor,
+                      sensor_names());
     if (params_finish(pl, "Film \"rgb\"", err) != HZ_OK)
         return HZ_ERROR;
     if (r && film_params_set_region(p, r, err) != HZ_OK) {
@@ -348,10 +349,17 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
         atomic_fetch_add_explicit(&f->nonfinite, 1, memory_order_relaxed);
         return;
     }
-    /* pbrt-v4 clamps the sensor value, i.e. after the imaging ratio. */
+    /* pbrt-v4 clamps the sensor value, i.e. after the imaging ratio, in the
+     * sensor's RGB, and turns it into output RGB when it writes the image
+     * (a linear map, so applying it per sample gives the same mean). */
+    const film_sensor *sensor = &f->p.sensor;
+    if (sensor->active)
+        L = sensor_apply(sensor->sensor_from_render, L);
     double m = rgb_max(L) * f->clamp_ratio;
     if (m > f->p.max_component_value)
         L = rgb_scale(L, f->p.max_component_value / m);
+    if (sensor->active)
+        L = sensor_apply(sensor->output_from_sensor, L);
     size_t i = film_index(f, px, py);
     film_pixel *p = &f->pixels[i];
     p->r += weight * L.r;

@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/vec.h"
 #include "film/exr.h" /* tmp_file_note */
+#include "film/sensor.h"
 #include "scene/scene_desc.h"
 
 typedef struct {
@@ -27,6 +28,7 @@ typedef struct {
     bool write_sample_count;   /* haze: "bool writesamplecount" adds SampleCount.Y */
     double max_component_value; /* pbrt-v4 "maxcomponentvalue": INFINITY = no clamp */
     double diagonal;           /* pbrt-v4 "diagonal" (mm, default 35), for physical cameras */
+    film_sensor sensor;        /* pbrt-v4 "sensor" and "whitebalance"; inactive by default */
 } film_params;
 
 /* Fills pbrt-v4's defaults (1280x720, full bounds, "pbrt.exr", iso 100, float32). */
@@ -48,8 +50,8 @@ typedef struct {
 hz_status film_params_set_region(film_params *p, const film_region *r, hz_error *err);
 
 /* Reads Film "rgb" (xresolution yresolution filename cropwindow pixelbounds
- * savefp16 iso maxcomponentvalue diagonal, "sensor" "cie1931" and
- * whitebalance 0 only, and haze's writedepth, writevariance and
+ * savefp16 iso maxcomponentvalue diagonal sensor whitebalance, and haze's
+ * writedepth, writevariance and
  * writesamplecount); other types are errors. Bounds
  * follow pbrt-v4: ceil(res * crop); "pixelbounds" [x0 x1 y0 y1] overrides
  * "cropwindow" and must be a non-empty part of the image. Films needing more

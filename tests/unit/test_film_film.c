@@ -167,8 +167,11 @@ static void test_params_errors(void **state)
     add_ints4(&e, "pixelbounds", 5, 5, 0, 5);
     params_fail(&e, "pixelbounds");
     entity_init(&e, "rgb");
-    add_string(&e, "sensor", "canon_eos_100d");
-    params_fail(&e, "cie1931");
+    add_string(&e, "sensor", "canon_eos_101d");
+    params_fail(&e, "canon_eos_100d"); /* the error lists the known sensors */
+    entity_init(&e, "rgb");
+    add_float(&e, "whitebalance", 500);
+    params_fail(&e, "whitebalance");
     entity_init(&e, "rgb");
     add_float(&e, "xresolution", 100); /* wrong type */
     params_fail(&e, "xresolution");
