@@ -36,6 +36,14 @@ static inline double v3_max_component(vec3 a)
 {
     return fmax(a.x, fmax(a.y, a.z));
 }
+static inline vec3 v3_min(vec3 a, vec3 b)
+{
+    return v3(fmin(a.x, b.x), fmin(a.y, b.y), fmin(a.z, b.z));
+}
+static inline vec3 v3_max(vec3 a, vec3 b)
+{
+    return v3(fmax(a.x, b.x), fmax(a.y, b.y), fmax(a.z, b.z));
+}
 static inline vec3 v3_abs(vec3 a) { return v3(fabs(a.x), fabs(a.y), fabs(a.z)); }
 static inline bool v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
 /* Builds an orthonormal basis (b1, b2) around unit vector n (Duff et al. 2017). */

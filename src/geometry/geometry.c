@@ -1,5 +1,6 @@
 #include "geometry/geometry.h"
 
+#include "core/box.h"
 #include "core/ray.h"
 
 #include <stdatomic.h>
@@ -39,6 +40,13 @@ struct geometry {
      * table itself is NULL when no shape moves. */
     instance **shape_instances;
     bool motion;              /* some shape or instance moves */
+    /* Render-space boxes around the static top-level shapes that change the
+     * medium (interface material, inside != outside); `interfaces_anywhere`
+     * when such a shape moves, lies in an object or is one of too many to
+     * test one by one (then every ray may cross one). */
+    vec3 (*interface_boxes)[2];
+    size_t interface_box_count;
+    bool interfaces_anywhere;
     double start_time, end_time; /* TransformTimes */
     /* Bytes Embree holds (its memory monitor): now and at most. */
     _Atomic long long embree_bytes, embree_peak;
@@ -583,6 +591,72 @@ static RTCDevice new_device(void)
     return d ? d : rtcNewDevice(NULL);
 }
 
+static bool changes_medium(const geom_shape *s)
+{
+    return !s->left_out && s->material->kind == MATERIAL_INTERFACE &&
+           s->medium_inside != s->medium_outside;
+}
+
+/* Beyond this many medium-changing shapes the boxes cost more than they save. */
+#define GEOMETRY_MAX_INTERFACE_BOXES 16
+
+/* Fills g's interface boxes (see struct geometry). */
+static hz_status find_interfaces(geometry *g, hz_error *err)
+{
+    for (size_t o = 0; o < g->object_count; ++o)
+        for (size_t i = 0; i < g->objects[o].shape_count; ++i)
+            g->interfaces_anywhere |= changes_medium(&g->objects[o].shapes[i]);
+    size_t n = 0;
+    for (size_t i = 0; i < g->shape_count; ++i)
+        if (changes_medium(&g->shapes[i])) {
+            n++;
+            g->interfaces_anywhere |= g->shapes[i].motion != NULL;
+        }
+    if (n > GEOMETRY_MAX_INTERFACE_BOXES)
+        g->interfaces_anywhere = true;
+    if (g->interfaces_anywhere || n == 0)
+        return HZ_OK;
+    g->interface_boxes = malloc(n * sizeof *g->interface_boxes);
+    if (!g->interface_boxes)
+        return hz_fail(err, "out of memory");
+    for (size_t i = 0; i < g->shape_count; ++i) {
+        const geom_shape *s = &g->shapes[i];
+        if (!changes_medium(s))
+            continue;
+        vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
+        if (s->kind == GEOMETRY_SPHERE) {
+            double r = s->radius;
+            transform_box(&s->space_from_object, v3(-r, -r, -r), v3(r, r, r), &lo, &hi);
+        } else {
+            for (size_t v = 0; v < s->vertex_count; ++v) {
+                const float *f = &s->p[3 * v];
+                vec3 p = v3(f[0], f[1], f[2]);
+                lo = v3_min(lo, p);
+                hi = v3_max(hi, p);
+            }
+        }
+        /* Padded well beyond the rounding of Embree's float hits. */
+        double pad = 1e-5 * v3_max_component(v3_max(v3_abs(lo), v3_abs(hi))) + 1e-30;
+        vec3 d = v3(pad, pad, pad);
+        g->interface_boxes[g->interface_box_count][0] = v3_sub(lo, d);
+        g->interface_boxes[g->interface_box_count][1] = v3_add(hi, d);
+        g->interface_box_count++;
+    }
+    return HZ_OK;
+}
+
+bool geometry_may_cross_interface(const geometry *g, vec3 o, vec3 d, double tmax)
+{
+    if (g->interfaces_anywhere)
+        return true;
+    for (size_t i = 0; i < g->interface_box_count; ++i) {
+        double t0 = 0.0, t1 = tmax;
+        if (box_clip_ray(o, d, g->interface_boxes[i][0], g->interface_boxes[i][1], &t0, &t1))
+            return true;
+    }
+    return false;
+}
+
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
                           hz_errors *errs, geometry **out, hz_error *err)
@@ -620,7 +694,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
         return HZ_ERROR;
     }
     rtcCommitScene(g->scene);
-    if (check_device(g->device, err) != HZ_OK) {
+    if (check_device(g->device, err) != HZ_OK || find_interfaces(g, err) != HZ_OK) {
         geometry_destroy(g);
         return HZ_ERROR;
     }
@@ -658,6 +732,7 @@ void geometry_destroy(geometry *g)
     for (size_t i = 0; i < g->instance_count; ++i)
         free(g->instances[i].motion.steps);
     free(g->instances);
+    free(g->interface_boxes);
     if (g->scene)
         rtcReleaseScene(g->scene);
     if (g->device)

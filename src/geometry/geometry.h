@@ -110,6 +110,13 @@ bool geometry_has_motion(const geometry *g);
  * enter one. */
 bool geometry_references_media(const geometry *g);
 
+/* False when the segment o + t d, t in [0, tmax], surely crosses no shape
+ * that changes the medium (an interface with different media on its sides):
+ * a shadow ray that starts in vacuum then stays in vacuum, so
+ * geometry_occluded decides it. Conservative (boxes around those shapes;
+ * true whenever one moves or lies in an object). */
+bool geometry_may_cross_interface(const geometry *g, vec3 o, vec3 d, double tmax);
+
 /* Top-level shapes, in scene_desc.shapes order (index = shape index). */
 size_t geometry_shape_count(const geometry *g);
 geom_shape *geometry_shape(geometry *g, size_t i);

@@ -61,6 +61,14 @@ typedef struct {
 
 path_shadow_ray path_surface_shadow_ray(const geom_hit *h, const light_sample *ls);
 
+/* True when shadow ray r, starting in medium `start` (-1: vacuum), stays in
+ * vacuum all the way: then geometry_occluded alone decides it, as in a scene
+ * without media (no walk through surfaces, no random numbers). */
+static inline bool path_shadow_ray_in_vacuum(const geometry *g, int start, const path_shadow_ray *r)
+{
+    return start < 0 && !geometry_may_cross_interface(g, r->o, r->w, r->tmax);
+}
+
 /* The same ray for a walk through media: w made unit (tmax a distance), and
  * *back, how far behind o the walk starts: where the ray's line crosses h's
  * tangent plane (at most a few offsets back, for grazing rays), so the medium

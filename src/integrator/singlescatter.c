@@ -94,7 +94,8 @@ static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
                   const light_sample *ls, media_walk *walk, integrator_counters *counters)
 {
     path_shadow_ray sr = path_surface_shadow_ray(h, ls);
-    if (sc->in.medium_count == 0) {
+    int start = sc->in.medium_count == 0 ? -1 : geometry_medium_after(h, sr.w, medium);
+    if (path_shadow_ray_in_vacuum(sc->in.geom, start, &sr)) {
         counters->shadow_rays++;
         return rgb_grey(geometry_occluded(sc->in.geom, sr.o, sr.w, sr.tmax, walk->time) ? 0.0 : 1.0);
     }
@@ -103,8 +104,7 @@ static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
         return rgb_grey(0.0);
     uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
     rgb T = singlescatter_shadow_transmittance(sc, v3_sub(sr.o, v3_scale(sr.w, e)), sr.w, e,
-                                               sr.tmax + e, geometry_medium_after(h, sr.w, medium),
-                                               walk);
+                                               sr.tmax + e, start, walk);
     if (counters->timed)
         counters->media_ns += hz_clock_ns() - t0;
     return T;

@@ -228,15 +228,15 @@ static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_sta
     if (v->b) {
         const geom_hit *h = v->h;
         path_shadow_ray sr = path_surface_shadow_ray(h, ls);
-        if (sc->in.medium_count == 0) {
+        int start = sc->in.medium_count == 0 ? -1 : geometry_medium_after(h, sr.w, v->medium);
+        if (path_shadow_ray_in_vacuum(sc->in.geom, start, &sr)) {
             pa->counters->shadow_rays++;
             return !geometry_occluded(sc->in.geom, sr.o, sr.w, sr.tmax, pa->walk.time);
         }
         double e;
         if (!path_shadow_ray_for_media(h, ls, &sr, &e))
             return false;
-        return shadow_walk(s, v3_sub(sr.o, v3_scale(sr.w, e)), sr.w, e, 0.0, sr.tmax + e,
-                           geometry_medium_after(h, sr.w, v->medium));
+        return shadow_walk(s, v3_sub(sr.o, v3_scale(sr.w, e)), sr.w, e, 0.0, sr.tmax + e, start);
     }
     double tmax = ls->infinite                       ? INFINITY
                   : v3_length_sq(ls->n_light) > 0.0 ? ls->dist * (1.0 - GEOMETRY_SHADOW_EPSILON)

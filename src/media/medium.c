@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/box.h"
 #include "core/path.h"
 #include "media/presets.h"
 #include "media/uniformgrid.h"
@@ -852,44 +853,6 @@ bool medium_grid_ray_make(const medium *m, vec3 o, vec3 d, double time, medium_g
     return v3_is_finite(out->o) && v3_is_finite(out->d);
 }
 
-/* Slab test: [*t0, *t1] clipped to where o + t d lies in the box [lo, hi].
- * False when nothing is left (also for an empty box). */
-static bool clip_to_box(vec3 o, vec3 d, vec3 lo_box, vec3 hi_box, double *t0, double *t1)
-{
-    const double o3[3] = {o.x, o.y, o.z}, d3[3] = {d.x, d.y, d.z};
-    const double lo3[3] = {lo_box.x, lo_box.y, lo_box.z};
-    const double hi3[3] = {hi_box.x, hi_box.y, hi_box.z};
-    double lo = *t0, hi = *t1;
-    for (int a = 0; a < 3; ++a) {
-        if (!(lo3[a] <= hi3[a]))
-            return false; /* empty box */
-        if (d3[a] == 0.0) {
-            /* Parallel to the slab: all inside or all outside. */
-            if (!(o3[a] >= lo3[a] && o3[a] <= hi3[a]))
-                return false;
-            continue;
-        }
-        /* Divisions (not a reciprocal times a difference): with a finite non-zero
-         * d, (bound - o) / d is never NaN; a tiny d gives ±inf, which is right. */
-        double tn = (lo3[a] - o3[a]) / d3[a];
-        double tf = (hi3[a] - o3[a]) / d3[a];
-        if (tn > tf) {
-            double t = tn;
-            tn = tf;
-            tf = t;
-        }
-        if (tn > lo)
-            lo = tn;
-        if (tf < hi)
-            hi = tf;
-        if (!(lo <= hi))
-            return false;
-    }
-    *t0 = lo;
-    *t1 = hi;
-    return true;
-}
-
 bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0, double *t1)
 {
     if (!(*t0 <= *t1)) /* also NaN */
@@ -899,7 +862,7 @@ bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0,
     /* The index-space ray against the support box; same t. The field is
      * zero on the support's boundary, so rounding at the ends loses
      * nothing. */
-    return clip_to_box(r->o, r->d, r->lo, r->hi, t0, t1);
+    return box_clip_ray(r->o, r->d, r->lo, r->hi, t0, t1);
 }
 
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1)
@@ -940,5 +903,5 @@ bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1)
 {
     vec3 om = transform_point(&m->cloud.medium_from_render, o);
     vec3 dm = transform_vector(&m->cloud.medium_from_render, d);
-    return clip_to_box(om, dm, m->cloud.p0, m->cloud.p1, t0, t1);
+    return box_clip_ray(om, dm, m->cloud.p0, m->cloud.p1, t0, t1);
 }

@@ -275,6 +275,38 @@ static void test_unreferenced_media_are_free(void **state)
     }
 }
 
+/* A medium elsewhere costs the shadow rays that cannot reach it nothing: a
+ * ray from a surface in vacuum that crosses no box around a medium-changing
+ * shape stays an occlusion test (no walk, no media time), and the radiance is
+ * the scene's without the medium, sample for sample. */
+static void test_media_elsewhere_are_free(void **state)
+{
+    (void)state;
+    const char *fmt =
+        "LookAt 0 0.5 -4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n"
+        "Integrator \"singlescatter\"\nWorldBegin\n%s"
+        "LightSource \"point\" \"rgb I\" [5 5 5] \"point3 from\" [0 2 -1]\n"
+        "Shape \"sphere\" \"float radius\" 0.8\n"
+        "Shape \"trianglemesh\" \"point3 P\" [-3 -1 -3  3 -1 -3  3 -1 3  -3 -1 3] "
+        "\"integer indices\" [0 1 2 0 2 3]\n";
+    const char *puff = "MakeNamedMedium \"puff\" \"string type\" \"homogeneous\"\n"
+                       "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"puff\" \"\"\n"
+                       "Translate 2.5 2.5 2.5\nShape \"sphere\" \"float radius\" 0.3\n"
+                       "AttributeEnd\n";
+    char *ta = sfmt(fmt, ""), *tb = sfmt(fmt, puff);
+    render_scene *a = build(ta), *b = build(tb);
+    integrator_counters ca = {.timed = true}, cb = {.timed = true};
+    double lit = expect_same_radiance(a, b, 64, 8, v2(560.0, 300.0), v2(20.0, 20.0), &ca, &cb);
+    assert_true(lit > 0.0);
+    assert_true(cb.shadow_rays > 0);
+    assert_int_equal(ca.shadow_rays, cb.shadow_rays);
+    assert_int_equal(cb.media_ns, 0);
+    render_scene_destroy(a);
+    render_scene_destroy(b);
+    free(ta);
+    free(tb);
+}
+
 /* Surfaces only: the media counters stay at zero, even timed. */
 static void test_no_media_no_media_code(void **state)
 {
@@ -456,6 +488,7 @@ int main(void)
         cmocka_unit_test(test_parameters),
         cmocka_unit_test(test_cloud_without_integrator),
         cmocka_unit_test(test_unreferenced_media_are_free),
+        cmocka_unit_test(test_media_elsewhere_are_free),
         cmocka_unit_test(test_no_media_no_media_code),
         cmocka_unit_test(test_scenes_maxdepth_1_matches_singlescatter),
     };
