@@ -16,6 +16,7 @@
 #include "cli/info.h"
 #include "cli/merge.h"
 #include "cli/outputs.h"
+#include "core/clock.h"
 #include "mpi/distributed.h"
 #include "render/progress.h"
 #include "render/render_scene.h"
@@ -82,7 +83,10 @@ static const char usage_text[] =
     "  --quiet                 no progress bar and no summary\n"
     "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
     "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
-    "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n";
+    "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n"
+    "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
+    "                          count) and write the complete passes done when the time\n"
+    "                          since start runs out (docs/performance.md)\n";
 
 typedef struct {
     const char *scene;
@@ -97,6 +101,8 @@ typedef struct {
     film_region region;     /* --pixelbounds / --cropwindow */
     const char *region_opt; /* which of the two, and its text, for messages */
     const char *region_arg;
+    double time_limit;      /* --time-limit seconds, 0: none */
+    double start_seconds;   /* hz_clock_seconds() when haze started */
 } cli;
 
 static int usage_error(const char *fmt, const char *arg)
@@ -150,7 +156,8 @@ static int parse_render_args(int argc, char **argv, cli *c)
         long n;
         if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--spp") ||
             !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview") ||
-            !strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow")) {
+            !strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow") ||
+            !strcmp(a, "--time-limit")) {
             if (!val)
                 return usage_error("option %s needs a value", a);
             ++i;
@@ -169,7 +176,15 @@ static int parse_render_args(int argc, char **argv, cli *c)
                 c->region_opt = a;
                 c->region_arg = val;
             }
-            else if (!strcmp(a, "--spp")) {
+            else if (!strcmp(a, "--time-limit")) {
+                char *end;
+                errno = 0;
+                double t = strtod(val, &end);
+                if (errno || end == val || *end != '\0' || !(t > 0.0 && t <= 1e9))
+                    return usage_error("--time-limit needs a number of seconds in (0, 1e9], "
+                                       "not '%s'", val);
+                c->time_limit = t;
+            } else if (!strcmp(a, "--spp")) {
                 if (parse_count(val, 1, 1 << 24, &n))
                     return usage_error("--spp needs an integer in [1, 16777216], not '%s'", val);
                 c->spp = (int)n;
@@ -368,7 +383,7 @@ static int run_render(const cli *c, distributed *dist)
         st = HZ_ERROR;
     bool no_jitter = c->disable_pixel_jitter || (rs && render_scene_options(rs).disable_pixel_jitter);
     snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
-             st == HZ_OK ? (unsigned long long)outputs_render_id(inputs_hash, rs, no_jitter) : 0ull);
+             st == HZ_OK ? (unsigned long long)outputs_render_id(inputs_hash, rs, render_scene_sampler(rs)->spp, no_jitter) : 0ull);
     if (distributed_agree(dist, st, &err,
                           st == HZ_OK ? distributed_fingerprint(inputs_hash, rs) : 0,
                           stderr) != HZ_OK) {
@@ -384,7 +399,8 @@ static int run_render(const cli *c, distributed *dist)
                             .disable_pixel_jitter = no_jitter,
                             .timing = c->stats != 0};
     render_stats stats;
-    if (distributed_render(dist, rs, &opt, &stats, &err) != HZ_OK) {
+    double deadline = c->time_limit > 0 ? c->start_seconds + c->time_limit : 0.0;
+    if (distributed_render(dist, rs, &opt, deadline, &stats, &err) != HZ_OK) {
         if (rank0)
             hz_error_print(stderr, &err);
         exit_code = EXIT_SCENE;
@@ -397,8 +413,18 @@ static int run_render(const cli *c, distributed *dist)
         exit_code = write_partial(&outs, f, ratio, &stats);
         goto done;
     }
-    const film_attribute id_attr[] = {{"haze:render", outs.render_id}};
-    film_output out = {id_attr, 1, &output_note};
+    char spp[32], passes[32], limit[32];
+    format_count(spp, sizeof spp, stats.spp);
+    format_count(passes, sizeof passes, stats.passes);
+    snprintf(limit, sizeof limit, "%g", c->time_limit);
+    if (stats.spp != render_scene_sampler(rs)->spp) /* the id names the samples taken */
+        snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
+                 (unsigned long long)outputs_render_id(inputs_hash, rs, stats.spp, no_jitter));
+    const film_attribute attrs[] = {{"haze:render", outs.render_id},
+                                    {"haze:spp", spp},
+                                    {"haze:passes", passes},
+                                    {"haze:time_limit_s", limit}};
+    film_output out = {attrs, deadline > 0 ? 4 : 1, &output_note};
     if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
         (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
         hz_error_print(stderr, &err);
@@ -429,10 +455,14 @@ static int run_render(const cli *c, distributed *dist)
         format_motion(render_scene_motion(rs), motion, sizeof motion);
         if (mpi)
             snprintf(ranks, sizeof ranks, " on %d ranks", distributed_size(dist));
-        printf("%s: %dx%d (%d x %d pixels rendered), %d spp, %d threads%s, %s, "
+        char pass_note[48] = "";
+        if (deadline > 0)
+            snprintf(pass_note, sizeof pass_note, " in %d pass%s", stats.passes,
+                     stats.passes == 1 ? "" : "es");
+        printf("%s: %dx%d (%d x %d pixels rendered), %d spp%s, %d threads%s, %s, "
                "%.2f Mrays/s (%llu camera + %llu shadow), %s%s%s, peak memory %.1f MiB\n",
                fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,
-               fp->bounds.y1 - fp->bounds.y0, stats.spp, stats.threads, ranks, wall,
+               fp->bounds.y1 - fp->bounds.y0, stats.spp, pass_note, stats.threads, ranks, wall,
                stats.wall_seconds > 0 ? rays / stats.wall_seconds * 1e-6 : 0.0,
                (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
                lookups, lookups[0] ? ", " : "", motion, peak_memory_mib());
@@ -491,6 +521,7 @@ int main(int argc, char **argv)
     }
     if (!strcmp(cmd, "render")) {
         cli c = {0};
+        c.start_seconds = hz_clock_seconds();
         for (int i = 2; i < argc; ++i)
             if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
                 fputs(usage_text, stdout);

@@ -119,10 +119,13 @@ hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png
     return st;
 }
 
-uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, bool disable_pixel_jitter)
+uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, int spp,
+                           bool disable_pixel_jitter)
 {
     uint64_t h = fnv1a(inputs_hash, HAZE_VERSION, sizeof HAZE_VERSION);
-    h = sampler_fingerprint(h, render_scene_sampler(rs));
+    sampler s = *render_scene_sampler(rs);
+    s.spp = spp;
+    h = sampler_fingerprint(h, &s);
     HASH_FIELD(h, disable_pixel_jitter);
     return h;
 }

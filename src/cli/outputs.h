@@ -17,10 +17,11 @@ typedef struct {
 
 /* What identifies a render, written to every EXR as "haze:render" so that
  * `haze merge` refuses parts of different renders: the bytes of every input
- * file (scene_inputs_hash), the haze version, the sampler (kind, spp, strata,
- * jitter, seed) and pixel jitter. Not the region, the thread count or the
+ * file (scene_inputs_hash), the haze version, the sampler (kind, strata,
+ * jitter, seed; `spp` the samples per pixel taken) and pixel jitter. Not the region, the thread count or the
  * output name: the parts of one render share it. */
-uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, bool disable_pixel_jitter);
+uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, int spp,
+                           bool disable_pixel_jitter);
 
 /* Resolves and checks the EXR output `exr` and the optional PNG `png` (NULL:
  * none) of a render of `sd`. Refused, each with one line naming the file:

@@ -14,7 +14,10 @@
 #ifdef HAZE_HAVE_MPI
 #include <mpi.h>
 
+#include <stdatomic.h>
+
 #include "mpi/tile_service.h"
+#include "render/progressive.h"
 #endif
 
 /* Per-rank figures gathered on rank 0 after a render (as doubles). */
@@ -239,8 +242,73 @@ static int tile_count_of(const film_params *fp)
            ((h + RENDERER_TILE_SIZE - 1) / RENDERER_TILE_SIZE);
 }
 
+/* The tiles one rank rendered in the first pass of a progressive render,
+ * recorded as its threads claim them, and handed out again in each later
+ * pass (so a pixel's samples all land on one rank's film, in order). */
+typedef struct {
+    tile_service *ts;
+    int *tiles;
+    atomic_int count, next;
+} tile_log;
+
+static int tile_log_claim(void *p)
+{
+    tile_log *l = p;
+    int t = tile_service_next(l->ts);
+    if (t >= 0)
+        l->tiles[atomic_fetch_add(&l->count, 1)] = t;
+    return t;
+}
+
+static int tile_log_replay(void *p)
+{
+    tile_log *l = p;
+    int i = atomic_fetch_add(&l->next, 1);
+    return i < atomic_load(&l->count) ? l->tiles[i] : -1;
+}
+
+/* The passes after the first of a progressive render across ranks: a pass
+ * starts when every rank expects to finish it by the deadline. */
+static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_log *log,
+                              double deadline, double first_seconds, render_stats *mine,
+                              hz_error *err)
+{
+    int spp = render_scene_sampler(rs)->spp;
+    int done = mine->spp, last_samples = done;
+    double last_seconds = first_seconds;
+    renderer_options po = *o;
+    po.next_tile = tile_log_replay;
+    po.tiles_shown = NULL;
+    po.tile_ctx = log;
+    po.progress = NULL;
+    while (done < spp) {
+        int end = progressive_pass_end(done, spp);
+        int fits = progressive_pass_fits(now_seconds(), deadline, last_seconds, last_samples,
+                                         end - done);
+        MPI_Allreduce(MPI_IN_PLACE, &fits, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+        if (!fits)
+            break;
+        double start = now_seconds();
+        atomic_store(&log->next, 0);
+        po.sample_begin = done;
+        po.sample_end = end;
+        render_stats pass;
+        if (renderer_run(rs, &po, &pass, err) != HZ_OK)
+            return HZ_ERROR;
+        render_stats_add_work(mine, &pass);
+        last_seconds = now_seconds() - start;
+        last_samples = end - done;
+        done = end;
+        mine->spp = done;
+        mine->passes++;
+        if (o->progress)
+            fprintf(o->progress, "pass %d: %d of %d spp\n", mine->passes, done, spp);
+    }
+    return HZ_OK;
+}
+
 static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_options *opt,
-                            render_stats *stats, hz_error *err)
+                            double deadline, render_stats *stats, hz_error *err)
 {
     double t0 = now_seconds();
     film *f = render_scene_film(rs);
@@ -260,6 +328,19 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     o.tile_ctx = ts;
     if (d->rank != 0)
         o.progress = NULL;
+    tile_log log = {.ts = ts};
+    atomic_init(&log.count, 0);
+    atomic_init(&log.next, 0);
+    if (deadline > 0) { /* the first pass: one sample per pixel, its tiles recorded */
+        log.tiles = malloc((size_t)tile_count_of(fp) * sizeof *log.tiles);
+        if (!log.tiles) {
+            fprintf(stderr, "haze: rank %d on host %s: out of memory\n", d->rank, d->host);
+            MPI_Abort(MPI_COMM_WORLD, 1);
+        }
+        o.next_tile = tile_log_claim;
+        o.tile_ctx = &log;
+        o.sample_end = progressive_pass_end(0, render_scene_sampler(rs)->spp);
+    }
     render_stats mine;
     memset(&mine, 0, sizeof mine);
     hz_status st = renderer_run(rs, &o, &mine, &local);
@@ -272,6 +353,19 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     tile_claim_stats claims = tile_service_claims(ts);
     d->service_cpu_seconds = claims.service_cpu_seconds;
     tile_service_destroy(ts);
+    if (deadline > 0) {
+        /* Every rank agrees the first pass went well before any starts the next. */
+        int ok = st == HZ_OK;
+        MPI_Allreduce(MPI_IN_PLACE, &ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+        if (ok && o.progress)
+            fprintf(o.progress, "pass 1: %d of %d spp\n", mine.spp,
+                    render_scene_sampler(rs)->spp);
+        if (ok && later_passes(rs, &o, &log, deadline, render_seconds, &mine, &local) != HZ_OK)
+            st = HZ_ERROR; /* renderer_run fails only before any thread starts */
+        free(log.tiles);
+        render_seconds = now_seconds() - t0;
+        t_wait = now_seconds();
+    }
 
     err->message[0] = '\0';
     st = agree_all(d, st, local.message, 0, false, keep_first, err);
@@ -330,6 +424,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
             stats->threads += (int)d->figures[r * FIG_COUNT + FIG_THREADS];
         stats->tiles_done = stats->tile_count;
         stats->pixels = stats->pixels_total;
+        /* spp and passes: every rank took the same (the decisions are collective) */
         stats->interrupted = false;
         stats->wall_seconds = now_seconds() - t0;
     }
@@ -338,14 +433,16 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
 #endif
 
 hz_status distributed_render(distributed *d, render_scene *rs, const renderer_options *opt,
-                             render_stats *stats, hz_error *err)
+                             double deadline, render_stats *stats, hz_error *err)
 {
 #ifdef HAZE_HAVE_MPI
     if (d->size > 1)
-        return render_mpi(d, rs, opt, stats, err);
+        return render_mpi(d, rs, opt, deadline, stats, err);
 #else
     (void)d;
 #endif
+    if (deadline > 0)
+        return renderer_run_progressive(rs, opt, deadline, stats, err);
     return renderer_run(rs, opt, stats, err);
 }
 

@@ -1,6 +1,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "render/renderer.h"
 
+#include <assert.h>
 #include <math.h>
 #include <pthread.h>
 #include <signal.h>
@@ -23,7 +24,7 @@ typedef struct {
     render_scene *rs;
     pixel_bounds bounds;
     int tiles_x, tile_count;
-    int spp;
+    int sample_begin, sample_end;
     atomic_int next_tile;
     atomic_int tiles_done;
     atomic_int running; /* workers not yet finished */
@@ -85,7 +86,7 @@ static void render_pixel(render_job *job, int px, int py, integrator_counters *c
     const filter *flt = render_scene_filter(job->rs);
     film *f = render_scene_film(job->rs);
 
-    for (int i = 0; i < job->spp; ++i) {
+    for (int i = job->sample_begin; i < job->sample_end; ++i) {
         sampler_state st;
         sampler_start(smp, px, py, i, &st);
         camera_sample cs = renderer_camera_sample_needs(flt, &st, px, py, job->needs);
@@ -171,7 +172,10 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     int w = fp->bounds.x1 - fp->bounds.x0, h = fp->bounds.y1 - fp->bounds.y0;
     job.tiles_x = (w + TILE_SIZE - 1) / TILE_SIZE;
     job.tile_count = job.tiles_x * ((h + TILE_SIZE - 1) / TILE_SIZE);
-    job.spp = render_scene_sampler(rs)->spp;
+    int spp = render_scene_sampler(rs)->spp;
+    job.sample_begin = opt->sample_begin;
+    job.sample_end = opt->sample_end > 0 ? opt->sample_end : spp;
+    assert(0 <= job.sample_begin && job.sample_begin <= job.sample_end && job.sample_end <= spp);
     atomic_init(&job.next_tile, 0);
     atomic_init(&job.tiles_done, 0);
     atomic_init(&job.running, 0);
@@ -235,19 +239,24 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         progress_begin(&bar, opt->progress, job.tile_count, t0);
         pthread_mutex_lock(&job.lock);
         while (atomic_load(&job.running) > 0) {
-            if (job.cancel && *job.cancel) {
+            double now = now_seconds();
+            if ((job.cancel && *job.cancel) || (opt->deadline > 0 && now >= opt->deadline)) {
                 atomic_store(&job.stop, 1);
                 break;
             }
             progress_update(&bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx)
                                                    : atomic_load(&job.tiles_done),
-                            now_seconds());
-            /* Up to 100 ms; the last worker's signal, or a cancel noticed
-             * then (workers stop claiming tiles on their own), ends it. */
+                            now);
+            /* Up to 100 ms or to the deadline; the last worker's signal, or a
+             * cancel noticed then (workers stop claiming tiles on their own),
+             * ends it. */
+            double nap = 0.1;
+            if (opt->deadline > 0 && opt->deadline - now < nap)
+                nap = opt->deadline - now;
             struct timespec until;
             clock_gettime(CLOCK_MONOTONIC, &until);
-            until.tv_nsec += 100 * 1000 * 1000;
-            if (until.tv_nsec >= 1000000000L) {
+            until.tv_nsec += (long)(nap * 1e9);
+            while (until.tv_nsec >= 1000000000L) {
                 until.tv_sec += 1;
                 until.tv_nsec -= 1000000000L;
             }
@@ -265,7 +274,8 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     if (stats) {
         memset(stats, 0, sizeof *stats);
         stats->threads = started;
-        stats->spp = job.spp;
+        stats->spp = job.sample_end - job.sample_begin;
+        stats->passes = 1;
         stats->pixels_total = (long)w * h;
         stats->tile_count = job.tile_count;
         stats->tiles_done = done;

@@ -40,11 +40,20 @@ typedef struct {
     int (*next_tile)(void *tile_ctx);
     int (*tiles_shown)(void *tile_ctx);
     void *tile_ctx;
+    /* The pixel samples to take: [sample_begin, sample_end) of every pixel
+     * (sample_end 0: the sampler's count), so passes over the image add the
+     * same samples in the same order as one render (src/render/progressive.h). */
+    int sample_begin, sample_end;
+    /* hz_clock_seconds() time after which no further tile is started (0:
+     * none); tiles under way are finished and stats.interrupted is set, as for
+     * *cancel. */
+    double deadline;
 } renderer_options;
 
 typedef struct {
     int threads;
-    int spp;
+    int spp;              /* samples per pixel taken (of every rendered pixel) */
+    int passes;           /* progressive passes completed (1 for one render) */
     long pixels;          /* rendered pixels (all of the bounds unless interrupted) */
     long pixels_total;    /* pixels of the film's bounds */
     int tiles_done, tile_count;

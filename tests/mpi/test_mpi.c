@@ -163,6 +163,33 @@ static void test_four_ranks_bit_identical(void **state)
     expect_identical("-np 4 --oversubscribe", "np4.exr", "--threads 1 --quiet");
 }
 
+/* --time-limit across ranks: with time to spare, every pass (8 spp: 1, 1, 2,
+ * 4) gives the single-process pixels, every AOV; with none, the first pass
+ * (the 1-sample render, since a Sobol' pixel's first samples do not depend
+ * on the count). */
+static void test_time_limit_passes(void **state)
+{
+    (void)state;
+    char text[16384], out[1200], one[1200], cmd[4096];
+    assert_int_equal(mpi_render("-np 2", "tl.exr", "--threads 1 --time-limit 1e6", text,
+                                sizeof text), 0);
+    if (!strstr(text, "8 spp in 4 passes"))
+        fail_msg("summary: %s", text);
+    snprintf(out, sizeof out, "%s/tl.exr", dir);
+    assert_true(exr_pixels_equal(out, reference));
+
+    snprintf(one, sizeof one, "%s/one.exr", dir);
+    snprintf(cmd, sizeof cmd, "'%s' render '%s' -o '%s' --seed 5 --spp 1 --quiet", HAZE_BIN,
+             scene, one);
+    assert_int_equal(run_shell(cmd, text, sizeof text), 0);
+    assert_int_equal(mpi_render("-np 2", "tl1.exr", "--threads 1 --time-limit 0.001", text,
+                                sizeof text), 0);
+    if (!strstr(text, "1 spp in 1 pass,"))
+        fail_msg("summary: %s", text);
+    snprintf(out, sizeof out, "%s/tl1.exr", dir);
+    assert_true(exr_pixels_equal(out, one));
+}
+
 /* The summary on rank 0 counts every rank's rays and says how many ranks. */
 static void test_summary_names_ranks(void **state)
 {
@@ -314,6 +341,7 @@ int main(void)
         cmocka_unit_test(test_two_ranks_bit_identical),
         cmocka_unit_test(test_four_ranks_bit_identical),
         cmocka_unit_test(test_summary_names_ranks),
+        cmocka_unit_test(test_time_limit_passes),
         cmocka_unit_test(test_failing_rank_named),
         cmocka_unit_test(test_mismatched_rank_refused),
         cmocka_unit_test(test_killed_rank_fails_run),
