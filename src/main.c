@@ -19,11 +19,14 @@
 #include "core/clock.h"
 #include "mpi/distributed.h"
 #include "render/progress.h"
+#include "render/progressive.h"
 #include "render/render_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_desc.h"
 
 enum { EXIT_SCENE = 1, EXIT_USAGE = 2, EXIT_INTERRUPTED = 130 };
+/* --target-error without --spp: the most samples a pixel may take. */
+enum { ADAPTIVE_MAX_SPP = 16384 };
 
 /* The only mutable globals of haze, shared with the signal handler: the
  * interrupt flag the renderer polls, and the temporary output file to remove
@@ -86,7 +89,9 @@ static const char usage_text[] =
     "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n"
     "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
     "                          count) and write the complete passes done when the time\n"
-    "                          since start runs out (docs/performance.md)\n";
+    "                          since start runs out (docs/performance.md)\n"
+    "  --target-error E        adaptive sampling: each pixel takes samples (4 at least, at\n"
+    "                          most --spp, default 16384) until its estimated relMSE is E\n";
 
 typedef struct {
     const char *scene;
@@ -102,6 +107,7 @@ typedef struct {
     const char *region_opt; /* which of the two, and its text, for messages */
     const char *region_arg;
     double time_limit;      /* --time-limit seconds, 0: none */
+    double target_error;    /* --target-error, 0: none */
     double start_seconds;   /* hz_clock_seconds() when haze started */
 } cli;
 
@@ -157,7 +163,7 @@ static int parse_render_args(int argc, char **argv, cli *c)
         if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--spp") ||
             !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview") ||
             !strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow") ||
-            !strcmp(a, "--time-limit")) {
+            !strcmp(a, "--time-limit") || !strcmp(a, "--target-error")) {
             if (!val)
                 return usage_error("option %s needs a value", a);
             ++i;
@@ -176,7 +182,15 @@ static int parse_render_args(int argc, char **argv, cli *c)
                 c->region_opt = a;
                 c->region_arg = val;
             }
-            else if (!strcmp(a, "--time-limit")) {
+            else if (!strcmp(a, "--target-error")) {
+                char *end;
+                errno = 0;
+                double e = strtod(val, &end);
+                if (errno || end == val || *end != '\0' || !(e >= 1e-8 && e <= 1.0))
+                    return usage_error("--target-error needs a relative error in [1e-8, 1], "
+                                       "not '%s'", val);
+                c->target_error = e;
+            } else if (!strcmp(a, "--time-limit")) {
                 char *end;
                 errno = 0;
                 double t = strtod(val, &end);
@@ -364,11 +378,13 @@ static int run_render(const cli *c, distributed *dist)
         scene_desc_free(&sd);
         return EXIT_USAGE;
     }
+    bool adaptive = c->target_error > 0;
     render_options ro = {.seed = c->seed,
                          .seed_given = c->seed_given != 0,
-                         .spp = c->spp,
+                         .spp = c->spp > 0 ? c->spp : adaptive ? ADAPTIVE_MAX_SPP : 0,
                          .output = c->output,
-                         .region = c->region};
+                         .region = c->region,
+                         .statistics = adaptive};
     render_scene *rs = NULL;
     hz_status st = parsed ? render_scene_create(&sd, &ro, rank0 ? stderr : NULL, &rs, &err)
                           : HZ_ERROR;
@@ -400,7 +416,9 @@ static int run_render(const cli *c, distributed *dist)
                             .timing = c->stats != 0};
     render_stats stats;
     double deadline = c->time_limit > 0 ? c->start_seconds + c->time_limit : 0.0;
-    if (distributed_render(dist, rs, &opt, deadline, &stats, &err) != HZ_OK) {
+    progressive_goal goal = {deadline, c->target_error};
+    bool progressive = deadline > 0 || adaptive;
+    if (distributed_render(dist, rs, &opt, progressive ? &goal : NULL, &stats, &err) != HZ_OK) {
         if (rank0)
             hz_error_print(stderr, &err);
         exit_code = EXIT_SCENE;
@@ -413,18 +431,29 @@ static int run_render(const cli *c, distributed *dist)
         exit_code = write_partial(&outs, f, ratio, &stats);
         goto done;
     }
-    char spp[32], passes[32], limit[32];
+    char spp[32], passes[32], limit[32], target[32], mean_spp[32];
     format_count(spp, sizeof spp, stats.spp);
     format_count(passes, sizeof passes, stats.passes);
     snprintf(limit, sizeof limit, "%g", c->time_limit);
+    snprintf(target, sizeof target, "%g", c->target_error);
+    double spp_mean = stats.pixels > 0 ? stats.samples / (double)stats.pixels : 0.0;
+    snprintf(mean_spp, sizeof mean_spp, "%.3f", spp_mean);
     if (stats.spp != render_scene_sampler(rs)->spp) /* the id names the samples taken */
         snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
                  (unsigned long long)outputs_render_id(inputs_hash, rs, stats.spp, no_jitter));
-    const film_attribute attrs[] = {{"haze:render", outs.render_id},
-                                    {"haze:spp", spp},
-                                    {"haze:passes", passes},
-                                    {"haze:time_limit_s", limit}};
-    film_output out = {attrs, deadline > 0 ? 4 : 1, &output_note};
+    film_attribute attrs[6] = {{"haze:render", outs.render_id}};
+    int nattrs = 1;
+    if (progressive) {
+        attrs[nattrs++] = (film_attribute){"haze:spp", spp};
+        attrs[nattrs++] = (film_attribute){"haze:passes", passes};
+    }
+    if (deadline > 0)
+        attrs[nattrs++] = (film_attribute){"haze:time_limit_s", limit};
+    if (adaptive) {
+        attrs[nattrs++] = (film_attribute){"haze:target_error", target};
+        attrs[nattrs++] = (film_attribute){"haze:spp_mean", mean_spp};
+    }
+    film_output out = {attrs, nattrs, &output_note};
     if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
         (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
         hz_error_print(stderr, &err);
@@ -455,10 +484,12 @@ static int run_render(const cli *c, distributed *dist)
         format_motion(render_scene_motion(rs), motion, sizeof motion);
         if (mpi)
             snprintf(ranks, sizeof ranks, " on %d ranks", distributed_size(dist));
-        char pass_note[48] = "";
-        if (deadline > 0)
-            snprintf(pass_note, sizeof pass_note, " in %d pass%s", stats.passes,
-                     stats.passes == 1 ? "" : "es");
+        char pass_note[96] = "";
+        if (adaptive)
+            snprintf(pass_note, sizeof pass_note, " at most (%.2f spp mean)", spp_mean);
+        if (progressive)
+            snprintf(pass_note + strlen(pass_note), sizeof pass_note - strlen(pass_note),
+                     " in %d pass%s", stats.passes, stats.passes == 1 ? "" : "es");
         printf("%s: %dx%d (%d x %d pixels rendered), %d spp%s, %d threads%s, %s, "
                "%.2f Mrays/s (%llu camera + %llu shadow), %s%s%s, peak memory %.1f MiB\n",
                fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,

@@ -343,6 +343,90 @@ static size_t film_index(const film *f, int px, int py)
     return (size_t)(py - f->p.bounds.y0) * (size_t)f->width + (size_t)(px - f->p.bounds.x0);
 }
 
+/* imaging_ratio * sum(w L) / sum(w), 0 without weight. */
+static rgb pixel_value(const film_pixel *p, double imaging_ratio)
+{
+    if (p->w == 0.0)
+        return rgb_grey(0.0);
+    double s = imaging_ratio / p->w;
+    return rgb_make(p->r * s, p->g * s, p->b * s);
+}
+
+struct film_snapshot {
+    double *doubles[3];
+    uint32_t *counts;
+    long nonfinite;
+};
+
+void film_snapshot_destroy(film_snapshot *s)
+{
+    if (!s)
+        return;
+    for (int i = 0; i < 3; ++i)
+        free(s->doubles[i]);
+    free(s->counts);
+    free(s);
+}
+
+film_snapshot *film_snapshot_create(film *f, hz_error *err)
+{
+    film_snapshot *s = calloc(1, sizeof *s);
+    film_accumulators acc;
+    film_get_accumulators(f, &acc);
+    bool ok = s != NULL;
+    for (int i = 0; ok && i < 3; ++i)
+        if (acc.doubles[i] && !(s->doubles[i] = malloc(acc.double_count[i] * sizeof(double))))
+            ok = false;
+    if (ok && acc.counts && !(s->counts = malloc(acc.count_count * sizeof(uint32_t))))
+        ok = false;
+    if (!ok) {
+        film_snapshot_destroy(s);
+        hz_fail(err, "out of memory for a copy of the film");
+        return NULL;
+    }
+    film_snapshot_save(s, f);
+    return s;
+}
+
+/* save: film -> snapshot; otherwise snapshot -> film. */
+static void snapshot_copy(film_snapshot *s, film *f, bool save)
+{
+    film_accumulators acc;
+    film_get_accumulators(f, &acc);
+    for (int i = 0; i < 3; ++i)
+        if (acc.doubles[i]) {
+            size_t n = acc.double_count[i] * sizeof(double);
+            if (save)
+                memcpy(s->doubles[i], acc.doubles[i], n);
+            else
+                memcpy(acc.doubles[i], s->doubles[i], n);
+        }
+    if (acc.counts) {
+        size_t n = acc.count_count * sizeof(uint32_t);
+        if (save)
+            memcpy(s->counts, acc.counts, n);
+        else
+            memcpy(acc.counts, s->counts, n);
+    }
+    if (save)
+        s->nonfinite = film_nonfinite_count(f);
+    else
+        film_add_nonfinite(f, s->nonfinite - film_nonfinite_count(f));
+}
+
+void film_snapshot_save(film_snapshot *s, film *f) { snapshot_copy(s, f, true); }
+
+void film_snapshot_restore(const film_snapshot *s, film *f)
+{
+    snapshot_copy((film_snapshot *)s, f, false); /* reads s only */
+}
+
+rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,
+                        double imaging_ratio)
+{
+    return pixel_value((const film_pixel *)s->doubles[0] + film_index(f, px, py), imaging_ratio);
+}
+
 void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth)
 {
     if (!isfinite(L.r) || !isfinite(L.g) || !isfinite(L.b) || !isfinite(weight)) {
@@ -389,11 +473,7 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
 
 rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio)
 {
-    const film_pixel *p = &f->pixels[film_index(f, px, py)];
-    if (p->w == 0.0)
-        return rgb_grey(0.0);
-    double s = imaging_ratio / p->w;
-    return rgb_make(p->r * s, p->g * s, p->b * s);
+    return pixel_value(&f->pixels[film_index(f, px, py)], imaging_ratio);
 }
 
 rgb film_get_variance(const film *f, int px, int py, double imaging_ratio)
@@ -407,6 +487,8 @@ rgb film_get_variance(const film *f, int px, int py, double imaging_ratio)
     double s = imaging_ratio * imaging_ratio * m->w2 / (m->w * excess);
     return rgb_make(m->m2[0] * s, m->m2[1] * s, m->m2[2] * s);
 }
+
+bool film_keeps_statistics(const film *f) { return f->moments && f->count; }
 
 long film_get_sample_count(const film *f, int px, int py)
 {

@@ -95,6 +95,9 @@ rgb film_get_variance(const film *f, int px, int py, double imaging_ratio);
 /* Number of finite samples that reached the pixel (dropped non-finite ones
  * are not counted). Only on a film created with write_sample_count (asserted). */
 long film_get_sample_count(const film *f, int px, int py);
+/* Whether the film keeps the variance moments and the sample counts
+ * (write_variance and write_sample_count). */
+bool film_keeps_statistics(const film *f);
 /* Number of non-finite sample values that were dropped (counted, never stored). */
 long film_nonfinite_count(const film *f);
 /* Writes R G B A (+ Z, Variance.R/G/B, SampleCount.Y when requested) float32,
@@ -123,6 +126,17 @@ typedef struct {
 void film_get_accumulators(film *f, film_accumulators *out);
 /* Adds n to film_nonfinite_count (the dropped samples of a combined film). */
 void film_add_nonfinite(film *f, long n);
+
+/* A copy of a film's accumulators: to undo samples (progressive passes cut
+ * short) and to see a pixel's value at the time of the copy. */
+typedef struct film_snapshot film_snapshot;
+film_snapshot *film_snapshot_create(film *f, hz_error *err);
+void film_snapshot_destroy(film_snapshot *s);
+void film_snapshot_save(film_snapshot *s, film *f);
+void film_snapshot_restore(const film_snapshot *s, film *f);
+/* film_get_pixel as of the last film_snapshot_save. */
+rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,
+                        double imaging_ratio);
 
 /* Extras for an output: EXR header string attributes (names < 64 bytes,
  * values < 256; ignored by the PNG writer) and where to publish the

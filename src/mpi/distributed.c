@@ -6,6 +6,7 @@
 
 #include "core/hash.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -235,6 +236,16 @@ static void reduce_sum(void *buf, size_t count, MPI_Datatype type, size_t elem_s
     }
 }
 
+/* Element-wise sum on every rank, in chunks that fit MPI's int counts. */
+static void reduce_all_chunked(double *buf, size_t count)
+{
+    const size_t chunk = (size_t)1 << 24;
+    for (size_t off = 0; off < count; off += chunk) {
+        int n = (int)(count - off < chunk ? count - off : chunk);
+        MPI_Allreduce(MPI_IN_PLACE, buf + off, n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    }
+}
+
 static int tile_count_of(const film_params *fp)
 {
     int w = fp->bounds.x1 - fp->bounds.x0, h = fp->bounds.y1 - fp->bounds.y0;
@@ -268,47 +279,86 @@ static int tile_log_replay(void *p)
 }
 
 /* The passes after the first of a progressive render across ranks: a pass
- * starts when every rank expects to finish it by the deadline. */
+ * starts when every rank expects to finish it by the deadline and some rank
+ * has pixels above the target error. */
 static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_log *log,
-                              double deadline, double first_seconds, render_stats *mine,
-                              hz_error *err)
+                              const progressive_goal *goal, double first_seconds,
+                              render_stats *mine, hz_error *err)
 {
+    film *f = render_scene_film(rs);
+    const film_params *fp = film_get_params(f);
+    double ratio = camera_imaging_ratio(render_scene_camera(rs), fp);
     int spp = render_scene_sampler(rs)->spp;
-    int done = mine->spp, last_samples = done;
-    double last_seconds = first_seconds;
+    double deadline = goal->deadline > 0 ? goal->deadline : INFINITY;
+    size_t npix = (size_t)(fp->bounds.x1 - fp->bounds.x0) * (fp->bounds.y1 - fp->bounds.y0);
+    unsigned char *active = NULL;
+    progressive_error pe = {0};
+    film_snapshot *snap = NULL; /* the film before the last pass */
+    long left = (long)npix;
+    if (goal->target_error > 0) {
+        if (progressive_error_init(&pe, f, err) != HZ_OK)
+            return HZ_ERROR;
+        if (!(active = malloc(npix ? npix : 1)) || !(snap = film_snapshot_create(f, err))) {
+            free(active);
+            progressive_error_free(&pe);
+            return hz_fail(err, "out of memory for the pixel mask (--target-error)");
+        }
+        memset(active, 1, npix);
+    }
+    int done = mine->spp;
+    double last_seconds = first_seconds, last_work = (double)done * (double)npix;
     renderer_options po = *o;
     po.next_tile = tile_log_replay;
     po.tiles_shown = NULL;
     po.tile_ctx = log;
     po.progress = NULL;
+    po.active = active;
+    hz_status st = HZ_OK;
     while (done < spp) {
-        int end = progressive_pass_end(done, spp);
-        int fits = progressive_pass_fits(now_seconds(), deadline, last_seconds, last_samples,
-                                         end - done);
-        MPI_Allreduce(MPI_IN_PLACE, &fits, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-        if (!fits)
+        int end = active ? progressive_error_next_end(&pe, done, spp, goal->target_error)
+                         : progressive_pass_end(done, spp);
+        double work = (double)(end - done) * (double)left;
+        /* {every rank fits, every rank is done}: go on when all fit and not all are done */
+        int flags[2] = {progressive_pass_fits(now_seconds(), deadline, last_seconds, last_work,
+                                              work),
+                        left == 0};
+        MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+        if (!flags[0] || flags[1])
             break;
         double start = now_seconds();
+        if (snap)
+            film_snapshot_save(snap, f);
         atomic_store(&log->next, 0);
         po.sample_begin = done;
         po.sample_end = end;
         render_stats pass;
-        if (renderer_run(rs, &po, &pass, err) != HZ_OK)
-            return HZ_ERROR;
+        if ((st = renderer_run(rs, &po, &pass, err)) != HZ_OK)
+            break;
         render_stats_add_work(mine, &pass);
+        mine->samples += pass.samples;
         last_seconds = now_seconds() - start;
-        last_samples = end - done;
+        last_work = work > 0.0 ? work : 1.0;
         done = end;
         mine->spp = done;
         mine->passes++;
+        if (active && done >= PROGRESSIVE_MIN_SPP) {
+            /* Each rank measures its tiles (the others' sum to 0); the sums of
+             * every tile then reach every rank, which decides for its own. */
+            progressive_error_measure(&pe, f, snap, active, po.sample_begin, done, ratio);
+            reduce_all_chunked(pe.tile_sums, 3 * (size_t)pe.tile_count);
+            left = progressive_error_select(&pe, f, goal->target_error, active, NULL);
+        }
         if (o->progress)
             fprintf(o->progress, "pass %d: %d of %d spp\n", mine->passes, done, spp);
     }
-    return HZ_OK;
+    free(active);
+    progressive_error_free(&pe);
+    film_snapshot_destroy(snap);
+    return st;
 }
 
 static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_options *opt,
-                            double deadline, render_stats *stats, hz_error *err)
+                            const progressive_goal *goal, render_stats *stats, hz_error *err)
 {
     double t0 = now_seconds();
     film *f = render_scene_film(rs);
@@ -331,7 +381,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     tile_log log = {.ts = ts};
     atomic_init(&log.count, 0);
     atomic_init(&log.next, 0);
-    if (deadline > 0) { /* the first pass: one sample per pixel, its tiles recorded */
+    if (goal) { /* the first pass: one sample per pixel, its tiles recorded */
         log.tiles = malloc((size_t)tile_count_of(fp) * sizeof *log.tiles);
         if (!log.tiles) {
             fprintf(stderr, "haze: rank %d on host %s: out of memory\n", d->rank, d->host);
@@ -353,14 +403,14 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     tile_claim_stats claims = tile_service_claims(ts);
     d->service_cpu_seconds = claims.service_cpu_seconds;
     tile_service_destroy(ts);
-    if (deadline > 0) {
+    if (goal) {
         /* Every rank agrees the first pass went well before any starts the next. */
         int ok = st == HZ_OK;
         MPI_Allreduce(MPI_IN_PLACE, &ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
         if (ok && o.progress)
             fprintf(o.progress, "pass 1: %d of %d spp\n", mine.spp,
                     render_scene_sampler(rs)->spp);
-        if (ok && later_passes(rs, &o, &log, deadline, render_seconds, &mine, &local) != HZ_OK)
+        if (ok && later_passes(rs, &o, &log, goal, render_seconds, &mine, &local) != HZ_OK)
             st = HZ_ERROR; /* renderer_run fails only before any thread starts */
         free(log.tiles);
         render_seconds = now_seconds() - t0;
@@ -388,8 +438,8 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     uint64_t sums[6] = {mine.camera_rays, mine.shadow_rays, mine.density_lookups,
                         (uint64_t)own_nonfinite, mine.majorant_steps, mine.lost_paths};
     reduce_sum(sums, 6, MPI_UINT64_T, sizeof(uint64_t), d->rank);
-    double times[3] = {mine.time_busy_s, mine.time_media_s, mine.time_film_s};
-    reduce_sum(times, 3, MPI_DOUBLE, sizeof(double), d->rank);
+    double times[4] = {mine.time_busy_s, mine.time_media_s, mine.time_film_s, mine.samples};
+    reduce_sum(times, 4, MPI_DOUBLE, sizeof(double), d->rank);
     double fig[FIG_COUNT] = {0};
     fig[FIG_TILES] = mine.tiles_done;
     fig[FIG_THREADS] = mine.threads;
@@ -419,6 +469,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
         stats->time_busy_s = times[0];
         stats->time_media_s = times[1];
         stats->time_film_s = times[2];
+        stats->samples = times[3];
         stats->threads = 0;
         for (int r = 0; r < d->size; ++r)
             stats->threads += (int)d->figures[r * FIG_COUNT + FIG_THREADS];
@@ -433,16 +484,16 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
 #endif
 
 hz_status distributed_render(distributed *d, render_scene *rs, const renderer_options *opt,
-                             double deadline, render_stats *stats, hz_error *err)
+                             const progressive_goal *goal, render_stats *stats, hz_error *err)
 {
 #ifdef HAZE_HAVE_MPI
     if (d->size > 1)
-        return render_mpi(d, rs, opt, deadline, stats, err);
+        return render_mpi(d, rs, opt, goal, stats, err);
 #else
     (void)d;
 #endif
-    if (deadline > 0)
-        return renderer_run_progressive(rs, opt, deadline, stats, err);
+    if (goal)
+        return renderer_run_progressive(rs, opt, goal, stats, err);
     return renderer_run(rs, opt, stats, err);
 }
 

@@ -13,6 +13,7 @@
 
 #include "core/error.h"
 #include "render/render_scene.h"
+#include "render/progressive.h"
 #include "render/renderer.h"
 
 typedef struct distributed distributed;
@@ -54,12 +55,13 @@ hz_status distributed_agree(distributed *d, hz_status local, const hz_error *loc
  * distributed render; threads: all ranks' threads). opt->cancel must be NULL
  * with more than one rank. A failure on any rank is HZ_ERROR on every rank,
  * rank 0's `err` naming the rank and host. One rank: renderer_run. With a
- * `deadline` (hz_clock_seconds(), 0: none): progressive passes as
- * renderer_run_progressive; across ranks each pass after the first renders
- * on every rank the tiles that rank rendered in the first, and a pass starts
- * only when every rank expects to finish it in time (no pass is cut short). */
+ * `goal` (NULL: one render): progressive passes as renderer_run_progressive;
+ * across ranks each pass after the first renders on every rank the tiles that
+ * rank rendered in the first (a pixel's samples stay on one film, in order),
+ * and a pass starts only when every rank expects to finish it by the deadline
+ * and some rank has pixels above the target error (no pass is cut short). */
 hz_status distributed_render(distributed *d, render_scene *rs, const renderer_options *opt,
-                             double deadline, render_stats *stats, hz_error *err);
+                             const progressive_goal *goal, render_stats *stats, hz_error *err);
 
 /* Rank 0 after distributed_render with more than one rank: one line with the
  * tiles each rank rendered, the mean time a worker waited for a tile index

@@ -1,6 +1,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "render/progressive.h"
 
+#include <assert.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,12 +16,12 @@ int progressive_pass_end(int begin, int spp)
     return begin <= spp / 2 ? 2 * begin : spp;
 }
 
-bool progressive_pass_fits(double now, double deadline, double last_seconds, int last_samples,
-                           int samples)
+bool progressive_pass_fits(double now, double deadline, double last_seconds, double last_work,
+                           double work)
 {
-    if (last_samples <= 0)
+    if (!(last_work > 0.0))
         return now < deadline;
-    return now + last_seconds * ((double)samples / last_samples) <= deadline;
+    return now + last_seconds * (work / last_work) <= deadline;
 }
 
 void render_stats_add_work(render_stats *total, const render_stats *pass)
@@ -34,93 +36,58 @@ void render_stats_add_work(render_stats *total, const render_stats *pass)
     total->time_film_s += pass->time_film_s;
 }
 
-/* A copy of the film's accumulators, to undo a pass cut short. */
-typedef struct {
-    double *doubles[3];
-    uint32_t *counts;
-    long nonfinite;
-} film_snapshot;
-
-static void snapshot_free(film_snapshot *s)
-{
-    for (int i = 0; i < 3; ++i)
-        free(s->doubles[i]);
-    free(s->counts);
-    memset(s, 0, sizeof *s);
-}
-
-static hz_status snapshot_alloc(film *f, film_snapshot *s, hz_error *err)
-{
-    memset(s, 0, sizeof *s);
-    film_accumulators acc;
-    film_get_accumulators(f, &acc);
-    bool ok = true;
-    for (int i = 0; i < 3; ++i)
-        if (acc.doubles[i] && !(s->doubles[i] = malloc(acc.double_count[i] * sizeof(double))))
-            ok = false;
-    if (acc.counts && !(s->counts = malloc(acc.count_count * sizeof(uint32_t))))
-        ok = false;
-    if (!ok) {
-        snapshot_free(s);
-        return hz_fail(err, "out of memory for a copy of the film (--time-limit)");
-    }
-    return HZ_OK;
-}
-
-/* save: film -> snapshot; otherwise snapshot -> film. */
-static void snapshot_copy(film *f, film_snapshot *s, bool save)
-{
-    film_accumulators acc;
-    film_get_accumulators(f, &acc);
-    for (int i = 0; i < 3; ++i)
-        if (acc.doubles[i]) {
-            size_t n = acc.double_count[i] * sizeof(double);
-            if (save)
-                memcpy(s->doubles[i], acc.doubles[i], n);
-            else
-                memcpy(acc.doubles[i], s->doubles[i], n);
-        }
-    if (acc.counts) {
-        size_t n = acc.count_count * sizeof(uint32_t);
-        if (save)
-            memcpy(s->counts, acc.counts, n);
-        else
-            memcpy(acc.counts, s->counts, n);
-    }
-    if (save)
-        s->nonfinite = film_nonfinite_count(f);
-    else
-        film_add_nonfinite(f, s->nonfinite - film_nonfinite_count(f));
-}
-
-hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt, double deadline,
-                                   render_stats *stats, hz_error *err)
+hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt,
+                                   const progressive_goal *goal, render_stats *stats,
+                                   hz_error *err)
 {
     film *f = render_scene_film(rs);
+    const film_params *fp = film_get_params(f);
     int spp = render_scene_sampler(rs)->spp;
-    film_snapshot snap;
-    if (snapshot_alloc(f, &snap, err) != HZ_OK)
+    double deadline = goal->deadline > 0 ? goal->deadline : INFINITY;
+    double ratio = camera_imaging_ratio(render_scene_camera(rs), fp);
+    size_t npix = (size_t)(fp->bounds.x1 - fp->bounds.x0) * (fp->bounds.y1 - fp->bounds.y0);
+    unsigned char *active = NULL;
+    progressive_error pe = {0};
+    if (goal->target_error > 0) {
+        if (progressive_error_init(&pe, f, err) != HZ_OK)
+            return HZ_ERROR;
+        if (!(active = malloc(npix ? npix : 1))) {
+            progressive_error_free(&pe);
+            return hz_fail(err, "out of memory for the pixel mask (--target-error)");
+        }
+        memset(active, 1, npix);
+    }
+    film_snapshot *snap = film_snapshot_create(f, err);
+    if (!snap) {
+        free(active);
+        progressive_error_free(&pe);
         return HZ_ERROR;
+    }
     double t0 = hz_clock_seconds();
     render_stats total;
     memset(&total, 0, sizeof total);
     renderer_options o = *opt;
     o.progress = NULL;
+    o.active = active;
     double last_seconds = 0.0;
-    int done = 0, passes = 0, last_samples = 0;
+    int done = 0, passes = 0;
+    double last_samples = 0.0;
+    long left = (long)npix;
     hz_status st = HZ_OK;
-    while (done < spp) {
-        int end = progressive_pass_end(done, spp);
+    while (done < spp && left > 0) {
+        int end = active ? progressive_error_next_end(&pe, done, spp, goal->target_error)
+                         : progressive_pass_end(done, spp);
         double start = hz_clock_seconds();
+        /* The next pass's work, in samples, against the last one's. */
+        double next_samples = (double)(end - done) * (double)left;
         if (passes > 0 && ((opt->cancel && *opt->cancel) ||
                            !progressive_pass_fits(start, deadline, last_seconds, last_samples,
-                                                  end - done)))
+                                                  next_samples)))
             break;
-        if (passes > 0)
-            snapshot_copy(f, &snap, true);
+        film_snapshot_save(snap, f);
         o.sample_begin = done;
         o.sample_end = end;
-        o.deadline = passes > 0 ? deadline : 0.0; /* the first pass always ends */
+        o.deadline = passes > 0 ? goal->deadline : 0.0; /* the first pass always ends */
         render_stats pass;
         st = renderer_run(rs, &o, &pass, err);
         if (st != HZ_OK)
@@ -135,27 +102,40 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
                 total.pixels = pass.pixels;
                 total.interrupted = true;
                 total.spp = end;
+                total.samples = pass.samples;
                 total.passes = 0;
             } else {
-                snapshot_copy(f, &snap, false);
+                film_snapshot_restore(snap, f);
             }
             break;
         }
         last_seconds = hz_clock_seconds() - start;
-        last_samples = end - done;
+        last_samples = next_samples;
         done = end;
         ++passes;
         total.tiles_done = pass.tiles_done;
         total.pixels = pass.pixels;
         total.spp = done;
+        total.samples += pass.samples;
         total.passes = passes;
+        double estimate = 0.0;
+        if (active && done >= PROGRESSIVE_MIN_SPP) {
+            progressive_error_measure(&pe, f, snap, active, o.sample_begin, done, ratio);
+            left = progressive_error_select(&pe, f, goal->target_error, active, &estimate);
+        }
         if (opt->progress) {
-            char el[32];
+            char el[32], px[96] = "";
             progress_format_duration(hz_clock_seconds() - t0, el, sizeof el);
-            fprintf(opt->progress, "pass %d: %d of %d spp, %s elapsed\n", passes, done, spp, el);
+            if (active)
+                snprintf(px, sizeof px, ", estimated relMSE %.3g, %ld pixels go on", estimate,
+                         left);
+            fprintf(opt->progress, "pass %d: %d of %d spp%s, %s elapsed\n", passes, done, spp,
+                    px, el);
         }
     }
-    snapshot_free(&snap);
+    film_snapshot_destroy(snap);
+    free(active);
+    progressive_error_free(&pe);
     total.wall_seconds = hz_clock_seconds() - t0;
     if (stats)
         *stats = total;

@@ -17,25 +17,93 @@
  * then twice `begin`, at most spp. */
 int progressive_pass_end(int begin, int spp);
 
-/* Whether a pass of `samples` samples per pixel, started at `now`, is
- * expected to end by `deadline`, given that the last pass took
- * `last_seconds` for `last_samples` (time proportional to samples). */
-bool progressive_pass_fits(double now, double deadline, double last_seconds, int last_samples,
-                           int samples);
+/* Whether a pass of `work` (pixel samples), started at `now`, is expected to
+ * end by `deadline`, given that the last pass took `last_seconds` for
+ * `last_work` (time proportional to work). */
+bool progressive_pass_fits(double now, double deadline, double last_seconds, double last_work,
+                           double work);
 
-/* renderer_run in passes until the sampler's count or `deadline`
- * (hz_clock_seconds()). The first pass always runs to its end unless
- * *opt->cancel is set; a later pass starts only when progressive_pass_fits,
- * and one cut short by the deadline or *opt->cancel is undone. opt->deadline,
- * sample_begin and sample_end are the driver's (ignored). stats: as
- * renderer_run's for the image left on the film (spp: its samples per pixel,
- * passes: its passes), with the work of every pass counted in the rays,
- * lookups and times; interrupted only when the first pass was. Progress: one
- * line per completed pass to opt->progress. */
-hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt, double deadline,
-                                   render_stats *stats, hz_error *err);
+/* When passes stop before the sampler's count. */
+typedef struct {
+    double deadline;     /* hz_clock_seconds() time; 0: none (--time-limit) */
+    /* The image's relative error to reach, 0: none (--target-error): relMSE
+     * as `haze diff` reports it against the converged image, estimated from
+     * each pixel's variance (progressive_error). Needs a film that keeps
+     * variance and sample counts. */
+    double target_error;
+} progressive_goal;
 
-/* Adds the counters and thread times of `pass` to `total`. */
+/* Samples before the first estimate (a variance needs two), and before the
+ * image's estimate is trusted to stop the render; the fraction of the target
+ * it must reach (measured calibration: docs/performance.md). */
+enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8 };
+#define PROGRESSIVE_SAFETY 0.7
+
+/* The error estimates behind --target-error; relative errors are those of
+ * haze diff's relMSE: Var / (|m| + 0.01)^2, channel mean, where m is the
+ * smaller of the pixel's value and its 3x3 neighbours' mean (a rare bright
+ * sample raises a pixel's own mean as much as its variance). Neighbourhoods
+ * end at tile edges, so a tile's figures depend on its own pixels only (under
+ * MPI each rank measures the tiles it owns).
+ * - Allocation, per pixel: e_i from the film's variance of the mean (s^2/n),
+ *   the larger of its own and its neighbours' mean (few samples
+ *   underestimate a variance). The fewest samples reaching a mean error E
+ *   give pixel i n_i proportional to sqrt(r_i), r_i = e_i n_i the error of
+ *   one sample: n*_i = sqrt(r_i) mean(sqrt(r)) / E; a pixel with n_i >= n*_i
+ *   takes no more samples.
+ * - When to stop, for the image: the mean over pixels of the "halves"
+ *   estimate: the squared difference of the means before and after a pixel's
+ *   last pass, scaled to the variance of its mean. Unlike s^2/n it follows
+ *   the faster-than-1/n convergence of stratified (Sobol') samples; both
+ *   miss rare bright samples at low counts, so it is trusted from
+ *   PROGRESSIVE_TRUST_SPP samples on, against PROGRESSIVE_SAFETY * E. */
+typedef struct {
+    int x0, y0, w, h, tiles_x, tile_count;
+    int samples;       /* of the pixels rendered in the last pass */
+    double estimate;   /* the image's relMSE, by the last progressive_error_select */
+    double *e;         /* per pixel */
+    double *halves;    /* per pixel: the halves estimate of its last pass */
+    /* Per tile, in tile order: the sums of the halves estimates, of
+     * sqrt(r_i) and the pixels with samples (as doubles, to be summed across
+     * ranks). */
+    double *tile_sums; /* 3 * tile_count */
+} progressive_error;
+
+hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error *err);
+void progressive_error_free(progressive_error *pe);
+/* Measures e_i of every pixel and the sums of each tile (tiles without
+ * samples sum to exactly 0). */
+void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
+                               const unsigned char *active, int n0, int n,
+                               double imaging_ratio);
+/* Clears active[i] of each pixel that has its share (above), or of all when
+ * the image's estimate is at most `target`; the tile sums may first have been
+ * summed across ranks. Returns the pixels left active; *estimate (may be
+ * NULL): the image's estimated relMSE. */
+long progressive_error_select(const progressive_error *pe, const film *f, double target,
+                              unsigned char *active, double *estimate);
+
+/* The end of the next pass of a render with a target error: once the
+ * estimate is trusted, the count at which it (falling as 1/n) reaches the
+ * target, at least a quarter more and at most twice `done`; before that,
+ * progressive_pass_end. */
+int progressive_error_next_end(const progressive_error *pe, int done, int spp, double target);
+
+/* renderer_run in passes until the sampler's count or the goal. The first
+ * pass always runs to its end unless *opt->cancel is set; a later pass starts
+ * only when progressive_pass_fits the deadline, and one cut short by the
+ * deadline or *opt->cancel is undone. With a target error each pass renders
+ * only the pixels that need more samples (progressive_error_select). opt->deadline,
+ * sample_begin, sample_end and active are the driver's (ignored). stats: as
+ * renderer_run's for the image left on the film (spp: the most samples a
+ * pixel took, samples: all of them, passes: the passes), with the work of
+ * every pass counted in the rays, lookups and times; interrupted only when
+ * the first pass was. Progress: one line per completed pass to opt->progress. */
+hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt,
+                                   const progressive_goal *goal, render_stats *stats,
+                                   hz_error *err);
+
+/* Adds the counters and thread times of `pass` to `total` (not its samples). */
 void render_stats_add_work(render_stats *total, const render_stats *pass);
 
 #endif

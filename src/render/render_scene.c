@@ -217,6 +217,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         HZ_OK;
     if (!have_film && collect(errs, err) != HZ_OK)
         return HZ_ERROR;
+    if (have_film && opt && opt->statistics)
+        fp.write_variance = fp.write_sample_count = true;
     if (have_film && opt && opt->output) {
         if (strlen(opt->output) >= sizeof fp.filename)
             return hz_fail(err, "output file name too long: %s", opt->output);

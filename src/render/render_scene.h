@@ -27,6 +27,8 @@ typedef struct {
     const char *output;        /* non-NULL overrides the Film's filename (-o) */
     film_region region;        /* replaces the Film's cropwindow/pixelbounds unless NONE
                                 * (--pixelbounds, --cropwindow) */
+    bool statistics;           /* the film keeps (and writes) variance and sample
+                                * counts whatever the Film says (--target-error) */
 } render_options;
 
 typedef struct render_scene render_scene;

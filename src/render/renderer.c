@@ -25,6 +25,7 @@ typedef struct {
     pixel_bounds bounds;
     int tiles_x, tile_count;
     int sample_begin, sample_end;
+    const unsigned char *active; /* NULL: every pixel */
     atomic_int next_tile;
     atomic_int tiles_done;
     atomic_int running; /* workers not yet finished */
@@ -42,6 +43,7 @@ typedef struct {
     camera_sample_needs needs;
     integrator_counters *counters; /* one per thread */
     uint64_t *busy_ns;         /* one per thread */
+    long *rendered;            /* pixels rendered, one per thread */
 } render_job;
 
 typedef struct {
@@ -128,6 +130,7 @@ static void *worker_main(void *p)
     integrator_counters local = job->counters[arg->index];
     integrator_counters *counters = &local;
     uint64_t start = hz_clock_ns();
+    long rendered = 0;
     for (;;) {
         if (atomic_load_explicit(&job->stop, memory_order_relaxed))
             break; /* claimed tiles stay a prefix: every one of them is finished */
@@ -139,12 +142,18 @@ static void *worker_main(void *p)
         int y0 = job->bounds.y0 + (t / job->tiles_x) * TILE_SIZE;
         int x1 = x0 + TILE_SIZE < job->bounds.x1 ? x0 + TILE_SIZE : job->bounds.x1;
         int y1 = y0 + TILE_SIZE < job->bounds.y1 ? y0 + TILE_SIZE : job->bounds.y1;
+        int w = job->bounds.x1 - job->bounds.x0;
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x)
-                render_pixel(job, x, y, counters);
+                if (!job->active ||
+                    job->active[(size_t)(y - job->bounds.y0) * w + (x - job->bounds.x0)]) {
+                    render_pixel(job, x, y, counters);
+                    ++rendered;
+                }
         atomic_fetch_add(&job->tiles_done, 1);
     }
     job->busy_ns[arg->index] = hz_clock_ns() - start;
+    job->rendered[arg->index] = rendered;
     job->counters[arg->index] = local;
     pthread_mutex_lock(&job->lock);
     atomic_fetch_sub(&job->running, 1);
@@ -186,6 +195,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     pthread_condattr_setclock(&cattr, CLOCK_MONOTONIC);
     pthread_cond_init(&job.wake, &cattr);
     pthread_condattr_destroy(&cattr);
+    job.active = opt->active;
     job.tile_source = opt->next_tile;
     job.tile_ctx = opt->tile_ctx;
     job.cancel = opt->cancel;
@@ -199,10 +209,12 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
         threads = job.tile_count > 0 ? job.tile_count : 1;
     job.counters = calloc((size_t)threads, sizeof *job.counters);
     job.busy_ns = calloc((size_t)threads, sizeof *job.busy_ns);
+    job.rendered = calloc((size_t)threads, sizeof *job.rendered);
     pthread_t *tids = calloc((size_t)threads, sizeof *tids);
     worker_arg *args = calloc((size_t)threads, sizeof *args);
-    if (!job.counters || !job.busy_ns || !tids || !args) {
+    if (!job.counters || !job.busy_ns || !job.rendered || !tids || !args) {
         free(job.counters);
+        free(job.rendered);
         free(job.busy_ns);
         free(tids);
         free(args);
@@ -293,12 +305,14 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
             stats->majorant_steps += job.counters[i].majorant_steps;
             stats->lost_paths += job.counters[i].lost_paths;
             stats->time_busy_s += job.busy_ns[i] * 1e-9;
+            stats->samples += (double)job.rendered[i] * stats->spp;
             stats->time_media_s += job.counters[i].media_ns * 1e-9;
             stats->time_film_s += job.counters[i].film_ns * 1e-9;
         }
     }
     free(job.counters);
     free(job.busy_ns);
+    free(job.rendered);
     free(tids);
     free(args);
     pthread_cond_destroy(&job.wake);

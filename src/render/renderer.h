@@ -48,6 +48,9 @@ typedef struct {
      * none); tiles under way are finished and stats.interrupted is set, as for
      * *cancel. */
     double deadline;
+    /* Pixels to render (0: skip), one byte per pixel of the film's bounds,
+     * row-major; NULL: all (src/render/progressive.h, --target-error). */
+    const unsigned char *active;
 } renderer_options;
 
 typedef struct {
@@ -55,6 +58,7 @@ typedef struct {
     int spp;              /* samples per pixel taken (of every rendered pixel) */
     int passes;           /* progressive passes completed (1 for one render) */
     long pixels;          /* rendered pixels (all of the bounds unless interrupted) */
+    double samples;       /* pixel samples taken in all (spp * pixels unless adaptive) */
     long pixels_total;    /* pixels of the film's bounds */
     int tiles_done, tile_count;
     bool interrupted;     /* stopped by *cancel before every tile was rendered */

@@ -190,6 +190,25 @@ static void test_time_limit_passes(void **state)
     assert_true(exr_pixels_equal(out, one));
 }
 
+/* --target-error across ranks: the single-process pixels (the decisions of a
+ * tile depend on its own pixels; the image's estimate is summed in tile order). */
+static void test_target_error_ranks(void **state)
+{
+    (void)state;
+    char text[16384], out[1200], single[1200], cmd[4096];
+    snprintf(single, sizeof single, "%s/te1.exr", dir);
+    snprintf(cmd, sizeof cmd,
+             "'%s' render '%s' -o '%s' --seed 5 --target-error 3e-3 --spp 64 --quiet", HAZE_BIN,
+             scene, single);
+    assert_int_equal(run_shell(cmd, text, sizeof text), 0);
+    assert_int_equal(mpi_render("-np 2", "te2.exr", "--threads 1 --target-error 3e-3 --spp 64",
+                                text, sizeof text), 0);
+    if (!strstr(text, "spp at most ("))
+        fail_msg("summary: %s", text);
+    snprintf(out, sizeof out, "%s/te2.exr", dir);
+    assert_true(exr_pixels_equal(out, single));
+}
+
 /* The summary on rank 0 counts every rank's rays and says how many ranks. */
 static void test_summary_names_ranks(void **state)
 {
@@ -342,6 +361,7 @@ int main(void)
         cmocka_unit_test(test_four_ranks_bit_identical),
         cmocka_unit_test(test_summary_names_ranks),
         cmocka_unit_test(test_time_limit_passes),
+        cmocka_unit_test(test_target_error_ranks),
         cmocka_unit_test(test_failing_rank_named),
         cmocka_unit_test(test_mismatched_rank_refused),
         cmocka_unit_test(test_killed_rank_fails_run),

@@ -9,6 +9,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <sys/stat.h>
@@ -19,6 +20,12 @@
 #include "film/exr.h"
 #include "render/progressive.h"
 #include "render_test_util.h"
+
+static bool verbose_on(void)
+{
+    const char *v = getenv("HAZE_MEDIA_VERBOSE");
+    return v && v[0] && v[0] != '0';
+}
 
 /* A medium over a floor under a sky and a distant light: surfaces, media,
  * shadow rays; every AOV; an independent sampler (sample i of a pixel does
@@ -125,7 +132,7 @@ static void test_all_passes_bit_identical(void **state)
         render_stats st;
         hz_error err = {0};
         assert_int_equal(
-            renderer_run_progressive(rs, &opt, hz_clock_seconds() + 1e6, &st, &err), HZ_OK);
+            renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() + 1e6, 0}, &st, &err), HZ_OK);
         assert_int_equal(st.spp, 12);
         assert_int_equal(st.passes, 5);
         assert_false(st.interrupted);
@@ -151,7 +158,7 @@ static void test_first_pass_always_completes(void **state)
     renderer_options opt = {.threads = 2};
     render_stats st;
     hz_error err = {0};
-    assert_int_equal(renderer_run_progressive(rs, &opt, hz_clock_seconds() - 1.0, &st, &err),
+    assert_int_equal(renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() - 1.0, 0}, &st, &err),
                      HZ_OK);
     assert_int_equal(st.spp, 1);
     assert_int_equal(st.passes, 1);
@@ -200,7 +207,7 @@ static void test_cut_pass_undone(void **state)
                             .cancel = &c.cancel};
     render_stats st;
     hz_error err = {0};
-    assert_int_equal(renderer_run_progressive(rs, &opt, hz_clock_seconds() + 1e6, &st, &err),
+    assert_int_equal(renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() + 1e6, 0}, &st, &err),
                      HZ_OK);
     assert_int_equal(st.tile_count, c.tile_count);
     assert_int_equal(st.spp, 2);
@@ -212,6 +219,215 @@ static void test_cut_pass_undone(void **state)
     free(prog);
     free(two);
     render_scene_destroy(rs);
+}
+
+/* ---- --target-error ------------------------------------------------------ */
+
+/* A deterministic standard normal (Box-Muller over a hash). */
+static double normal(uint64_t *state)
+{
+    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
+    double u1 = ((*state >> 11) + 0.5) * 0x1p-53;
+    *state = *state * 6364136223846793005ull + 1442695040888963407ull;
+    double u2 = ((*state >> 11) + 0.5) * 0x1p-53;
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+/* A 64x32 film whose pixels take iid samples of mean 0.5 and standard
+ * deviation 0.1 (left half) or 0.4 (right half), grey. */
+static film *noise_film(void)
+{
+    film_params p;
+    film_params_default(&p);
+    p.xres = 64;
+    p.yres = 32;
+    p.bounds = (pixel_bounds){.x0 = 0, .x1 = 64, .y0 = 0, .y1 = 32};
+    p.write_variance = p.write_sample_count = true;
+    hz_error err = {0};
+    film *f = film_create(&p, &err);
+    if (!f)
+        fail_msg("film: %s", err.message);
+    return f;
+}
+
+static void add_noise(film *f, int samples, uint64_t *state)
+{
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            for (int i = 0; i < samples; ++i) {
+                double v = 0.5 + (x < 32 ? 0.1 : 0.4) * normal(state);
+                film_add_sample(f, x, y, rgb_grey(v), 1.0, INFINITY);
+            }
+}
+
+/* The estimates against the closed form: Var[mean] = sigma^2 / n, relative
+ * (0.5 + 0.01)^2; the allocation gives the noisier half 4x the samples. */
+static void test_error_estimate(void **state)
+{
+    (void)state;
+    film *f = noise_film();
+    uint64_t rng = 12345;
+    add_noise(f, 8, &rng);
+    hz_error err = {0};
+    film_snapshot *before = film_snapshot_create(f, &err);
+    assert_non_null(before);
+    add_noise(f, 8, &rng);
+    progressive_error pe;
+    assert_int_equal(progressive_error_init(&pe, f, &err), HZ_OK);
+    unsigned char active[64 * 32];
+    memset(active, 1, sizeof active);
+    progressive_error_measure(&pe, f, before, active, 8, 16, 1.0);
+    double d = 0.51 * 0.51, want = (0.01 + 0.16) / 2.0 / 16.0 / d;
+    /* e_i (allocation) of pixels away from the halves' border and the tile
+     * edges: the larger of own and neighbours' mean, a little above sigma^2/n */
+    double left = 0.0, right = 0.0;
+    int nl = 0, nr = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x) {
+            if (x % 16 == 0 || x % 16 == 15 || y % 16 == 0 || y % 16 == 15)
+                continue;
+            if (x < 32) {
+                left += pe.e[y * 64 + x];
+                ++nl;
+            } else {
+                right += pe.e[y * 64 + x];
+                ++nr;
+            }
+        }
+    left /= nl;
+    right /= nr;
+    if (verbose_on())
+        print_message("e left %.4g (%.4g), right %.4g (%.4g)\n", left, 0.01 / 16 / d, right,
+                      0.16 / 16 / d);
+    /* Conservative: the larger of own and neighbours' mean, over the smaller
+     * of the pixel's and its neighbours' value (at 0.1 relative noise of the
+     * value, about +15%; at 0.2, +45%) */
+    assert_true(left >= 0.01 / 16 / d && left <= 1.3 * 0.01 / 16 / d);
+    assert_true(right >= 0.16 / 16 / d && right <= 1.6 * 0.16 / 16 / d);
+
+    /* The image's (halves) estimate: unbiased for iid samples. */
+    double estimate = 0.0;
+    long on = progressive_error_select(&pe, f, 1e-9, active, &estimate);
+    if (verbose_on())
+        print_message("halves %.4g (%.4g)\n", estimate, want);
+    expect_close(estimate, want, 0.3, 0.0, "halves estimate", 0, 0);
+    assert_int_equal(on, 64 * 32); /* far from 1e-9: every pixel goes on */
+
+    /* A target between the halves' shares: n*_left = 0.096 / E, n*_right =
+     * 0.384 / E; at E = 0.012, 8 and 32: the left half (16 samples) stops, the
+     * right goes on (the estimate, 0.02, is above 0.7 E). */
+    memset(active, 1, sizeof active);
+    on = progressive_error_select(&pe, f, 0.012, active, NULL);
+    int left_on = 0, right_on = 0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            if (x < 16) /* whole tiles on either side */
+                left_on += active[y * 64 + x];
+            else if (x >= 48)
+                right_on += active[y * 64 + x];
+    assert_true(left_on < 16 * 32 / 20);
+    assert_true(right_on > 16 * 32 * 19 / 20);
+    assert_true(on > 0);
+
+    /* A target the estimate meets: every pixel stops. */
+    memset(active, 1, sizeof active);
+    assert_int_equal(progressive_error_select(&pe, f, want / 0.5, active, NULL), 0);
+    assert_int_equal(progressive_error_next_end(&pe, 16, 1024, want / 0.5), 20);
+    /* A target 10x below: the next pass doubles (1/n: 14x the samples). */
+    assert_int_equal(progressive_error_next_end(&pe, 16, 1024, want / 10), 32);
+    progressive_error_free(&pe);
+    film_snapshot_destroy(before);
+    film_destroy(f);
+}
+
+static void render_adaptive(const char *text, int threads, double target, film_snapshot **out,
+                            render_stats *st, render_scene **keep)
+{
+    render_options ro = {.statistics = true, .spp = 1024};
+    render_scene *rs = build_scene_or_fail(text, &ro);
+    renderer_options opt = {.threads = threads};
+    hz_error err = {0};
+    assert_int_equal(
+        renderer_run_progressive(rs, &opt, &(progressive_goal){0.0, target}, st, &err), HZ_OK);
+    *out = film_snapshot_create(render_scene_film(rs), &err);
+    assert_non_null(*out);
+    *keep = rs;
+}
+
+/* A fog sphere (noisy) in front of a plain sky (exact from one sample):
+ * the same image for 1 and 2 threads; sky pixels stop at the first estimate;
+ * the measured relMSE against a 1024-sample render meets the target. */
+static void test_target_error_render(void **state)
+{
+    (void)state;
+    const char *text =
+        "LookAt 0 1 -4  0 0.7 0  0 1 0\n"
+        "Camera \"perspective\" \"float fov\" 40\n"
+        "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 24\n"
+        "Sampler \"zsobol\" \"integer pixelsamples\" 1024\n"
+        "WorldBegin\n"
+        "LightSource \"distant\" \"point3 from\" [1 3 -2] \"point3 to\" [0 0 0]"
+        " \"rgb L\" [3 3 3]\n"
+        "LightSource \"infinite\" \"rgb L\" [0.3 0.35 0.4]\n"
+        "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+        "    \"rgb sigma_a\" [0.2 0.2 0.2] \"rgb sigma_s\" [2 2 2]\n"
+        "AttributeBegin\n"
+        "  Material \"interface\"\n"
+        "  MediumInterface \"fog\" \"\"\n"
+        "  Translate 0 0.7 0\n"
+        "  Shape \"sphere\" \"float radius\" 0.8\n"
+        "AttributeEnd\n";
+    const double target = 1e-3;
+    film_snapshot *a, *b;
+    render_stats sa, sb;
+    render_scene *ra, *rb;
+    render_adaptive(text, 1, target, &a, &sa, &ra);
+    render_adaptive(text, 2, target, &b, &sb, &rb);
+    film *fa = render_scene_film(ra), *fb = render_scene_film(rb);
+    size_t n1 = 0, n2 = 0;
+    unsigned char *ba = film_bytes(fa, &n1), *bb = film_bytes(fb, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(ba, bb, n1);
+    free(ba);
+    free(bb);
+    assert_true(sa.passes >= 3 && sa.passes == sb.passes);
+    assert_true(sa.samples < 0.5 * 1024 * 32 * 24); /* adaptive: far fewer than the cap */
+
+    /* The reference: 1024 samples everywhere. */
+    render_scene *ref = build_scene_or_fail(text, NULL);
+    renderer_options opt = {.threads = 2};
+    render_stats sr;
+    hz_error err = {0};
+    assert_int_equal(renderer_run(ref, &opt, &sr, &err), HZ_OK);
+    film *fr = render_scene_film(ref);
+    double rel = 0.0;
+    long sky = 0, sky_two = 0, most = 0;
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 32; ++x) {
+            rgb p = film_get_pixel(fa, x, y, 1.0), r = film_get_pixel(fr, x, y, 1.0);
+            double c[3] = {p.r - r.r, p.g - r.g, p.b - r.b}, q[3] = {r.r, r.g, r.b};
+            for (int k = 0; k < 3; ++k)
+                rel += c[k] * c[k] / ((q[k] + 0.01) * (q[k] + 0.01)) / 3.0;
+            long count = film_get_sample_count(fa, x, y);
+            most = count > most ? count : most;
+            if (film_get_variance(fa, x, y, 1.0).r == 0.0 && fabs(r.g - 0.35) < 1e-9) {
+                ++sky;
+                sky_two += count == 2;
+            }
+        }
+    rel /= 32 * 24;
+    if (verbose_on())
+        print_message("relMSE %.3g (target %.3g), %.2f spp mean, %ld max, %ld sky pixels\n",
+                      rel, target, sa.samples / (32.0 * 24), most, sky);
+    assert_true(rel <= target);
+    /* The sky stops at 2 samples (but next to the fog: its neighbours' error) */
+    assert_true(sky > 50 && sky_two > 0.8 * sky);
+    assert_true(most > 8);                   /* the fog did not */
+    render_scene_destroy(ref);
+    film_snapshot_destroy(a);
+    film_snapshot_destroy(b);
+    render_scene_destroy(ra);
+    render_scene_destroy(rb);
 }
 
 static char dir[1024];
@@ -274,7 +490,25 @@ static void test_command_line(void **state)
         snprintf(args, sizeof args, "render '%s' -o '%s' --time-limit %s", scene, quick, bad[i]);
         assert_int_equal(run_haze(args, out, sizeof out), 2);
         assert_non_null(strstr(out, "--time-limit"));
+        snprintf(args, sizeof args, "render '%s' -o '%s' --target-error %s", scene, quick,
+                 bad[i]);
+        assert_int_equal(run_haze(args, out, sizeof out), 2);
+        assert_non_null(strstr(out, "--target-error"));
     }
+
+    /* --target-error: the film records each pixel's samples and variance */
+    snprintf(args, sizeof args, "render '%s' -o '%s' --target-error 1e-2 --spp 64", scene, quick);
+    if (run_haze(args, out, sizeof out) != 0)
+        fail_msg("%s", out);
+    assert_non_null(strstr(out, "spp at most ("));
+    assert_int_equal(exr_read(quick, &img, &err), HZ_OK);
+    assert_non_null(exr_attribute(&img, "haze:target_error"));
+    assert_non_null(exr_attribute(&img, "haze:spp_mean"));
+    bool has_count = false;
+    for (int c = 0; c < img.channel_count; ++c)
+        has_count |= !strcmp(img.channels[c].name, "SampleCount.Y");
+    assert_true(has_count);
+    exr_image_free(&img);
     unlink(scene);
     unlink(full);
     unlink(prog);
@@ -290,6 +524,8 @@ int main(void)
         cmocka_unit_test(test_first_pass_always_completes),
         cmocka_unit_test(test_cut_pass_undone),
         cmocka_unit_test(test_command_line),
+        cmocka_unit_test(test_error_estimate),
+        cmocka_unit_test(test_target_error_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,0 +1,160 @@
+/* The error estimate and sample allocation of --target-error
+ * (progressive_error in progressive.h). */
+#include <assert.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/progressive.h"
+
+enum { T = RENDERER_TILE_SIZE };
+
+hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error *err)
+{
+    assert(film_keeps_statistics(f));
+    const film_params *fp = film_get_params(f);
+    memset(pe, 0, sizeof *pe);
+    pe->x0 = fp->bounds.x0;
+    pe->y0 = fp->bounds.y0;
+    pe->w = fp->bounds.x1 - fp->bounds.x0;
+    pe->h = fp->bounds.y1 - fp->bounds.y0;
+    pe->tiles_x = (pe->w + T - 1) / T;
+    pe->tile_count = pe->tiles_x * ((pe->h + T - 1) / T);
+    size_t n = (size_t)pe->w * pe->h;
+    pe->e = malloc((n ? n : 1) * sizeof *pe->e);
+    pe->halves = calloc(n ? n : 1, sizeof *pe->halves);
+    pe->tile_sums = calloc((size_t)(pe->tile_count ? 3 * pe->tile_count : 1), sizeof(double));
+    if (!pe->e || !pe->halves || !pe->tile_sums) {
+        progressive_error_free(pe);
+        return hz_fail(err, "out of memory for the error estimate (--target-error)");
+    }
+    return HZ_OK;
+}
+
+void progressive_error_free(progressive_error *pe)
+{
+    free(pe->e);
+    free(pe->halves);
+    free(pe->tile_sums);
+    memset(pe, 0, sizeof *pe);
+}
+
+/* Var / (|m| + 0.01)^2, channel mean. */
+static double relative_error(rgb var, rgb m)
+{
+    double mr = fabs(m.r) + 0.01, mg = fabs(m.g) + 0.01, mb = fabs(m.b) + 0.01;
+    return (var.r / (mr * mr) + var.g / (mg * mg) + var.b / (mb * mb)) / 3.0;
+}
+
+static double min_abs(double a, double b) { return fabs(a) < fabs(b) ? a : b; }
+
+void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
+                               const unsigned char *active, int n0, int n,
+                               double imaging_ratio)
+{
+    int w = pe->w, h = pe->h;
+    double own[T * T];
+    rgb means[T * T];
+    /* Var of an n-sample mean from the difference D of the means of the
+     * first n0 and the last k = n - n0 samples, D^2 n0 k / n^2, where the
+     * film shows d = m_n - m_n0 = D k / n: d^2 n0 / k. */
+    double half_scale = (double)n0 / (double)(n - n0);
+    pe->samples = n;
+    memset(pe->tile_sums, 0, (size_t)3 * pe->tile_count * sizeof(double));
+    for (int t = 0; t < pe->tile_count; ++t) {
+        int tx = (t % pe->tiles_x) * T, ty = (t / pe->tiles_x) * T;
+        int tw = w - tx < T ? w - tx : T, th = h - ty < T ? h - ty : T;
+        for (int y = 0; y < th; ++y)
+            for (int x = 0; x < tw; ++x)
+                means[y * T + x] = film_get_pixel(f, pe->x0 + tx + x, pe->y0 + ty + y,
+                                                  imaging_ratio);
+        for (int y = 0; y < th; ++y)
+            for (int x = 0; x < tw; ++x) {
+                int px = pe->x0 + tx + x, py = pe->y0 + ty + y;
+                rgb msum = rgb_grey(0.0);
+                int k = 0;
+                for (int yy = y - 1; yy <= y + 1; ++yy)
+                    for (int xx = x - 1; xx <= x + 1; ++xx)
+                        if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
+                            msum = rgb_add(msum, means[yy * T + xx]);
+                            ++k;
+                        }
+                rgb self = means[y * T + x], m = rgb_scale(msum, 1.0 / k);
+                m = rgb_make(min_abs(self.r, m.r), min_abs(self.g, m.g), min_abs(self.b, m.b));
+                own[y * T + x] = relative_error(film_get_variance(f, px, py, imaging_ratio), m);
+                size_t i = (size_t)(ty + y) * w + tx + x;
+                if (active[i]) { /* rendered in the last pass: a new halves estimate */
+                    rgb d = rgb_sub(self, film_snapshot_pixel(before, f, px, py, imaging_ratio));
+                    pe->halves[i] = relative_error(rgb_mul(d, rgb_scale(d, half_scale)), m);
+                }
+            }
+        for (int y = 0; y < th; ++y)
+            for (int x = 0; x < tw; ++x) {
+                double sum = 0.0;
+                int k = 0;
+                for (int yy = y - 1; yy <= y + 1; ++yy)
+                    for (int xx = x - 1; xx <= x + 1; ++xx)
+                        if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
+                            sum += own[yy * T + xx];
+                            ++k;
+                        }
+                double self = own[y * T + x], e = sum / k > self ? sum / k : self;
+                size_t i = (size_t)(ty + y) * w + tx + x;
+                pe->e[i] = e;
+                long samples = film_get_sample_count(f, pe->x0 + tx + x, pe->y0 + ty + y);
+                if (samples > 0) {
+                    double *sums = pe->tile_sums + 3 * (size_t)t;
+                    sums[0] += pe->halves[i];
+                    sums[1] += sqrt(e * (double)samples);
+                    sums[2] += 1.0;
+                }
+            }
+    }
+}
+
+long progressive_error_select(const progressive_error *pe, const film *f, double target,
+                              unsigned char *active, double *estimate)
+{
+    double e_sum = 0.0, root_sum = 0.0, pixels = 0.0;
+    for (int t = 0; t < pe->tile_count; ++t) { /* in tile order: the same sum on every rank */
+        const double *sums = pe->tile_sums + 3 * (size_t)t;
+        e_sum += sums[0];
+        root_sum += sums[1];
+        pixels += sums[2];
+    }
+    double image = pixels > 0.0 ? e_sum / pixels : 0.0;
+    ((progressive_error *)pe)->estimate = image;
+    if (estimate)
+        *estimate = image;
+    size_t n = (size_t)pe->w * pe->h;
+    if (pe->samples >= PROGRESSIVE_TRUST_SPP && !(image > PROGRESSIVE_SAFETY * target)) {
+        /* reached (a NaN estimate goes on) */
+        memset(active, 0, n);
+        return 0;
+    }
+    double scale = root_sum / pixels / target; /* n*_i = sqrt(r_i) * scale */
+    long left = 0;
+    for (int y = 0; y < pe->h; ++y)
+        for (int x = 0; x < pe->w; ++x) {
+            size_t i = (size_t)y * pe->w + x;
+            if (!active[i])
+                continue;
+            double samples = (double)film_get_sample_count(f, pe->x0 + x, pe->y0 + y);
+            double want = sqrt(pe->e[i] * samples) * scale;
+            if (samples >= want)
+                active[i] = 0;
+            left += active[i] != 0;
+        }
+    return left;
+}
+
+int progressive_error_next_end(const progressive_error *pe, int done, int spp, double target)
+{
+    if (pe->samples < PROGRESSIVE_TRUST_SPP || !(pe->estimate > 0.0) || done <= 0)
+        return progressive_pass_end(done, spp);
+    /* The count where the estimate, falling as 1/n, reaches the target. */
+    double want = ceil((double)done * pe->estimate / (PROGRESSIVE_SAFETY * target));
+    double lo = done + (done / 4 > 1 ? done / 4 : 1), hi = 2.0 * done;
+    double end = want < lo ? lo : want > hi ? hi : want;
+    return end < spp ? (int)end : spp;
+}
