@@ -22,11 +22,12 @@ BENCH_LOAD=$(cut -d' ' -f1-3 /proc/loadavg)
 . "$BENCH/peer.sh"
 . "$BENCH/yardsticks.sh"
 . "$BENCH/bounce.sh"
+. "$BENCH/target.sh"
 . "$BENCH/report.sh"
 
-# BENCH_PARTS: a subset of "ladder peer bounce yardsticks" (the others' tables of
-# the last run are reused by the report).
-PARTS=${BENCH_PARTS-ladder peer bounce yardsticks}
+# BENCH_PARTS: a subset of "ladder peer bounce target yardsticks" (the others'
+# tables of the last run are reused by the report).
+PARTS=${BENCH_PARTS-ladder peer bounce target yardsticks}
 start=$(now)
 for part in $PARTS; do
     echo "bench: $part" >&2

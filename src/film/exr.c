@@ -284,6 +284,14 @@ static hz_status exr_write_context(const char *path, const char *tmp, const exr_
             goto done;
         }
     }
+    if (img->has_chromaticities) {
+        const float *c = img->chromaticities;
+        exr_attr_chromaticities_t ch = {c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]};
+        if ((rv = exr_attr_set_chromaticities(ctx, part, "chromaticities", &ch))) {
+            exr_fail_code(err, path, "set the chromaticities of", rv, io);
+            goto done;
+        }
+    }
     if ((rv = exr_write_header(ctx))) {
         exr_fail_code(err, path, "write the header of", rv, io);
         goto done;

@@ -27,6 +27,10 @@ typedef struct {
     int attribute_count;
     char (*attribute_names)[64];
     char (*attribute_values)[256];
+    /* exr_write: a "chromaticities" attribute (red, green, blue, white x, y)
+     * when has_chromaticities (the image is not in sRGB/Rec. 709). */
+    bool has_chromaticities;
+    float chromaticities[8];
 } exr_image;
 
 /* Allocates channels (zeroed); names are set by the caller. The display

@@ -209,6 +209,28 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
     return HZ_OK;
 }
 
+void film_params_set_color_space(film_params *p, color_space cs)
+{
+    p->color_space = cs;
+    if (cs == COLOR_SPACE_SRGB)
+        return;
+    double m[9], out[9];
+    color_space_convert_matrix(COLOR_SPACE_SRGB, cs, m);
+    film_sensor *s = &p->sensor;
+    if (!s->active) {
+        static const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+        memcpy(s->sensor_from_render, id, sizeof id);
+        memcpy(s->output_from_sensor, id, sizeof id);
+        s->active = true;
+    }
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            out[r * 3 + c] = m[r * 3] * s->output_from_sensor[c] +
+                             m[r * 3 + 1] * s->output_from_sensor[3 + c] +
+                             m[r * 3 + 2] * s->output_from_sensor[6 + c];
+    memcpy(s->output_from_sensor, out, sizeof out);
+}
+
 hz_status film_params_set_region(film_params *p, const film_region *r, hz_error *err)
 {
     const double *v = r->v;
@@ -528,6 +550,13 @@ hz_status film_write_exr_with(const film *f, const char *path, double imaging_ra
         sc = nc++;
     if (exr_image_alloc(&img, f->width, f->height, nc, err) != HZ_OK)
         return HZ_ERROR;
+    if (f->p.color_space != COLOR_SPACE_SRGB) {
+        double xy[8];
+        color_space_chromaticities(f->p.color_space, xy);
+        img.has_chromaticities = true;
+        for (int i = 0; i < 8; ++i)
+            img.chromaticities[i] = (float)xy[i];
+    }
     static const char *names[] = {"R", "G", "B", "A"};
     for (int c = 0; c < 4; c++)
         snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
@@ -581,9 +610,13 @@ hz_status film_write_png_with(const film *f, const char *path, double imaging_ra
     uint8_t *buf = malloc(n * 3);
     if (!buf)
         return hz_fail(err, "%s: out of memory for the PNG", path);
+    double to_srgb[9]; /* a PNG is sRGB */
+    color_space_convert_matrix(f->p.color_space, COLOR_SPACE_SRGB, to_srgb);
     for (int y = 0; y < f->height; y++)
         for (int x = 0; x < f->width; x++) {
             rgb v = film_get_pixel(f, x + f->p.bounds.x0, y + f->p.bounds.y0, imaging_ratio);
+            if (f->p.color_space != COLOR_SPACE_SRGB)
+                v = sensor_apply(to_srgb, v);
             uint8_t *o = buf + ((size_t)y * (size_t)f->width + (size_t)x) * 3;
             o[0] = png_out_srgb8(v.r);
             o[1] = png_out_srgb8(v.g);

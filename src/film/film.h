@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/color_space.h"
 #include "core/error.h"
 #include "core/vec.h"
 #include "film/exr.h" /* tmp_file_note */
@@ -29,6 +30,7 @@ typedef struct {
     double max_component_value; /* pbrt-v4 "maxcomponentvalue": INFINITY = no clamp */
     double diagonal;           /* pbrt-v4 "diagonal" (mm, default 35), for physical cameras */
     film_sensor sensor;        /* pbrt-v4 "sensor" and "whitebalance"; inactive by default */
+    color_space color_space;   /* of the image (ColorSpace at Film); sRGB by default */
 } film_params;
 
 /* Fills pbrt-v4's defaults (1280x720, full bounds, "pbrt.exr", iso 100, float32). */
@@ -48,6 +50,10 @@ typedef struct {
  * one-line message (no option name) when the region is malformed, empty or
  * not inside the image. */
 hz_status film_params_set_region(film_params *p, const film_region *r, hz_error *err);
+/* The image's colour space: output RGB becomes that space's (folded into the
+ * sensor's output matrix, so maxcomponentvalue still clamps the sensor's RGB);
+ * the EXR says so in its chromaticities, the PNG preview stays sRGB. */
+void film_params_set_color_space(film_params *p, color_space cs);
 
 /* Reads Film "rgb" (xresolution yresolution filename cropwindow pixelbounds
  * savefp16 iso maxcomponentvalue diagonal sensor whitebalance, and haze's

@@ -79,12 +79,15 @@ singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
     return (singlescatter_scene){*in, settings, stochastic};
 }
 
-static rgb sky(const singlescatter_scene *sc)
+/* The infinite lights seen along w (light sampling of image lights is not
+ * MIS-weighted here: the path that escapes is the camera ray's or a
+ * transmitted one, which light sampling does not cover). */
+static rgb sky(const singlescatter_scene *sc, vec3 w)
 {
     rgb L = rgb_grey(0.0);
     for (size_t i = 0; i < sc->in.light_count; ++i)
         if (sc->in.lights[i].kind == LIGHT_INFINITE)
-            L = rgb_add(L, sc->in.lights[i].emit);
+            L = rgb_add(L, light_infinite_le(&sc->in.lights[i], w));
     return L;
 }
 
@@ -133,7 +136,7 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
         const light *l = &sc->in.lights[i];
         vec2 u = light_is_delta(l) ? v2(0.5, 0.5) : sampler_2d(st);
         vec3 side = ns;
-        bool both = transmits && l->kind == LIGHT_INFINITE;
+        bool both = transmits && l->kind == LIGHT_INFINITE && !light_is_image(l);
         if (both) { /* half the samples on each side */
             side = u.x < 0.5 ? ns : v3_neg(ns);
             u.x = u.x < 0.5 ? 2.0 * u.x : 2.0 * u.x - 1.0;
@@ -188,7 +191,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
                 goto done;
         }
         if (!hit) {
-            L = rgb_add(L, rgb_mul(beta, sky(sc)));
+            L = rgb_add(L, rgb_mul(beta, sky(sc, d)));
             goto done;
         }
         if (h.shape->material->kind != MATERIAL_INTERFACE)

@@ -123,7 +123,7 @@ static rgb light_inscattered(const singlescatter_scene *vs, int mi, const light 
         vec3 wi;
         rgb Li;
         double f, tmax;
-        if (l->kind == LIGHT_INFINITE) {
+        if (l->kind == LIGHT_INFINITE && !light_is_image(l)) {
             /* A constant sky: sampling the phase function leaves only the
              * visibility to estimate (phase / pdf = 1). */
             double pdf;

@@ -64,10 +64,12 @@ static double scene_radius(const geometry *geom)
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
                              volpath_settings settings, hz_error *err)
 {
-    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0)};
+    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0), false};
     for (size_t i = 0; i < in->light_count; ++i)
-        if (in->lights[i].kind == LIGHT_INFINITE)
+        if (in->lights[i].kind == LIGHT_INFINITE && !light_is_image(&in->lights[i]))
             out->sky = rgb_add(out->sky, in->lights[i].emit);
+        else if (light_is_image(&in->lights[i]))
+            out->image_lights = true;
     return light_sampler_create(settings.light_sampler, in->lights, in->light_count,
                                 scene_radius(in->geom), &out->sampler, err);
 }
@@ -395,6 +397,28 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
     pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(den)));
 }
 
+/* The image infinite lights seen by a path leaving the scene along w,
+ * MIS-weighted against their light samples (as add_emission). */
+static void add_image_lights(path *pa, vec3 w)
+{
+    const volpath_scene *sc = pa->sc;
+    for (size_t i = 0; i < sc->in.light_count; ++i) {
+        const light *l = &sc->in.lights[i];
+        if (!light_is_image(l))
+            continue;
+        rgb Le = light_infinite_le(l, w);
+        if (rgb_is_black(Le))
+            continue;
+        rgb den = pa->r_u;
+        if (pa->depth > 0 && !pa->specular) {
+            double p_l = light_sampler_pmf(&sc->sampler, pa->prev_p, pa->prev_n, i) *
+                         light_infinite_pdf(l, w);
+            den = rgb_add(den, rgb_scale(pa->r_l, p_l));
+        }
+        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(den)));
+    }
+}
+
 /* pbrt-v4's forcediffuse: the BSDF's directional albedo at wo, from one
  * sample, as the reflectance of a diffuse BSDF in its place. */
 static void force_diffuse(bsdf *b, vec3 wo, sampler_state *st)
@@ -530,9 +554,11 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
             }
         }
         if (!hit) {
-            /* The sky is never light-sampled (light_sampler.h): full weight. */
+            /* A constant sky is never light-sampled (light_sampler.h): full weight. */
             if (!rgb_is_black(sc->sky))
                 pa.L = rgb_add(pa.L, rgb_div(rgb_mul(pa.beta, sc->sky), rgb_avg(pa.r_u)));
+            if (sc->image_lights)
+                add_image_lights(&pa, ray->d);
             break;
         }
         if (!opaque) {

@@ -52,7 +52,8 @@ typedef struct {
     integrator_inputs in;
     volpath_settings settings;
     light_sampler sampler;
-    rgb sky; /* the sum of the infinite lights' radiance */
+    rgb sky; /* the sum of the constant infinite lights' radiance */
+    bool image_lights; /* some infinite light has an image (light-sampled, MIS) */
 } volpath_scene;
 
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,

@@ -286,8 +286,8 @@ hz_status light_bvh_build(const light *lights, size_t light_count, light_bvh *ou
     }
     size_t m = 0;
     for (size_t i = 0; i < light_count; ++i) {
-        if (lights[i].kind == LIGHT_INFINITE)
-            continue;
+        if (lights[i].kind == LIGHT_INFINITE && !light_is_image(&lights[i]))
+            continue; /* a constant sky is reached by escaping paths only */
         light_bounds b;
         if (!bounds_of(&lights[i], &b)) {
             out->unbounded[out->unbounded_count++] = i;

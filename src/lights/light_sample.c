@@ -275,6 +275,19 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
         out->L = l->emit;
         return true;
     case LIGHT_INFINITE: {
+        if (l->infinite.image) { /* the map's density */
+            double pdf_uv;
+            vec2 uv = light_image_sample(l->infinite.image, u, &pdf_uv);
+            if (!(pdf_uv > 0.0))
+                return false;
+            vec3 wl = light_equal_area_square_to_sphere(uv);
+            out->wi = v3_normalize(transform_vector(&l->infinite.render_from_light, wl));
+            out->pdf = pdf_uv / (4.0 * HZ_PI);
+            out->dist = INFINITY;
+            out->infinite = true;
+            out->L = rgb_mul(l->emit, light_image_lookup(l->infinite.image, uv));
+            return true;
+        }
         /* Cosine sampling around the normal: for a constant sky the
          * estimator's only variance is visibility. */
         double c;

@@ -19,8 +19,8 @@ hz_status light_sampler_create(light_sampler_kind kind, const light *lights, siz
         return light_bvh_build(lights, light_count, &out->bvh, err);
     double total = 0.0;
     for (size_t i = 0; i < light_count; ++i) {
-        if (lights[i].kind == LIGHT_INFINITE)
-            continue;
+        if (lights[i].kind == LIGHT_INFINITE && !light_is_image(&lights[i]))
+            continue; /* a constant sky is reached by escaping paths only */
         double w = 1.0;
         if (kind == LIGHT_SAMPLER_POWER) {
             rgb phi = light_phi(&lights[i], scene_radius);

@@ -1,5 +1,6 @@
 #include "lights/lights.h"
 
+#include "core/path.h"
 #include "core/ray.h"
 
 #include <math.h>
@@ -27,6 +28,22 @@ static hz_status refuse(param_list *pl, const char *name, const char *why, hz_er
     if (!params_has(pl, name))
         return HZ_OK;
     return hz_fail_at(err, params_loc(pl, name), "%s", why);
+}
+
+/* The image of an infinite light, named relative to the scene file that names it. */
+static hz_status load_image(param_list *pl, const char *filename, light_image **out,
+                            hz_error *err)
+{
+    file_loc at = params_loc(pl, "filename");
+    char *path = path_relative_to(at.file, filename);
+    if (!path)
+        return hz_fail_at(err, at, "out of memory");
+    hz_error e;
+    hz_status st = light_image_from_exr(path, out, &e);
+    if (st != HZ_OK)
+        hz_fail_at(err, at, "infinite light \"filename\": %s", e.message);
+    free(path);
+    return st;
 }
 
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
@@ -98,19 +115,31 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         vec3 w = transform_vector(&render_from_light, v3_sub(from, to));
         out->distant.w = v3_length(w) > 0.0 ? v3_normalize(w) : v3(0, 0, 1);
     } else if (strcmp(type, "infinite") == 0) {
-        if (refuse(pl, "filename",
-                   "image-based infinite lights (\"filename\") are not supported yet; use "
-                   "\"rgb L\"",
-                   err) != HZ_OK ||
-            refuse(pl, "portal", "infinite light \"portal\" is not supported", err) != HZ_OK)
+        if (refuse(pl, "portal", "infinite light \"portal\" is not supported", err) != HZ_OK)
             return HZ_ERROR;
+        const char *filename = params_string(pl, "filename", NULL);
+        if (filename && params_has(pl, "L"))
+            return hz_fail_at(err, params_loc(pl, "L"),
+                              "infinite light: \"L\" and \"filename\" cannot both be given");
         rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
         double scale = params_float(pl, "scale", 1.0);
-        /* pbrt-v4: illuminance of a uniform sky on an upward patch is π L. */
         double illum = params_float(pl, "illuminance", -1.0);
-        if (illum > 0.0)
-            scale *= illum / HZ_PI;
         out->kind = LIGHT_INFINITE;
+        if (filename) {
+            if (load_image(pl, filename, &out->infinite.image, err) != HZ_OK)
+                return HZ_ERROR;
+            L = rgb_grey(1.0);
+            /* pbrt-v4 scales the map to the asked illuminance on an upward
+             * patch (light_image_illuminance). */
+            double k_e = illum > 0.0 ? light_image_illuminance(out->infinite.image) : 0.0;
+            if (illum > 0.0 && k_e > 0.0)
+                scale *= illum / k_e;
+            out->infinite.render_from_light = render_from_light;
+            out->infinite.light_from_render = transform_inverse(render_from_light);
+        } else if (illum > 0.0) {
+            /* pbrt-v4: illuminance of a uniform sky on an upward patch is π L. */
+            scale *= illum / HZ_PI;
+        }
         out->emit = rgb_scale(L, scale);
     } else {
         return hz_fail_at(err, e->entity.loc,
@@ -128,7 +157,11 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
                       p.x, p.y, p.z, HZ_MAX_COORD);
     char what[128];
     snprintf(what, sizeof what, "LightSource \"%s\"", type);
-    return params_finish(pl, what, err);
+    if (params_finish(pl, what, err) != HZ_OK) {
+        light_free(out); /* what it holds (an image) */
+        return HZ_ERROR;
+    }
+    return HZ_OK;
 }
 
 static double triangle_area(const geom_shape *s, size_t t)
@@ -226,6 +259,28 @@ void light_free(light *l)
         free(l->area.cdf);
         l->area.cdf = NULL;
     }
+    if (l && l->kind == LIGHT_INFINITE) {
+        light_image_destroy(l->infinite.image);
+        l->infinite.image = NULL;
+    }
+}
+
+rgb light_infinite_le(const light *l, vec3 w)
+{
+    if (!l->infinite.image)
+        return l->emit;
+    vec3 wl = v3_normalize(transform_vector(&l->infinite.light_from_render, w));
+    return rgb_mul(l->emit, light_image_lookup(l->infinite.image,
+                                               light_equal_area_sphere_to_square(wl)));
+}
+
+double light_infinite_pdf(const light *l, vec3 w)
+{
+    if (!l->infinite.image)
+        return 0.0;
+    vec3 wl = v3_normalize(transform_vector(&l->infinite.light_from_render, w));
+    return light_image_pdf(l->infinite.image, light_equal_area_sphere_to_square(wl)) /
+           (4.0 * HZ_PI);
 }
 
 bool light_is_delta(const light *l)
@@ -260,8 +315,11 @@ rgb light_phi(const light *l, double scene_radius)
                                                     l->spot.cos_falloff_end)));
     case LIGHT_DISTANT:
         return rgb_scale(l->emit, HZ_PI * scene_radius * scene_radius);
-    case LIGHT_INFINITE:
-        return rgb_scale(l->emit, 4.0 * HZ_PI * HZ_PI * scene_radius * scene_radius);
+    case LIGHT_INFINITE: {
+        rgb L = l->infinite.image ? rgb_mul(l->emit, light_image_average(l->infinite.image))
+                                  : l->emit;
+        return rgb_scale(L, 4.0 * HZ_PI * HZ_PI * scene_radius * scene_radius);
+    }
     case LIGHT_AREA: {
         const geom_shape *s = l->area.shape;
         double area = l->area.area;

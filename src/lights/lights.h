@@ -16,6 +16,28 @@
 
 typedef enum { LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_INFINITE, LIGHT_AREA } light_kind;
 
+/* The image of an image infinite light (envmap.c): pbrt-v4's equal-area
+ * octahedral square map of directions in the light's space, looked up at the
+ * nearest texel, sampled by the piecewise-constant density of its texels'
+ * channel average. */
+typedef struct light_image light_image;
+/* A square RGB EXR; non-finite texels refused, negative ones read as 0. */
+hz_status light_image_from_exr(const char *path, light_image **out, hz_error *err);
+void light_image_destroy(light_image *m);
+int light_image_resolution(const light_image *m);
+rgb light_image_lookup(const light_image *m, vec2 uv);
+/* Density over the unit square (1 everywhere for an all-black map). */
+double light_image_pdf(const light_image *m, vec2 uv);
+/* u in [0,1)^2 -> a point of the square with *pdf = light_image_pdf there. */
+vec2 light_image_sample(const light_image *m, vec2 u, double *pdf);
+/* Mean RGB of the texels, and pbrt-v4's "illuminance" of the map. */
+rgb light_image_average(const light_image *m);
+double light_image_illuminance(const light_image *m);
+/* Clarberg's equal-area mapping between the unit square and the unit
+ * sphere, as pbrt-v4 (the square's centre is +z, its corners -z). */
+vec3 light_equal_area_square_to_sphere(vec2 p);
+vec2 light_equal_area_sphere_to_square(vec3 d);
+
 typedef struct {
     light_kind kind;
     rgb emit; /* I (point, spot) or L (distant, infinite, area), scale and power applied */
@@ -31,6 +53,12 @@ typedef struct {
         struct {
             vec3 w; /* unit direction toward the light */
         } distant;
+        struct {
+            /* NULL: a constant sky of radiance emit. Otherwise radiance
+             * emit * image(light_from_render w) arrives from direction w. */
+            light_image *image;
+            transform light_from_render, render_from_light; /* rotations */
+        } infinite;
         struct {
             /* top-level; in render space, or in object space when it moves
              * (shape->motion): then it is sampled in object space and moved
@@ -51,7 +79,8 @@ typedef struct {
     };
 } light;
 
-/* LightSource "point", "spot", "distant", "infinite" (constant L only). */
+/* LightSource "point", "spot", "distant", "infinite" (constant "L" or an
+ * image "filename"). */
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
                             hz_error *err);
 /* AreaLightSource "diffuse" on a top-level shape (in render space, or in
@@ -92,6 +121,18 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
 rgb light_area_le(const light *l, vec3 n, vec3 w);
 
 bool light_is_delta(const light *l);
+
+/* Radiance of infinite light `l` arriving along -w, i.e. seen by a ray with
+ * unit direction w that leaves the scene. */
+rgb light_infinite_le(const light *l, vec3 w);
+/* The solid-angle density with which light_sample_li samples direction w of
+ * an image infinite light (0 for a constant one, which it samples around the
+ * normal instead). */
+double light_infinite_pdf(const light *l, vec3 w);
+static inline bool light_is_image(const light *l)
+{
+    return l->kind == LIGHT_INFINITE && l->infinite.image;
+}
 
 /* The solid-angle density with which light_sample_li(l, p, .., time, ..)
  * picks the point `pl` (unit geometric normal `nl`) of area light `l`, seen

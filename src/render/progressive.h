@@ -34,29 +34,36 @@ typedef struct {
 } progressive_goal;
 
 /* Samples before the first estimate (a variance needs two), and before the
- * image's estimate is trusted to stop the render; the fraction of the target
- * it must reach (measured calibration: docs/performance.md). */
+ * image's estimate is trusted to stop the render. The tuning of the
+ * estimates, measured on the benchmark scenes (docs/performance.md): the
+ * image stops at SAFETY * E; every pixel takes at least MIN_SCALE / sqrt(E)
+ * samples; LOWER_BOUND_K: see progressive_error. */
 enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8 };
-#define PROGRESSIVE_SAFETY 0.7
+#define PROGRESSIVE_SAFETY 1.0
+#define PROGRESSIVE_MIN_SCALE 0.2
+#define PROGRESSIVE_LOWER_BOUND_K 0.5
 
-/* The error estimates behind --target-error; relative errors are those of
- * haze diff's relMSE: Var / (|m| + 0.01)^2, channel mean, where m is the
- * smaller of the pixel's value and its 3x3 neighbours' mean (a rare bright
- * sample raises a pixel's own mean as much as its variance). Neighbourhoods
- * end at tile edges, so a tile's figures depend on its own pixels only (under
- * MPI each rank measures the tiles it owns).
+/* The error estimates behind --target-error. A pixel's relative error is
+ * haze diff's relMSE term, Var / (b + 0.01)^2 with b the converged value;
+ * for b haze takes m_lo = max(0, |m| - K sqrt(Var[m])), K =
+ * PROGRESSIVE_LOWER_BOUND_K, because a pixel's own mean m is high exactly when
+ * a rare bright sample also raised its variance (with m itself the estimate
+ * was 3x too low at 4 spp on smoke.pbrt). Channel mean. Neighbourhoods end at
+ * tile edges, so a tile's figures depend on its own pixels only (under MPI
+ * each rank measures the tiles it owns).
  * - Allocation, per pixel: e_i from the film's variance of the mean (s^2/n),
- *   the larger of its own and its neighbours' mean (few samples
+ *   the larger of its own and its 3x3 neighbours' mean (few samples
  *   underestimate a variance). The fewest samples reaching a mean error E
  *   give pixel i n_i proportional to sqrt(r_i), r_i = e_i n_i the error of
- *   one sample: n*_i = sqrt(r_i) mean(sqrt(r)) / E; a pixel with n_i >= n*_i
- *   takes no more samples.
+ *   one sample: n*_i = sqrt(r_i) mean(sqrt(r)) / E, at least
+ *   PROGRESSIVE_MIN_SCALE / sqrt(E) (samples that agree may still miss an
+ *   edge or a rare path); a pixel with n_i >= n*_i takes no more samples.
  * - When to stop, for the image: the mean over pixels of the "halves"
- *   estimate: the squared difference of the means before and after a pixel's
- *   last pass, scaled to the variance of its mean. Unlike s^2/n it follows
- *   the faster-than-1/n convergence of stratified (Sobol') samples; both
- *   miss rare bright samples at low counts, so it is trusted from
- *   PROGRESSIVE_TRUST_SPP samples on, against PROGRESSIVE_SAFETY * E. */
+ *   estimate: the squared change of a pixel's value over its last pass,
+ *   scaled to the variance of its mean. Unlike s^2/n it follows the
+ *   faster-than-1/n convergence of stratified (Sobol') samples. It is
+ *   trusted from PROGRESSIVE_TRUST_SPP samples on, against
+ *   PROGRESSIVE_SAFETY * E. */
 typedef struct {
     int x0, y0, w, h, tiles_x, tile_count;
     int samples;       /* of the pixels rendered in the last pass */

@@ -39,14 +39,20 @@ void progressive_error_free(progressive_error *pe)
     memset(pe, 0, sizeof *pe);
 }
 
-/* Var / (|m| + 0.01)^2, channel mean. */
-static double relative_error(rgb var, rgb m)
+/* Var / (m_lo + 0.01)^2, channel mean, with m_lo = max(0, |m| - k sqrt(var_m)):
+ * the denominator of relMSE is the converged value, and a pixel's own mean
+ * is high exactly when a rare bright sample also raised its variance. */
+static double relative_error(rgb var, rgb m, rgb var_m)
 {
-    double mr = fabs(m.r) + 0.01, mg = fabs(m.g) + 0.01, mb = fabs(m.b) + 0.01;
-    return (var.r / (mr * mr) + var.g / (mg * mg) + var.b / (mb * mb)) / 3.0;
+    double v[3] = {var.r, var.g, var.b}, mm[3] = {m.r, m.g, m.b}, vm[3] = {var_m.r, var_m.g, var_m.b};
+    double sum = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        double lo = fabs(mm[c]) - PROGRESSIVE_LOWER_BOUND_K * sqrt(vm[c]);
+        double d = (lo > 0.0 ? lo : 0.0) + 0.01;
+        sum += v[c] / (d * d);
+    }
+    return sum / 3.0;
 }
-
-static double min_abs(double a, double b) { return fabs(a) < fabs(b) ? a : b; }
 
 void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
                                const unsigned char *active, int n0, int n,
@@ -71,21 +77,12 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
         for (int y = 0; y < th; ++y)
             for (int x = 0; x < tw; ++x) {
                 int px = pe->x0 + tx + x, py = pe->y0 + ty + y;
-                rgb msum = rgb_grey(0.0);
-                int k = 0;
-                for (int yy = y - 1; yy <= y + 1; ++yy)
-                    for (int xx = x - 1; xx <= x + 1; ++xx)
-                        if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
-                            msum = rgb_add(msum, means[yy * T + xx]);
-                            ++k;
-                        }
-                rgb self = means[y * T + x], m = rgb_scale(msum, 1.0 / k);
-                m = rgb_make(min_abs(self.r, m.r), min_abs(self.g, m.g), min_abs(self.b, m.b));
-                own[y * T + x] = relative_error(film_get_variance(f, px, py, imaging_ratio), m);
+                rgb m = means[y * T + x], var = film_get_variance(f, px, py, imaging_ratio);
+                own[y * T + x] = relative_error(var, m, var);
                 size_t i = (size_t)(ty + y) * w + tx + x;
                 if (active[i]) { /* rendered in the last pass: a new halves estimate */
-                    rgb d = rgb_sub(self, film_snapshot_pixel(before, f, px, py, imaging_ratio));
-                    pe->halves[i] = relative_error(rgb_mul(d, rgb_scale(d, half_scale)), m);
+                    rgb d = rgb_sub(m, film_snapshot_pixel(before, f, px, py, imaging_ratio));
+                    pe->halves[i] = relative_error(rgb_mul(d, rgb_scale(d, half_scale)), m, var);
                 }
             }
         for (int y = 0; y < th; ++y)
@@ -133,6 +130,7 @@ long progressive_error_select(const progressive_error *pe, const film *f, double
         return 0;
     }
     double scale = root_sum / pixels / target; /* n*_i = sqrt(r_i) * scale */
+    double min_samples = ceil(PROGRESSIVE_MIN_SCALE / sqrt(target));
     long left = 0;
     for (int y = 0; y < pe->h; ++y)
         for (int x = 0; x < pe->w; ++x) {
@@ -141,6 +139,10 @@ long progressive_error_select(const progressive_error *pe, const film *f, double
                 continue;
             double samples = (double)film_get_sample_count(f, pe->x0 + x, pe->y0 + y);
             double want = sqrt(pe->e[i] * samples) * scale;
+            /* Every pixel goes on to min_samples: one whose samples agree may
+             * still miss an edge or a rare light path. */
+            if (want < min_samples)
+                want = min_samples;
             if (samples >= want)
                 active[i] = 0;
             left += active[i] != 0;

@@ -217,6 +217,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         HZ_OK;
     if (!have_film && collect(errs, err) != HZ_OK)
         return HZ_ERROR;
+    if (have_film)
+        film_params_set_color_space(&fp, sd->film_color_space);
     if (have_film && opt && opt->statistics)
         fp.write_variance = fp.write_sample_count = true;
     if (have_film && opt && opt->output) {

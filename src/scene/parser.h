@@ -7,6 +7,7 @@
 
 #include <stdbool.h>
 
+#include "core/color_space.h"
 #include "scene/lexer.h"
 #include "scene/scene_desc.h"
 
@@ -22,6 +23,7 @@ typedef struct {
     scene_entity area_light;   /* owns its params when has_area_light */
     const char *inside, *outside; /* interned medium names */
     param_list attrs[ATTR_COUNT]; /* Attribute defaults */
+    color_space color_space;   /* ColorSpace: the space of "rgb" values that follow */
     char kind;                 /* for pushed states: 'a' AttributeBegin, 'o' ObjectBegin */
     file_loc pushed_at;
 } gstate;

@@ -464,14 +464,16 @@ static hz_status d_option(parser *ps, const token *d, hz_error *err)
     return st;
 }
 
+/* Later "rgb" values are in this space (parse_value converts them to haze's
+ * sRGB); a Film after it writes its image in it. */
 static hz_status d_color_space(parser *ps, const token *d, hz_error *err)
 {
     const char *name;
     if (parser_string_arg(ps, d, &name, err) != HZ_OK)
         return HZ_ERROR;
-    if (strcmp(name, "srgb") != 0)
-        return hz_fail_at(err, d->loc, "ColorSpace \"%s\" is not supported; haze renders in \"srgb\"",
-                          name);
+    if (!color_space_lookup(name, &ps->gs.color_space))
+        return hz_fail_at(err, d->loc, "unknown ColorSpace \"%s\" (known: %s)", name,
+                          color_space_names());
     return HZ_OK;
 }
 
@@ -480,7 +482,11 @@ static hz_status d_color_space(parser *ps, const token *d, hz_error *err)
     {                                                                                             \
         return d_options_entity(ps, d, label, &ps->seen_field, &ps->sd->slot, err);               \
     }
-OPTION_ENTITY(d_film, "Film", seen_film, film)
+static hz_status d_film(parser *ps, const token *d, hz_error *err)
+{
+    ps->sd->film_color_space = ps->gs.color_space;
+    return d_options_entity(ps, d, "Film", &ps->seen_film, &ps->sd->film, err);
+}
 OPTION_ENTITY(d_sampler, "Sampler", seen_sampler, sampler)
 OPTION_ENTITY(d_filter, "PixelFilter", seen_filter, filter)
 OPTION_ENTITY(d_integrator, "Integrator", seen_integrator, integrator)

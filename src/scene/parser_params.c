@@ -410,6 +410,15 @@ static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_e
     p->count = n;
     for (size_t i = 0; i < n; ++i)
         p->nums[i] = vals[i].num;
+    if (p->type == PARAM_RGB && ps->gs.color_space != COLOR_SPACE_SRGB) {
+        double m[9];
+        color_space_convert_matrix(ps->gs.color_space, COLOR_SPACE_SRGB, m);
+        for (size_t i = 0; i + 2 < n; i += 3) {
+            double r = p->nums[i], g = p->nums[i + 1], b = p->nums[i + 2];
+            for (int k = 0; k < 3; ++k)
+                p->nums[i + k] = m[3 * k] * r + m[3 * k + 1] * g + m[3 * k + 2] * b;
+        }
+    }
     return HZ_OK;
 }
 

@@ -17,6 +17,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/color_space.h"
 #include "core/error.h"
 #include "core/transform.h"
 #include "scene/params.h"
@@ -83,6 +84,7 @@ typedef struct {
      * ("perspective", "rgb", "zsobol", "gaussian", "volpath") and no params. */
     camera_entity camera;
     scene_entity film, sampler, filter, integrator;
+    color_space film_color_space; /* ColorSpace current at Film: the image's space */
 
     shape_entity *shapes;        /* top-level shapes, in file order */
     size_t shape_count;

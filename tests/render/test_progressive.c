@@ -299,18 +299,20 @@ static void test_error_estimate(void **state)
     if (verbose_on())
         print_message("e left %.4g (%.4g), right %.4g (%.4g)\n", left, 0.01 / 16 / d, right,
                       0.16 / 16 / d);
-    /* Conservative: the larger of own and neighbours' mean, over the smaller
-     * of the pixel's and its neighbours' value (at 0.1 relative noise of the
-     * value, about +15%; at 0.2, +45%) */
+    /* Conservative: the larger of own and neighbours' mean, over the lower
+     * bound of the value (at a noise of the mean 0.05 of it, about +20%; at
+     * 0.2, +80%) */
     assert_true(left >= 0.01 / 16 / d && left <= 1.3 * 0.01 / 16 / d);
-    assert_true(right >= 0.16 / 16 / d && right <= 1.6 * 0.16 / 16 / d);
+    assert_true(right >= 0.16 / 16 / d && right <= 2.0 * 0.16 / 16 / d);
 
-    /* The image's (halves) estimate: unbiased for iid samples. */
+    /* The image's (halves) estimate. */
     double estimate = 0.0;
     long on = progressive_error_select(&pe, f, 1e-9, active, &estimate);
     if (verbose_on())
         print_message("halves %.4g (%.4g)\n", estimate, want);
-    expect_close(estimate, want, 0.3, 0.0, "halves estimate", 0, 0);
+    /* unbiased over the value; over its lower bound (the right half's mean
+     * noise is 0.2 of it): up to 1.6x */
+    assert_true(estimate >= want && estimate <= 1.6 * want);
     assert_int_equal(on, 64 * 32); /* far from 1e-9: every pixel goes on */
 
     /* A target between the halves' shares: n*_left = 0.096 / E, n*_right =
@@ -355,7 +357,7 @@ static void render_adaptive(const char *text, int threads, double target, film_s
 }
 
 /* A fog sphere (noisy) in front of a plain sky (exact from one sample):
- * the same image for 1 and 2 threads; sky pixels stop at the first estimate;
+ * the same image for 1 and 2 threads; sky pixels stop at the least count;
  * the measured relMSE against a 1024-sample render meets the target. */
 static void test_target_error_render(void **state)
 {
@@ -401,7 +403,8 @@ static void test_target_error_render(void **state)
     assert_int_equal(renderer_run(ref, &opt, &sr, &err), HZ_OK);
     film *fr = render_scene_film(ref);
     double rel = 0.0;
-    long sky = 0, sky_two = 0, most = 0;
+    /* every pixel's least: 0.2 / sqrt(E) = 6.3, the pass that reaches it: 8 */
+    long sky = 0, sky_least = 0, most = 0, least = 8;
     for (int y = 0; y < 24; ++y)
         for (int x = 0; x < 32; ++x) {
             rgb p = film_get_pixel(fa, x, y, 1.0), r = film_get_pixel(fr, x, y, 1.0);
@@ -412,7 +415,7 @@ static void test_target_error_render(void **state)
             most = count > most ? count : most;
             if (film_get_variance(fa, x, y, 1.0).r == 0.0 && fabs(r.g - 0.35) < 1e-9) {
                 ++sky;
-                sky_two += count == 2;
+                sky_least += count == least;
             }
         }
     rel /= 32 * 24;
@@ -420,9 +423,9 @@ static void test_target_error_render(void **state)
         print_message("relMSE %.3g (target %.3g), %.2f spp mean, %ld max, %ld sky pixels\n",
                       rel, target, sa.samples / (32.0 * 24), most, sky);
     assert_true(rel <= target);
-    /* The sky stops at 2 samples (but next to the fog: its neighbours' error) */
-    assert_true(sky > 50 && sky_two > 0.8 * sky);
-    assert_true(most > 8);                   /* the fog did not */
+    /* The sky stops at the least (but next to the fog: its neighbours' error) */
+    assert_true(sky > 50 && sky_least > 0.8 * sky);
+    assert_true(most > least); /* the fog did not */
     render_scene_destroy(ref);
     film_snapshot_destroy(a);
     film_snapshot_destroy(b);

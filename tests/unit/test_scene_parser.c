@@ -386,7 +386,7 @@ static void test_options_and_colorspace(void **state)
     scene_desc_free(&sd);
     parse_err("Option \"bool nosuch\" true", "t.pbrt:1:8: unknown option \"nosuch\"");
     parse_err("Option \"float seed\" 1", "t.pbrt:1:8: option \"seed\" takes one integer value");
-    parse_err("ColorSpace \"aces2065-1\"", "t.pbrt:1:1: ColorSpace \"aces2065-1\" is not supported");
+    parse_err("ColorSpace \"adobergb\"", "t.pbrt:1:1: unknown ColorSpace \"adobergb\"");
 }
 
 static void test_structure_errors(void **state)

@@ -1,0 +1,236 @@
+/* Image infinite lights (pbrt-v4's ImageInfiniteLight): an equal-area
+ * octahedral square map of the sphere of directions, looked up at the
+ * nearest texel and importance sampled by the piecewise-constant density of
+ * its texels' channel average. */
+#include "lights/lights.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "film/exr.h"
+
+struct light_image {
+    int res;
+    float *rgb;      /* res * res texels of 3 floats, row-major, top row (v = 0) first */
+    double *row_cdf; /* res + 1: the marginal over rows, cdf[0] = 0, cdf[res] = 1 */
+    double *cdf;     /* res rows of res + 1: the conditional cdf within each row */
+    double *func;    /* res * res: the sampling function (channel average, >= 0) */
+    double mean;     /* of func over the texels; 0: sampled uniformly */
+};
+
+/* ---- the mapping (Clarberg's equal-area square <-> sphere) ---- */
+
+vec3 light_equal_area_square_to_sphere(vec2 p)
+{
+    double u = 2.0 * p.x - 1.0, v = 2.0 * p.y - 1.0;
+    double up = fabs(u), vp = fabs(v);
+    double signed_distance = 1.0 - (up + vp);
+    double r = 1.0 - fabs(signed_distance);
+    double phi = (r == 0.0 ? 1.0 : (vp - up) / r + 1.0) * HZ_PI / 4.0;
+    double z = copysign(1.0 - r * r, signed_distance);
+    double s = r * sqrt(fmax(0.0, 2.0 - r * r));
+    return v3(copysign(cos(phi), u) * s, copysign(sin(phi), v) * s, z);
+}
+
+vec2 light_equal_area_sphere_to_square(vec3 d)
+{
+    double x = fabs(d.x), y = fabs(d.y), z = fabs(d.z);
+    double r = sqrt(fmax(0.0, 1.0 - z));
+    double a = fmax(x, y), b = fmin(x, y);
+    double phi = a == 0.0 ? 0.0 : atan(b / a) * 2.0 / HZ_PI;
+    if (x < y)
+        phi = 1.0 - phi;
+    double v = phi * r, u = r - v;
+    if (d.z < 0.0) { /* the southern hemisphere folds over the diagonals */
+        double t = u;
+        u = 1.0 - v;
+        v = 1.0 - t;
+    }
+    u = copysign(u, d.x);
+    v = copysign(v, d.y);
+    return v2(0.5 * (u + 1.0), 0.5 * (v + 1.0));
+}
+
+/* ---- the image ---- */
+
+void light_image_destroy(light_image *m)
+{
+    if (!m)
+        return;
+    free(m->rgb);
+    free(m->row_cdf);
+    free(m->cdf);
+    free(m->func);
+    free(m);
+}
+
+/* Cumulative sums of f[0..n) normalised to end at 1 (uniform when f sums to
+ * 0); returns the sum. */
+static double build_cdf(const double *f, int n, double *cdf)
+{
+    cdf[0] = 0.0;
+    for (int i = 0; i < n; ++i)
+        cdf[i + 1] = cdf[i] + f[i];
+    double sum = cdf[n];
+    for (int i = 1; i <= n; ++i)
+        cdf[i] = sum > 0.0 ? cdf[i] / sum : (double)i / n;
+    cdf[n] = 1.0;
+    return sum;
+}
+
+hz_status light_image_from_exr(const char *path, light_image **out, hz_error *err)
+{
+    *out = NULL;
+    exr_image img;
+    hz_error e;
+    if (exr_read(path, &img, &e) != HZ_OK)
+        return hz_fail(err, "%s", e.message);
+    const exr_channel *ch[3] = {exr_find_channel(&img, "R"), exr_find_channel(&img, "G"),
+                                exr_find_channel(&img, "B")};
+    hz_status st = HZ_OK;
+    if (!ch[0] || !ch[1] || !ch[2])
+        st = hz_fail(err, "%s: an infinite light's image needs R, G and B channels", path);
+    else if (img.width != img.height)
+        st = hz_fail(err,
+                     "%s: %dx%d is not square: an infinite light's image is an equal-area "
+                     "octahedral map (pbrt-v4's imgtool makeequiarea converts others)",
+                     path, img.width, img.height);
+    int res = img.width;
+    size_t n = (size_t)res * (size_t)res;
+    for (size_t i = 0; st == HZ_OK && i < n; ++i)
+        for (int c = 0; c < 3; ++c)
+            if (!isfinite(ch[c]->pixels[i])) {
+                st = hz_fail(err, "%s: texel (%zu, %zu) is not finite: not usable as a light",
+                             path, i % (size_t)res, i / (size_t)res);
+                break;
+            }
+    light_image *m = st == HZ_OK ? calloc(1, sizeof *m) : NULL;
+    if (st == HZ_OK && m) {
+        m->res = res;
+        m->rgb = malloc(n * 3 * sizeof *m->rgb);
+        m->func = malloc(n * sizeof *m->func);
+        m->cdf = malloc((size_t)res * (size_t)(res + 1) * sizeof *m->cdf);
+        m->row_cdf = malloc((size_t)(res + 1) * sizeof *m->row_cdf);
+    }
+    if (st == HZ_OK && (!m || !m->rgb || !m->func || !m->cdf || !m->row_cdf))
+        st = hz_fail(err, "%s: out of memory for an infinite light's image", path);
+    if (st != HZ_OK) {
+        light_image_destroy(m);
+        exr_image_free(&img);
+        return HZ_ERROR;
+    }
+    double *rows = malloc((size_t)res * sizeof *rows);
+    if (!rows) {
+        light_image_destroy(m);
+        exr_image_free(&img);
+        return hz_fail(err, "%s: out of memory for an infinite light's image", path);
+    }
+    for (size_t i = 0; i < n; ++i) {
+        double sum = 0.0;
+        for (int c = 0; c < 3; ++c) { /* negative radiance is none (pbrt-v4 clamps) */
+            float v = ch[c]->pixels[i] > 0.0f ? ch[c]->pixels[i] : 0.0f;
+            m->rgb[3 * i + (size_t)c] = v;
+            sum += v;
+        }
+        m->func[i] = sum / 3.0;
+    }
+    double total = 0.0;
+    for (int y = 0; y < res; ++y) {
+        rows[y] = build_cdf(m->func + (size_t)y * res, res, m->cdf + (size_t)y * (res + 1));
+        total += rows[y];
+    }
+    build_cdf(rows, res, m->row_cdf);
+    m->mean = total / (double)n;
+    free(rows);
+    exr_image_free(&img);
+    *out = m;
+    return HZ_OK;
+}
+
+int light_image_resolution(const light_image *m) { return m->res; }
+
+static size_t texel_of(const light_image *m, vec2 uv)
+{
+    int x = (int)(uv.x * m->res), y = (int)(uv.y * m->res);
+    x = x < 0 ? 0 : x >= m->res ? m->res - 1 : x;
+    y = y < 0 ? 0 : y >= m->res ? m->res - 1 : y;
+    return (size_t)y * (size_t)m->res + (size_t)x;
+}
+
+rgb light_image_lookup(const light_image *m, vec2 uv)
+{
+    const float *t = m->rgb + 3 * texel_of(m, uv);
+    return rgb_make(t[0], t[1], t[2]);
+}
+
+double light_image_pdf(const light_image *m, vec2 uv)
+{
+    return m->mean > 0.0 ? m->func[texel_of(m, uv)] / m->mean : 1.0;
+}
+
+/* The index i with cdf[i] <= u < cdf[i + 1] among n intervals, skipping
+ * empty ones. */
+static int find_interval(const double *cdf, int n, double u)
+{
+    int lo = 0, hi = n - 1;
+    while (lo < hi) {
+        int mid = (lo + hi + 1) / 2;
+        if (cdf[mid] <= u)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    while (lo < n - 1 && !(cdf[lo + 1] > cdf[lo])) /* an empty interval at u */
+        ++lo;
+    return lo;
+}
+
+vec2 light_image_sample(const light_image *m, vec2 u, double *pdf)
+{
+    int res = m->res;
+    int y = find_interval(m->row_cdf, res, u.y);
+    double dy = m->row_cdf[y + 1] - m->row_cdf[y];
+    double fy = dy > 0.0 ? (u.y - m->row_cdf[y]) / dy : 0.5;
+    const double *c = m->cdf + (size_t)y * (res + 1);
+    int x = find_interval(c, res, u.x);
+    double dx = c[x + 1] - c[x];
+    double fx = dx > 0.0 ? (u.x - c[x]) / dx : 0.5;
+    vec2 uv = v2((x + fmin(fmax(fx, 0.0), 0x1.fffffffffffffp-1)) / res,
+                 (y + fmin(fmax(fy, 0.0), 0x1.fffffffffffffp-1)) / res);
+    *pdf = light_image_pdf(m, uv);
+    return uv;
+}
+
+double light_image_mean(const light_image *m) { return m->mean; }
+
+rgb light_image_average(const light_image *m)
+{
+    size_t n = (size_t)m->res * (size_t)m->res;
+    double s[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c)
+            s[c] += m->rgb[3 * i + (size_t)c];
+    return rgb_make(s[0] / n, s[1] / n, s[2] / n);
+}
+
+/* pbrt-v4's "illuminance" of an image map: the sum over texels whose centre
+ * is in the upper hemisphere (+z in the light's space) of luminance (sRGB
+ * weights) times cos theta, times 2 pi / texels (pbrt-v4's factor; the
+ * solid angle of a texel is 4 pi / texels, so this is half the illuminance of
+ * the map, and pbrt-v4's maps come out twice as bright as asked: haze
+ * matches its images). */
+double light_image_illuminance(const light_image *m)
+{
+    double sum = 0.0;
+    for (int y = 0; y < m->res; ++y)
+        for (int x = 0; x < m->res; ++x) {
+            vec3 w = light_equal_area_square_to_sphere(
+                v2((x + 0.5) / m->res, (y + 0.5) / m->res));
+            if (w.z <= 0.0)
+                continue;
+            const float *t = m->rgb + 3 * ((size_t)y * (size_t)m->res + (size_t)x);
+            sum += (0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]) * w.z;
+        }
+    return sum * 2.0 * HZ_PI / ((double)m->res * (double)m->res);
+}

@@ -1,0 +1,291 @@
+/* Image infinite lights (LightSource "infinite" "string filename"): the
+ * equal-area mapping (round trips, equal areas), the map's sampling density
+ * (normalised, followed by its samples), refusals, and renders against closed
+ * forms: a diffuse plane under a sky bright only above the horizon has
+ * radiance albedo * c facing up and albedo * c / 2 standing, in the
+ * single-scattering and the path-tracing integrator, and a uniform map
+ * renders as the constant sky of the same radiance. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/rng.h"
+#include "film/exr.h"
+#include "lights/lights.h"
+#include "render_test_util.h"
+
+static char dir[1024];
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(dir, sizeof dir, "%s/envmap-%ld", HAZE_TMP, (long)getpid());
+    return mkdir(dir, 0755) == 0 ? 0 : -1;
+}
+
+/* A res x res map whose texel (x, y) is fn(its centre's direction). */
+static void write_map(const char *path, int res, int width, rgb (*fn)(vec3))
+{
+    exr_image img;
+    hz_error err = {0};
+    assert_int_equal(exr_image_alloc(&img, width, res, 3, &err), HZ_OK);
+    const char *names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c)
+        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
+    for (int y = 0; y < res; ++y)
+        for (int x = 0; x < width; ++x) {
+            rgb v = fn(light_equal_area_square_to_sphere(v2((x + 0.5) / res, (y + 0.5) / res)));
+            img.channels[0].pixels[y * width + x] = (float)v.r;
+            img.channels[1].pixels[y * width + x] = (float)v.g;
+            img.channels[2].pixels[y * width + x] = (float)v.b;
+        }
+    if (exr_write(path, &img, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    exr_image_free(&img);
+}
+
+static rgb upper_sky(vec3 w) { return w.z > 0.0 ? rgb_make(2.0, 1.5, 1.0) : rgb_grey(0.0); }
+static rgb uniform_sky(vec3 w)
+{
+    (void)w;
+    return rgb_make(0.4, 0.5, 0.6);
+}
+/* A bright patch around +x+z and a dim rest. */
+static rgb patchy(vec3 w) { return rgb_grey(w.x > 0.5 && w.z > 0.5 ? 50.0 : 0.2); }
+
+static void test_mapping(void **state)
+{
+    (void)state;
+    rng r = rng_seeded(7);
+    for (int i = 0; i < 100000; ++i) {
+        vec2 p = v2(rng_uniform(&r), rng_uniform(&r));
+        vec3 d = light_equal_area_square_to_sphere(p);
+        assert_true(fabs(v3_length(d) - 1.0) < 1e-12);
+        vec2 q = light_equal_area_sphere_to_square(d);
+        assert_true(fabs(q.x - p.x) < 1e-9 && fabs(q.y - p.y) < 1e-9);
+    }
+    vec3 c = light_equal_area_square_to_sphere(v2(0.5, 0.5));
+    assert_true(fabs(c.z - 1.0) < 1e-12);
+    vec3 k = light_equal_area_square_to_sphere(v2(0.0, 1.0));
+    assert_true(fabs(k.z + 1.0) < 1e-12);
+    /* Equal areas: uniform directions land evenly on an 8x8 grid of cells */
+    enum { N = 640000, G = 8 };
+    static int hist[G * G];
+    for (int i = 0; i < N; ++i) {
+        double z = 1.0 - 2.0 * rng_uniform(&r), phi = 2.0 * HZ_PI * rng_uniform(&r);
+        double s = sqrt(fmax(0.0, 1.0 - z * z));
+        vec2 q = light_equal_area_sphere_to_square(v3(s * cos(phi), s * sin(phi), z));
+        int x = (int)(q.x * G), y = (int)(q.y * G);
+        hist[(y < G ? y : G - 1) * G + (x < G ? x : G - 1)]++;
+    }
+    double want = (double)N / (G * G), sd = sqrt(want);
+    for (int i = 0; i < G * G; ++i)
+        assert_true(fabs(hist[i] - want) < 5.0 * sd);
+}
+
+static void test_sampling_density(void **state)
+{
+    (void)state;
+    char path[1200];
+    snprintf(path, sizeof path, "%s/patchy.exr", dir);
+    enum { RES = 16 };
+    write_map(path, RES, RES, patchy);
+    light_image *m;
+    hz_error err = {0};
+    assert_int_equal(light_image_from_exr(path, &m, &err), HZ_OK);
+    assert_int_equal(light_image_resolution(m), RES);
+    double total = 0.0;
+    for (int y = 0; y < RES; ++y)
+        for (int x = 0; x < RES; ++x)
+            total += light_image_pdf(m, v2((x + 0.5) / RES, (y + 0.5) / RES));
+    assert_true(fabs(total / (RES * RES) - 1.0) < 1e-12);
+    /* samples follow the density, and report it */
+    enum { N = 400000 };
+    static int hist[RES * RES];
+    rng r = rng_seeded(3);
+    for (int i = 0; i < N; ++i) {
+        double pdf;
+        vec2 uv = light_image_sample(m, v2(rng_uniform(&r), rng_uniform(&r)), &pdf);
+        assert_true(uv.x >= 0.0 && uv.x < 1.0 && uv.y >= 0.0 && uv.y < 1.0);
+        assert_true(fabs(pdf - light_image_pdf(m, uv)) < 1e-12);
+        hist[(int)(uv.y * RES) * RES + (int)(uv.x * RES)]++;
+    }
+    for (int i = 0; i < RES * RES; ++i) {
+        double p = light_image_pdf(m, v2((i % RES + 0.5) / RES, (i / RES + 0.5) / RES));
+        double want = N * p / (RES * RES);
+        assert_true(fabs(hist[i] - want) < 5.0 * sqrt(want) + 1.0);
+    }
+    light_image_destroy(m);
+}
+
+static void test_refusals(void **state)
+{
+    (void)state;
+    char path[1200], text[2048], msg[1024];
+    snprintf(path, sizeof path, "%s/wide.exr", dir);
+    write_map(path, 8, 16, uniform_sky);
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+             " \"integer yresolution\" 4\nWorldBegin\n"
+             "LightSource \"infinite\" \"string filename\" \"%s\"\n",
+             path);
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "test.pbrt:4:"));
+    assert_non_null(strstr(msg, "not square"));
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+             " \"integer yresolution\" 4\nWorldBegin\n"
+             "LightSource \"infinite\" \"string filename\" \"%s/missing.exr\"\n",
+             dir);
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "missing.exr"));
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+             " \"integer yresolution\" 4\nWorldBegin\n"
+             "LightSource \"infinite\" \"string filename\" \"%s\" \"rgb L\" [1 1 1]\n",
+             path);
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "cannot both"));
+}
+
+/* A diffuse plane of albedo 0.5 seen from above (facing the sky) or a wall
+ * seen from the side, lit by the map only. */
+static rgb plane_radiance(const char *map, const char *integrator, bool wall, int spp)
+{
+    char text[4096];
+    snprintf(text, sizeof text,
+             "%s"
+             "%s\n"
+             "Camera \"perspective\" \"float fov\" 20\n"
+             "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+             "Sampler \"independent\"\n"
+             "WorldBegin\n"
+             "LightSource \"infinite\" \"string filename\" \"%s\"\n"
+             "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
+             "%s\n",
+             integrator,
+             wall ? "LookAt 0 -5 0  0 0 0  0 0 1" : "LookAt 0 0 5  0 0 0  0 1 0",
+             map,
+             wall ? "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]"
+                    " \"point3 P\" [-1 0 -1  1 0 -1  1 0 1  -1 0 1]"
+                  : "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]"
+                    " \"point3 P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0]");
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    pixel_eval e = eval_pixel(rs, 4.0, 4.0, spp);
+    assert_true(e.hit);
+    render_scene_destroy(rs);
+    return e.L;
+}
+
+/* Irradiance of a map on a surface of normal n: each texel's radiance over
+ * its solid angle, 4 pi / texels, at its centre's cosine (the closed form of
+ * the nearest-texel map, up to the cosine's variation inside a texel). */
+static double map_irradiance(rgb (*fn)(vec3), int res, vec3 n)
+{
+    double e = 0.0;
+    for (int y = 0; y < res; ++y)
+        for (int x = 0; x < res; ++x) {
+            vec3 w = light_equal_area_square_to_sphere(v2((x + 0.5) / res, (y + 0.5) / res));
+            if (v3_dot(w, n) > 0.0)
+                e += fn(w).r * v3_dot(w, n);
+        }
+    return e * 4.0 * HZ_PI / ((double)res * res);
+}
+
+static void test_renders_against_closed_forms(void **state)
+{
+    (void)state;
+    char upper[1200], uni[1200];
+    snprintf(upper, sizeof upper, "%s/upper.exr", dir);
+    snprintf(uni, sizeof uni, "%s/uniform.exr", dir);
+    write_map(upper, 128, 128, upper_sky);
+    write_map(uni, 16, 16, uniform_sky);
+    /* up: pi c; standing: pi c / 2 (a quarter of the sphere, cosine-weighted)
+     * less 2% where texels straddle the horizon */
+    double e_up = map_irradiance(upper_sky, 128, v3(0, 0, 1)) / 2.0; /* per unit of c.r = 2 */
+    double e_wall = map_irradiance(upper_sky, 128, v3(0, -1, 0)) / 2.0;
+    assert_true(fabs(e_up / HZ_PI - 1.0) < 0.002 && fabs(e_wall / (HZ_PI / 2) - 1.0) < 0.03);
+    rgb c = rgb_make(2.0, 1.5, 1.0);
+    const char *integrators[] = {"", "Integrator \"volpath\" \"integer maxdepth\" 1\n"};
+    for (int k = 0; k < 2; ++k) {
+        /* albedo 0.5: radiance 0.5 E / pi; 65536 samples: about 0.5% noise */
+        rgb up = plane_radiance(upper, integrators[k], false, 65536);
+        expect_rgb_close(up, rgb_scale(c, 0.5 * e_up / HZ_PI), 0.02, 0.0, "plane under the sky",
+                         4, 4);
+        rgb wall = plane_radiance(upper, integrators[k], true, 65536);
+        expect_rgb_close(wall, rgb_scale(c, 0.5 * e_wall / HZ_PI), 0.02, 0.0,
+                         "wall under the sky", 4, 4);
+        rgb flat = plane_radiance(uni, integrators[k], false, 65536);
+        expect_rgb_close(flat, rgb_make(0.2, 0.25, 0.3), 0.02, 0.0, "uniform map", 4, 4);
+    }
+}
+
+/* Through a fog box against the sky: a uniform map gives the constant
+ * sky's image (map sampling of the in-scattered light against phase
+ * sampling), in both integrators. */
+static void test_fog_under_uniform_map(void **state)
+{
+    (void)state;
+    char uni[1200], text[4096];
+    snprintf(uni, sizeof uni, "%s/uniform.exr", dir);
+    write_map(uni, 16, 16, uniform_sky);
+    const char *integrators[] = {"", "Integrator \"volpath\" \"integer maxdepth\" 1\n"};
+    const char *skies[2] = {NULL, "LightSource \"infinite\" \"rgb L\" [0.4 0.5 0.6]\n"};
+    char map_sky[1400];
+    snprintf(map_sky, sizeof map_sky, "LightSource \"infinite\" \"string filename\" \"%s\"\n",
+             uni);
+    skies[0] = map_sky;
+    for (int k = 0; k < 2; ++k) {
+        rgb L[2];
+        for (int s = 0; s < 2; ++s) {
+            snprintf(text, sizeof text,
+                     "%sLookAt 0 0 5  0 0 0  0 1 0\n"
+                     "Camera \"perspective\" \"float fov\" 20\n"
+                     "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                     "Sampler \"independent\"\n"
+                     "WorldBegin\n%s"
+                     "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+                     "    \"rgb sigma_a\" [0.1 0.1 0.1] \"rgb sigma_s\" [0.8 0.8 0.8]\n"
+                     "Material \"interface\"\n"
+                     "MediumInterface \"fog\" \"\"\n"
+                     "Shape \"sphere\" \"float radius\" 1\n",
+                     integrators[k], skies[s]);
+            render_scene *rs = build_scene_or_fail(text, NULL);
+            L[s] = eval_pixel(rs, 4.0, 4.0, 65536).L;
+            render_scene_destroy(rs);
+        }
+        expect_rgb_close(L[0], L[1], 0.02, 0.0, "fog under a uniform map", 4, 4);
+    }
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    const char *files[] = {"patchy.exr", "wide.exr", "upper.exr", "uniform.exr"};
+    char path[1200];
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        snprintf(path, sizeof path, "%s/%s", dir, files[i]);
+        unlink(path);
+    }
+    rmdir(dir);
+    return 0;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_mapping),
+        cmocka_unit_test(test_sampling_density),
+        cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_renders_against_closed_forms),
+        cmocka_unit_test(test_fog_under_uniform_map),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
