@@ -88,13 +88,16 @@ hz_status light_image_from_exr(const char *path, light_image **out, hz_error *er
         return hz_fail(err, "%s", e.message);
     const exr_channel *ch[3] = {exr_find_channel(&img, "R"), exr_find_channel(&img, "G"),
                                 exr_find_channel(&img, "B")};
+    const exr_channel *y = exr_find_channel(&img, "Y");
+    if (!ch[0] && !ch[1] && !ch[2] && y) /* a luminance map: grey */
+        ch[0] = ch[1] = ch[2] = y;
     hz_status st = HZ_OK;
     if (!ch[0] || !ch[1] || !ch[2])
-        st = hz_fail(err, "%s: an infinite light's image needs R, G and B channels", path);
+        st = hz_fail(err, "%s: a light's image needs R, G and B channels (or Y alone)", path);
     else if (img.width != img.height)
         st = hz_fail(err,
-                     "%s: %dx%d is not square: an infinite light's image is an equal-area "
-                     "octahedral map (pbrt-v4's imgtool makeequiarea converts others)",
+                     "%s: %dx%d is not square: a light's image is an equal-area octahedral "
+                     "map of directions (pbrt-v4's imgtool makeequiarea converts others)",
                      path, img.width, img.height);
     int res = img.width;
     size_t n = (size_t)res * (size_t)res;
@@ -114,7 +117,7 @@ hz_status light_image_from_exr(const char *path, light_image **out, hz_error *er
         m->row_cdf = malloc((size_t)(res + 1) * sizeof *m->row_cdf);
     }
     if (st == HZ_OK && (!m || !m->rgb || !m->func || !m->cdf || !m->row_cdf))
-        st = hz_fail(err, "%s: out of memory for an infinite light's image", path);
+        st = hz_fail(err, "%s: out of memory for a light's image", path);
     if (st != HZ_OK) {
         light_image_destroy(m);
         exr_image_free(&img);
@@ -124,7 +127,7 @@ hz_status light_image_from_exr(const char *path, light_image **out, hz_error *er
     if (!rows) {
         light_image_destroy(m);
         exr_image_free(&img);
-        return hz_fail(err, "%s: out of memory for an infinite light's image", path);
+        return hz_fail(err, "%s: out of memory for a light's image", path);
     }
     for (size_t i = 0; i < n; ++i) {
         double sum = 0.0;
@@ -163,6 +166,8 @@ rgb light_image_lookup(const light_image *m, vec2 uv)
     const float *t = m->rgb + 3 * texel_of(m, uv);
     return rgb_make(t[0], t[1], t[2]);
 }
+
+double light_image_value(const light_image *m, vec2 uv) { return m->func[texel_of(m, uv)]; }
 
 double light_image_pdf(const light_image *m, vec2 uv)
 {

@@ -114,7 +114,8 @@ static bool bounds_of(const light *l, light_bounds *out)
     switch (l->kind) {
     case LIGHT_POINT:
         grow(&b, l->point.p);
-        b.phi = 4.0 * HZ_PI * max_channel(l->emit);
+        b.phi = 4.0 * HZ_PI * max_channel(l->emit) *
+                (l->point.image ? light_image_mean(l->point.image) : 1.0);
         break;
     case LIGHT_SPOT: {
         grow(&b, l->spot.p);

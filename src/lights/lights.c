@@ -62,6 +62,31 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         out->kind = LIGHT_POINT;
         out->emit = apply_power(I, scale, power, 4.0 * HZ_PI);
         out->point.p = transform_point(&render_from_light, from);
+    } else if (strcmp(type, "goniometric") == 0) {
+        /* pbrt-v4's GoniometricLight: a point light at the light space's
+         * origin whose intensity toward w is I scale times the image's channel
+         * average at the equal-area point of w, with y and z swapped. */
+        rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
+        double scale = params_float(pl, "scale", 1.0);
+        double power = params_float(pl, "power", -1.0);
+        const char *filename = params_string(pl, "filename", NULL);
+        if (!filename)
+            return hz_fail_at(err, e->entity.loc,
+                              "goniometric light needs \"string filename\" (pbrt-v4 renders "
+                              "it black without one)");
+        if (load_image(pl, filename, &out->point.image, err) != HZ_OK)
+            return HZ_ERROR;
+        out->kind = LIGHT_POINT;
+        double mean = light_image_mean(out->point.image);
+        if (power > 0.0 && mean > 0.0)
+            scale *= power / (4.0 * HZ_PI * mean);
+        out->emit = rgb_scale(I, scale);
+        out->point.p = transform_point(&render_from_light, v3(0, 0, 0));
+        /* its own inverse */
+        const mat4 swap = {{{1, 0, 0, 0}, {0, 0, 1, 0}, {0, 1, 0, 0}, {0, 0, 0, 1}}};
+        const transform swap_yz = {swap, swap};
+        out->point.light_from_render =
+            transform_compose(swap_yz, transform_inverse(render_from_light));
     } else if (strcmp(type, "spot") == 0) {
         rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
         double scale = params_float(pl, "scale", 1.0);
@@ -144,7 +169,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
     } else {
         return hz_fail_at(err, e->entity.loc,
                           "LightSource \"%s\" is not supported (supported: \"point\", \"spot\", "
-                          "\"distant\", \"infinite\")",
+                          "\"goniometric\", \"distant\", \"infinite\")",
                           type);
     }
     vec3 p = out->kind == LIGHT_POINT  ? out->point.p
@@ -263,6 +288,10 @@ void light_free(light *l)
         light_image_destroy(l->infinite.image);
         l->infinite.image = NULL;
     }
+    if (l && l->kind == LIGHT_POINT) {
+        light_image_destroy(l->point.image);
+        l->point.image = NULL;
+    }
 }
 
 rgb light_infinite_le(const light *l, vec3 w)
@@ -308,7 +337,8 @@ rgb light_phi(const light *l, double scene_radius)
 {
     switch (l->kind) {
     case LIGHT_POINT:
-        return rgb_scale(l->emit, 4.0 * HZ_PI);
+        return rgb_scale(l->emit, 4.0 * HZ_PI *
+                                      (l->point.image ? light_image_mean(l->point.image) : 1.0));
     case LIGHT_SPOT:
         return rgb_scale(l->emit, 2.0 * HZ_PI *
                                       (1.0 - 0.5 * (l->spot.cos_falloff_start +

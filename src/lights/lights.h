@@ -21,7 +21,8 @@ typedef enum { LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_INFINITE, LIGHT_ARE
  * nearest texel, sampled by the piecewise-constant density of its texels'
  * channel average. */
 typedef struct light_image light_image;
-/* A square RGB EXR; non-finite texels refused, negative ones read as 0. */
+/* A square EXR with R, G, B (or only Y) channels; non-finite texels
+ * refused, negative ones read as 0. */
 hz_status light_image_from_exr(const char *path, light_image **out, hz_error *err);
 void light_image_destroy(light_image *m);
 int light_image_resolution(const light_image *m);
@@ -30,6 +31,10 @@ rgb light_image_lookup(const light_image *m, vec2 uv);
 double light_image_pdf(const light_image *m, vec2 uv);
 /* u in [0,1)^2 -> a point of the square with *pdf = light_image_pdf there. */
 vec2 light_image_sample(const light_image *m, vec2 u, double *pdf);
+/* The channel average at uv (a goniometric light's relative intensity),
+ * and its mean over the texels. */
+double light_image_value(const light_image *m, vec2 uv);
+double light_image_mean(const light_image *m);
 /* Mean RGB of the texels, and pbrt-v4's "illuminance" of the map. */
 rgb light_image_average(const light_image *m);
 double light_image_illuminance(const light_image *m);
@@ -44,6 +49,10 @@ typedef struct {
     union {
         struct {
             vec3 p;
+            /* goniometric: intensity emit * value(image(light_from_render w))
+             * toward w; NULL: isotropic */
+            light_image *image;
+            transform light_from_render;
         } point;
         struct {
             vec3 p;
@@ -79,8 +88,8 @@ typedef struct {
     };
 } light;
 
-/* LightSource "point", "spot", "distant", "infinite" (constant "L" or an
- * image "filename"). */
+/* LightSource "point", "spot", "goniometric" (a point light with an image),
+ * "distant", "infinite" (constant "L" or an image "filename"). */
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
                             hz_error *err);
 /* AreaLightSource "diffuse" on a top-level shape (in render space, or in

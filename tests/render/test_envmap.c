@@ -265,10 +265,69 @@ static void test_fog_under_uniform_map(void **state)
     }
 }
 
+/* light space +y after pbrt-v4's swap of y and z: the map's +z */
+static rgb upper_map(vec3 w) { return rgb_grey(w.z > 0.0 ? 3.0 : 0.0); }
+
+/* LightSource "goniometric": a point light at the light space's origin whose
+ * intensity toward w is I scale times the map's channel average at w (y and z
+ * of the light space swapped, as pbrt-v4), its "power" over the map's mean. */
+static void test_goniometric(void **state)
+{
+    (void)state;
+    char map[1200], text[4096];
+    snprintf(map, sizeof map, "%s/gonio.exr", dir);
+    write_map(map, 64, 64, upper_map);
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+             " \"integer yresolution\" 4\nWorldBegin\n"
+             "AttributeBegin\n  Translate 0 0 2\n"
+             "  LightSource \"goniometric\" \"string filename\" \"%s\" \"rgb I\" [1 2 3]"
+             " \"float scale\" 0.5\n"
+             "AttributeEnd\n",
+             map);
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    assert_int_equal(render_scene_light_count(rs), 1);
+    const light *l = &render_scene_lights(rs)[0];
+    assert_false(l->kind != LIGHT_POINT || !light_is_delta(l));
+    light_sample ls;
+    /* toward +y (light space): 3 * I * 0.5 / d^2; toward -y: dark */
+    assert_true(light_sample_li(l, v3(0.0, 2.0, 2.0), v3(0, 0, 1), 0.0, v2(0.5, 0.5), &ls));
+    expect_rgb_close(ls.L, rgb_make(0.375, 0.75, 1.125), 1e-9, 0.0, "toward +y", 0, 0);
+    assert_true(light_sample_li(l, v3(0.0, -2.0, 2.0), v3(0, 0, 1), 0.0, v2(0.5, 0.5), &ls));
+    assert_true(rgb_is_black(ls.L));
+    /* power: 4 pi I scale mean(map) (texel centres above the equator: about half) */
+    double mean = 0.0;
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x)
+            mean += upper_map(light_equal_area_square_to_sphere(v2((x + .5) / 64, (y + .5) / 64)))
+                        .r /
+                    (64.0 * 64.0);
+    assert_true(fabs(mean - 1.5) < 0.1);
+    rgb phi = light_phi(l, 1.0);
+    expect_rgb_close(phi, rgb_scale(rgb_make(1, 2, 3), 0.5 * 4.0 * HZ_PI * mean), 1e-9, 0.0,
+                     "phi", 0, 0);
+    render_scene_destroy(rs);
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+             " \"integer yresolution\" 4\nWorldBegin\n"
+             "LightSource \"goniometric\" \"string filename\" \"%s\" \"float power\" 100\n",
+             map);
+    rs = build_scene_or_fail(text, NULL);
+    phi = light_phi(&render_scene_lights(rs)[0], 1.0);
+    expect_rgb_close(phi, rgb_grey(100.0), 1e-9, 0.0, "power", 0, 0);
+    render_scene_destroy(rs);
+    char msg[1024];
+    build_scene_expect_error("Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+                             " \"integer yresolution\" 4\nWorldBegin\n"
+                             "LightSource \"goniometric\"\n",
+                             msg, sizeof msg);
+    assert_non_null(strstr(msg, "test.pbrt:4:1: goniometric light needs"));
+}
+
 static int teardown(void **state)
 {
     (void)state;
-    const char *files[] = {"patchy.exr", "wide.exr", "upper.exr", "uniform.exr"};
+    const char *files[] = {"patchy.exr", "wide.exr", "upper.exr", "uniform.exr", "gonio.exr"};
     char path[1200];
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
         snprintf(path, sizeof path, "%s/%s", dir, files[i]);
@@ -286,6 +345,7 @@ int main(void)
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_renders_against_closed_forms),
         cmocka_unit_test(test_fog_under_uniform_map),
+        cmocka_unit_test(test_goniometric),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
