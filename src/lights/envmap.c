@@ -11,11 +11,11 @@
 #include "film/exr.h"
 
 struct light_image {
-    int res;
-    float *rgb;      /* res * res texels of 3 floats, row-major, top row (v = 0) first */
-    double *row_cdf; /* res + 1: the marginal over rows, cdf[0] = 0, cdf[res] = 1 */
-    double *cdf;     /* res rows of res + 1: the conditional cdf within each row */
-    double *func;    /* res * res: the sampling function (channel average, >= 0) */
+    int w, h;
+    float *rgb;      /* w * h texels of 3 floats, row-major, top row (v = 0) first */
+    double *row_cdf; /* h + 1: the marginal over rows, cdf[0] = 0, cdf[h] = 1 */
+    double *cdf;     /* h rows of w + 1: the conditional cdf within each row */
+    double *func;    /* w * h: the sampling function (channel average, >= 0) */
     double mean;     /* of func over the texels; 0: sampled uniformly */
 };
 
@@ -79,7 +79,7 @@ static double build_cdf(const double *f, int n, double *cdf)
     return sum;
 }
 
-hz_status light_image_from_exr(const char *path, light_image **out, hz_error *err)
+hz_status light_image_from_exr(const char *path, bool square, light_image **out, hz_error *err)
 {
     *out = NULL;
     exr_image img;
@@ -94,27 +94,28 @@ hz_status light_image_from_exr(const char *path, light_image **out, hz_error *er
     hz_status st = HZ_OK;
     if (!ch[0] || !ch[1] || !ch[2])
         st = hz_fail(err, "%s: a light's image needs R, G and B channels (or Y alone)", path);
-    else if (img.width != img.height)
+    else if (square && img.width != img.height)
         st = hz_fail(err,
                      "%s: %dx%d is not square: a light's image is an equal-area octahedral "
                      "map of directions (pbrt-v4's imgtool makeequiarea converts others)",
                      path, img.width, img.height);
-    int res = img.width;
-    size_t n = (size_t)res * (size_t)res;
+    int w = img.width, h = img.height;
+    size_t n = (size_t)w * (size_t)h;
     for (size_t i = 0; st == HZ_OK && i < n; ++i)
         for (int c = 0; c < 3; ++c)
             if (!isfinite(ch[c]->pixels[i])) {
                 st = hz_fail(err, "%s: texel (%zu, %zu) is not finite: not usable as a light",
-                             path, i % (size_t)res, i / (size_t)res);
+                             path, i % (size_t)w, i / (size_t)w);
                 break;
             }
     light_image *m = st == HZ_OK ? calloc(1, sizeof *m) : NULL;
     if (st == HZ_OK && m) {
-        m->res = res;
+        m->w = w;
+        m->h = h;
         m->rgb = malloc(n * 3 * sizeof *m->rgb);
         m->func = malloc(n * sizeof *m->func);
-        m->cdf = malloc((size_t)res * (size_t)(res + 1) * sizeof *m->cdf);
-        m->row_cdf = malloc((size_t)(res + 1) * sizeof *m->row_cdf);
+        m->cdf = malloc((size_t)h * (size_t)(w + 1) * sizeof *m->cdf);
+        m->row_cdf = malloc((size_t)(h + 1) * sizeof *m->row_cdf);
     }
     if (st == HZ_OK && (!m || !m->rgb || !m->func || !m->cdf || !m->row_cdf))
         st = hz_fail(err, "%s: out of memory for a light's image", path);
@@ -123,7 +124,7 @@ hz_status light_image_from_exr(const char *path, light_image **out, hz_error *er
         exr_image_free(&img);
         return HZ_ERROR;
     }
-    double *rows = malloc((size_t)res * sizeof *rows);
+    double *rows = malloc((size_t)h * sizeof *rows);
     if (!rows) {
         light_image_destroy(m);
         exr_image_free(&img);
@@ -139,11 +140,11 @@ hz_status light_image_from_exr(const char *path, light_image **out, hz_error *er
         m->func[i] = sum / 3.0;
     }
     double total = 0.0;
-    for (int y = 0; y < res; ++y) {
-        rows[y] = build_cdf(m->func + (size_t)y * res, res, m->cdf + (size_t)y * (res + 1));
+    for (int y = 0; y < h; ++y) {
+        rows[y] = build_cdf(m->func + (size_t)y * w, w, m->cdf + (size_t)y * (w + 1));
         total += rows[y];
     }
-    build_cdf(rows, res, m->row_cdf);
+    build_cdf(rows, h, m->row_cdf);
     m->mean = total / (double)n;
     free(rows);
     exr_image_free(&img);
@@ -151,14 +152,18 @@ hz_status light_image_from_exr(const char *path, light_image **out, hz_error *er
     return HZ_OK;
 }
 
-int light_image_resolution(const light_image *m) { return m->res; }
+void light_image_size(const light_image *m, int *w, int *h)
+{
+    *w = m->w;
+    *h = m->h;
+}
 
 static size_t texel_of(const light_image *m, vec2 uv)
 {
-    int x = (int)(uv.x * m->res), y = (int)(uv.y * m->res);
-    x = x < 0 ? 0 : x >= m->res ? m->res - 1 : x;
-    y = y < 0 ? 0 : y >= m->res ? m->res - 1 : y;
-    return (size_t)y * (size_t)m->res + (size_t)x;
+    int x = (int)(uv.x * m->w), y = (int)(uv.y * m->h);
+    x = x < 0 ? 0 : x >= m->w ? m->w - 1 : x;
+    y = y < 0 ? 0 : y >= m->h ? m->h - 1 : y;
+    return (size_t)y * (size_t)m->w + (size_t)x;
 }
 
 rgb light_image_lookup(const light_image *m, vec2 uv)
@@ -193,16 +198,15 @@ static int find_interval(const double *cdf, int n, double u)
 
 vec2 light_image_sample(const light_image *m, vec2 u, double *pdf)
 {
-    int res = m->res;
-    int y = find_interval(m->row_cdf, res, u.y);
+    int y = find_interval(m->row_cdf, m->h, u.y);
     double dy = m->row_cdf[y + 1] - m->row_cdf[y];
     double fy = dy > 0.0 ? (u.y - m->row_cdf[y]) / dy : 0.5;
-    const double *c = m->cdf + (size_t)y * (res + 1);
-    int x = find_interval(c, res, u.x);
+    const double *c = m->cdf + (size_t)y * (m->w + 1);
+    int x = find_interval(c, m->w, u.x);
     double dx = c[x + 1] - c[x];
     double fx = dx > 0.0 ? (u.x - c[x]) / dx : 0.5;
-    vec2 uv = v2((x + fmin(fmax(fx, 0.0), 0x1.fffffffffffffp-1)) / res,
-                 (y + fmin(fmax(fy, 0.0), 0x1.fffffffffffffp-1)) / res);
+    vec2 uv = v2((x + fmin(fmax(fx, 0.0), 0x1.fffffffffffffp-1)) / m->w,
+                 (y + fmin(fmax(fy, 0.0), 0x1.fffffffffffffp-1)) / m->h);
     *pdf = light_image_pdf(m, uv);
     return uv;
 }
@@ -211,7 +215,7 @@ double light_image_mean(const light_image *m) { return m->mean; }
 
 rgb light_image_average(const light_image *m)
 {
-    size_t n = (size_t)m->res * (size_t)m->res;
+    size_t n = (size_t)m->w * (size_t)m->h;
     double s[3] = {0, 0, 0};
     for (size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c)
@@ -228,14 +232,13 @@ rgb light_image_average(const light_image *m)
 double light_image_illuminance(const light_image *m)
 {
     double sum = 0.0;
-    for (int y = 0; y < m->res; ++y)
-        for (int x = 0; x < m->res; ++x) {
-            vec3 w = light_equal_area_square_to_sphere(
-                v2((x + 0.5) / m->res, (y + 0.5) / m->res));
+    for (int y = 0; y < m->h; ++y)
+        for (int x = 0; x < m->w; ++x) {
+            vec3 w = light_equal_area_square_to_sphere(v2((x + 0.5) / m->w, (y + 0.5) / m->h));
             if (w.z <= 0.0)
                 continue;
-            const float *t = m->rgb + 3 * ((size_t)y * (size_t)m->res + (size_t)x);
+            const float *t = m->rgb + 3 * ((size_t)y * (size_t)m->w + (size_t)x);
             sum += (0.2126 * t[0] + 0.7152 * t[1] + 0.0722 * t[2]) * w.z;
         }
-    return sum * 2.0 * HZ_PI / ((double)m->res * (double)m->res);
+    return sum * 2.0 * HZ_PI / ((double)m->w * (double)m->h);
 }

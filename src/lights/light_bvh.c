@@ -114,8 +114,8 @@ static bool bounds_of(const light *l, light_bounds *out)
     switch (l->kind) {
     case LIGHT_POINT:
         grow(&b, l->point.p);
-        b.phi = 4.0 * HZ_PI * max_channel(l->emit) *
-                (l->point.image ? light_image_mean(l->point.image) : 1.0);
+        b.phi = l->point.image ? max_channel(light_phi(l, 0.0))
+                               : 4.0 * HZ_PI * max_channel(l->emit);
         break;
     case LIGHT_SPOT: {
         grow(&b, l->spot.p);

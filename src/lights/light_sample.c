@@ -253,11 +253,8 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
         if (d2 == 0.0)
             return false;
         out->L = rgb_scale(l->emit, 1.0 / d2);
-        if (l->point.image) { /* goniometric: the image toward p */
-            vec3 wl = v3_normalize(transform_vector(&l->point.light_from_render, v3_neg(out->wi)));
-            out->L = rgb_scale(out->L, light_image_value(l->point.image,
-                                                         light_equal_area_sphere_to_square(wl)));
-        }
+        if (l->point.image) /* goniometric, projection: the image toward p */
+            out->L = rgb_mul(out->L, light_point_factor(l, v3_neg(out->wi)));
         return true;
     }
     case LIGHT_SPOT: {

@@ -31,19 +31,75 @@ static hz_status refuse(param_list *pl, const char *name, const char *why, hz_er
 }
 
 /* The image of an infinite light, named relative to the scene file that names it. */
-static hz_status load_image(param_list *pl, const char *filename, light_image **out,
-                            hz_error *err)
+static hz_status load_image(param_list *pl, const char *filename, bool square,
+                            light_image **out, hz_error *err)
 {
     file_loc at = params_loc(pl, "filename");
     char *path = path_relative_to(at.file, filename);
     if (!path)
         return hz_fail_at(err, at, "out of memory");
     hz_error e;
-    hz_status st = light_image_from_exr(path, out, &e);
+    hz_status st = light_image_from_exr(path, square, out, &e);
     if (st != HZ_OK)
-        hz_fail_at(err, at, "infinite light \"filename\": %s", e.message);
+        hz_fail_at(err, at, "light \"filename\": %s", e.message);
     free(path);
     return st;
+}
+
+/* pbrt-v4's ProjectionLight: a point light at the light space's origin
+ * (y flipped) that projects its image through a perspective window of `fov`
+ * (the image's aspect ratio; the shorter side spans [-1, 1]) along +z; the
+ * intensity toward w is scale times the nearest texel, no cosine falloff.
+ * "power": scale *= power / (A mean(luminance cos^3)), A the window's area
+ * at unit distance. */
+static hz_status projection_from_params(param_list *pl, file_loc loc, transform render_from_light,
+                                        light *out, hz_error *err)
+{
+    double scale = params_float(pl, "scale", 1.0);
+    double power = params_float(pl, "power", -1.0);
+    double fov = params_float(pl, "fov", 90.0);
+    if (!(fov > 0.0 && fov < 180.0))
+        params_reject(pl, "fov", "projection light \"fov\" must be in (0, 180), got %g", fov);
+    const char *filename = params_string(pl, "filename", NULL);
+    if (!filename)
+        return hz_fail_at(err, loc, "projection light needs \"string filename\"");
+    if (pl->failed)
+        return HZ_OK; /* params_finish reports it */
+    if (load_image(pl, filename, false, &out->point.image, err) != HZ_OK)
+        return HZ_ERROR;
+    int w, h;
+    light_image_size(out->point.image, &w, &h);
+    double aspect = (double)w / h;
+    double *sc = out->point.screen;
+    if (aspect > 1.0) {
+        sc[0] = -aspect, sc[1] = aspect, sc[2] = -1.0, sc[3] = 1.0;
+    } else {
+        sc[0] = -1.0, sc[1] = 1.0, sc[2] = -1.0 / aspect, sc[3] = 1.0 / aspect;
+    }
+    double t = tan(fov * HZ_PI / 360.0);
+    out->point.inv_tan = 1.0 / t;
+    if (power > 0.0) {
+        double sum = 0.0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                double px = sc[0] + (sc[1] - sc[0]) * (x + 0.5) / w;
+                double py = sc[2] + (sc[3] - sc[2]) * (y + 0.5) / h;
+                double c = 1.0 / sqrt(1.0 + (px * px + py * py) * t * t); /* cos theta */
+                rgb v = light_image_lookup(out->point.image, v2((x + 0.5) / w, (y + 0.5) / h));
+                sum += (0.2126 * v.r + 0.7152 * v.g + 0.0722 * v.b) * c * c * c;
+            }
+        double area = 4.0 * t * t * (aspect > 1.0 ? aspect : 1.0 / aspect);
+        if (sum > 0.0)
+            scale *= power / (area * sum / ((double)w * h));
+    }
+    out->kind = LIGHT_POINT;
+    out->emit = rgb_grey(scale);
+    out->point.p = transform_point(&render_from_light, v3(0, 0, 0));
+    out->point.projection = true;
+    const mat4 flip = {{{1, 0, 0, 0}, {0, -1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
+    const transform flip_y = {flip, flip}; /* its own inverse */
+    out->point.light_from_render = transform_compose(flip_y, transform_inverse(render_from_light));
+    return HZ_OK;
 }
 
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
@@ -74,7 +130,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
             return hz_fail_at(err, e->entity.loc,
                               "goniometric light needs \"string filename\" (pbrt-v4 renders "
                               "it black without one)");
-        if (load_image(pl, filename, &out->point.image, err) != HZ_OK)
+        if (load_image(pl, filename, true, &out->point.image, err) != HZ_OK)
             return HZ_ERROR;
         out->kind = LIGHT_POINT;
         double mean = light_image_mean(out->point.image);
@@ -87,6 +143,9 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         const transform swap_yz = {swap, swap};
         out->point.light_from_render =
             transform_compose(swap_yz, transform_inverse(render_from_light));
+    } else if (strcmp(type, "projection") == 0) {
+        if (projection_from_params(pl, e->entity.loc, render_from_light, out, err) != HZ_OK)
+            return HZ_ERROR;
     } else if (strcmp(type, "spot") == 0) {
         rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
         double scale = params_float(pl, "scale", 1.0);
@@ -151,7 +210,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         double illum = params_float(pl, "illuminance", -1.0);
         out->kind = LIGHT_INFINITE;
         if (filename) {
-            if (load_image(pl, filename, &out->infinite.image, err) != HZ_OK)
+            if (load_image(pl, filename, true, &out->infinite.image, err) != HZ_OK)
                 return HZ_ERROR;
             L = rgb_grey(1.0);
             /* pbrt-v4 scales the map to the asked illuminance on an upward
@@ -169,7 +228,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
     } else {
         return hz_fail_at(err, e->entity.loc,
                           "LightSource \"%s\" is not supported (supported: \"point\", \"spot\", "
-                          "\"goniometric\", \"distant\", \"infinite\")",
+                          "\"goniometric\", \"projection\", \"distant\", \"infinite\")",
                           type);
     }
     vec3 p = out->kind == LIGHT_POINT  ? out->point.p
@@ -333,10 +392,51 @@ rgb light_area_le(const light *l, vec3 n, vec3 w)
     return l->emit;
 }
 
+/* The power of a projection light per unit of emit: the window's area at
+ * unit distance times the mean of the texels weighted by cos^3. */
+static rgb projection_power(const light *l)
+{
+    int w, h;
+    light_image_size(l->point.image, &w, &h);
+    const double *sc = l->point.screen;
+    double t = 1.0 / l->point.inv_tan, s[3] = {0, 0, 0};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            double px = sc[0] + (sc[1] - sc[0]) * (x + 0.5) / w;
+            double py = sc[2] + (sc[3] - sc[2]) * (y + 0.5) / h;
+            double c = 1.0 / sqrt(1.0 + (px * px + py * py) * t * t);
+            rgb v = light_image_lookup(l->point.image, v2((x + 0.5) / w, (y + 0.5) / h));
+            s[0] += v.r * c * c * c;
+            s[1] += v.g * c * c * c;
+            s[2] += v.b * c * c * c;
+        }
+    double area = (sc[1] - sc[0]) * (sc[3] - sc[2]) * t * t / ((double)w * h);
+    return rgb_make(s[0] * area, s[1] * area, s[2] * area);
+}
+
+rgb light_point_factor(const light *l, vec3 w)
+{
+    const light_image *m = l->point.image;
+    if (!m)
+        return rgb_grey(1.0);
+    vec3 wl = v3_normalize(transform_vector(&l->point.light_from_render, w));
+    if (!l->point.projection)
+        return rgb_grey(light_image_value(m, light_equal_area_sphere_to_square(wl)));
+    if (wl.z < 1e-3) /* pbrt-v4's hither */
+        return rgb_grey(0.0);
+    const double *sc = l->point.screen;
+    double px = wl.x / wl.z * l->point.inv_tan, py = wl.y / wl.z * l->point.inv_tan;
+    if (!(px >= sc[0] && px <= sc[1] && py >= sc[2] && py <= sc[3]))
+        return rgb_grey(0.0);
+    return light_image_lookup(m, v2((px - sc[0]) / (sc[1] - sc[0]), (py - sc[2]) / (sc[3] - sc[2])));
+}
+
 rgb light_phi(const light *l, double scene_radius)
 {
     switch (l->kind) {
     case LIGHT_POINT:
+        if (l->point.projection)
+            return rgb_mul(l->emit, projection_power(l));
         return rgb_scale(l->emit, 4.0 * HZ_PI *
                                       (l->point.image ? light_image_mean(l->point.image) : 1.0));
     case LIGHT_SPOT:

@@ -21,11 +21,11 @@ typedef enum { LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_INFINITE, LIGHT_ARE
  * nearest texel, sampled by the piecewise-constant density of its texels'
  * channel average. */
 typedef struct light_image light_image;
-/* A square EXR with R, G, B (or only Y) channels; non-finite texels
- * refused, negative ones read as 0. */
-hz_status light_image_from_exr(const char *path, light_image **out, hz_error *err);
+/* An EXR with R, G, B (or only Y) channels, square when `square`; non-finite
+ * texels refused, negative ones read as 0. */
+hz_status light_image_from_exr(const char *path, bool square, light_image **out, hz_error *err);
 void light_image_destroy(light_image *m);
-int light_image_resolution(const light_image *m);
+void light_image_size(const light_image *m, int *w, int *h);
 rgb light_image_lookup(const light_image *m, vec2 uv);
 /* Density over the unit square (1 everywhere for an all-black map). */
 double light_image_pdf(const light_image *m, vec2 uv);
@@ -49,10 +49,15 @@ typedef struct {
     union {
         struct {
             vec3 p;
-            /* goniometric: intensity emit * value(image(light_from_render w))
-             * toward w; NULL: isotropic */
+            /* NULL: isotropic. Otherwise, with wl = light_from_render w
+             * toward w: goniometric, intensity emit * value(image(wl));
+             * projection, emit * image(screen point of wl) inside the
+             * screen window, 0 outside. */
             light_image *image;
             transform light_from_render;
+            bool projection;
+            double inv_tan;   /* projection: 1 / tan(fov / 2) */
+            double screen[4]; /* projection: x0, x1, y0, y1 of the window */
         } point;
         struct {
             vec3 p;
@@ -88,8 +93,9 @@ typedef struct {
     };
 } light;
 
-/* LightSource "point", "spot", "goniometric" (a point light with an image),
- * "distant", "infinite" (constant "L" or an image "filename"). */
+/* LightSource "point", "spot", "goniometric" and "projection" (point lights
+ * with an image), "distant", "infinite" (constant "L" or an image
+ * "filename"). */
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
                             hz_error *err);
 /* AreaLightSource "diffuse" on a top-level shape (in render space, or in
@@ -130,6 +136,11 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
 rgb light_area_le(const light *l, vec3 n, vec3 w);
 
 bool light_is_delta(const light *l);
+
+/* The intensity factor of point light `l` toward unit direction w (from the
+ * light): 1 for an isotropic one, the image's for goniometric and
+ * projection lights. */
+rgb light_point_factor(const light *l, vec3 w);
 
 /* Radiance of infinite light `l` arriving along -w, i.e. seen by a ray with
  * unit direction w that leaves the scene. */

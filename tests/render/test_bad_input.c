@@ -106,7 +106,7 @@ static void test_all_errors_in_one_run(void **state)
                     "Include \"bad_input_many.inc\"\n"
                     "Material \"hair\"\n"
                     "Shape \"curve\" \"float width\" 1\n"
-                    "LightSource \"projection\" \"float fov\" 30\n"
+                    "LightSource \"laser\" \"float fov\" 30\n"
                     "MakeNamedMedium \"m\" \"string type\" \"fluffy\"\n"
                     "AttributeBegin\nAreaLightSource \"diffuse\" \"float what\" 3\n"
                     "Shape \"sphere\"\nAttributeEnd\n");
@@ -119,7 +119,7 @@ static void test_all_errors_in_one_run(void **state)
         "bad_input_many.pbrt:1:37: unused parameter \"float bogus\"",
         "bad_input_many.pbrt:5:1: Material \"hair\" is not supported",
         "bad_input_many.pbrt:6:1: unknown shape \"curve\"",
-        "bad_input_many.pbrt:7:1: LightSource \"projection\" is not supported",
+        "bad_input_many.pbrt:7:1: LightSource \"laser\" is not supported",
         "bad_input_many.pbrt:8:1: MakeNamedMedium \"m\": medium type \"fluffy\"",
         "bad_input_many.pbrt:10:27: unused parameter \"float what\"",
         "bad_input_many.inc:1:33: unused parameter \"float nonsense\"",

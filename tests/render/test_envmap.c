@@ -99,8 +99,10 @@ static void test_sampling_density(void **state)
     write_map(path, RES, RES, patchy);
     light_image *m;
     hz_error err = {0};
-    assert_int_equal(light_image_from_exr(path, &m, &err), HZ_OK);
-    assert_int_equal(light_image_resolution(m), RES);
+    assert_int_equal(light_image_from_exr(path, true, &m, &err), HZ_OK);
+    int w, h;
+    light_image_size(m, &w, &h);
+    assert_true(w == RES && h == RES);
     double total = 0.0;
     for (int y = 0; y < RES; ++y)
         for (int x = 0; x < RES; ++x)
@@ -324,10 +326,64 @@ static void test_goniometric(void **state)
     assert_non_null(strstr(msg, "test.pbrt:4:1: goniometric light needs"));
 }
 
+/* LightSource "projection": the image through a window of `fov` along +z
+ * (the wider side spans the aspect ratio), y flipped as pbrt-v4, nothing
+ * outside the window or behind; "power" is the emitted power. */
+static void test_projection(void **state)
+{
+    (void)state;
+    char map[1200], text[4096];
+    snprintf(map, sizeof map, "%s/proj.exr", dir);
+    exr_image img;
+    hz_error err = {0};
+    assert_int_equal(exr_image_alloc(&img, 8, 4, 3, &err), HZ_OK);
+    const char *names[3] = {"R", "G", "B"};
+    for (int c = 0; c < 3; ++c) {
+        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
+        for (int i = 0; i < 32; ++i) /* top-left texel 5, the rest 1 */
+            img.channels[c].pixels[i] = i == 0 ? 5.0f : 1.0f;
+    }
+    assert_int_equal(exr_write(map, &img, &err), HZ_OK);
+    exr_image_free(&img);
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+             " \"integer yresolution\" 4\nWorldBegin\n"
+             "LightSource \"projection\" \"string filename\" \"%s\" \"float fov\" 90"
+             " \"float scale\" 2\n",
+             map);
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    const light *l = &render_scene_lights(rs)[0];
+    /* fov 90: the window is x in [-2, 2], y in [-1, 1] at unit distance */
+    expect_rgb_close(light_point_factor(l, v3_normalize(v3(0.1, 0.1, 1))), rgb_grey(1.0), 0, 0,
+                     "centre", 0, 0);
+    /* the top-left texel (the image's first row): toward -x, +y (row 0 is the
+     * window's bottom in light space, and pbrt-v4 flips y) */
+    expect_rgb_close(light_point_factor(l, v3_normalize(v3(-1.9, 0.9, 1))), rgb_grey(5.0), 0,
+                     0, "corner", 0, 0);
+    expect_rgb_close(light_point_factor(l, v3_normalize(v3(-1.9, -0.9, 1))), rgb_grey(1.0), 0,
+                     0, "other corner", 0, 0);
+    assert_true(rgb_is_black(light_point_factor(l, v3_normalize(v3(-2.1, 0, 1)))));
+    assert_true(rgb_is_black(light_point_factor(l, v3(0, 0, -1))));
+    light_sample ls;
+    assert_true(light_sample_li(l, v3(0, 0, 2), v3(0, 0, -1), 0.0, v2(0.5, 0.5), &ls));
+    expect_rgb_close(ls.L, rgb_grey(2.0 / 4.0), 1e-12, 0.0, "intensity / d^2", 0, 0);
+    render_scene_destroy(rs);
+    snprintf(text, sizeof text,
+             "Camera \"perspective\"\nFilm \"rgb\" \"integer xresolution\" 4"
+             " \"integer yresolution\" 4\nWorldBegin\n"
+             "LightSource \"projection\" \"string filename\" \"%s\" \"float power\" 100\n",
+             map);
+    rs = build_scene_or_fail(text, NULL);
+    expect_rgb_close(light_phi(&render_scene_lights(rs)[0], 1.0), rgb_grey(100.0), 1e-9, 0.0,
+                     "power", 0, 0);
+    render_scene_destroy(rs);
+}
+
 static int teardown(void **state)
 {
     (void)state;
-    const char *files[] = {"patchy.exr", "wide.exr", "upper.exr", "uniform.exr", "gonio.exr"};
+    const char *files[] = {"patchy.exr", "wide.exr", "upper.exr", "uniform.exr", "gonio.exr",
+                           "proj.exr"};
     char path[1200];
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
         snprintf(path, sizeof path, "%s/%s", dir, files[i]);
@@ -346,6 +402,7 @@ int main(void)
         cmocka_unit_test(test_renders_against_closed_forms),
         cmocka_unit_test(test_fog_under_uniform_map),
         cmocka_unit_test(test_goniometric),
+        cmocka_unit_test(test_projection),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

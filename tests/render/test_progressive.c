@@ -71,10 +71,12 @@ static unsigned char *film_bytes(film *f, size_t *n)
     unsigned char *b = malloc(total), *p = b;
     assert_non_null(b);
     for (int i = 0; i < 3; ++i) {
-        memcpy(p, acc.doubles[i], acc.double_count[i] * sizeof(double));
+        if (acc.doubles[i])
+            memcpy(p, acc.doubles[i], acc.double_count[i] * sizeof(double));
         p += acc.double_count[i] * sizeof(double);
     }
-    memcpy(p, acc.counts, acc.count_count * sizeof(uint32_t));
+    if (acc.counts)
+        memcpy(p, acc.counts, acc.count_count * sizeof(uint32_t));
     *n = total;
     return b;
 }
