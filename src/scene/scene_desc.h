@@ -78,6 +78,15 @@ typedef struct {
     transform world_from_medium_end; /* end time: haze moves media with it */
 } medium_entity;
 
+/* `Texture "name" "float"|"spectrum" "class" params`: entity.type is the
+ * class. */
+typedef struct {
+    char *name;
+    bool spectrum;               /* "spectrum" (rgb) or "float" */
+    scene_entity entity;
+    transform world_from_texture; /* the CTM at the directive */
+} texture_entity;
+
 typedef struct {
     /* Absent directives get default entities with the type pbrt-v4 uses
      * ("perspective", "rgb", "zsobol", "gaussian", "volpath") and no params. */
@@ -98,6 +107,8 @@ typedef struct {
     size_t light_count;
     medium_entity *media;
     size_t medium_count;
+    texture_entity *textures;    /* in file order */
+    size_t texture_count;
 
     /* TransformTimes (defaults 0 and 1). */
     double transform_start_time, transform_end_time;
