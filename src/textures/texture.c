@@ -32,13 +32,18 @@ typedef struct {
     float *rgb; /* 3 per texel, linear, top row first */
 } tex_image;
 
+enum { TEX_MAX_LEVELS = 32 };
+typedef enum { FILTER_POINT, FILTER_BILINEAR, FILTER_TRILINEAR } tex_filter;
+
 struct texture {
     texture_kind kind;
     bool spectrum;
     double su, sv, du, dv; /* "uv" mapping: s = su u + du, t = sv v + dv */
     tex_input in[4];
-    tex_image img;
-    bool point_filter;
+    tex_image img;            /* level 0 */
+    tex_image level[TEX_MAX_LEVELS]; /* level[0] = img; each next a 2x2 box of the last */
+    int levels;
+    tex_filter filter;
     tex_wrap wrap;
     double scale;
     bool invert;
@@ -118,26 +123,84 @@ static bool wrap_texel(tex_wrap w, int width, int height, int *x, int *y)
     return false;
 }
 
-static rgb texel(const texture *t, int x, int y)
+static rgb texel(const texture *t, const tex_image *im, int x, int y)
 {
-    if (!wrap_texel(t->wrap, t->img.width, t->img.height, &x, &y))
+    if (!wrap_texel(t->wrap, im->width, im->height, &x, &y))
         return rgb_grey(0.0);
-    const float *p = &t->img.rgb[3 * ((size_t)y * (size_t)t->img.width + (size_t)x)];
+    const float *p = &im->rgb[3 * ((size_t)y * (size_t)im->width + (size_t)x)];
     return rgb_make(p[0], p[1], p[2]);
 }
 
 /* pbrt-v4's Image lookups: texel centres at (i + 0.5) / width. */
-static rgb image_lookup(const texture *t, double s, double tt)
+static rgb bilerp(const texture *t, const tex_image *im, double s, double tt)
 {
-    double x = s * t->img.width - 0.5, y = tt * t->img.height - 0.5;
-    if (t->point_filter)
-        return texel(t, (int)round(x), (int)round(y));
+    double x = s * im->width - 0.5, y = tt * im->height - 0.5;
     double fx = floor(x), fy = floor(y), dx = x - fx, dy = y - fy;
     int x0 = (int)fx, y0 = (int)fy;
-    return rgb_add(rgb_add(rgb_scale(texel(t, x0, y0), (1 - dx) * (1 - dy)),
-                           rgb_scale(texel(t, x0 + 1, y0), dx * (1 - dy))),
-                   rgb_add(rgb_scale(texel(t, x0, y0 + 1), (1 - dx) * dy),
-                           rgb_scale(texel(t, x0 + 1, y0 + 1), dx * dy)));
+    return rgb_add(rgb_add(rgb_scale(texel(t, im, x0, y0), (1 - dx) * (1 - dy)),
+                           rgb_scale(texel(t, im, x0 + 1, y0), dx * (1 - dy))),
+                   rgb_add(rgb_scale(texel(t, im, x0, y0 + 1), (1 - dx) * dy),
+                           rgb_scale(texel(t, im, x0 + 1, y0 + 1), dx * dy)));
+}
+
+/* pbrt-v4's MIPMap::Filter for its non-EWA filters: the level of a filter
+ * width of twice the largest st derivative; point and bilinear look up
+ * that level, trilinear blends it with the next (from level 1 on). */
+static rgb image_lookup(const texture *t, double s, double tt, double width)
+{
+    int n = t->levels;
+    double level = n - 1 + log2(fmax(width, 1e-8));
+    if (level >= n - 1)
+        return texel(t, &t->level[n - 1], 0, 0);
+    int il = level > 0.0 ? (int)floor(level) : 0;
+    const tex_image *im = &t->level[il];
+    switch (t->filter) {
+    case FILTER_POINT:
+        return texel(t, im, (int)round(s * im->width - 0.5), (int)round(tt * im->height - 0.5));
+    case FILTER_BILINEAR:
+        return bilerp(t, im, s, tt);
+    case FILTER_TRILINEAR:
+        if (il == 0)
+            return bilerp(t, im, s, tt);
+        return rgb_lerp(level - il, bilerp(t, im, s, tt), bilerp(t, &t->level[il + 1], s, tt));
+    }
+    return rgb_grey(0.0);
+}
+
+/* Levels down to 1x1, each texel the mean of the 2x2 below it (clamped at
+ * an odd edge); pbrt-v4 first resamples an image whose sides are not powers
+ * of 2 to the next powers. */
+static hz_status build_pyramid(texture *t, hz_error *err)
+{
+    t->level[0] = t->img;
+    t->levels = 1;
+    while (t->levels < TEX_MAX_LEVELS) {
+        const tex_image *a = &t->level[t->levels - 1];
+        if (a->width == 1 && a->height == 1)
+            break;
+        tex_image *b = &t->level[t->levels];
+        b->width = a->width > 1 ? (a->width + 1) / 2 : 1;
+        b->height = a->height > 1 ? (a->height + 1) / 2 : 1;
+        b->rgb = malloc((size_t)b->width * (size_t)b->height * 3 * sizeof *b->rgb);
+        if (!b->rgb)
+            return hz_fail(err, "out of memory");
+        ++t->levels;
+        for (int y = 0; y < b->height; ++y)
+            for (int x = 0; x < b->width; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    double sum = 0;
+                    for (int k = 0; k < 4; ++k) {
+                        int xs = 2 * x + (k & 1), ys = 2 * y + (k >> 1);
+                        xs = xs < a->width ? xs : a->width - 1;
+                        ys = ys < a->height ? ys : a->height - 1;
+                        sum += a->rgb[3 * ((size_t)ys * (size_t)a->width + (size_t)xs) +
+                                      (size_t)c];
+                    }
+                    b->rgb[3 * ((size_t)y * (size_t)b->width + (size_t)x) + (size_t)c] =
+                        (float)(sum / 4);
+                }
+    }
+    return HZ_OK;
 }
 
 rgb texture_eval(const texture *t, const texture_ctx *c)
@@ -165,7 +228,9 @@ rgb texture_eval(const texture *t, const texture_ctx *c)
                        rgb_lerp(s, rgb_scale(eval_input(&t->in[1], c), tt),
                                 rgb_scale(eval_input(&t->in[3], c), tt)));
     case TEX_IMAGEMAP: {
-        rgb v = rgb_scale(image_lookup(t, s, 1.0 - tt), t->scale);
+        double width = 2 * fmax(fmax(fabs(t->su * c->dudx), fabs(t->su * c->dudy)),
+                                fmax(fabs(t->sv * c->dvdx), fabs(t->sv * c->dvdy)));
+        rgb v = rgb_scale(image_lookup(t, s, 1.0 - tt, width), t->scale);
         if (t->invert)
             v = rgb_sub(rgb_grey(1.0), v);
         return rgb_make(fmax(v.r, 0.0), fmax(v.g, 0.0), fmax(v.b, 0.0));
@@ -327,12 +392,16 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
 {
     t->kind = TEX_IMAGEMAP;
     const char *filter = params_string(pl, "filter", "bilinear");
-    /* trilinear and ewa: bilinear at the finest level (no MIP pyramid yet). */
-    if (strcmp(filter, "point") != 0 && strcmp(filter, "bilinear") != 0 &&
-        strcmp(filter, "trilinear") != 0 && strcmp(filter, "ewa") != 0 &&
-        strcmp(filter, "EWA") != 0)
+    /* ewa runs as trilinear (docs/differences-from-pbrt.md). */
+    if (strcmp(filter, "point") == 0)
+        t->filter = FILTER_POINT;
+    else if (strcmp(filter, "bilinear") == 0)
+        t->filter = FILTER_BILINEAR;
+    else if (strcmp(filter, "trilinear") == 0 || strcmp(filter, "ewa") == 0 ||
+             strcmp(filter, "EWA") == 0)
+        t->filter = FILTER_TRILINEAR;
+    else
         return hz_fail_at(err, params_loc(pl, "filter"), "unknown \"filter\" \"%s\"", filter);
-    t->point_filter = strcmp(filter, "point") == 0;
     const char *wrap = params_string(pl, "wrap", "repeat");
     static const char *const wraps[] = {"repeat", "black", "clamp", "octahedralsphere"};
     int w = -1;
@@ -364,7 +433,7 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
     if (st == HZ_OK && (t->img.width <= 0 || t->img.height <= 0))
         return hz_fail_at(err, params_loc(pl, "filename"), "image texture \"%s\" is empty",
                           name);
-    return st;
+    return st == HZ_OK ? build_pyramid(t, err) : st;
 }
 
 static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, hz_error *err)
@@ -426,6 +495,13 @@ static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, h
     return params_finish(pl, what, err);
 }
 
+static void free_images(texture *t)
+{
+    free(t->img.rgb);
+    for (int i = 1; i < t->levels; ++i)
+        free(t->level[i].rgb);
+}
+
 hz_status texture_set_create(scene_desc *sd, hz_errors *errs, texture_set **out, hz_error *err)
 {
     *out = NULL;
@@ -440,7 +516,7 @@ hz_status texture_set_create(scene_desc *sd, hz_errors *errs, texture_set **out,
     }
     for (size_t i = 0; i < sd->texture_count; ++i) {
         if (build_texture(s, &sd->textures[i], &s->items[i], err) != HZ_OK) {
-            free(s->items[i].img.rgb);
+            free_images(&s->items[i]);
             if (!err->loc.file) {
                 s->count = i;
                 texture_set_destroy(s);
@@ -460,7 +536,7 @@ void texture_set_destroy(texture_set *s)
     if (!s)
         return;
     for (size_t i = 0; i < s->count; ++i)
-        free(s->items[i].img.rgb);
+        free_images(&s->items[i]);
     free(s->items);
     free(s);
 }

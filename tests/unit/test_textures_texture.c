@@ -171,7 +171,9 @@ static void test_imagemap_exr(void **state)
               "Texture \"k\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
               "\"string wrap\" \"black\" \"string filter\" \"point\"\n"
               "Texture \"s\" \"float\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
-              "\"float scale\" 0.5 \"bool invert\" true \"string filter\" \"point\"\n",
+              "\"float scale\" 0.5 \"bool invert\" true \"string filter\" \"point\"\n"
+              "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
+              "\"string filter\" \"trilinear\"\n",
               &b, &err),
         HZ_OK);
     /* Texel centres: (u, v) = ((x + 0.5) / 2, 1 - (y + 0.5) / 2). */
@@ -189,6 +191,17 @@ static void test_imagemap_exr(void **state)
     assert_rgb(at(&b, "c", true, 0.0, 0.75), 1, 10, 0, 1e-6);
     /* Black outside. */
     assert_rgb(at(&b, "k", true, 1.25, 0.75), 0, 0, 0, 0);
+    /* A footprint of the whole image (width 2 max |ds|, |dt| = 1): the 1x1
+     * top of the pyramid, the mean, for every filter (pbrt-v4's level choice). */
+    texture_ctx wide = {.u = 0.25, .v = 0.75, .dudx = 0.5};
+    assert_rgb(texture_eval(texture_set_find(b.set, "l", true), &wide), 2.5, 25, 0, 1e-6);
+    assert_rgb(texture_eval(texture_set_find(b.set, "p", true), &wide), 2.5, 25, 0, 1e-6);
+    /* Half of it: level 0 (trilinear blends only from level 1 on, as pbrt-v4). */
+    texture_ctx half = {.u = 0.25, .v = 0.75, .dudx = 0.25};
+    assert_rgb(texture_eval(texture_set_find(b.set, "t", true), &half), 1, 10, 0, 1e-6);
+    /* Between: level 0.5 -> level 0 for trilinear. */
+    texture_ctx mid = {.u = 0.25, .v = 0.75, .dudx = 0.25 * sqrt(2.0)};
+    assert_rgb(texture_eval(texture_set_find(b.set, "t", true), &mid), 1, 10, 0, 1e-6);
     /* Float from R: 1 - 0.5 * R, clamped at 0. */
     assert_near(at(&b, "s", false, 0.25, 0.75).r, 0.5, 0);
     assert_near(at(&b, "s", false, 0.75, 0.25).r, 0.0, 0);
