@@ -55,6 +55,8 @@ hz_status scene_input_files(const scene_desc *sd, char ***out, size_t *count, hz
         ok = push_named(&list, &n, &cap, &sd->object_shapes[i].entity, "plymesh", "filename");
     for (size_t i = 0; ok && i < sd->medium_count; ++i)
         ok = push_named(&list, &n, &cap, &sd->media[i].entity, "nanovdb", "filename");
+    for (size_t i = 0; ok && i < sd->texture_count; ++i)
+        ok = push_named(&list, &n, &cap, &sd->textures[i].entity, "imagemap", "filename");
     if (!ok) {
         scene_input_files_free(list, n);
         return hz_fail(err, "out of memory listing the scene's files");
