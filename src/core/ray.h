@@ -21,6 +21,15 @@ typedef struct {
     vec3 rx_o, rx_d, ry_o, ry_d;
 } ray_differential;
 
+/* pbrt-v4's ScaleDifferentials: the offset rays moved towards the main one. */
+static inline void ray_scale_differentials(ray_differential *rd, double s)
+{
+    rd->rx_o = v3_add(rd->r.o, v3_scale(v3_sub(rd->rx_o, rd->r.o), s));
+    rd->ry_o = v3_add(rd->r.o, v3_scale(v3_sub(rd->ry_o, rd->r.o), s));
+    rd->rx_d = v3_add(rd->r.d, v3_scale(v3_sub(rd->rx_d, rd->r.d), s));
+    rd->ry_d = v3_add(rd->r.d, v3_scale(v3_sub(rd->ry_d, rd->r.d), s));
+}
+
 /* Coordinates haze can trace. Embree refuses (asserts on) a ray whose origin or
  * direction has a component beyond FLT_LARGE (~1.8e18), and float rounding
  * makes surfaces meaningless long before that. Scene values that would put a

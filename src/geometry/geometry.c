@@ -222,6 +222,7 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
     out->kind = g.kind;
     out->flip_normal = se->reverse_orientation ^ transform_swaps_handedness(&space_from_object);
     bool interface = out->material->kind == MATERIAL_INTERFACE;
+    out->textured = material_has_textures(out->material);
 
     RTCGeometry geom = NULL;
     if (g.kind == GEOMETRY_SPHERE) {
@@ -287,6 +288,9 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
                 out->n[3 * i + 2] = n.z;
             }
         }
+        out->uv = g.uv; /* taken from g */
+        g.uv = NULL;
+        out->quads = g.quads;
         out->vertex_count = g.vertex_count;
         out->triangle_count = g.triangle_count;
         out->p = p;
@@ -707,7 +711,7 @@ void geometry_destroy(geometry *g)
     if (!g)
         return;
     for (size_t i = 0; i < g->shape_count; ++i)
-        free(g->shapes[i].n);
+        free(g->shapes[i].n), free(g->shapes[i].uv);
     free(g->shapes);
     if (g->shape_instances) {
         for (size_t i = 0; i < g->shape_count; ++i) {
@@ -723,7 +727,7 @@ void geometry_destroy(geometry *g)
     }
     for (size_t o = 0; o < g->object_count; ++o) {
         for (size_t i = 0; i < g->objects[o].shape_count; ++i)
-            free(g->objects[o].shapes[i].n);
+            free(g->objects[o].shapes[i].n), free(g->objects[o].shapes[i].uv);
         free(g->objects[o].shapes);
         if (g->objects[o].scene)
             rtcReleaseScene(g->objects[o].scene);
@@ -772,6 +776,105 @@ static vec3 vertex(const geom_shape *s, uint32_t i)
     return v3(s->p[3 * i], s->p[3 * i + 1], s->p[3 * i + 2]);
 }
 
+/* a b - c d */
+static double diff_products(double a, double b, double c, double d)
+{
+    return a * b - c * d;
+}
+
+static double clamp_derivative(double x)
+{
+    return isfinite(x) ? hz_clamp(x, -1e8, 1e8) : 0.0;
+}
+
+void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d)
+{
+    vec3 n = h->ng;
+    double nx = v3_dot(n, rx_d), ny = v3_dot(n, ry_d);
+    if (!h->shape->textured || nx == 0.0 || ny == 0.0)
+        return;
+    double d = -v3_dot(n, h->p);
+    vec3 px = v3_add(rx_o, v3_scale(rx_d, (-v3_dot(n, rx_o) - d) / nx));
+    vec3 py = v3_add(ry_o, v3_scale(ry_d, (-v3_dot(n, ry_o) - d) / ny));
+    vec3 dpdx = v3_sub(px, h->p), dpdy = v3_sub(py, h->p);
+    double a00 = v3_dot(h->dpdu, h->dpdu), a01 = v3_dot(h->dpdu, h->dpdv);
+    double a11 = v3_dot(h->dpdv, h->dpdv);
+    double inv = 1.0 / diff_products(a00, a11, a01, a01);
+    inv = isfinite(inv) ? inv : 0.0;
+    double b0x = v3_dot(h->dpdu, dpdx), b1x = v3_dot(h->dpdv, dpdx);
+    double b0y = v3_dot(h->dpdu, dpdy), b1y = v3_dot(h->dpdv, dpdy);
+    h->dudx = clamp_derivative(diff_products(a11, b0x, a01, b1x) * inv);
+    h->dvdx = clamp_derivative(diff_products(a00, b1x, a01, b0x) * inv);
+    h->dudy = clamp_derivative(diff_products(a11, b0y, a01, b1y) * inv);
+    h->dvdy = clamp_derivative(diff_products(a00, b1y, a01, b0y) * inv);
+}
+
+const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scratch)
+{
+    const material *m = material_at(h->shape->material, h->p, wo);
+    if (!h->shape->textured)
+        return m;
+    texture_ctx c = {.u = h->u, .v = h->v, .p = h->p, .dudx = h->dudx, .dudy = h->dudy,
+                     .dvdx = h->dvdx, .dvdy = h->dvdy};
+    return material_textured(m, &c, scratch);
+}
+
+/* pbrt-v4's sphere parameters at the object-space point po. */
+static void sphere_uv(const geom_shape *s, vec3 po, geom_hit *hit)
+{
+    double r = s->radius, phi = atan2(po.y, po.x);
+    if (phi < 0.0)
+        phi += 2.0 * HZ_PI;
+    double th_min = acos(hz_clamp(fmin(s->zmin, s->zmax) / r, -1.0, 1.0));
+    double th_max = acos(hz_clamp(s->zmax / r, -1.0, 1.0));
+    double theta = acos(hz_clamp(po.z / r, -1.0, 1.0));
+    hit->dudx = hit->dudy = hit->dvdx = hit->dvdy = 0.0;
+    hit->u = phi / s->phimax;
+    hit->v = (theta - th_min) / (th_max - th_min);
+    double zr = sqrt(po.x * po.x + po.y * po.y);
+    double cos_phi = zr > 0.0 ? po.x / zr : 1.0, sin_phi = zr > 0.0 ? po.y / zr : 0.0;
+    hit->dpdu = transform_vector(&s->space_from_object,
+                                 v3(-s->phimax * po.y, s->phimax * po.x, 0.0));
+    hit->dpdv = transform_vector(&s->space_from_object,
+                                 v3_scale(v3(po.z * cos_phi, po.z * sin_phi, -r * sin(theta)),
+                                          th_max - th_min));
+}
+
+/* pbrt-v4's triangle parameters: the mesh's uv (or its defaults, a
+ * bilinear patch's for a quad's halves) at barycentrics (b1, b2). */
+static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2, vec3 p0,
+                        vec3 p1, vec3 p2, geom_hit *hit)
+{
+    const uint32_t *tri = &s->indices[3 * prim];
+    double uv[3][2] = {{0, 0}, {1, 0}, {1, 1}};
+    if (s->uv) {
+        for (int i = 0; i < 3; ++i) {
+            uv[i][0] = s->uv[2 * tri[i]];
+            uv[i][1] = s->uv[2 * tri[i] + 1];
+        }
+    } else if (s->quads && (prim & 1u)) {
+        /* p00 p11 p01 */
+        uv[1][0] = 1, uv[1][1] = 1, uv[2][0] = 0, uv[2][1] = 1;
+    }
+    double b0 = 1.0 - b1 - b2;
+    hit->dudx = hit->dudy = hit->dvdx = hit->dvdy = 0.0;
+    hit->u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
+    hit->v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
+    double d02[2] = {uv[0][0] - uv[2][0], uv[0][1] - uv[2][1]};
+    double d12[2] = {uv[1][0] - uv[2][0], uv[1][1] - uv[2][1]};
+    vec3 dp02 = v3_sub(p0, p2), dp12 = v3_sub(p1, p2);
+    double det = d02[0] * d12[1] - d02[1] * d12[0];
+    if (fabs(det) > 1e-12) {
+        double inv = 1.0 / det;
+        hit->dpdu = v3_scale(v3_sub(v3_scale(dp02, d12[1]), v3_scale(dp12, d02[1])), inv);
+        hit->dpdv = v3_scale(v3_sub(v3_scale(dp12, d02[0]), v3_scale(dp02, d12[0])), inv);
+        if (v3_length_sq(v3_cross(hit->dpdu, hit->dpdv)) > 0.0)
+            return;
+    }
+    /* Degenerate uv: any frame of the plane (as pbrt-v4). */
+    v3_basis(v3_normalize(v3_cross(dp02, dp12)), &hit->dpdu, &hit->dpdv);
+}
+
 /* Fills p, ng, ns in the shape's own space (render or prototype), for the
  * ray o + t d of that space; d = 0 asks for the point at barycentrics (u, v). */
 static void surface_at(const geom_shape *s, unsigned prim, double u, double v, vec3 o, vec3 d,
@@ -785,6 +888,8 @@ static void surface_at(const geom_shape *s, unsigned prim, double u, double v, v
         hit->p = transform_point(&s->space_from_object, po);
         vec3 n = v3_normalize(transform_normal(&s->space_from_object, po));
         hit->ng = hit->ns = s->flip_normal ? v3_neg(n) : n;
+        if (s->textured)
+            sphere_uv(s, po, hit);
         return;
     }
     const uint32_t *tri = &s->indices[3 * prim];
@@ -801,6 +906,8 @@ static void surface_at(const geom_shape *s, unsigned prim, double u, double v, v
     } else {
         hit->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, u)), v3_scale(p2, v));
     }
+    if (s->textured)
+        triangle_uv(s, prim, u, v, p0, p1, p2, hit);
     vec3 ng = v3_normalize(n);
     if (s->flip_normal)
         ng = v3_neg(ng);
@@ -908,6 +1015,10 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
     hit->p = transform_point(&render_from_instance, hit->p);
     hit->ng = v3_normalize(transform_normal(&render_from_instance, hit->ng));
     hit->ns = v3_normalize(transform_normal(&render_from_instance, hit->ns));
+    if (s->textured) {
+        hit->dpdu = transform_vector(&render_from_instance, hit->dpdu);
+        hit->dpdv = transform_vector(&render_from_instance, hit->dpdv);
+    }
     return true;
 }
 

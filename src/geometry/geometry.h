@@ -62,6 +62,11 @@ typedef struct {
     const float *p;           /* 3 per vertex */
     const uint32_t *indices;  /* 3 per triangle */
     double *n;                /* 3 per vertex, shading normals in this space, or NULL */
+    double *uv;               /* 2 per vertex, or NULL: pbrt-v4's defaults */
+    bool quads;               /* bilinearmesh: triangles 2i, 2i + 1 are quad i's halves */
+    /* The material (or a mix's component) has textures: hits carry (u, v)
+     * and dp/du, dp/dv (no cost for the others). */
+    bool textured;
     /* sphere; a part of it (pbrt-v4's zmin, zmax, phimax) when `partial` */
     double radius;
     double zmin, zmax, phimax;
@@ -80,7 +85,25 @@ typedef struct {
     vec3 ns;                  /* unit shading normal (equals ng without mesh normals) */
     const geom_shape *shape;
     unsigned prim;            /* triangle index */
+    /* Only when shape->textured: the surface parameters as pbrt-v4's
+     * (sphere: phi / phimax and (theta - theta(zmin)) / range; triangles:
+     * the mesh's "uv" or (0,0), (1,0), (1,1)) and their render-space
+     * partial derivatives. */
+    double u, v;
+    vec3 dpdu, dpdv;
+    /* Screen-space footprint of (u, v): 0 unless geometry_hit_footprint set
+     * it (camera rays with differentials at textured shapes). */
+    double dudx, dudy, dvdx, dvdy;
 } geom_hit;
+
+/* pbrt-v4's footprint of a textured hit: the differential rays meet the
+ * tangent plane at p + dp/dx and p + dp/dy, and (du/dx, dv/dx, ...) solve
+ * dp/dx = du/dx dp/du + dv/dx dp/dv in the least-squares sense. */
+void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d);
+
+/* The material at hit h seen from wo: material_at's choice with its
+ * textures evaluated at the hit (into *scratch when it has any). */
+const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scratch);
 
 typedef struct geometry geometry;
 

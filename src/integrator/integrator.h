@@ -54,7 +54,7 @@ void integrator_free(integrator *it);
 /* Radiance along the camera ray `r` (unit direction). `depth` receives the
  * distance to the first opaque surface (INFINITY when none). Thread-safe;
  * allocates nothing. */
-rgb integrator_li(const integrator *it, const ray *r, sampler_state *st, double *depth,
-                  integrator_counters *counters);
+rgb integrator_li(const integrator *it, const ray_differential *rd, sampler_state *st,
+                  double *depth, integrator_counters *counters);
 
 #endif

@@ -160,9 +160,10 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
     return L;
 }
 
-rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state *st, double *depth,
-                  integrator_counters *counters)
+rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
+                     double *depth, integrator_counters *counters)
 {
+    const ray *r = &rd->r;
     counters->camera_rays++;
     *depth = INFINITY;
     vec3 o = r->o, d = r->d;
@@ -210,7 +211,10 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state 
     rgb Ls = rgb_grey(0.0);
     if (h.shape->area_light >= 0)
         Ls = light_area_le(&sc->in.lights[h.shape->area_light], h.ng, wo);
-    const material *mat = material_at(h.shape->material, h.p, wo);
+    if (rd->has_differentials)
+        geometry_hit_footprint(&h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
+    material scratch;
+    const material *mat = geometry_material_at(&h, wo, &scratch);
     switch (mat->kind) {
     case MATERIAL_DIFFUSE:
     case MATERIAL_CONDUCTOR:

@@ -61,7 +61,7 @@ singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
                                              singlescatter_settings settings);
 
 /* `r->d` must be unit. */
-rgb singlescatter_li(const singlescatter_scene *sc, const ray *r, sampler_state *st,
+rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
                      double *depth, integrator_counters *counters);
 
 #endif

@@ -442,7 +442,8 @@ static bool bounce(path *pa, const geom_hit *h)
     if (h->shape->area_light >= 0)
         add_emission(pa, h, wo);
     bsdf b;
-    if (!bsdf_from_material(material_at(h->shape->material, h->p, wo), h->ns, &b))
+    material scratch;
+    if (!bsdf_from_material(geometry_material_at(h, wo, &scratch), h->ns, &b))
         return false;
     if (pa->depth++ >= sc->settings.max_depth)
         return false;
@@ -508,9 +509,10 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
     return true;
 }
 
-rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double *depth,
-               integrator_counters *counters)
+rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_state *st,
+               double *depth, integrator_counters *counters)
 {
+    const ray *r = &rd->r;
     counters->camera_rays++;
     *depth = INFINITY;
     bool media = sc->in.medium_count > 0;
@@ -574,6 +576,10 @@ rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double 
         if (camera_ray) {
             *depth = v3_length(v3_sub(h.p, r->o));
             camera_ray = false;
+            /* Textures are filtered over the camera ray's footprint only
+             * (later bounces: no filtering; docs/differences-from-pbrt.md). */
+            if (rd->has_differentials)
+                geometry_hit_footprint(&h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
         }
         if (!bounce(&pa, &h))
             break;

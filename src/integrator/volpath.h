@@ -63,7 +63,7 @@ void volpath_scene_free(volpath_scene *sc);
 /* Radiance along the camera ray `r` (unit direction). `depth` receives the
  * distance to the first opaque surface on the camera ray before any scattering
  * (INFINITY when none). Thread-safe; allocates nothing. */
-rgb volpath_li(const volpath_scene *sc, const ray *r, sampler_state *st, double *depth,
-               integrator_counters *counters);
+rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_state *st,
+               double *depth, integrator_counters *counters);
 
 #endif

@@ -93,17 +93,40 @@ bool material_transmits(const material *m)
 static const rgb copper_eta = {0.43052, 0.96400, 1.16244};
 static const rgb copper_k = {6.06186, 2.60415, 2.32192};
 
+/* The texture a "texture NAME" parameter names, of the given value type;
+ * NULL when the parameter is not a texture. An unknown name is refused at
+ * its place. */
+static const texture *texture_param(param_list *pl, const texture_set *ts, const char *name,
+                                    bool spectrum)
+{
+    const char *ref = params_texture(pl, name);
+    if (!ref)
+        return NULL;
+    const texture *t = texture_set_find(ts, ref, spectrum);
+    if (!t)
+        params_reject(pl, name, "\"texture %s\": no %s texture named \"%s\" defined before it",
+                      name, spectrum ? "spectrum" : "float", ref);
+    return t;
+}
+
 /* PREFIX"roughness", or PREFIX"uroughness"/PREFIX"vroughness", to
  * Trowbridge-Reitz alphas (remapped unless "remaproughness" is false), as
- * pbrt-v4. */
-static tr_distribution read_roughness_of(param_list *pl, const char *prefix)
+ * pbrt-v4; float textures go to tex[0..1] (u, v), evaluated per hit. */
+static tr_distribution read_roughness_of(param_list *pl, const char *prefix,
+                                         const texture_set *ts, const texture **tex)
 {
     char names[3][64];
     const char *base[3] = {"roughness", "uroughness", "vroughness"};
     for (int i = 0; i < 3; ++i)
         snprintf(names[i], sizeof names[i], "%s%s", prefix, base[i]);
-    double r = params_float(pl, names[0], 0.0);
-    double u = params_float(pl, names[1], r), v = params_float(pl, names[2], r);
+    const texture *rt = texture_param(pl, ts, names[0], false);
+    const texture *ut = texture_param(pl, ts, names[1], false);
+    const texture *vt = texture_param(pl, ts, names[2], false);
+    double r = rt ? 0.0 : params_float(pl, names[0], 0.0);
+    double u = ut ? 0.0 : params_float(pl, names[1], r);
+    double v = vt ? 0.0 : params_float(pl, names[2], r);
+    tex[0] = ut ? ut : params_has(pl, names[1]) ? NULL : rt;
+    tex[1] = vt ? vt : params_has(pl, names[2]) ? NULL : rt;
     bool remap = params_bool(pl, "remaproughness", true);
     const double vals[3] = {r, u, v};
     for (int i = 0; i < 3; ++i)
@@ -114,9 +137,9 @@ static tr_distribution read_roughness_of(param_list *pl, const char *prefix)
                              remap ? tr_roughness_to_alpha(v) : v};
 }
 
-static void read_roughness(param_list *pl, material *out)
+static void read_roughness(param_list *pl, const texture_set *ts, material *out)
 {
-    tr_distribution d = read_roughness_of(pl, "");
+    tr_distribution d = read_roughness_of(pl, "", ts, out->rough);
     out->alpha_x = d.alpha_x;
     out->alpha_y = d.alpha_y;
 }
@@ -131,32 +154,41 @@ static double read_eta(param_list *pl, const char *name)
     return eta;
 }
 
+/* A conductor's "reflectance" r as eta 1 and k = 2 sqrt(r) / sqrt(1 - r). */
+static rgb k_of_reflectance(rgb r)
+{
+    double c[3] = {r.r, r.g, r.b}, kk[3];
+    for (int i = 0; i < 3; ++i) {
+        double ri = hz_clamp(c[i], 0.0, 0.9999);
+        kk[i] = 2.0 * sqrt(ri) / sqrt(1.0 - ri);
+    }
+    return rgb_make(kk[0], kk[1], kk[2]);
+}
+
 /* A conductor's eta and k (named NAME_ETA, NAME_K; default copper), or
  * "reflectance" r: eta 1 and k = 2 sqrt(r) / sqrt(1 - r), r within
  * [0, 0.9999] (as pbrt-v4). */
-static hz_status read_metal(param_list *pl, const char *name_eta, const char *name_k, rgb *eta,
-                            rgb *k, hz_error *err)
+static hz_status read_metal(param_list *pl, const texture_set *ts, const char *name_eta,
+                            const char *name_k, rgb *eta, rgb *k, material *out, hz_error *err)
 {
     bool has_r = params_has(pl, "reflectance");
+    out->metal_r_tex = texture_param(pl, ts, "reflectance", true);
+    out->eta_tex = texture_param(pl, ts, name_eta, true);
+    out->k_tex = texture_param(pl, ts, name_k, true);
     if (has_r && (params_has(pl, name_eta) || params_has(pl, name_k)))
         return hz_fail_at(err, params_loc(pl, "reflectance"),
                           "give \"reflectance\" or \"%s\" and \"%s\", not both (as pbrt-v4)",
                           name_eta, name_k);
     if (has_r) {
-        rgb r = params_rgb(pl, "reflectance", rgb_grey(0.0));
+        rgb r = out->metal_r_tex ? rgb_grey(0.0) : params_rgb(pl, "reflectance", rgb_grey(0.0));
         if (!(r.r >= 0 && r.g >= 0 && r.b >= 0 && r.r <= 1 && r.g <= 1 && r.b <= 1))
             params_reject(pl, "reflectance", "conductor reflectance must be within [0, 1]");
-        double c[3] = {r.r, r.g, r.b}, kk[3];
-        for (int i = 0; i < 3; ++i) {
-            double ri = hz_clamp(c[i], 0.0, 0.9999);
-            kk[i] = 2.0 * sqrt(ri) / sqrt(1.0 - ri);
-        }
         *eta = rgb_grey(1.0);
-        *k = rgb_make(kk[0], kk[1], kk[2]);
+        *k = k_of_reflectance(r);
         return HZ_OK;
     }
-    *eta = params_rgb(pl, name_eta, copper_eta);
-    *k = params_rgb(pl, name_k, copper_k);
+    *eta = out->eta_tex ? copper_eta : params_rgb(pl, name_eta, copper_eta);
+    *k = out->k_tex ? copper_k : params_rgb(pl, name_k, copper_k);
     rgb e = *eta, kv = *k;
     if (!(e.r > 0 && e.g > 0 && e.b > 0 && isfinite(e.r + e.g + e.b)))
         params_reject(pl, name_eta, "conductor \"%s\" must be finite and > 0", name_eta);
@@ -189,26 +221,29 @@ static void read_layers(param_list *pl, layered *l)
                       l->n_samples);
 }
 
-static void read_coated_diffuse(param_list *pl, material *out)
+static void read_coated_diffuse(param_list *pl, const texture_set *ts, material *out)
 {
     out->kind = MATERIAL_COATED_DIFFUSE;
     layered *l = &out->coat;
-    rgb r = params_rgb(pl, "reflectance", rgb_grey(0.5));
+    out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
+    rgb r = out->reflectance_tex ? rgb_grey(0.5) : params_rgb(pl, "reflectance", rgb_grey(0.5));
     l->reflectance = rgb_make(hz_clamp(r.r, 0, 1), hz_clamp(r.g, 0, 1), hz_clamp(r.b, 0, 1));
-    l->top = read_roughness_of(pl, "");
+    l->top = read_roughness_of(pl, "", ts, out->rough);
     l->eta = read_eta(pl, "eta");
     read_layers(pl, l);
 }
 
-static hz_status read_coated_conductor(param_list *pl, material *out, hz_error *err)
+static hz_status read_coated_conductor(param_list *pl, const texture_set *ts, material *out,
+                                       hz_error *err)
 {
     out->kind = MATERIAL_COATED_CONDUCTOR;
     layered *l = &out->coat;
     l->conductor = true;
-    l->top = read_roughness_of(pl, "interface.");
-    l->bottom = read_roughness_of(pl, "conductor.");
+    l->top = read_roughness_of(pl, "interface.", ts, out->rough);
+    l->bottom = read_roughness_of(pl, "conductor.", ts, out->rough + 2);
     l->eta = read_eta(pl, "interface.eta");
-    if (read_metal(pl, "conductor.eta", "conductor.k", &l->eta_rgb, &l->k, err) != HZ_OK)
+    if (read_metal(pl, ts, "conductor.eta", "conductor.k", &l->eta_rgb, &l->k, out, err) !=
+        HZ_OK)
         return HZ_ERROR;
     /* The base sits under the coating: its index relative to it. */
     l->eta_rgb = rgb_scale(l->eta_rgb, 1.0 / l->eta);
@@ -217,24 +252,113 @@ static hz_status read_coated_conductor(param_list *pl, material *out, hz_error *
     return HZ_OK;
 }
 
-static hz_status read_conductor(param_list *pl, material *out, hz_error *err)
+static hz_status read_conductor(param_list *pl, const texture_set *ts, material *out,
+                                hz_error *err)
 {
     out->kind = MATERIAL_CONDUCTOR;
-    if (read_metal(pl, "eta", "k", &out->eta_rgb, &out->k, err) != HZ_OK)
+    if (read_metal(pl, ts, "eta", "k", &out->eta_rgb, &out->k, out, err) != HZ_OK)
         return HZ_ERROR;
-    read_roughness(pl, out);
+    read_roughness(pl, ts, out);
     return HZ_OK;
 }
 
-static void read_dielectric(param_list *pl, bool thin, material *out)
+static void read_dielectric(param_list *pl, const texture_set *ts, bool thin, material *out)
 {
     out->kind = thin ? MATERIAL_THIN_DIELECTRIC : MATERIAL_DIELECTRIC;
     out->eta = read_eta(pl, "eta");
     if (!thin)
-        read_roughness(pl, out);
+        read_roughness(pl, ts, out);
 }
 
-hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
+static rgb clamp01(rgb c)
+{
+    return rgb_make(hz_clamp(c.r, 0, 1), hz_clamp(c.g, 0, 1), hz_clamp(c.b, 0, 1));
+}
+
+static double alpha_at(const material *m, const texture *t, double constant,
+                       const texture_ctx *c)
+{
+    if (!t)
+        return constant;
+    double r = fmax(texture_eval_float(t, c), 0.0);
+    return m->remap_roughness ? tr_roughness_to_alpha(r) : r;
+}
+
+/* The metal's eta and k at c (relative to `outside`, the coating's index). */
+static void metal_at(const material *m, const texture_ctx *c, double outside, rgb *eta, rgb *k)
+{
+    if (m->metal_r_tex) {
+        *eta = rgb_grey(1.0 / outside);
+        *k = rgb_scale(k_of_reflectance(texture_eval(m->metal_r_tex, c)), 1.0 / outside);
+        return;
+    }
+    if (m->eta_tex) {
+        rgb e = texture_eval(m->eta_tex, c);
+        *eta = rgb_scale(rgb_make(fmax(e.r, 1e-6), fmax(e.g, 1e-6), fmax(e.b, 1e-6)),
+                         1.0 / outside);
+    }
+    if (m->k_tex) {
+        rgb kk = texture_eval(m->k_tex, c);
+        *k = rgb_scale(rgb_make(fmax(kk.r, 0), fmax(kk.g, 0), fmax(kk.b, 0)), 1.0 / outside);
+    }
+}
+
+bool material_has_textures(const material *m)
+{
+    if (m->kind == MATERIAL_MIX)
+        return (m->mix[0] && material_has_textures(m->mix[0])) ||
+               (m->mix[1] && material_has_textures(m->mix[1]));
+    return m->textured;
+}
+
+const material *material_textured(const material *m, const texture_ctx *c, material *scratch)
+{
+    if (!m->textured)
+        return m;
+    *scratch = *m;
+    material *o = scratch;
+    switch (m->kind) {
+    case MATERIAL_DIFFUSE:
+        if (m->reflectance_tex)
+            o->reflectance = clamp01(texture_eval(m->reflectance_tex, c));
+        break;
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        if (m->reflectance_tex)
+            o->reflectance = clamp01(rgb_scale(texture_eval(m->reflectance_tex, c), m->amount));
+        if (m->transmittance_tex)
+            o->transmittance =
+                clamp01(rgb_scale(texture_eval(m->transmittance_tex, c), m->amount));
+        break;
+    case MATERIAL_CONDUCTOR:
+        metal_at(m, c, 1.0, &o->eta_rgb, &o->k);
+        o->alpha_x = alpha_at(m, m->rough[0], m->alpha_x, c);
+        o->alpha_y = alpha_at(m, m->rough[1], m->alpha_y, c);
+        break;
+    case MATERIAL_DIELECTRIC:
+        o->alpha_x = alpha_at(m, m->rough[0], m->alpha_x, c);
+        o->alpha_y = alpha_at(m, m->rough[1], m->alpha_y, c);
+        break;
+    case MATERIAL_COATED_DIFFUSE:
+    case MATERIAL_COATED_CONDUCTOR:
+        if (m->reflectance_tex)
+            o->coat.reflectance = clamp01(texture_eval(m->reflectance_tex, c));
+        if (m->kind == MATERIAL_COATED_CONDUCTOR)
+            metal_at(m, c, m->coat.eta, &o->coat.eta_rgb, &o->coat.k);
+        o->coat.top.alpha_x = alpha_at(m, m->rough[0], m->coat.top.alpha_x, c);
+        o->coat.top.alpha_y = alpha_at(m, m->rough[1], m->coat.top.alpha_y, c);
+        o->coat.bottom.alpha_x = alpha_at(m, m->rough[2], m->coat.bottom.alpha_x, c);
+        o->coat.bottom.alpha_y = alpha_at(m, m->rough[3], m->coat.bottom.alpha_y, c);
+        break;
+    case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_MIX:
+    case MATERIAL_INTERFACE:
+        break;
+    }
+    return o;
+}
+
+hz_status material_from_entity(material_entity *e, const texture_set *ts, material *out,
+                               hz_error *err)
 {
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
@@ -255,7 +379,9 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
 
     if (strcmp(type, "diffuse") == 0) {
         out->kind = MATERIAL_DIFFUSE;
-        out->reflectance = params_rgb(pl, "reflectance", rgb_grey(0.5));
+        out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
+        out->reflectance = out->reflectance_tex ? rgb_grey(0.5)
+                                                : params_rgb(pl, "reflectance", rgb_grey(0.5));
         rgb r = out->reflectance;
         if (r.r < 0 || r.g < 0 || r.b < 0 || r.r > 1 || r.g > 1 || r.b > 1)
             params_reject(pl, "reflectance", "diffuse reflectance must be within [0, 1]");
@@ -264,14 +390,19 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
          * clamped to [0, 1]. */
         out->kind = MATERIAL_DIFFUSE_TRANSMISSION;
         double scale = params_float(pl, "scale", 1.0);
-        rgb r = params_rgb(pl, "reflectance", rgb_grey(0.25));
-        rgb t = params_rgb(pl, "transmittance", rgb_grey(0.25));
+        out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
+        out->transmittance_tex = texture_param(pl, ts, "transmittance", true);
+        rgb r = out->reflectance_tex ? rgb_grey(0.25)
+                                     : params_rgb(pl, "reflectance", rgb_grey(0.25));
+        rgb t = out->transmittance_tex ? rgb_grey(0.25)
+                                       : params_rgb(pl, "transmittance", rgb_grey(0.25));
         if (!(isfinite(scale) && scale >= 0.0))
             params_reject(pl, "scale", "\"scale\" must be finite and >= 0, got %g", scale);
         out->reflectance = rgb_make(hz_clamp(scale * r.r, 0, 1), hz_clamp(scale * r.g, 0, 1),
                                     hz_clamp(scale * r.b, 0, 1));
         out->transmittance = rgb_make(hz_clamp(scale * t.r, 0, 1), hz_clamp(scale * t.g, 0, 1),
                                       hz_clamp(scale * t.b, 0, 1));
+        out->amount = scale; /* the textures' scale */
     } else if (strcmp(type, "mix") == 0) {
         out->kind = MATERIAL_MIX;
         out->amount = params_float(pl, "amount", 0.5);
@@ -287,15 +418,15 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
         out->mix_names[0] = names[0];
         out->mix_names[1] = names[1];
     } else if (strcmp(type, "coateddiffuse") == 0) {
-        read_coated_diffuse(pl, out);
+        read_coated_diffuse(pl, ts, out);
     } else if (strcmp(type, "coatedconductor") == 0) {
-        if (read_coated_conductor(pl, out, err) != HZ_OK)
+        if (read_coated_conductor(pl, ts, out, err) != HZ_OK)
             return HZ_ERROR;
     } else if (strcmp(type, "conductor") == 0) {
-        if (read_conductor(pl, out, err) != HZ_OK)
+        if (read_conductor(pl, ts, out, err) != HZ_OK)
             return HZ_ERROR;
     } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "thindielectric") == 0) {
-        read_dielectric(pl, strcmp(type, "thindielectric") == 0, out);
+        read_dielectric(pl, ts, strcmp(type, "thindielectric") == 0, out);
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 ||
                strcmp(type, "none") == 0) {
         /* pbrt-v4 makes no material for all three: rays pass the surface,
@@ -309,6 +440,11 @@ hz_status material_from_entity(material_entity *e, material *out, hz_error *err)
                           "\"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
                           type);
     }
+    bool rough_tex = out->rough[0] || out->rough[1] || out->rough[2] || out->rough[3];
+    /* Read already by the roughness, when there is one. */
+    out->remap_roughness = rough_tex ? params_bool(pl, "remaproughness", true) : true;
+    out->textured = out->reflectance_tex || out->transmittance_tex || out->eta_tex ||
+                    out->k_tex || out->metal_r_tex || rough_tex;
     char what[128];
     snprintf(what, sizeof what, "Material \"%s\"", type);
     return params_finish(pl, what, err);

@@ -9,6 +9,7 @@
 #include "core/vec.h"
 #include "materials/layered.h"
 #include "scene/scene_desc.h"
+#include "textures/texture.h"
 
 typedef enum {
     MATERIAL_DIFFUSE,         /* Lambertian reflection, two-sided as in pbrt-v4 */
@@ -36,7 +37,23 @@ typedef struct material_s {
     double amount;
     const char *mix_names[2];
     const struct material_s *mix[2];
+    /* Textured parameters ("texture reflectance" "name"; NULL = the constant
+     * above), evaluated per hit by material_textured. rough[0..1]: u and v
+     * roughness (a coated material's top interface); rough[2..3]: a coated
+     * conductor's base. metal_r: a conductor's "reflectance". */
+    bool textured;
+    bool remap_roughness;
+    const texture *reflectance_tex, *transmittance_tex;
+    const texture *eta_tex, *k_tex, *metal_r_tex;
+    const texture *rough[4];
 } material;
+
+/* m or (for a mix) any material it may pick has textures. */
+bool material_has_textures(const material *m);
+
+/* m with its textures evaluated at c: m itself when it has none, otherwise
+ * *scratch filled with the values there. */
+const material *material_textured(const material *m, const texture_ctx *c, material *scratch);
 
 /* The material a hit at p seen from wo uses: m itself, or for a mix the
  * component its hash picks (mixes of mixes followed). Deterministic. */
@@ -58,6 +75,7 @@ bool material_transmits(const material *m);
 /* The material of a Material or MakeNamedMaterial entity, with pbrt-v4's
  * parameters and defaults; other types and parameters are errors naming
  * their place. */
-hz_status material_from_entity(material_entity *e, material *out, hz_error *err);
+hz_status material_from_entity(material_entity *e, const texture_set *textures, material *out,
+                               hz_error *err);
 
 #endif

@@ -14,6 +14,8 @@ struct render_scene {
     film *film;
     sampler smp;
     filter *filt;
+    texture_set *textures;
+    size_t texture_count;
     material *materials;
     size_t material_count;
     material default_material;
@@ -27,6 +29,7 @@ struct render_scene {
 };
 
 scene_options render_scene_options(const render_scene *rs) { return rs->options; }
+bool render_scene_has_textures(const render_scene *rs) { return rs->texture_count > 0; }
 
 static bool animated(const transform *start, const transform *end)
 {
@@ -72,12 +75,16 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_errors *er
                                  hz_error *err)
 {
     rs->default_material = material_default();
+    if (texture_set_create(sd, errs, &rs->textures, err) != HZ_OK)
+        return HZ_ERROR;
+    rs->texture_count = sd->texture_count;
     rs->materials = calloc(sd->material_count ? sd->material_count : 1, sizeof *rs->materials);
     if (!rs->materials)
         return hz_fail(err, "out of memory");
     rs->material_count = sd->material_count;
     for (size_t i = 0; i < sd->material_count; ++i)
-        if (material_from_entity(&sd->materials[i], &rs->materials[i], err) != HZ_OK) {
+        if (material_from_entity(&sd->materials[i], rs->textures, &rs->materials[i], err) !=
+            HZ_OK) {
             if (collect(errs, err) != HZ_OK)
                 return HZ_ERROR;
             rs->materials[i] = material_default();
@@ -353,6 +360,7 @@ void render_scene_destroy(render_scene *rs)
     free(rs->media);
     geometry_destroy(rs->geom);
     free(rs->materials);
+    texture_set_destroy(rs->textures);
     if (rs->film)
         film_destroy(rs->film);
     if (rs->filt)
@@ -418,5 +426,5 @@ render_memory render_scene_memory(const render_scene *rs)
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, integrator_counters *counters)
 {
-    return integrator_li(&rs->integ, &r->r, s, depth, counters);
+    return integrator_li(&rs->integ, r, s, depth, counters);
 }

@@ -54,6 +54,8 @@ hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *w
 void render_scene_destroy(render_scene *rs);
 
 const camera *render_scene_camera(const render_scene *rs);
+/* The scene has textures: camera rays should carry differentials. */
+bool render_scene_has_textures(const render_scene *rs);
 film *render_scene_film(render_scene *rs);
 const sampler *render_scene_sampler(const render_scene *rs);
 const filter *render_scene_filter(const render_scene *rs);

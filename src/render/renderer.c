@@ -26,6 +26,11 @@ typedef struct {
     int tiles_x, tile_count;
     int sample_begin, sample_end;
     const unsigned char *active; /* NULL: every pixel */
+    /* Textures are filtered: camera rays carry differentials, scaled by
+     * max(1/8, 1/sqrt(spp)) as pbrt-v4's (unless the pixel jitter is off),
+     * spp the sampler's count (the same in every progressive pass);
+     * 0 = no differentials (the same main rays). */
+    double diff_scale;
     atomic_int next_tile;
     atomic_int tiles_done;
     atomic_int running; /* workers not yet finished */
@@ -93,11 +98,14 @@ static void render_pixel(render_job *job, int px, int py, integrator_counters *c
         sampler_start(smp, px, py, i, &st);
         camera_sample cs = renderer_camera_sample_needs(flt, &st, px, py, job->needs);
 
-        /* haze's integrator reads no ray differentials (it has no textures to
-         * filter): the main ray only, the same ray as with differentials. */
         ray_differential rd = {.has_differentials = false};
-        if (!camera_generate_ray(cam, cs, &rd.r))
+        if (job->diff_scale > 0.0) {
+            if (!camera_generate_ray_differential(cam, cs, &rd))
+                continue;
+            ray_scale_differentials(&rd, job->diff_scale);
+        } else if (!camera_generate_ray(cam, cs, &rd.r)) {
             continue;
+        }
         double depth = INFINITY;
         rgb L = render_scene_li(job->rs, &rd, &st, &depth, counters);
         if (counters->timed) {
@@ -200,6 +208,8 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     job.tile_ctx = opt->tile_ctx;
     job.cancel = opt->cancel;
     render_motion motion = render_scene_motion(rs);
+    if (render_scene_has_textures(rs))
+        job.diff_scale = opt->disable_pixel_jitter ? 1.0 : fmax(0.125, 1.0 / sqrt(spp));
     job.needs = (camera_sample_needs){!opt->disable_pixel_jitter,
                                       motion.camera || motion.surfaces || motion.media > 0,
                                       camera_has_lens(render_scene_camera(rs))};

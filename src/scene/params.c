@@ -21,6 +21,7 @@ const char *param_type_name(param_type t)
     case PARAM_RGB: return "rgb";
     case PARAM_SPECTRUM: return "spectrum";
     case PARAM_BLACKBODY: return "blackbody";
+    case PARAM_TEXTURE: return "texture";
     }
     return "?";
 }
@@ -355,6 +356,15 @@ const char *params_peek_string(const param_list *pl, const char *name, const cha
 {
     const param *p = find(pl, name);
     return p && p->type == PARAM_STRING && p->count > 0 ? p->strs[0] : def;
+}
+
+const char *params_texture(param_list *pl, const char *name)
+{
+    param *p = find(pl, name);
+    if (!p || p->type != PARAM_TEXTURE || p->count != 1)
+        return NULL;
+    p->used = true;
+    return p->strs[0];
 }
 
 bool params_has(const param_list *pl, const char *name)

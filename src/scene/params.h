@@ -26,7 +26,8 @@ typedef enum {
     PARAM_NORMAL,
     PARAM_RGB,
     PARAM_SPECTRUM, /* converted to rgb at parse time (see docs/scene-format.md) */
-    PARAM_BLACKBODY /* converted to rgb at parse time */
+    PARAM_BLACKBODY, /* converted to rgb at parse time */
+    PARAM_TEXTURE    /* the name of a Texture, in strs[0] */
 } param_type;
 
 const char *param_type_name(param_type t);
@@ -114,6 +115,9 @@ const double *params_rgbs(param_list *pl, const char *name, size_t *n);
 const char *params_peek_string(const param_list *pl, const char *name, const char *def);
 /* True when a parameter of this name is present (does not mark it used). */
 bool params_has(const param_list *pl, const char *name);
+/* The texture a "texture NAME" parameter names (marked used), or NULL when
+ * `name` is absent or of another type (left for the typed getters). */
+const char *params_texture(param_list *pl, const char *name);
 /* The location of a parameter (its directive's location when absent), for
  * factories that reject a value: hz_fail_at(err, params_loc(pl, "fov"), ...). */
 file_loc params_loc(const param_list *pl, const char *name);

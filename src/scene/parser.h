@@ -11,7 +11,7 @@
 #include "scene/lexer.h"
 #include "scene/scene_desc.h"
 
-enum { ATTR_SHAPE, ATTR_LIGHT, ATTR_MATERIAL, ATTR_MEDIUM, ATTR_COUNT };
+enum { ATTR_SHAPE, ATTR_LIGHT, ATTR_MATERIAL, ATTR_MEDIUM, ATTR_TEXTURE, ATTR_COUNT };
 
 /* pbrt-v4's GraphicsState: what AttributeBegin saves and AttributeEnd restores. */
 typedef struct {

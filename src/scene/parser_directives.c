@@ -14,7 +14,8 @@
     "CoordSysTransform TransformTimes ActiveTransform AttributeBegin AttributeEnd Attribute "     \
     "Camera Film Sampler PixelFilter Integrator WorldBegin MakeNamedMedium MediumInterface "      \
     "LightSource AreaLightSource Shape Material MakeNamedMaterial NamedMaterial "                 \
-    "ReverseOrientation Include Import ObjectBegin ObjectEnd ObjectInstance Option ColorSpace"
+    "Texture ReverseOrientation Include Import ObjectBegin ObjectEnd ObjectInstance Option "     \
+    "ColorSpace"
 
 typedef hz_status (*directive_fn)(parser *ps, const token *d, hz_error *err);
 

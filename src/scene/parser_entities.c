@@ -217,6 +217,41 @@ static hz_status d_material(parser *ps, const token *d, hz_error *err)
     return add_material(ps, d, m, &ps->gs.material, err);
 }
 
+/* `Texture "name" "float"|"spectrum" "class" params...`; a name may be
+ * redefined for the other value type only (as pbrt-v4). */
+static hz_status d_texture(parser *ps, const token *d, hz_error *err)
+{
+    const char *name, *value_type;
+    if (parser_need_world(ps, d, "Texture", err) != HZ_OK ||
+        parser_string_arg(ps, d, &name, err) != HZ_OK ||
+        parser_string_arg(ps, d, &value_type, err) != HZ_OK)
+        return HZ_ERROR;
+    bool spectrum = strcmp(value_type, "spectrum") == 0;
+    if (!spectrum && strcmp(value_type, "float") != 0)
+        return hz_fail_at(err, d->loc, "Texture \"%s\": type \"%s\" must be \"float\" or "
+                          "\"spectrum\"", name, value_type);
+    scene_desc *sd = ps->sd;
+    for (size_t i = 0; i < sd->texture_count; ++i)
+        if (sd->textures[i].spectrum == spectrum && strcmp(sd->textures[i].name, name) == 0) {
+            file_loc at = sd->textures[i].entity.loc;
+            return hz_fail_at(err, d->loc, "Texture \"%s\" redefined (first at %s:%d:%d)", name,
+                              at.file, at.line, at.column);
+        }
+    texture_entity t = {.name = (char *)name, .spectrum = spectrum,
+                        .world_from_texture = ps->gs.ctm[0]};
+    if (read_entity(ps, d, ATTR_TEXTURE, &t.entity, err) != HZ_OK)
+        return HZ_ERROR;
+    texture_entity *grown =
+        scene_grow_implicit(sd->textures, sd->texture_count, sizeof *sd->textures);
+    if (!grown) {
+        params_free(&t.entity.params);
+        return parser_oom(ps, d->loc, err);
+    }
+    sd->textures = grown;
+    sd->textures[sd->texture_count++] = t;
+    return HZ_OK;
+}
+
 static long find_named_material(const scene_desc *sd, const char *name)
 {
     for (size_t i = 0; i < sd->material_count; ++i)
@@ -387,7 +422,8 @@ static hz_status d_object_instance(parser *ps, const token *d, hz_error *err)
 
 static hz_status d_attribute(parser *ps, const token *d, hz_error *err)
 {
-    static const char *const targets[ATTR_COUNT] = {"shape", "light", "material", "medium"};
+    static const char *const targets[ATTR_COUNT] = {"shape", "light", "material", "medium",
+                                                    "texture"};
     const char *target;
     if (parser_string_arg(ps, d, &target, err) != HZ_OK)
         return HZ_ERROR;
@@ -508,6 +544,7 @@ hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_
         {"Material", d_material},
         {"MakeNamedMaterial", d_make_named_material},
         {"NamedMaterial", d_named_material},
+        {"Texture", d_texture},
         {"MakeNamedMedium", d_make_named_medium},
         {"MediumInterface", d_medium_interface},
         {"ReverseOrientation", d_reverse_orientation},

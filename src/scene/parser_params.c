@@ -23,7 +23,7 @@ static const struct {
     {"point3", PARAM_POINT3},   {"point", PARAM_POINT3},    {"vector3", PARAM_VECTOR3},
     {"vector", PARAM_VECTOR3},  {"normal", PARAM_NORMAL},   {"normal3", PARAM_NORMAL},
     {"rgb", PARAM_RGB},         {"color", PARAM_RGB},       {"spectrum", PARAM_SPECTRUM},
-    {"blackbody", PARAM_BLACKBODY},
+    {"blackbody", PARAM_BLACKBODY}, {"texture", PARAM_TEXTURE},
 };
 
 /* Splits "type name" into its two words. */
@@ -63,11 +63,10 @@ static hz_status lookup_type(const char *type, file_loc loc, param_type *out, hz
             return HZ_OK;
         }
     }
-    if (strcmp(type, "texture") == 0)
-        return hz_fail_at(err, loc, "texture parameters are not supported (haze has no textures)");
     return hz_fail_at(err, loc,
                       "unknown parameter type \"%.60s\"; expected integer, float, bool, string, "
-                      "point2, vector2, point3, vector3, normal, rgb, spectrum or blackbody",
+                      "point2, vector2, point3, vector3, normal, rgb, spectrum, blackbody or "
+                      "texture",
                       type);
 }
 
@@ -327,6 +326,7 @@ static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_e
     size_t tuple = 1;
     switch (p->type) {
     case PARAM_STRING:
+    case PARAM_TEXTURE:
         p->strs = scene_array(n, sizeof *p->strs);
         if (!p->strs)
             return parser_oom(ps, p->loc, err);
@@ -337,8 +337,8 @@ static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_e
             if (vals[i].kind != TOK_STRING) {
                 char got[48];
                 token_describe(&vals[i], got, sizeof got);
-                return hz_fail_at(err, vals[i].loc, "parameter \"string %s\" expects strings, got %s",
-                                  p->name, got);
+                return hz_fail_at(err, vals[i].loc, "parameter \"%s %s\" expects strings, got %s",
+                                  param_type_name(p->type), p->name, got);
             }
             p->strs[i] = token_string_dup(&vals[i]);
             if (!p->strs[i])

@@ -89,6 +89,9 @@ void scene_desc_free(scene_desc *sd)
     for (size_t i = 0; i < sd->medium_count; ++i)
         params_free(&sd->media[i].entity.params);
     free(sd->media);
+    for (size_t i = 0; i < sd->texture_count; ++i)
+        params_free(&sd->textures[i].entity.params);
+    free(sd->textures);
     for (size_t i = 0; i < sd->string_count; ++i)
         free(sd->strings[i]);
     free(sd->strings);

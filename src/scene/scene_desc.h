@@ -79,6 +79,15 @@ typedef struct {
     transform world_from_medium_end; /* end time: haze moves media with it */
 } medium_entity;
 
+/* `Texture "name" "float"|"spectrum" "class" params`: entity.type is the
+ * class. */
+typedef struct {
+    char *name;
+    bool spectrum;               /* "spectrum" (rgb) or "float" */
+    scene_entity entity;
+    transform world_from_texture; /* the CTM at the directive */
+} texture_entity;
+
 typedef struct {
     /* Absent directives get default entities with the type pbrt-v4 uses
      * ("perspective", "rgb", "zsobol", "gaussian", "volpath") and no params. */
@@ -100,6 +109,8 @@ typedef struct {
     size_t light_count;
     medium_entity *media;
     size_t medium_count;
+    texture_entity *textures;    /* in file order */
+    size_t texture_count;
 
     /* TransformTimes (defaults 0 and 1). */
     double transform_start_time, transform_end_time;
@@ -134,8 +145,9 @@ hz_status scene_parse_string(const char *text, const char *name, scene_desc *out
 void scene_desc_free(scene_desc *sd);
 
 /* Every file a render of `sd` reads, as paths relative to the working
- * directory: sd->files (the scene and its includes), then each plymesh's and
- * nanovdb medium's "filename". Free with scene_input_files_free. */
+ * directory: sd->files (the scene and its includes), then the "filename" of
+ * each plymesh, nanovdb medium, image light (infinite, goniometric,
+ * projection) and imagemap texture. Free with scene_input_files_free. */
 hz_status scene_input_files(const scene_desc *sd, char ***files, size_t *count, hz_error *err);
 void scene_input_files_free(char **files, size_t count);
 /* A hash of the bytes of every file scene_input_files lists, in order: what

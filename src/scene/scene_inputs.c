@@ -55,8 +55,12 @@ hz_status scene_input_files(const scene_desc *sd, char ***out, size_t *count, hz
         ok = push_named(&list, &n, &cap, &sd->object_shapes[i].entity, "plymesh", "filename");
     for (size_t i = 0; ok && i < sd->medium_count; ++i)
         ok = push_named(&list, &n, &cap, &sd->media[i].entity, "nanovdb", "filename");
+    static const char *const image_lights[] = {"infinite", "goniometric", "projection"};
     for (size_t i = 0; ok && i < sd->light_count; ++i)
-        ok = push_named(&list, &n, &cap, &sd->lights[i].entity, "infinite", "filename");
+        for (int k = 0; ok && k < 3; ++k)
+            ok = push_named(&list, &n, &cap, &sd->lights[i].entity, image_lights[k], "filename");
+    for (size_t i = 0; ok && i < sd->texture_count; ++i)
+        ok = push_named(&list, &n, &cap, &sd->textures[i].entity, "imagemap", "filename");
     if (!ok) {
         scene_input_files_free(list, n);
         return hz_fail(err, "out of memory listing the scene's files");

@@ -84,6 +84,7 @@ static hz_status create_mesh(shape_entity *se, int per_face, shape_geometry *g, 
     if (faces == 0)
         return hz_fail_at(err, se->entity.loc, "%s has no faces", type);
     g->kind = GEOMETRY_TRIANGLES;
+    g->quads = per_face == 4;
     g->vertex_count = np;
     g->p = dup_doubles(P, 3 * np);
     g->n = N ? dup_doubles(N, 3 * np) : NULL;

@@ -5,6 +5,7 @@
 #ifndef HAZE_SCENE_SHAPE_H
 #define HAZE_SCENE_SHAPE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -20,6 +21,7 @@ typedef struct {
     double *p;          /* 3 * vertex_count */
     double *n;          /* 3 * vertex_count, or NULL */
     double *uv;         /* 2 * vertex_count, or NULL */
+    bool quads;         /* bilinearmesh: triangles 2i, 2i + 1 are quad i's halves */
     uint32_t *indices;  /* 3 * triangle_count */
     /* sphere, centred at the object-space origin; a part of it when zmin >
      * -radius, zmax < radius or phimax < 2 pi (pbrt-v4's partial sphere) */

@@ -386,7 +386,7 @@ static void test_integrator_and_parameters(void **state)
         {"WorldBegin\nMaterial \"thindielectric\" \"float roughness\" 0.1\n",
          "unused parameter \"float roughness\""},
         {"WorldBegin\nMaterial \"conductor\" \"texture roughness\" \"t\"\n",
-         "texture parameters are not supported"},
+         "\"texture roughness\": no float texture named \"t\" defined before it"},
         {"WorldBegin\nMaterial \"coateddiffuse\" \"integer nsamples\" 0\n",
          "\"nsamples\" must be within 1 .. 10000"},
         {"WorldBegin\nMaterial \"coatedconductor\" \"rgb reflectance\" [0.5 0.5 0.5] "

@@ -10,6 +10,7 @@
 
 #include <cmocka.h>
 
+#include "film/png.h"
 #include "render/cli_util.h"
 
 #define DIR HAZE_TMP "/outputs"
@@ -103,6 +104,15 @@ static void test_inputs_are_not_outputs(void **state)
     unlink(DIR "/twice.png");
     assert_int_equal(symlink("twice.exr", DIR "/twice.png"), 0);
     expect_refused("-o '" DIR "/twice.exr' --preview '" DIR "/twice.png'", "are the same file");
+    /* An image texture is an input too. */
+    const uint8_t px[3] = {10, 20, 30};
+    hz_error err;
+    assert_int_equal(png_out_write_rgb8(DIR "/tex.png", 1, 1, px, &err), HZ_OK);
+    write_text_file(DIR "/part.pbrt", "Texture \"t\" \"spectrum\" \"imagemap\" "
+                                      "\"string filename\" \"tex.png\"\nShape \"sphere\"\n");
+    expect_refused("-o '" DIR "/ok.exr' --preview '" DIR "/tex.png'",
+                   "which the render reads; refusing to replace it");
+    setup_dir();
 }
 
 /* A symlink is written through: the link stays, its target gets the image. */

@@ -371,7 +371,8 @@ static void test_attribute_defaults(void **state)
                      HZ_ERROR);
     assert_string_equal(err.message, "t.pbrt:4:16: unused parameter \"float yy\" for Shape \"sphere\"");
     scene_desc_free(&sd);
-    parse_err("Attribute \"texture\" \"float x\" 1", "t.pbrt:1:1: Attribute target \"texture\" is not supported");
+    parse_err("Attribute \"camera\" \"float x\" 1",
+              "t.pbrt:1:1: Attribute target \"camera\" is not supported");
 }
 
 static void test_options_and_colorspace(void **state)
@@ -464,8 +465,13 @@ static void test_param_errors(void **state)
     parse_err("WorldBegin\nLightSource \"point\" \"blackbody I\" [0]", "temperature must be > 0");
     parse_err("WorldBegin\nLightSource \"point\" \"blackbody I\" [5000 1]",
               "t.pbrt:2:21: parameter \"blackbody I\" takes 1 value (kelvin), got 2");
-    parse_err("WorldBegin\nMaterial \"diffuse\" \"texture reflectance\" \"checks\"",
-              "t.pbrt:2:20: texture parameters are not supported");
+    parse_err("WorldBegin\nMaterial \"diffuse\" \"texture reflectance\" 0.5",
+              "t.pbrt:2:42: parameter \"texture reflectance\" expects strings");
+    parse_err("WorldBegin\nTexture \"t\" \"color\" \"constant\"",
+              "t.pbrt:2:1: Texture \"t\": type \"color\" must be \"float\" or \"spectrum\"");
+    parse_err("WorldBegin\nTexture \"t\" \"float\" \"constant\"\n"
+              "Texture \"t\" \"float\" \"constant\"",
+              "t.pbrt:3:1: Texture \"t\" redefined (first at t.pbrt:2:1)");
 }
 
 static void test_param_values(void **state)

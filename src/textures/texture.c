@@ -1,0 +1,542 @@
+#include "textures/texture.h"
+
+#include <ctype.h>
+#include <math.h>
+#include <png.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/path.h"
+#include "film/exr.h"
+
+typedef enum {
+    TEX_CONSTANT,
+    TEX_SCALE,        /* in[0] * in[1] */
+    TEX_MIX,          /* (1 - in[2]) in[0] + in[2] in[1] */
+    TEX_CHECKERBOARD, /* in[0] on even squares, in[1] on odd ones */
+    TEX_BILERP,       /* in[0..3] = v00 v01 v10 v11 */
+    TEX_IMAGEMAP,
+} texture_kind;
+
+typedef enum { WRAP_REPEAT, WRAP_BLACK, WRAP_CLAMP, WRAP_OCTAHEDRAL } tex_wrap;
+
+/* A parameter that is either a texture or a constant. */
+typedef struct {
+    const texture *t;
+    rgb v;
+} tex_input;
+
+typedef struct {
+    int width, height;
+    float *rgb; /* 3 per texel, linear, top row first */
+} tex_image;
+
+enum { TEX_MAX_LEVELS = 32 };
+typedef enum { FILTER_POINT, FILTER_BILINEAR, FILTER_TRILINEAR } tex_filter;
+
+struct texture {
+    texture_kind kind;
+    bool spectrum;
+    double su, sv, du, dv; /* "uv" mapping: s = su u + du, t = sv v + dv */
+    tex_input in[4];
+    tex_image img;            /* level 0 */
+    tex_image level[TEX_MAX_LEVELS]; /* level[0] = img; each next a 2x2 box of the last */
+    int levels;
+    tex_filter filter;
+    tex_wrap wrap;
+    double scale;
+    bool invert;
+};
+
+struct texture_set {
+    const texture_entity *entities; /* the scene's, for names while building */
+    texture *items;
+    size_t count;
+};
+
+static rgb eval_input(const tex_input *in, const texture_ctx *c)
+{
+    return in->t ? texture_eval(in->t, c) : in->v;
+}
+
+static rgb rgb_lerp(double w, rgb a, rgb b)
+{
+    return rgb_add(rgb_scale(a, 1.0 - w), rgb_scale(b, w));
+}
+
+/* pbrt-v4's 2D checkerboard weight of tex2: the square's parity convolved
+ * with a box of 1.5 times the larger derivative in each direction (closed
+ * form of the filtered square wave). */
+static double checker_d(double x)
+{
+    double y = x / 2.0 - floor(x / 2.0) - 0.5;
+    return x / 2.0 + y * (1.0 - 2.0 * fabs(y));
+}
+
+static double checker_bf(double x, double r)
+{
+    if (floor(x - r) == floor(x + r))
+        return 1.0 - 2.0 * (double)((long long)floor(x) & 1);
+    return (checker_d(x + r) - 2.0 * checker_d(x) + checker_d(x - r)) / (r * r);
+}
+
+static double checker_weight(double s, double t, double ds, double dt)
+{
+    return 0.5 - checker_bf(s, 1.5 * ds) * checker_bf(t, 1.5 * dt) / 2.0;
+}
+
+/* The texel (x, y) after wrapping; false when it is black. */
+static bool wrap_texel(tex_wrap w, int width, int height, int *x, int *y)
+{
+    switch (w) {
+    case WRAP_REPEAT:
+        *x = ((*x % width) + width) % width;
+        *y = ((*y % height) + height) % height;
+        return true;
+    case WRAP_CLAMP:
+        *x = *x < 0 ? 0 : *x >= width ? width - 1 : *x;
+        *y = *y < 0 ? 0 : *y >= height ? height - 1 : *y;
+        return true;
+    case WRAP_BLACK:
+        return *x >= 0 && *x < width && *y >= 0 && *y < height;
+    case WRAP_OCTAHEDRAL:
+        /* pbrt-v4: mirror across the edge that was crossed. */
+        if (*x < 0) {
+            *x = -*x - 1;
+            *y = height - 1 - *y;
+        } else if (*x >= width) {
+            *x = 2 * width - 1 - *x;
+            *y = height - 1 - *y;
+        }
+        if (*y < 0) {
+            *x = width - 1 - *x;
+            *y = -*y - 1;
+        } else if (*y >= height) {
+            *x = width - 1 - *x;
+            *y = 2 * height - 1 - *y;
+        }
+        *x = *x < 0 ? 0 : *x >= width ? width - 1 : *x;
+        *y = *y < 0 ? 0 : *y >= height ? height - 1 : *y;
+        return true;
+    }
+    return false;
+}
+
+static rgb texel(const texture *t, const tex_image *im, int x, int y)
+{
+    if (!wrap_texel(t->wrap, im->width, im->height, &x, &y))
+        return rgb_grey(0.0);
+    const float *p = &im->rgb[3 * ((size_t)y * (size_t)im->width + (size_t)x)];
+    return rgb_make(p[0], p[1], p[2]);
+}
+
+/* pbrt-v4's Image lookups: texel centres at (i + 0.5) / width. */
+static rgb bilerp(const texture *t, const tex_image *im, double s, double tt)
+{
+    double x = s * im->width - 0.5, y = tt * im->height - 0.5;
+    double fx = floor(x), fy = floor(y), dx = x - fx, dy = y - fy;
+    int x0 = (int)fx, y0 = (int)fy;
+    return rgb_add(rgb_add(rgb_scale(texel(t, im, x0, y0), (1 - dx) * (1 - dy)),
+                           rgb_scale(texel(t, im, x0 + 1, y0), dx * (1 - dy))),
+                   rgb_add(rgb_scale(texel(t, im, x0, y0 + 1), (1 - dx) * dy),
+                           rgb_scale(texel(t, im, x0 + 1, y0 + 1), dx * dy)));
+}
+
+/* pbrt-v4's MIPMap::Filter for its non-EWA filters: the level of a filter
+ * width of twice the largest st derivative; point and bilinear look up
+ * that level, trilinear blends it with the next (from level 1 on). */
+static rgb image_lookup(const texture *t, double s, double tt, double width)
+{
+    int n = t->levels;
+    double level = n - 1 + log2(fmax(width, 1e-8));
+    if (level >= n - 1)
+        return texel(t, &t->level[n - 1], 0, 0);
+    int il = level > 0.0 ? (int)floor(level) : 0;
+    const tex_image *im = &t->level[il];
+    switch (t->filter) {
+    case FILTER_POINT:
+        return texel(t, im, (int)round(s * im->width - 0.5), (int)round(tt * im->height - 0.5));
+    case FILTER_BILINEAR:
+        return bilerp(t, im, s, tt);
+    case FILTER_TRILINEAR:
+        if (il == 0)
+            return bilerp(t, im, s, tt);
+        return rgb_lerp(level - il, bilerp(t, im, s, tt), bilerp(t, &t->level[il + 1], s, tt));
+    }
+    return rgb_grey(0.0);
+}
+
+/* Levels down to 1x1, each texel the mean of the 2x2 below it (clamped at
+ * an odd edge); pbrt-v4 first resamples an image whose sides are not powers
+ * of 2 to the next powers. */
+static hz_status build_pyramid(texture *t, hz_error *err)
+{
+    t->level[0] = t->img;
+    t->levels = 1;
+    while (t->levels < TEX_MAX_LEVELS) {
+        const tex_image *a = &t->level[t->levels - 1];
+        if (a->width == 1 && a->height == 1)
+            break;
+        tex_image *b = &t->level[t->levels];
+        b->width = a->width > 1 ? (a->width + 1) / 2 : 1;
+        b->height = a->height > 1 ? (a->height + 1) / 2 : 1;
+        b->rgb = malloc((size_t)b->width * (size_t)b->height * 3 * sizeof *b->rgb);
+        if (!b->rgb)
+            return hz_fail(err, "out of memory");
+        ++t->levels;
+        for (int y = 0; y < b->height; ++y)
+            for (int x = 0; x < b->width; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    double sum = 0;
+                    for (int k = 0; k < 4; ++k) {
+                        int xs = 2 * x + (k & 1), ys = 2 * y + (k >> 1);
+                        xs = xs < a->width ? xs : a->width - 1;
+                        ys = ys < a->height ? ys : a->height - 1;
+                        sum += a->rgb[3 * ((size_t)ys * (size_t)a->width + (size_t)xs) +
+                                      (size_t)c];
+                    }
+                    b->rgb[3 * ((size_t)y * (size_t)b->width + (size_t)x) + (size_t)c] =
+                        (float)(sum / 4);
+                }
+    }
+    return HZ_OK;
+}
+
+rgb texture_eval(const texture *t, const texture_ctx *c)
+{
+    double s = t->su * c->u + t->du, tt = t->sv * c->v + t->dv;
+    switch (t->kind) {
+    case TEX_CONSTANT:
+        return t->in[0].v;
+    case TEX_SCALE:
+        return rgb_scale(eval_input(&t->in[0], c), eval_input(&t->in[1], c).r);
+    case TEX_MIX:
+        return rgb_lerp(eval_input(&t->in[2], c).r, eval_input(&t->in[0], c),
+                        eval_input(&t->in[1], c));
+    case TEX_CHECKERBOARD: {
+        double ds = fmax(fabs(t->su * c->dudx), fabs(t->su * c->dudy));
+        double dt = fmax(fabs(t->sv * c->dvdx), fabs(t->sv * c->dvdy));
+        double w = checker_weight(s, tt, ds, dt);
+        rgb a = w != 1.0 ? eval_input(&t->in[0], c) : rgb_grey(0.0);
+        rgb b = w != 0.0 ? eval_input(&t->in[1], c) : rgb_grey(0.0);
+        return rgb_lerp(w, a, b);
+    }
+    case TEX_BILERP:
+        return rgb_add(rgb_lerp(s, rgb_scale(eval_input(&t->in[0], c), 1 - tt),
+                                rgb_scale(eval_input(&t->in[2], c), 1 - tt)),
+                       rgb_lerp(s, rgb_scale(eval_input(&t->in[1], c), tt),
+                                rgb_scale(eval_input(&t->in[3], c), tt)));
+    case TEX_IMAGEMAP: {
+        double width = 2 * fmax(fmax(fabs(t->su * c->dudx), fabs(t->su * c->dudy)),
+                                fmax(fabs(t->sv * c->dvdx), fabs(t->sv * c->dvdy)));
+        rgb v = rgb_scale(image_lookup(t, s, 1.0 - tt, width), t->scale);
+        if (t->invert)
+            v = rgb_sub(rgb_grey(1.0), v);
+        return rgb_make(fmax(v.r, 0.0), fmax(v.g, 0.0), fmax(v.b, 0.0));
+    }
+    }
+    return rgb_grey(0.0);
+}
+
+double texture_eval_float(const texture *t, const texture_ctx *c)
+{
+    return texture_eval(t, c).r;
+}
+
+const texture *texture_set_find(const texture_set *s, const char *name, bool spectrum)
+{
+    if (!s)
+        return NULL;
+    /* The last definition before the use wins; the set is built in order. */
+    for (size_t i = s->count; i-- > 0;)
+        if (s->entities[i].spectrum == spectrum && strcmp(s->entities[i].name, name) == 0)
+            return &s->items[i];
+    return NULL;
+}
+
+/* ---- building ----------------------------------------------------------- */
+
+/* A parameter of a texture: "texture NAME" (a float texture when `spectrum`
+ * is false) or a value (float, or rgb/spectrum when `spectrum`). */
+static hz_status read_input(const texture_set *s, param_list *pl, const char *name,
+                            bool spectrum, rgb def, tex_input *out, hz_error *err)
+{
+    out->t = NULL;
+    const char *ref = params_texture(pl, name);
+    if (ref) {
+        out->t = texture_set_find(s, ref, spectrum);
+        if (!out->t)
+            return hz_fail_at(err, params_loc(pl, name),
+                              "\"texture %s\": no %s texture named \"%s\" defined before it",
+                              name, spectrum ? "spectrum" : "float", ref);
+        return HZ_OK;
+    }
+    out->v = spectrum ? params_rgb(pl, name, def) : rgb_grey(params_float(pl, name, def.r));
+    return HZ_OK;
+}
+
+static hz_status read_mapping(param_list *pl, texture *t, hz_error *err)
+{
+    const char *mapping = params_string(pl, "mapping", "uv");
+    if (strcmp(mapping, "uv") != 0)
+        return hz_fail_at(err, params_loc(pl, "mapping"),
+                          "texture \"mapping\" \"%s\" is not supported (haze has \"uv\")",
+                          mapping);
+    t->su = params_float(pl, "uscale", 1.0);
+    t->sv = params_float(pl, "vscale", 1.0);
+    t->du = params_float(pl, "udelta", 0.0);
+    t->dv = params_float(pl, "vdelta", 0.0);
+    return HZ_OK;
+}
+
+static double srgb_to_linear(double v)
+{
+    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
+}
+
+/* An 8-bit PNG as rgb in [0, 1], decoded by `encoding` (sRGB, linear or
+ * gamma g). */
+static hz_status read_png(const char *path, file_loc loc, int enc, double gamma, tex_image *out,
+                          hz_error *err)
+{
+    png_image im;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&im, path))
+        return hz_fail_at(err, loc, "cannot read PNG \"%s\": %s", path, im.message);
+    im.format = PNG_FORMAT_RGB;
+    size_t n = (size_t)im.width * im.height * 3;
+    unsigned char *buf = malloc(n ? n : 1);
+    out->rgb = malloc((n ? n : 1) * sizeof *out->rgb);
+    if (!buf || !out->rgb || !png_image_finish_read(&im, NULL, buf, 0, NULL)) {
+        png_image_free(&im);
+        free(buf);
+        free(out->rgb);
+        out->rgb = NULL;
+        return hz_fail_at(err, loc, "cannot read PNG \"%s\"", path);
+    }
+    out->width = (int)im.width;
+    out->height = (int)im.height;
+    for (size_t i = 0; i < n; ++i) {
+        double v = buf[i] / 255.0;
+        out->rgb[i] = (float)(enc == 0 ? srgb_to_linear(v) : enc == 1 ? v : pow(v, gamma));
+    }
+    free(buf);
+    return HZ_OK;
+}
+
+/* An EXR's R, G, B (or Y, or its one channel) as linear rgb. */
+static hz_status read_exr(const char *path, file_loc loc, tex_image *out, hz_error *err)
+{
+    exr_image img;
+    memset(&img, 0, sizeof img);
+    hz_error e;
+    if (exr_read(path, &img, &e) != HZ_OK)
+        return hz_fail_at(err, loc, "cannot read EXR \"%s\": %s", path, e.message);
+    const exr_channel *ch[3] = {exr_find_channel(&img, "R"), exr_find_channel(&img, "G"),
+                                exr_find_channel(&img, "B")};
+    if (!ch[0] || !ch[1] || !ch[2]) {
+        const exr_channel *y = exr_find_channel(&img, "Y");
+        if (!y && img.channel_count == 1)
+            y = &img.channels[0];
+        ch[0] = ch[1] = ch[2] = y;
+    }
+    if (!ch[0]) {
+        exr_image_free(&img);
+        return hz_fail_at(err, loc, "EXR \"%s\" has no R, G, B or Y channel", path);
+    }
+    size_t n = (size_t)img.width * (size_t)img.height;
+    out->rgb = malloc((n ? n : 1) * 3 * sizeof *out->rgb);
+    if (!out->rgb) {
+        exr_image_free(&img);
+        return hz_fail(err, "out of memory");
+    }
+    for (size_t i = 0; i < n; ++i)
+        for (int k = 0; k < 3; ++k)
+            out->rgb[3 * i + (size_t)k] = ch[k]->pixels[i];
+    out->width = img.width;
+    out->height = img.height;
+    exr_image_free(&img);
+    return HZ_OK;
+}
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), m = strlen(suffix);
+    if (n < m)
+        return false;
+    for (size_t i = 0; i < m; ++i)
+        if (tolower((unsigned char)s[n - m + i]) != tolower((unsigned char)suffix[i]))
+            return false;
+    return true;
+}
+
+static hz_status read_encoding(param_list *pl, bool png, int *enc, double *gamma, hz_error *err)
+{
+    const char *e = params_string(pl, "encoding", png ? "sRGB" : "linear");
+    *gamma = 1.0;
+    if (strcmp(e, "sRGB") == 0)
+        *enc = 0;
+    else if (strcmp(e, "linear") == 0)
+        *enc = 1;
+    else if (sscanf(e, "gamma %lf", gamma) == 1 && isfinite(*gamma) && *gamma > 0.0)
+        *enc = 2;
+    else
+        return hz_fail_at(err, params_loc(pl, "encoding"),
+                          "\"encoding\" \"%s\" must be \"sRGB\", \"linear\" or \"gamma G\"", e);
+    return HZ_OK;
+}
+
+static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_error *err)
+{
+    t->kind = TEX_IMAGEMAP;
+    const char *filter = params_string(pl, "filter", "bilinear");
+    /* ewa runs as trilinear (docs/differences-from-pbrt.md). */
+    if (strcmp(filter, "point") == 0)
+        t->filter = FILTER_POINT;
+    else if (strcmp(filter, "bilinear") == 0)
+        t->filter = FILTER_BILINEAR;
+    else if (strcmp(filter, "trilinear") == 0 || strcmp(filter, "ewa") == 0 ||
+             strcmp(filter, "EWA") == 0)
+        t->filter = FILTER_TRILINEAR;
+    else
+        return hz_fail_at(err, params_loc(pl, "filter"), "unknown \"filter\" \"%s\"", filter);
+    const char *wrap = params_string(pl, "wrap", "repeat");
+    static const char *const wraps[] = {"repeat", "black", "clamp", "octahedralsphere"};
+    int w = -1;
+    for (int i = 0; i < 4; ++i)
+        if (strcmp(wrap, wraps[i]) == 0)
+            w = i;
+    if (w < 0)
+        return hz_fail_at(err, params_loc(pl, "wrap"), "unknown \"wrap\" \"%s\"", wrap);
+    t->wrap = (tex_wrap)w;
+    t->scale = params_float(pl, "scale", 1.0);
+    t->invert = params_bool(pl, "invert", false);
+    const char *name = params_string(pl, "filename", NULL);
+    if (!name)
+        return hz_fail_at(err, loc, "Texture \"imagemap\" needs \"string filename\"");
+    bool png = has_suffix(name, ".png");
+    int enc;
+    double gamma;
+    if (read_encoding(pl, png, &enc, &gamma, err) != HZ_OK)
+        return HZ_ERROR;
+    if (!png && !has_suffix(name, ".exr"))
+        return hz_fail_at(err, params_loc(pl, "filename"),
+                          "image texture \"%s\": haze reads .png and .exr", name);
+    char *path = path_relative_to(loc.file, name);
+    if (!path)
+        return hz_fail(err, "out of memory");
+    hz_status st = png ? read_png(path, params_loc(pl, "filename"), enc, gamma, &t->img, err)
+                       : read_exr(path, params_loc(pl, "filename"), &t->img, err);
+    free(path);
+    if (st == HZ_OK && (t->img.width <= 0 || t->img.height <= 0))
+        return hz_fail_at(err, params_loc(pl, "filename"), "image texture \"%s\" is empty",
+                          name);
+    return st == HZ_OK ? build_pyramid(t, err) : st;
+}
+
+static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    const char *cls = te->entity.type;
+    bool sp = te->spectrum;
+    rgb one = rgb_grey(1.0), zero = rgb_grey(0.0);
+    *t = (texture){.spectrum = sp, .su = 1.0, .sv = 1.0};
+    hz_status st = HZ_OK;
+    if (strcmp(cls, "constant") == 0) {
+        t->kind = TEX_CONSTANT;
+        t->in[0].v = sp ? params_rgb(pl, "value", one) : rgb_grey(params_float(pl, "value", 1));
+    } else if (strcmp(cls, "scale") == 0) {
+        t->kind = TEX_SCALE;
+        if (read_input(s, pl, "tex", sp, one, &t->in[0], err) != HZ_OK ||
+            read_input(s, pl, "scale", false, one, &t->in[1], err) != HZ_OK)
+            return HZ_ERROR;
+    } else if (strcmp(cls, "mix") == 0) {
+        t->kind = TEX_MIX;
+        if (read_input(s, pl, "tex1", sp, zero, &t->in[0], err) != HZ_OK ||
+            read_input(s, pl, "tex2", sp, one, &t->in[1], err) != HZ_OK ||
+            read_input(s, pl, "amount", false, rgb_grey(0.5), &t->in[2], err) != HZ_OK)
+            return HZ_ERROR;
+    } else if (strcmp(cls, "checkerboard") == 0) {
+        t->kind = TEX_CHECKERBOARD;
+        int dim = params_int(pl, "dimension", 2);
+        if (dim != 2)
+            return hz_fail_at(err, params_loc(pl, "dimension"),
+                              "checkerboard \"dimension\" %d: haze has 2 (3 is not supported)",
+                              dim);
+        if (read_mapping(pl, t, err) != HZ_OK ||
+            read_input(s, pl, "tex1", sp, one, &t->in[0], err) != HZ_OK ||
+            read_input(s, pl, "tex2", sp, zero, &t->in[1], err) != HZ_OK)
+            return HZ_ERROR;
+    } else if (strcmp(cls, "bilerp") == 0) {
+        t->kind = TEX_BILERP;
+        static const char *const v[4] = {"v00", "v01", "v10", "v11"};
+        if (read_mapping(pl, t, err) != HZ_OK)
+            return HZ_ERROR;
+        for (int i = 0; i < 4; ++i)
+            if (read_input(s, pl, v[i], sp, rgb_grey(i & 1 ? 1.0 : 0.0), &t->in[i], err) !=
+                HZ_OK)
+                return HZ_ERROR;
+    } else if (strcmp(cls, "imagemap") == 0) {
+        if (read_mapping(pl, t, err) != HZ_OK)
+            return HZ_ERROR;
+        st = read_imagemap(pl, te->entity.loc, t, err);
+    } else {
+        return hz_fail_at(err, te->entity.loc,
+                          "Texture class \"%s\" is not supported (supported: \"constant\", "
+                          "\"scale\", \"mix\", \"checkerboard\", \"bilerp\", \"imagemap\")",
+                          cls);
+    }
+    if (st != HZ_OK)
+        return st;
+    char what[128];
+    snprintf(what, sizeof what, "Texture \"%s\" \"%s\"", te->name, cls);
+    return params_finish(pl, what, err);
+}
+
+static void free_images(texture *t)
+{
+    free(t->img.rgb);
+    for (int i = 1; i < t->levels; ++i)
+        free(t->level[i].rgb);
+}
+
+hz_status texture_set_create(scene_desc *sd, hz_errors *errs, texture_set **out, hz_error *err)
+{
+    *out = NULL;
+    texture_set *s = calloc(1, sizeof *s);
+    if (!s)
+        return hz_fail(err, "out of memory");
+    s->entities = sd->textures;
+    s->items = calloc(sd->texture_count ? sd->texture_count : 1, sizeof *s->items);
+    if (!s->items) {
+        free(s);
+        return hz_fail(err, "out of memory");
+    }
+    for (size_t i = 0; i < sd->texture_count; ++i) {
+        if (build_texture(s, &sd->textures[i], &s->items[i], err) != HZ_OK) {
+            free_images(&s->items[i]);
+            if (!err->loc.file) {
+                s->count = i;
+                texture_set_destroy(s);
+                return HZ_ERROR;
+            }
+            hz_errors_add(errs, err);
+            s->items[i] = (texture){.kind = TEX_CONSTANT, .spectrum = sd->textures[i].spectrum};
+        }
+        s->count = i + 1;
+    }
+    *out = s;
+    return HZ_OK;
+}
+
+void texture_set_destroy(texture_set *s)
+{
+    if (!s)
+        return;
+    for (size_t i = 0; i < s->count; ++i)
+        free_images(&s->items[i]);
+    free(s->items);
+    free(s);
+}

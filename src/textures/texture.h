@@ -1,0 +1,41 @@
+/* Textures: pbrt-v4's `Texture "name" "float"|"spectrum" "class" params`, a
+ * closed set of classes evaluated at a surface point. A spectrum texture
+ * gives rgb; a float texture gives its value in all three channels.
+ * Classes: "constant", "scale", "mix", "checkerboard" (2D, box-filtered as
+ * pbrt-v4), "bilerp" and "imagemap" (EXR or PNG), with pbrt-v4's "uv"
+ * mapping. docs/scene-format.md lists what is refused. */
+#ifndef HAZE_TEXTURES_TEXTURE_H
+#define HAZE_TEXTURES_TEXTURE_H
+
+#include <stdbool.h>
+
+#include "core/error.h"
+#include "core/vec.h"
+#include "scene/scene_desc.h"
+
+/* Where a texture is evaluated: surface (u, v), their screen-space
+ * derivatives (0 = no footprint: no filtering) and the render-space point. */
+typedef struct {
+    double u, v;
+    double dudx, dudy, dvdx, dvdy;
+    vec3 p;
+} texture_ctx;
+
+typedef struct texture texture;
+typedef struct texture_set texture_set;
+
+/* Builds every texture of `sd` in file order; a texture may name only
+ * textures defined before it. An error with a place (a texture's) is
+ * collected in `errs` and that texture becomes a constant 0; one without
+ * (memory) ends the build in `err`. */
+hz_status texture_set_create(scene_desc *sd, hz_errors *errs, texture_set **out, hz_error *err);
+void texture_set_destroy(texture_set *s);
+
+/* The texture of that name and value type, or NULL. */
+const texture *texture_set_find(const texture_set *s, const char *name, bool spectrum);
+
+/* The value at c: rgb for spectrum textures, grey for float ones. */
+rgb texture_eval(const texture *t, const texture_ctx *c);
+double texture_eval_float(const texture *t, const texture_ctx *c);
+
+#endif

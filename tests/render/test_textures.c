@@ -1,0 +1,283 @@
+#define _POSIX_C_SOURCE 200809L
+/* Textures through whole renders of the haze binary: a checkerboard ground
+ * filtered to its mean far away and exact near, an image of one colour equal
+ * to that colour as a constant material. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <math.h>
+
+#include "cli_util.h"
+#include "render_test_util.h"
+#include "core/vec.h"
+#include "film/exr.h"
+
+enum { W = 96, H = 72 };
+
+static void render_or_fail(const char *name, const char *text, exr_image *img)
+{
+    char scene[1024], args[4096], out[8192], path[1024];
+    snprintf(scene, sizeof scene, "%s/%s.pbrt", HAZE_TMP, name);
+    write_text_file(scene, text);
+    snprintf(path, sizeof path, "%s/%s.exr", HAZE_TMP, name);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet --threads 2", scene, path);
+    int rc = run_haze(args, out, sizeof out);
+    if (rc != 0) {
+        print_error("haze exited %d: %s\n", rc, out);
+        fail();
+    }
+    hz_error err = {0};
+    if (exr_read(path, img, &err) != HZ_OK) {
+        print_error("%s\n", err.message);
+        fail();
+    }
+}
+
+/* Mean of channel `ch` over [x0, x1) x [y0, y1). */
+static double region_mean(const exr_image *img, const char *ch, int x0, int x1, int y0, int y1)
+{
+    const exr_channel *c = exr_find_channel(img, ch);
+    assert_non_null(c);
+    double s = 0;
+    for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x)
+            s += c->pixels[y * img->width + x];
+    return s / ((x1 - x0) * (y1 - y0));
+}
+
+/* A ground of unit squares (red 0.8 / blue 0.8) under a white sky, seen at a
+ * grazing angle; maxdepth 1, so a pixel is the reflectance it sees. */
+static const char checker_fmt[] =
+    "LookAt 0 1 0  0 0.8 10  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 60\n"
+    "Film \"rgb\" \"integer xresolution\" %d \"integer yresolution\" %d\n"
+    "Sampler \"zsobol\" \"integer pixelsamples\" 16\n"
+    "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+    "WorldBegin\n"
+    "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+    "Texture \"ck\" \"spectrum\" \"checkerboard\" \"float uscale\" 2000 \"float vscale\" 2000\n"
+    "  \"rgb tex1\" [0.8 0 0] \"rgb tex2\" [0 0 0.8]\n"
+    "Material \"diffuse\" \"texture reflectance\" \"ck\"\n"
+    "Shape \"trianglemesh\" \"point3 P\" [-1000 0 -1000  1000 0 -1000  1000 0 1000  -1000 0 1000]\n"
+    "  \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n";
+
+static void test_checkerboard_ground(void **state)
+{
+    (void)state;
+    char text[4096];
+    snprintf(text, sizeof text, checker_fmt, W, H);
+    exr_image img;
+    render_or_fail("tex_checker", text, &img);
+    /* Far (rows 37-39, just below the horizon at row 34.75, z ~ 15-25): many
+     * squares per pixel, filtered to the mean 0.4 of both colours. */
+    double far_r = region_mean(&img, "R", 0, W, 37, 40);
+    double far_b = region_mean(&img, "B", 0, W, 37, 40);
+    print_message("far rows: R %.4f B %.4f\n", far_r, far_b);
+    assert_true(fabs(far_r - 0.4) < 0.04 && fabs(far_b - 0.4) < 0.04);
+    /* Near (bottom rows: z in (1.6, 1.8), x within 0.1 of 0): squares of tens
+     * of pixels, x = 0 an edge at the centre column; each side one colour. */
+    double near_r = region_mean(&img, "R", W / 2 - 4, W / 2 - 2, H - 3, H - 1);
+    double near_b = region_mean(&img, "B", W / 2 - 4, W / 2 - 2, H - 3, H - 1);
+    double near_r2 = region_mean(&img, "R", W / 2 + 2, W / 2 + 4, H - 3, H - 1);
+    double near_b2 = region_mean(&img, "B", W / 2 + 2, W / 2 + 4, H - 3, H - 1);
+    print_message("near: (%.4f, %.4f) and (%.4f, %.4f)\n", near_r, near_b, near_r2, near_b2);
+    /* One side red only, the other blue only (exact zeros in the other). */
+    assert_true((near_r > 0.75 && near_b == 0.0 && near_r2 == 0.0 && near_b2 > 0.75) ||
+                (near_b > 0.75 && near_r == 0.0 && near_b2 == 0.0 && near_r2 > 0.75));
+    exr_image_free(&img);
+}
+
+static const char plane_fmt[] =
+    "LookAt 0 1 -2  0 0 3  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 50\n"
+    "Film \"rgb\" \"integer xresolution\" 48 \"integer yresolution\" 36\n"
+    "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
+    "Integrator \"volpath\" \"integer maxdepth\" 3\n"
+    "WorldBegin\n"
+    "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+    "%s\n"
+    "Shape \"trianglemesh\" \"point3 P\" [-4 0 -4  4 0 -4  4 0 8  -4 0 8]\n"
+    "  \"integer indices\" [0 1 2 0 2 3]\n"
+    "Shape \"sphere\" \"float radius\" 0.5\n";
+
+static void test_constant_image_is_constant_material(void **state)
+{
+    (void)state;
+    exr_image tex;
+    hz_error err;
+    assert_int_equal(exr_image_alloc(&tex, 4, 4, 3, &err), HZ_OK);
+    const char *names[3] = {"B", "G", "R"};
+    const float v[3] = {0.75f, 0.5f, 0.25f};
+    for (int c = 0; c < 3; ++c) {
+        snprintf(tex.channels[c].name, sizeof tex.channels[c].name, "%s", names[c]);
+        for (int i = 0; i < 16; ++i)
+            tex.channels[c].pixels[i] = v[c];
+    }
+    char path[1024];
+    snprintf(path, sizeof path, "%s/tex_const.exr", HAZE_TMP);
+    assert_int_equal(exr_write(path, &tex, &err), HZ_OK);
+    exr_image_free(&tex);
+
+    char a[4096], b[4096];
+    snprintf(a, sizeof a, plane_fmt,
+             "Texture \"im\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_const.exr\"\n"
+             "Texture \"r\" \"float\" \"constant\" \"float value\" 0.3\n"
+             "Material \"coateddiffuse\" \"texture reflectance\" \"im\" \"texture roughness\" "
+             "\"r\"");
+    snprintf(b, sizeof b, plane_fmt,
+             "Material \"coateddiffuse\" \"rgb reflectance\" [0.25 0.5 0.75] "
+             "\"float roughness\" 0.3");
+    exr_image ia, ib;
+    render_or_fail("tex_const_a", a, &ia);
+    render_or_fail("tex_const_b", b, &ib);
+    const char *ch[3] = {"R", "G", "B"};
+    double worst = 0;
+    for (int c = 0; c < 3; ++c) {
+        const float *pa = exr_find_channel(&ia, ch[c])->pixels;
+        const float *pb = exr_find_channel(&ib, ch[c])->pixels;
+        for (int i = 0; i < ia.width * ia.height; ++i)
+            worst = fmax(worst, fabs(pa[i] - pb[i]));
+    }
+    print_message("imagemap vs constant: worst pixel difference %.3g\n", worst);
+    assert_true(worst < 1e-5);
+    exr_image_free(&ia);
+    exr_image_free(&ib);
+}
+
+/* A texture that shows (u, v) as red and green, under a white sky with
+ * maxdepth 1: a diffuse pixel is its reflectance exactly (cosine sampling). */
+static const char uv_fmt[] =
+    "LookAt 0 0 -5  0 0 0  0 1 0\n"
+    "Camera \"perspective\" \"float fov\" 40\n"
+    "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\n"
+    "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+    "WorldBegin\n"
+    "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+    "Texture \"uv\" \"spectrum\" \"bilerp\" \"rgb v00\" [0 0 0] \"rgb v01\" [0 1 0]\n"
+    "  \"rgb v10\" [1 0 0] \"rgb v11\" [1 1 0]\n"
+    "Material \"diffuse\" \"texture reflectance\" \"uv\"\n"
+    "%s\n";
+
+typedef void (*uv_of_fn)(vec3 p, double *u, double *v);
+
+static double phi_of(vec3 p)
+{
+    double phi = atan2(p.y, p.x);
+    return phi < 0 ? phi + 2 * HZ_PI : phi;
+}
+
+static void uv_sphere(vec3 p, double *u, double *v)
+{
+    *u = phi_of(p) / (2 * HZ_PI);
+    *v = (acos(p.z) - HZ_PI) / (0 - HZ_PI);
+}
+
+/* zmin -0.9, zmax 0.5, phimax 270 */
+static void uv_partial_sphere(vec3 p, double *u, double *v)
+{
+    double th0 = acos(-0.9), th1 = acos(0.5);
+    *u = phi_of(p) / (1.5 * HZ_PI);
+    *v = (acos(p.z) - th0) / (th1 - th0);
+}
+
+static void uv_given(vec3 p, double *u, double *v)
+{
+    *u = 0.5 * (p.x + 1) / 2;
+    *v = 0.2 + 0.8 * (p.y + 1) / 2;
+}
+
+/* Triangles (p0 p1 p2) and (p0 p2 p3) of the square [-1, 1]^2, each with
+ * pbrt-v4's default (0,0), (1,0), (1,1). */
+static void uv_default_triangles(vec3 p, double *u, double *v)
+{
+    if (fabs(p.x - p.y) < 1e-6) { /* on the shared edge: either triangle's */
+        *u = *v = NAN;
+    } else if (p.x > p.y) {
+        *u = (p.x + 1) / 2;
+        *v = (p.y + 1) / 2;
+    } else {
+        *u = (p.y + 1) / 2;
+        *v = (p.y - p.x) / 2;
+    }
+}
+
+static void uv_bilinear(vec3 p, double *u, double *v)
+{
+    *u = (p.x + 1) / 2;
+    *v = (p.y + 1) / 2;
+}
+
+/* radius 1, innerradius 0.2 */
+static void uv_disk(vec3 p, double *u, double *v)
+{
+    *u = phi_of(p) / (2 * HZ_PI);
+    *v = (1 - sqrt(p.x * p.x + p.y * p.y)) / 0.8;
+}
+
+/* Rotate 90 about x: object (x, y, z) is world (x, -z, y). */
+static void uv_cylinder(vec3 w, double *u, double *v)
+{
+    vec3 p = v3(w.x, w.z, -w.y);
+    *u = phi_of(p) / (2 * HZ_PI);
+    *v = (p.z + 1) / 2;
+}
+
+static void check_uv(const char *shape, uv_of_fn uv_of, double tol)
+{
+    char text[4096];
+    snprintf(text, sizeof text, uv_fmt, shape);
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    int hits = 0;
+    double worst = 0;
+    for (int y = 2; y < 32; y += 3)
+        for (int x = 2; x < 32; x += 3) {
+            pixel_eval e = eval_pixel(rs, x + 0.5, y + 0.5, 1);
+            /* The far side (z > 0) is the inside of a partial sphere seen
+             * through its cut, in its own shadow: not the texture alone. */
+            if (!e.hit || e.p_world.z > 1e-9)
+                continue;
+            double u, v;
+            uv_of(e.p_world, &u, &v);
+            if (isnan(u))
+                continue;
+            worst = fmax(worst, fmax(fabs(e.L.r - u), fabs(e.L.g - v)));
+            if (!(fabs(e.L.r - u) <= tol && fabs(e.L.g - v) <= tol))
+                fail_msg("%s: at (%g %g %g) got uv (%.6f %.6f), want (%.6f %.6f)", shape,
+                         e.p_world.x, e.p_world.y, e.p_world.z, e.L.r, e.L.g, u, v);
+            ++hits;
+        }
+    print_message("%.40s...: %d hits, worst %.2g\n", shape, hits, worst);
+    assert_true(hits > 10);
+    render_scene_destroy(rs);
+}
+
+static void test_uv_on_shapes(void **state)
+{
+    (void)state;
+    check_uv("Shape \"sphere\"", uv_sphere, 1e-6);
+    check_uv("Shape \"sphere\" \"float zmin\" -0.9 \"float zmax\" 0.5 \"float phimax\" 270",
+             uv_partial_sphere, 1e-6);
+    check_uv("Shape \"trianglemesh\" \"point3 P\" [-1 -1 0 1 -1 0 1 1 0 -1 1 0]\n"
+             "  \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0.2 0.5 0.2 0.5 1 0 1]",
+             uv_given, 1e-6);
+    check_uv("Shape \"trianglemesh\" \"point3 P\" [-1 -1 0 1 -1 0 1 1 0 -1 1 0]\n"
+             "  \"integer indices\" [0 1 2 0 2 3]",
+             uv_default_triangles, 1e-6);
+    check_uv("Shape \"bilinearmesh\" \"point3 P\" [-1 -1 0 1 -1 0 -1 1 0 1 1 0]",
+             uv_bilinear, 1e-6);
+    check_uv("Shape \"disk\" \"float innerradius\" 0.2", uv_disk, 2e-3);
+    check_uv("Rotate 90 1 0 0 Shape \"cylinder\"", uv_cylinder, 2e-3);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_checkerboard_ground),
+        cmocka_unit_test(test_constant_image_is_constant_material),
+        cmocka_unit_test(test_uv_on_shapes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

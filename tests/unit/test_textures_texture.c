@@ -1,0 +1,263 @@
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "assert_util.h"
+#include "film/exr.h"
+#include "film/png.h"
+#include "textures/texture.h"
+
+typedef struct {
+    scene_desc sd;
+    texture_set *set;
+} built;
+
+/* Parses "WorldBegin <textures>" (named file `name` in HAZE_TMP, so that
+ * image names resolve there) and builds its textures; the error of the
+ * first failing texture goes to *err. */
+static hz_status build(const char *textures, built *b, hz_error *err)
+{
+    char src[4096], name[512];
+    snprintf(src, sizeof src, "WorldBegin\n%s", textures);
+    snprintf(name, sizeof name, "%s/textures.pbrt", HAZE_TMP);
+    if (scene_parse_string(src, name, &b->sd, err) != HZ_OK)
+        return HZ_ERROR;
+    hz_errors errs;
+    memset(&errs, 0, sizeof errs);
+    hz_status st = texture_set_create(&b->sd, &errs, &b->set, err);
+    if (st == HZ_OK && errs.count > 0)
+        return hz_errors_finish(&errs, NULL, 0, err);
+    free(errs.items);
+    return st;
+}
+
+static void unbuild(built *b)
+{
+    texture_set_destroy(b->set);
+    scene_desc_free(&b->sd);
+}
+
+static rgb at(const built *b, const char *name, bool spectrum, double u, double v)
+{
+    const texture *t = texture_set_find(b->set, name, spectrum);
+    if (!t)
+        fail_msg("no texture \"%s\"", name);
+    texture_ctx c = {.u = u, .v = v};
+    return texture_eval(t, &c);
+}
+
+static void assert_rgb(rgb got, double r, double g, double bl, double tol)
+{
+    assert_near(got.r, r, tol);
+    assert_near(got.g, g, tol);
+    assert_near(got.b, bl, tol);
+}
+
+static void expect_error(const char *textures, const char *want)
+{
+    built b;
+    hz_error err;
+    memset(&b, 0, sizeof b);
+    hz_status st = build(textures, &b, &err);
+    unbuild(&b);
+    assert_int_equal(st, HZ_ERROR);
+    if (!strstr(err.message, want))
+        fail_msg("got \"%s\", want \"%s\"", err.message, want);
+    assert_non_null(err.loc.file);
+}
+
+static void test_constant_scale_mix(void **state)
+{
+    (void)state;
+    built b;
+    hz_error err;
+    assert_int_equal(build("Texture \"c\" \"spectrum\" \"constant\" \"rgb value\" [0.2 0.4 0.6]\n"
+                           "Texture \"f\" \"float\" \"constant\" \"float value\" 0.25\n"
+                           "Texture \"one\" \"float\" \"constant\"\n"
+                           "Texture \"s\" \"spectrum\" \"scale\" \"texture tex\" \"c\" "
+                           "\"texture scale\" \"f\"\n"
+                           "Texture \"m\" \"spectrum\" \"mix\" \"texture tex1\" \"c\" "
+                           "\"rgb tex2\" [1 1 1] \"texture amount\" \"f\"\n"
+                           "Texture \"md\" \"float\" \"mix\"\n",
+                           &b, &err),
+                     HZ_OK);
+    assert_rgb(at(&b, "c", true, 0.3, 0.7), 0.2, 0.4, 0.6, 0);
+    assert_near(at(&b, "f", false, 0, 0).r, 0.25, 0);
+    assert_near(at(&b, "one", false, 0, 0).r, 1.0, 0); /* pbrt-v4's default value */
+    assert_rgb(at(&b, "s", true, 0, 0), 0.05, 0.1, 0.15, 1e-15);
+    assert_rgb(at(&b, "m", true, 0, 0), 0.4, 0.55, 0.7, 1e-15);
+    assert_near(at(&b, "md", false, 0, 0).r, 0.5, 0); /* tex1 0, tex2 1, amount 0.5 */
+    assert_null(texture_set_find(b.set, "f", true));
+    unbuild(&b);
+}
+
+static void test_checkerboard(void **state)
+{
+    (void)state;
+    built b;
+    hz_error err;
+    assert_int_equal(build("Texture \"k\" \"float\" \"checkerboard\" \"float uscale\" 4 "
+                           "\"float vscale\" 2 \"float udelta\" 0.5\n"
+                           "Texture \"d\" \"float\" \"checkerboard\"\n",
+                           &b, &err),
+                     HZ_OK);
+    /* s = 4u + 0.5, t = 2v: floor(s) + floor(t) even -> tex1 (1), odd -> tex2 (0). */
+    assert_near(at(&b, "k", false, 0.01, 0.1).r, 1.0, 0);  /* s 0.54, t 0.2 */
+    assert_near(at(&b, "k", false, 0.2, 0.1).r, 0.0, 0);   /* s 1.3 */
+    assert_near(at(&b, "k", false, 0.2, 0.6).r, 1.0, 0);   /* s 1.3, t 1.2 */
+    assert_near(at(&b, "k", false, -0.2, 0.1).r, 0.0, 0);  /* s -0.3: square -1 */
+    assert_near(at(&b, "d", false, 0.5, 0.5).r, 1.0, 0);
+    assert_near(at(&b, "d", false, 1.5, 0.5).r, 0.0, 0);
+    /* A footprint of many squares averages to one half (pbrt-v4's box). */
+    texture_ctx c = {.u = 0.3, .v = 0.7, .dudx = 40, .dvdy = 40};
+    assert_near(texture_eval(texture_set_find(b.set, "d", false), &c).r, 0.5, 0.01);
+    unbuild(&b);
+}
+
+static void test_bilerp(void **state)
+{
+    (void)state;
+    built b;
+    hz_error err;
+    assert_int_equal(build("Texture \"b\" \"float\" \"bilerp\" \"float v00\" 1 \"float v01\" 2 "
+                           "\"float v10\" 3 \"float v11\" 4\n",
+                           &b, &err),
+                     HZ_OK);
+    assert_near(at(&b, "b", false, 0, 0).r, 1, 1e-15);
+    assert_near(at(&b, "b", false, 0, 1).r, 2, 1e-15);
+    assert_near(at(&b, "b", false, 1, 0).r, 3, 1e-15);
+    assert_near(at(&b, "b", false, 1, 1).r, 4, 1e-15);
+    assert_near(at(&b, "b", false, 0.5, 0.5).r, 2.5, 1e-15);
+    unbuild(&b);
+}
+
+/* A 2x2 EXR: top row (1, 2), bottom row (3, 4) in R; G = 10 R; B = 0. */
+static void write_exr(const char *name)
+{
+    exr_image img;
+    hz_error err;
+    assert_int_equal(exr_image_alloc(&img, 2, 2, 3, &err), HZ_OK);
+    const char *names[3] = {"B", "G", "R"};
+    const float r[4] = {1, 2, 3, 4};
+    for (int c = 0; c < 3; ++c) {
+        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
+        for (int i = 0; i < 4; ++i)
+            img.channels[c].pixels[i] = c == 2 ? r[i] : c == 1 ? 10 * r[i] : 0;
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", HAZE_TMP, name);
+    assert_int_equal(exr_write(path, &img, &err), HZ_OK);
+    exr_image_free(&img);
+}
+
+static void test_imagemap_exr(void **state)
+{
+    (void)state;
+    write_exr("tex_2x2.exr");
+    built b;
+    hz_error err;
+    assert_int_equal(
+        build("Texture \"p\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
+              "\"string filter\" \"point\"\n"
+              "Texture \"l\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x2.exr\"\n"
+              "Texture \"c\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
+              "\"string wrap\" \"clamp\"\n"
+              "Texture \"k\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
+              "\"string wrap\" \"black\" \"string filter\" \"point\"\n"
+              "Texture \"s\" \"float\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
+              "\"float scale\" 0.5 \"bool invert\" true \"string filter\" \"point\"\n"
+              "Texture \"t\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
+              "\"string filter\" \"trilinear\"\n",
+              &b, &err),
+        HZ_OK);
+    /* Texel centres: (u, v) = ((x + 0.5) / 2, 1 - (y + 0.5) / 2). */
+    assert_rgb(at(&b, "p", true, 0.25, 0.75), 1, 10, 0, 0);
+    assert_rgb(at(&b, "p", true, 0.75, 0.75), 2, 20, 0, 0);
+    assert_rgb(at(&b, "p", true, 0.25, 0.25), 3, 30, 0, 0);
+    assert_rgb(at(&b, "p", true, 0.75, 0.25), 4, 40, 0, 0);
+    assert_rgb(at(&b, "l", true, 0.25, 0.75), 1, 10, 0, 1e-6);
+    assert_rgb(at(&b, "l", true, 0.75, 0.25), 4, 40, 0, 1e-6);
+    assert_rgb(at(&b, "l", true, 0.5, 0.5), 2.5, 25, 0, 1e-6);
+    /* Repeat: u = 0 lies between texel 1 of the row and texel 0 of the next period. */
+    assert_rgb(at(&b, "l", true, 0.0, 0.75), 1.5, 15, 0, 1e-6);
+    assert_rgb(at(&b, "p", true, 1.25, -0.25), 1, 10, 0, 0);
+    /* Clamp: the edge texel. */
+    assert_rgb(at(&b, "c", true, 0.0, 0.75), 1, 10, 0, 1e-6);
+    /* Black outside. */
+    assert_rgb(at(&b, "k", true, 1.25, 0.75), 0, 0, 0, 0);
+    /* A footprint of the whole image (width 2 max |ds|, |dt| = 1): the 1x1
+     * top of the pyramid, the mean, for every filter (pbrt-v4's level choice). */
+    texture_ctx wide = {.u = 0.25, .v = 0.75, .dudx = 0.5};
+    assert_rgb(texture_eval(texture_set_find(b.set, "l", true), &wide), 2.5, 25, 0, 1e-6);
+    assert_rgb(texture_eval(texture_set_find(b.set, "p", true), &wide), 2.5, 25, 0, 1e-6);
+    /* Half of it: level 0 (trilinear blends only from level 1 on, as pbrt-v4). */
+    texture_ctx half = {.u = 0.25, .v = 0.75, .dudx = 0.25};
+    assert_rgb(texture_eval(texture_set_find(b.set, "t", true), &half), 1, 10, 0, 1e-6);
+    /* Between: level 0.5 -> level 0 for trilinear. */
+    texture_ctx mid = {.u = 0.25, .v = 0.75, .dudx = 0.25 * sqrt(2.0)};
+    assert_rgb(texture_eval(texture_set_find(b.set, "t", true), &mid), 1, 10, 0, 1e-6);
+    /* Float from R: 1 - 0.5 * R, clamped at 0. */
+    assert_near(at(&b, "s", false, 0.25, 0.75).r, 0.5, 0);
+    assert_near(at(&b, "s", false, 0.75, 0.25).r, 0.0, 0);
+    unbuild(&b);
+}
+
+static void test_imagemap_png(void **state)
+{
+    (void)state;
+    char path[512];
+    hz_error err;
+    snprintf(path, sizeof path, "%s/tex_2x1.png", HAZE_TMP);
+    const uint8_t px[6] = {255, 128, 0, 0, 64, 255};
+    assert_int_equal(png_out_write_rgb8(path, 2, 1, px, &err), HZ_OK);
+    built b;
+    assert_int_equal(
+        build("Texture \"s\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x1.png\" "
+              "\"string filter\" \"point\"\n"
+              "Texture \"l\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x1.png\" "
+              "\"string filter\" \"point\" \"string encoding\" \"linear\"\n"
+              "Texture \"g\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_2x1.png\" "
+              "\"string filter\" \"point\" \"string encoding\" \"gamma 2\"\n",
+              &b, &err),
+        HZ_OK);
+    double s128 = pow((128 / 255.0 + 0.055) / 1.055, 2.4);
+    assert_rgb(at(&b, "s", true, 0.25, 0.5), 1, s128, 0, 1e-6);
+    assert_rgb(at(&b, "l", true, 0.75, 0.5), 0, 64 / 255.0, 1, 1e-6);
+    assert_rgb(at(&b, "g", true, 0.25, 0.5), 1, (128 / 255.0) * (128 / 255.0), 0, 1e-6);
+    unbuild(&b);
+}
+
+static void test_errors(void **state)
+{
+    (void)state;
+    expect_error("Texture \"a\" \"spectrum\" \"nosuch\"\n", "\"nosuch\" is not supported");
+    expect_error("Texture \"a\" \"float\" \"constant\" \"float valu\" 1\n", "valu");
+    expect_error("Texture \"a\" \"float\" \"scale\" \"texture tex\" \"missing\"\n",
+                 "no float texture named \"missing\"");
+    expect_error("Texture \"a\" \"float\" \"checkerboard\" \"string mapping\" \"polar\"\n",
+                 "mapping");
+    expect_error("Texture \"a\" \"float\" \"imagemap\" \"string filename\" \"none.exr\"\n",
+                 "none.exr");
+    expect_error("Texture \"a\" \"float\" \"imagemap\" \"string filename\" \"tex_2x2.exr\" "
+                 "\"string wrap\" \"spiral\"\n",
+                 "spiral");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_constant_scale_mix),
+        cmocka_unit_test(test_checkerboard),
+        cmocka_unit_test(test_bilerp),
+        cmocka_unit_test(test_imagemap_exr),
+        cmocka_unit_test(test_imagemap_png),
+        cmocka_unit_test(test_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
