@@ -45,11 +45,18 @@ hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_pa
     const char *why, *what;
     if (e->loc.line == 0 && integrator_default_kind(sd, &why, &what) == INTEGRATOR_SINGLESCATTER)
         return params_finish(pl, "Integrator", err);
-    if (strcmp(type, "volpath") == 0) {
+    /* pbrt-v4's "path" is its volpath without media (the same estimator and
+     * parameters); with media it ignores them, which haze does not do. */
+    bool path = strcmp(type, "path") == 0;
+    if (path && sd->medium_count > 0)
+        return hz_fail_at(err, e->loc,
+                          "Integrator \"path\" with media: pbrt-v4's path integrator ignores "
+                          "media, haze does not render them away; use \"volpath\"");
+    if (path || strcmp(type, "volpath") == 0) {
         out->kind = INTEGRATOR_VOLPATH;
         if (volpath_settings_from_entity(e, warn, &out->volpath, err) != HZ_OK)
             return HZ_ERROR;
-        return params_finish(pl, "Integrator \"volpath\"", err);
+        return params_finish(pl, path ? "Integrator \"path\"" : "Integrator \"volpath\"", err);
     }
     if (strcmp(type, "singlescatter") == 0) {
         if (singlescatter_settings_from_entity(e, &out->singlescatter, err) != HZ_OK)
@@ -57,8 +64,8 @@ hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_pa
         return params_finish(pl, "Integrator \"singlescatter\"", err);
     }
     return hz_fail_at(err, e->loc,
-                      "Integrator \"%s\" is not supported (supported: \"volpath\", "
-                      "\"singlescatter\")",
+                      "Integrator \"%s\" is not supported (supported: \"volpath\", \"path\" "
+                      "(without media), \"singlescatter\")",
                       type);
 }
 

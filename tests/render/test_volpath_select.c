@@ -51,6 +51,42 @@ static void test_threads_byte_identical(void **state)
     free(b);
 }
 
+/* pbrt-v4's "path" is volpath without media: the same image where there are
+ * none; with media (which pbrt-v4's path ignores) it is refused. */
+static void test_path_is_volpath_without_media(void **state)
+{
+    (void)state;
+    const char *body = "WorldBegin\n"
+                       "LightSource \"spot\" \"rgb I\" [6 5 4] \"point3 from\" [0 2 0]"
+                       " \"point3 to\" [0 0 0]\n"
+                       "Shape \"sphere\" \"float radius\" 0.5\n"
+                       "Shape \"trianglemesh\" \"point3 P\" [-3 -1 -3  3 -1 -3  3 -1 3  -3 -1 3] "
+                       "\"integer indices\" [0 1 2 0 2 3]\n";
+    char *pa = sfmt("%sIntegrator \"path\" \"integer maxdepth\" 3\n%s", camera_text, body);
+    char *vp = sfmt("%sIntegrator \"volpath\" \"integer maxdepth\" 3\n%s", camera_text, body);
+    render_scene *a = build_scene_or_fail(pa, NULL), *b = build_scene_or_fail(vp, NULL);
+    renderer_options opt = {.threads = 2};
+    render_stats st;
+    hz_error err = {0};
+    assert_int_equal(renderer_run(a, &opt, &st, &err), HZ_OK);
+    assert_int_equal(renderer_run(b, &opt, &st, &err), HZ_OK);
+    film_accumulators fa, fb;
+    film_get_accumulators(render_scene_film(a), &fa);
+    film_get_accumulators(render_scene_film(b), &fb);
+    assert_int_equal(fa.double_count[0], fb.double_count[0]);
+    assert_memory_equal(fa.doubles[0], fb.doubles[0], fa.double_count[0] * sizeof(double));
+    assert_true(film_get_pixel(render_scene_film(a), 12, 8, 1.0).r > 0.0);
+    render_scene_destroy(a);
+    render_scene_destroy(b);
+    free(pa);
+    free(vp);
+    char msg[1024];
+    char *with_media = sfmt("%sIntegrator \"path\"\n%s", camera_text, scene_body);
+    build_scene_expect_error(with_media, msg, sizeof msg);
+    assert_non_null(strstr(msg, "test.pbrt:5:1: Integrator \"path\" with media"));
+    free(with_media);
+}
+
 /* A scene naming no Integrator renders exactly as "singlescatter". */
 static void test_default_is_singlescatter(void **state)
 {
@@ -484,6 +520,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_threads_byte_identical),
         cmocka_unit_test(test_default_is_singlescatter),
+        cmocka_unit_test(test_path_is_volpath_without_media),
         cmocka_unit_test(test_empty_material_is_interface),
         cmocka_unit_test(test_parameters),
         cmocka_unit_test(test_cloud_without_integrator),
