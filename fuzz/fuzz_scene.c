@@ -1,4 +1,4 @@
-/* libFuzzer target: the scene parser (scene_parse_string) on arbitrary bytes,
+/* libFuzzer target: the scene parser (scene_parse_string_all) on arbitrary bytes,
  * then the render-scene factories (render_scene_create, no rendering) on what
  * parses. Neither may crash, leak, hang, read out of bounds or hit undefined
  * behaviour; errors are the expected outcome for most inputs. */
@@ -57,17 +57,23 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     }
     scene_desc sd;
     hz_error err;
-    if (scene_parse_string(text, FUZZ_SCENE_NAME, &sd, &err) == HZ_OK) {
+    hz_errors errs = {0};
+    if (scene_parse_string_all(text, FUZZ_SCENE_NAME, &sd, &errs, &err) == HZ_OK) {
         /* The factories interpret every parameter and read the files the scene
          * names (plymesh, VDB); relative names resolve inside the nonexistent
          * directory, absolute ones could reach anything, so scenes with a
-         * string starting with '/' are not built. */
+         * string starting with '/' are not built. A scene with parse errors
+         * is built too (render_scene_check), as haze render does to report
+         * its other problems. */
         if (!contains(text, "\"/") && film_pixels(&sd) <= FUZZ_MAX_FILM_PIXELS) {
             render_options opt = {.seed = 0, .spp = 1, .output = NULL};
             render_scene *rs = NULL;
-            if (render_scene_create(&sd, &opt, NULL, &rs, &err) == HZ_OK)
+            if (errs.count || errs.dropped)
+                render_scene_check(&sd, &opt, &errs, &err);
+            else if (render_scene_create(&sd, &opt, NULL, &rs, &err) == HZ_OK)
                 render_scene_destroy(rs);
         }
+        hz_errors_finish(&errs, NULL, 0, NULL);
         scene_desc_free(&sd);
     }
     free(text);

@@ -372,7 +372,9 @@ static int run_render(const cli *c, distributed *dist)
     double baseline_mib = c->stats ? resident_memory_mib() : 0.0;
     scene_desc sd;
     bool rank0 = distributed_rank(dist) == 0, mpi = distributed_size(dist) > 1;
-    bool parsed = scene_parse_file(c->scene, &sd, &err) == HZ_OK;
+    hz_errors parse_errs = {0};
+    bool read = scene_parse_file_all(c->scene, &sd, &parse_errs, &err) == HZ_OK;
+    bool parsed = read && parse_errs.count == 0 && parse_errs.dropped == 0;
     /* Every rank has the same arguments: under mpirun all of them stop here. */
     if (parsed && check_region(c, &sd) != 0) {
         scene_desc_free(&sd);
@@ -386,8 +388,11 @@ static int run_render(const cli *c, distributed *dist)
                          .region = c->region,
                          .statistics = adaptive};
     render_scene *rs = NULL;
-    hz_status st = parsed ? render_scene_create(&sd, &ro, rank0 ? stderr : NULL, &rs, &err)
-                          : HZ_ERROR;
+    hz_status st = HZ_ERROR;
+    if (parsed)
+        st = render_scene_create(&sd, &ro, rank0 ? stderr : NULL, &rs, &err);
+    else if (read) /* the scene's other problems too, in one report */
+        render_scene_check(&sd, &ro, &parse_errs, &err);
     film *f = st == HZ_OK ? render_scene_film(rs) : NULL;
     const film_params *fp = f ? film_get_params(f) : NULL;
     int exit_code = 0;
@@ -503,7 +508,7 @@ static int run_render(const cli *c, distributed *dist)
         print_stats(rs, &stats, baseline_mib);
 done:
     render_scene_destroy(rs);
-    if (parsed)
+    if (read)
         scene_desc_free(&sd);
     return exit_code;
 }

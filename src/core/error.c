@@ -96,15 +96,21 @@ hz_status hz_errors_finish(hz_errors *l, const char *const *files, size_t file_c
     if (err) {
         err->message[0] = '\0';
         err->loc = l->count ? l->items[keys[0].order].loc : (file_loc){0};
-        size_t used = 0, cap = sizeof err->message;
-        for (size_t i = 0; i < l->count && used < cap; ++i) {
-            int n = snprintf(err->message + used, cap - used, "%s%s", i ? "\n" : "",
-                             l->items[keys[i].order].message);
-            used += n > 0 ? (size_t)n : 0;
+        /* Whole lines only, with room kept for the count of the rest. */
+        enum { TAIL = 48 };
+        size_t used = 0, cap = sizeof err->message, dropped = l->dropped;
+        for (size_t i = 0; i < l->count; ++i) {
+            const char *m = l->items[keys[i].order].message;
+            if (used && used + strlen(m) + 1 + TAIL >= cap) {
+                dropped += l->count - i;
+                break;
+            }
+            used += (size_t)snprintf(err->message + used, cap - used, "%s%s", used ? "\n" : "",
+                                     m);
         }
-        if (l->dropped && used < cap)
+        if (dropped)
             snprintf(err->message + used, cap - used, "%s... and %zu more error%s",
-                     l->count ? "\n" : "", l->dropped, l->dropped == 1 ? "" : "s");
+                     used ? "\n" : "", dropped, dropped == 1 ? "" : "s");
     }
     free(l->items);
     *l = (hz_errors){0};

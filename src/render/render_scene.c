@@ -324,12 +324,26 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
 /* Every error with a place in one run (sorted in file order, at most
  * HZ_ERRORS_MAX), ended early only by one without a place. */
 static hz_status build(render_scene *rs, scene_desc *sd, const render_options *opt, FILE *warn,
-                       hz_error *err)
+                       hz_errors *errs, hz_error *err)
 {
-    hz_errors errs = {0};
-    if (build_all(rs, sd, opt, warn, &errs, err) != HZ_OK)
-        hz_errors_add(&errs, err);
-    return hz_errors_finish(&errs, sd->files, sd->file_count, err);
+    if (build_all(rs, sd, opt, warn, errs, err) != HZ_OK)
+        hz_errors_add(errs, err);
+    return hz_errors_finish(errs, sd->files, sd->file_count, err);
+}
+
+hz_status render_scene_check(scene_desc *sd, const render_options *opt, hz_errors *errs,
+                             hz_error *err)
+{
+    render_scene *rs = calloc(1, sizeof *rs);
+    if (!rs) {
+        hz_fail(err, "out of memory");
+        hz_errors_add(errs, err);
+    } else {
+        if (build_all(rs, sd, opt, NULL, errs, err) != HZ_OK)
+            hz_errors_add(errs, err);
+        render_scene_destroy(rs);
+    }
+    return hz_errors_finish(errs, sd->files, sd->file_count, err);
 }
 
 hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *warn,
@@ -339,7 +353,8 @@ hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *w
     render_scene *rs = calloc(1, sizeof *rs);
     if (!rs)
         return hz_fail(err, "out of memory");
-    if (build(rs, sd, opt, warn, err) != HZ_OK) {
+    hz_errors errs = {0};
+    if (build(rs, sd, opt, warn, &errs, err) != HZ_OK) {
         render_scene_destroy(rs);
         return HZ_ERROR;
     }

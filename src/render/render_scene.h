@@ -52,6 +52,12 @@ scene_options render_scene_options(const render_scene *rs);
 hz_status render_scene_create(scene_desc *sd, const render_options *opt, FILE *warn,
                               render_scene **out, hz_error *err);
 void render_scene_destroy(render_scene *rs);
+/* For a scene whose parse found errors (scene_parse_file_all): runs the
+ * factories on what parsed only to find its other problems, adds them to
+ * `errs` (no warnings) and reports the lot, in file order, in `err`. Returns
+ * HZ_OK only when `errs` stayed empty. */
+hz_status render_scene_check(scene_desc *sd, const render_options *opt, hz_errors *errs,
+                             hz_error *err);
 
 const camera *render_scene_camera(const render_scene *rs);
 /* The scene has textures: camera rays should carry differentials. */

@@ -296,8 +296,11 @@ static void parse_directives(parser *ps, hz_errors *errs, file_loc *end, hz_erro
             *end = t.loc;
             return;
         }
+        ps->defining.name = NULL;
         if (t.kind == TOK_IDENT && parser_directive(ps, &t, err) == HZ_OK)
             continue;
+        if (ps->defining.name && !ps->out_of_memory)
+            parser_define_stand_in(ps);
         if (t.kind != TOK_IDENT) {
             char got[48];
             token_describe(&t, got, sizeof got);
@@ -313,8 +316,11 @@ static void parse_directives(parser *ps, hz_errors *errs, file_loc *end, hz_erro
     }
 }
 
+/* Parses into `out`, collecting every error with a place in `errs`. HZ_ERROR
+ * (err filled, out freed) only when the parse could not begin or memory ran
+ * out: then what parsed is not worth building. */
 static hz_status parse_root(const char *text, size_t len, const char *name, scene_desc *out,
-                            hz_error *err)
+                            hz_errors *errs, hz_error *err)
 {
     parser ps;
     if (!parser_start(&ps, text, len, name, out)) {
@@ -324,33 +330,50 @@ static hz_status parse_root(const char *text, size_t len, const char *name, scen
         scene_desc_free(out);
         return st;
     }
-    hz_errors errs = {0};
     file_loc end = {out->files[0], 1, 1};
-    parse_directives(&ps, &errs, &end, err);
+    parse_directives(&ps, errs, &end, err);
     if (!ps.lex_failed && !ps.out_of_memory && parser_finish(&ps, end, err) != HZ_OK)
-        hz_errors_add(&errs, err);
-    hz_status st;
-    if (errs.count == 0 && errs.dropped > 0) {
+        hz_errors_add(errs, err);
+    bool oom = ps.out_of_memory;
+    parser_state_free(&ps);
+    if (!oom)
+        return HZ_OK;
+    if (errs->count == 0 && errs->dropped > 0)
         /* Not even the list of errors could be allocated: *err still holds
          * the last error (out of memory ends the parse), better than "... and
          * 1 more error". */
-        hz_errors_finish(&errs, NULL, 0, NULL);
-        st = HZ_ERROR;
-    } else {
-        st = hz_errors_finish(&errs, out->files, out->file_count, err);
-    }
-    parser_state_free(&ps);
-    if (st != HZ_OK)
-        scene_desc_free(out);
-    return st;
+        hz_errors_finish(errs, NULL, 0, NULL);
+    else
+        hz_errors_finish(errs, out->files, out->file_count, err);
+    scene_desc_free(out);
+    return HZ_ERROR;
+}
+
+/* After parse_root: the errors reported in `err`, and `out` emptied, when
+ * there were any. */
+static hz_status report_alone(scene_desc *out, hz_errors *errs, hz_error *err)
+{
+    if (hz_errors_finish(errs, out->files, out->file_count, err) == HZ_OK)
+        return HZ_OK;
+    scene_desc_free(out);
+    return HZ_ERROR;
 }
 
 hz_status scene_parse_string(const char *text, const char *name, scene_desc *out, hz_error *err)
 {
-    return parse_root(text, strlen(text), name ? name : "<string>", out, err);
+    hz_errors errs = {0};
+    if (parse_root(text, strlen(text), name ? name : "<string>", out, &errs, err) != HZ_OK)
+        return HZ_ERROR;
+    return report_alone(out, &errs, err);
 }
 
-hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err)
+hz_status scene_parse_string_all(const char *text, const char *name, scene_desc *out,
+                                 hz_errors *errs, hz_error *err)
+{
+    return parse_root(text, strlen(text), name ? name : "<string>", out, errs, err);
+}
+
+hz_status scene_parse_file_all(const char *path, scene_desc *out, hz_errors *errs, hz_error *err)
 {
     char *text;
     size_t len;
@@ -358,7 +381,15 @@ hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err)
     memset(out, 0, sizeof *out);
     if (file_read_all(path, FILE_LIMIT_SCENE, &text, &len, &ferr) != HZ_OK)
         return hz_fail(err, "%s: cannot read scene: %s", path, ferr.message);
-    hz_status st = parse_root(text, len, path, out, err);
+    hz_status st = parse_root(text, len, path, out, errs, err);
     free(text);
     return st;
+}
+
+hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err)
+{
+    hz_errors errs = {0};
+    if (scene_parse_file_all(path, out, &errs, err) != HZ_OK)
+        return HZ_ERROR;
+    return report_alone(out, &errs, err);
 }

@@ -63,6 +63,16 @@ typedef struct {
      * on to the next directive, whose allocations would most likely fail too
      * and bury the cause under a list of consequences. */
     bool out_of_memory;
+    /* The name a defining directive (Texture 't', MakeNamedMaterial 'm',
+     * MakeNamedMedium 'M') has read: when the directive fails, a stand-in
+     * takes the name (parser_define_stand_in), so what refers to it later
+     * adds no errors of its own to the report. */
+    struct {
+        char kind;
+        const char *name;
+        bool spectrum;
+        file_loc loc;
+    } defining;
     /* Every included file's text, kept to the end (tokens point into it). */
     char **texts;
     size_t text_count, text_cap;
@@ -104,6 +114,10 @@ hz_status parser_set_coordsys(parser *ps, const char *name, const transform ctm[
  * entities get (materials, media, area lights, objects). *handled is false
  * when `d` is none of them. */
 hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_error *err);
+/* After a defining directive failed (ps->defining): an entity of that name
+ * with no parameters (a constant texture, a diffuse material, a homogeneous
+ * medium) unless one exists. Such a scene is reported, never rendered. */
+void parser_define_stand_in(parser *ps);
 void parser_state_free(parser *ps);
 void gstate_free(gstate *g);
 

@@ -1,6 +1,7 @@
 /* Directives that create entities (Camera, Shape, LightSource, materials,
  * media, objects) or set what later entities receive (NamedMaterial,
  * AreaLightSource, MediumInterface, Attribute). pbrt-v4 semantics. */
+#include <assert.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -38,6 +39,9 @@ static hz_status read_named(parser *ps, const token *d, const char *what, int at
     params_init(&e->params, d->loc);
     if (parser_string_arg(ps, d, name, err) != HZ_OK)
         return HZ_ERROR;
+    ps->defining.kind = attr == ATTR_MEDIUM ? 'M' : 'm';
+    ps->defining.name = *name;
+    ps->defining.loc = d->loc;
     e->loc = d->loc;
     if (parser_params(ps, &e->params, d->loc, err) != HZ_OK)
         goto fail;
@@ -217,6 +221,35 @@ static hz_status d_material(parser *ps, const token *d, hz_error *err)
     return add_material(ps, d, m, &ps->gs.material, err);
 }
 
+/* Takes t (frees it when out of memory, the only failure). */
+static hz_status add_texture(parser *ps, const token *d, texture_entity t, hz_error *err)
+{
+    scene_desc *sd = ps->sd;
+    texture_entity *grown =
+        scene_grow_implicit(sd->textures, sd->texture_count, sizeof *sd->textures);
+    if (!grown) {
+        params_free(&t.entity.params);
+        return parser_oom(ps, d->loc, err);
+    }
+    sd->textures = grown;
+    sd->textures[sd->texture_count++] = t;
+    return HZ_OK;
+}
+
+/* Takes m (frees it when out of memory, the only failure). */
+static hz_status add_medium(parser *ps, const token *d, medium_entity m, hz_error *err)
+{
+    scene_desc *sd = ps->sd;
+    medium_entity *grown = scene_grow_implicit(sd->media, sd->medium_count, sizeof *sd->media);
+    if (!grown) {
+        params_free(&m.entity.params);
+        return parser_oom(ps, d->loc, err);
+    }
+    sd->media = grown;
+    sd->media[sd->medium_count++] = m;
+    return HZ_OK;
+}
+
 /* `Texture "name" "float"|"spectrum" "class" params...`; a name may be
  * redefined for the other value type only (as pbrt-v4). */
 static hz_status d_texture(parser *ps, const token *d, hz_error *err)
@@ -230,6 +263,10 @@ static hz_status d_texture(parser *ps, const token *d, hz_error *err)
     if (!spectrum && strcmp(value_type, "float") != 0)
         return hz_fail_at(err, d->loc, "Texture \"%s\": type \"%s\" must be \"float\" or "
                           "\"spectrum\"", name, value_type);
+    ps->defining.kind = 't';
+    ps->defining.name = name;
+    ps->defining.spectrum = spectrum;
+    ps->defining.loc = d->loc;
     scene_desc *sd = ps->sd;
     for (size_t i = 0; i < sd->texture_count; ++i)
         if (sd->textures[i].spectrum == spectrum && strcmp(sd->textures[i].name, name) == 0) {
@@ -241,15 +278,7 @@ static hz_status d_texture(parser *ps, const token *d, hz_error *err)
                         .world_from_texture = ps->gs.ctm[0]};
     if (read_entity(ps, d, ATTR_TEXTURE, &t.entity, err) != HZ_OK)
         return HZ_ERROR;
-    texture_entity *grown =
-        scene_grow_implicit(sd->textures, sd->texture_count, sizeof *sd->textures);
-    if (!grown) {
-        params_free(&t.entity.params);
-        return parser_oom(ps, d->loc, err);
-    }
-    sd->textures = grown;
-    sd->textures[sd->texture_count++] = t;
-    return HZ_OK;
+    return add_texture(ps, d, t, err);
 }
 
 static long find_named_material(const scene_desc *sd, const char *name)
@@ -316,14 +345,66 @@ static hz_status d_make_named_medium(parser *ps, const token *d, hz_error *err)
     m.name = (char *)name;
     m.world_from_medium = ps->gs.ctm[0];
     m.world_from_medium_end = ps->gs.ctm[1];
-    medium_entity *grown = scene_grow_implicit(sd->media, sd->medium_count, sizeof *sd->media);
-    if (!grown) {
-        params_free(&m.entity.params);
-        return parser_oom(ps, d->loc, err);
+    return add_medium(ps, d, m, err);
+}
+
+static bool medium_defined(const scene_desc *sd, const char *name)
+{
+    for (size_t i = 0; i < sd->medium_count; ++i)
+        if (strcmp(sd->media[i].name, name) == 0)
+            return true;
+    return false;
+}
+
+static bool texture_defined(const scene_desc *sd, const char *name, bool spectrum)
+{
+    for (size_t i = 0; i < sd->texture_count; ++i)
+        if (sd->textures[i].spectrum == spectrum && strcmp(sd->textures[i].name, name) == 0)
+            return true;
+    return false;
+}
+
+void parser_define_stand_in(parser *ps)
+{
+    scene_desc *sd = ps->sd;
+    const char *name = ps->defining.name;
+    scene_entity e = {.loc = ps->defining.loc};
+    params_init(&e.params, e.loc);
+    const token d = {.loc = e.loc};
+    hz_error err;
+    switch (ps->defining.kind) {
+    case 'm':
+        if (find_named_material(sd, name) >= 0)
+            return;
+        e.type = (char *)parser_intern(ps, "diffuse");
+        if (e.type)
+            add_material(ps, &d, (material_entity){.entity = e, .name = (char *)name}, NULL,
+                         &err);
+        return;
+    case 'M':
+        if (name[0] == '\0' || medium_defined(sd, name))
+            return;
+        e.type = (char *)parser_intern(ps, "homogeneous");
+        if (e.type)
+            add_medium(ps, &d, (medium_entity){.entity = e, .name = (char *)name,
+                                               .world_from_medium = transform_identity(),
+                                               .world_from_medium_end = transform_identity()},
+                       &err);
+        return;
+    case 't':
+        if (texture_defined(sd, name, ps->defining.spectrum))
+            return;
+        e.type = (char *)parser_intern(ps, "constant");
+        if (e.type)
+            add_texture(ps, &d,
+                        (texture_entity){.entity = e, .name = (char *)name,
+                                         .spectrum = ps->defining.spectrum,
+                                         .world_from_texture = transform_identity()},
+                        &err);
+        return;
+    default:
+        assert(!"unknown kind of definition");
     }
-    sd->media = grown;
-    sd->media[sd->medium_count++] = m;
-    return HZ_OK;
 }
 
 static hz_status d_medium_interface(parser *ps, const token *d, hz_error *err)

@@ -142,6 +142,14 @@ hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err);
 /* Parses text held in memory; `name` is used in diagnostics and as the base for
  * relative Include paths (its directory). */
 hz_status scene_parse_string(const char *text, const char *name, scene_desc *out, hz_error *err);
+/* The same, going on past errors: each error with a place is added to `errs`
+ * and *out keeps what parsed (a directive that failed is left out), so the
+ * caller can go on to find the scene's other problems (render_scene_check)
+ * and report them together. HZ_ERROR, with *out empty, only when the file
+ * cannot be read or memory runs out. Free *out either way on HZ_OK. */
+hz_status scene_parse_file_all(const char *path, scene_desc *out, hz_errors *errs, hz_error *err);
+hz_status scene_parse_string_all(const char *text, const char *name, scene_desc *out,
+                                 hz_errors *errs, hz_error *err);
 void scene_desc_free(scene_desc *sd);
 
 /* Every file a render of `sd` reads, as paths relative to the working

@@ -39,6 +39,22 @@ static void assert_one_line(const char *out)
         fail_msg("expected one line of output, got:\n%s", out);
 }
 
+/* `out` is exactly the lines "haze: ...want[i]...", in that order. */
+static void assert_lines(const char *out, const char *const *want, size_t n)
+{
+    const char *line = out;
+    for (size_t i = 0; i < n; ++i) {
+        assert_non_null(line);
+        if (strncmp(line, "haze: ", 6) != 0 || !strstr(line, want[i]) ||
+            (strchr(line, '\n') && strstr(line, want[i]) > strchr(line, '\n')))
+            fail_msg("line %zu lacks '%s': %s", i + 1, want[i], out);
+        line = strchr(line, '\n');
+        line = line ? line + 1 : NULL;
+    }
+    if (line && *line)
+        fail_msg("more lines than the %zu expected: %s", n, out);
+}
+
 static int compare_names(const void *a, const void *b)
 {
     return strcmp(*(char *const *)a, *(char *const *)b);
@@ -124,16 +140,46 @@ static void test_all_errors_in_one_run(void **state)
         "bad_input_many.pbrt:10:27: unused parameter \"float what\"",
         "bad_input_many.inc:1:33: unused parameter \"float nonsense\"",
     };
-    const char *line = out;
-    for (size_t i = 0; i < sizeof want / sizeof want[0]; ++i) {
-        assert_non_null(line);
-        if (strncmp(line, "haze: ", 6) != 0 || !strstr(line, want[i]) ||
-            (strchr(line, '\n') && strstr(line, want[i]) > strchr(line, '\n')))
-            fail_msg("line %zu lacks '%s': %s", i + 1, want[i], out);
-        line = strchr(line, '\n');
-        line = line ? line + 1 : NULL;
-    }
-    assert_true(line == NULL || *line == '\0');
+    assert_lines(out, want, sizeof want / sizeof want[0]);
+    assert_good_output_kept(good);
+}
+
+/* The parser's errors (types, syntax) and the build's (unsupported kinds)
+ * in one report; a definition that failed to parse adds no errors where it
+ * is used (its name stands for a placeholder that is never rendered). */
+static void test_parse_and_build_errors_in_one_run(void **state)
+{
+    (void)state;
+    const char *scene = HAZE_TMP "/bad_input_mixed.pbrt";
+    write_text_file(scene,
+                    "Camera \"perspective\" \"float fov\" \"wide\"\n"
+                    "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                    "WorldBegin\n"
+                    "Texture \"t\" \"spectrum\" \"checkerboard\" \"float uscale\" \"q\"\n"
+                    "Material \"diffuse\" \"texture reflectance\" \"t\"\n"
+                    "Material \"hair\"\n"
+                    "MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1]\n"
+                    "MakeNamedMaterial \"g\" \"string type\" \"diffuse\" \"rgb reflectance\" [1]\n"
+                    "NamedMaterial \"g\"\n"
+                    "MediumInterface \"m\" \"\"\n"
+                    "Shape \"sphere\"\n"
+                    "Frobnicate 3\n"
+                    "LightSource \"laser\"\n");
+    const char *good = HAZE_TMP "/bad_input_good.exr";
+    write_good_output(good);
+    char args[2048], out[8192];
+    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet", scene, good);
+    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    static const char *want[] = {
+        "bad_input_mixed.pbrt:1:34: parameter \"float fov\" expects numbers",
+        "bad_input_mixed.pbrt:4:54: parameter \"float uscale\" expects numbers",
+        "bad_input_mixed.pbrt:6:1: Material \"hair\" is not supported",
+        "bad_input_mixed.pbrt:7:49: parameter \"rgb sigma_a\" needs a multiple of 3",
+        "bad_input_mixed.pbrt:8:47: parameter \"rgb reflectance\" needs a multiple of 3",
+        "bad_input_mixed.pbrt:12:1: unknown directive",
+        "bad_input_mixed.pbrt:13:1: LightSource \"laser\" is not supported",
+    };
+    assert_lines(out, want, sizeof want / sizeof want[0]);
     assert_good_output_kept(good);
 }
 
@@ -178,6 +224,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_scene_corpus),
         cmocka_unit_test(test_all_errors_in_one_run),
+        cmocka_unit_test(test_parse_and_build_errors_in_one_run),
         cmocka_unit_test(test_corrupt_exr_diff),
         cmocka_unit_test(test_unwritable_output),
     };

@@ -603,6 +603,25 @@ static void test_all_errors_in_one_run(void **state)
     assert_non_null(strstr(err.message, "t.pbrt:21:1: AttributeEnd"));
     assert_null(strstr(err.message, "t.pbrt:22:1"));
     assert_non_null(strstr(err.message, "\n... and 10 more errors"));
+
+    /* Errors too long to fit the report together: whole lines, then the
+     * count of the rest (nothing cut mid-line). */
+    strcpy(text, "WorldBegin\n");
+    for (int i = 0; i < 12; ++i)
+        strcat(text, "Frobnicate\n");
+    assert_int_equal(scene_parse_string(text, "t.pbrt", &sd, &err), HZ_ERROR);
+    const char *tail = strstr(err.message, "\n... and ");
+    assert_non_null(tail);
+    int kept = 0, more = 0;
+    for (const char *c = err.message; c < tail; ++c)
+        kept += *c == '\n';
+    kept += 1;
+    assert_int_equal(sscanf(tail, "\n... and %d more errors", &more), 1);
+    assert_int_equal(kept + more, 12);
+    assert_true(kept >= 2);
+    for (const char *c = err.message; c && c < tail; c = strchr(c + 1, '\n'))
+        assert_non_null(strstr(c, "supported: "));
+    assert_memory_equal(tail - 10, "ColorSpace", 10);
 }
 
 /* pbrt-v4 reads one token stream: the end of an included file continues the
