@@ -71,6 +71,7 @@ typedef struct {
     double radius;
     double zmin, zmax, phimax;
     bool partial;
+    double unit_area;            /* shape_geometry's: what area lights' "power" divides */
     transform space_from_object; /* render (or prototype) space from object space */
     /* A moving top-level shape: everything above is in object space (space =
      * object space, space_from_object the identity) and render_from_object at

@@ -257,6 +257,56 @@ static double triangle_area(const geom_shape *s, size_t t)
     return 0.5 * v3_length(v3_cross(v3_sub(p1, p0), v3_sub(p2, p0)));
 }
 
+/* The area of emitter k of a mesh (triangle k, or quad k's two halves) in
+ * the shape's space. */
+static double mesh_unit_area(const geom_shape *s, size_t k)
+{
+    return s->quads ? triangle_area(s, 2 * k) + triangle_area(s, 2 * k + 1)
+                    : triangle_area(s, k);
+}
+
+/* pbrt-v4's "power" on a diffuse area light: scale *= power / (A π), twice A
+ * when two-sided, A the Area() of one emitter: the analytic shape's (object
+ * space), or each triangle's (quad's) of a mesh, where pbrt-v4 makes one light
+ * per triangle. haze's mesh is one light of one radiance, so its emitters
+ * must share one area (as a quad's two triangles do); otherwise, and on
+ * moving shapes (pbrt-v4 has no moving area lights), "power" is refused
+ * (pl's error). Returns the factor (1 when refused). */
+static double area_power_scale(param_list *pl, const geom_shape *shape, double power,
+                               bool two_sided)
+{
+    double A = shape->unit_area;
+    if (shape->motion) {
+        params_reject(pl, "power", "\"power\" on a moving area light is not supported "
+                                   "(pbrt-v4 has no moving area lights); use \"L\" and "
+                                   "\"scale\"");
+        return 1.0;
+    }
+    if (!(A > 0.0) && shape->kind == GEOMETRY_TRIANGLES) {
+        size_t units = shape->quads ? shape->triangle_count / 2 : shape->triangle_count;
+        double lo = HUGE_VAL, hi = 0.0;
+        for (size_t k = 0; k < units; ++k) {
+            double a = mesh_unit_area(shape, k);
+            lo = fmin(lo, a);
+            hi = fmax(hi, a);
+        }
+        if (units > 0 && !(hi - lo <= 1e-4 * hi)) {
+            params_reject(pl, "power",
+                          "\"power\" on a mesh whose %s differ in area (%g to %g) is not "
+                          "supported: pbrt-v4 gives each its own radiance, haze one radiance "
+                          "per mesh; use \"L\" and \"scale\"",
+                          shape->quads ? "quads" : "triangles", lo, hi);
+            return 1.0;
+        }
+        A = hi;
+    }
+    if (!(A > 0.0)) {
+        params_reject(pl, "power", "\"power\" on an area light of zero area");
+        return 1.0;
+    }
+    return power / (A * HZ_PI * (two_sided ? 2.0 : 1.0));
+}
+
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
                                  hz_error *err)
 {
@@ -268,18 +318,17 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
                           "AreaLightSource \"%s\" is not supported (supported: \"diffuse\")",
                           type);
     if (refuse(pl, "filename", "image area lights (\"filename\") are not supported yet",
-               err) != HZ_OK ||
-        refuse(pl, "power",
-               "\"power\" on area lights is not supported yet (pbrt-v4 applies it per "
-               "triangle); use \"rgb L\" and \"scale\"",
                err) != HZ_OK)
         return HZ_ERROR;
     rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
     double scale = params_float(pl, "scale", 1.0);
+    double power = params_float(pl, "power", -1.0);
     out->kind = LIGHT_AREA;
-    out->emit = rgb_scale(L, scale);
     out->area.two_sided = params_bool(pl, "twosided", false);
     out->area.shape = shape;
+    if (power > 0.0)
+        scale *= area_power_scale(pl, shape, power, out->area.two_sided);
+    out->emit = rgb_scale(L, scale);
     if (params_finish(pl, "AreaLightSource \"diffuse\"", err) != HZ_OK)
         return HZ_ERROR;
 

@@ -156,6 +156,7 @@ static hz_status create_sphere(shape_entity *se, shape_geometry *g, hz_error *er
     g->zmin = lo;
     g->zmax = hi;
     g->phimax = phimax;
+    g->unit_area = phimax * r * (hi - lo);
     return HZ_OK;
 }
 
@@ -227,6 +228,7 @@ static hz_status create_disk(shape_entity *se, shape_geometry *g, hz_error *err)
         params_reject(pl, "innerradius", "disk \"innerradius\" must be in [0, radius), got %g", ri);
     if (finish(se, err) != HZ_OK)
         return HZ_ERROR;
+    g->unit_area = 0.5 * phimax * (r * r - ri * ri);
     const double rad[2] = {r, ri}, z[2] = {h, h};
     return ring_strip(se, g, phimax, rad, z, false, err);
 }
@@ -244,6 +246,7 @@ static hz_status create_cylinder(shape_entity *se, shape_geometry *g, hz_error *
         params_reject(pl, "zmax", "cylinder \"zmin\" and \"zmax\" must be finite and differ");
     if (finish(se, err) != HZ_OK)
         return HZ_ERROR;
+    g->unit_area = fabs(z1 - z0) * r * phimax;
     const double rad[2] = {r, r}, z[2] = {fmin(z0, z1), fmax(z0, z1)};
     return ring_strip(se, g, phimax, rad, z, true, err);
 }

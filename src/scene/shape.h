@@ -27,6 +27,11 @@ typedef struct {
      * -radius, zmax < radius or phimax < 2 pi (pbrt-v4's partial sphere) */
     double radius;
     double zmin, zmax, phimax;
+    /* pbrt-v4's Area() of the shape as one emitter (sphere, disk, cylinder:
+     * the analytic surface in object space, as pbrt-v4 computes it, whatever
+     * the transform); 0 for meshes, each of whose triangles (bilinearmesh:
+     * quads) is an emitter of its own. What an area light's "power" divides. */
+    double unit_area;
 } shape_geometry;
 
 hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error *err);
