@@ -606,6 +606,12 @@ hz_status medium_from_entity(medium_entity *e, transform render_from_world,
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
     const char *name = e->name ? e->name : "";
+    /* pbrt-v4-scenes' explosion writes "LeScale" (pbrt-v4 itself refuses it
+     * as unused): the same parameter as "Lescale". */
+    if (params_has(pl, "LeScale") && params_has(pl, "Lescale"))
+        params_reject(pl, "LeScale", "give one of \"Lescale\" and \"LeScale\", not both");
+    else if (!params_rename(pl, "LeScale", "Lescale"))
+        return hz_fail(err, "out of memory");
     bool is_grid, uniform = false, cloud = false, rgbgrid = false;
     if (strcmp(type, "homogeneous") == 0)
         is_grid = false;

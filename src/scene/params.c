@@ -173,6 +173,20 @@ void params_remove(param_list *pl, const char *name)
     --pl->count;
 }
 
+bool params_rename(param_list *pl, const char *from, const char *to)
+{
+    param *p = find(pl, from);
+    if (!p || find(pl, to))
+        return true;
+    char *name = malloc(strlen(to) + 1);
+    if (!name)
+        return false;
+    strcpy(name, to);
+    free(p->name);
+    p->name = name;
+    return true;
+}
+
 static void record(param_list *pl, file_loc loc, const char *fmt, ...) HZ_PRINTF(3, 4);
 static void record(param_list *pl, file_loc loc, const char *fmt, ...)
 {

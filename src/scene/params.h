@@ -73,6 +73,10 @@ bool params_reserve(param_list *pl);
 hz_status params_add_defaults(param_list *pl, const param_list *defaults, hz_error *err);
 /* Removes parameter `name` (if present) and frees it. */
 void params_remove(param_list *pl, const char *name);
+/* Gives parameter `from` (if present, and no `to` is) the name `to`: for
+ * other spellings of a name that published scenes use. False only when out
+ * of memory (pl unchanged). */
+bool params_rename(param_list *pl, const char *from, const char *to);
 void param_free(param *p);
 
 /* Getters: the default when absent; on a type or count mismatch they record an
