@@ -29,6 +29,14 @@ typedef struct {
     double sum, w; /* |weight|-weighted finite depths */
 } film_depth;
 
+/* A gbuffer pixel's sums: weight of the samples that hit, and weighted
+ * sums of their point, normals, uv and depth slopes (render space), and of
+ * every sample's albedo (divided by the pixel's w). */
+typedef struct {
+    double w, p[3], n[3], ns[3], uv[2], dz[2], albedo[3];
+} film_gbuffer;
+enum { GBUFFER_DOUBLES = 17 };
+
 /* Weighted Welford/West state with weights |w|: W = sum |w|, W2 = sum w^2,
  * the |w|-weighted running mean and M2 = sum |w| (L - mean)^2 per component. */
 typedef struct {
@@ -42,6 +50,8 @@ struct film {
     film_depth *depth; /* NULL unless write_z */
     film_moments *moments; /* NULL unless write_variance */
     uint32_t *count;   /* NULL unless write_sample_count */
+    film_gbuffer *gbuf; /* NULL unless gbuffer */
+    transform output_from_render; /* gbuffer positions and normals */
     double clamp_ratio;
     atomic_long nonfinite; /* tiles run in parallel; only this is shared */
 };
@@ -59,6 +69,10 @@ void film_params_default(film_params *p)
     p->diagonal = 35.0;
 }
 
+/* The gbuffer's own channels (Albedo.R ... v; the variances are the
+ * moments' 3 plus RelativeVariance's 3). */
+enum { GBUFFER_OUT = 16 };
+
 /* Bytes per bounds pixel: accumulation, optional depth and statistics, and
  * the output image (one float per channel). */
 static double film_bytes(const film_params *p)
@@ -67,7 +81,9 @@ static double film_bytes(const film_params *p)
     double per = sizeof(film_pixel) + 4.0 * sizeof(float) +
                  (p->write_z ? sizeof(film_depth) + sizeof(float) : 0.0) +
                  (p->write_variance ? sizeof(film_moments) + 3.0 * sizeof(float) : 0.0) +
-                 (p->write_sample_count ? sizeof(uint32_t) + sizeof(float) : 0.0);
+                 (p->write_sample_count ? sizeof(uint32_t) + sizeof(float) : 0.0) +
+                 (p->gbuffer ? sizeof(film_gbuffer) + (GBUFFER_OUT + 3.0) * sizeof(float)
+                             : 0.0);
     return area * per;
 }
 
@@ -147,10 +163,22 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
         *bad_region = false;
     film_params_default(out);
     const char *type = e->type ? e->type : "";
-    if (strcmp(type, "rgb") != 0)
-        return hz_fail_at(err, e->loc, "Film \"%s\" is not supported (haze supports only \"rgb\")", type);
+    bool gbuffer = strcmp(type, "gbuffer") == 0;
+    if (strcmp(type, "rgb") != 0 && !gbuffer)
+        return hz_fail_at(err, e->loc,
+                          "Film \"%s\" is not supported (supported: \"rgb\", \"gbuffer\")",
+                          type);
     param_list *pl = &e->params;
     film_params *p = out;
+    if (gbuffer) {
+        const char *cs = params_string(pl, "coordinatesystem", "camera");
+        p->gbuffer = true;
+        p->gbuffer_world = strcmp(cs, "world") == 0;
+        if (!p->gbuffer_world && strcmp(cs, "camera") != 0)
+            params_reject(pl, "coordinatesystem",
+                          "Film \"gbuffer\" \"string coordinatesystem\" must be \"camera\" or "
+                          "\"world\", got \"%s\"", cs);
+    }
     p->xres = params_int(pl, "xresolution", 1280);
     p->yres = params_int(pl, "yresolution", 720);
     bool res_ok = true;
@@ -173,7 +201,8 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
         snprintf(p->filename, sizeof p->filename, "%s", name);
     p->savefp16 = params_bool(pl, "savefp16", false);
     p->write_z = params_bool(pl, "writedepth", false);
-    p->write_variance = params_bool(pl, "writevariance", false);
+    /* A gbuffer's variance channels come from the same moments. */
+    p->write_variance = params_bool(pl, "writevariance", false) || p->gbuffer;
     p->write_sample_count = params_bool(pl, "writesamplecount", false);
     p->iso = params_float(pl, "iso", 100.0);
     if (!(p->iso > 0.0 && isfinite(p->iso)))
@@ -194,7 +223,7 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
     else if (!sensor_lookup(sensor, wb, &p->sensor))
         params_reject(pl, "sensor", "Film \"string sensor\" \"%s\" is unknown (known: %s)", sensor,
                       sensor_names());
-    if (params_finish(pl, "Film \"rgb\"", err) != HZ_OK)
+    if (params_finish(pl, gbuffer ? "Film \"gbuffer\"" : "Film \"rgb\"", err) != HZ_OK)
         return HZ_ERROR;
     if (r && film_params_set_region(p, r, err) != HZ_OK) {
         if (bad_region)
@@ -299,8 +328,11 @@ film *film_create(const film_params *p, hz_error *err)
         f->moments = calloc(n, sizeof *f->moments);
     if (p->write_sample_count)
         f->count = calloc(n, sizeof *f->count);
+    if (p->gbuffer)
+        f->gbuf = calloc(n, sizeof *f->gbuf);
+    f->output_from_render = transform_identity();
     if (!f->pixels || (p->write_z && !f->depth) || (p->write_variance && !f->moments) ||
-        (p->write_sample_count && !f->count)) {
+        (p->write_sample_count && !f->count) || (p->gbuffer && !f->gbuf)) {
         hz_fail(err, "film: out of memory for %dx%d pixels (%.1f MiB)", f->width, f->height,
                 bytes / (1024.0 * 1024));
         film_destroy(f);
@@ -317,6 +349,7 @@ void film_destroy(film *f)
     free(f->depth);
     free(f->moments);
     free(f->count);
+    free(f->gbuf);
     free(f);
 }
 
@@ -336,6 +369,8 @@ void film_get_accumulators(film *f, film_accumulators *out)
     _Static_assert(sizeof(film_pixel) == 4 * sizeof(double), "film_pixel is 4 doubles");
     _Static_assert(sizeof(film_depth) == 2 * sizeof(double), "film_depth is 2 doubles");
     _Static_assert(sizeof(film_moments) == 8 * sizeof(double), "film_moments is 8 doubles");
+    _Static_assert(sizeof(film_gbuffer) == GBUFFER_DOUBLES * sizeof(double),
+                   "film_gbuffer is plain doubles");
     size_t n = (size_t)f->width * (size_t)f->height;
     memset(out, 0, sizeof *out);
     out->doubles[0] = (double *)f->pixels;
@@ -347,6 +382,10 @@ void film_get_accumulators(film *f, film_accumulators *out)
     if (f->moments) {
         out->doubles[2] = (double *)f->moments;
         out->double_count[2] = 8 * n;
+    }
+    if (f->gbuf) {
+        out->doubles[3] = (double *)f->gbuf;
+        out->double_count[3] = GBUFFER_DOUBLES * n;
     }
     if (f->count) {
         out->counts = f->count;
@@ -375,7 +414,7 @@ static rgb pixel_value(const film_pixel *p, double imaging_ratio)
 }
 
 struct film_snapshot {
-    double *doubles[3];
+    double *doubles[FILM_DOUBLE_ARRAYS];
     uint32_t *counts;
     long nonfinite;
 };
@@ -384,7 +423,7 @@ void film_snapshot_destroy(film_snapshot *s)
 {
     if (!s)
         return;
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
         free(s->doubles[i]);
     free(s->counts);
     free(s);
@@ -396,7 +435,7 @@ film_snapshot *film_snapshot_create(film *f, hz_error *err)
     film_accumulators acc;
     film_get_accumulators(f, &acc);
     bool ok = s != NULL;
-    for (int i = 0; ok && i < 3; ++i)
+    for (int i = 0; ok && i < FILM_DOUBLE_ARRAYS; ++i)
         if (acc.doubles[i] && !(s->doubles[i] = malloc(acc.double_count[i] * sizeof(double))))
             ok = false;
     if (ok && acc.counts && !(s->counts = malloc(acc.count_count * sizeof(uint32_t))))
@@ -415,7 +454,7 @@ static void snapshot_copy(film_snapshot *s, film *f, bool save)
 {
     film_accumulators acc;
     film_get_accumulators(f, &acc);
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
         if (acc.doubles[i]) {
             size_t n = acc.double_count[i] * sizeof(double);
             if (save)
@@ -493,6 +532,43 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
         f->count[i]++;
 }
 
+bool film_wants_surface(const film *f) { return f->gbuf != NULL; }
+
+void film_set_output_from_render(film *f, transform output_from_render)
+{
+    f->output_from_render = output_from_render;
+}
+
+static void add3(double *sum, double w, vec3 v)
+{
+    sum[0] += w * v.x;
+    sum[1] += w * v.y;
+    sum[2] += w * v.z;
+}
+
+void film_add_surface(film *f, int px, int py, double weight, const film_surface *s)
+{
+    assert(f->gbuf);
+    if (!isfinite(weight))
+        return; /* film_add_sample counted it */
+    film_gbuffer *g = &f->gbuf[film_index(f, px, py)];
+    if (!s->hit)
+        return;
+    g->albedo[0] += weight * s->albedo.r;
+    g->albedo[1] += weight * s->albedo.g;
+    g->albedo[2] += weight * s->albedo.b;
+    g->w += weight;
+    add3(g->p, weight, s->p);
+    add3(g->n, weight, s->n);
+    add3(g->ns, weight, s->ns);
+    g->uv[0] += weight * s->u;
+    g->uv[1] += weight * s->v;
+    /* The slopes of depth in the output space (camera: z; world: z too, as
+     * pbrt-v4). */
+    g->dz[0] += weight * transform_vector(&f->output_from_render, s->dpdx).z;
+    g->dz[1] += weight * transform_vector(&f->output_from_render, s->dpdy).z;
+}
+
 rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio)
 {
     return pixel_value(&f->pixels[film_index(f, px, py)], imaging_ratio);
@@ -534,20 +610,115 @@ hz_status film_write_png(const film *f, const char *path, double imaging_ratio, 
     return film_write_png_with(f, path, imaging_ratio, NULL, err);
 }
 
+/* The EXR's channels, in order: R G B A, then Z (write_z), the gbuffer's
+ * (pbrt-v4's names and order), the variances and the sample count. */
+enum { MAX_CHANNELS = 4 + 1 + GBUFFER_OUT + 6 + 1 };
+
+static int exr_channel_names(const film *f, char names[][64])
+{
+    static const char *const rgba[] = {"R", "G", "B", "A"};
+    static const char *const gbuffer[GBUFFER_OUT] = {
+        "Albedo.R", "Albedo.G", "Albedo.B", "P.X", "P.Y", "P.Z", "dzdx", "dzdy",
+        "N.X",      "N.Y",      "N.Z",      "Ns.X", "Ns.Y", "Ns.Z", "u",  "v"};
+    int n = 0;
+    for (int c = 0; c < 4; ++c)
+        snprintf(names[n++], 64, "%s", rgba[c]);
+    if (f->depth)
+        snprintf(names[n++], 64, "Z");
+    for (int c = 0; f->gbuf && c < GBUFFER_OUT; ++c)
+        snprintf(names[n++], 64, "%s", gbuffer[c]);
+    for (int c = 0; f->moments && c < 3; ++c)
+        snprintf(names[n++], 64, "Variance.%s", rgba[c]);
+    for (int c = 0; f->gbuf && c < 3; ++c)
+        snprintf(names[n++], 64, "RelativeVariance.%s", rgba[c]);
+    if (f->count)
+        snprintf(names[n++], 64, "SampleCount.Y");
+    return n;
+}
+
+/* A vector's components from the sums s divided by w (0 when w is 0). */
+static vec3 mean3(const double *s, double w)
+{
+    return w != 0.0 ? v3(s[0] / w, s[1] / w, s[2] / w) : v3(0.0, 0.0, 0.0);
+}
+
+static float *put3(float *o, vec3 v)
+{
+    o[0] = (float)v.x;
+    o[1] = (float)v.y;
+    o[2] = (float)v.z;
+    return o + 3;
+}
+
+/* Pixel (px, py)'s gbuffer channels (GBUFFER_OUT values). */
+static float *gbuffer_values(const film *f, size_t i, float *o)
+{
+    const film_gbuffer *g = &f->gbuf[i];
+    double w = f->pixels[i].w;
+    o = put3(o, mean3(g->albedo, w));
+    vec3 p = mean3(g->p, g->w);
+    o = put3(o, g->w != 0.0 ? transform_point(&f->output_from_render, p) : p);
+    *o++ = g->w != 0.0 ? (float)fabs(g->dz[0] / g->w) : 0.0f;
+    *o++ = g->w != 0.0 ? (float)fabs(g->dz[1] / g->w) : 0.0f;
+    const double *normals[2] = {g->n, g->ns};
+    for (int k = 0; k < 2; ++k) {
+        vec3 n = transform_normal(&f->output_from_render, mean3(normals[k], 1.0));
+        o = put3(o, v3_length_sq(n) > 0.0 ? v3_normalize(n) : n);
+    }
+    *o++ = g->w != 0.0 ? (float)(g->uv[0] / g->w) : 0.0f;
+    *o++ = g->w != 0.0 ? (float)(g->uv[1] / g->w) : 0.0f;
+    return o;
+}
+
+/* pbrt-v4's GBufferFilm variances: of the samples (not of their mean, as
+ * film_get_variance), and that over the sample mean (pbrt-v4's
+ * RelativeVariance: 0 where the mean is 0). */
+static float *sample_variances(const film *f, int px, int py, double ratio, float *o)
+{
+    const film_moments *m = &f->moments[film_index(f, px, py)];
+    rgb var = film_get_variance(f, px, py, ratio);
+    double n_eff = m->w2 > 0.0 ? m->w * m->w / m->w2 : 0.0;
+    double v[3] = {var.r * n_eff, var.g * n_eff, var.b * n_eff};
+    for (int c = 0; c < 3; ++c)
+        o[c] = (float)v[c];
+    for (int c = 0; c < 3; ++c) {
+        double mean = m->mean[c] * ratio;
+        o[3 + c] = mean != 0.0 ? (float)(v[c] / mean) : 0.0f;
+    }
+    return o + 6;
+}
+
+/* Pixel (px, py)'s values in exr_channel_names's order. */
+static void exr_channel_values(const film *f, int px, int py, double ratio, float *o)
+{
+    size_t i = film_index(f, px, py);
+    rgb v = film_get_pixel(f, px, py, ratio);
+    *o++ = (float)v.r;
+    *o++ = (float)v.g;
+    *o++ = (float)v.b;
+    *o++ = f->pixels[i].w != 0.0 ? 1.0f : 0.0f;
+    if (f->depth)
+        *o++ = (float)film_get_depth(f, px, py);
+    if (f->gbuf)
+        o = gbuffer_values(f, i, o);
+    if (f->gbuf) {
+        o = sample_variances(f, px, py, ratio, o);
+    } else if (f->moments) {
+        rgb var = film_get_variance(f, px, py, ratio);
+        *o++ = (float)var.r;
+        *o++ = (float)var.g;
+        *o++ = (float)var.b;
+    }
+    if (f->count)
+        *o++ = (float)f->count[i];
+}
+
 hz_status film_write_exr_with(const film *f, const char *path, double imaging_ratio,
                               const film_output *out, hz_error *err)
 {
     exr_image img;
-    /* R G B A, then the optional channels in this order (-1: not written). */
-    int zc = -1, vc = -1, sc = -1, nc = 4;
-    if (f->depth)
-        zc = nc++;
-    if (f->moments) {
-        vc = nc;
-        nc += 3;
-    }
-    if (f->count)
-        sc = nc++;
+    char names[MAX_CHANNELS][64];
+    int nc = exr_channel_names(f, names);
     if (exr_image_alloc(&img, f->width, f->height, nc, err) != HZ_OK)
         return HZ_ERROR;
     if (f->p.color_space != COLOR_SPACE_SRGB) {
@@ -557,42 +728,24 @@ hz_status film_write_exr_with(const film *f, const char *path, double imaging_ra
         for (int i = 0; i < 8; ++i)
             img.chromaticities[i] = (float)xy[i];
     }
-    static const char *names[] = {"R", "G", "B", "A"};
-    for (int c = 0; c < 4; c++)
+    /* The AOVs need float precision (a variance is tiny, a count exceeds
+     * half's 2048 exact integers, positions are large). */
+    for (int c = 0; c < nc; c++) {
         snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
-    if (zc >= 0)
-        snprintf(img.channels[zc].name, sizeof img.channels[zc].name, "Z");
-    for (int c = 0; vc >= 0 && c < 3; c++)
-        snprintf(img.channels[vc + c].name, sizeof img.channels[vc + c].name, "Variance.%s", names[c]);
-    if (sc >= 0)
-        snprintf(img.channels[sc].name, sizeof img.channels[sc].name, "SampleCount.Y");
-    /* Depth and the statistics need float precision (a variance is tiny, a
-     * count exceeds half's 2048 exact integers). */
-    for (int c = 0; c < nc; c++)
         img.channels[c].half = f->p.savefp16 && c < 4;
+    }
     img.data_x0 = f->p.bounds.x0;
     img.data_y0 = f->p.bounds.y0;
     img.display_width = f->p.xres;
     img.display_height = f->p.yres;
+    float values[MAX_CHANNELS];
     for (int y = 0; y < f->height; y++)
         for (int x = 0; x < f->width; x++) {
-            int px = x + f->p.bounds.x0, py = y + f->p.bounds.y0;
             size_t i = (size_t)y * (size_t)f->width + (size_t)x;
-            rgb v = film_get_pixel(f, px, py, imaging_ratio);
-            img.channels[0].pixels[i] = (float)v.r;
-            img.channels[1].pixels[i] = (float)v.g;
-            img.channels[2].pixels[i] = (float)v.b;
-            img.channels[3].pixels[i] = f->pixels[i].w != 0.0 ? 1.0f : 0.0f;
-            if (zc >= 0)
-                img.channels[zc].pixels[i] = (float)film_get_depth(f, px, py);
-            if (vc >= 0) {
-                rgb var = film_get_variance(f, px, py, imaging_ratio);
-                img.channels[vc].pixels[i] = (float)var.r;
-                img.channels[vc + 1].pixels[i] = (float)var.g;
-                img.channels[vc + 2].pixels[i] = (float)var.b;
-            }
-            if (sc >= 0)
-                img.channels[sc].pixels[i] = (float)f->count[i];
+            exr_channel_values(f, x + f->p.bounds.x0, y + f->p.bounds.y0, imaging_ratio,
+                               values);
+            for (int c = 0; c < nc; c++)
+                img.channels[c].pixels[i] = values[c];
         }
     hz_status st = exr_image_add_attribute(&img, "software", "haze " HAZE_VERSION, err);
     for (int a = 0; out && st == HZ_OK && a < out->attribute_count; a++)

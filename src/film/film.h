@@ -9,6 +9,7 @@
 
 #include "core/color_space.h"
 #include "core/error.h"
+#include "core/transform.h"
 #include "core/vec.h"
 #include "film/exr.h" /* tmp_file_note */
 #include "film/sensor.h"
@@ -31,7 +32,23 @@ typedef struct {
     double diagonal;           /* pbrt-v4 "diagonal" (mm, default 35), for physical cameras */
     film_sensor sensor;        /* pbrt-v4 "sensor" and "whitebalance"; inactive by default */
     color_space color_space;   /* of the image (ColorSpace at Film); sRGB by default */
+    /* Film "gbuffer": pbrt-v4's GBufferFilm channels beside the image (the
+     * visible surface's albedo, position, normals, uv, depth slopes, and
+     * the per-sample variance); "coordinatesystem" "world" (gbuffer_world)
+     * or "camera" (the default) for positions and normals. */
+    bool gbuffer, gbuffer_world;
 } film_params;
+
+/* What a camera ray saw first (pbrt-v4's VisibleSurface), for a gbuffer
+ * film: the first surface with a material (not an interface) met before any
+ * scattering, in render space. */
+typedef struct {
+    bool hit;
+    vec3 p, n, ns;    /* point, geometric and shading normals (unit) */
+    vec3 dpdx, dpdy;  /* the point's change per pixel (0: no differentials) */
+    double u, v;
+    rgb albedo;       /* the BSDF's directional albedo toward the camera */
+} film_surface;
 
 /* Fills pbrt-v4's defaults (1280x720, full bounds, "pbrt.exr", iso 100, float32). */
 void film_params_default(film_params *p);
@@ -84,6 +101,16 @@ const film_params *film_get_params(const film *f);
  * max_component_value (see film_set_imaging_ratio). Z is the mean of the
  * finite depths weighted by |weight|, +INFINITY where no sample hit. */
 void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth);
+/* A gbuffer film (params.gbuffer) wants each sample's visible surface. */
+bool film_wants_surface(const film *f);
+/* Adds a sample's visible surface to pixel (px, py), with the weight its
+ * film_add_sample had: positions, normals, uv and depth slopes are the mean
+ * over the samples that hit, the albedo the mean over all (misses count 0),
+ * as pbrt-v4's GBufferFilm. Only on a gbuffer film (asserted). */
+void film_add_surface(film *f, int px, int py, double weight, const film_surface *s);
+/* The transform from render space to the gbuffer's output space (camera or
+ * world space; the identity until set). */
+void film_set_output_from_render(film *f, transform output_from_render);
 /* The imaging ratio that maxcomponentvalue clamping assumes (default 1); pass
  * the same ratio to the output functions. */
 void film_set_imaging_ratio(film *f, double imaging_ratio);
@@ -122,9 +149,12 @@ hz_status film_write_png(const film *f, const char *path, double imaging_ratio, 
  * samples of its own pixel, so adding another film's arrays element by element
  * (x + 0 = x) yields bit for bit the film that rendered both pixel sets.
  * Arrays that the film does not keep are NULL with count 0. */
+enum { FILM_DOUBLE_ARRAYS = 4 };
 typedef struct {
-    double *doubles[3];      /* pixel sums, depth sums (write_z), moments (write_variance) */
-    size_t double_count[3];
+    /* pixel sums, depth sums (write_z), moments (write_variance), visible
+     * surface sums (gbuffer) */
+    double *doubles[FILM_DOUBLE_ARRAYS];
+    size_t double_count[FILM_DOUBLE_ARRAYS];
     uint32_t *counts;        /* sample counts (write_sample_count) */
     size_t count_count;
 } film_accumulators;

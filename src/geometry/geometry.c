@@ -223,6 +223,7 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
     out->flip_normal = se->reverse_orientation ^ transform_swaps_handedness(&space_from_object);
     bool interface = out->material->kind == MATERIAL_INTERFACE;
     out->textured = material_has_textures(out->material);
+    out->hit_uv = out->textured;
     out->unit_area = g.unit_area;
 
     RTCGeometry geom = NULL;
@@ -788,16 +789,27 @@ static double clamp_derivative(double x)
     return isfinite(x) ? hz_clamp(x, -1e8, 1e8) : 0.0;
 }
 
-void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d)
+bool geometry_hit_dpdxy(const geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d,
+                        vec3 *dpdx, vec3 *dpdy)
 {
     vec3 n = h->ng;
     double nx = v3_dot(n, rx_d), ny = v3_dot(n, ry_d);
-    if (!h->shape->textured || nx == 0.0 || ny == 0.0)
-        return;
+    *dpdx = *dpdy = v3(0.0, 0.0, 0.0);
+    if (nx == 0.0 || ny == 0.0)
+        return false;
     double d = -v3_dot(n, h->p);
     vec3 px = v3_add(rx_o, v3_scale(rx_d, (-v3_dot(n, rx_o) - d) / nx));
     vec3 py = v3_add(ry_o, v3_scale(ry_d, (-v3_dot(n, ry_o) - d) / ny));
-    vec3 dpdx = v3_sub(px, h->p), dpdy = v3_sub(py, h->p);
+    *dpdx = v3_sub(px, h->p);
+    *dpdy = v3_sub(py, h->p);
+    return true;
+}
+
+void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d)
+{
+    vec3 dpdx, dpdy;
+    if (!h->shape->textured || !geometry_hit_dpdxy(h, rx_o, rx_d, ry_o, ry_d, &dpdx, &dpdy))
+        return;
     double a00 = v3_dot(h->dpdu, h->dpdu), a01 = v3_dot(h->dpdu, h->dpdv);
     double a11 = v3_dot(h->dpdv, h->dpdv);
     double inv = 1.0 / diff_products(a00, a11, a01, a01);
@@ -808,6 +820,15 @@ void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 r
     h->dvdx = clamp_derivative(diff_products(a00, b1x, a01, b0x) * inv);
     h->dudy = clamp_derivative(diff_products(a11, b0y, a01, b1y) * inv);
     h->dvdy = clamp_derivative(diff_products(a00, b1y, a01, b0y) * inv);
+}
+
+void geometry_require_uv(geometry *g)
+{
+    for (size_t i = 0; i < g->shape_count; ++i)
+        g->shapes[i].hit_uv = true;
+    for (size_t o = 0; o < g->object_count; ++o)
+        for (size_t i = 0; i < g->objects[o].shape_count; ++i)
+            g->objects[o].shapes[i].hit_uv = true;
 }
 
 const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scratch)
@@ -889,7 +910,7 @@ static void surface_at(const geom_shape *s, unsigned prim, double u, double v, v
         hit->p = transform_point(&s->space_from_object, po);
         vec3 n = v3_normalize(transform_normal(&s->space_from_object, po));
         hit->ng = hit->ns = s->flip_normal ? v3_neg(n) : n;
-        if (s->textured)
+        if (s->hit_uv)
             sphere_uv(s, po, hit);
         return;
     }
@@ -907,7 +928,7 @@ static void surface_at(const geom_shape *s, unsigned prim, double u, double v, v
     } else {
         hit->p = v3_add(v3_add(v3_scale(p0, b0), v3_scale(p1, u)), v3_scale(p2, v));
     }
-    if (s->textured)
+    if (s->hit_uv)
         triangle_uv(s, prim, u, v, p0, p1, p2, hit);
     vec3 ng = v3_normalize(n);
     if (s->flip_normal)
@@ -1016,7 +1037,7 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
     hit->p = transform_point(&render_from_instance, hit->p);
     hit->ng = v3_normalize(transform_normal(&render_from_instance, hit->ng));
     hit->ns = v3_normalize(transform_normal(&render_from_instance, hit->ns));
-    if (s->textured) {
+    if (s->hit_uv) {
         hit->dpdu = transform_vector(&render_from_instance, hit->dpdu);
         hit->dpdv = transform_vector(&render_from_instance, hit->dpdv);
     }

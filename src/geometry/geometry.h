@@ -67,6 +67,9 @@ typedef struct {
     /* The material (or a mix's component) has textures: hits carry (u, v)
      * and dp/du, dp/dv (no cost for the others). */
     bool textured;
+    /* Hits carry (u, v) and dp/du, dp/dv: textured shapes, and every shape
+     * after geometry_require_uv. */
+    bool hit_uv;
     /* sphere; a part of it (pbrt-v4's zmin, zmax, phimax) when `partial` */
     double radius;
     double zmin, zmax, phimax;
@@ -86,7 +89,7 @@ typedef struct {
     vec3 ns;                  /* unit shading normal (equals ng without mesh normals) */
     const geom_shape *shape;
     unsigned prim;            /* triangle index */
-    /* Only when shape->textured: the surface parameters as pbrt-v4's
+    /* Only when shape->hit_uv: the surface parameters as pbrt-v4's
      * (sphere: phi / phimax and (theta - theta(zmin)) / range; triangles:
      * the mesh's "uv" or (0,0), (1,0), (1,1)) and their render-space
      * partial derivatives. */
@@ -101,6 +104,10 @@ typedef struct {
  * tangent plane at p + dp/dx and p + dp/dy, and (du/dx, dv/dx, ...) solve
  * dp/dx = du/dx dp/du + dv/dx dp/dv in the least-squares sense. */
 void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d);
+/* Where the differential rays meet the hit's tangent plane, as offsets from
+ * h->p (pbrt-v4's dpdx, dpdy). False (zeros) when one runs parallel to it. */
+bool geometry_hit_dpdxy(const geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d,
+                        vec3 *dpdx, vec3 *dpdy);
 
 /* The material at hit h seen from wo: material_at's choice with its
  * textures evaluated at the hit (into *scratch when it has any). */
@@ -120,6 +127,8 @@ typedef struct geometry geometry;
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
                           hz_errors *errs, geometry **out, hz_error *err);
+/* Every shape's hits carry (u, v) from now on (a gbuffer film's channels). */
+void geometry_require_uv(geometry *g);
 void geometry_destroy(geometry *g);
 
 /* The committed Embree scene (RTCScene; declared without Embree's header),

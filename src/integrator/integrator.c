@@ -95,13 +95,13 @@ void integrator_free(integrator *it)
 }
 
 rgb integrator_li(const integrator *it, const ray_differential *rd, sampler_state *st,
-                  double *depth, integrator_counters *counters)
+                  double *depth, film_surface *vs, integrator_counters *counters)
 {
     switch (it->kind) {
     case INTEGRATOR_SINGLESCATTER:
-        return singlescatter_li(&it->singlescatter, rd, st, depth, counters);
+        return singlescatter_li(&it->singlescatter, rd, st, depth, vs, counters);
     case INTEGRATOR_VOLPATH:
-        return volpath_li(&it->volpath, rd, st, depth, counters);
+        return volpath_li(&it->volpath, rd, st, depth, vs, counters);
     }
     return rgb_grey(0.0);
 }

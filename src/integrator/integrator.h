@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/ray.h"
 #include "integrator/path.h"
+#include "film/film.h"
 #include "integrator/singlescatter.h"
 #include "integrator/volpath.h"
 #include "sampler/sampler.h"
@@ -52,9 +53,11 @@ hz_status integrator_init(integrator *out, const integrator_params *p,
 void integrator_free(integrator *it);
 
 /* Radiance along the camera ray `r` (unit direction). `depth` receives the
- * distance to the first opaque surface (INFINITY when none). Thread-safe;
- * allocates nothing. */
+ * distance to the first opaque surface (INFINITY when none); `vs` (NULL when
+ * not wanted: it costs an albedo estimate) what that surface is, when the
+ * ray met it before any scattering (vs->hit). Thread-safe; allocates
+ * nothing. */
 rgb integrator_li(const integrator *it, const ray_differential *rd, sampler_state *st,
-                  double *depth, integrator_counters *counters);
+                  double *depth, film_surface *vs, integrator_counters *counters);
 
 #endif

@@ -1,5 +1,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "integrator/singlescatter.h"
+#include "integrator/visible_surface.h"
 
 #include <math.h>
 
@@ -161,7 +162,7 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
 }
 
 rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
-                     double *depth, integrator_counters *counters)
+                     double *depth, film_surface *vs, integrator_counters *counters)
 {
     const ray *r = &rd->r;
     counters->camera_rays++;
@@ -213,6 +214,8 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
         Ls = light_area_le(&sc->in.lights[h.shape->area_light], h.ng, wo);
     if (rd->has_differentials)
         geometry_hit_footprint(&h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
+    if (vs)
+        visible_surface_at(&h, rd, vs);
     material scratch;
     const material *mat = geometry_material_at(&h, wo, &scratch);
     switch (mat->kind) {

@@ -13,6 +13,7 @@
 
 #include "core/error.h"
 #include "core/ray.h"
+#include "film/film.h"
 #include "geometry/geometry.h"
 #include "integrator/path.h"
 #include "lights/lights.h"
@@ -62,6 +63,6 @@ singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
 
 /* `r->d` must be unit. */
 rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
-                     double *depth, integrator_counters *counters);
+                     double *depth, film_surface *vs, integrator_counters *counters);
 
 #endif

@@ -1,5 +1,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "integrator/volpath.h"
+#include "integrator/visible_surface.h"
 
 #include <math.h>
 #include <string.h>
@@ -510,7 +511,7 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
 }
 
 rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_state *st,
-               double *depth, integrator_counters *counters)
+               double *depth, film_surface *vs, integrator_counters *counters)
 {
     const ray *r = &rd->r;
     counters->camera_rays++;
@@ -580,6 +581,8 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
              * (later bounces: no filtering; docs/differences-from-pbrt.md). */
             if (rd->has_differentials)
                 geometry_hit_footprint(&h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
+            if (vs && pa.depth == 0)
+                visible_surface_at(&h, rd, vs);
         }
         if (!bounce(&pa, &h))
             break;

@@ -24,6 +24,7 @@
 
 #include "core/error.h"
 #include "core/ray.h"
+#include "film/film.h"
 #include "media/medium.h"
 #include "geometry/geometry.h"
 #include "lights/light_sampler.h"
@@ -64,6 +65,6 @@ void volpath_scene_free(volpath_scene *sc);
  * distance to the first opaque surface on the camera ray before any scattering
  * (INFINITY when none). Thread-safe; allocates nothing. */
 rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_state *st,
-               double *depth, integrator_counters *counters);
+               double *depth, film_surface *vs, integrator_counters *counters);
 
 #endif

@@ -120,6 +120,8 @@ uint64_t distributed_fingerprint(uint64_t inputs_hash, const render_scene *rs)
     HASH_FIELD(h, fp->savefp16);
     HASH_FIELD(h, fp->write_z);
     HASH_FIELD(h, fp->write_variance);
+    HASH_FIELD(h, fp->gbuffer);
+    HASH_FIELD(h, fp->gbuffer_world);
     HASH_FIELD(h, fp->write_sample_count);
     HASH_FIELD(h, fp->iso);
     HASH_FIELD(h, fp->max_component_value);
@@ -429,7 +431,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     double t_gather = now_seconds();
     film_accumulators acc;
     film_get_accumulators(f, &acc);
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
         if (acc.doubles[i])
             reduce_sum(acc.doubles[i], acc.double_count[i], MPI_DOUBLE, sizeof(double), d->rank);
     if (acc.counts)

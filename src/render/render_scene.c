@@ -29,7 +29,10 @@ struct render_scene {
 };
 
 scene_options render_scene_options(const render_scene *rs) { return rs->options; }
-bool render_scene_has_textures(const render_scene *rs) { return rs->texture_count > 0; }
+bool render_scene_has_textures(const render_scene *rs)
+{
+    return rs->texture_count > 0 || (rs->film && film_wants_surface(rs->film));
+}
 
 static bool animated(const transform *start, const transform *end)
 {
@@ -262,6 +265,11 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         }
         /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
         film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
+        /* A gbuffer's positions and normals: camera space (at the shutter's
+         * open) or world space. */
+        film_set_output_from_render(rs->film, fp.gbuffer_world
+                                                  ? rs->cam.world_from_render
+                                                  : transform_inverse(rs->cam.render_from_camera));
     }
     integrator_params ip = {.kind = INTEGRATOR_SINGLESCATTER};
     CHECK(integrator_params_from_scene(sd, warn, &ip, err));
@@ -275,6 +283,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         have_camera ? transform_inverse(rs->cam.world_from_render) : transform_identity();
     CHECK(geometry_create(sd, render_from_world, rs->materials, rs->material_count,
                           &rs->default_material, errs, &rs->geom, err));
+    if (rs->geom && rs->film && film_wants_surface(rs->film))
+        geometry_require_uv(rs->geom);
     if (build_lights(rs, sd, render_from_world, warn, errs, err) != HZ_OK ||
         build_media(rs, sd, render_from_world, errs, err) != HZ_OK)
         return HZ_ERROR;
@@ -441,5 +451,11 @@ render_memory render_scene_memory(const render_scene *rs)
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, integrator_counters *counters)
 {
-    return integrator_li(&rs->integ, r, s, depth, counters);
+    return integrator_li(&rs->integ, r, s, depth, NULL, counters);
+}
+
+rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, sampler_state *s,
+                            double *depth, film_surface *vs, integrator_counters *counters)
+{
+    return integrator_li(&rs->integ, r, s, depth, vs, counters);
 }

@@ -60,7 +60,8 @@ hz_status render_scene_check(scene_desc *sd, const render_options *opt, hz_error
                              hz_error *err);
 
 const camera *render_scene_camera(const render_scene *rs);
-/* The scene has textures: camera rays should carry differentials. */
+/* The scene has textures, or its film is a gbuffer (whose depth slopes
+ * need them): camera rays should carry differentials. */
 bool render_scene_has_textures(const render_scene *rs);
 film *render_scene_film(render_scene *rs);
 const sampler *render_scene_sampler(const render_scene *rs);
@@ -91,5 +92,8 @@ render_memory render_scene_memory(const render_scene *rs);
  * first surface hit (INFINITY when none). Thread-safe; allocates nothing. */
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, integrator_counters *counters);
+/* The same, and what the ray saw first for a gbuffer film (integrator_li). */
+rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, sampler_state *s,
+                            double *depth, film_surface *vs, integrator_counters *counters);
 
 #endif

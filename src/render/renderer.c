@@ -31,6 +31,7 @@ typedef struct {
      * spp the sampler's count (the same in every progressive pass);
      * 0 = no differentials (the same main rays). */
     double diff_scale;
+    bool surfaces; /* the film wants each sample's visible surface (gbuffer) */
     atomic_int next_tile;
     atomic_int tiles_done;
     atomic_int running; /* workers not yet finished */
@@ -107,14 +108,15 @@ static void render_pixel(render_job *job, int px, int py, integrator_counters *c
             continue;
         }
         double depth = INFINITY;
-        rgb L = render_scene_li(job->rs, &rd, &st, &depth, counters);
-        if (counters->timed) {
-            uint64_t t0 = hz_clock_ns();
-            film_add_sample(f, px, py, L, cs.filter_weight, depth);
+        film_surface vs = {.hit = false};
+        rgb L = render_scene_li_surface(job->rs, &rd, &st, &depth, job->surfaces ? &vs : NULL,
+                                        counters);
+        uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
+        film_add_sample(f, px, py, L, cs.filter_weight, depth);
+        if (job->surfaces)
+            film_add_surface(f, px, py, cs.filter_weight, &vs);
+        if (counters->timed)
             counters->film_ns += hz_clock_ns() - t0;
-        } else {
-            film_add_sample(f, px, py, L, cs.filter_weight, depth);
-        }
     }
 }
 
@@ -208,6 +210,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     job.tile_ctx = opt->tile_ctx;
     job.cancel = opt->cancel;
     render_motion motion = render_scene_motion(rs);
+    job.surfaces = film_wants_surface(render_scene_film(rs));
     if (render_scene_has_textures(rs))
         job.diff_scale = opt->disable_pixel_jitter ? 1.0 : fmax(0.125, 1.0 / sqrt(spp));
     job.needs = (camera_sample_needs){!opt->disable_pixel_jitter,

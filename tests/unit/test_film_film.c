@@ -135,10 +135,10 @@ static void test_params_errors(void **state)
 {
     (void)state;
     scene_entity e;
-    entity_init(&e, "gbuffer");
-    params_fail(&e, "\"rgb\"");
     entity_init(&e, "spectral");
     params_fail(&e, "spectral");
+    entity_init(&e, "spectral");
+    params_fail(&e, "\"gbuffer\"");
     entity_init(&e, "rgb");
     add_int(&e, "xresolution", 0);
     params_fail(&e, "xresolution");
@@ -591,6 +591,54 @@ static void test_write_png(void **state)
     film_destroy(f);
 }
 
+/* A gbuffer pixel: pbrt-v4's per-sample variance (not the mean's) and
+ * RelativeVariance = variance / mean; the surface channels average the hits
+ * (albedo over every sample, misses count 0); a pixel with no hit is 0. */
+static void test_gbuffer_pixel(void **state)
+{
+    (void)state;
+    film_params p;
+    film_params_default(&p);
+    p.xres = p.yres = 2;
+    p.bounds = (pixel_bounds){0, 0, 2, 2};
+    p.gbuffer = p.write_variance = true;
+    film *f = film_with(&p);
+    film_set_output_from_render(f, transform_translate(v3(0.0, 0.0, 10.0)));
+    const double values[4] = {1.0, 2.0, 3.0, 6.0};
+    for (int i = 0; i < 4; ++i) {
+        film_add_sample(f, 1, 0, rgb_grey(values[i]), 1.0, INFINITY);
+        film_surface s = {.hit = i < 2, .p = v3(i, 0.0, 1.0), .n = v3(0.0, 0.0, 1.0),
+                          .ns = v3(0.0, 1.0, 0.0), .dpdx = v3(0.0, 0.0, -0.5),
+                          .u = 0.25 * i, .v = 1.0, .albedo = rgb_make(0.4, 0.8, 0.2)};
+        film_add_surface(f, 1, 0, 1.0, &s);
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/film_gbuffer.exr", HAZE_TMP);
+    hz_error err = {0};
+    assert_int_equal(film_write_exr(f, path, 1.0, &err), HZ_OK);
+    film_destroy(f);
+    exr_image img;
+    assert_int_equal(exr_read(path, &img, &err), HZ_OK);
+    struct {
+        const char *name;
+        double pixel1, pixel0;
+    } want[] = {
+        {"Variance.G", 14.0 / 3.0, 0.0}, {"RelativeVariance.G", 14.0 / 9.0, 0.0},
+        {"Albedo.R", 0.2, 0.0},          {"Albedo.G", 0.4, 0.0},
+        {"P.X", 0.5, 0.0},               {"P.Z", 11.0, 0.0},
+        {"N.Z", 1.0, 0.0},               {"Ns.Y", 1.0, 0.0},
+        {"dzdx", 0.5, 0.0},              {"dzdy", 0.0, 0.0},
+        {"u", 0.125, 0.0},               {"v", 1.0, 0.0},
+    };
+    for (size_t k = 0; k < sizeof want / sizeof want[0]; ++k) {
+        const exr_channel *c = exr_find_channel(&img, want[k].name);
+        assert_non_null(c);
+        assert_float_equal(c->pixels[1], want[k].pixel1, 1e-6);
+        assert_float_equal(c->pixels[0], want[k].pixel0, 0.0);
+    }
+    exr_image_free(&img);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -600,6 +648,7 @@ int main(void)
         cmocka_unit_test(test_variance_weighted),
         cmocka_unit_test(test_write_statistics),
         cmocka_unit_test(test_write_png),
+        cmocka_unit_test(test_gbuffer_pixel),
         /* Factories last: they need scene/params. */
         cmocka_unit_test(test_params_defaults),
         cmocka_unit_test(test_params_bounds),
