@@ -4,6 +4,7 @@
  * film position (pbrt-v4 places every lens ray around the optical axis, the
  * bug reported as mmp/pbrt-v3#315 and carried into v4). */
 #include "camera/camera.h"
+#include "core/sampling.h"
 
 #include <assert.h>
 #include <math.h>
@@ -63,7 +64,8 @@ static bool mat4_is_finite(const mat4 *m)
 
 const char *camera_config_check(const camera_config *c, hz_error *err)
 {
-    if (c->kind != CAMERA_PERSPECTIVE && c->kind != CAMERA_ORTHOGRAPHIC) {
+    if (c->kind != CAMERA_PERSPECTIVE && c->kind != CAMERA_ORTHOGRAPHIC &&
+        c->kind != CAMERA_SPHERICAL) {
         hz_fail(err, "unknown camera kind %d", (int)c->kind);
         return "";
     }
@@ -114,6 +116,10 @@ const char *camera_config_check(const camera_config *c, hz_error *err)
                 "ymin < ymax)",
                 w[0], w[1], w[2], w[3]);
         return "screenwindow";
+    }
+    if (c->kind == CAMERA_SPHERICAL && c->lens_radius != 0.0) {
+        hz_fail(err, "the spherical camera has no lens (\"lensradius\" must be 0)");
+        return "lensradius";
     }
     if (!isfinite(c->lens_radius) || c->lens_radius < 0.0 || c->lens_radius > HZ_MAX_COORD) {
         hz_fail(err, "\"lensradius\" must be in [0, %g], got %g", HZ_MAX_COORD, c->lens_radius);
@@ -193,6 +199,12 @@ hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err)
     c.blade_rotation = hz_radians(cfg->blade_rotation);
     c.xres = cfg->xres;
     c.yres = cfg->yres;
+    c.equirect = cfg->equirect;
+    if (cfg->kind == CAMERA_SPHERICAL) { /* no projection: directions from the film point */
+        c.screen_from_camera = c.camera_from_raster = c.raster_from_camera = transform_identity();
+        *out = c;
+        return HZ_OK;
+    }
 
     c.screen_from_camera = cfg->kind == CAMERA_PERSPECTIVE
                                ? transform_perspective(cfg->fov, PERSPECTIVE_NEAR, PERSPECTIVE_FAR)
@@ -222,6 +234,23 @@ double camera_imaging_ratio(const camera *c, const film_params *film)
     return (c->shutter_close - c->shutter_open) * film->iso / 100.0;
 }
 
+/* pbrt-v4's SphericalCamera direction through film point p (raster units):
+ * (u, v) = p / resolution on the equal-area square (wrapped across its edges)
+ * or as longitude 2 pi u and colatitude pi v, then y and z swapped so that
+ * the image's centre row circles the camera's horizon. */
+static vec3 spherical_direction(const camera *c, vec2 p)
+{
+    vec2 uv = v2(p.x / c->xres, p.y / c->yres);
+    vec3 d;
+    if (c->equirect) {
+        double theta = HZ_PI * uv.y, phi = 2.0 * HZ_PI * uv.x;
+        d = v3(sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta));
+    } else {
+        d = equal_area_square_to_sphere(equal_area_wrap(uv));
+    }
+    return v3(d.x, d.z, d.y);
+}
+
 /* The camera-space ray, pbrt-v4's GenerateRay before RenderFromCamera. Also
  * hands back the film point and lens point the differentials reuse. */
 static void camera_space_ray(const camera *c, camera_sample s, vec3 *o, vec3 *d, vec3 *p_camera,
@@ -229,6 +258,10 @@ static void camera_space_ray(const camera *c, camera_sample s, vec3 *o, vec3 *d,
 {
     *p_camera = transform_point(&c->camera_from_raster, v3(s.p_film.x, s.p_film.y, 0.0));
     switch (c->kind) {
+    case CAMERA_SPHERICAL:
+        *o = v3(0.0, 0.0, 0.0);
+        *d = spherical_direction(c, s.p_film);
+        break;
     case CAMERA_PERSPECTIVE:
         *o = v3(0.0, 0.0, 0.0);
         *d = v3_normalize(*p_camera);
@@ -286,6 +319,9 @@ static void shifted_ray(const camera *c, vec3 p_camera, vec3 delta, vec2 p_lens,
 {
     vec3 p = v3_add(p_camera, delta);
     switch (c->kind) {
+    case CAMERA_SPHERICAL:
+        assert(!"spherical differentials are finite differences");
+        break;
     case CAMERA_PERSPECTIVE:
         if (c->lens_radius > 0.0) {
             vec3 dir = v3_normalize(p);
@@ -320,8 +356,18 @@ bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_diff
     out->r = render_ray(c, &rfc, o, d, time);
 
     vec3 ox, dx, oy, dy;
-    shifted_ray(c, p_camera, c->dx_camera, p_lens, o, d, &ox, &dx);
-    shifted_ray(c, p_camera, c->dy_camera, p_lens, o, d, &oy, &dy);
+    if (c->kind == CAMERA_SPHERICAL) {
+        /* pbrt-v4's finite difference: a twentieth of a pixel, scaled up. */
+        const double eps = 0.05;
+        vec3 ddx = v3_sub(spherical_direction(c, v2(s.p_film.x + eps, s.p_film.y)), d);
+        vec3 ddy = v3_sub(spherical_direction(c, v2(s.p_film.x, s.p_film.y + eps)), d);
+        ox = oy = o;
+        dx = v3_add(d, v3_scale(ddx, 1.0 / eps));
+        dy = v3_add(d, v3_scale(ddy, 1.0 / eps));
+    } else {
+        shifted_ray(c, p_camera, c->dx_camera, p_lens, o, d, &ox, &dx);
+        shifted_ray(c, p_camera, c->dy_camera, p_lens, o, d, &oy, &dy);
+    }
     out->rx_o = transform_point(&rfc, ox);
     out->rx_d = v3_normalize(transform_vector(&rfc, dx));
     out->ry_o = transform_point(&rfc, oy);

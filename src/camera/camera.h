@@ -1,5 +1,5 @@
 /* pbrt-v4's projective cameras (perspective, orthographic) with the thin lens,
- * ray differentials, shutter and film exposure. Rays come out in render space:
+ * its spherical camera, ray differentials, shutter and film exposure. Rays come out in render space:
  * world translated so the camera at the middle of TransformTimes sits at the origin
  * (render_from_world is a pure translation), which keeps precision far from
  * the world origin. */
@@ -15,7 +15,10 @@
 #include "film/film.h"
 #include "scene/scene_desc.h"
 
-typedef enum { CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC } camera_kind;
+/* pbrt-v4's spherical camera: every direction around the camera, the film
+ * mapped to the sphere by the equal-area octahedral map or latitude and
+ * longitude (equirectangular). */
+typedef enum { CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC, CAMERA_SPHERICAL } camera_kind;
 
 typedef struct {
     vec2 p_film;         /* raster position, continuous (pixel (x,y) covers [x,x+1)x[y,y+1)) */
@@ -42,6 +45,7 @@ typedef struct {
     double blade_rotation;        /* radians */
     vec3 dx_camera, dy_camera;    /* one-pixel steps in camera space (differentials) */
     int xres, yres;               /* full film resolution */
+    bool equirect;                /* spherical: "equirectangular" mapping, else "equalarea" */
 } camera;
 
 /* Everything camera_create reads from the scene, already interpreted: the
@@ -64,6 +68,7 @@ typedef struct {
     int blades;                   /* 0 = round aperture, >= 3 = regular polygon */
     double blade_rotation;        /* degrees */
     int xres, yres;
+    bool equirect;                /* spherical: "mapping" "equirectangular" */
 } camera_config;
 
 /* pbrt-v4's defaults for a film of xres x yres: identity transform, shutter

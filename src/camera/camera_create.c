@@ -65,6 +65,33 @@ static hz_status read_physical_lens(scene_entity *ent, double frame, camera_conf
     return HZ_OK;
 }
 
+/* The spherical camera's "mapping"; the projective cameras' parameters,
+ * which pbrt-v4 reads there and ignores, are refused. */
+static hz_status read_spherical(scene_entity *ent, camera_config *cfg, hz_error *err)
+{
+    static const char *const projective[] = {
+        "lensradius", "focaldistance", "frameaspectratio", "screenwindow", "fov",
+        "blades",     "bladerotation", "focallength",      "fstop",        "sensorwidth"};
+    param_list *pl = &ent->params;
+    char msg[256];
+    for (size_t i = 0; i < sizeof projective / sizeof projective[0]; ++i)
+        if (params_has(pl, projective[i])) {
+            snprintf(msg, sizeof msg,
+                     "\"%s\" does nothing on a spherical camera (pbrt-v4 ignores it): "
+                     "remove it",
+                     projective[i]);
+            return fail_param(err, ent, projective[i], msg);
+        }
+    const char *m = params_string(pl, "mapping", "equalarea");
+    cfg->equirect = strcmp(m, "equirectangular") == 0;
+    if (!cfg->equirect && strcmp(m, "equalarea") != 0) {
+        snprintf(msg, sizeof msg,
+                 "\"mapping\" must be \"equalarea\" or \"equirectangular\", got \"%.60s\"", m);
+        return fail_param(err, ent, "mapping", msg);
+    }
+    return HZ_OK;
+}
+
 hz_status camera_create(camera_entity *e, const film_params *film, camera *out, hz_error *err)
 {
     scene_entity *ent = &e->entity;
@@ -74,10 +101,13 @@ hz_status camera_create(camera_entity *e, const film_params *film, camera *out, 
         kind = CAMERA_PERSPECTIVE;
     else if (strcmp(ent->type, "orthographic") == 0)
         kind = CAMERA_ORTHOGRAPHIC;
+    else if (strcmp(ent->type, "spherical") == 0)
+        kind = CAMERA_SPHERICAL;
     else
         return hz_fail_at(err, ent->loc,
-                          "camera type \"%s\" is not supported (haze supports \"perspective\" "
-                          "and \"orthographic\")",
+                          "camera type \"%s\" is not supported (haze supports \"perspective\", "
+                          "\"orthographic\" and \"spherical\"; \"realistic\" is refused, see "
+                          "docs/differences-from-pbrt.md)",
                           ent->type);
     if (film->xres < 1 || film->yres < 1)
         return hz_fail_at(err, ent->loc, "film resolution %dx%d must be at least 1x1",
@@ -85,6 +115,8 @@ hz_status camera_create(camera_entity *e, const film_params *film, camera *out, 
 
     char msg[256];
     camera_config cfg = camera_config_default(kind, film->xres, film->yres);
+    if (kind == CAMERA_SPHERICAL && read_spherical(ent, &cfg, err) != HZ_OK)
+        return HZ_ERROR;
     cfg.camera_from_world = e->camera_from_world;
     cfg.camera_from_world_end = e->camera_from_world_end;
     cfg.motion = memcmp(&e->camera_from_world.m, &e->camera_from_world_end.m,

@@ -44,4 +44,13 @@ static inline double uniform_cone_pdf(double cos_max)
 /* Exponential distance with rate a (pdf a e^{-a x}); u in [0,1). */
 double sample_exponential(double u, double a);
 
+/* Clarberg's equal-area mapping between the unit square and the unit
+ * sphere, as pbrt-v4 (the square's centre is +z, its corners -z). */
+vec3 equal_area_square_to_sphere(vec2 p);
+vec2 equal_area_sphere_to_square(vec3 d);
+/* A point outside the unit square folded back in, as the octahedral map
+ * continues across its edges (pbrt-v4's WrapEqualAreaSquare; within one
+ * square's width of it). */
+vec2 equal_area_wrap(vec2 p);
+
 #endif

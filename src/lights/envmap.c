@@ -21,37 +21,6 @@ struct light_image {
 
 /* ---- the mapping (Clarberg's equal-area square <-> sphere) ---- */
 
-vec3 light_equal_area_square_to_sphere(vec2 p)
-{
-    double u = 2.0 * p.x - 1.0, v = 2.0 * p.y - 1.0;
-    double up = fabs(u), vp = fabs(v);
-    double signed_distance = 1.0 - (up + vp);
-    double r = 1.0 - fabs(signed_distance);
-    double phi = (r == 0.0 ? 1.0 : (vp - up) / r + 1.0) * HZ_PI / 4.0;
-    double z = copysign(1.0 - r * r, signed_distance);
-    double s = r * sqrt(fmax(0.0, 2.0 - r * r));
-    return v3(copysign(cos(phi), u) * s, copysign(sin(phi), v) * s, z);
-}
-
-vec2 light_equal_area_sphere_to_square(vec3 d)
-{
-    double x = fabs(d.x), y = fabs(d.y), z = fabs(d.z);
-    double r = sqrt(fmax(0.0, 1.0 - z));
-    double a = fmax(x, y), b = fmin(x, y);
-    double phi = a == 0.0 ? 0.0 : atan(b / a) * 2.0 / HZ_PI;
-    if (x < y)
-        phi = 1.0 - phi;
-    double v = phi * r, u = r - v;
-    if (d.z < 0.0) { /* the southern hemisphere folds over the diagonals */
-        double t = u;
-        u = 1.0 - v;
-        v = 1.0 - t;
-    }
-    u = copysign(u, d.x);
-    v = copysign(v, d.y);
-    return v2(0.5 * (u + 1.0), 0.5 * (v + 1.0));
-}
-
 /* ---- the image ---- */
 
 void light_image_destroy(light_image *m)
@@ -234,7 +203,7 @@ double light_image_illuminance(const light_image *m)
     double sum = 0.0;
     for (int y = 0; y < m->h; ++y)
         for (int x = 0; x < m->w; ++x) {
-            vec3 w = light_equal_area_square_to_sphere(v2((x + 0.5) / m->w, (y + 0.5) / m->h));
+            vec3 w = equal_area_square_to_sphere(v2((x + 0.5) / m->w, (y + 0.5) / m->h));
             if (w.z <= 0.0)
                 continue;
             const float *t = m->rgb + 3 * ((size_t)y * (size_t)m->w + (size_t)x);

@@ -282,7 +282,7 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
             vec2 uv = light_image_sample(l->infinite.image, u, &pdf_uv);
             if (!(pdf_uv > 0.0))
                 return false;
-            vec3 wl = light_equal_area_square_to_sphere(uv);
+            vec3 wl = equal_area_square_to_sphere(uv);
             out->wi = v3_normalize(transform_vector(&l->infinite.render_from_light, wl));
             out->pdf = pdf_uv / (4.0 * HZ_PI);
             out->dist = INFINITY;

@@ -408,7 +408,7 @@ rgb light_infinite_le(const light *l, vec3 w)
         return l->emit;
     vec3 wl = v3_normalize(transform_vector(&l->infinite.light_from_render, w));
     return rgb_mul(l->emit, light_image_lookup(l->infinite.image,
-                                               light_equal_area_sphere_to_square(wl)));
+                                               equal_area_sphere_to_square(wl)));
 }
 
 double light_infinite_pdf(const light *l, vec3 w)
@@ -416,7 +416,7 @@ double light_infinite_pdf(const light *l, vec3 w)
     if (!l->infinite.image)
         return 0.0;
     vec3 wl = v3_normalize(transform_vector(&l->infinite.light_from_render, w));
-    return light_image_pdf(l->infinite.image, light_equal_area_sphere_to_square(wl)) /
+    return light_image_pdf(l->infinite.image, equal_area_sphere_to_square(wl)) /
            (4.0 * HZ_PI);
 }
 
@@ -470,7 +470,7 @@ rgb light_point_factor(const light *l, vec3 w)
         return rgb_grey(1.0);
     vec3 wl = v3_normalize(transform_vector(&l->point.light_from_render, w));
     if (!l->point.projection)
-        return rgb_grey(light_image_value(m, light_equal_area_sphere_to_square(wl)));
+        return rgb_grey(light_image_value(m, equal_area_sphere_to_square(wl)));
     if (wl.z < 1e-3) /* pbrt-v4's hither */
         return rgb_grey(0.0);
     const double *sc = l->point.screen;

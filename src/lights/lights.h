@@ -10,6 +10,7 @@
 #include <stdio.h>
 
 #include "core/error.h"
+#include "core/sampling.h"
 #include "core/transform.h"
 #include "geometry/geometry.h"
 #include "scene/scene_desc.h"
@@ -38,10 +39,6 @@ double light_image_mean(const light_image *m);
 /* Mean RGB of the texels, and pbrt-v4's "illuminance" of the map. */
 rgb light_image_average(const light_image *m);
 double light_image_illuminance(const light_image *m);
-/* Clarberg's equal-area mapping between the unit square and the unit
- * sphere, as pbrt-v4 (the square's centre is +z, its corners -z). */
-vec3 light_equal_area_square_to_sphere(vec2 p);
-vec2 light_equal_area_sphere_to_square(vec3 d);
 
 typedef struct {
     light_kind kind;

@@ -41,7 +41,7 @@ static void write_map(const char *path, int res, int width, rgb (*fn)(vec3))
         snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
     for (int y = 0; y < res; ++y)
         for (int x = 0; x < width; ++x) {
-            rgb v = fn(light_equal_area_square_to_sphere(v2((x + 0.5) / res, (y + 0.5) / res)));
+            rgb v = fn(equal_area_square_to_sphere(v2((x + 0.5) / res, (y + 0.5) / res)));
             img.channels[0].pixels[y * width + x] = (float)v.r;
             img.channels[1].pixels[y * width + x] = (float)v.g;
             img.channels[2].pixels[y * width + x] = (float)v.b;
@@ -66,14 +66,14 @@ static void test_mapping(void **state)
     rng r = rng_seeded(7);
     for (int i = 0; i < 100000; ++i) {
         vec2 p = v2(rng_uniform(&r), rng_uniform(&r));
-        vec3 d = light_equal_area_square_to_sphere(p);
+        vec3 d = equal_area_square_to_sphere(p);
         assert_true(fabs(v3_length(d) - 1.0) < 1e-12);
-        vec2 q = light_equal_area_sphere_to_square(d);
+        vec2 q = equal_area_sphere_to_square(d);
         assert_true(fabs(q.x - p.x) < 1e-9 && fabs(q.y - p.y) < 1e-9);
     }
-    vec3 c = light_equal_area_square_to_sphere(v2(0.5, 0.5));
+    vec3 c = equal_area_square_to_sphere(v2(0.5, 0.5));
     assert_true(fabs(c.z - 1.0) < 1e-12);
-    vec3 k = light_equal_area_square_to_sphere(v2(0.0, 1.0));
+    vec3 k = equal_area_square_to_sphere(v2(0.0, 1.0));
     assert_true(fabs(k.z + 1.0) < 1e-12);
     /* Equal areas: uniform directions land evenly on an 8x8 grid of cells */
     enum { N = 640000, G = 8 };
@@ -81,7 +81,7 @@ static void test_mapping(void **state)
     for (int i = 0; i < N; ++i) {
         double z = 1.0 - 2.0 * rng_uniform(&r), phi = 2.0 * HZ_PI * rng_uniform(&r);
         double s = sqrt(fmax(0.0, 1.0 - z * z));
-        vec2 q = light_equal_area_sphere_to_square(v3(s * cos(phi), s * sin(phi), z));
+        vec2 q = equal_area_sphere_to_square(v3(s * cos(phi), s * sin(phi), z));
         int x = (int)(q.x * G), y = (int)(q.y * G);
         hist[(y < G ? y : G - 1) * G + (x < G ? x : G - 1)]++;
     }
@@ -194,7 +194,7 @@ static double map_irradiance(rgb (*fn)(vec3), int res, vec3 n)
     double e = 0.0;
     for (int y = 0; y < res; ++y)
         for (int x = 0; x < res; ++x) {
-            vec3 w = light_equal_area_square_to_sphere(v2((x + 0.5) / res, (y + 0.5) / res));
+            vec3 w = equal_area_square_to_sphere(v2((x + 0.5) / res, (y + 0.5) / res));
             if (v3_dot(w, n) > 0.0)
                 e += fn(w).r * v3_dot(w, n);
         }
@@ -301,7 +301,7 @@ static void test_goniometric(void **state)
     double mean = 0.0;
     for (int y = 0; y < 64; ++y)
         for (int x = 0; x < 64; ++x)
-            mean += upper_map(light_equal_area_square_to_sphere(v2((x + .5) / 64, (y + .5) / 64)))
+            mean += upper_map(equal_area_square_to_sphere(v2((x + .5) / 64, (y + .5) / 64)))
                         .r /
                     (64.0 * 64.0);
     assert_true(fabs(mean - 1.5) < 0.1);

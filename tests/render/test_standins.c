@@ -49,7 +49,7 @@ static void write_sky(const char *path)
     vec3 sun = v3_normalize(v3(0.4, 0.3, 0.8));
     for (int y = 0; y < RES; ++y)
         for (int x = 0; x < RES; ++x) {
-            vec3 w = light_equal_area_square_to_sphere(v2((x + 0.5) / RES, (y + 0.5) / RES));
+            vec3 w = equal_area_square_to_sphere(v2((x + 0.5) / RES, (y + 0.5) / RES));
             double up = fmax(w.z, 0.0);
             float v[3] = {(float)(0.3 + 0.2 * up), (float)(0.45 + 0.3 * up), (float)(0.7 + up)};
             if (w.z < 0.0)

@@ -258,11 +258,115 @@ static void test_unsupported_type(void **state)
     fixture_init(&f, "realistic");
     expect_error(&f, film_of(10, 10),
                  "scene.pbrt:3:1: camera type \"realistic\" is not supported (haze supports "
-                 "\"perspective\" and \"orthographic\")");
+                 "\"perspective\", \"orthographic\" and \"spherical\"; \"realistic\" is "
+                 "refused, see docs/differences-from-pbrt.md)");
+}
+
+/* The spherical camera's directions (camera space, before the render
+ * transform, which is the identity here): pbrt-v4's maps with y and z
+ * swapped. */
+static void test_spherical_directions(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "spherical"); /* "mapping" "equalarea", the default */
+    camera c = create_ok(&f, film_of(64, 32));
+    assert_false(c.equirect);
+    struct {
+        vec2 p;
+        vec3 d;
+    } equal_area[] = {
+        {{32.0, 16.0}, {0.0, 1.0, 0.0}},   /* the square's centre: +z, swapped to up */
+        {{0.0, 0.0}, {0.0, -1.0, 0.0}},    /* its corners: down */
+        {{64.0, 16.0}, {1.0, 0.0, 0.0}},   /* the middle of its right edge: +x */
+        {{32.0, 32.0}, {0.0, 0.0, 1.0}},   /* bottom edge's middle: +y, swapped to +z */
+    };
+    for (size_t i = 0; i < sizeof equal_area / sizeof equal_area[0]; ++i) {
+        ray r;
+        camera_sample cs = {equal_area[i].p, v2(0.5, 0.5), 0.0, 1.0};
+        assert_true(camera_generate_ray(&c, cs, &r));
+        assert_float_equal(r.d.x, equal_area[i].d.x, 1e-12);
+        assert_float_equal(r.d.y, equal_area[i].d.y, 1e-12);
+        assert_float_equal(r.d.z, equal_area[i].d.z, 1e-12);
+        assert_float_equal(v3_length(r.o), 0.0, 0.0);
+    }
+    /* Equal area: a uniform grid over the film covers the sphere uniformly,
+     * so half its directions point up and their mean is the origin. */
+    int up = 0, n = 0;
+    vec3 mean = v3(0.0, 0.0, 0.0);
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x) {
+            ray r;
+            camera_sample cs = {v2(x + 0.5, y + 0.5), v2(0.5, 0.5), 0.0, 1.0};
+            assert_true(camera_generate_ray(&c, cs, &r));
+            up += r.d.y > 0.0;
+            mean = v3_add(mean, r.d);
+            ++n;
+        }
+    assert_int_equal(up, n / 2);
+    assert_true(v3_length(mean) / n < 1e-9);
+
     fixture_init(&f, "spherical");
+    const char *equirect = "equirectangular";
+    param p = {.type = PARAM_STRING, .name = dup("mapping"), .count = 1,
+               .loc = {"scene.pbrt", 4, 5}};
+    p.strs = malloc(sizeof *p.strs);
+    assert_non_null(p.strs);
+    p.strs[0] = dup(equirect);
+    hz_error err;
+    assert_int_equal(params_add(&f.e.entity.params, p, &err), HZ_OK);
+    c = create_ok(&f, film_of(64, 32));
+    assert_true(c.equirect);
+    struct {
+        vec2 p;
+        vec3 d;
+    } equirect_dirs[] = {
+        {{16.0, 16.0}, {0.0, 0.0, 1.0}},  /* longitude 90 degrees on the horizon: ahead */
+        {{0.0, 16.0}, {1.0, 0.0, 0.0}},   /* longitude 0: +x */
+        {{32.0, 16.0}, {-1.0, 0.0, 0.0}}, /* longitude 180 */
+        {{20.0, 0.0}, {0.0, 1.0, 0.0}},   /* the top row: up */
+    };
+    for (size_t i = 0; i < sizeof equirect_dirs / sizeof equirect_dirs[0]; ++i) {
+        ray_differential rd;
+        camera_sample cs = {equirect_dirs[i].p, v2(0.5, 0.5), 0.0, 1.0};
+        assert_true(camera_generate_ray_differential(&c, cs, &rd));
+        assert_float_equal(rd.r.d.x, equirect_dirs[i].d.x, 1e-12);
+        assert_float_equal(rd.r.d.y, equirect_dirs[i].d.y, 1e-12);
+        assert_float_equal(rd.r.d.z, equirect_dirs[i].d.z, 1e-12);
+        assert_true(v3_is_finite(rd.rx_d) && v3_is_finite(rd.ry_d));
+    }
+    /* On the horizon one pixel turns the ray by 2 pi / 64 about the up axis:
+     * the differential direction d + dd/dx (normalised) is that far off d
+     * in the tangent's direction. */
+    ray_differential rd;
+    camera_sample cs = {v2(16.0, 16.0), v2(0.5, 0.5), 0.0, 1.0};
+    assert_true(camera_generate_ray_differential(&c, cs, &rd));
+    double angle = acos(v3_dot(rd.r.d, rd.rx_d));
+    assert_float_equal(tan(angle), 2.0 * HZ_PI / 64.0, 2e-3);
+}
+
+/* A spherical camera has no lens and no screen: pbrt-v4 reads and ignores
+ * those parameters; haze names them. */
+static void test_spherical_refusals(void **state)
+{
+    (void)state;
+    fixture f;
+    fixture_init(&f, "spherical");
+    add_float(&f, "lensradius", 5, 9, 0.1);
     expect_error(&f, film_of(10, 10),
-                 "scene.pbrt:3:1: camera type \"spherical\" is not supported (haze supports "
-                 "\"perspective\" and \"orthographic\")");
+                 "scene.pbrt:5:9: \"lensradius\" does nothing on a spherical camera (pbrt-v4 "
+                 "ignores it): remove it");
+    fixture_init(&f, "spherical");
+    param p = {.type = PARAM_STRING, .name = dup("mapping"), .count = 1,
+               .loc = {"scene.pbrt", 6, 2}};
+    p.strs = malloc(sizeof *p.strs);
+    assert_non_null(p.strs);
+    p.strs[0] = dup("fisheye");
+    hz_error err;
+    assert_int_equal(params_add(&f.e.entity.params, p, &err), HZ_OK);
+    expect_error(&f, film_of(10, 10),
+                 "scene.pbrt:6:2: \"mapping\" must be \"equalarea\" or \"equirectangular\", "
+                 "got \"fisheye\"");
 }
 
 static void test_illegal_values_name_their_place(void **state)
@@ -486,8 +590,10 @@ static void test_from_scene_text(void **state)
                                       "WorldBegin\n",
                                       10, 10, &c, &err),
                      HZ_ERROR);
-    assert_string_equal(err.message, "t.pbrt:1:1: camera type \"realistic\" is not supported "
-                                     "(haze supports \"perspective\" and \"orthographic\")");
+    assert_string_equal(err.message,
+                        "t.pbrt:1:1: camera type \"realistic\" is not supported (haze supports "
+                        "\"perspective\", \"orthographic\" and \"spherical\"; \"realistic\" "
+                        "is refused, see docs/differences-from-pbrt.md)");
 
     assert_int_equal(create_from_text("Camera \"orthographic\" \"float lensradius\" 0.5\n"
                                       "    \"float focaldistance\" -1\nWorldBegin\n",
@@ -528,6 +634,8 @@ int main(void)
         cmocka_unit_test(test_physical_lens),
         cmocka_unit_test(test_physical_lens_errors),
         cmocka_unit_test(test_unsupported_type),
+        cmocka_unit_test(test_spherical_directions),
+        cmocka_unit_test(test_spherical_refusals),
         cmocka_unit_test(test_illegal_values_name_their_place),
         cmocka_unit_test(test_screen_window_errors),
         cmocka_unit_test(test_unknown_and_mistyped_parameters),
