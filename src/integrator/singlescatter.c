@@ -83,12 +83,12 @@ singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
 /* The infinite lights seen along w (light sampling of image lights is not
  * MIS-weighted here: the path that escapes is the camera ray's or a
  * transmitted one, which light sampling does not cover). */
-static rgb sky(const singlescatter_scene *sc, vec3 w)
+static rgb sky(const singlescatter_scene *sc, vec3 o, vec3 w)
 {
     rgb L = rgb_grey(0.0);
     for (size_t i = 0; i < sc->in.light_count; ++i)
         if (sc->in.lights[i].kind == LIGHT_INFINITE)
-            L = rgb_add(L, light_infinite_le(&sc->in.lights[i], w));
+            L = rgb_add(L, light_infinite_le(&sc->in.lights[i], o, w));
     return L;
 }
 
@@ -193,7 +193,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
                 goto done;
         }
         if (!hit) {
-            L = rgb_add(L, rgb_mul(beta, sky(sc, d)));
+            L = rgb_add(L, rgb_mul(beta, sky(sc, o, d)));
             goto done;
         }
         if (h.shape->material->kind != MATERIAL_INTERFACE)

@@ -400,14 +400,14 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
 
 /* The image infinite lights seen by a path leaving the scene along w,
  * MIS-weighted against their light samples (as add_emission). */
-static void add_image_lights(path *pa, vec3 w)
+static void add_image_lights(path *pa, vec3 o, vec3 w)
 {
     const volpath_scene *sc = pa->sc;
     for (size_t i = 0; i < sc->in.light_count; ++i) {
         const light *l = &sc->in.lights[i];
         if (!light_is_image(l))
             continue;
-        rgb Le = light_infinite_le(l, w);
+        rgb Le = light_infinite_le(l, o, w);
         if (rgb_is_black(Le))
             continue;
         rgb den = pa->r_u;
@@ -561,7 +561,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
             if (!rgb_is_black(sc->sky))
                 pa.L = rgb_add(pa.L, rgb_div(rgb_mul(pa.beta, sc->sky), rgb_avg(pa.r_u)));
             if (sc->image_lights)
-                add_image_lights(&pa, ray->d);
+                add_image_lights(&pa, ray->o, ray->d);
             break;
         }
         if (!opaque) {

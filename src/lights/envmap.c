@@ -48,6 +48,48 @@ static double build_cdf(const double *f, int n, double *cdf)
     return sum;
 }
 
+/* The map of w x h texels from three channel planes (negative values read
+ * as 0), with its sampling tables; `what` names it in errors. */
+static hz_status image_build(int w, int h, const float *const ch[3], const char *what,
+                             light_image **out, hz_error *err)
+{
+    size_t n = (size_t)w * (size_t)h;
+    light_image *m = calloc(1, sizeof *m);
+    double *rows = malloc((size_t)h * sizeof *rows);
+    if (m) {
+        m->w = w;
+        m->h = h;
+        m->rgb = malloc(n * 3 * sizeof *m->rgb);
+        m->func = malloc(n * sizeof *m->func);
+        m->cdf = malloc((size_t)h * (size_t)(w + 1) * sizeof *m->cdf);
+        m->row_cdf = malloc((size_t)(h + 1) * sizeof *m->row_cdf);
+    }
+    if (!m || !rows || !m->rgb || !m->func || !m->cdf || !m->row_cdf) {
+        light_image_destroy(m);
+        free(rows);
+        return hz_fail(err, "%s: out of memory for a light's image", what);
+    }
+    for (size_t i = 0; i < n; ++i) {
+        double sum = 0.0;
+        for (int c = 0; c < 3; ++c) { /* negative radiance is none (pbrt-v4 clamps) */
+            float v = ch[c][i] > 0.0f ? ch[c][i] : 0.0f;
+            m->rgb[3 * i + (size_t)c] = v;
+            sum += v;
+        }
+        m->func[i] = sum / 3.0;
+    }
+    double total = 0.0;
+    for (int y = 0; y < h; ++y) {
+        rows[y] = build_cdf(m->func + (size_t)y * w, w, m->cdf + (size_t)y * (w + 1));
+        total += rows[y];
+    }
+    build_cdf(rows, h, m->row_cdf);
+    m->mean = total / (double)n;
+    free(rows);
+    *out = m;
+    return HZ_OK;
+}
+
 hz_status light_image_from_exr(const char *path, bool square, light_image **out, hz_error *err)
 {
     *out = NULL;
@@ -68,8 +110,8 @@ hz_status light_image_from_exr(const char *path, bool square, light_image **out,
                      "%s: %dx%d is not square: a light's image is an equal-area octahedral "
                      "map of directions (pbrt-v4's imgtool makeequiarea converts others)",
                      path, img.width, img.height);
-    int w = img.width, h = img.height;
-    size_t n = (size_t)w * (size_t)h;
+    int w = img.width;
+    size_t n = (size_t)w * (size_t)img.height;
     for (size_t i = 0; st == HZ_OK && i < n; ++i)
         for (int c = 0; c < 3; ++c)
             if (!isfinite(ch[c]->pixels[i])) {
@@ -77,48 +119,19 @@ hz_status light_image_from_exr(const char *path, bool square, light_image **out,
                              path, i % (size_t)w, i / (size_t)w);
                 break;
             }
-    light_image *m = st == HZ_OK ? calloc(1, sizeof *m) : NULL;
-    if (st == HZ_OK && m) {
-        m->w = w;
-        m->h = h;
-        m->rgb = malloc(n * 3 * sizeof *m->rgb);
-        m->func = malloc(n * sizeof *m->func);
-        m->cdf = malloc((size_t)h * (size_t)(w + 1) * sizeof *m->cdf);
-        m->row_cdf = malloc((size_t)(h + 1) * sizeof *m->row_cdf);
+    if (st == HZ_OK) {
+        const float *const planes[3] = {ch[0]->pixels, ch[1]->pixels, ch[2]->pixels};
+        st = image_build(w, img.height, planes, path, out, err);
     }
-    if (st == HZ_OK && (!m || !m->rgb || !m->func || !m->cdf || !m->row_cdf))
-        st = hz_fail(err, "%s: out of memory for a light's image", path);
-    if (st != HZ_OK) {
-        light_image_destroy(m);
-        exr_image_free(&img);
-        return HZ_ERROR;
-    }
-    double *rows = malloc((size_t)h * sizeof *rows);
-    if (!rows) {
-        light_image_destroy(m);
-        exr_image_free(&img);
-        return hz_fail(err, "%s: out of memory for a light's image", path);
-    }
-    for (size_t i = 0; i < n; ++i) {
-        double sum = 0.0;
-        for (int c = 0; c < 3; ++c) { /* negative radiance is none (pbrt-v4 clamps) */
-            float v = ch[c]->pixels[i] > 0.0f ? ch[c]->pixels[i] : 0.0f;
-            m->rgb[3 * i + (size_t)c] = v;
-            sum += v;
-        }
-        m->func[i] = sum / 3.0;
-    }
-    double total = 0.0;
-    for (int y = 0; y < h; ++y) {
-        rows[y] = build_cdf(m->func + (size_t)y * w, w, m->cdf + (size_t)y * (w + 1));
-        total += rows[y];
-    }
-    build_cdf(rows, h, m->row_cdf);
-    m->mean = total / (double)n;
-    free(rows);
     exr_image_free(&img);
-    *out = m;
-    return HZ_OK;
+    return st;
+}
+
+hz_status light_image_white(light_image **out, hz_error *err)
+{
+    const float one = 1.0f;
+    const float *const planes[3] = {&one, &one, &one};
+    return image_build(1, 1, planes, "a constant sky", out, err);
 }
 
 void light_image_size(const light_image *m, int *w, int *h)

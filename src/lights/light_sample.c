@@ -284,6 +284,8 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
                 return false;
             vec3 wl = equal_area_square_to_sphere(uv);
             out->wi = v3_normalize(transform_vector(&l->infinite.render_from_light, wl));
+            if (!light_portal_passes(l, p, out->wi))
+                return false; /* the map's density over every direction: unbiased */
             out->pdf = pdf_uv / (4.0 * HZ_PI);
             out->dist = INFINITY;
             out->infinite = true;

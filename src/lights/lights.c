@@ -102,6 +102,49 @@ static hz_status projection_from_params(param_list *pl, file_loc loc, transform 
     return HZ_OK;
 }
 
+/* pbrt-v4's "point3 portal" (four world-space corners of a rectangle): the
+ * light then arrives only through it. A constant sky becomes a 1x1 image,
+ * as pbrt-v4 does, so that the image lights' paths (which know the ray's
+ * origin) handle it. */
+static hz_status read_portal(param_list *pl, transform render_from_world,
+                             transform render_from_light, light *out, hz_error *err)
+{
+    size_t n = 0;
+    const double *c = params_point3s(pl, "portal", &n);
+    if (!c)
+        return HZ_OK; /* a type error, reported by params_finish */
+    if (n != 4)
+        return hz_fail_at(err, params_loc(pl, "portal"),
+                          "infinite light \"portal\" takes 4 points, got %zu", n);
+    vec3 p[4];
+    for (int i = 0; i < 4; ++i)
+        p[i] = transform_point(&render_from_world, v3(c[3 * i], c[3 * i + 1], c[3 * i + 2]));
+    vec3 e01 = v3_sub(p[1], p[0]), e03 = v3_sub(p[3], p[0]);
+    vec3 e32 = v3_sub(p[2], p[3]), e12 = v3_sub(p[2], p[1]);
+    double lx = v3_length(e03), ly = v3_length(e01);
+    /* A rectangle, as pbrt-v4 expects (it only warns): opposite edges equal,
+     * adjacent ones perpendicular. */
+    double tol = 1e-3 * fmax(lx, ly);
+    if (!(lx > 0.0 && ly > 0.0) || v3_length(v3_sub(e01, e32)) > tol ||
+        v3_length(v3_sub(e03, e12)) > tol || fabs(v3_dot(e01, e03)) > tol * fmax(lx, ly))
+        return hz_fail_at(err, params_loc(pl, "portal"),
+                          "infinite light \"portal\" must be a rectangle (corners in order)");
+    if (!out->infinite.image) {
+        if (light_image_white(&out->infinite.image, err) != HZ_OK)
+            return HZ_ERROR;
+        out->infinite.render_from_light = render_from_light;
+        out->infinite.light_from_render = transform_inverse(render_from_light);
+    }
+    out->infinite.portal = true;
+    out->infinite.portal_p0 = p[0];
+    out->infinite.portal_ex = v3_scale(e03, 1.0 / lx);
+    out->infinite.portal_ey = v3_scale(e01, 1.0 / ly);
+    out->infinite.portal_ez = v3_normalize(v3_cross(e03, e01));
+    out->infinite.portal_len_x = lx;
+    out->infinite.portal_len_y = ly;
+    return HZ_OK;
+}
+
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
                             hz_error *err)
 {
@@ -199,8 +242,6 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         vec3 w = transform_vector(&render_from_light, v3_sub(from, to));
         out->distant.w = v3_length(w) > 0.0 ? v3_normalize(w) : v3(0, 0, 1);
     } else if (strcmp(type, "infinite") == 0) {
-        if (refuse(pl, "portal", "infinite light \"portal\" is not supported", err) != HZ_OK)
-            return HZ_ERROR;
         const char *filename = params_string(pl, "filename", NULL);
         if (filename && params_has(pl, "L"))
             return hz_fail_at(err, params_loc(pl, "L"),
@@ -225,6 +266,9 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
             scale *= illum / HZ_PI;
         }
         out->emit = rgb_scale(L, scale);
+        if (params_has(pl, "portal") &&
+            read_portal(pl, render_from_world, render_from_light, out, err) != HZ_OK)
+            return HZ_ERROR;
     } else {
         return hz_fail_at(err, e->entity.loc,
                           "LightSource \"%s\" is not supported (supported: \"point\", \"spot\", "
@@ -402,8 +446,24 @@ void light_free(light *l)
     }
 }
 
-rgb light_infinite_le(const light *l, vec3 w)
+bool light_portal_passes(const light *l, vec3 o, vec3 w)
 {
+    if (l->kind != LIGHT_INFINITE || !l->infinite.portal)
+        return true;
+    vec3 z = l->infinite.portal_ez, to = v3_sub(l->infinite.portal_p0, o);
+    double wz = v3_dot(w, z), oz = v3_dot(to, z);
+    if (!(wz > 0.0) || !(oz > 0.0)) /* away from it, or o beyond it */
+        return false;
+    vec3 q = v3_sub(v3_scale(w, oz / wz), to); /* the crossing, from p0 */
+    double a = v3_dot(q, l->infinite.portal_ex), b = v3_dot(q, l->infinite.portal_ey);
+    return a >= 0.0 && a <= l->infinite.portal_len_x && b >= 0.0 &&
+           b <= l->infinite.portal_len_y;
+}
+
+rgb light_infinite_le(const light *l, vec3 o, vec3 w)
+{
+    if (!light_portal_passes(l, o, w))
+        return rgb_grey(0.0);
     if (!l->infinite.image)
         return l->emit;
     vec3 wl = v3_normalize(transform_vector(&l->infinite.light_from_render, w));

@@ -25,6 +25,8 @@ typedef struct light_image light_image;
 /* An EXR with R, G, B (or only Y) channels, square when `square`; non-finite
  * texels refused, negative ones read as 0. */
 hz_status light_image_from_exr(const char *path, bool square, light_image **out, hz_error *err);
+/* A 1x1 map of 1: a constant sky as an image light (for a portal). */
+hz_status light_image_white(light_image **out, hz_error *err);
 void light_image_destroy(light_image *m);
 void light_image_size(const light_image *m, int *w, int *h);
 rgb light_image_lookup(const light_image *m, vec2 uv);
@@ -69,6 +71,14 @@ typedef struct {
              * emit * image(light_from_render w) arrives from direction w. */
             light_image *image;
             transform light_from_render, render_from_light; /* rotations */
+            /* pbrt-v4's "portal" (always with an image): light arrives only
+             * along rays through this rectangle, render space: corner p0,
+             * unit edges ex (toward the 4th corner) and ey (toward the 2nd)
+             * of lengths len_x, len_y, and ez = ex x ey, the way it lets
+             * light in. */
+            bool portal;
+            vec3 portal_p0, portal_ex, portal_ey, portal_ez;
+            double portal_len_x, portal_len_y;
         } infinite;
         struct {
             /* top-level; in render space, or in object space when it moves
@@ -139,9 +149,12 @@ bool light_is_delta(const light *l);
  * projection lights. */
 rgb light_point_factor(const light *l, vec3 w);
 
-/* Radiance of infinite light `l` arriving along -w, i.e. seen by a ray with
- * unit direction w that leaves the scene. */
-rgb light_infinite_le(const light *l, vec3 w);
+/* Radiance of infinite light `l` arriving along -w, i.e. seen by a ray from
+ * o with unit direction w that leaves the scene. */
+rgb light_infinite_le(const light *l, vec3 o, vec3 w);
+/* Whether a ray from o along w can see infinite light l: always, unless l
+ * has a portal the ray does not pass through. */
+bool light_portal_passes(const light *l, vec3 o, vec3 w);
 /* The solid-angle density with which light_sample_li samples direction w of
  * an image infinite light (0 for a constant one, which it samples around the
  * normal instead). */

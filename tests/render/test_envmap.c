@@ -393,6 +393,50 @@ static int teardown(void **state)
     return 0;
 }
 
+/* A constant sky seen only through a portal: the 2x2 rectangle at height 2
+ * above the point of a diffuse floor (albedo 0.5) under its centre. The
+ * point's radiance is albedo L F, F the rectangle's form factor: four times
+ * that of a rectangle with a corner above the point, (1 / 2 pi) (X / sqrt(1
+ * + X^2) atan(Y / sqrt(1 + X^2)) + the same with X, Y swapped), X = Y =
+ * 1 / 2. The portal's corner order sets the side light comes from: the
+ * other order leaves the floor dark. */
+static void test_portal(void **state)
+{
+    (void)state;
+    static const char *fmt =
+        "LookAt 0 5 0  0 0 0  0 0 1\n"
+        "Camera \"orthographic\"\n"
+        "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+        "Sampler \"independent\"\n"
+        "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+        "WorldBegin\n"
+        "LightSource \"infinite\" \"rgb L\" [2 2 2] \"point3 portal\" [%s]\n"
+        "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
+        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+        "  \"point3 P\" [-5 0 -5  5 0 -5  5 0 5  -5 0 5]\n";
+    double X = 0.5, k = sqrt(1.0 + X * X);
+    double F = 4.0 * (2.0 * X / k * atan(X / k)) / (2.0 * HZ_PI);
+    char text[2048];
+    snprintf(text, sizeof text, fmt, "-1 2 -1  1 2 -1  1 2 1  -1 2 1");
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    pixel_eval e = eval_pixel(rs, 4.0, 4.0, 16384);
+    render_scene_destroy(rs);
+    assert_true(e.hit);
+    print_message("portal: %.5f, closed form %.5f\n", e.L.r, 0.5 * 2.0 * F);
+    assert_float_equal(e.L.r, 0.5 * 2.0 * F, 0.02 * 0.5 * 2.0 * F);
+    snprintf(text, sizeof text, fmt, "-1 2 -1  -1 2 1  1 2 1  1 2 -1");
+    rs = build_scene_or_fail(text, NULL);
+    e = eval_pixel(rs, 4.0, 4.0, 256);
+    render_scene_destroy(rs);
+    assert_float_equal(e.L.r, 0.0, 0.0);
+
+    char msg[1024];
+    snprintf(text, sizeof text, fmt, "-1 2 -1  1 2 -1  1 2 1.5  -1 2 1");
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "test.pbrt:7:"));
+    assert_non_null(strstr(msg, "must be a rectangle"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -403,6 +447,7 @@ int main(void)
         cmocka_unit_test(test_fog_under_uniform_map),
         cmocka_unit_test(test_goniometric),
         cmocka_unit_test(test_projection),
+        cmocka_unit_test(test_portal),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
