@@ -862,6 +862,13 @@ static void sphere_uv(const geom_shape *s, vec3 po, geom_hit *hit)
                                           th_max - th_min));
 }
 
+vec2 geometry_sphere_uv(const geom_shape *s, vec3 po)
+{
+    geom_hit h;
+    sphere_uv(s, po, &h);
+    return v2(h.u, h.v);
+}
+
 /* pbrt-v4's triangle parameters: the mesh's uv (or its defaults, a
  * bilinear patch's for a quad's halves) at barycentrics (b1, b2). */
 static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2, vec3 p0,

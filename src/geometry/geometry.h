@@ -127,6 +127,8 @@ typedef struct geometry geometry;
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
                           hz_errors *errs, geometry **out, hz_error *err);
+/* pbrt-v4's (u, v) of sphere `s` at object-space point po (on it). */
+vec2 geometry_sphere_uv(const geom_shape *s, vec3 po);
 /* Every shape's hits carry (u, v) from now on (a gbuffer film's channels). */
 void geometry_require_uv(geometry *g);
 void geometry_destroy(geometry *g);

@@ -148,6 +148,23 @@ static size_t texel_of(const light_image *m, vec2 uv)
     return (size_t)y * (size_t)m->w + (size_t)x;
 }
 
+rgb light_image_bilerp(const light_image *m, vec2 uv)
+{
+    double x = uv.x * m->w - 0.5, y = uv.y * m->h - 0.5;
+    double fx = floor(x), fy = floor(y), dx = x - fx, dy = y - fy;
+    rgb sum = rgb_grey(0.0);
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+            int tx = (int)fx + i, ty = (int)fy + j;
+            tx = tx < 0 ? 0 : tx >= m->w ? m->w - 1 : tx;
+            ty = ty < 0 ? 0 : ty >= m->h ? m->h - 1 : ty;
+            const float *t = m->rgb + 3 * ((size_t)ty * (size_t)m->w + (size_t)tx);
+            double wgt = (i ? dx : 1.0 - dx) * (j ? dy : 1.0 - dy);
+            sum = rgb_add(sum, rgb_scale(rgb_make(t[0], t[1], t[2]), wgt));
+        }
+    return sum;
+}
+
 rgb light_image_lookup(const light_image *m, vec2 uv)
 {
     const float *t = m->rgb + 3 * texel_of(m, uv);
@@ -194,6 +211,15 @@ vec2 light_image_sample(const light_image *m, vec2 u, double *pdf)
 }
 
 double light_image_mean(const light_image *m) { return m->mean; }
+
+double light_image_luminance(const light_image *m)
+{
+    size_t n = (size_t)m->w * (size_t)m->h;
+    double sum = 0.0;
+    for (size_t i = 0; i < n; ++i)
+        sum += 0.2126 * m->rgb[3 * i] + 0.7152 * m->rgb[3 * i + 1] + 0.0722 * m->rgb[3 * i + 2];
+    return sum / (double)n;
+}
 
 rgb light_image_average(const light_image *m)
 {

@@ -30,7 +30,8 @@ static double smooth_step(double x, double a, double b)
 
 /* A point on the mesh, chosen proportionally to area; pdf per unit area (in
  * the shape's space: object space for a moving shape). */
-static bool sample_triangles(const light *l, vec2 u, vec3 *p, vec3 *n, double *pdf_area)
+static bool sample_triangles(const light *l, vec2 u, vec3 *p, vec3 *n, vec2 *uv,
+                             double *pdf_area)
 {
     const geom_shape *s = l->area.shape;
     if (s->triangle_count == 0 || l->area.area <= 0.0)
@@ -51,6 +52,7 @@ static bool sample_triangles(const light *l, vec2 u, vec3 *p, vec3 *n, double *p
     geometry_triangle_point(s, (unsigned)lo, b.y, 1.0 - b.x - b.y, &h);
     *p = h.p;
     *n = h.ng;
+    *uv = v2(h.u, h.v); /* set where the light has an image (its shape's hit_uv) */
     *pdf_area = 1.0 / l->area.area;
     return true;
 }
@@ -58,11 +60,12 @@ static bool sample_triangles(const light *l, vec2 u, vec3 *p, vec3 *n, double *p
 /* Uniform by area in object space, with the exact area change of the
  * transform `render_from_object`, so non-uniform scales stay unbiased. */
 static bool sample_sphere(const light *l, const transform *render_from_object, vec2 u, vec3 *p,
-                          vec3 *n, double *pdf_area)
+                          vec3 *n, vec2 *uv, double *pdf_area)
 {
     const geom_shape *s = l->area.shape;
     vec3 n_obj = sample_uniform_sphere(u);
     vec3 po = v3_scale(n_obj, s->radius);
+    *uv = l->area.image ? geometry_sphere_uv(s, po) : v2(0.0, 0.0);
     *p = transform_point(render_from_object, po);
     vec3 nt = transform_normal(render_from_object, n_obj);
     double jacobian =
@@ -175,15 +178,15 @@ static double toward_point(vec3 p_light, vec3 p, light_sample *out)
 /* The sample of point `pl` (normal `nl`) of an area light chosen with
  * density `pdf_dir` per solid angle at p (sphere cone sampling). */
 
-static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_dir,
-                                    light_sample *out)
+static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, vec2 uv,
+                                    double pdf_dir, light_sample *out)
 {
     if (sample_direction(p, pl, out) == 0.0)
         return false;
     out->pdf = pdf_dir;
     /* One-sided: only the side the normal faces emits (for an outward normal
      * that is the whole cone but its rim). */
-    out->L = light_area_le(l, nl, v3_neg(out->wi));
+    out->L = light_area_le(l, nl, v3_neg(out->wi), uv);
     if (rgb_is_black(out->L))
         return false;
     out->p_light = pl;
@@ -193,8 +196,8 @@ static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, do
 
 /* The sample of point `pl` (unit normal `nl`) of an area light chosen with
  * density `pdf_area` per unit area (render space). */
-static bool area_sample_area(const light *l, vec3 p, vec3 pl, vec3 nl, double pdf_area,
-                             light_sample *out)
+static bool area_sample_area(const light *l, vec3 p, vec3 pl, vec3 nl, vec2 uv,
+                             double pdf_area, light_sample *out)
 {
     double d2 = sample_direction(p, pl, out);
     if (d2 == 0.0)
@@ -202,13 +205,22 @@ static bool area_sample_area(const light *l, vec3 p, vec3 pl, vec3 nl, double pd
     double cos_l = fabs(v3_dot(nl, out->wi));
     if (cos_l == 0.0)
         return false;
-    out->L = light_area_le(l, nl, v3_neg(out->wi));
+    out->L = light_area_le(l, nl, v3_neg(out->wi), uv);
     if (rgb_is_black(out->L))
         return false;
     out->pdf = pdf_area * d2 / cos_l;
     out->p_light = pl;
     out->n_light = nl;
     return true;
+}
+
+/* The (u, v) of render-space point pl on an image light's sphere. */
+static vec2 sphere_uv_at(const light *l, const transform *render_from_object, vec3 pl)
+{
+    if (!l->area.image)
+        return v2(0.0, 0.0);
+    transform object_from_render = transform_inverse(*render_from_object);
+    return geometry_sphere_uv(l->area.shape, transform_point(&object_from_render, pl));
 }
 
 /* An area light on a moving shape (kept in object space, geometry.h) at scene
@@ -219,6 +231,7 @@ static bool sample_moving_area(const light *l, vec3 p, double time, vec2 u, ligh
     const geom_shape *s = l->area.shape;
     transform render_from_object = geom_motion_at(s->motion, time);
     vec3 pl, nl;
+    vec2 uv;
     double pdf;
     if (s->kind == GEOMETRY_SPHERE) {
         /* Cone sampling while the transform is a similarity at this time. */
@@ -227,11 +240,12 @@ static bool sample_moving_area(const light *l, vec3 p, double time, vec2 u, ligh
         if (scale > 0.0 && radius > 0.0 && isfinite(radius) &&
             sample_sphere_cone(l, transform_point(&render_from_object, v3(0, 0, 0)), radius, p, u,
                                &pl, &nl, &pdf))
-            return area_sample_solid_angle(l, p, pl, nl, pdf, out);
-        return sample_sphere(l, &render_from_object, u, &pl, &nl, &pdf) &&
-               area_sample_area(l, p, pl, nl, pdf, out);
+            return area_sample_solid_angle(l, p, pl, nl,
+                                           sphere_uv_at(l, &render_from_object, pl), pdf, out);
+        return sample_sphere(l, &render_from_object, u, &pl, &nl, &uv, &pdf) &&
+               area_sample_area(l, p, pl, nl, uv, pdf, out);
     }
-    if (!sample_triangles(l, u, &pl, &nl, &pdf))
+    if (!sample_triangles(l, u, &pl, &nl, &uv, &pdf))
         return false;
     /* Per object-space area so far; dA_render = |det A| |A^-T n| dA_object
      * for the unit normal n (the triangle's area changes with a scale). */
@@ -239,7 +253,7 @@ static bool sample_moving_area(const light *l, vec3 p, double time, vec2 u, ligh
     double jacobian = fabs(transform_det3(&render_from_object)) * v3_length(nt);
     if (!(jacobian > 0.0) || !isfinite(jacobian))
         return false;
-    return area_sample_area(l, p, transform_point(&render_from_object, pl), v3_normalize(nt),
+    return area_sample_area(l, p, transform_point(&render_from_object, pl), v3_normalize(nt), uv,
                             pdf / jacobian, out);
 }
 
@@ -309,14 +323,16 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
         if (s->motion)
             return sample_moving_area(l, p, time, u, out);
         vec3 pl, nl;
+        vec2 uv;
         double pdf;
         if (l->area.sphere_cone && sample_sphere_cone(l, l->area.sphere_center,
                                                       l->area.sphere_radius, p, u, &pl, &nl, &pdf))
-            return area_sample_solid_angle(l, p, pl, nl, pdf, out);
+            return area_sample_solid_angle(l, p, pl, nl, sphere_uv_at(l, &s->space_from_object, pl),
+                                           pdf, out);
         bool ok = s->kind == GEOMETRY_SPHERE
-                      ? sample_sphere(l, &s->space_from_object, u, &pl, &nl, &pdf)
-                      : sample_triangles(l, u, &pl, &nl, &pdf);
-        return ok && area_sample_area(l, p, pl, nl, pdf, out);
+                      ? sample_sphere(l, &s->space_from_object, u, &pl, &nl, &uv, &pdf)
+                      : sample_triangles(l, u, &pl, &nl, &uv, &pdf);
+        return ok && area_sample_area(l, p, pl, nl, uv, pdf, out);
     }
     }
     return false;

@@ -23,13 +23,6 @@ static rgb apply_power(rgb I, double scale, double power, double k_e)
     return rgb_scale(I, scale);
 }
 
-static hz_status refuse(param_list *pl, const char *name, const char *why, hz_error *err)
-{
-    if (!params_has(pl, name))
-        return HZ_OK;
-    return hz_fail_at(err, params_loc(pl, name), "%s", why);
-}
-
 /* The image of an infinite light, named relative to the scene file that names it. */
 static hz_status load_image(param_list *pl, const char *filename, bool square,
                             light_image **out, hz_error *err)
@@ -351,8 +344,22 @@ static double area_power_scale(param_list *pl, const geom_shape *shape, double p
     return power / (A * HZ_PI * (two_sided ? 2.0 : 1.0));
 }
 
+static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
+                                  hz_error *err);
+
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
                                  hz_error *err)
+{
+    hz_status st = area_from_entity(e, shape, out, err);
+    if (st != HZ_OK) { /* what it allocated before the error */
+        out->kind = LIGHT_AREA;
+        light_free(out);
+    }
+    return st;
+}
+
+static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
+                                  hz_error *err)
 {
     memset(out, 0, sizeof *out);
     param_list *pl = &e->params;
@@ -361,8 +368,11 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
         return hz_fail_at(err, e->loc,
                           "AreaLightSource \"%s\" is not supported (supported: \"diffuse\")",
                           type);
-    if (refuse(pl, "filename", "image area lights (\"filename\") are not supported yet",
-               err) != HZ_OK)
+    const char *filename = params_string(pl, "filename", NULL);
+    if (filename && params_has(pl, "L"))
+        return hz_fail_at(err, params_loc(pl, "L"),
+                          "AreaLightSource: \"L\" and \"filename\" cannot both be given");
+    if (filename && load_image(pl, filename, false, &out->area.image, err) != HZ_OK)
         return HZ_ERROR;
     rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
     double scale = params_float(pl, "scale", 1.0);
@@ -371,7 +381,8 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
     out->area.two_sided = params_bool(pl, "twosided", false);
     out->area.shape = shape;
     if (power > 0.0)
-        scale *= area_power_scale(pl, shape, power, out->area.two_sided);
+        scale *= area_power_scale(pl, shape, power, out->area.two_sided) /
+                 (out->area.image ? light_image_luminance(out->area.image) : 1.0);
     out->emit = rgb_scale(L, scale);
     if (params_finish(pl, "AreaLightSource \"diffuse\"", err) != HZ_OK)
         return HZ_ERROR;
@@ -435,6 +446,8 @@ void light_free(light *l)
     if (l && l->kind == LIGHT_AREA) {
         free(l->area.cdf);
         l->area.cdf = NULL;
+        light_image_destroy(l->area.image);
+        l->area.image = NULL;
     }
     if (l && l->kind == LIGHT_INFINITE) {
         light_image_destroy(l->infinite.image);
@@ -494,11 +507,13 @@ bool light_is_delta(const light *l)
     return false;
 }
 
-rgb light_area_le(const light *l, vec3 n, vec3 w)
+rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv)
 {
     if (!l->area.two_sided && v3_dot(n, w) <= 0.0)
         return rgb_grey(0.0);
-    return l->emit;
+    if (!l->area.image)
+        return l->emit;
+    return rgb_mul(l->emit, light_image_bilerp(l->area.image, v2(uv.x, 1.0 - uv.y)));
 }
 
 /* The power of a projection light per unit of emit: the window's area at

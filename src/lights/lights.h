@@ -30,6 +30,8 @@ hz_status light_image_white(light_image **out, hz_error *err);
 void light_image_destroy(light_image *m);
 void light_image_size(const light_image *m, int *w, int *h);
 rgb light_image_lookup(const light_image *m, vec2 uv);
+/* Bilinear between texel centres, clamped at the edges (pbrt-v4's Bilerp). */
+rgb light_image_bilerp(const light_image *m, vec2 uv);
 /* Density over the unit square (1 everywhere for an all-black map). */
 double light_image_pdf(const light_image *m, vec2 uv);
 /* u in [0,1)^2 -> a point of the square with *pdf = light_image_pdf there. */
@@ -38,6 +40,9 @@ vec2 light_image_sample(const light_image *m, vec2 u, double *pdf);
  * and its mean over the texels. */
 double light_image_value(const light_image *m, vec2 uv);
 double light_image_mean(const light_image *m);
+/* Mean luminance (linear sRGB weights) of the texels: pbrt-v4's k_e of an
+ * image area light's "power". */
+double light_image_luminance(const light_image *m);
 /* Mean RGB of the texels, and pbrt-v4's "illuminance" of the map. */
 rgb light_image_average(const light_image *m);
 double light_image_illuminance(const light_image *m);
@@ -86,6 +91,9 @@ typedef struct {
              * to render space with the transform at the sample's time */
             const geom_shape *shape;
             bool two_sided;
+            /* "filename": radiance emit times the image, bilinear at the
+             * surface's (u, 1 - v) as pbrt-v4 (NULL: emit alone). */
+            light_image *image;
             double area;             /* in the shape's space */
             double *cdf;             /* triangles: cumulative areas / area (triangle_count) */
             /* Spheres whose space_from_object is a uniform scale (times a
@@ -139,8 +147,9 @@ typedef struct {
  * with their shapes). `u` in [0,1)^2 (ignored by delta lights). */
 bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_sample *out);
 
-/* Radiance leaving an area light's surface point with unit normal `n` toward `w`. */
-rgb light_area_le(const light *l, vec3 n, vec3 w);
+/* Radiance leaving an area light's surface point with unit normal `n` and
+ * surface parameters `uv` (which only an image light reads) toward `w`. */
+rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv);
 
 bool light_is_delta(const light *l);
 

@@ -129,8 +129,11 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
             continue;
         }
         if (light_area_from_entity(&sd->shapes[i].area_light, gs, &rs->lights[rs->light_count],
-                                   err) == HZ_OK)
+                                   err) == HZ_OK) {
+            /* An image emitter's radiance depends on the hit's (u, v). */
+            gs->hit_uv |= rs->lights[rs->light_count].area.image != NULL;
             gs->area_light = (int)rs->light_count++;
+        }
         else if (collect(errs, err) != HZ_OK)
             return HZ_ERROR;
     }

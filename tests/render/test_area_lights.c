@@ -1,9 +1,14 @@
-/* "power" on diffuse area lights, as pbrt-v4 defines it: the radiance is
+/* Diffuse area lights' "power" and "filename", as pbrt-v4 defines them.
+ * "power": the radiance is
  * scale * L * power / (A π), A the Area() of one emitter (doubled when
  * two-sided): the analytic shape's in object space (sphere, disk, cylinder),
  * each triangle's (bilinearmesh: quad's) of a mesh. Seen straight on by an
  * orthographic camera, a pixel on the emitter is that radiance exactly. */
 #include "render_test_util.h"
+
+#include <unistd.h>
+
+#include "film/exr.h"
 
 static const char *camera_down = "LookAt 0 0 5  0 0 0  0 1 0\n"
                                  "Camera \"orthographic\"\n"
@@ -28,7 +33,8 @@ static rgb seen_at(const char *world, double x, double y)
 static void expect_seen(const char *world, double wx, double wy, rgb want, double rel,
                         const char *what)
 {
-    double x = 16.0 + 16.0 * wx, y = 16.0 - 16.0 * wy;
+    /* pbrt-v4's LookAt down -z with y up: camera x is world -x. */
+    double x = 16.0 - 16.0 * wx, y = 16.0 - 16.0 * wy;
     expect_rgb_close(seen_at(world, x, y), want, rel, 0.0, what, x, y);
 }
 
@@ -110,12 +116,71 @@ static void test_refused(void **state)
     free(text);
 }
 
+/* "filename": the radiance is scale times the image, bilinear at (u, 1 - v)
+ * of the emitter's surface. A 4x2 EXR on the quad [-1, 1]^2 (uv = (x + 1,
+ * y + 1) / 2): at each texel's centre the pixel sees that texel exactly;
+ * halfway between two texels, their mean. With "power", the image's mean
+ * luminance takes the place of L's (pbrt-v4's k_e). */
+static void test_image_emitter(void **state)
+{
+    (void)state;
+    static const float texels[8][3] = {{4, 0.5, 0.5}, {0.5, 4, 0.5}, {0.5, 0.5, 4}, {2, 2, 2},
+                                       {1, 1, 0.2},   {0.2, 1, 1},   {1, 0.2, 1},   {3, 1, 0.5}};
+    char path[512];
+    snprintf(path, sizeof path, "%s/area_image-%ld.exr", HAZE_TMP, (long)getpid());
+    exr_image img;
+    hz_error err;
+    assert_int_equal(exr_image_alloc(&img, 4, 2, 3, &err), HZ_OK);
+    const char *names[3] = {"R", "G", "B"};
+    double lum = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
+        for (int i = 0; i < 8; ++i)
+            img.channels[c].pixels[i] = texels[i][c];
+    }
+    for (int i = 0; i < 8; ++i)
+        lum += (0.2126 * texels[i][0] + 0.7152 * texels[i][1] + 0.0722 * texels[i][2]) / 8.0;
+    assert_int_equal(exr_write(path, &img, &err), HZ_OK);
+    exr_image_free(&img);
+    char world[1024];
+    const char *quad = "Shape \"trianglemesh\" \"point3 P\" [-1 -1 0 1 -1 0 1 1 0 -1 1 0] "
+                       "\"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n";
+    snprintf(world, sizeof world,
+             "AreaLightSource \"diffuse\" \"string filename\" \"%s\" \"float scale\" 2\n%s",
+             path, quad);
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 4; ++i) {
+            /* Texel (i, j) centre: (u, 1 - v) = ((i + 0.5) / 4, (j + 0.5) / 2). */
+            double u = (i + 0.5) / 4.0, v = 1.0 - (j + 0.5) / 2.0;
+            const float *t = texels[j * 4 + i];
+            expect_seen(world, 2.0 * u - 1.0, 2.0 * v - 1.0,
+                        rgb_make(2.0 * t[0], 2.0 * t[1], 2.0 * t[2]), 1e-5, "texel centre");
+        }
+    /* Between texels (0, 0) and (1, 0): their mean. */
+    expect_seen(world, 2.0 * 0.25 - 1.0, 2.0 * 0.75 - 1.0,
+                rgb_make(4.5, 4.5, 1.0), 1e-5, "between texels");
+    snprintf(world, sizeof world,
+             "AreaLightSource \"diffuse\" \"string filename\" \"%s\" \"float power\" 6\n%s",
+             path, quad);
+    double k = 6.0 / (2.0 * HZ_PI * lum); /* each triangle: area 2 */
+    expect_seen(world, 2.0 * 0.625 - 1.0, 2.0 * 0.75 - 1.0,
+                rgb_make(0.5 * k, 0.5 * k, 4.0 * k), 1e-5, "power over the image");
+    char msg[1024];
+    char *text = cat("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"orthographic\"\nWorldBegin\n",
+                     "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"string filename\" \"x.exr\"\n",
+                     quad);
+    build_scene_expect_error(text, msg, sizeof msg);
+    assert_non_null(strstr(msg, "\"L\" and \"filename\" cannot both be given"));
+    free(text);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_quad_one_and_two_sided),
         cmocka_unit_test(test_analytic_shapes),
         cmocka_unit_test(test_refused),
+        cmocka_unit_test(test_image_emitter),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
