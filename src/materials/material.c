@@ -375,7 +375,8 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
                           "(no displaced or bump-mapped surfaces)");
     if (params_has(pl, "normalmap"))
         return hz_fail_at(err, params_loc(pl, "normalmap"),
-                          "\"normalmap\" is not supported: haze has no image textures yet");
+                          "\"normalmap\" is not supported: haze shades with the geometry's "
+                          "normals (no normal or bump mapping)");
 
     if (strcmp(type, "diffuse") == 0) {
         out->kind = MATERIAL_DIFFUSE;

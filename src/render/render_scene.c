@@ -98,6 +98,44 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_errors *er
     return HZ_OK;
 }
 
+/* pbrt-v4's Accelerator: its type and parameters are checked as pbrt-v4
+ * reads them, then a warning says they change nothing here (they only set
+ * the speed of pbrt-v4's own BVH or kd-tree; haze builds Embree's BVH). */
+static hz_status read_accelerator(scene_entity *e, FILE *warn, hz_error *err)
+{
+    if (e->loc.line == 0)
+        return HZ_OK;
+    param_list *pl = &e->params;
+    if (strcmp(e->type, "bvh") == 0) {
+        params_int(pl, "maxnodeprims", 4);
+        const char *split = params_string(pl, "splitmethod", "sah");
+        if (strcmp(split, "sah") && strcmp(split, "middle") && strcmp(split, "equal") &&
+            strcmp(split, "hlbvh"))
+            params_reject(pl, "splitmethod",
+                          "\"splitmethod\" \"%.40s\" is unknown (pbrt-v4 has \"sah\", "
+                          "\"middle\", \"equal\", \"hlbvh\")",
+                          split);
+    } else if (strcmp(e->type, "kdtree") == 0) {
+        params_int(pl, "intersectcost", 5);
+        params_int(pl, "traversalcost", 1);
+        params_float(pl, "emptybonus", 0.5);
+        params_int(pl, "maxprims", 1);
+        params_int(pl, "maxdepth", -1);
+    } else {
+        return hz_fail_at(err, e->loc,
+                          "Accelerator \"%.40s\" is unknown (pbrt-v4 has \"bvh\" and \"kdtree\")",
+                          e->type);
+    }
+    if (params_finish(pl, "Accelerator", err) != HZ_OK)
+        return HZ_ERROR;
+    if (warn)
+        fprintf(warn,
+                "%s:%d:%d: warning: Accelerator \"%s\" changes nothing in haze, which always "
+                "builds Embree's BVH (the image is the same)\n",
+                e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, e->type);
+    return HZ_OK;
+}
+
 static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render_from_world,
                               FILE *warn, hz_errors *errs, hz_error *err)
 {
@@ -239,6 +277,7 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
             return hz_fail(err, "output file name too long: %s", opt->output);
         snprintf(fp.filename, sizeof fp.filename, "%s", opt->output);
     }
+    CHECK(read_accelerator(&sd->accelerator, warn, err));
     rs->filt = filter_create(&sd->filter, err);
     if (!rs->filt && collect(errs, err) != HZ_OK)
         return HZ_ERROR;

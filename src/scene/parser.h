@@ -47,7 +47,7 @@ typedef struct {
     named_coordsys *coords;
     size_t coord_count, coord_cap;
     bool in_world;
-    file_loc seen_camera, seen_film, seen_sampler, seen_filter, seen_integrator;
+    file_loc seen_camera, seen_film, seen_sampler, seen_filter, seen_integrator, seen_accelerator;
     long current_object;      /* index being defined, -1 outside ObjectBegin */
 
     /* One token stream, as pbrt-v4 reads it: Include pushes the included

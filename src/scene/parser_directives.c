@@ -12,7 +12,8 @@
 #define SUPPORTED                                                                                \
     "LookAt Translate Rotate Scale Transform ConcatTransform Identity CoordinateSystem "          \
     "CoordSysTransform TransformTimes ActiveTransform AttributeBegin AttributeEnd Attribute "     \
-    "Camera Film Sampler PixelFilter Integrator WorldBegin MakeNamedMedium MediumInterface "      \
+    "Camera Film Sampler PixelFilter Integrator Accelerator WorldBegin MakeNamedMedium "          \
+    "MediumInterface "                                                                            \
     "LightSource AreaLightSource Shape Material MakeNamedMaterial NamedMaterial "                 \
     "Texture ReverseOrientation Include Import ObjectBegin ObjectEnd ObjectInstance Option "     \
     "ColorSpace"

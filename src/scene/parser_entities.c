@@ -607,6 +607,7 @@ static hz_status d_film(parser *ps, const token *d, hz_error *err)
 OPTION_ENTITY(d_sampler, "Sampler", seen_sampler, sampler)
 OPTION_ENTITY(d_filter, "PixelFilter", seen_filter, filter)
 OPTION_ENTITY(d_integrator, "Integrator", seen_integrator, integrator)
+OPTION_ENTITY(d_accelerator, "Accelerator", seen_accelerator, accelerator)
 
 hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_error *err)
 {
@@ -619,6 +620,7 @@ hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_
         {"Sampler", d_sampler},
         {"PixelFilter", d_filter},
         {"Integrator", d_integrator},
+        {"Accelerator", d_accelerator},
         {"Shape", d_shape},
         {"LightSource", d_light},
         {"AreaLightSource", d_area_light},

@@ -45,7 +45,8 @@ bool scene_desc_init(scene_desc *sd, const char *file)
            default_entity(sd, &sd->film, "rgb", start) &&
            default_entity(sd, &sd->sampler, "zsobol", start) &&
            default_entity(sd, &sd->filter, "gaussian", start) &&
-           default_entity(sd, &sd->integrator, "volpath", no_integrator);
+           default_entity(sd, &sd->integrator, "volpath", no_integrator) &&
+           default_entity(sd, &sd->accelerator, "bvh", no_integrator);
 }
 
 bool scene_desc_add_file(scene_desc *sd, const char *owned_name)
@@ -75,6 +76,7 @@ void scene_desc_free(scene_desc *sd)
     params_free(&sd->sampler.params);
     params_free(&sd->filter.params);
     params_free(&sd->integrator.params);
+    params_free(&sd->accelerator.params);
     params_free(&sd->options);
     free_shapes(sd->shapes, sd->shape_count);
     free_shapes(sd->object_shapes, sd->object_shape_count);

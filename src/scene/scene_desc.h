@@ -90,9 +90,11 @@ typedef struct {
 
 typedef struct {
     /* Absent directives get default entities with the type pbrt-v4 uses
-     * ("perspective", "rgb", "zsobol", "gaussian", "volpath") and no params. */
+     * ("perspective", "rgb", "zsobol", "gaussian", "volpath", "bvh") and no
+     * params; an absent Integrator or Accelerator has loc.line 0. */
     camera_entity camera;
     scene_entity film, sampler, filter, integrator;
+    scene_entity accelerator; /* read and checked, but haze always builds Embree's BVH */
     color_space film_color_space; /* ColorSpace current at Film: the image's space */
 
     shape_entity *shapes;        /* top-level shapes, in file order */

@@ -94,6 +94,32 @@ static void test_sampler_warnings(void **state)
     assert_null(strstr(out, "125"));
 }
 
+/* pbrt-v4's Accelerator only sets the speed of its own BVH or kd-tree: haze
+ * checks it as pbrt-v4 reads it, warns that it changes nothing, and renders
+ * the image of the scene without it, bit for bit. */
+static void test_accelerator(void **state)
+{
+    (void)state;
+    char out[4096];
+    assert_int_equal(render("accel", "Accelerator \"kdtree\" \"integer maxprims\" 2\n", "", out,
+                            sizeof out),
+                     0);
+    assert_non_null(strstr(out, "accel.pbrt:1:1: warning: Accelerator \"kdtree\" changes "
+                                "nothing in haze"));
+    assert_int_equal(render("noaccel", "", "", out, sizeof out), 0);
+    assert_true(exr_pixels_equal(DIR "/accel.exr", DIR "/noaccel.exr"));
+    assert_int_equal(render("accel_bad", "Accelerator \"bvh\" \"string splitmethod\" \"best\"\n",
+                            "", out, sizeof out),
+                     1);
+    assert_non_null(strstr(out, "accel_bad.pbrt:1:19: \"splitmethod\" \"best\" is unknown"));
+    assert_int_equal(render("accel_kind", "Accelerator \"octree\"\n", "", out, sizeof out), 1);
+    assert_non_null(strstr(out, "accel_kind.pbrt:1:1: Accelerator \"octree\" is unknown"));
+    assert_int_equal(render("accel_param", "Accelerator \"bvh\" \"integer maxprims\" 3\n", "",
+                            out, sizeof out),
+                     1);
+    assert_non_null(strstr(out, "unused parameter \"integer maxprims\""));
+}
+
 int main(void)
 {
     mkdir(HAZE_TMP, 0755);
@@ -102,6 +128,7 @@ int main(void)
         cmocka_unit_test(test_honoured_options),
         cmocka_unit_test(test_refused_options),
         cmocka_unit_test(test_sampler_warnings),
+        cmocka_unit_test(test_accelerator),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
