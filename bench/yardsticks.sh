@@ -73,6 +73,15 @@ yardsticks_run() {
                 echo "  (haze --stats lacks a memory line: memory skipped)" >&2
             fi
         done
+        # The whole process tree's peak (GNU time: haze, or its .vdb reader
+        # process while it converts the grid, whichever is larger): the .vdb
+        # scene against the .nvdb one (issue 20: at most 1.5x).
+        if [ -x /usr/bin/time ] && [ -f "$CACHE/smoke-nvdb.pbrt" ]; then
+            kv=$(/usr/bin/time -f %M "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
+            kn=$(/usr/bin/time -f %M "$HAZE" render "$CACHE/smoke-nvdb.pbrt" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
+            r=$(awk -v a="$kv" -v b="$kn" 'BEGIN { printf "%.2f", a / b }')
+            yard_row memory_vdb_over_nvdb "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "smoke.pbrt peak RSS of haze and its reader process (GNU time): .vdb $(awk -v k="$kv" 'BEGIN { printf "%.1f", k / 1024 }') MiB, .nvdb $(awk -v k="$kn" 'BEGIN { printf "%.1f", k / 1024 }') MiB"
+        fi
     else
         kb=$(/usr/bin/time -f %M "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
         yard_row memory_peak_mib "$(awk -v k="$kb" 'BEGIN { printf "%.1f", k / 1024 }')" "<= 1.5x parts" "unknown" "no haze render --stats yet: only the process peak RSS is known"

@@ -18,6 +18,7 @@ packages=(
   valgrind           # the valgrind_render memcheck test
   libopenmpi-dev openmpi-bin  # MPI: one image across ranks (mpirun), on when found
   gnuplot-nox        # make bench: bench/results/trade.png
+  time               # make bench: GNU time's peak memory of haze and its .vdb reader
 )
 
 missing=()

@@ -841,6 +841,45 @@ const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scrat
     return material_textured(m, &c, scratch);
 }
 
+vec3 geometry_shading_normal(const geom_hit *h, const material *m)
+{
+    if (!m->displacement)
+        return h->ns;
+    /* pbrt-v4's shading frame: a mesh with normals takes ss = (ns x dpdu) x
+     * ns and ts = ns x dpdu; otherwise dp/du and dp/dv themselves. */
+    vec3 ss = h->dpdu, ts = h->dpdv;
+    if (h->shape->kind == GEOMETRY_TRIANGLES && h->shape->n) {
+        vec3 t = v3_cross(h->ns, h->dpdu);
+        if (v3_length_sq(t) > 0.0) {
+            ss = v3_cross(t, h->ns);
+            ts = t;
+        } else {
+            v3_basis(h->ns, &ss, &ts);
+        }
+    }
+    texture_ctx c = {.u = h->u, .v = h->v, .p = h->p, .dudx = h->dudx, .dudy = h->dudy,
+                     .dvdx = h->dvdx, .dvdy = h->dvdy};
+    double du = 0.5 * (fabs(h->dudx) + fabs(h->dudy));
+    double dv = 0.5 * (fabs(h->dvdx) + fabs(h->dvdy));
+    du = du == 0.0 ? 0.0005 : du;
+    dv = dv == 0.0 ? 0.0005 : dv;
+    double d0 = texture_eval_float(m->displacement, &c);
+    texture_ctx cu = c, cv = c;
+    cu.u += du;
+    cu.p = v3_add(h->p, v3_scale(ss, du));
+    cv.v += dv;
+    cv.p = v3_add(h->p, v3_scale(ts, dv));
+    double d_u = texture_eval_float(m->displacement, &cu);
+    double d_v = texture_eval_float(m->displacement, &cv);
+    vec3 dpdu = v3_add(ss, v3_scale(h->ns, (d_u - d0) / du));
+    vec3 dpdv = v3_add(ts, v3_scale(h->ns, (d_v - d0) / dv));
+    vec3 n = v3_cross(dpdu, dpdv);
+    if (!(v3_length_sq(n) > 0.0) || !v3_is_finite(n))
+        return h->ns;
+    n = v3_normalize(n);
+    return v3_dot(n, h->ng) < 0.0 ? v3_neg(n) : n;
+}
+
 /* pbrt-v4's sphere parameters at the object-space point po. */
 static void sphere_uv(const geom_shape *s, vec3 po, geom_hit *hit)
 {

@@ -127,6 +127,13 @@ typedef struct geometry geometry;
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
                           hz_errors *errs, geometry **out, hz_error *err);
+/* The shading normal of hit h under material m (geometry_material_at's):
+ * h->ns, or bumped by m's displacement texture as pbrt-v4's BumpMap (the
+ * texture at (u, v) and one footprint step (or 0.0005) along u and v, the
+ * shading frame's dp/du, dp/dv tilted by the differences along the normal;
+ * the displace dn/du term is left out: haze has no dn/du) and faced to the
+ * geometric normal's side. */
+vec3 geometry_shading_normal(const geom_hit *h, const material *m);
 /* pbrt-v4's (u, v) of sphere `s` at object-space point po (on it). */
 vec2 geometry_sphere_uv(const geom_shape *s, vec3 po);
 /* Every shape's hits carry (u, v) from now on (a gbuffer film's channels). */

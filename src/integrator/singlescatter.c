@@ -128,9 +128,10 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
      * wo's side, f is r / pi wherever cos > 0. */
     bool diffuse = mat->kind == MATERIAL_DIFFUSE;
     bsdf b;
-    if (!bsdf_from_material(mat, h->ns, &b) || !(diffuse || bsdf_is_non_specular(&b)))
+    vec3 n_shading = geometry_shading_normal(h, mat);
+    if (!bsdf_from_material(mat, n_shading, &b) || !(diffuse || bsdf_is_non_specular(&b)))
         return rgb_grey(0.0);
-    vec3 ns = v3_dot(h->ns, wo) < 0.0 ? v3_neg(h->ns) : h->ns;
+    vec3 ns = v3_dot(n_shading, wo) < 0.0 ? v3_neg(n_shading) : n_shading;
     bool transmits = material_transmits(mat);
     rgb L = rgb_grey(0.0);
     for (size_t i = 0; i < sc->in.light_count; ++i) {

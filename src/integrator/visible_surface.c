@@ -10,7 +10,8 @@ static rgb directional_albedo(const geom_hit *h, vec3 wo)
     enum { N = 16 };
     material scratch;
     bsdf b;
-    if (!bsdf_from_material(geometry_material_at(h, wo, &scratch), h->ns, &b))
+    const material *mat = geometry_material_at(h, wo, &scratch);
+    if (!bsdf_from_material(mat, geometry_shading_normal(h, mat), &b))
         return rgb_grey(0.0);
     rgb sum = rgb_grey(0.0);
     for (int i = 0; i < N; ++i) {

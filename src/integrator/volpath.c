@@ -444,7 +444,8 @@ static bool bounce(path *pa, const geom_hit *h)
         add_emission(pa, h, wo);
     bsdf b;
     material scratch;
-    if (!bsdf_from_material(geometry_material_at(h, wo, &scratch), h->ns, &b))
+    const material *mat = geometry_material_at(h, wo, &scratch);
+    if (!bsdf_from_material(mat, geometry_shading_normal(h, mat), &b))
         return false;
     if (pa->depth++ >= sc->settings.max_depth)
         return false;

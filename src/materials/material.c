@@ -369,10 +369,6 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
     *out = (material){.kind = MATERIAL_INTERFACE};
     /* Out of scope for now (docs/differences-from-pbrt.md): say so rather
      * than "unused parameter". */
-    if (params_has(pl, "displacement"))
-        return hz_fail_at(err, params_loc(pl, "displacement"),
-                          "\"displacement\" is not supported: haze shades the geometry as given "
-                          "(no displaced or bump-mapped surfaces)");
     if (params_has(pl, "normalmap"))
         return hz_fail_at(err, params_loc(pl, "normalmap"),
                           "\"normalmap\" is not supported: haze shades with the geometry's "
@@ -441,11 +437,19 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
                           "\"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
                           type);
     }
+    /* Every material with a surface takes pbrt-v4's "displacement": a float
+     * texture bumps the shading normal; a constant one changes nothing (its
+     * gradient is 0, as in pbrt-v4). Mixes and interfaces leave it unused. */
+    if (out->kind != MATERIAL_MIX && out->kind != MATERIAL_INTERFACE) {
+        out->displacement = texture_param(pl, ts, "displacement", false);
+        if (!out->displacement && params_has(pl, "displacement"))
+            params_float(pl, "displacement", 0.0);
+    }
     bool rough_tex = out->rough[0] || out->rough[1] || out->rough[2] || out->rough[3];
     /* Read already by the roughness, when there is one. */
     out->remap_roughness = rough_tex ? params_bool(pl, "remaproughness", true) : true;
     out->textured = out->reflectance_tex || out->transmittance_tex || out->eta_tex ||
-                    out->k_tex || out->metal_r_tex || rough_tex;
+                    out->k_tex || out->metal_r_tex || rough_tex || out->displacement;
     char what[128];
     snprintf(what, sizeof what, "Material \"%s\"", type);
     return params_finish(pl, what, err);

@@ -397,8 +397,10 @@ static void test_integrator_and_parameters(void **state)
         {"WorldBegin\nMaterial \"coatedconductor\" \"float roughness\" 0.1\n",
          "unused parameter \"float roughness\""},
         {"WorldBegin\nMaterial \"measured\"\n", "\"measured\" is not supported"},
-        {"WorldBegin\nMaterial \"diffuse\" \"float displacement\" 0.1\n",
-         "test.pbrt:2:20: \"displacement\" is not supported"},
+        {"WorldBegin\nMaterial \"diffuse\" \"texture displacement\" \"nope\"\n",
+         "test.pbrt:2:20: \"texture displacement\": no float texture named \"nope\""},
+        {"WorldBegin\nMaterial \"interface\" \"float displacement\" 0.1\n",
+         "unused parameter \"float displacement\""},
         {"WorldBegin\nMaterial \"coateddiffuse\" \"string normalmap\" \"n.png\"\n",
          "\"normalmap\" is not supported"},
     };
@@ -407,6 +409,45 @@ static void test_integrator_and_parameters(void **state)
         if (!strstr(msg, cases[k].want))
             fail_msg("case %zu: got \"%s\", want \"%s\"", k, msg, cases[k].want);
     }
+}
+
+/* "texture displacement" (pbrt-v4's BumpMap) with the closed form of a
+ * ramp: displacement a u on the plane [-1, 1]^2 (dp/du of length 2) tilts
+ * the normal by atan(a / 2), so a diffuse plane under a distant light from
+ * straight above sends rho / pi L cos(atan(a / 2)) to the camera; a constant
+ * displacement (gradient 0) changes nothing. */
+static void test_bump_ramp(void **state)
+{
+    (void)state;
+    static const char *fmt =
+        "LookAt 0 5 0  0 0 0  0 0 1\n"
+        "Camera \"orthographic\"\n"
+        "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+        "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+        "WorldBegin\n"
+        "LightSource \"distant\" \"point3 from\" [0 1 0] \"point3 to\" [0 0 0] "
+        "\"rgb L\" [3.14159265358979 3.14159265358979 3.14159265358979]\n"
+        "Texture \"d\" \"float\" \"bilerp\" \"float v00\" 0 \"float v10\" %g "
+        "\"float v01\" 0 \"float v11\" %g\n"
+        "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5] %s\n"
+        "Shape \"trianglemesh\" \"point3 P\" [-1 0 -1 1 0 -1 1 0 1 -1 0 1]\n"
+        "  \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n";
+    const double slopes[] = {0.0, 1.0, -3.0};
+    for (size_t i = 0; i < sizeof slopes / sizeof slopes[0]; ++i) {
+        char *text = sfmt(fmt, slopes[i], slopes[i], "\"texture displacement\" \"d\"");
+        render_scene *rs = build(text);
+        pixel_eval e = eval_pixel(rs, 3.5, 4.5, 4);
+        render_scene_destroy(rs);
+        free(text);
+        double want = 0.5 * cos(atan(slopes[i] / 2.0));
+        expect_close(e.L.g, want, 1e-6, 0.0, "bumped plane", 3.5, 4.5);
+    }
+    char *text = sfmt(fmt, 1.0, 1.0, "\"float displacement\" 0.25");
+    render_scene *rs = build(text);
+    pixel_eval e = eval_pixel(rs, 3.5, 4.5, 4);
+    render_scene_destroy(rs);
+    free(text);
+    expect_close(e.L.g, 0.5, 1e-9, 0.0, "constant displacement", 3.5, 4.5);
 }
 
 int main(void)
@@ -421,6 +462,7 @@ int main(void)
         cmocka_unit_test(test_coated_closed_forms),
         cmocka_unit_test(test_mix),
         cmocka_unit_test(test_integrator_and_parameters),
+        cmocka_unit_test(test_bump_ramp),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
