@@ -833,12 +833,11 @@ void geometry_require_uv(geometry *g)
 
 const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scratch)
 {
-    const material *m = material_at(h->shape->material, h->p, wo);
     if (!h->shape->textured)
-        return m;
+        return material_at(h->shape->material, h->p, wo, NULL);
     texture_ctx c = {.u = h->u, .v = h->v, .p = h->p, .dudx = h->dudx, .dudy = h->dudy,
                      .dvdx = h->dvdx, .dvdy = h->dvdy};
-    return material_textured(m, &c, scratch);
+    return material_textured(material_at(h->shape->material, h->p, wo, &c), &c, scratch);
 }
 
 vec3 geometry_shading_normal(const geom_hit *h, const material *m)

@@ -23,16 +23,17 @@ static double hash_unit(vec3 p, vec3 wo)
     return rng_uniform(&r);
 }
 
-const material *material_at(const material *m, vec3 p, vec3 wo)
+const material *material_at(const material *m, vec3 p, vec3 wo, const texture_ctx *c)
 {
     /* Bounded: mixes refer only to materials defined before them. */
     while (m->kind == MATERIAL_MIX) {
-        if (m->amount <= 0.0)
+        double amount = m->amount_tex && c ? texture_eval_float(m->amount_tex, c) : m->amount;
+        if (amount <= 0.0)
             m = m->mix[0];
-        else if (m->amount >= 1.0)
+        else if (amount >= 1.0)
             m = m->mix[1];
         else
-            m = m->amount < hash_unit(p, wo) ? m->mix[0] : m->mix[1];
+            m = amount < hash_unit(p, wo) ? m->mix[0] : m->mix[1];
     }
     return m;
 }
@@ -306,7 +307,7 @@ static void metal_at(const material *m, const texture_ctx *c, double outside, rg
 bool material_has_textures(const material *m)
 {
     if (m->kind == MATERIAL_MIX)
-        return (m->mix[0] && material_has_textures(m->mix[0])) ||
+        return m->amount_tex || (m->mix[0] && material_has_textures(m->mix[0])) ||
                (m->mix[1] && material_has_textures(m->mix[1]));
     return m->textured;
 }
@@ -402,7 +403,8 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
         out->amount = scale; /* the textures' scale */
     } else if (strcmp(type, "mix") == 0) {
         out->kind = MATERIAL_MIX;
-        out->amount = params_float(pl, "amount", 0.5);
+        out->amount_tex = texture_param(pl, ts, "amount", false);
+        out->amount = out->amount_tex ? 0.5 : params_float(pl, "amount", 0.5);
         if (!isfinite(out->amount))
             params_reject(pl, "amount", "\"amount\" must be finite, got %g", out->amount);
         size_t n = 0;

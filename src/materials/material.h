@@ -37,6 +37,7 @@ typedef struct material_s {
     double amount;
     const char *mix_names[2];
     const struct material_s *mix[2];
+    const texture *amount_tex; /* mix: "texture amount" (a float texture), or NULL */
     /* Textured parameters ("texture reflectance" "name"; NULL = the constant
      * above), evaluated per hit by material_textured. rough[0..1]: u and v
      * roughness (a coated material's top interface); rough[2..3]: a coated
@@ -59,8 +60,9 @@ bool material_has_textures(const material *m);
 const material *material_textured(const material *m, const texture_ctx *c, material *scratch);
 
 /* The material a hit at p seen from wo uses: m itself, or for a mix the
- * component its hash picks (mixes of mixes followed). Deterministic. */
-const material *material_at(const material *m, vec3 p, vec3 wo);
+ * component its hash picks (mixes of mixes followed), with the amount its
+ * texture gives at c (NULL: no textures at this hit). Deterministic. */
+const material *material_at(const material *m, vec3 p, vec3 wo, const texture_ctx *c);
 
 /* Points every mix of `materials` (n, the scene's named and anonymous ones,
  * in scene_desc order with their entities) at its components, found by name

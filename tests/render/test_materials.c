@@ -99,8 +99,8 @@ static void test_mix(void **state)
     int second = 0;
     for (int i = 0; i < n; ++i) {
         vec3 p = v3(i * 0.001, 1.0 + (i % 7) * 0.3, -2.0), wo = v3_normalize(v3(1, 2, i % 5));
-        const material *c = material_at(&m, p, wo);
-        assert_true(c == material_at(&m, p, wo));
+        const material *c = material_at(&m, p, wo, NULL);
+        assert_true(c == material_at(&m, p, wo, NULL));
         second += c == &b;
     }
     double share = (double)second / n, sd = sqrt(0.25 * 0.75 / n);
@@ -450,6 +450,54 @@ static void test_bump_ramp(void **state)
     expect_close(e.L.g, 0.5, 1e-9, 0.0, "constant displacement", 3.5, 4.5);
 }
 
+/* A mix's "texture amount": where a float checkerboard is 0 the first
+ * material shows, where it is 1 the second (pbrt-v4's MixMaterial), each
+ * exactly: two diffuse materials under a sky of radiance 1 return their
+ * reflectances. */
+static void test_mix_texture_amount(void **state)
+{
+    (void)state;
+    char *text = sfmt("LookAt 0 5 0  0 0 0  0 0 1\n"
+                      "Camera \"orthographic\"\n"
+                      "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                      "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+                      "WorldBegin\n"
+                      "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                      "Texture \"amt\" \"float\" \"checkerboard\" \"float uscale\" 2 "
+                      "\"float vscale\" 2 \"float tex1\" 0 \"float tex2\" 1\n"
+                      "MakeNamedMaterial \"a\" \"string type\" \"diffuse\" "
+                      "\"rgb reflectance\" [0.2 0.2 0.2]\n"
+                      "MakeNamedMaterial \"b\" \"string type\" \"diffuse\" "
+                      "\"rgb reflectance\" [0.8 0.8 0.8]\n"
+                      "MakeNamedMaterial \"m\" \"string type\" \"mix\" "
+                      "\"string materials\" [\"a\" \"b\"] \"texture amount\" \"amt\"\n"
+                      "NamedMaterial \"m\"\n"
+                      "Shape \"trianglemesh\" \"point3 P\" [-1 0 -1 1 0 -1 1 0 1 -1 0 1]\n"
+                      "  \"integer indices\" [0 1 2 0 2 3] \"point2 uv\" [0 0 1 0 1 1 0 1]\n");
+    render_scene *rs = build(text);
+    free(text);
+    int seen[2] = {0, 0};
+    for (int y = 0; y < 8; ++y)
+        for (int x = 0; x < 8; ++x) {
+            pixel_eval e = eval_pixel(rs, x + 0.5, y + 0.5, 64);
+            assert_true(e.hit);
+            /* (u, v) of the pixel's centre: x and z of the plane over [-1, 1]. */
+            double u = (e.p_world.x + 1.0) / 2.0, v = (e.p_world.z + 1.0) / 2.0;
+            int second = ((int)floor(2.0 * u) + (int)floor(2.0 * v)) & 1;
+            seen[second]++;
+            /* The amount is box-filtered over the camera ray's footprint (a
+             * quarter of a check), as pbrt-v4's checkerboard: next to an
+             * edge (the plane's rim too) it is fractional and the hash
+             * decides. */
+            double ax = fabs(e.p_world.x), az = fabs(e.p_world.z);
+            if (ax < 0.3 || az < 0.3 || ax > 0.7 || az > 0.7)
+                continue;
+            expect_close(e.L.g, second ? 0.8 : 0.2, 0.03, 0.0, "mixed by texture", x, y);
+        }
+    assert_true(seen[0] > 0 && seen[1] > 0);
+    render_scene_destroy(rs);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -463,6 +511,7 @@ int main(void)
         cmocka_unit_test(test_mix),
         cmocka_unit_test(test_integrator_and_parameters),
         cmocka_unit_test(test_bump_ramp),
+        cmocka_unit_test(test_mix_texture_amount),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
