@@ -402,6 +402,12 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
         t->filter = FILTER_TRILINEAR;
     else
         return hz_fail_at(err, params_loc(pl, "filter"), "unknown \"filter\" \"%s\"", filter);
+    /* pbrt-v4 reads "maxanisotropy" whatever the filter and uses it only for
+     * ewa, which haze renders as trilinear: it bounds nothing here. */
+    double aniso = params_float(pl, "maxanisotropy", 8.0);
+    if (!(aniso >= 1.0 && isfinite(aniso)))
+        params_reject(pl, "maxanisotropy", "\"maxanisotropy\" must be finite and >= 1, got %g",
+                      aniso);
     const char *wrap = params_string(pl, "wrap", "repeat");
     static const char *const wraps[] = {"repeat", "black", "clamp", "octahedralsphere"};
     int w = -1;
