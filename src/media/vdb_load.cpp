@@ -7,6 +7,7 @@
 #include "media/vdb_load.h"
 
 #include "media/vdb_bridge.hpp"
+#include "media/vdb_cache.h"
 #include "media/vdb_module.h"
 #include "media/nvdb_check.h"
 
@@ -16,6 +17,8 @@
 #include <nanovdb/util/GridHandle.h>
 #include <nanovdb/util/GridValidator.h>
 #include <nanovdb/util/IO.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -23,7 +26,9 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <cstdio>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -394,6 +399,87 @@ extern "C" int vdb_error_is_missing_grid(const char *message)
     return std::strstr(message, ": no grid named \"") != nullptr;
 }
 
+namespace
+{
+
+// The converted grids of a .vdb file from the cache (vdb_cache.h): true when
+// every request is served (a grid, or the marker of an optional grid the file
+// lacks); otherwise nothing is kept and the caller converts.
+bool cache_load(const vdb_cache &c, const vdb_grid_request *req, size_t n, vdb_buffer *outs,
+                int *present)
+{
+    char entry[sizeof c.dir + 64];
+    bool ok = true;
+    for (size_t i = 0; i < n && ok; ++i) {
+        struct stat st;
+        if (req[i].optional && vdb_cache_entry(&c, req[i].name, req[i].type, true, entry,
+                                               sizeof entry) &&
+            stat(entry, &st) == 0)
+            continue; // present[i] stays 0
+        ok = vdb_cache_entry(&c, req[i].name, req[i].type, false, entry, sizeof entry) &&
+             stat(entry, &st) == 0 && S_ISREG(st.st_mode);
+        char msg[256];
+        ok = ok && guarded(entry, msg, sizeof msg, [&] {
+                 outs[i] = load_nvdb(entry, req[i].name, req[i].type, std::uintmax_t(st.st_size));
+             }) == HZ_OK;
+        present[i] = ok;
+    }
+    if (!ok)
+        for (size_t i = 0; i < n; ++i) {
+            vdb_buffer_free(&outs[i]);
+            present[i] = 0;
+        }
+    return ok;
+}
+
+// Writes `path` whole or not at all: a temporary file in the same directory,
+// renamed over it.
+void cache_write(const std::string &path, const std::function<bool(std::ostream &)> &body)
+{
+    std::string tmp = path + ".tmp-" + std::to_string(long(getpid()));
+    bool ok;
+    {
+        std::ofstream os(tmp, std::ios::out | std::ios::binary | std::ios::trunc);
+        ok = os && body(os);
+        os.close();
+        ok = ok && !os.fail();
+    }
+    if (!ok || std::rename(tmp.c_str(), path.c_str()) != 0)
+        std::remove(tmp.c_str());
+}
+
+// Stores what the reader converted; a failure only costs the next render
+// the conversion again.
+void cache_store(const vdb_cache &c, const vdb_grid_request *req, size_t n,
+                 const vdb_buffer *outs, const int *present)
+{
+    if (!vdb_cache_prepare(&c))
+        return;
+    char entry[sizeof c.dir + 64];
+    for (size_t i = 0; i < n; ++i) {
+        if (!vdb_cache_entry(&c, req[i].name, req[i].type, !present[i], entry, sizeof entry))
+            continue;
+        if (!present[i]) {
+            cache_write(entry, [](std::ostream &) { return true; });
+            continue;
+        }
+        // A handle over the reader's buffer (not owned: no copy), written as
+        // NanoVDB's own file format.
+        nanovdb::GridHandle<nanovdb::HostBuffer> handle(
+            nanovdb::HostBuffer::createFull(outs[i].size, outs[i].data));
+        cache_write(entry, [&](std::ostream &os) {
+            try {
+                nanovdb::io::writeGrid(os, handle, nanovdb::io::Codec::NONE);
+            } catch (...) {
+                return false;
+            }
+            return bool(os);
+        });
+    }
+}
+
+} // namespace
+
 extern "C" hz_status vdb_load_grid_set(const char *path, const vdb_grid_request *req, size_t n,
                                        vdb_buffer *outs, int *present, size_t *failed, char *err,
                                        size_t err_size)
@@ -410,9 +496,17 @@ extern "C" hz_status vdb_load_grid_set(const char *path, const vdb_grid_request 
     hz_status st = guarded(path, err, err_size, [&] { size = check_file(path, &kind); });
     if (st != HZ_OK)
         return st;
-    if (kind == file_kind::openvdb)
-        return vdb_module_load_grid_isolated(path, size, req, n, outs, present, failed, err,
-                                             err_size);
+    if (kind == file_kind::openvdb) {
+        vdb_cache cache;
+        bool cached = vdb_cache_open(&cache, path, size);
+        if (cached && cache_load(cache, req, n, outs, present))
+            return HZ_OK;
+        st = vdb_module_load_grid_isolated(path, size, req, n, outs, present, failed, err,
+                                           err_size);
+        if (st == HZ_OK && cached)
+            cache_store(cache, req, n, outs, present);
+        return st;
+    }
     for (size_t i = 0; i < n; ++i) {
         st = guarded(path, err, err_size,
                      [&] { outs[i] = load_nvdb(path, req[i].name, req[i].type, size); });
