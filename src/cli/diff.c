@@ -434,6 +434,13 @@ static hz_status zt_check_values(const char *file, const char *channel, const fl
 static hz_status zt_prepare(const diff_options *opt, const exr_image *a, const exr_image *b,
                             const diff_stats *st, int nc, ztest *zt, hz_error *err)
 {
+    /* A gbuffer film's Variance is pbrt-v4's, of the samples, not of their
+     * mean: a z-test against it would pass anything. */
+    if (exr_find_channel(b, "RelativeVariance.R") || exr_find_channel(a, "RelativeVariance.R"))
+        return hz_fail(err, "--ztest: %s is a Film \"gbuffer\" image, whose Variance is of the "
+                            "samples, not of their mean; render the reference with Film \"rgb\" "
+                            "\"bool writevariance\" true",
+                       exr_find_channel(b, "RelativeVariance.R") ? opt->b : opt->a);
     bool any_rgb = false;
     static const char *const order[] = {"R", "G", "B"}; /* whatever the file's order */
     for (int o = 0; o < 3; o++) {

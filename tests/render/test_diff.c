@@ -941,6 +941,12 @@ static void test_ztest_errors(void **state)
     write_image(c, W, H, 0, 0, 6, rv, nan_a);
     snprintf(args, sizeof args, "diff '%s' '%s' --ztest", c, c);
     expect_exit2(args, "R is nan at pixel (1, 1)");
+    /* A gbuffer film's Variance is of the samples: refused as a z-test's. */
+    static const char *const gb[] = {"R", "G", "B", "Variance.R", "Variance.G", "Variance.B",
+                                     "RelativeVariance.R"};
+    write_image(c, W, H, 0, 0, 7, gb, offset_value);
+    snprintf(args, sizeof args, "diff '%s' '%s' --ztest", ref_exr, c);
+    expect_exit2(args, "is a Film \"gbuffer\" image");
     /* Options (usage errors add a line pointing at --help). */
     const struct {
         const char *opts, *want;
