@@ -87,6 +87,8 @@ static const char usage_text[] =
     "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
     "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
     "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n"
+    "  --portable-isa          Embree at SSE4.2 on every machine: byte-identical images\n"
+    "                          across x86 machines (default: the CPU's widest ISA)\n"
     "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
     "                          count) and write the complete passes done when the time\n"
     "                          since start runs out (docs/performance.md)\n"
@@ -103,6 +105,7 @@ typedef struct {
     int quiet;
     int stats;                /* --stats */
     int disable_pixel_jitter; /* --disable-pixel-jitter */
+    int portable_isa;         /* --portable-isa */
     film_region region;     /* --pixelbounds / --cropwindow */
     const char *region_opt; /* which of the two, and its text, for messages */
     const char *region_arg;
@@ -218,6 +221,8 @@ static int parse_render_args(int argc, char **argv, cli *c)
             c->stats = 1;
         } else if (!strcmp(a, "--disable-pixel-jitter")) {
             c->disable_pixel_jitter = 1;
+        } else if (!strcmp(a, "--portable-isa")) {
+            c->portable_isa = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
             return usage_error("unknown option '%s'", a);
         } else if (!c->scene) {
@@ -386,7 +391,8 @@ static int run_render(const cli *c, distributed *dist)
                          .spp = c->spp > 0 ? c->spp : adaptive ? ADAPTIVE_MAX_SPP : 0,
                          .output = c->output,
                          .region = c->region,
-                         .statistics = adaptive};
+                         .statistics = adaptive,
+                         .portable_isa = c->portable_isa != 0};
     render_scene *rs = NULL;
     hz_status st = HZ_ERROR;
     if (parsed)

@@ -123,10 +123,13 @@ typedef struct geometry geometry;
  * file:line:column. With `errs` (may be NULL), a shape's own error (its
  * parameters, material, media) is added there and the shape left out
  * (geom_shape.left_out), so one run reports every shape's; what is not a
- * shape's (memory, Embree) still ends the build. */
+ * shape's (memory, Embree) still ends the build. Embree runs with the best
+ * instruction set the CPU has, or, with `portable_isa`, SSE4.2 on every
+ * machine (byte-identical images across x86 machines: other ISAs may find a
+ * different triangle at a shared edge). */
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
-                          hz_errors *errs, geometry **out, hz_error *err);
+                          bool portable_isa, hz_errors *errs, geometry **out, hz_error *err);
 /* The shading normal of hit h under material m (geometry_material_at's):
  * h->ns, or bumped by m's displacement texture as pbrt-v4's BumpMap (the
  * texture at (u, v) and one footprint step (or 0.0005) along u and v, the

@@ -29,6 +29,7 @@ typedef struct {
                                 * (--pixelbounds, --cropwindow) */
     bool statistics;           /* the film keeps (and writes) variance and sample
                                 * counts whatever the Film says (--target-error) */
+    bool portable_isa;         /* Embree at SSE4.2 on every machine (--portable-isa) */
 } render_options;
 
 typedef struct render_scene render_scene;
