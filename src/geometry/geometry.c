@@ -1,4 +1,5 @@
 #include "geometry/geometry.h"
+#include "core/hash.h"
 
 #include "core/box.h"
 #include "core/ray.h"
@@ -48,6 +49,7 @@ struct geometry {
     size_t interface_box_count;
     bool interfaces_anywhere;
     double start_time, end_time; /* TransformTimes */
+    const texture_set *textures; /* for "texture alpha" while building */
     /* Bytes Embree holds (its memory monitor): now and at most. */
     _Atomic long long embree_bytes, embree_peak;
 };
@@ -108,8 +110,83 @@ static bool sphere_part_has(const geom_shape *s, vec3 p)
     return phi <= s->phimax;
 }
 
-/* Nearest root of |o + t d| = r in (tnear, tfar) on the sphere's part, or
- * -1. pbrt-v4's
+/* ---- alpha cut-outs (pbrt-v4's GeometricPrimitive alpha test) ---- */
+
+static void triangle_corner_uv(const geom_shape *s, unsigned prim, double uv[3][2]);
+static void sphere_uv(const geom_shape *s, vec3 po, geom_hit *hit);
+
+/* Whether the hit at distance t of the ray (o, d) where the alpha is `a`
+ * counts: always at 1 and above, never at 0 and below, otherwise when a hash
+ * of the ray and t is at most a. pbrt-v4 hashes the ray, and after ignoring a
+ * hit traces a new ray from it, so each surface along the way decides anew
+ * (the back of a sphere of alpha 1/2 shows through its front half the time):
+ * hashing t as well gives each hit its own decision along the one ray Embree
+ * keeps tracing. */
+static bool alpha_keeps(double a, vec3 o, vec3 d, double t)
+{
+    if (a >= 1.0)
+        return true;
+    if (!(a > 0.0))
+        return false;
+    const float v[7] = {(float)o.x, (float)o.y, (float)o.z, (float)d.x,
+                        (float)d.y, (float)d.z, (float)t};
+    uint64_t h = fnv1a(HZ_FNV_OFFSET, v, sizeof v);
+    h ^= h >> 33;
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 33;
+    return (double)(h >> 11) * 0x1.0p-53 <= a;
+}
+
+/* The shape's alpha at surface parameters (u, v) and point p. */
+static double shape_alpha_at(const geom_shape *s, double u, double v, vec3 p)
+{
+    if (!s->alpha_tex)
+        return s->alpha;
+    texture_ctx c = {.u = u, .v = v, .p = p};
+    return texture_eval_float(s->alpha_tex, &c);
+}
+
+/* Embree's filter for triangles with an alpha: drops the hits the alpha test
+ * ignores, so Embree goes on to the next surface (camera and shadow rays). */
+static void alpha_filter(const struct RTCFilterFunctionNArguments *args)
+{
+    const geom_shape *s = args->geometryUserPtr;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] == 0)
+            continue;
+        /* Embree's SOA layouts (RTCRayN, RTCHitN; C has no accessors): a
+         * field's N values in a row, the fields in struct order. */
+        const float *ray = (const float *)args->ray, *hit = (const float *)args->hit;
+        unsigned n = args->N, prim;
+        memcpy(&prim, &hit[5 * n + i], sizeof prim);
+        double b1 = hit[3 * n + i], b2 = hit[4 * n + i];
+        vec3 o = v3(ray[0 * n + i], ray[1 * n + i], ray[2 * n + i]);
+        vec3 d = v3(ray[4 * n + i], ray[5 * n + i], ray[6 * n + i]);
+        double t = ray[8 * n + i];
+        double uv[3][2];
+        triangle_corner_uv(s, prim, uv);
+        double b0 = 1.0 - b1 - b2;
+        double u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
+        double v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
+        if (!alpha_keeps(shape_alpha_at(s, u, v, v3_add(o, v3_scale(d, t))), o, d, t))
+            args->valid[i] = 0;
+    }
+}
+
+/* Whether sphere s's hit at object-space point po (at t along the ray o, d of
+ * the shape's space) survives its alpha. */
+static bool sphere_alpha_keeps(const geom_shape *s, vec3 po, vec3 o, vec3 d, double t)
+{
+    if (!s->has_alpha)
+        return true;
+    geom_hit h;
+    sphere_uv(s, po, &h);
+    return alpha_keeps(shape_alpha_at(s, h.u, h.v, transform_point(&s->space_from_object, po)),
+                       o, d, t);
+}
+
+/* Nearest root of |o + t d| = r in (tnear, tfar) on the sphere's part that
+ * its alpha keeps, or -1. pbrt-v4's
  * formulation: the discriminant from the closest-approach vector avoids the
  * cancellation of b^2 - 4ac for distant origins. */
 static double sphere_hit_t(const geom_shape *s, vec3 o_space, vec3 d_space, double tnear,
@@ -134,10 +211,14 @@ static double sphere_hit_t(const geom_shape *s, vec3 o_space, vec3 d_space, doub
         t0 = t1;
         t1 = t;
     }
-    if (t0 > tnear && t0 < tfar && (!s->partial || sphere_part_has(s, v3_add(o, v3_scale(d, t0)))))
-        return t0;
-    if (t1 > tnear && t1 < tfar && (!s->partial || sphere_part_has(s, v3_add(o, v3_scale(d, t1)))))
-        return t1;
+    const double roots[2] = {t0, t1};
+    for (int k = 0; k < 2; ++k) {
+        double t = roots[k];
+        vec3 po = v3_add(o, v3_scale(d, t));
+        if (t > tnear && t < tfar && (!s->partial || sphere_part_has(s, po)) &&
+            sphere_alpha_keeps(s, po, o_space, d_space, t))
+            return t;
+    }
     return -1.0;
 }
 
@@ -201,7 +282,7 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
                              const scene_desc *sd, shape_entity *se, transform space_from_object,
                              const material *materials,
                              size_t material_count, const material *default_material,
-                             geom_shape *out, hz_error *err)
+                             const texture_set *textures, geom_shape *out, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     out->area_light = -1;
@@ -225,6 +306,20 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
     out->textured = material_has_textures(out->material);
     out->hit_uv = out->textured;
     out->unit_area = g.unit_area;
+    out->alpha = g.alpha;
+    if (g.alpha_texture) {
+        out->alpha_tex = textures ? texture_set_find(textures, g.alpha_texture, false) : NULL;
+        if (!out->alpha_tex) {
+            hz_status st = hz_fail_at(err, params_loc(&se->entity.params, "alpha"),
+                                      "\"texture alpha\": no float texture named \"%s\" "
+                                      "defined before it",
+                                      g.alpha_texture);
+            shape_geometry_free(&g);
+            return st;
+        }
+    }
+    out->has_alpha = out->alpha_tex || out->alpha < 1.0;
+    bool cutout = out->has_alpha;
 
     RTCGeometry geom = NULL;
     if (g.kind == GEOMETRY_SPHERE) {
@@ -301,6 +396,12 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
     shape_geometry_free(&g);
     if (!geom)
         return HZ_OK; /* an empty mesh: nothing to intersect */
+    if (cutout && out->kind == GEOMETRY_TRIANGLES) {
+        rtcSetGeometryUserData(geom, out);
+        rtcSetGeometryIntersectFilterFunction(geom, alpha_filter);
+        if (!interface)
+            rtcSetGeometryOccludedFilterFunction(geom, alpha_filter);
+    }
     if (interface)
         rtcSetGeometryOccludedFilterFunction(geom, reject_occlusion);
     rtcCommitGeometry(geom);
@@ -387,8 +488,8 @@ static hz_status build_objects(geometry *g, scene_desc *sd, const material *mate
             transform space_from_object =
                 transform_compose(transform_identity(), se->world_from_object);
             if (build_shape(g->device, pr->scene, (unsigned)i, sd, se, space_from_object,
-                            materials, material_count, default_material, &pr->shapes[i],
-                            err) != HZ_OK &&
+                            materials, material_count, default_material, g->textures,
+                            &pr->shapes[i], err) != HZ_OK &&
                 shape_failed(&pr->shapes[i], errs, err) != HZ_OK)
                 return HZ_ERROR;
         }
@@ -502,7 +603,8 @@ static hz_status build_moving_shape(geometry *g, scene_desc *sd, size_t i,
     in->shapes = &g->shapes[i];
     shape_entity *se = &sd->shapes[i];
     if (build_shape(g->device, in->own_scene, 0, sd, se, transform_identity(), materials,
-                    material_count, default_material, &g->shapes[i], err) != HZ_OK)
+                    material_count, default_material, g->textures, &g->shapes[i],
+                    err) != HZ_OK)
         return HZ_ERROR;
     rtcCommitScene(in->own_scene);
     if (check_device(g->device, err) != HZ_OK ||
@@ -539,7 +641,8 @@ static hz_status build_shapes(geometry *g, scene_desc *sd, transform render_from
             }
         }
         if (build_shape(g->device, g->scene, (unsigned)i, sd, se, render_from_object, materials,
-                        material_count, default_material, &g->shapes[i], err) != HZ_OK &&
+                        material_count, default_material, g->textures, &g->shapes[i],
+                        err) != HZ_OK &&
             shape_failed(&g->shapes[i], errs, err) != HZ_OK)
             return HZ_ERROR;
     }
@@ -667,7 +770,8 @@ bool geometry_may_cross_interface(const geometry *g, vec3 o, vec3 d, double tmax
 
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
-                          bool portable_isa, hz_errors *errs, geometry **out, hz_error *err)
+                          const texture_set *textures, bool portable_isa, hz_errors *errs,
+                          geometry **out, hz_error *err)
 {
     *out = NULL;
     geometry *g = calloc(1, sizeof *g);
@@ -675,6 +779,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
         return hz_fail(err, "out of memory");
     g->start_time = sd->transform_start_time;
     g->end_time = sd->transform_end_time;
+    g->textures = textures;
     g->device = new_device(portable_isa);
     if (!g->device) {
         free(g);
@@ -911,11 +1016,13 @@ vec2 geometry_sphere_uv(const geom_shape *s, vec3 po)
 
 /* pbrt-v4's triangle parameters: the mesh's uv (or its defaults, a
  * bilinear patch's for a quad's halves) at barycentrics (b1, b2). */
-static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2, vec3 p0,
-                        vec3 p1, vec3 p2, geom_hit *hit)
+/* The (u, v) of triangle prim's three corners: the mesh's "uv", or pbrt-v4's
+ * defaults (a bilinear patch's for a quad's halves). */
+static void triangle_corner_uv(const geom_shape *s, unsigned prim, double uv[3][2])
 {
     const uint32_t *tri = &s->indices[3 * prim];
-    double uv[3][2] = {{0, 0}, {1, 0}, {1, 1}};
+    static const double defaults[3][2] = {{0, 0}, {1, 0}, {1, 1}};
+    memcpy(uv, defaults, sizeof defaults);
     if (s->uv) {
         for (int i = 0; i < 3; ++i) {
             uv[i][0] = s->uv[2 * tri[i]];
@@ -925,6 +1032,13 @@ static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2
         /* p00 p11 p01 */
         uv[1][0] = 1, uv[1][1] = 1, uv[2][0] = 0, uv[2][1] = 1;
     }
+}
+
+static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2, vec3 p0,
+                        vec3 p1, vec3 p2, geom_hit *hit)
+{
+    double uv[3][2];
+    triangle_corner_uv(s, prim, uv);
     double b0 = 1.0 - b1 - b2;
     hit->dudx = hit->dudy = hit->dvdx = hit->dvdy = 0.0;
     hit->u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];

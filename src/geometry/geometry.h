@@ -75,6 +75,14 @@ typedef struct {
     double zmin, zmax, phimax;
     bool partial;
     double unit_area;            /* shape_geometry's: what area lights' "power" divides */
+    /* pbrt-v4's alpha cut-out: hits where the alpha (the texture at the hit's
+     * uv, or the constant) is 0 are ignored, where it is in (0, 1) kept with
+     * that probability by a hash of the ray (the same for camera and shadow
+     * rays); a shape with alpha 1 and no texture has no filter at all
+     * (has_alpha false: the zero value is an opaque shape). */
+    bool has_alpha;
+    double alpha;
+    const texture *alpha_tex;
     transform space_from_object; /* render (or prototype) space from object space */
     /* A moving top-level shape: everything above is in object space (space =
      * object space, space_from_object the identity) and render_from_object at
@@ -123,13 +131,15 @@ typedef struct geometry geometry;
  * file:line:column. With `errs` (may be NULL), a shape's own error (its
  * parameters, material, media) is added there and the shape left out
  * (geom_shape.left_out), so one run reports every shape's; what is not a
- * shape's (memory, Embree) still ends the build. Embree runs with the best
+ * shape's (memory, Embree) still ends the build. `textures` (may be NULL:
+ * none) resolves "texture alpha". Embree runs with the best
  * instruction set the CPU has, or, with `portable_isa`, SSE4.2 on every
  * machine (byte-identical images across x86 machines: other ISAs may find a
  * different triangle at a shared edge). */
 hz_status geometry_create(scene_desc *sd, transform render_from_world, const material *materials,
                           size_t material_count, const material *default_material,
-                          bool portable_isa, hz_errors *errs, geometry **out, hz_error *err);
+                          const texture_set *textures, bool portable_isa, hz_errors *errs,
+                          geometry **out, hz_error *err);
 /* The shading normal of hit h under material m (geometry_material_at's):
  * h->ns, or bumped by m's displacement texture as pbrt-v4's BumpMap (the
  * texture at (u, v) and one footprint step (or 0.0005) along u and v, the

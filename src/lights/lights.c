@@ -368,6 +368,10 @@ static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, ligh
         return hz_fail_at(err, e->loc,
                           "AreaLightSource \"%s\" is not supported (supported: \"diffuse\")",
                           type);
+    if (shape->has_alpha)
+        return hz_fail_at(err, e->loc,
+                          "AreaLightSource on a shape with \"alpha\" is not supported (pbrt-v4 "
+                          "masks such an emitter's light by its alpha; haze does not yet)");
     const char *filename = params_string(pl, "filename", NULL);
     if (filename && params_has(pl, "L"))
         return hz_fail_at(err, params_loc(pl, "L"),

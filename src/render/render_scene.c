@@ -324,8 +324,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     transform render_from_world =
         have_camera ? transform_inverse(rs->cam.world_from_render) : transform_identity();
     CHECK(geometry_create(sd, render_from_world, rs->materials, rs->material_count,
-                          &rs->default_material, opt && opt->portable_isa, errs, &rs->geom,
-                          err));
+                          &rs->default_material, rs->textures, opt && opt->portable_isa, errs,
+                          &rs->geom, err));
     if (rs->geom && rs->film && film_wants_surface(rs->film))
         geometry_require_uv(rs->geom);
     if (build_lights(rs, sd, render_from_world, warn, errs, err) != HZ_OK ||

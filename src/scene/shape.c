@@ -255,6 +255,13 @@ hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error 
 {
     memset(out, 0, sizeof *out);
     const char *type = se->entity.type;
+    param_list *pl = &se->entity.params;
+    /* Every shape takes "alpha" (read before the shape's own parameters are
+     * finished). Values outside [0, 1] act as pbrt-v4's: 0 or 1. */
+    out->alpha_texture = params_texture(pl, "alpha");
+    out->alpha = out->alpha_texture ? 1.0 : params_float(pl, "alpha", 1.0);
+    if (!isfinite(out->alpha))
+        params_reject(pl, "alpha", "\"alpha\" must be finite, got %g", out->alpha);
     hz_status st;
     if (strcmp(type, "trianglemesh") == 0)
         st = create_mesh(se, 3, out, err);

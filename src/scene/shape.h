@@ -32,6 +32,10 @@ typedef struct {
      * the transform); 0 for meshes, each of whose triangles (bilinearmesh:
      * quads) is an emitter of its own. What an area light's "power" divides. */
     double unit_area;
+    /* pbrt-v4's "alpha": a constant (1: opaque, the default) or the name of a
+     * float texture ("texture alpha", resolved by geometry_create). */
+    double alpha;
+    const char *alpha_texture;
 } shape_geometry;
 
 hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error *err);

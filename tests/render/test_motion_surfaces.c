@@ -564,7 +564,7 @@ static void test_hits_follow_the_motion(void **state)
     assert_int_equal(scene_parse_string(shear_scene, "shear.pbrt", &sd, &err), HZ_OK);
     material def = material_default();
     geometry *g = NULL;
-    if (geometry_create(&sd, transform_identity(), NULL, 0, &def, false, NULL, &g, &err) != HZ_OK) {
+    if (geometry_create(&sd, transform_identity(), NULL, 0, &def, NULL, false, NULL, &g, &err) != HZ_OK) {
         print_error("%s\n", err.message);
         fail();
     }
