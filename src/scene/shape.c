@@ -108,6 +108,14 @@ static hz_status create_mesh(shape_entity *se, int per_face, shape_geometry *g, 
 static hz_status create_plymesh(shape_entity *se, shape_geometry *g, hz_error *err)
 {
     param_list *pl = &se->entity.params;
+    /* pbrt-v4 splits the mesh's edges down to "edgelength" and moves the
+     * vertices along their normals by the texture: not done here. */
+    if (params_has(pl, "displacement"))
+        return hz_fail_at(err, params_loc(pl, "displacement"),
+                          "plymesh \"displacement\" is not supported (pbrt-v4 subdivides the "
+                          "mesh to \"edgelength\" and displaces its vertices; haze renders the "
+                          "mesh as given): remove it, or bump-map with the material's "
+                          "\"displacement\"");
     const char *name = params_string(pl, "filename", NULL);
     if (finish(se, err) != HZ_OK)
         return HZ_ERROR;

@@ -161,7 +161,14 @@ static void test_plymesh_relative_path(void **state)
                            "displacement\" 1",
                            scene, &g, &err),
                      HZ_ERROR);
-    assert_non_null(strstr(err.message, "unused parameter \"float displacement\""));
+    assert_non_null(strstr(err.message, "plymesh \"displacement\" is not supported"));
+    /* Every shape takes "alpha": read, never left unused. */
+    if (build("Shape \"plymesh\" \"string filename\" \"shape_tri.ply\" \"float alpha\" 0.5",
+              scene, &g, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_float_equal(g.alpha, 0.5, 0.0);
+    assert_null(g.alpha_texture);
+    shape_geometry_free(&g);
 }
 
 /* pbrt-v4's cylinder (radius, zmin, zmax, phimax) as 256 segments per turn:
