@@ -266,10 +266,10 @@ hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error 
     param_list *pl = &se->entity.params;
     /* Every shape takes "alpha" (read before the shape's own parameters are
      * finished). Values outside [0, 1] act as pbrt-v4's: 0 or 1. */
-    out->alpha_texture = params_texture(pl, "alpha");
-    out->alpha = out->alpha_texture ? 1.0 : params_float(pl, "alpha", 1.0);
-    if (!isfinite(out->alpha))
-        params_reject(pl, "alpha", "\"alpha\" must be finite, got %g", out->alpha);
+    const char *alpha_texture = params_texture(pl, "alpha");
+    double alpha = alpha_texture ? 1.0 : params_float(pl, "alpha", 1.0);
+    if (!isfinite(alpha))
+        params_reject(pl, "alpha", "\"alpha\" must be finite, got %g", alpha);
     hz_status st;
     if (strcmp(type, "trianglemesh") == 0)
         st = create_mesh(se, 3, out, err);
@@ -288,7 +288,11 @@ hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error 
                         "unknown shape \"%.60s\"; supported: trianglemesh plymesh sphere disk "
                         "cylinder bilinearmesh",
                         type);
-    if (st != HZ_OK)
+    if (st != HZ_OK) {
         shape_geometry_free(out);
-    return st;
+        return st;
+    }
+    out->alpha = alpha; /* the creators fill the rest of *out */
+    out->alpha_texture = alpha_texture;
+    return HZ_OK;
 }
