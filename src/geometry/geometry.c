@@ -917,6 +917,8 @@ void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 r
     vec3 dpdx, dpdy;
     if (!h->shape->textured || !geometry_hit_dpdxy(h, rx_o, rx_d, ry_o, ry_d, &dpdx, &dpdy))
         return;
+    h->dpdx = dpdx;
+    h->dpdy = dpdy;
     double a00 = v3_dot(h->dpdu, h->dpdu), a01 = v3_dot(h->dpdu, h->dpdv);
     double a11 = v3_dot(h->dpdv, h->dpdv);
     double inv = 1.0 / diff_products(a00, a11, a01, a01);
@@ -943,7 +945,8 @@ const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scrat
     if (!h->shape->textured)
         return material_at(h->shape->material, h->p, wo, NULL);
     texture_ctx c = {.u = h->u, .v = h->v, .p = h->p, .dudx = h->dudx, .dudy = h->dudy,
-                     .dvdx = h->dvdx, .dvdy = h->dvdy};
+                     .dvdx = h->dvdx, .dvdy = h->dvdy, .dpdx = h->dpdx, .dpdy = h->dpdy,
+                     .n = h->ng};
     return material_textured(material_at(h->shape->material, h->p, wo, &c), &c, scratch);
 }
 
@@ -964,7 +967,8 @@ vec3 geometry_shading_normal(const geom_hit *h, const material *m)
         }
     }
     texture_ctx c = {.u = h->u, .v = h->v, .p = h->p, .dudx = h->dudx, .dudy = h->dudy,
-                     .dvdx = h->dvdx, .dvdy = h->dvdy};
+                     .dvdx = h->dvdx, .dvdy = h->dvdy, .dpdx = h->dpdx, .dpdy = h->dpdy,
+                     .n = h->ng};
     double du = 0.5 * (fabs(h->dudx) + fabs(h->dudy));
     double dv = 0.5 * (fabs(h->dvdx) + fabs(h->dvdy));
     du = du == 0.0 ? 0.0005 : du;
@@ -996,6 +1000,7 @@ static void sphere_uv(const geom_shape *s, vec3 po, geom_hit *hit)
     double th_max = acos(hz_clamp(s->zmax / r, -1.0, 1.0));
     double theta = acos(hz_clamp(po.z / r, -1.0, 1.0));
     hit->dudx = hit->dudy = hit->dvdx = hit->dvdy = 0.0;
+    hit->dpdx = hit->dpdy = v3(0.0, 0.0, 0.0);
     hit->u = phi / s->phimax;
     hit->v = (theta - th_min) / (th_max - th_min);
     double zr = sqrt(po.x * po.x + po.y * po.y);
@@ -1041,6 +1046,7 @@ static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2
     triangle_corner_uv(s, prim, uv);
     double b0 = 1.0 - b1 - b2;
     hit->dudx = hit->dudy = hit->dvdx = hit->dvdy = 0.0;
+    hit->dpdx = hit->dpdy = v3(0.0, 0.0, 0.0);
     hit->u = b0 * uv[0][0] + b1 * uv[1][0] + b2 * uv[2][0];
     hit->v = b0 * uv[0][1] + b1 * uv[1][1] + b2 * uv[2][1];
     double d02[2] = {uv[0][0] - uv[2][0], uv[0][1] - uv[2][1]};

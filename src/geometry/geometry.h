@@ -106,6 +106,7 @@ typedef struct {
     /* Screen-space footprint of (u, v): 0 unless geometry_hit_footprint set
      * it (camera rays with differentials at textured shapes). */
     double dudx, dudy, dvdx, dvdy;
+    vec3 dpdx, dpdy; /* the point's own footprint (0 unless geometry_hit_footprint set it) */
 } geom_hit;
 
 /* pbrt-v4's footprint of a textured hit: the differential rays meet the

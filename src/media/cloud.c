@@ -1,6 +1,6 @@
 #include "media/cloud.h"
 
-#include "media/noise.h"
+#include "core/noise.h"
 
 static float clampf(float v, float lo, float hi) { return v < lo ? lo : v > hi ? hi : v; }
 

@@ -74,11 +74,11 @@ static hz_status collect(hz_errors *errs, const hz_error *err)
     return HZ_OK;
 }
 
-static hz_status build_materials(render_scene *rs, scene_desc *sd, hz_errors *errs,
-                                 hz_error *err)
+static hz_status build_materials(render_scene *rs, scene_desc *sd, transform render_from_world,
+                                 hz_errors *errs, hz_error *err)
 {
     rs->default_material = material_default();
-    if (texture_set_create(sd, errs, &rs->textures, err) != HZ_OK)
+    if (texture_set_create(sd, render_from_world, errs, &rs->textures, err) != HZ_OK)
         return HZ_ERROR;
     rs->texture_count = sd->texture_count;
     rs->materials = calloc(sd->material_count ? sd->material_count : 1, sizeof *rs->materials);
@@ -318,11 +318,11 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (ip.kind == INTEGRATOR_VOLPATH)
         ip.volpath.force_diffuse = rs->options.force_diffuse;
     CHECK(check_motion(sd, warn, err));
-    if (build_materials(rs, sd, errs, err) != HZ_OK)
-        return HZ_ERROR;
     /* Render space: the world translated so the camera sits at the origin. */
     transform render_from_world =
         have_camera ? transform_inverse(rs->cam.world_from_render) : transform_identity();
+    if (build_materials(rs, sd, render_from_world, errs, err) != HZ_OK)
+        return HZ_ERROR;
     CHECK(geometry_create(sd, render_from_world, rs->materials, rs->material_count,
                           &rs->default_material, rs->textures, opt && opt->portable_isa, errs,
                           &rs->geom, err));

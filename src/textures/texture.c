@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/noise.h"
 #include "core/path.h"
 #include "film/exr.h"
 
@@ -17,6 +18,12 @@ typedef enum {
     TEX_CHECKERBOARD, /* in[0] on even squares, in[1] on odd ones */
     TEX_BILERP,       /* in[0..3] = v00 v01 v10 v11 */
     TEX_IMAGEMAP,
+    TEX_DIRECTIONMIX, /* |n . dir| in[0] + (1 - |n . dir|) in[1] */
+    TEX_DOTS,         /* in[0] in pbrt-v4's polka dots, in[1] between them */
+    TEX_FBM,          /* the 3D textures: on tex_from_render p */
+    TEX_WRINKLED,
+    TEX_WINDY,
+    TEX_MARBLE,
 } texture_kind;
 
 typedef enum { WRAP_REPEAT, WRAP_BLACK, WRAP_CLAMP, WRAP_OCTAHEDRAL } tex_wrap;
@@ -47,10 +54,16 @@ struct texture {
     tex_wrap wrap;
     double scale;
     bool invert;
+    vec3 dir;                  /* directionmix, render space, unit */
+    transform tex_from_render; /* the 3D textures' space */
+    int octaves;               /* fbm, wrinkled, marble */
+    double omega;              /* their "roughness" */
+    double variation;          /* marble ("scale" is its frequency) */
 };
 
 struct texture_set {
     const texture_entity *entities; /* the scene's, for names while building */
+    transform render_from_world;    /* for the textures' own spaces */
     texture *items;
     size_t count;
 };
@@ -203,6 +216,74 @@ static hz_status build_pyramid(texture *t, hz_error *err)
     return HZ_OK;
 }
 
+/* pbrt-v4's InsidePolkaDot: one dot of radius 0.35 per unit cell around
+ * integer st, in the cells where noise says so, shifted by noise. */
+static bool inside_polka_dot(double s, double t)
+{
+    float sc = floorf((float)s + 0.5f), tc = floorf((float)t + 0.5f);
+    if (!(noise3(sc + 0.5f, tc + 0.5f, 0.5f) > 0.0f))
+        return false;
+    const float radius = 0.35f, max_shift = 0.5f - radius;
+    float s0 = sc + max_shift * noise3(sc + 1.5f, tc + 2.8f, 0.5f);
+    float t0 = tc + max_shift * noise3(sc + 4.5f, tc + 9.8f, 0.5f);
+    float ds = (float)s - s0, dt = (float)t - t0;
+    return ds * ds + dt * dt < radius * radius;
+}
+
+/* pbrt-v4's marble: a sine of the point's height, perturbed by fbm, through
+ * a cubic Bezier spline of nine colours, times 1.5. */
+static rgb marble(const texture *t, vec3 p, vec3 dpdx, vec3 dpdy)
+{
+    static const float colors[9][3] = {{.58f, .58f, .6f}, {.58f, .58f, .6f}, {.58f, .58f, .6f},
+                                       {.5f, .5f, .5f},   {.6f, .59f, .58f}, {.58f, .58f, .6f},
+                                       {.58f, .58f, .6f}, {.2f, .2f, .33f},  {.58f, .58f, .6f}};
+    float k = (float)t->scale;
+    vec3 q = v3((float)p.x * k, (float)p.y * k, (float)p.z * k);
+    float m = (float)q.y + (float)t->variation * noise_fbm(q, v3_scale(dpdx, k),
+                                                           v3_scale(dpdy, k),
+                                                           (float)t->omega, t->octaves);
+    float u = 0.5f + 0.5f * sinf(m);
+    const int segments = 9 - 3;
+    int first = (int)floorf(u * segments);
+    first = first < segments - 1 ? first : segments - 1;
+    u = u * segments - (float)first;
+    float out[3];
+    for (int c = 0; c < 3; ++c) { /* de Casteljau on colors[first .. first + 3] */
+        float b[4];
+        for (int i = 0; i < 4; ++i)
+            b[i] = colors[first + i][c];
+        for (int r = 3; r > 0; --r)
+            for (int i = 0; i < r; ++i)
+                b[i] = (1.0f - u) * b[i] + u * b[i + 1];
+        out[c] = 1.5f * b[0];
+    }
+    return rgb_make(out[0], out[1], out[2]);
+}
+
+/* The 3D textures' point and footprint in their own space. */
+static float eval_3d(const texture *t, const texture_ctx *c, rgb *spectral)
+{
+    vec3 p = transform_point(&t->tex_from_render, c->p);
+    vec3 dx = transform_vector(&t->tex_from_render, c->dpdx);
+    vec3 dy = transform_vector(&t->tex_from_render, c->dpdy);
+    switch (t->kind) {
+    case TEX_FBM:
+        return noise_fbm(p, dx, dy, (float)t->omega, t->octaves);
+    case TEX_WRINKLED:
+        return noise_turbulence(p, dx, dy, (float)t->omega, t->octaves);
+    case TEX_WINDY: {
+        float wind = noise_fbm(v3_scale(p, 0.1f), v3_scale(dx, 0.1f), v3_scale(dy, 0.1f), 0.5f, 3);
+        float wave = noise_fbm(p, dx, dy, 0.5f, 6);
+        return fabsf(wind) * wave;
+    }
+    case TEX_MARBLE:
+        *spectral = marble(t, p, dx, dy);
+        return 0.0f;
+    default:
+        return 0.0f;
+    }
+}
+
 rgb texture_eval(const texture *t, const texture_ctx *c)
 {
     double s = t->su * c->u + t->du, tt = t->sv * c->v + t->dv;
@@ -234,6 +315,22 @@ rgb texture_eval(const texture *t, const texture_ctx *c)
         if (t->invert)
             v = rgb_sub(rgb_grey(1.0), v);
         return rgb_make(fmax(v.r, 0.0), fmax(v.g, 0.0), fmax(v.b, 0.0));
+    }
+    case TEX_DIRECTIONMIX: {
+        double amt = fabs(v3_dot(c->n, t->dir));
+        rgb a = amt != 0.0 ? eval_input(&t->in[0], c) : rgb_grey(0.0);
+        rgb b = amt != 1.0 ? eval_input(&t->in[1], c) : rgb_grey(0.0);
+        return rgb_add(rgb_scale(a, amt), rgb_scale(b, 1.0 - amt));
+    }
+    case TEX_DOTS:
+        return eval_input(&t->in[inside_polka_dot(s, tt) ? 0 : 1], c);
+    case TEX_FBM:
+    case TEX_WRINKLED:
+    case TEX_WINDY:
+    case TEX_MARBLE: {
+        rgb spectral = rgb_grey(0.0);
+        float v = eval_3d(t, c, &spectral);
+        return t->kind == TEX_MARBLE ? spectral : rgb_grey(v);
     }
     }
     return rgb_grey(0.0);
@@ -488,10 +585,69 @@ static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, h
         if (read_mapping(pl, t, err) != HZ_OK)
             return HZ_ERROR;
         st = read_imagemap(pl, te->entity.loc, t, err);
+    } else if (strcmp(cls, "directionmix") == 0) {
+        t->kind = TEX_DIRECTIONMIX;
+        transform render_from_texture = transform_compose(s->render_from_world,
+                                                          te->world_from_texture);
+        vec3 d = transform_vector(&render_from_texture, params_vector3(pl, "dir", v3(0, 1, 0)));
+        if (!(v3_length(d) > 0.0) || !v3_is_finite(d))
+            return hz_fail_at(err, params_loc(pl, "dir"),
+                              "directionmix \"dir\" must be a finite, non-zero vector");
+        t->dir = v3_normalize(d);
+        if (read_input(s, pl, "tex1", sp, zero, &t->in[0], err) != HZ_OK ||
+            read_input(s, pl, "tex2", sp, one, &t->in[1], err) != HZ_OK)
+            return HZ_ERROR;
+    } else if (strcmp(cls, "dots") == 0) {
+        /* As pbrt-v4 renders it: its DotsTexture constructors take (outside,
+         * inside) and Create passes ("inside", "outside"), so "inside" shows
+         * between the dots and "outside" in them. Scenes were made by
+         * looking at that image. */
+        t->kind = TEX_DOTS;
+        if (read_mapping(pl, t, err) != HZ_OK ||
+            read_input(s, pl, "outside", sp, zero, &t->in[0], err) != HZ_OK ||
+            read_input(s, pl, "inside", sp, one, &t->in[1], err) != HZ_OK)
+            return HZ_ERROR;
+    } else if (strcmp(cls, "fbm") == 0 || strcmp(cls, "wrinkled") == 0 ||
+               strcmp(cls, "windy") == 0 || strcmp(cls, "marble") == 0) {
+        bool is_marble = strcmp(cls, "marble") == 0;
+        if (sp != is_marble)
+            return hz_fail_at(err, te->entity.loc,
+                              "Texture class \"%s\" makes %s textures only (as in pbrt-v4)", cls,
+                              is_marble ? "spectrum" : "float");
+        t->kind = is_marble                   ? TEX_MARBLE
+                  : strcmp(cls, "fbm") == 0   ? TEX_FBM
+                  : strcmp(cls, "windy") == 0 ? TEX_WINDY
+                                              : TEX_WRINKLED;
+        t->tex_from_render = transform_inverse(
+            transform_compose(s->render_from_world, te->world_from_texture));
+        bool finite = true;
+        for (int r = 0; r < 4; ++r)
+            for (int k = 0; k < 4; ++k)
+                finite &= isfinite(t->tex_from_render.m.m[r][k]) != 0;
+        if (!finite)
+            return hz_fail_at(err, te->entity.loc,
+                              "Texture \"%s\": its transform is not invertible", te->name);
+        if (t->kind != TEX_WINDY) { /* windy's octaves and roughness are fixed */
+            t->octaves = params_int(pl, "octaves", 8);
+            t->omega = params_float(pl, "roughness", 0.5);
+            if (t->octaves < 0 || t->octaves > 64)
+                params_reject(pl, "octaves", "\"octaves\" must be in [0, 64], got %d",
+                              t->octaves);
+            if (!isfinite(t->omega))
+                params_reject(pl, "roughness", "\"roughness\" must be finite");
+        }
+        if (is_marble) {
+            t->scale = params_float(pl, "scale", 1.0);
+            t->variation = params_float(pl, "variation", 0.2);
+            if (!isfinite(t->scale) || !isfinite(t->variation))
+                params_reject(pl, "scale", "marble \"scale\" and \"variation\" must be finite");
+        }
     } else {
         return hz_fail_at(err, te->entity.loc,
                           "Texture class \"%s\" is not supported (supported: \"constant\", "
-                          "\"scale\", \"mix\", \"checkerboard\", \"bilerp\", \"imagemap\")",
+                          "\"scale\", \"mix\", \"directionmix\", \"checkerboard\", "
+                          "\"bilerp\", \"dots\", \"imagemap\", \"fbm\", \"wrinkled\", "
+                          "\"windy\", \"marble\"; \"ptex\" is refused)",
                           cls);
     }
     if (st != HZ_OK)
@@ -508,13 +664,15 @@ static void free_images(texture *t)
         free(t->level[i].rgb);
 }
 
-hz_status texture_set_create(scene_desc *sd, hz_errors *errs, texture_set **out, hz_error *err)
+hz_status texture_set_create(scene_desc *sd, transform render_from_world, hz_errors *errs,
+                             texture_set **out, hz_error *err)
 {
     *out = NULL;
     texture_set *s = calloc(1, sizeof *s);
     if (!s)
         return hz_fail(err, "out of memory");
     s->entities = sd->textures;
+    s->render_from_world = render_from_world;
     s->items = calloc(sd->texture_count ? sd->texture_count : 1, sizeof *s->items);
     if (!s->items) {
         free(s);

@@ -9,7 +9,7 @@
 #include <cmocka.h>
 
 #include "media/cloud.h"
-#include "media/noise.h"
+#include "core/noise.h"
 
 /* Gradient noise is 0 at every lattice point, within [-1, 1], periodic with
  * period 256, continuous, and not constant. */

@@ -11,6 +11,7 @@
 #include "assert_util.h"
 #include "film/exr.h"
 #include "film/png.h"
+#include "core/noise.h"
 #include "textures/texture.h"
 
 typedef struct {
@@ -30,7 +31,7 @@ static hz_status build(const char *textures, built *b, hz_error *err)
         return HZ_ERROR;
     hz_errors errs;
     memset(&errs, 0, sizeof errs);
-    hz_status st = texture_set_create(&b->sd, &errs, &b->set, err);
+    hz_status st = texture_set_create(&b->sd, transform_identity(), &errs, &b->set, err);
     if (st == HZ_OK && errs.count > 0)
         return hz_errors_finish(&errs, NULL, 0, err);
     free(errs.items);
@@ -249,6 +250,94 @@ static void test_errors(void **state)
                  "spiral");
 }
 
+/* The 3D textures at p (texture space = render space here) with footprint
+ * (dpdx, dpdy). */
+static double at3(const built *b, const char *name, vec3 p, vec3 dpdx, vec3 dpdy)
+{
+    const texture *t = texture_set_find(b->set, name, false);
+    if (!t)
+        fail_msg("no texture \"%s\"", name);
+    texture_ctx c = {.p = p, .dpdx = dpdx, .dpdy = dpdy};
+    return texture_eval_float(t, &c);
+}
+
+/* pbrt-v4's FBm and Turbulence, octave by octave from the noise itself:
+ * with no footprint every octave counts; a footprint of 2^-5 per pixel
+ * leaves -1 - log2(2^-10) / 2 = 4 octaves exactly (the partial one faded to
+ * nothing), and turbulence counts each dropped octave as 0.2 (and, as
+ * pbrt-v4's loop does, the partial one twice). */
+static void test_fbm_and_turbulence(void **state)
+{
+    (void)state;
+    built b;
+    hz_error err;
+    assert_int_equal(build("Texture \"f\" \"float\" \"fbm\" \"integer octaves\" 6 "
+                           "\"float roughness\" 0.6\n"
+                           "Texture \"w\" \"float\" \"wrinkled\" \"integer octaves\" 6 "
+                           "\"float roughness\" 0.6\n",
+                           &b, &err),
+                     HZ_OK);
+    vec3 p = v3(0.37, 1.21, -2.53), zero = v3(0, 0, 0), step = v3(0.03125, 0, 0);
+    double fbm6 = 0.0, fbm4 = 0.0, turb4 = 0.0, lambda = 1.0, o = 1.0;
+    for (int i = 0; i < 6; ++i) {
+        float n = noise3((float)(lambda * p.x), (float)(lambda * p.y), (float)(lambda * p.z));
+        fbm6 += o * n;
+        if (i < 4) {
+            fbm4 += o * n;
+            turb4 += o * fabs(n);
+        } else {
+            turb4 += o * 0.2; /* the dropped octaves 4 and 5 */
+        }
+        if (i == 4)
+            turb4 += o * 0.2; /* pbrt-v4 also adds the partial octave 4, faded to 0.2 */
+        lambda = (float)(lambda * 1.99f);
+        o = (float)(o * 0.6f);
+    }
+    assert_near(at3(&b, "f", p, zero, zero), fbm6, 1e-5);
+    assert_near(at3(&b, "f", p, step, zero), fbm4, 1e-5);
+    assert_near(at3(&b, "w", p, step, zero), turb4, 1e-5);
+    /* A larger footprint than one unit leaves nothing of fbm. */
+    assert_near(at3(&b, "f", p, v3(4, 0, 0), zero), 0.0, 1e-7);
+    unbuild(&b);
+}
+
+/* dots: one dot of radius 0.35 per cell where the noise says so, as pbrt-v4
+ * renders it ("outside" in the dots, "inside" between: pbrt-v4's swap);
+ * directionmix: |n . dir| of tex1; marble is spectrum only. */
+static void test_dots_directionmix(void **state)
+{
+    (void)state;
+    built b;
+    hz_error err;
+    assert_int_equal(build("Texture \"d\" \"float\" \"dots\" \"float inside\" 0.25 "
+                           "\"float outside\" 0.75\n"
+                           "Texture \"m\" \"float\" \"directionmix\" \"float tex1\" 1 "
+                           "\"float tex2\" 3 \"vector3 dir\" [0 0 2]\n",
+                           &b, &err),
+                     HZ_OK);
+    int cells_with_dots = 0;
+    for (int sc = 0; sc < 16; ++sc)
+        for (int tc = 0; tc < 16; ++tc) {
+            bool dot = noise3(sc + 0.5f, tc + 0.5f, 0.5f) > 0.0f;
+            /* The dot's centre: shifted by at most 0.15 from the cell's. */
+            double s0 = sc + 0.15f * noise3(sc + 1.5f, tc + 2.8f, 0.5f);
+            double t0 = tc + 0.15f * noise3(sc + 4.5f, tc + 9.8f, 0.5f);
+            assert_near(at(&b, "d", false, s0, t0).r, dot ? 0.75 : 0.25, 0.0);
+            /* The cell's corner region is never in a dot. */
+            assert_near(at(&b, "d", false, sc + 0.49, tc + 0.49).r, 0.25, 0.0);
+            cells_with_dots += dot;
+        }
+    assert_true(cells_with_dots > 64 && cells_with_dots < 192);
+    const texture *m = texture_set_find(b.set, "m", false);
+    texture_ctx c = {.n = v3(0.6, 0.0, -0.8)};
+    assert_near(texture_eval_float(m, &c), 0.8 * 1 + 0.2 * 3, 1e-12);
+    unbuild(&b);
+    expect_error("Texture \"a\" \"spectrum\" \"fbm\"\n", "makes float textures only");
+    expect_error("Texture \"a\" \"float\" \"marble\"\n", "makes spectrum textures only");
+    expect_error("Texture \"a\" \"float\" \"directionmix\" \"vector3 dir\" [0 0 0]\n",
+                 "non-zero");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -258,6 +347,8 @@ int main(void)
         cmocka_unit_test(test_imagemap_exr),
         cmocka_unit_test(test_imagemap_png),
         cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_fbm_and_turbulence),
+        cmocka_unit_test(test_dots_directionmix),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,4 +1,4 @@
-#include "media/noise.h"
+#include "core/noise.h"
 
 #include <math.h>
 
@@ -55,4 +55,59 @@ float noise3(float x, float y, float z)
     float x00 = lerpf(wx, w000, w100), x10 = lerpf(wx, w010, w110);
     float x01 = lerpf(wx, w001, w101), x11 = lerpf(wx, w011, w111);
     return lerpf(wz, lerpf(wy, x00, x10), lerpf(wy, x01, x11));
+}
+
+static float smooth_step(float x, float a, float b)
+{
+    if (a == b)
+        return x < a ? 0.0f : 1.0f;
+    float t = (x - a) / (b - a);
+    t = t < 0.0f ? 0.0f : t > 1.0f ? 1.0f : t;
+    return t * t * (3.0f - 2.0f * t);
+}
+
+/* The octaves the footprint allows: -1 - log2(largest squared step) / 2,
+ * clamped to [0, octaves] (all of them for a zero footprint). */
+static float octave_count(vec3 dpdx, vec3 dpdy, int octaves)
+{
+    float len2 = (float)fmax(v3_length_sq(dpdx), v3_length_sq(dpdy));
+    float n = -1.0f - log2f(len2) / 2.0f;
+    return n < 0.0f ? 0.0f : n > (float)octaves ? (float)octaves : n;
+}
+
+static float noise_at(vec3 p, float lambda)
+{
+    return noise3(lambda * (float)p.x, lambda * (float)p.y, lambda * (float)p.z);
+}
+
+float noise_fbm(vec3 p, vec3 dpdx, vec3 dpdy, float omega, int octaves)
+{
+    float n = octave_count(dpdx, dpdy, octaves);
+    int whole = (int)floorf(n);
+    float sum = 0.0f, lambda = 1.0f, o = 1.0f;
+    for (int i = 0; i < whole; ++i) {
+        sum += o * noise_at(p, lambda);
+        lambda *= 1.99f;
+        o *= omega;
+    }
+    return sum + o * smooth_step(n - (float)whole, 0.3f, 0.7f) * noise_at(p, lambda);
+}
+
+float noise_turbulence(vec3 p, vec3 dpdx, vec3 dpdy, float omega, int octaves)
+{
+    float n = octave_count(dpdx, dpdy, octaves);
+    int whole = (int)floorf(n);
+    float sum = 0.0f, lambda = 1.0f, o = 1.0f;
+    for (int i = 0; i < whole; ++i) {
+        sum += o * fabsf(noise_at(p, lambda));
+        lambda *= 1.99f;
+        o *= omega;
+    }
+    float w = smooth_step(n - (float)whole, 0.3f, 0.7f);
+    sum += o * ((1.0f - w) * 0.2f + w * fabsf(noise_at(p, lambda)));
+    for (int i = whole; i < octaves; ++i) {
+        sum += o * 0.2f;
+        o *= omega;
+    }
+    return sum;
 }
