@@ -28,6 +28,15 @@ typedef enum {
 
 typedef enum { WRAP_REPEAT, WRAP_BLACK, WRAP_CLAMP, WRAP_OCTAHEDRAL } tex_wrap;
 
+/* pbrt-v4's 2D mappings: "uv" (s = uscale u + udelta, ...), and on the point
+ * in the texture's space "spherical", "cylindrical" and "planar". */
+typedef enum { MAP_UV, MAP_SPHERICAL, MAP_CYLINDRICAL, MAP_PLANAR } tex_mapping;
+
+/* (s, t) and their screen derivatives. */
+typedef struct {
+    double s, t, dsdx, dsdy, dtdx, dtdy;
+} tex_coord;
+
 /* A parameter that is either a texture or a constant. */
 typedef struct {
     const texture *t;
@@ -59,6 +68,9 @@ struct texture {
     int octaves;               /* fbm, wrinkled, marble */
     double omega;              /* their "roughness" */
     double variation;          /* marble ("scale" is its frequency) */
+    tex_mapping mapping;       /* the 2D textures' (s, t) */
+    vec3 v1, v2;               /* planar mapping's axes, texture space */
+    bool checker3d;            /* checkerboard "dimension" 3: on tex_from_render p */
 };
 
 struct texture_set {
@@ -284,9 +296,56 @@ static float eval_3d(const texture *t, const texture_ctx *c, rgb *spectral)
     }
 }
 
+/* The 2D mappings, as pbrt-v4's TextureMapping2D::Map. */
+static tex_coord map2d(const texture *t, const texture_ctx *c)
+{
+    if (t->mapping == MAP_UV)
+        return (tex_coord){t->su * c->u + t->du, t->sv * c->v + t->dv, t->su * c->dudx,
+                           t->su * c->dudy,      t->sv * c->dvdx,      t->sv * c->dvdy};
+    vec3 p = transform_point(&t->tex_from_render, c->p);
+    vec3 dx = transform_vector(&t->tex_from_render, c->dpdx);
+    vec3 dy = transform_vector(&t->tex_from_render, c->dpdy);
+    vec3 dsdp, dtdp;
+    tex_coord out;
+    switch (t->mapping) {
+    case MAP_SPHERICAL: {
+        double x2y2 = p.x * p.x + p.y * p.y, r = sqrt(x2y2);
+        dsdp = v3_scale(v3(-p.y, p.x, 0.0), 1.0 / (2.0 * HZ_PI * x2y2));
+        dtdp = v3_scale(v3(p.x * p.z / r, p.y * p.z / r, -r),
+                        1.0 / (HZ_PI * (x2y2 + p.z * p.z)));
+        vec3 w = v3_normalize(p);
+        double phi = atan2(w.y, w.x);
+        out.s = acos(fmax(-1.0, fmin(1.0, w.z))) / HZ_PI; /* pbrt-v4: theta first */
+        out.t = (phi < 0.0 ? phi + 2.0 * HZ_PI : phi) / (2.0 * HZ_PI);
+        break;
+    }
+    case MAP_CYLINDRICAL: {
+        double x2y2 = p.x * p.x + p.y * p.y;
+        dsdp = v3_scale(v3(-p.y, p.x, 0.0), 1.0 / (2.0 * HZ_PI * x2y2));
+        dtdp = v3(0.0, 0.0, 1.0);
+        out.s = (HZ_PI + atan2(p.y, p.x)) / (2.0 * HZ_PI);
+        out.t = p.z;
+        break;
+    }
+    default: /* MAP_PLANAR */
+        dsdp = t->v1;
+        dtdp = t->v2;
+        out.s = t->du + v3_dot(p, t->v1);
+        out.t = t->dv + v3_dot(p, t->v2);
+        break;
+    }
+    /* A point on the axis: no derivative (pbrt-v4 divides by zero there). */
+    out.dsdx = v3_is_finite(dsdp) ? v3_dot(dsdp, dx) : 0.0;
+    out.dsdy = v3_is_finite(dsdp) ? v3_dot(dsdp, dy) : 0.0;
+    out.dtdx = v3_is_finite(dtdp) ? v3_dot(dtdp, dx) : 0.0;
+    out.dtdy = v3_is_finite(dtdp) ? v3_dot(dtdp, dy) : 0.0;
+    return out;
+}
+
 rgb texture_eval(const texture *t, const texture_ctx *c)
 {
-    double s = t->su * c->u + t->du, tt = t->sv * c->v + t->dv;
+    tex_coord m = map2d(t, c);
+    double s = m.s, tt = m.t;
     switch (t->kind) {
     case TEX_CONSTANT:
         return t->in[0].v;
@@ -296,9 +355,18 @@ rgb texture_eval(const texture *t, const texture_ctx *c)
         return rgb_lerp(eval_input(&t->in[2], c).r, eval_input(&t->in[0], c),
                         eval_input(&t->in[1], c));
     case TEX_CHECKERBOARD: {
-        double ds = fmax(fabs(t->su * c->dudx), fabs(t->su * c->dudy));
-        double dt = fmax(fabs(t->sv * c->dvdx), fabs(t->sv * c->dvdy));
-        double w = checker_weight(s, tt, ds, dt);
+        double w;
+        if (t->checker3d) {
+            vec3 p = transform_point(&t->tex_from_render, c->p);
+            vec3 dx = transform_vector(&t->tex_from_render, c->dpdx);
+            vec3 dy = transform_vector(&t->tex_from_render, c->dpdy);
+            w = 0.5 - 0.5 * checker_bf(p.x, 1.5 * fmax(fabs(dx.x), fabs(dy.x))) *
+                          checker_bf(p.y, 1.5 * fmax(fabs(dx.y), fabs(dy.y))) *
+                          checker_bf(p.z, 1.5 * fmax(fabs(dx.z), fabs(dy.z)));
+        } else {
+            w = checker_weight(s, tt, fmax(fabs(m.dsdx), fabs(m.dsdy)),
+                               fmax(fabs(m.dtdx), fabs(m.dtdy)));
+        }
         rgb a = w != 1.0 ? eval_input(&t->in[0], c) : rgb_grey(0.0);
         rgb b = w != 0.0 ? eval_input(&t->in[1], c) : rgb_grey(0.0);
         return rgb_lerp(w, a, b);
@@ -309,8 +377,7 @@ rgb texture_eval(const texture *t, const texture_ctx *c)
                        rgb_lerp(s, rgb_scale(eval_input(&t->in[1], c), tt),
                                 rgb_scale(eval_input(&t->in[3], c), tt)));
     case TEX_IMAGEMAP: {
-        double width = 2 * fmax(fmax(fabs(t->su * c->dudx), fabs(t->su * c->dudy)),
-                                fmax(fabs(t->sv * c->dvdx), fabs(t->sv * c->dvdy)));
+        double width = 2 * fmax(fmax(fabs(m.dsdx), fabs(m.dsdy)), fmax(fabs(m.dtdx), fabs(m.dtdy)));
         rgb v = rgb_scale(image_lookup(t, s, 1.0 - tt, width), t->scale);
         if (t->invert)
             v = rgb_sub(rgb_grey(1.0), v);
@@ -373,18 +440,52 @@ static hz_status read_input(const texture_set *s, param_list *pl, const char *na
     return HZ_OK;
 }
 
-static hz_status read_mapping(param_list *pl, texture *t, hz_error *err)
+/* The texture's own space (the CTM at its Texture directive), for the
+ * mappings and the 3D textures. */
+static hz_status texture_space(const texture_set *s, const texture_entity *te, texture *t,
+                               hz_error *err)
+{
+    t->tex_from_render =
+        transform_inverse(transform_compose(s->render_from_world, te->world_from_texture));
+    bool finite = true;
+    for (int r = 0; r < 4; ++r)
+        for (int k = 0; k < 4; ++k)
+            finite &= isfinite(t->tex_from_render.m.m[r][k]) != 0;
+    if (!finite)
+        return hz_fail_at(err, te->entity.loc, "Texture \"%s\": its transform is not invertible",
+                          te->name);
+    return HZ_OK;
+}
+
+static hz_status read_mapping(const texture_set *s, const texture_entity *te, param_list *pl,
+                              texture *t, hz_error *err)
 {
     const char *mapping = params_string(pl, "mapping", "uv");
-    if (strcmp(mapping, "uv") != 0)
+    if (strcmp(mapping, "uv") == 0) {
+        t->mapping = MAP_UV;
+        t->su = params_float(pl, "uscale", 1.0);
+        t->sv = params_float(pl, "vscale", 1.0);
+        t->du = params_float(pl, "udelta", 0.0);
+        t->dv = params_float(pl, "vdelta", 0.0);
+        return HZ_OK;
+    }
+    if (strcmp(mapping, "spherical") == 0) {
+        t->mapping = MAP_SPHERICAL;
+    } else if (strcmp(mapping, "cylindrical") == 0) {
+        t->mapping = MAP_CYLINDRICAL;
+    } else if (strcmp(mapping, "planar") == 0) {
+        t->mapping = MAP_PLANAR;
+        t->v1 = params_vector3(pl, "v1", v3(1, 0, 0));
+        t->v2 = params_vector3(pl, "v2", v3(0, 1, 0));
+        t->du = params_float(pl, "udelta", 0.0);
+        t->dv = params_float(pl, "vdelta", 0.0);
+    } else {
         return hz_fail_at(err, params_loc(pl, "mapping"),
-                          "texture \"mapping\" \"%s\" is not supported (haze has \"uv\")",
+                          "texture \"mapping\" \"%s\" is unknown (pbrt-v4 has \"uv\", "
+                          "\"spherical\", \"cylindrical\", \"planar\")",
                           mapping);
-    t->su = params_float(pl, "uscale", 1.0);
-    t->sv = params_float(pl, "vscale", 1.0);
-    t->du = params_float(pl, "udelta", 0.0);
-    t->dv = params_float(pl, "vdelta", 0.0);
-    return HZ_OK;
+    }
+    return texture_space(s, te, t, err);
 }
 
 static double srgb_to_linear(double v)
@@ -564,25 +665,25 @@ static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, h
     } else if (strcmp(cls, "checkerboard") == 0) {
         t->kind = TEX_CHECKERBOARD;
         int dim = params_int(pl, "dimension", 2);
-        if (dim != 2)
+        if (dim != 2 && dim != 3)
             return hz_fail_at(err, params_loc(pl, "dimension"),
-                              "checkerboard \"dimension\" %d: haze has 2 (3 is not supported)",
-                              dim);
-        if (read_mapping(pl, t, err) != HZ_OK ||
+                              "checkerboard \"dimension\" must be 2 or 3, got %d", dim);
+        t->checker3d = dim == 3;
+        if ((dim == 3 ? texture_space(s, te, t, err) : read_mapping(s, te, pl, t, err)) != HZ_OK ||
             read_input(s, pl, "tex1", sp, one, &t->in[0], err) != HZ_OK ||
             read_input(s, pl, "tex2", sp, zero, &t->in[1], err) != HZ_OK)
             return HZ_ERROR;
     } else if (strcmp(cls, "bilerp") == 0) {
         t->kind = TEX_BILERP;
         static const char *const v[4] = {"v00", "v01", "v10", "v11"};
-        if (read_mapping(pl, t, err) != HZ_OK)
+        if (read_mapping(s, te, pl, t, err) != HZ_OK)
             return HZ_ERROR;
         for (int i = 0; i < 4; ++i)
             if (read_input(s, pl, v[i], sp, rgb_grey(i & 1 ? 1.0 : 0.0), &t->in[i], err) !=
                 HZ_OK)
                 return HZ_ERROR;
     } else if (strcmp(cls, "imagemap") == 0) {
-        if (read_mapping(pl, t, err) != HZ_OK)
+        if (read_mapping(s, te, pl, t, err) != HZ_OK)
             return HZ_ERROR;
         st = read_imagemap(pl, te->entity.loc, t, err);
     } else if (strcmp(cls, "directionmix") == 0) {
@@ -603,7 +704,7 @@ static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, h
          * between the dots and "outside" in them. Scenes were made by
          * looking at that image. */
         t->kind = TEX_DOTS;
-        if (read_mapping(pl, t, err) != HZ_OK ||
+        if (read_mapping(s, te, pl, t, err) != HZ_OK ||
             read_input(s, pl, "outside", sp, zero, &t->in[0], err) != HZ_OK ||
             read_input(s, pl, "inside", sp, one, &t->in[1], err) != HZ_OK)
             return HZ_ERROR;
@@ -618,15 +719,8 @@ static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, h
                   : strcmp(cls, "fbm") == 0   ? TEX_FBM
                   : strcmp(cls, "windy") == 0 ? TEX_WINDY
                                               : TEX_WRINKLED;
-        t->tex_from_render = transform_inverse(
-            transform_compose(s->render_from_world, te->world_from_texture));
-        bool finite = true;
-        for (int r = 0; r < 4; ++r)
-            for (int k = 0; k < 4; ++k)
-                finite &= isfinite(t->tex_from_render.m.m[r][k]) != 0;
-        if (!finite)
-            return hz_fail_at(err, te->entity.loc,
-                              "Texture \"%s\": its transform is not invertible", te->name);
+        if (texture_space(s, te, t, err) != HZ_OK)
+            return HZ_ERROR;
         if (t->kind != TEX_WINDY) { /* windy's octaves and roughness are fixed */
             t->octaves = params_int(pl, "octaves", 8);
             t->omega = params_float(pl, "roughness", 0.5);
@@ -647,7 +741,8 @@ static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, h
                           "Texture class \"%s\" is not supported (supported: \"constant\", "
                           "\"scale\", \"mix\", \"directionmix\", \"checkerboard\", "
                           "\"bilerp\", \"dots\", \"imagemap\", \"fbm\", \"wrinkled\", "
-                          "\"windy\", \"marble\"; \"ptex\" is refused)",
+                          "\"windy\", \"marble\"; \"ptex\" is refused: haze reads no Ptex "
+                          "files)",
                           cls);
     }
     if (st != HZ_OK)

@@ -338,6 +338,53 @@ static void test_dots_directionmix(void **state)
                  "non-zero");
 }
 
+static double at_p(const built *b, const char *name, vec3 p)
+{
+    const texture *t = texture_set_find(b->set, name, false);
+    if (!t)
+        fail_msg("no texture \"%s\"", name);
+    texture_ctx c = {.p = p};
+    return texture_eval_float(t, &c);
+}
+
+/* pbrt-v4's 2D mappings read back through bilerp (s with v10 = v11 = 1, t
+ * with v01 = v11 = 1) at points of the texture's space, and the 3D
+ * checkerboard: tex1 where floor(x) + floor(y) + floor(z) is even. */
+static void test_mappings(void **state)
+{
+    (void)state;
+    built b;
+    hz_error err;
+    const char *s_of = "\"float v00\" 0 \"float v10\" 1 \"float v01\" 0 \"float v11\" 1";
+    const char *t_of = "\"float v00\" 0 \"float v10\" 0 \"float v01\" 1 \"float v11\" 1";
+    char text[4096];
+    snprintf(text, sizeof text,
+             "Texture \"ss\" \"float\" \"bilerp\" \"string mapping\" \"spherical\" %s\n"
+             "Texture \"st\" \"float\" \"bilerp\" \"string mapping\" \"spherical\" %s\n"
+             "Texture \"cs\" \"float\" \"bilerp\" \"string mapping\" \"cylindrical\" %s\n"
+             "Texture \"ct\" \"float\" \"bilerp\" \"string mapping\" \"cylindrical\" %s\n"
+             "Translate 1 0 0\n"
+             "Texture \"ps\" \"float\" \"bilerp\" \"string mapping\" \"planar\" "
+             "\"vector3 v1\" [2 0 0] \"vector3 v2\" [0 0 3] \"float udelta\" 0.25 %s\n"
+             "Texture \"c3\" \"float\" \"checkerboard\" \"integer dimension\" 3\n",
+             s_of, t_of, s_of, t_of, s_of);
+    assert_int_equal(build(text, &b, &err), HZ_OK);
+    /* Spherical: s = theta / pi, t = phi / 2 pi. */
+    assert_near(at_p(&b, "ss", v3(1, 0, 0)), 0.5, 1e-12);
+    assert_near(at_p(&b, "ss", v3(0, 0, 2)), 0.0, 1e-12);
+    assert_near(at_p(&b, "st", v3(0, 0.5, 0.5)), 0.25, 1e-12);
+    /* Cylindrical: s = (pi + atan2(y, x)) / 2 pi, t = z (bilerp takes t as is). */
+    assert_near(at_p(&b, "cs", v3(0, 1, 0.25)), 0.75, 1e-12);
+    assert_near(at_p(&b, "ct", v3(0, 1, 0.25)), 0.25, 1e-12);
+    /* Planar in the space after Translate 1 0 0: s = 0.25 + (p - (1, 0, 0)) . v1. */
+    assert_near(at_p(&b, "ps", v3(1.2, 5, 0)), 0.25 + 0.4, 1e-12);
+    /* The 3D checkerboard too is in the translated space: x - 1. */
+    assert_near(at_p(&b, "c3", v3(0.5, 0.5, 0.5)), 0.0, 0.0);
+    assert_near(at_p(&b, "c3", v3(1.5, 0.5, 0.5)), 1.0, 0.0);
+    assert_near(at_p(&b, "c3", v3(1.5, -0.5, 0.5)), 0.0, 0.0);
+    unbuild(&b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -349,6 +396,7 @@ int main(void)
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_fbm_and_turbulence),
         cmocka_unit_test(test_dots_directionmix),
+        cmocka_unit_test(test_mappings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
