@@ -1,6 +1,7 @@
 /* Shape factories. Every error names the parameter's (or the Shape's)
  * file:line:column; params_finish makes unknown parameters errors. */
 #include "scene/shape.h"
+#include "scene/loopsubdiv.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -102,6 +103,47 @@ static hz_status create_mesh(shape_entity *se, int per_face, shape_geometry *g, 
             for (int c = 0; c < 3; ++c)
                 g->indices[o++] = (uint32_t)v[per_face == 3 ? tri[t][c] : quad[t][c]];
     }
+    return HZ_OK;
+}
+
+/* pbrt-v4's "loopsubdiv": a triangle mesh ("indices", "P") refined
+ * "levels" times (default 3) and pushed to its limit surface. */
+static hz_status create_loopsubdiv(shape_entity *se, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    int levels = params_int(pl, "levels", 3);
+    if (levels < 0 || levels > 10)
+        params_reject(pl, "levels", "loopsubdiv \"levels\" must be in [0, 10], got %d", levels);
+    params_string(pl, "scheme", "loop"); /* pbrt-v4 reads it and uses "loop" */
+    static const char *const unused[] = {"N", "uv", "S"};
+    for (int i = 0; i < 3; ++i)
+        if (params_has(pl, unused[i]))
+            params_reject(pl, unused[i],
+                          "loopsubdiv takes no \"%s\" (it computes its own; pbrt-v4 refuses "
+                          "it too)",
+                          unused[i]);
+    if (create_mesh(se, 3, g, err) != HZ_OK)
+        return HZ_ERROR;
+    /* 4^levels triangles each: keep the result under 2^28 triangles. */
+    if (ldexp((double)g->triangle_count, 2 * levels) > (double)(1u << 28))
+        return hz_fail_at(err, params_loc(pl, "levels"),
+                          "loopsubdiv: %d levels of %zu triangles would make %.3g triangles "
+                          "(at most 2^28)",
+                          levels, g->triangle_count, ldexp((double)g->triangle_count, 2 * levels));
+    double *p, *n;
+    uint32_t *idx;
+    size_t nv, nt;
+    hz_error e;
+    if (loop_subdivide(g->p, g->vertex_count, g->indices, g->triangle_count, levels, &p, &n, &nv,
+                       &idx, &nt, &e) != HZ_OK)
+        return hz_fail_at(err, se->entity.loc, "%s", e.message);
+    free(g->p);
+    free(g->indices);
+    g->p = p;
+    g->n = n;
+    g->indices = idx;
+    g->vertex_count = nv;
+    g->triangle_count = nt;
     return HZ_OK;
 }
 
@@ -283,10 +325,12 @@ hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error 
         st = create_disk(se, out, err);
     else if (strcmp(type, "cylinder") == 0)
         st = create_cylinder(se, out, err);
+    else if (strcmp(type, "loopsubdiv") == 0)
+        st = create_loopsubdiv(se, out, err);
     else
         st = hz_fail_at(err, se->entity.loc,
                         "unknown shape \"%.60s\"; supported: trianglemesh plymesh sphere disk "
-                        "cylinder bilinearmesh",
+                        "cylinder bilinearmesh loopsubdiv",
                         type);
     if (st != HZ_OK) {
         shape_geometry_free(out);
