@@ -14,6 +14,10 @@ typedef enum { HZ_OK = 0, HZ_ERROR = 1 } hz_status;
 typedef struct {
     const char *file;
     int line, column;
+    /* The top-level scene file, whose directory relative file names start
+     * from (pbrt-v4's search directory, for the scene and every file it
+     * includes); NULL: `file` itself. */
+    const char *root;
 } file_loc;
 
 typedef struct {

@@ -15,3 +15,8 @@ char *path_relative_to(const char *base, const char *name)
     memcpy(path + dir, name, n + 1);
     return path;
 }
+
+char *path_of_scene_file(file_loc loc, const char *name)
+{
+    return path_relative_to(loc.root ? loc.root : loc.file, name);
+}

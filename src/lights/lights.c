@@ -28,7 +28,7 @@ static hz_status load_image(param_list *pl, const char *filename, bool square,
                             light_image **out, hz_error *err)
 {
     file_loc at = params_loc(pl, "filename");
-    char *path = path_relative_to(at.file, filename);
+    char *path = path_of_scene_file(at, filename);
     if (!path)
         return hz_fail_at(err, at, "out of memory");
     hz_error e;

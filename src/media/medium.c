@@ -310,7 +310,7 @@ static hz_status load_grid(medium_entity *e, transform render_from_world, const 
 {
     file_loc loc = e->entity.loc;
     const char *name = e->name ? e->name : "";
-    char *path = path_relative_to(loc.file, filename);
+    char *path = path_of_scene_file(loc, filename);
     if (!path)
         return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": out of memory", name);
     /* Every grid the medium needs, in one read of the file (one OpenVDB

@@ -7,7 +7,7 @@
 #include <string.h>
 #include <strings.h>
 
-void lexer_init(lexer *lx, const char *src, size_t len, const char *file)
+void lexer_init(lexer *lx, const char *src, size_t len, const char *file, const char *root)
 {
     lx->src = src;
     lx->len = len;
@@ -18,11 +18,12 @@ void lexer_init(lexer *lx, const char *src, size_t len, const char *file)
     lx->line = 1;
     lx->column = 1;
     lx->file = file;
+    lx->root = root;
 }
 
 static file_loc here(const lexer *lx)
 {
-    return (file_loc){lx->file, lx->line, lx->column};
+    return (file_loc){lx->file, lx->line, lx->column, lx->root};
 }
 
 static void advance(lexer *lx)

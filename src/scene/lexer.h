@@ -30,9 +30,11 @@ typedef struct {
     size_t len, pos;
     int line, column;
     const char *file; /* stored in every token's loc */
+    const char *root; /* the top-level scene file, the same */
 } lexer;
 
-void lexer_init(lexer *lx, const char *src, size_t len, const char *file);
+/* `root` (may be NULL) goes into every token's loc.root. */
+void lexer_init(lexer *lx, const char *src, size_t len, const char *file, const char *root);
 /* The next token, TOK_EOF at the end. Errors (unterminated string, bad escape,
  * malformed or out-of-range number, stray byte) name the token's start. */
 hz_status lexer_next(lexer *lx, token *tok, hz_error *err);

@@ -156,7 +156,7 @@ static bool push_file(parser *ps, const char *text, size_t len, const char *file
     }
     ps->files = grown;
     parser_file *f = &ps->files[ps->file_depth++];
-    lexer_init(&f->lx, text, len, file);
+    lexer_init(&f->lx, text, len, file, ps->sd->file_count ? ps->sd->files[0] : file);
     f->canon = canon;
     return true;
 }
@@ -179,7 +179,7 @@ hz_status parser_include(parser *ps, const token *directive, const char *path, h
 {
     char name[48];
     directive_name(directive, name, sizeof name);
-    char *full = path_relative_to(directive->loc.file, path);
+    char *full = path_of_scene_file(directive->loc, path);
     if (!full)
         return parser_oom(ps, directive->loc, err);
     char *canon = realpath(full, NULL);
@@ -273,7 +273,7 @@ static bool parser_start(parser *ps, const char *text, size_t len, const char *n
         return false;
     const char *file = out->files[0];
     for (int i = 0; i < ATTR_COUNT; ++i)
-        params_init(&ps->gs.attrs[i], (file_loc){file, 1, 1});
+        params_init(&ps->gs.attrs[i], (file_loc){file, 1, 1, NULL});
     ps->gs.inside = ps->gs.outside = parser_intern(ps, "");
     if (!ps->gs.inside)
         return false;
@@ -325,12 +325,12 @@ static hz_status parse_root(const char *text, size_t len, const char *name, scen
     parser ps;
     if (!parser_start(&ps, text, len, name, out)) {
         /* The caller's name: the scene's own copy of it may be what failed. */
-        hz_status st = parser_oom(&ps, (file_loc){name, 1, 1}, err);
+        hz_status st = parser_oom(&ps, (file_loc){name, 1, 1, NULL}, err);
         parser_state_free(&ps);
         scene_desc_free(out);
         return st;
     }
-    file_loc end = {out->files[0], 1, 1};
+    file_loc end = {out->files[0], 1, 1, NULL};
     parse_directives(&ps, errs, &end, err);
     if (!ps.lex_failed && !ps.out_of_memory && parser_finish(&ps, end, err) != HZ_OK)
         hz_errors_add(errs, err);

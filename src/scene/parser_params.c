@@ -177,7 +177,7 @@ static hz_status set_sampled(parser *ps, param *p, const double *lambda, const d
  * as one, relative to the scene file. The file joins the scene's inputs. */
 static hz_status read_spd(parser *ps, param *p, const char *name, file_loc loc, hz_error *err)
 {
-    char *full = path_relative_to(loc.file, name);
+    char *full = path_of_scene_file(loc, name);
     if (!full)
         return parser_oom(ps, loc, err);
     char *text;

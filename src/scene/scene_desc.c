@@ -34,9 +34,9 @@ bool scene_desc_init(scene_desc *sd, const char *file)
     sd->camera.transform_end_time = 1.0;
     sd->transform_start_time = 0.0;
     sd->transform_end_time = 1.0;
-    file_loc start = {scene_desc_own(sd, file), 1, 1};
+    file_loc start = {scene_desc_own(sd, file), 1, 1, NULL};
     /* Line 0: no Integrator directive (haze then renders with singlescatter). */
-    file_loc no_integrator = {start.file, 0, 0};
+    file_loc no_integrator = {start.file, 0, 0, NULL};
     params_init(&sd->options, start);
     if (!start.file || !scene_desc_add_file(sd, start.file))
         return false;

@@ -138,7 +138,9 @@ typedef struct {
  * Sampler, PixelFilter, Integrator and TransformTimes only before it, once each;
  * a file without WorldBegin is an error. Include and Import both read the file
  * in place with the current graphics state (haze does not isolate Import's
- * state as pbrt-v4 does); paths are relative to the including file. On error fills err with
+ * state as pbrt-v4 does); relative paths (here and in every
+ * parameter that names a file) resolve against the top-level scene file's
+ * directory, as in pbrt-v4. On error fills err with
  * "file:line:column: message" and returns HZ_ERROR; *out is then empty. */
 hz_status scene_parse_file(const char *path, scene_desc *out, hz_error *err);
 /* Parses text held in memory; `name` is used in diagnostics and as the base for

@@ -34,7 +34,7 @@ static bool push_named(char ***list, size_t *n, size_t *cap, const scene_entity 
     if (!e->type || strcmp(e->type, type) != 0)
         return true;
     const char *name = params_peek_string(&e->params, param_name, NULL);
-    return !name || push(list, n, cap, path_relative_to(e->loc.file, name));
+    return !name || push(list, n, cap, path_of_scene_file(e->loc, name));
 }
 
 hz_status scene_input_files(const scene_desc *sd, char ***out, size_t *count, hz_error *err)

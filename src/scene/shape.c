@@ -164,7 +164,7 @@ static hz_status create_plymesh(shape_entity *se, shape_geometry *g, hz_error *e
     if (!name)
         return hz_fail_at(err, se->entity.loc, "plymesh needs \"string filename\"");
     /* Relative to the directory of the scene file that names it. */
-    char *path = path_relative_to(se->entity.loc.file, name);
+    char *path = path_of_scene_file(se->entity.loc, name);
     if (!path)
         return hz_fail_at(err, params_loc(pl, "filename"), "plymesh: out of memory");
     hz_error perr;

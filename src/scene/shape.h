@@ -1,6 +1,6 @@
 /* Shape factories: turn a shape_entity's parameters into object-space geometry.
- * "trianglemesh" (indices P N uv), "plymesh" (filename, relative to the scene
- * file that names it), "sphere" (radius), "disk" (height radius innerradius),
+ * "trianglemesh" (indices P N uv), "plymesh" (filename, relative to the top-level
+ * scene file's directory), "sphere" (radius), "disk" (height radius innerradius),
  * "bilinearmesh" (indices P N uv, each quad split into two triangles). */
 #ifndef HAZE_SCENE_SHAPE_H
 #define HAZE_SCENE_SHAPE_H

@@ -43,6 +43,11 @@ typedef struct {
     rgb v;
 } tex_input;
 
+/* pbrt-v4 reads a float image texture from an RGB(A) image in two ways: a
+ * texel lookup (point filter, ewa, the coarsest level) takes its first
+ * channel, a bilinear one the mean of R, G and B, or A when the image has an
+ * alpha channel that is not all one. A float texture's image holds R in
+ * channel 0 and that second value in channels 1 and 2. */
 typedef struct {
     int width, height;
     float *rgb; /* 3 per texel, linear, top row first */
@@ -60,6 +65,7 @@ struct texture {
     tex_image level[TEX_MAX_LEVELS]; /* level[0] = img; each next a 2x2 box of the last */
     int levels;
     tex_filter filter;
+    bool ewa;    /* "ewa" (run as trilinear): its float lookups are texel lookups */
     tex_wrap wrap;
     double scale;
     bool invert;
@@ -171,16 +177,20 @@ static rgb bilerp(const texture *t, const tex_image *im, double s, double tt)
 /* pbrt-v4's MIPMap::Filter for its non-EWA filters: the level of a filter
  * width of twice the largest st derivative; point and bilinear look up
  * that level, trilinear blends it with the next (from level 1 on). */
-static rgb image_lookup(const texture *t, double s, double tt, double width)
+static rgb image_filter(const texture *t, double s, double tt, double width, bool *texel_lookup)
 {
     int n = t->levels;
     double level = n - 1 + log2(fmax(width, 1e-8));
+    *texel_lookup = true;
     if (level >= n - 1)
         return texel(t, &t->level[n - 1], 0, 0);
     int il = level > 0.0 ? (int)floor(level) : 0;
     const tex_image *im = &t->level[il];
+    /* pbrt-v4's ewa looks texels up unless the footprint is zero. */
+    *texel_lookup = t->ewa && width > 0.0;
     switch (t->filter) {
     case FILTER_POINT:
+        *texel_lookup = true;
         return texel(t, im, (int)round(s * im->width - 0.5), (int)round(tt * im->height - 0.5));
     case FILTER_BILINEAR:
         return bilerp(t, im, s, tt);
@@ -190,6 +200,15 @@ static rgb image_lookup(const texture *t, double s, double tt, double width)
         return rgb_lerp(level - il, bilerp(t, im, s, tt), bilerp(t, &t->level[il + 1], s, tt));
     }
     return rgb_grey(0.0);
+}
+
+/* A float texture's value: channel 0 for texel lookups, channel 1 for
+ * bilinear ones (see tex_image). */
+static rgb image_lookup(const texture *t, double s, double tt, double width)
+{
+    bool texel_lookup;
+    rgb v = image_filter(t, s, tt, width, &texel_lookup);
+    return t->spectrum ? v : rgb_grey(texel_lookup ? v.r : v.g);
 }
 
 /* Levels down to 1x1, each texel the mean of the 2x2 below it (clamped at
@@ -381,6 +400,8 @@ rgb texture_eval(const texture *t, const texture_ctx *c)
         rgb v = rgb_scale(image_lookup(t, s, 1.0 - tt, width), t->scale);
         if (t->invert)
             v = rgb_sub(rgb_grey(1.0), v);
+        else if (!t->spectrum)
+            return v; /* pbrt-v4 clamps float images only when inverted */
         return rgb_make(fmax(v.r, 0.0), fmax(v.g, 0.0), fmax(v.b, 0.0));
     }
     case TEX_DIRECTIONMIX: {
@@ -494,39 +515,55 @@ static double srgb_to_linear(double v)
 }
 
 /* An 8-bit PNG as rgb in [0, 1], decoded by `encoding` (sRGB, linear or
- * gamma g). */
+ * gamma g), and *alpha (decoded alike, as pbrt-v4) when it is an RGBA image;
+ * as pbrt-v4, grey and palette images have none. */
 static hz_status read_png(const char *path, file_loc loc, int enc, double gamma, tex_image *out,
-                          hz_error *err)
+                          float **alpha, hz_error *err)
 {
     png_image im;
     memset(&im, 0, sizeof im);
     im.version = PNG_IMAGE_VERSION;
+    *alpha = NULL;
     if (!png_image_begin_read_from_file(&im, path))
         return hz_fail_at(err, loc, "cannot read PNG \"%s\": %s", path, im.message);
-    im.format = PNG_FORMAT_RGB;
-    size_t n = (size_t)im.width * im.height * 3;
-    unsigned char *buf = malloc(n ? n : 1);
-    out->rgb = malloc((n ? n : 1) * sizeof *out->rgb);
-    if (!buf || !out->rgb || !png_image_finish_read(&im, NULL, buf, 0, NULL)) {
+    bool rgba = (im.format & PNG_FORMAT_FLAG_COLOR) && (im.format & PNG_FORMAT_FLAG_ALPHA) &&
+                !(im.format & PNG_FORMAT_FLAG_COLORMAP);
+    im.format = PNG_FORMAT_RGBA; /* 8-bit: not premultiplied */
+    size_t n = (size_t)im.width * im.height;
+    unsigned char *buf = malloc(n ? 4 * n : 1);
+    out->rgb = malloc((n ? 3 * n : 1) * sizeof *out->rgb);
+    *alpha = rgba ? malloc((n ? n : 1) * sizeof **alpha) : NULL;
+    if (!buf || !out->rgb || (rgba && !*alpha) ||
+        !png_image_finish_read(&im, NULL, buf, 0, NULL)) {
         png_image_free(&im);
         free(buf);
         free(out->rgb);
+        free(*alpha);
         out->rgb = NULL;
+        *alpha = NULL;
         return hz_fail_at(err, loc, "cannot read PNG \"%s\"", path);
     }
     out->width = (int)im.width;
     out->height = (int)im.height;
-    for (size_t i = 0; i < n; ++i) {
-        double v = buf[i] / 255.0;
-        out->rgb[i] = (float)(enc == 0 ? srgb_to_linear(v) : enc == 1 ? v : pow(v, gamma));
-    }
+    for (size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 4; ++c) {
+            double v = buf[4 * i + (size_t)c] / 255.0;
+            float f = (float)(enc == 0 ? srgb_to_linear(v) : enc == 1 ? v : pow(v, gamma));
+            if (c < 3)
+                out->rgb[3 * i + (size_t)c] = f;
+            else if (rgba)
+                (*alpha)[i] = f;
+        }
     free(buf);
     return HZ_OK;
 }
 
-/* An EXR's R, G, B (or Y, or its one channel) as linear rgb. */
-static hz_status read_exr(const char *path, file_loc loc, tex_image *out, hz_error *err)
+/* An EXR's R, G, B (or Y, or its one channel) as linear rgb, and its A as
+ * *alpha when it has R, G, B and A. */
+static hz_status read_exr(const char *path, file_loc loc, tex_image *out, float **alpha,
+                          hz_error *err)
 {
+    *alpha = NULL;
     exr_image img;
     memset(&img, 0, sizeof img);
     hz_error e;
@@ -540,19 +577,28 @@ static hz_status read_exr(const char *path, file_loc loc, tex_image *out, hz_err
             y = &img.channels[0];
         ch[0] = ch[1] = ch[2] = y;
     }
+    const exr_channel *a = ch[0] != ch[1] ? exr_find_channel(&img, "A") : NULL;
     if (!ch[0]) {
         exr_image_free(&img);
         return hz_fail_at(err, loc, "EXR \"%s\" has no R, G, B or Y channel", path);
     }
     size_t n = (size_t)img.width * (size_t)img.height;
     out->rgb = malloc((n ? n : 1) * 3 * sizeof *out->rgb);
-    if (!out->rgb) {
+    *alpha = a ? malloc((n ? n : 1) * sizeof **alpha) : NULL;
+    if (!out->rgb || (a && !*alpha)) {
+        free(out->rgb);
+        out->rgb = NULL;
+        free(*alpha);
+        *alpha = NULL;
         exr_image_free(&img);
         return hz_fail(err, "out of memory");
     }
-    for (size_t i = 0; i < n; ++i)
+    for (size_t i = 0; i < n; ++i) {
         for (int k = 0; k < 3; ++k)
             out->rgb[3 * i + (size_t)k] = ch[k]->pixels[i];
+        if (a)
+            (*alpha)[i] = a->pixels[i];
+    }
     out->width = img.width;
     out->height = img.height;
     exr_image_free(&img);
@@ -586,6 +632,22 @@ static hz_status read_encoding(param_list *pl, bool png, int *enc, double *gamma
     return HZ_OK;
 }
 
+/* A float texture's image (see tex_image): R, then the mean of R, G and B,
+ * or alpha when there is one that is not all one (pbrt-v4 drops an all-one
+ * alpha). */
+static void float_channels(tex_image *im, const float *alpha)
+{
+    size_t n = (size_t)im->width * (size_t)im->height;
+    bool use_alpha = false;
+    for (size_t i = 0; alpha && i < n && !use_alpha; ++i)
+        use_alpha = alpha[i] != 1.0f;
+    for (size_t i = 0; i < n; ++i) {
+        float *p = &im->rgb[3 * i];
+        float v = use_alpha ? alpha[i] : (p[0] + p[1] + p[2]) / 3.0f;
+        p[1] = p[2] = v;
+    }
+}
+
 static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_error *err)
 {
     t->kind = TEX_IMAGEMAP;
@@ -596,8 +658,10 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
     else if (strcmp(filter, "bilinear") == 0)
         t->filter = FILTER_BILINEAR;
     else if (strcmp(filter, "trilinear") == 0 || strcmp(filter, "ewa") == 0 ||
-             strcmp(filter, "EWA") == 0)
+             strcmp(filter, "EWA") == 0) {
         t->filter = FILTER_TRILINEAR;
+        t->ewa = filter[0] != 't';
+    }
     else
         return hz_fail_at(err, params_loc(pl, "filter"), "unknown \"filter\" \"%s\"", filter);
     /* pbrt-v4 reads "maxanisotropy" whatever the filter and uses it only for
@@ -628,12 +692,17 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
     if (!png && !has_suffix(name, ".exr"))
         return hz_fail_at(err, params_loc(pl, "filename"),
                           "image texture \"%s\": haze reads .png and .exr", name);
-    char *path = path_relative_to(loc.file, name);
+    char *path = path_of_scene_file(loc, name);
     if (!path)
         return hz_fail(err, "out of memory");
-    hz_status st = png ? read_png(path, params_loc(pl, "filename"), enc, gamma, &t->img, err)
-                       : read_exr(path, params_loc(pl, "filename"), &t->img, err);
+    float *alpha = NULL;
+    hz_status st = png ? read_png(path, params_loc(pl, "filename"), enc, gamma, &t->img, &alpha,
+                                  err)
+                       : read_exr(path, params_loc(pl, "filename"), &t->img, &alpha, err);
     free(path);
+    if (st == HZ_OK && !t->spectrum)
+        float_channels(&t->img, alpha);
+    free(alpha);
     if (st == HZ_OK && (t->img.width <= 0 || t->img.height <= 0))
         return hz_fail_at(err, params_loc(pl, "filename"), "image texture \"%s\" is empty",
                           name);

@@ -7,13 +7,17 @@
 #define _POSIX_C_SOURCE 200809L
 #include <setjmp.h>
 #include <stdarg.h>
+#include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cmocka.h>
 
 #include "core/vec.h"
+#include <png.h>
+#include <string.h>
 #include "lights/lights.h"
 #include "render/cli_util.h"
 
@@ -64,10 +68,63 @@ static void write_sky(const char *path)
     exr_image_free(&img);
 }
 
+/* A 32x32 8-bit RGBA PNG of pattern(x, y) in [0, 1] per channel (R, G, B,
+ * A; the pattern sets A only where it is not 1). */
+static void write_png(const char *path, void (*pattern)(int x, int y, double out[4]))
+{
+    enum { RES = 32 };
+    uint8_t buf[RES * RES * 4];
+    for (int y = 0; y < RES; ++y)
+        for (int x = 0; x < RES; ++x) {
+            double v[4] = {0, 0, 0, 1};
+            pattern(x, y, v);
+            for (int c = 0; c < 4; ++c)
+                buf[4 * (y * RES + x) + c] = (uint8_t)lround(255.0 * v[c]);
+        }
+    png_image im;
+    memset(&im, 0, sizeof im);
+    im.version = PNG_IMAGE_VERSION;
+    im.width = im.height = RES;
+    im.format = PNG_FORMAT_RGBA;
+    if (!png_image_write_to_file(&im, path, 0, buf, 0, NULL))
+        fail_msg("cannot write %s", path);
+}
+
+/* Stone: warm tiles with dark joints. */
+static void stone(int x, int y, double v[4])
+{
+    bool joint = x % 8 == 0 || y % 8 == 0;
+    v[0] = joint ? 0.2 : 0.7 + 0.02 * (x % 5);
+    v[1] = joint ? 0.2 : 0.55;
+    v[2] = joint ? 0.2 : 0.4 + 0.02 * (y % 3);
+}
+
+/* A leaf: green inside an ellipse, alpha 1 there and 0 outside (a float
+ * texture of it reads the alpha, as pbrt-v4's does). */
+static void leaf(int x, int y, double v[4])
+{
+    double dx = (x - 15.5) / 15.0, dy = (y - 15.5) / 9.0;
+    double in = dx * dx + dy * dy < 1.0 ? 1.0 : 0.0;
+    v[0] = 0.1;
+    v[1] = 0.6;
+    v[2] = 0.15;
+    v[3] = in;
+}
+
+static void bumps(int x, int y, double v[4])
+{
+    v[0] = v[1] = v[2] = 0.5 + 0.25 * sin(x * 0.6) * cos(y * 0.4);
+}
+
 static int setup(void **state)
 {
     (void)state;
-    snprintf(dir, sizeof dir, "%s/standins-%ld", HAZE_TMP, (long)getpid());
+    snprintf(dir, sizeof dir, "%s/standins", HAZE_TMP);
+    /* A fresh scratch directory each run (the last one stays for a look). */
+    char rm[1200];
+    snprintf(rm, sizeof rm, "rm -rf '%s'", dir);
+    if (system(rm) != 0)
+        return -1;
     char sub[1200];
     if (mkdir(dir, 0755) != 0)
         return -1;
@@ -81,8 +138,11 @@ static int setup(void **state)
 /* The scene files and the data they name, under the names they use. */
 static void stage(void)
 {
-    static const char *files[] = {"bunny-cloud.pbrt", "explosion.pbrt",       "disney-cloud.pbrt",
-                                  "clouds.pbrt",      "killeroo-simple.pbrt", "geometry/creature.pbrt"};
+    static const char *files[] = {
+        "bunny-cloud.pbrt",      "explosion.pbrt",         "disney-cloud.pbrt",
+        "clouds.pbrt",           "killeroo-simple.pbrt",   "geometry/creature.pbrt",
+        "sanmiguel-courtyard.pbrt", "geometry/courtyard-mat.pbrt",
+        "geometry/courtyard-geom.pbrt", "crown.pbrt", "geometry/gem.ply"};
     static const char *data[][2] = {{"box.nvdb", "bunny_cloud.nvdb"},
                                     {"box.nvdb", "wdas_cloud_quarter.nvdb"},
                                     {"box_fire.nvdb", "fire.nvdb"}};
@@ -99,6 +159,12 @@ static void stage(void)
     }
     snprintf(to, sizeof to, "%s/textures/sky.exr", dir);
     write_sky(to);
+    snprintf(to, sizeof to, "%s/textures/stone.png", dir);
+    write_png(to, stone);
+    snprintf(to, sizeof to, "%s/textures/leaf.png", dir);
+    write_png(to, leaf);
+    snprintf(to, sizeof to, "%s/textures/bump.png", dir);
+    write_png(to, bumps);
 }
 
 /* The value of "stat NAME" in haze's --stats output (-1 when absent). */
@@ -163,6 +229,8 @@ static void test_surface_scenes(void **state)
 {
     (void)state;
     render_standin("killeroo-simple", false, 0.001);
+    render_standin("sanmiguel-courtyard", false, 0.01);
+    render_standin("crown", false, 0.001);
 }
 
 int main(void)

@@ -28,7 +28,7 @@ static inline void entity_init(scene_entity *e, const char *type)
 {
     memset(e, 0, sizeof *e);
     e->type = dup_str(type);
-    e->loc = (file_loc){"test.pbrt", 3, 1};
+    e->loc = (file_loc){"test.pbrt", 3, 1, NULL};
     params_init(&e->params, e->loc);
 }
 
@@ -45,7 +45,7 @@ static inline void add_nums(scene_entity *e, param_type t, const char *name, con
     memset(&p, 0, sizeof p);
     p.type = t;
     p.name = dup_str(name);
-    p.loc = (file_loc){"test.pbrt", 3, 10};
+    p.loc = (file_loc){"test.pbrt", 3, 10, NULL};
     p.count = n;
     p.nums = malloc(n * sizeof *p.nums);
     assert_non_null(p.nums);
@@ -69,7 +69,7 @@ static inline void add_string(scene_entity *e, const char *name, const char *v)
     memset(&p, 0, sizeof p);
     p.type = PARAM_STRING;
     p.name = dup_str(name);
-    p.loc = (file_loc){"test.pbrt", 3, 10};
+    p.loc = (file_loc){"test.pbrt", 3, 10, NULL};
     p.count = 1;
     p.strs = malloc(sizeof *p.strs);
     assert_non_null(p.strs);
@@ -83,7 +83,7 @@ static inline void add_bool(scene_entity *e, const char *name, bool v)
     memset(&p, 0, sizeof p);
     p.type = PARAM_BOOL;
     p.name = dup_str(name);
-    p.loc = (file_loc){"test.pbrt", 3, 10};
+    p.loc = (file_loc){"test.pbrt", 3, 10, NULL};
     p.count = 1;
     p.bools = malloc(sizeof *p.bools);
     assert_non_null(p.bools);

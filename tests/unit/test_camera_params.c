@@ -35,7 +35,7 @@ static void fixture_init(fixture *f, const char *type)
     memset(f, 0, sizeof *f);
     strcpy(f->type, type);
     f->e.entity.type = f->type;
-    f->e.entity.loc = (file_loc){"scene.pbrt", 3, 1};
+    f->e.entity.loc = (file_loc){"scene.pbrt", 3, 1, NULL};
     params_init(&f->e.entity.params, f->e.entity.loc);
     f->e.camera_from_world = transform_identity();
     f->e.camera_from_world_end = transform_identity();
@@ -50,7 +50,7 @@ static void add_nums(fixture *f, param_type type, const char *name, int line, in
     memset(&p, 0, sizeof p);
     p.type = type;
     p.name = dup(name);
-    p.loc = (file_loc){"scene.pbrt", line, column};
+    p.loc = (file_loc){"scene.pbrt", line, column, NULL};
     p.count = count;
     p.nums = malloc(count * sizeof *p.nums);
     assert_non_null(p.nums);

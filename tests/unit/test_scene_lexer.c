@@ -30,7 +30,7 @@ static void test_tokens_and_locations(void **state)
                       "  \"float radius\" [ 2.5 -1e2 ]\n"
                       "\tLookAt .5 +3\n";
     lexer lx;
-    lexer_init(&lx, src, strlen(src), "a.pbrt");
+    lexer_init(&lx, src, strlen(src), "a.pbrt", NULL);
     expect_tok(&lx, TOK_IDENT, "Shape", 1, 1);
     expect_tok(&lx, TOK_STRING, "sphere", 1, 7);
     expect_tok(&lx, TOK_STRING, "float radius", 2, 3);
@@ -58,7 +58,7 @@ static void test_escapes(void **state)
     (void)state;
     const char *src = "\"a\\n\\t\\\\\\\"b\"";
     lexer lx;
-    lexer_init(&lx, src, strlen(src), "e");
+    lexer_init(&lx, src, strlen(src), "e", NULL);
     token t;
     hz_error err;
     assert_int_equal(lexer_next(&lx, &t, &err), HZ_OK);
@@ -71,7 +71,7 @@ static void test_escapes(void **state)
 static void expect_error(const char *src, const char *msg)
 {
     lexer lx;
-    lexer_init(&lx, src, strlen(src), "x.pbrt");
+    lexer_init(&lx, src, strlen(src), "x.pbrt", NULL);
     token t;
     hz_error err;
     hz_status st;
@@ -103,7 +103,7 @@ static void test_nul_byte_is_an_error(void **state)
     (void)state;
     const char src[] = {'A', ' ', '\0', 'B'};
     lexer lx;
-    lexer_init(&lx, src, sizeof src, "n");
+    lexer_init(&lx, src, sizeof src, "n", NULL);
     token t;
     hz_error err;
     assert_int_equal(lexer_next(&lx, &t, &err), HZ_OK);

@@ -520,7 +520,8 @@ static void test_include(void **state)
     snprintf(path, sizeof path, "%s/main.pbrt", dir);
     write_file(path, "WorldBegin\nInclude \"sub/a.pbrt\"\nShape \"disk\"\n");
     snprintf(path, sizeof path, "%s/sub/a.pbrt", dir);
-    write_file(path, "# a\nImport \"b.pbrt\"\n");
+    /* Names resolve from the top-level scene file's directory, as pbrt-v4. */
+    write_file(path, "# a\nImport \"sub/b.pbrt\"\n");
     snprintf(path, sizeof path, "%s/sub/b.pbrt", dir);
     write_file(path, "\n  Shape \"sphere\"\n");
     snprintf(path, sizeof path, "%s/main.pbrt", dir);
@@ -542,7 +543,7 @@ static void test_include(void **state)
 
     /* A cycle through two files, reported at the Include that closes it. */
     snprintf(path, sizeof path, "%s/sub/b.pbrt", dir);
-    write_file(path, "Include \"a.pbrt\"\n");
+    write_file(path, "Include \"sub/a.pbrt\"\n");
     snprintf(path, sizeof path, "%s/main.pbrt", dir);
     assert_int_equal(scene_parse_file(path, &sd, &err), HZ_ERROR);
     assert_non_null(strstr(err.message, "sub/b.pbrt:1:1: Include cycle: a.pbrt -> b.pbrt -> a.pbrt"));

@@ -11,6 +11,7 @@
 #include "assert_util.h"
 #include "film/exr.h"
 #include "film/png.h"
+#include <png.h>
 #include "core/noise.h"
 #include "textures/texture.h"
 
@@ -234,6 +235,88 @@ static void test_imagemap_png(void **state)
     unbuild(&b);
 }
 
+/* A 2x2 EXR named `name` of the channels R (1 2 / 3 4), G = 10 R, B = 0
+ * and, when a >= 0, A = a. */
+static void write_exr_rgba(const char *name, double a)
+{
+    exr_image img;
+    hz_error err;
+    int n = a >= 0.0 ? 4 : 3;
+    assert_int_equal(exr_image_alloc(&img, 2, 2, n, &err), HZ_OK);
+    const char *names[4] = {"A", "B", "G", "R"};
+    const float r[4] = {1, 2, 3, 4};
+    for (int c = 0; c < n; ++c) {
+        const char *cn = names[c + 4 - n];
+        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", cn);
+        for (int i = 0; i < 4; ++i)
+            img.channels[c].pixels[i] = cn[0] == 'R'   ? r[i]
+                                        : cn[0] == 'G' ? 10 * r[i]
+                                        : cn[0] == 'A' ? (float)a
+                                                       : 0;
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", HAZE_TMP, name);
+    assert_int_equal(exr_write(path, &img, &err), HZ_OK);
+    exr_image_free(&img);
+}
+
+/* pbrt-v4's float image textures: a bilinear lookup reads the mean of R, G
+ * and B (or A, when not all one), a texel lookup (point, ewa) reads R. */
+static void test_imagemap_float_channels(void **state)
+{
+    (void)state;
+    write_exr_rgba("f_rgb.exr", -1.0);
+    write_exr_rgba("f_rgba.exr", 0.25);
+    write_exr_rgba("f_rgb1.exr", 1.0);
+    char path[512];
+    snprintf(path, sizeof path, "%s/f_rgba.png", HAZE_TMP);
+    const uint8_t px[8] = {255, 0, 0, 51, 0, 255, 0, 255};
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    pi.width = 2;
+    pi.height = 1;
+    pi.format = PNG_FORMAT_RGBA;
+    assert_true(png_image_write_to_file(&pi, path, 0, px, 0, NULL));
+    built b;
+    hz_error err;
+#define FT(n, f, extra) "Texture \"" n "\" \"float\" \"imagemap\" \"string filename\" \"" f "\" " extra "\n"
+    assert_int_equal(build(FT("bl", "f_rgb.exr", "") FT("pt", "f_rgb.exr", "\"string filter\" \"point\"")
+                               FT("ew", "f_rgb.exr", "\"string filter\" \"ewa\"")
+                               FT("tr", "f_rgb.exr", "\"string filter\" \"trilinear\"")
+                               FT("al", "f_rgba.exr", "") FT("one", "f_rgb1.exr", "")
+                               FT("neg", "f_rgb.exr", "\"float scale\" -1")
+                               FT("png", "f_rgba.png", "\"string encoding\" \"linear\"")
+                               FT("pngpt", "f_rgba.png", "\"string filter\" \"point\"")
+                               "Texture \"sp\" \"spectrum\" \"imagemap\" \"string filename\" "
+                               "\"f_rgba.png\" \"string encoding\" \"linear\"\n",
+                           &b, &err),
+                     HZ_OK);
+#undef FT
+    assert_near(at(&b, "bl", false, 0.25, 0.75).r, 11.0 / 3.0, 1e-6);
+    assert_near(at(&b, "tr", false, 0.75, 0.25).r, 44.0 / 3.0, 1e-5);
+    assert_near(at(&b, "pt", false, 0.25, 0.75).r, 1.0, 0);
+    /* ewa: a texel lookup with a footprint, a bilinear one without. */
+    texture_ctx fp = {.u = 0.25, .v = 0.75, .dudx = 0.25};
+    assert_near(texture_eval(texture_set_find(b.set, "ew", false), &fp).r, 1.0, 1e-6);
+    assert_near(at(&b, "ew", false, 0.25, 0.75).r, 11.0 / 3.0, 1e-6);
+    /* The whole image's footprint: the coarsest level's R, for every filter. */
+    texture_ctx wide = {.u = 0.25, .v = 0.75, .dudx = 0.5};
+    assert_near(texture_eval(texture_set_find(b.set, "bl", false), &wide).r, 2.5, 1e-6);
+    assert_near(at(&b, "al", false, 0.25, 0.75).r, 0.25, 1e-6);
+    assert_near(at(&b, "one", false, 0.25, 0.75).r, 11.0 / 3.0, 1e-6);
+    /* Not inverted: not clamped. */
+    assert_near(at(&b, "neg", false, 0.25, 0.75).r, -11.0 / 3.0, 1e-6);
+    /* An RGBA PNG: bilinear reads alpha, point reads R (sRGB-decoded). */
+    assert_near(at(&b, "png", false, 0.25, 0.5).r, 0.2, 1e-6);
+    assert_near(at(&b, "png", false, 0.75, 0.5).r, 1.0, 1e-6);
+    assert_near(at(&b, "pngpt", false, 0.25, 0.5).r, 1.0, 1e-6);
+    assert_near(at(&b, "pngpt", false, 0.75, 0.5).r, 0.0, 1e-6);
+    /* Its colour is not premultiplied. */
+    assert_rgb(at(&b, "sp", true, 0.25, 0.5), 1, 0, 0, 1e-6);
+    unbuild(&b);
+}
+
 static void test_errors(void **state)
 {
     (void)state;
@@ -393,6 +476,7 @@ int main(void)
         cmocka_unit_test(test_bilerp),
         cmocka_unit_test(test_imagemap_exr),
         cmocka_unit_test(test_imagemap_png),
+        cmocka_unit_test(test_imagemap_float_channels),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_fbm_and_turbulence),
         cmocka_unit_test(test_dots_directionmix),
