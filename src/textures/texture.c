@@ -514,9 +514,10 @@ static double srgb_to_linear(double v)
     return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
 }
 
-/* An 8-bit PNG as rgb in [0, 1], decoded by `encoding` (sRGB, linear or
- * gamma g), and *alpha (decoded alike, as pbrt-v4) when it is an RGBA image;
- * as pbrt-v4, grey and palette images have none. */
+/* A PNG as rgb in [0, 1], decoded by `encoding` (sRGB, linear or gamma g),
+ * and *alpha (decoded alike, as pbrt-v4) when it is an RGBA image; as
+ * pbrt-v4, grey and palette images have none. 16-bit files are read at 16
+ * bits (libpng's simplified API gives them premultiplied: divided back). */
 static hz_status read_png(const char *path, file_loc loc, int enc, double gamma, tex_image *out,
                           float **alpha, hz_error *err)
 {
@@ -528,9 +529,12 @@ static hz_status read_png(const char *path, file_loc loc, int enc, double gamma,
         return hz_fail_at(err, loc, "cannot read PNG \"%s\": %s", path, im.message);
     bool rgba = (im.format & PNG_FORMAT_FLAG_COLOR) && (im.format & PNG_FORMAT_FLAG_ALPHA) &&
                 !(im.format & PNG_FORMAT_FLAG_COLORMAP);
-    im.format = PNG_FORMAT_RGBA; /* 8-bit: not premultiplied */
+    bool wide = im.format & PNG_FORMAT_FLAG_LINEAR;
+    /* 8-bit: the file's samples, not premultiplied; 16-bit: as stored
+     * (libpng takes 16-bit data as linear), premultiplied. */
+    im.format = wide ? PNG_FORMAT_LINEAR_RGB_ALPHA : PNG_FORMAT_RGBA;
     size_t n = (size_t)im.width * im.height;
-    unsigned char *buf = malloc(n ? 4 * n : 1);
+    unsigned char *buf = malloc(n ? PNG_IMAGE_SIZE(im) : 1);
     out->rgb = malloc((n ? 3 * n : 1) * sizeof *out->rgb);
     *alpha = rgba ? malloc((n ? n : 1) * sizeof **alpha) : NULL;
     if (!buf || !out->rgb || (rgba && !*alpha) ||
@@ -545,9 +549,15 @@ static hz_status read_png(const char *path, file_loc loc, int enc, double gamma,
     }
     out->width = (int)im.width;
     out->height = (int)im.height;
+    const uint16_t *buf16 = (const uint16_t *)(const void *)buf;
     for (size_t i = 0; i < n; ++i)
         for (int c = 0; c < 4; ++c) {
             double v = buf[4 * i + (size_t)c] / 255.0;
+            if (wide) {
+                double a = buf16[4 * i + 3] / 65535.0;
+                v = buf16[4 * i + (size_t)c] / 65535.0;
+                v = c == 3 ? a : a > 0.0 ? fmin(v / a, 1.0) : 0.0;
+            }
             float f = (float)(enc == 0 ? srgb_to_linear(v) : enc == 1 ? v : pow(v, gamma));
             if (c < 3)
                 out->rgb[3 * i + (size_t)c] = f;

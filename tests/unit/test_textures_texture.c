@@ -233,6 +233,28 @@ static void test_imagemap_png(void **state)
     assert_rgb(at(&b, "l", true, 0.75, 0.5), 0, 64 / 255.0, 1, 1e-6);
     assert_rgb(at(&b, "g", true, 0.25, 0.5), 1, (128 / 255.0) * (128 / 255.0), 0, 1e-6);
     unbuild(&b);
+    /* A 16-bit grey PNG: read at 16 bits, then decoded by the encoding. */
+    snprintf(path, sizeof path, "%s/tex_16.png", HAZE_TMP);
+    const uint16_t px16[2] = {32768, 65535};
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    pi.width = 2;
+    pi.height = 1;
+    pi.format = PNG_FORMAT_LINEAR_Y;
+    assert_true(png_image_write_to_file(&pi, path, 0, px16, 0, NULL));
+    assert_int_equal(
+        build("Texture \"l\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_16.png\" "
+              "\"string filter\" \"point\" \"string encoding\" \"linear\"\n"
+              "Texture \"s\" \"float\" \"imagemap\" \"string filename\" \"tex_16.png\" "
+              "\"string filter\" \"point\"\n",
+              &b, &err),
+        HZ_OK);
+    double h = 32768 / 65535.0;
+    assert_rgb(at(&b, "l", true, 0.25, 0.5), h, h, h, 1e-6);
+    assert_near(at(&b, "s", false, 0.25, 0.5).r, pow((h + 0.055) / 1.055, 2.4), 1e-6);
+    assert_near(at(&b, "s", false, 0.75, 0.5).r, 1.0, 1e-6);
+    unbuild(&b);
 }
 
 /* A 2x2 EXR named `name` of the channels R (1 2 / 3 4), G = 10 R, B = 0
