@@ -2,7 +2,6 @@
 
 #include <ctype.h>
 #include <math.h>
-#include <png.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,6 +9,7 @@
 #include "core/noise.h"
 #include "core/path.h"
 #include "film/exr.h"
+#include "film/png.h"
 
 typedef enum {
     TEX_CONSTANT,
@@ -514,57 +514,41 @@ static double srgb_to_linear(double v)
     return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
 }
 
-/* A PNG as rgb in [0, 1], decoded by `encoding` (sRGB, linear or gamma g),
- * and *alpha (decoded alike, as pbrt-v4) when it is an RGBA image; as
- * pbrt-v4, grey and palette images have none. 16-bit files are read at 16
- * bits (libpng's simplified API gives them premultiplied: divided back). */
+/* A PNG as rgb in [0, 1], its samples as stored (8 or 16 bits; no gAMA or
+ * sRGB chunk applied, as pbrt-v4) decoded by `encoding` (sRGB, linear or
+ * gamma g), and *alpha (decoded alike, as pbrt-v4) when it is an RGBA image;
+ * as pbrt-v4, grey and palette images have none. */
 static hz_status read_png(const char *path, file_loc loc, int enc, double gamma, tex_image *out,
                           float **alpha, hz_error *err)
 {
-    png_image im;
-    memset(&im, 0, sizeof im);
-    im.version = PNG_IMAGE_VERSION;
     *alpha = NULL;
-    if (!png_image_begin_read_from_file(&im, path))
-        return hz_fail_at(err, loc, "cannot read PNG \"%s\": %s", path, im.message);
-    bool rgba = (im.format & PNG_FORMAT_FLAG_COLOR) && (im.format & PNG_FORMAT_FLAG_ALPHA) &&
-                !(im.format & PNG_FORMAT_FLAG_COLORMAP);
-    bool wide = im.format & PNG_FORMAT_FLAG_LINEAR;
-    /* 8-bit: the file's samples, not premultiplied; 16-bit: as stored
-     * (libpng takes 16-bit data as linear), premultiplied. */
-    im.format = wide ? PNG_FORMAT_LINEAR_RGB_ALPHA : PNG_FORMAT_RGBA;
-    size_t n = (size_t)im.width * im.height;
-    unsigned char *buf = malloc(n ? PNG_IMAGE_SIZE(im) : 1);
+    png_samples ps;
+    hz_error e;
+    if (png_read_samples(path, &ps, &e) != HZ_OK)
+        return hz_fail_at(err, loc, "cannot read PNG \"%s\": %s", path, e.message);
+    size_t n = (size_t)ps.width * (size_t)ps.height;
     out->rgb = malloc((n ? 3 * n : 1) * sizeof *out->rgb);
-    *alpha = rgba ? malloc((n ? n : 1) * sizeof **alpha) : NULL;
-    if (!buf || !out->rgb || (rgba && !*alpha) ||
-        !png_image_finish_read(&im, NULL, buf, 0, NULL)) {
-        png_image_free(&im);
-        free(buf);
+    *alpha = ps.rgba ? malloc((n ? n : 1) * sizeof **alpha) : NULL;
+    if (!out->rgb || (ps.rgba && !*alpha)) {
         free(out->rgb);
         free(*alpha);
         out->rgb = NULL;
         *alpha = NULL;
-        return hz_fail_at(err, loc, "cannot read PNG \"%s\"", path);
+        png_samples_free(&ps);
+        return hz_fail(err, "out of memory");
     }
-    out->width = (int)im.width;
-    out->height = (int)im.height;
-    const uint16_t *buf16 = (const uint16_t *)(const void *)buf;
+    out->width = ps.width;
+    out->height = ps.height;
     for (size_t i = 0; i < n; ++i)
-        for (int c = 0; c < 4; ++c) {
-            double v = buf[4 * i + (size_t)c] / 255.0;
-            if (wide) {
-                double a = buf16[4 * i + 3] / 65535.0;
-                v = buf16[4 * i + (size_t)c] / 65535.0;
-                v = c == 3 ? a : a > 0.0 ? fmin(v / a, 1.0) : 0.0;
-            }
+        for (int c = 0; c < (ps.rgba ? 4 : 3); ++c) {
+            double v = ps.samples[4 * i + (size_t)c] / (double)ps.max;
             float f = (float)(enc == 0 ? srgb_to_linear(v) : enc == 1 ? v : pow(v, gamma));
             if (c < 3)
                 out->rgb[3 * i + (size_t)c] = f;
-            else if (rgba)
+            else
                 (*alpha)[i] = f;
         }
-    free(buf);
+    png_samples_free(&ps);
     return HZ_OK;
 }
 

@@ -255,6 +255,34 @@ static void test_imagemap_png(void **state)
     assert_near(at(&b, "s", false, 0.25, 0.5).r, pow((h + 0.055) / 1.055, 2.4), 1e-6);
     assert_near(at(&b, "s", false, 0.75, 0.5).r, 1.0, 1e-6);
     unbuild(&b);
+    /* An 8-bit grey PNG whose gAMA chunk says linear: its sample is read as
+     * stored (pbrt-v4 ignores gAMA), 128 / 255 with encoding "linear". */
+    static const uint8_t gama_png[83] = {
+        0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0x00, 0x00, 0x00, 0x0d, 0x49, 0x48,
+        0x44, 0x52, 0x00, 0x00, 0x00, 0x01, 0x00, 0x00, 0x00, 0x01, 0x08, 0x00, 0x00, 0x00,
+        0x00, 0x3a, 0x7e, 0x9b, 0x55, 0x00, 0x00, 0x00, 0x04, 0x67, 0x41, 0x4d, 0x41, 0x00,
+        0x01, 0x86, 0xa0, 0x31, 0xe8, 0x96, 0x5f, 0x00, 0x00, 0x00, 0x0a, 0x49, 0x44, 0x41,
+        0x54, 0x78, 0x9c, 0x63, 0x68, 0x00, 0x00, 0x00, 0x82, 0x00, 0x81, 0x77, 0xcd, 0x72,
+        0xb6, 0x00, 0x00, 0x00, 0x00, 0x49, 0x45, 0x4e, 0x44, 0xae, 0x42, 0x60, 0x82};
+    snprintf(path, sizeof path, "%s/tex_gama.png", HAZE_TMP);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(gama_png, 1, sizeof gama_png, f), sizeof gama_png);
+    fclose(f);
+    assert_int_equal(
+        build("Texture \"l\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_gama.png\" "
+              "\"string encoding\" \"linear\"\n",
+              &b, &err),
+        HZ_OK);
+    assert_rgb(at(&b, "l", true, 0.5, 0.5), 128 / 255.0, 128 / 255.0, 128 / 255.0, 1e-6);
+    unbuild(&b);
+    /* A file that is not a PNG: an error naming it. */
+    f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs("not a png", f);
+    fclose(f);
+    expect_error("Texture \"l\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_gama.png\"\n",
+                 "cannot read PNG");
 }
 
 /* A 2x2 EXR named `name` of the channels R (1 2 / 3 4), G = 10 R, B = 0
