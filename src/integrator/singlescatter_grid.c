@@ -242,6 +242,9 @@ typedef struct {
     strata s;
     rgb T, Lseg;
     double tau; /* optical distance left to the next tentative collision */
+    /* raymarch: a deterministic end where T falls below this, instead of
+     * roulette, so that a pixel centre's value does not depend on the seed */
+    double cutoff;
     sampler_state *u;
     media_walk *walk;
 } segment_walk;
@@ -338,7 +341,8 @@ static bool march_strata(segment_walk *sw, double b)
                                                                    sigma_t, step_t)),
                                        inscattered_at(sw, s->t)));
         sw->T = rgb_mul(sw->T, step_t);
-        if (!singlescatter_roulette(&sw->T, &sw->walk->r)) {
+        if (sw->cutoff > 0.0 ? rgb_max(sw->T) < sw->cutoff
+                             : !singlescatter_roulette(&sw->T, &sw->walk->r)) {
             strata_next(s);
             return false;
         }
@@ -426,6 +430,8 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
                     : mode == TRANSMITTANCE_RAYMARCH ? 0.5
                                                      : -1.0;
     strata_make(&sw.s, &sw.gr, t0, t1, set->step, offset, &walk->r);
+    if (mode == TRANSMITTANCE_RAYMARCH)
+        sw.cutoff = SINGLESCATTER_MARCH_CUTOFF * rgb_max(*beta);
     if (!marching)
         sw.tau = exp1(&walk->r);
     double sigma_max = rgb_max(sw.sigma_t);

@@ -31,6 +31,10 @@
 
 /* Below this largest transmittance component a walk plays Russian roulette. */
 #define SINGLESCATTER_RR_THRESHOLD 1e-2
+/* `raymarch` camera rays end where their transmittance falls below this
+ * fraction of their throughput at entry (what is left behind is at most that
+ * fraction of the light beyond): deterministic, unlike roulette. */
+#define SINGLESCATTER_MARCH_CUTOFF 1e-4
 
 /* Transmittance from `o` along unit `w` to distance `tmax` (INFINITY: to the end
  * of the scene), starting in `medium` (-1 vacuum): every medium segment
