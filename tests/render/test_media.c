@@ -1,9 +1,11 @@
+#define _POSIX_C_SOURCE 200809L
 /* Analytic checks of haze's single-scattering media: scenes whose radiance has
  * a closed form (Beer–Lambert, airlight) or that must agree with each other
  * (a constant-density grid against a homogeneous box, the three transmittance
  * estimators), evaluated through render_scene_li for the camera ray through
  * pixel centres. Set HAZE_MEDIA_VERBOSE=1 to print the measured errors. */
 #include "media_test_util.h"
+#include "cli_util.h"
 
 #include "geometry/geometry.h" /* GEOMETRY_SHADOW_EPSILON */
 
@@ -689,7 +691,7 @@ static void test_wall_shadows_fog(void **state)
 #define SMOKE_W 16
 #define SMOKE_H 32
 
-static char *smoke_scene(const char *integrator)
+static char *smoke_scene_scaled(const char *integrator, double scale)
 {
     char *encl = box_mesh(v3(-0.5, -0.1, -0.5), v3(0.4, 2.1, 0.45));
     char *s = sfmt("LookAt 0 1 4  -0.05 1 0  0 1 0\n"
@@ -702,12 +704,50 @@ static char *smoke_scene(const char *integrator)
                    "\"point3 to\" [0 0 0]\n"
                    "MakeNamedMedium \"smoke\" \"string type\" \"nanovdb\" "
                    "\"string filename\" \"%s/smoke.vdb\" "
-                   "\"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [4 6 8] \"float scale\" 2\n"
+                   "\"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [4 6 8] \"float scale\" %g\n"
                    "AttributeBegin\nMediumInterface \"smoke\" \"\"\nMaterial \"interface\"\n%s"
                    "AttributeEnd\n",
-                   SMOKE_W, SMOKE_H, integrator, VOLUMES, encl);
+                   SMOKE_W, SMOKE_H, integrator, VOLUMES, scale, encl);
     free(encl);
     return s;
+}
+
+static char *smoke_scene(const char *integrator) { return smoke_scene_scaled(integrator, 2.0); }
+
+/* raymarch at pixel centres is deterministic, in thick media too (its march
+ * ends at a transmittance cut-off, not by roulette): two seeds give the same
+ * image, and two seeds of jittered marching do not. */
+static void test_raymarch_seed_independent(void **state)
+{
+    (void)state;
+    char out[4096], path[512], args[2048];
+    const char *modes[2] = {"raymarch", "jittered"};
+    for (int m = 0; m < 2; ++m) {
+        char integ[256];
+        snprintf(integ, sizeof integ,
+                 "Integrator \"singlescatter\" \"string transmittance\" \"%s\" "
+                 "\"float stepsize\" 0.5",
+                 modes[m]);
+        char *text = smoke_scene_scaled(integ, 40.0);
+        /* The Sampler's seed (which wins over --seed): 11, then 12. */
+        char *seed_at = strstr(text, "\"integer seed\" 11");
+        assert_non_null(seed_at);
+        for (int seed = 0; seed < 2; ++seed) {
+            seed_at[strlen("\"integer seed\" 1")] = (char)('1' + seed);
+            snprintf(path, sizeof path, "%s/seed_%s.pbrt", HAZE_TMP, modes[m]);
+            write_text_file(path, text);
+            snprintf(args, sizeof args,
+                     "render '%s' -o '%s/seed_%s_%d.exr' --quiet --spp 1 "
+                     "--disable-pixel-jitter",
+                     path, HAZE_TMP, modes[m], seed);
+            assert_int_equal(run_haze(args, out, sizeof out), 0);
+        }
+        free(text);
+        char a[600], b[600];
+        snprintf(a, sizeof a, "%s/seed_%s_0.exr", HAZE_TMP, modes[m]);
+        snprintf(b, sizeof b, "%s/seed_%s_1.exr", HAZE_TMP, modes[m]);
+        assert_true(exr_pixels_equal(a, b) == (m == 0));
+    }
 }
 
 /* Mean radiance over the image and its standard error. */
@@ -1047,6 +1087,7 @@ int main(void)
         cmocka_unit_test(test_lit_room),
         cmocka_unit_test(test_wall_shadows_fog),
         cmocka_unit_test(test_estimators_agree),
+        cmocka_unit_test(test_raymarch_seed_independent),
         cmocka_unit_test(test_extreme_density),
         cmocka_unit_test(test_extreme_density_grid),
         cmocka_unit_test(test_vanishing_density),
