@@ -139,24 +139,33 @@ static void test_bilerp(void **state)
     unbuild(&b);
 }
 
-/* A 2x2 EXR: top row (1, 2), bottom row (3, 4) in R; G = 10 R; B = 0. */
-static void write_exr(const char *name)
+/* A 2x2 EXR named `name` of the channels R (1 2 / 3 4), G = 10 R, B = 0
+ * and, when a >= 0, A = a. */
+static void write_exr_rgba(const char *name, double a)
 {
     exr_image img;
     hz_error err;
-    assert_int_equal(exr_image_alloc(&img, 2, 2, 3, &err), HZ_OK);
-    const char *names[3] = {"B", "G", "R"};
+    int n = a >= 0.0 ? 4 : 3;
+    assert_int_equal(exr_image_alloc(&img, 2, 2, n, &err), HZ_OK);
+    const char *names[4] = {"A", "B", "G", "R"};
     const float r[4] = {1, 2, 3, 4};
-    for (int c = 0; c < 3; ++c) {
-        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
+    for (int c = 0; c < n; ++c) {
+        const char *cn = names[c + 4 - n];
+        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", cn);
         for (int i = 0; i < 4; ++i)
-            img.channels[c].pixels[i] = c == 2 ? r[i] : c == 1 ? 10 * r[i] : 0;
+            img.channels[c].pixels[i] = cn[0] == 'R'   ? r[i]
+                                        : cn[0] == 'G' ? 10 * r[i]
+                                        : cn[0] == 'A' ? (float)a
+                                                       : 0;
     }
     char path[512];
     snprintf(path, sizeof path, "%s/%s", HAZE_TMP, name);
     assert_int_equal(exr_write(path, &img, &err), HZ_OK);
     exr_image_free(&img);
 }
+
+/* A 2x2 EXR: top row (1, 2), bottom row (3, 4) in R; G = 10 R; B = 0. */
+static void write_exr(const char *name) { write_exr_rgba(name, -1.0); }
 
 static void test_imagemap_exr(void **state)
 {
@@ -210,6 +219,20 @@ static void test_imagemap_exr(void **state)
     unbuild(&b);
 }
 
+/* A 2x1 PNG named `name` in HAZE_TMP, of libpng's simplified `format`. */
+static void write_png_2x1(const char *name, png_uint_32 format, const void *pixels)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", HAZE_TMP, name);
+    png_image pi;
+    memset(&pi, 0, sizeof pi);
+    pi.version = PNG_IMAGE_VERSION;
+    pi.width = 2;
+    pi.height = 1;
+    pi.format = format;
+    assert_true(png_image_write_to_file(&pi, path, 0, pixels, 0, NULL));
+}
+
 static void test_imagemap_png(void **state)
 {
     (void)state;
@@ -234,15 +257,8 @@ static void test_imagemap_png(void **state)
     assert_rgb(at(&b, "g", true, 0.25, 0.5), 1, (128 / 255.0) * (128 / 255.0), 0, 1e-6);
     unbuild(&b);
     /* A 16-bit grey PNG: read at 16 bits, then decoded by the encoding. */
-    snprintf(path, sizeof path, "%s/tex_16.png", HAZE_TMP);
     const uint16_t px16[2] = {32768, 65535};
-    png_image pi;
-    memset(&pi, 0, sizeof pi);
-    pi.version = PNG_IMAGE_VERSION;
-    pi.width = 2;
-    pi.height = 1;
-    pi.format = PNG_FORMAT_LINEAR_Y;
-    assert_true(png_image_write_to_file(&pi, path, 0, px16, 0, NULL));
+    write_png_2x1("tex_16.png", PNG_FORMAT_LINEAR_Y, px16);
     assert_int_equal(
         build("Texture \"l\" \"spectrum\" \"imagemap\" \"string filename\" \"tex_16.png\" "
               "\"string filter\" \"point\" \"string encoding\" \"linear\"\n"
@@ -285,31 +301,6 @@ static void test_imagemap_png(void **state)
                  "cannot read PNG");
 }
 
-/* A 2x2 EXR named `name` of the channels R (1 2 / 3 4), G = 10 R, B = 0
- * and, when a >= 0, A = a. */
-static void write_exr_rgba(const char *name, double a)
-{
-    exr_image img;
-    hz_error err;
-    int n = a >= 0.0 ? 4 : 3;
-    assert_int_equal(exr_image_alloc(&img, 2, 2, n, &err), HZ_OK);
-    const char *names[4] = {"A", "B", "G", "R"};
-    const float r[4] = {1, 2, 3, 4};
-    for (int c = 0; c < n; ++c) {
-        const char *cn = names[c + 4 - n];
-        snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", cn);
-        for (int i = 0; i < 4; ++i)
-            img.channels[c].pixels[i] = cn[0] == 'R'   ? r[i]
-                                        : cn[0] == 'G' ? 10 * r[i]
-                                        : cn[0] == 'A' ? (float)a
-                                                       : 0;
-    }
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s", HAZE_TMP, name);
-    assert_int_equal(exr_write(path, &img, &err), HZ_OK);
-    exr_image_free(&img);
-}
-
 /* pbrt-v4's float image textures: a bilinear lookup reads the mean of R, G
  * and B (or A, when not all one), a texel lookup (point, ewa) reads R. */
 static void test_imagemap_float_channels(void **state)
@@ -318,16 +309,8 @@ static void test_imagemap_float_channels(void **state)
     write_exr_rgba("f_rgb.exr", -1.0);
     write_exr_rgba("f_rgba.exr", 0.25);
     write_exr_rgba("f_rgb1.exr", 1.0);
-    char path[512];
-    snprintf(path, sizeof path, "%s/f_rgba.png", HAZE_TMP);
     const uint8_t px[8] = {255, 0, 0, 51, 0, 255, 0, 255};
-    png_image pi;
-    memset(&pi, 0, sizeof pi);
-    pi.version = PNG_IMAGE_VERSION;
-    pi.width = 2;
-    pi.height = 1;
-    pi.format = PNG_FORMAT_RGBA;
-    assert_true(png_image_write_to_file(&pi, path, 0, px, 0, NULL));
+    write_png_2x1("f_rgba.png", PNG_FORMAT_RGBA, px);
     built b;
     hz_error err;
 #define FT(n, f, extra) "Texture \"" n "\" \"float\" \"imagemap\" \"string filename\" \"" f "\" " extra "\n"
