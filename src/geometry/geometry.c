@@ -257,6 +257,58 @@ static void sphere_occluded(const struct RTCOccludedFunctionNArguments *args)
         r->tfar = -INFINITY;
 }
 
+static void curve_bounds(const struct RTCBoundsFunctionArguments *args)
+{
+    const geom_shape *s = args->geometryUserPtr;
+    vec3 lo, hi;
+    geometry_curve_bounds(s, args->primID, &lo, &hi);
+    const double l[3] = {lo.x, lo.y, lo.z}, h[3] = {hi.x, hi.y, hi.z};
+    float *b = &args->bounds_o->lower_x;
+    for (int k = 0; k < 3; ++k) {
+        double pad = 1e-6 * fmax(fabs(l[k]), fabs(h[k]));
+        b[k] = (float)(l[k] - pad);
+        b[4 + k] = (float)(h[k] + pad);
+    }
+}
+
+static void curve_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    assert(args->N == 1);
+    if (!args->valid[0])
+        return;
+    const geom_shape *s = args->geometryUserPtr;
+    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
+    vec3 o = v3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z);
+    vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
+    double u = 0.0;
+    double t = geometry_curve_hit(s, args->primID, o, d, rh->ray.tnear, rh->ray.tfar, &u);
+    if (t < 0.0 || !((float)t < rh->ray.tfar))
+        return;
+    rh->ray.tfar = (float)t;
+    rh->hit.u = (float)u;
+    rh->hit.v = 0.0f;
+    rh->hit.Ng_x = rh->hit.Ng_y = rh->hit.Ng_z = 0.0f; /* recomputed in double later */
+    rh->hit.primID = args->primID;
+    rh->hit.geomID = args->geomID;
+    rh->hit.instID[0] = args->context->instID[0];
+}
+
+static void curve_occluded(const struct RTCOccludedFunctionNArguments *args)
+{
+    assert(args->N == 1);
+    if (!args->valid[0])
+        return;
+    const geom_shape *s = args->geometryUserPtr;
+    if (s->material->kind == MATERIAL_INTERFACE)
+        return;
+    struct RTCRay *r = (struct RTCRay *)args->ray;
+    vec3 o = v3(r->org_x, r->org_y, r->org_z);
+    vec3 d = v3(r->dir_x, r->dir_y, r->dir_z);
+    double u;
+    if (geometry_curve_hit(s, args->primID, o, d, r->tnear, r->tfar, &u) >= 0.0)
+        r->tfar = -INFINITY;
+}
+
 /* Shadow rays pass through interfaces (they bound media, not surfaces). */
 static void reject_occlusion(const struct RTCFilterFunctionNArguments *args)
 {
@@ -276,6 +328,62 @@ static hz_status resolve_medium(const scene_desc *sd, const char *name, file_loc
     return hz_fail_at(err, loc, "MediumInterface names medium \"%s\", which is not defined "
                                 "(MakeNamedMedium)",
                       name);
+}
+
+/* pbrt-v4's curve: Embree user geometry of 2^splitdepth pieces per segment,
+ * intersected by pbrt-v4's algorithm (curve.c). Widths scale with the
+ * transform (its volume's cube root: the scale of a similarity). */
+static hz_status build_curves(RTCDevice device, shape_entity *se, const shape_geometry *g,
+                              transform space_from_object, bool interface, bool cutout,
+                              geom_shape *out, RTCGeometry *geom_out, hz_error *err)
+{
+    if (interface && out->medium_inside != out->medium_outside)
+        return hz_fail_at(err, se->entity.loc,
+                          "a curve cannot separate media (it encloses no volume): give it no "
+                          "MediumInterface, or the same medium on both sides");
+    if (cutout)
+        return hz_fail_at(err, params_loc(&se->entity.params, "alpha"),
+                          "\"alpha\" on a curve is not supported");
+    size_t n = g->segment_count;
+    if (n > (UINT32_MAX >> g->split))
+        return hz_fail_at(err, se->entity.loc, "curve has too many segments");
+    double scale = cbrt(fabs(transform_det3(&space_from_object)));
+    out->curve = g->curve;
+    out->curve_split = g->split;
+    out->segment_count = n;
+    out->curve_cp = malloc(12 * n * sizeof *out->curve_cp);
+    out->curve_w = malloc(2 * n * sizeof *out->curve_w);
+    out->curve_n = g->normals ? malloc(6 * n * sizeof *out->curve_n) : NULL;
+    if (!out->curve_cp || !out->curve_w || (g->normals && !out->curve_n))
+        return hz_fail(err, "out of memory");
+    for (size_t s = 0; s < n; ++s) {
+        out->curve_w[2 * s] = scale * g->width[2 * s];
+        out->curve_w[2 * s + 1] = scale * g->width[2 * s + 1];
+        for (int e = 0; g->normals && e < 2; ++e) {
+            const double *gn = &g->normals[6 * s + 3 * (size_t)e];
+            vec3 nn = v3_normalize(transform_normal(&space_from_object, v3(gn[0], gn[1], gn[2])));
+            out->curve_n[6 * s + 3 * (size_t)e] = nn.x;
+            out->curve_n[6 * s + 3 * (size_t)e + 1] = nn.y;
+            out->curve_n[6 * s + 3 * (size_t)e + 2] = nn.z;
+        }
+        for (int i = 0; i < 4; ++i) {
+            const double *c = &g->cp[12 * s + 3 * (size_t)i];
+            vec3 q = transform_point(&space_from_object, v3(c[0], c[1], c[2]));
+            out->curve_cp[12 * s + 3 * (size_t)i] = q.x;
+            out->curve_cp[12 * s + 3 * (size_t)i + 1] = q.y;
+            out->curve_cp[12 * s + 3 * (size_t)i + 2] = q.z;
+        }
+    }
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    if (!geom)
+        return hz_fail(err, "cannot create an Embree geometry");
+    rtcSetGeometryUserPrimitiveCount(geom, (unsigned)(n << g->split));
+    rtcSetGeometryUserData(geom, out);
+    rtcSetGeometryBoundsFunction(geom, curve_bounds, NULL);
+    rtcSetGeometryIntersectFunction(geom, curve_intersect);
+    rtcSetGeometryOccludedFunction(geom, curve_occluded);
+    *geom_out = geom;
+    return HZ_OK;
 }
 
 static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
@@ -335,6 +443,12 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
         rtcSetGeometryBoundsFunction(geom, sphere_bounds, NULL);
         rtcSetGeometryIntersectFunction(geom, sphere_intersect);
         rtcSetGeometryOccludedFunction(geom, sphere_occluded);
+    } else if (g.kind == GEOMETRY_CURVES) {
+        if (build_curves(device, se, &g, space_from_object, interface, cutout, out, &geom, err) !=
+            HZ_OK) {
+            shape_geometry_free(&g);
+            return HZ_ERROR;
+        }
     } else if (g.triangle_count > 0) {
         geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
         float *p = rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -815,12 +929,21 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
     return HZ_OK;
 }
 
+static void free_shape_arrays(geom_shape *s)
+{
+    free(s->n);
+    free(s->uv);
+    free(s->curve_cp);
+    free(s->curve_w);
+    free(s->curve_n);
+}
+
 void geometry_destroy(geometry *g)
 {
     if (!g)
         return;
     for (size_t i = 0; i < g->shape_count; ++i)
-        free(g->shapes[i].n), free(g->shapes[i].uv);
+        free_shape_arrays(&g->shapes[i]);
     free(g->shapes);
     if (g->shape_instances) {
         for (size_t i = 0; i < g->shape_count; ++i) {
@@ -836,7 +959,7 @@ void geometry_destroy(geometry *g)
     }
     for (size_t o = 0; o < g->object_count; ++o) {
         for (size_t i = 0; i < g->objects[o].shape_count; ++i)
-            free(g->objects[o].shapes[i].n), free(g->objects[o].shapes[i].uv);
+            free_shape_arrays(&g->objects[o].shapes[i]);
         free(g->objects[o].shapes);
         if (g->objects[o].scene)
             rtcReleaseScene(g->objects[o].scene);
@@ -1064,11 +1187,84 @@ static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2
     v3_basis(v3_normalize(v3_cross(dp02, dp12)), &hit->dpdu, &hit->dpdv);
 }
 
+/* A curve hit as pbrt-v4's Curve::Intersect reports it, at Embree's curve
+ * parameter u of segment `prim` and its t: dp/du from the Bezier; dp/dv
+ * across the width in the plane facing the ray (a ribbon: across its
+ * normal, the width foreshortened by it); v from the side and distance of
+ * the point to the centre line (0.5 on it); a "cylinder" turns dp/dv about
+ * dp/du by -lerp(v, -90, 90) degrees, so that the normal cross(dp/du, dp/dv)
+ * rounds over the width. */
+static void curve_at(const geom_shape *s, unsigned prim, double u, vec3 o, vec3 d, double t,
+                     geom_hit *hit)
+{
+    size_t seg = prim >> s->curve_split;
+    const double *c = &s->curve_cp[12 * seg];
+    vec3 P[4];
+    for (int i = 0; i < 4; ++i)
+        P[i] = v3(c[3 * i], c[3 * i + 1], c[3 * i + 2]);
+    u = hz_clamp(u, 0.0, 1.0);
+    double a = 1.0 - u;
+    vec3 centre = v3_add(v3_add(v3_scale(P[0], a * a * a), v3_scale(P[1], 3.0 * a * a * u)),
+                         v3_add(v3_scale(P[2], 3.0 * a * u * u), v3_scale(P[3], u * u * u)));
+    vec3 dpdu = v3_scale(v3_add(v3_add(v3_scale(v3_sub(P[1], P[0]), a * a),
+                                       v3_scale(v3_sub(P[2], P[1]), 2.0 * a * u)),
+                                v3_scale(v3_sub(P[3], P[2]), u * u)),
+                         3.0);
+    if (!(v3_length_sq(dpdu) > 0.0))
+        dpdu = v3_sub(P[3], P[0]);
+    hit->p = v3_add(o, v3_scale(d, t));
+    double width = geometry_curve_width(s, seg, u);
+    vec3 dn = v3_normalize(d);
+    vec3 across = v3_cross(dn, dpdu);
+    across = v3_length_sq(across) > 0.0 ? v3_normalize(across) : v3(0.0, 0.0, 0.0);
+    vec3 n_ribbon = v3(0.0, 0.0, 0.0);
+    if (s->curve == CURVE_RIBBON) {
+        n_ribbon = geometry_curve_ribbon_normal(s, seg, u);
+        width *= fabs(v3_dot(n_ribbon, dn));
+    }
+    /* pbrt-v4's v: the whole distance from the ray to the curve point in
+     * the plane facing the ray, on the side `across` tells. */
+    vec3 off = v3_sub(hit->p, centre);
+    off = v3_sub(off, v3_scale(dn, v3_dot(off, dn)));
+    double dist = v3_length(off);
+    double v = width > 0.0 ? 0.5 + (v3_dot(off, across) < 0.0 ? -dist : dist) / width : 0.5;
+    v = hz_clamp(v, 0.0, 1.0);
+    vec3 dpdv;
+    if (s->curve == CURVE_RIBBON) {
+        vec3 x = v3_cross(n_ribbon, dpdu);
+        dpdv = v3_scale(v3_length_sq(x) > 0.0 ? v3_normalize(x) : across, width);
+    } else {
+        dpdv = v3_scale(across, width);
+        if (s->curve == CURVE_CYLINDER) {
+            double phi = -(-90.0 + 180.0 * v) * HZ_PI / 180.0;
+            vec3 axis = v3_normalize(dpdu);
+            dpdv = v3_add(v3_scale(dpdv, cos(phi)), v3_scale(v3_cross(axis, dpdv), sin(phi)));
+        }
+    }
+    vec3 n = v3_cross(dpdu, dpdv);
+    n = v3_length_sq(n) > 0.0 ? v3_normalize(n) : v3_neg(dn);
+    hit->ng = hit->ns = s->flip_normal ? v3_neg(n) : n;
+    hit->p_error = width;
+    if (s->hit_uv) {
+        hit->dudx = hit->dudy = hit->dvdx = hit->dvdy = 0.0;
+        hit->dpdx = hit->dpdy = v3(0.0, 0.0, 0.0);
+        hit->u = u;
+        hit->v = v;
+        hit->dpdu = dpdu;
+        hit->dpdv = dpdv;
+    }
+}
+
 /* Fills p, ng, ns in the shape's own space (render or prototype), for the
  * ray o + t d of that space; d = 0 asks for the point at barycentrics (u, v). */
 static void surface_at(const geom_shape *s, unsigned prim, double u, double v, vec3 o, vec3 d,
                        double t, geom_hit *hit)
 {
+    hit->p_error = 0.0;
+    if (s->kind == GEOMETRY_CURVES) {
+        curve_at(s, prim, u, o, d, t, hit);
+        return;
+    }
     if (s->kind == GEOMETRY_SPHERE) {
         transform object_from_space = transform_inverse(s->space_from_object);
         vec3 po = transform_point(&object_from_space, v3_add(o, v3_scale(d, t)));
@@ -1202,6 +1398,7 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
     surface_at(s, rh.hit.primID, rh.hit.u, rh.hit.v, transform_point(&instance_from_render, o),
                transform_vector(&instance_from_render, d), rh.ray.tfar, hit);
     hit->p = transform_point(&render_from_instance, hit->p);
+    hit->p_error *= cbrt(fabs(transform_det3(&render_from_instance)));
     hit->ng = v3_normalize(transform_normal(&render_from_instance, hit->ng));
     hit->ns = v3_normalize(transform_normal(&render_from_instance, hit->ns));
     if (s->hit_uv) {
@@ -1237,6 +1434,15 @@ static float offset_coord(float p, float n)
     return r;
 }
 
+vec3 geometry_leave_origin(const geom_hit *h, vec3 w)
+{
+    vec3 n = v3_dot(h->ng, w) < 0.0 ? v3_neg(h->ng) : h->ng;
+    vec3 p = h->p;
+    if (h->p_error > 0.0)
+        p = v3_add(p, v3_scale(n, h->p_error * (fabs(n.x) + fabs(n.y) + fabs(n.z))));
+    return geometry_offset_origin(p, n, w);
+}
+
 vec3 geometry_offset_origin(vec3 p, vec3 n, vec3 w)
 {
     if (v3_dot(n, w) < 0.0)
@@ -1251,7 +1457,7 @@ double geometry_step_past(const geom_hit *h, vec3 o, vec3 d)
 {
     double t_hit = v3_dot(v3_sub(h->p, o), d) / v3_dot(d, d);
     double dn = v3_dot(d, h->ng);
-    vec3 past = geometry_offset_origin(h->p, h->ng, d);
+    vec3 past = geometry_leave_origin(h, d);
     double dt = dn != 0.0 ? v3_dot(v3_sub(past, h->p), h->ng) / dn : 0.0;
     /* Past Embree's own (float) t of the hit too, whatever rounding put
      * h->p at. */

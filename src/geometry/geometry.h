@@ -75,6 +75,16 @@ typedef struct {
     double zmin, zmax, phimax;
     bool partial;
     double unit_area;            /* shape_geometry's: what area lights' "power" divides */
+    /* curves (Embree's flat or normal-oriented Bezier curves): each segment's
+     * 4 control points in this space (in double, for the hit's frame), its
+     * widths at the ends (object widths times the transform's scale) and,
+     * for ribbons, its unit normals at the ends */
+    curve_type curve;
+    size_t segment_count;
+    double *curve_cp; /* 12 per segment */
+    double *curve_w;  /* 2 per segment */
+    double *curve_n;  /* 6 per segment, or NULL */
+    int curve_split;  /* pbrt-v4's "splitdepth": 2^split Embree primitives per segment */
     /* pbrt-v4's alpha cut-out: hits where the alpha (the texture at the hit's
      * uv, or the constant) is 0 are ignored, where it is in (0, 1) kept with
      * that probability by a hash of the ray (the same for camera and shadow
@@ -107,6 +117,10 @@ typedef struct {
      * it (camera rays with differentials at textured shapes). */
     double dudx, dudy, dvdx, dvdy;
     vec3 dpdx, dpdy; /* the point's own footprint (0 unless geometry_hit_footprint set it) */
+    /* How far the point may be off the surface a leaving ray must clear
+     * (curves: the width there, pbrt-v4's error bound; 0: float rounding
+     * only). geometry_leave_origin moves that far off along the normal. */
+    double p_error;
 } geom_hit;
 
 /* pbrt-v4's footprint of a textured hit: the differential rays meet the
@@ -148,6 +162,20 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
  * the displace dn/du term is left out: haze has no dn/du) and faced to the
  * geometric normal's side. */
 vec3 geometry_shading_normal(const geom_hit *h, const material *m);
+/* Curves (curve.c). Primitive `prim` of curve shape s is piece
+ * prim & (2^split - 1) of segment prim >> split: its 4 control points (in
+ * the shape's space) and its range [u0, u1] of the segment's u. */
+void geometry_curve_piece(const geom_shape *s, unsigned prim, vec3 cp[4], double *u0, double *u1);
+/* The box of piece `prim`, widened by half its largest width. */
+void geometry_curve_bounds(const geom_shape *s, unsigned prim, vec3 *lo, vec3 *hi);
+/* pbrt-v4's nearest hit of piece `prim` by o + t d in (tnear, tfar): its t
+ * (-1: none) and the segment's u there. */
+double geometry_curve_hit(const geom_shape *s, unsigned prim, vec3 o, vec3 d, double tnear,
+                          double tfar, double *u_hit);
+/* The width of segment `seg` at u, and a ribbon's normal there (pbrt-v4's
+ * slerp of the end normals). */
+double geometry_curve_width(const geom_shape *s, size_t seg, double u);
+vec3 geometry_curve_ribbon_normal(const geom_shape *s, size_t seg, double u);
 /* pbrt-v4's (u, v) of sphere `s` at object-space point po (on it). */
 vec2 geometry_sphere_uv(const geom_shape *s, vec3 po);
 /* Every shape's hits carry (u, v) from now on (a gbuffer film's channels). */
@@ -233,6 +261,10 @@ double geometry_step_past(const geom_hit *h, vec3 o, vec3 d);
  * points to, by a few hundred float ULPs per coordinate (Wächter & Binder,
  * Ray Tracing Gems ch. 6): scale-invariant, so no scene-size epsilon. */
 vec3 geometry_offset_origin(vec3 p, vec3 n, vec3 w);
+/* The origin of a ray leaving hit h along w: geometry_offset_origin, first
+ * moved p_error * (|n.x| + |n.y| + |n.z|) along the normal to w's side (as
+ * pbrt-v4's OffsetRayOrigin). */
+vec3 geometry_leave_origin(const geom_hit *h, vec3 w);
 
 /* The most memory Embree has held for this geometry (its memory monitor):
  * BVHs and vertex copies, in bytes. */

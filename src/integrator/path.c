@@ -4,7 +4,7 @@
 
 path_shadow_ray path_surface_shadow_ray(const geom_hit *h, const light_sample *ls)
 {
-    path_shadow_ray r = {geometry_offset_origin(h->p, h->ng, ls->wi), ls->wi, INFINITY};
+    path_shadow_ray r = {geometry_leave_origin(h, ls->wi), ls->wi, INFINITY};
     if (!ls->infinite) {
         bool emitter = v3_length_sq(ls->n_light) > 0.0;
         vec3 target = ls->p_light;

@@ -94,7 +94,7 @@ typedef struct {
  * its line crosses the tangent plane. */
 static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media)
 {
-    vec3 o = geometry_offset_origin(h->p, h->ng, w);
+    vec3 o = geometry_leave_origin(h, w);
     int after = geometry_medium_after(h, w, medium);
     if (!media)
         return (vp_ray){o, w, 0.0, 0.0, after};

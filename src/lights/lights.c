@@ -368,6 +368,10 @@ static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, ligh
         return hz_fail_at(err, e->loc,
                           "AreaLightSource \"%s\" is not supported (supported: \"diffuse\")",
                           type);
+    if (shape->kind == GEOMETRY_CURVES)
+        return hz_fail_at(err, e->loc,
+                          "AreaLightSource on a curve is not supported (pbrt-v4 cannot sample "
+                          "curves either: it stops on such a light)");
     if (shape->has_alpha)
         return hz_fail_at(err, e->loc,
                           "AreaLightSource on a shape with \"alpha\" is not supported (pbrt-v4 "

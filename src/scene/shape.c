@@ -22,6 +22,9 @@ void shape_geometry_free(shape_geometry *g)
     free(g->n);
     free(g->uv);
     free(g->indices);
+    free(g->cp);
+    free(g->width);
+    free(g->normals);
     memset(g, 0, sizeof *g);
 }
 
@@ -327,10 +330,12 @@ hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error 
         st = create_cylinder(se, out, err);
     else if (strcmp(type, "loopsubdiv") == 0)
         st = create_loopsubdiv(se, out, err);
+    else if (strcmp(type, "curve") == 0)
+        st = shape_curve_create(se, out, err);
     else
         st = hz_fail_at(err, se->entity.loc,
                         "unknown shape \"%.60s\"; supported: trianglemesh plymesh sphere disk "
-                        "cylinder bilinearmesh loopsubdiv",
+                        "cylinder bilinearmesh loopsubdiv curve",
                         type);
     if (st != HZ_OK) {
         shape_geometry_free(out);

@@ -1,7 +1,8 @@
 /* Shape factories: turn a shape_entity's parameters into object-space geometry.
  * "trianglemesh" (indices P N uv), "plymesh" (filename, relative to the top-level
  * scene file's directory), "sphere" (radius), "disk" (height radius innerradius),
- * "bilinearmesh" (indices P N uv, each quad split into two triangles). */
+ * "bilinearmesh" (indices P N uv, each quad split into two triangles),
+ * "curve" (P basis degree type N width width0 width1 splitdepth). */
 #ifndef HAZE_SCENE_SHAPE_H
 #define HAZE_SCENE_SHAPE_H
 
@@ -12,7 +13,11 @@
 #include "core/error.h"
 #include "scene/scene_desc.h"
 
-typedef enum { GEOMETRY_TRIANGLES, GEOMETRY_SPHERE } geometry_kind;
+typedef enum { GEOMETRY_TRIANGLES, GEOMETRY_SPHERE, GEOMETRY_CURVES } geometry_kind;
+
+/* pbrt-v4's curve types: a ribbon facing the ray ("flat"), the same ribbon
+ * shaded as a tube ("cylinder"), a ribbon turned by given normals ("ribbon"). */
+typedef enum { CURVE_FLAT, CURVE_CYLINDER, CURVE_RIBBON } curve_type;
 
 typedef struct {
     geometry_kind kind;
@@ -27,6 +32,14 @@ typedef struct {
      * -radius, zmax < radius or phimax < 2 pi (pbrt-v4's partial sphere) */
     double radius;
     double zmin, zmax, phimax;
+    /* curve: cubic Bezier segments (pbrt-v4's "curve" with its quadratic
+     * segments raised to cubic and b-splines converted), in object space */
+    curve_type curve;
+    size_t segment_count;
+    double *cp;      /* 12 per segment: its 4 control points */
+    double *width;   /* 2 per segment: the width at its ends */
+    double *normals; /* ribbon: 6 per segment, the unit normals at its ends; else NULL */
+    int split;       /* "splitdepth": each segment intersected as 2^split pieces */
     /* pbrt-v4's Area() of the shape as one emitter (sphere, disk, cylinder:
      * the analytic surface in object space, as pbrt-v4 computes it, whatever
      * the transform); 0 for meshes, each of whose triangles (bilinearmesh:
@@ -39,6 +52,8 @@ typedef struct {
 } shape_geometry;
 
 hz_status shape_geometry_create(shape_entity *se, shape_geometry *out, hz_error *err);
+/* pbrt-v4's "curve" (curve.c); errors name the parameter. */
+hz_status shape_curve_create(shape_entity *se, shape_geometry *g, hz_error *err);
 void shape_geometry_free(shape_geometry *g);
 
 #endif

@@ -134,7 +134,7 @@ static void test_all_errors_in_one_run(void **state)
     static const char *want[] = {
         "bad_input_many.pbrt:1:37: unused parameter \"float bogus\"",
         "bad_input_many.pbrt:5:1: Material \"hair\" is not supported",
-        "bad_input_many.pbrt:6:1: unknown shape \"curve\"",
+        "bad_input_many.pbrt:6:1: curve needs \"point3 P\"",
         "bad_input_many.pbrt:7:1: LightSource \"laser\" is not supported",
         "bad_input_many.pbrt:8:1: MakeNamedMedium \"m\": medium type \"fluffy\"",
         "bad_input_many.pbrt:10:27: unused parameter \"float what\"",

@@ -4,6 +4,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -219,6 +220,85 @@ static void test_cylinder(void **state)
     shape_geometry_free(&g);
 }
 
+/* pbrt-v4's curve: Bezier segments sharing end points, quadratics raised to
+ * cubic, uniform b-splines converted (the same curve: continuous, starting
+ * at the b-spline's first knot point), widths linear over the whole curve. */
+static void test_curve(void **state)
+{
+    (void)state;
+    shape_geometry g;
+    hz_error err;
+    assert_int_equal(build("Shape \"curve\" \"point3 P\" [0 0 0 1 1 0 2 1 0 3 0 0 4 -1 0 5 -1 0 "
+                           "6 0 0] \"float width0\" 1 \"float width1\" 3 \"integer splitdepth\" 2",
+                           "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.kind, GEOMETRY_CURVES);
+    assert_int_equal(g.curve, CURVE_FLAT);
+    assert_int_equal(g.segment_count, 2);
+    assert_int_equal(g.split, 2);
+    assert_true(g.cp[12 + 0] == 3.0 && g.cp[12 + 9] == 6.0); /* segment 1: P3 .. P6 */
+    assert_true(g.width[0] == 1.0 && g.width[1] == 2.0 && g.width[2] == 2.0 && g.width[3] == 3.0);
+    assert_null(g.normals);
+    shape_geometry_free(&g);
+
+    /* Quadratic Bezier: (p0, p0 + 2/3 (p1 - p0), p2 + 2/3 (p1 - p2), p2). */
+    assert_int_equal(build("Shape \"curve\" \"point3 P\" [0 0 0 3 3 0 6 0 0] \"integer degree\" 2",
+                           "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.segment_count, 1);
+    const double q[12] = {0, 0, 0, 2, 2, 0, 4, 2, 0, 6, 0, 0};
+    for (int i = 0; i < 12; ++i)
+        assert_true(fabs(g.cp[i] - q[i]) < 1e-12);
+    shape_geometry_free(&g);
+
+    /* Cubic b-spline: 5 points, 2 segments, joined; it starts at
+     * (P0 + 4 P1 + P2) / 6. */
+    assert_int_equal(build("Shape \"curve\" \"point3 P\" [0 0 0 1 2 0 2 0 1 3 3 0 4 0 0] "
+                           "\"string basis\" \"bspline\" \"string type\" \"cylinder\"",
+                           "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.segment_count, 2);
+    assert_int_equal(g.curve, CURVE_CYLINDER);
+    const double start[3] = {(0 + 4 * 1 + 2) / 6.0, (0 + 4 * 2 + 0) / 6.0, (0 + 0 + 1) / 6.0};
+    for (int k = 0; k < 3; ++k) {
+        assert_true(fabs(g.cp[k] - start[k]) < 1e-12);
+        assert_true(fabs(g.cp[9 + k] - g.cp[12 + k]) < 1e-12);
+    }
+    shape_geometry_free(&g);
+
+    /* Quadratic b-spline: starts at the midpoint of P0 P1. */
+    assert_int_equal(build("Shape \"curve\" \"point3 P\" [0 0 0 2 2 0 4 0 0 6 2 0] "
+                           "\"string basis\" \"bspline\" \"integer degree\" 2",
+                           "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.segment_count, 2);
+    assert_true(g.cp[0] == 1.0 && g.cp[1] == 1.0);
+    assert_true(fabs(g.cp[9] - g.cp[12]) < 1e-12 && fabs(g.cp[10] - g.cp[13]) < 1e-12);
+    shape_geometry_free(&g);
+
+    /* A ribbon's normals, normalised, at each segment's ends. */
+    assert_int_equal(build("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] "
+                           "\"string type\" \"ribbon\" \"normal N\" [0 0 2 0 3 0]",
+                           "s.pbrt", &g, &err),
+                     HZ_OK);
+    assert_int_equal(g.curve, CURVE_RIBBON);
+    assert_true(g.normals[2] == 1.0 && g.normals[4] == 1.0);
+    shape_geometry_free(&g);
+
+    expect_error("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"normal N\" [0 0 1]",
+                 "s.pbrt:2:52: curve \"N\" is used by \"ribbon\" curves only");
+    expect_error("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0 5 0 0 6 0 0] "
+                 "\"string type\" \"ribbon\" \"normal N\" [0 0 1 0 0 1]",
+                 "2 segments need 3 normals");
+    expect_error("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0] \"string basis\" \"bspline\"",
+                 "b-spline needs at least 4 control points");
+    expect_error("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"string type\" \"tube\"",
+                 "curve \"type\" must be");
+    expect_error("Shape \"curve\" \"point3 P\" [0 0 0 1 0 0 2 0 0 3 0 0] \"integer splitdepth\" 9",
+                 "\"splitdepth\" must be in [0, 8]");
+    expect_error("Shape \"curve\" \"float width\" 1", "curve needs \"point3 P\"");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -226,6 +306,7 @@ int main(void)
         cmocka_unit_test(test_trianglemesh_errors),
         cmocka_unit_test(test_sphere_disk_bilinear),
         cmocka_unit_test(test_cylinder),
+        cmocka_unit_test(test_curve),
         cmocka_unit_test(test_plymesh_relative_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
