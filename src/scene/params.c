@@ -54,6 +54,8 @@ void params_free(param_list *pl)
     free(pl->items);
     pl->items = NULL;
     pl->count = pl->capacity = 0;
+    free(pl->error);
+    pl->error = NULL;
 }
 
 /* A deep copy of `s` into *d; false when out of memory (*d then owns
@@ -98,6 +100,13 @@ bool params_copy(param_list *dst, const param_list *src)
     *dst = *src;
     dst->items = NULL;
     dst->count = dst->capacity = 0;
+    dst->error = NULL;
+    if (src->error) {
+        dst->error = malloc(sizeof *dst->error);
+        if (!dst->error)
+            return false;
+        *dst->error = *src->error;
+    }
     if (!src->count)
         return true;
     dst->items = scene_array(src->count, sizeof *dst->items);
@@ -187,6 +196,24 @@ bool params_rename(param_list *pl, const char *from, const char *to)
     return true;
 }
 
+/* The list's first problem (later ones are not kept). */
+static void set_error(param_list *pl, file_loc loc, const char *msg)
+{
+    pl->failed = true;
+    if (!pl->error)
+        pl->error = malloc(sizeof *pl->error);
+    if (pl->error)
+        hz_fail_at(pl->error, loc, "%s", msg);
+}
+
+void params_failure(const param_list *pl, hz_error *err)
+{
+    if (pl->error)
+        *err = *pl->error;
+    else
+        hz_fail_at(err, pl->loc, "out of memory");
+}
+
 static void record(param_list *pl, file_loc loc, const char *fmt, ...) HZ_PRINTF(3, 4);
 static void record(param_list *pl, file_loc loc, const char *fmt, ...)
 {
@@ -197,8 +224,7 @@ static void record(param_list *pl, file_loc loc, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    hz_fail_at(&pl->error, loc, "%s", msg);
-    pl->failed = true;
+    set_error(pl, loc, msg);
 }
 
 /* The parameter `name` if it has one of the accepted types; otherwise NULL,
@@ -404,15 +430,14 @@ void params_reject(param_list *pl, const char *name, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    hz_fail_at(&pl->error, p ? p->loc : pl->loc, "%s", msg);
-    pl->failed = true;
+    set_error(pl, p ? p->loc : pl->loc, msg);
 }
 
 hz_status params_finish(const param_list *pl, const char *what, hz_error *err)
 {
     if (pl->failed) {
         if (err)
-            *err = pl->error;
+            params_failure(pl, err);
         return HZ_ERROR;
     }
     for (size_t i = 0; i < pl->count; ++i) {

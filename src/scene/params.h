@@ -51,7 +51,8 @@ typedef struct {
     size_t count, capacity;
     file_loc loc;       /* the directive these parameters belong to */
     bool failed;        /* a getter met a problem; `error` holds it */
-    hz_error error;
+    hz_error *error;    /* malloc'ed on the first problem (NULL: out of memory then),
+                         * so that a list costs no 4 KiB message buffer per shape */
 } param_list;
 
 void params_init(param_list *pl, file_loc directive);
@@ -131,5 +132,7 @@ void params_reject(param_list *pl, const char *name, const char *fmt, ...) HZ_PR
 /* Reports the first recorded problem, else the first unused parameter:
  * "file:line:col: unused parameter "float fvo" for Camera "perspective"". */
 hz_status params_finish(const param_list *pl, const char *what, hz_error *err);
+/* The problem a getter recorded (pl->failed) into *err. */
+void params_failure(const param_list *pl, hz_error *err);
 
 #endif

@@ -51,7 +51,7 @@ static hz_status read_named(parser *ps, const token *d, const char *what, int at
     }
     const char *type = params_string(&e->params, "type", NULL);
     if (e->params.failed) {
-        *err = e->params.error;
+        params_failure(&e->params, err);
         goto fail;
     }
     if (!type) {
