@@ -412,7 +412,7 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
     out->flip_normal = se->reverse_orientation ^ transform_swaps_handedness(&space_from_object);
     bool interface = out->material->kind == MATERIAL_INTERFACE;
     out->textured = material_has_textures(out->material);
-    out->hit_uv = out->textured;
+    out->hit_uv = out->textured || material_needs_hair_frame(out->material);
     out->unit_area = g.unit_area;
     out->alpha = g.alpha;
     if (g.alpha_texture) {

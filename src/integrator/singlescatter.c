@@ -129,7 +129,7 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
     bool diffuse = mat->kind == MATERIAL_DIFFUSE;
     bsdf b;
     vec3 n_shading = geometry_shading_normal(h, mat);
-    if (!bsdf_from_material(mat, n_shading, &b) || !(diffuse || bsdf_is_non_specular(&b)))
+    if (!bsdf_from_material(mat, n_shading, h->dpdu, h->v, &b) || !(diffuse || bsdf_is_non_specular(&b)))
         return rgb_grey(0.0);
     vec3 ns = v3_dot(n_shading, wo) < 0.0 ? v3_neg(n_shading) : n_shading;
     bool transmits = material_transmits(mat);
@@ -227,6 +227,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
+    case MATERIAL_HAIR:
         Ls = rgb_add(Ls, direct_bsdf(sc, &h, medium, wo, mat, st, &walk, counters));
         break;
     case MATERIAL_MIX: /* material_at resolved it */

@@ -11,7 +11,7 @@ static rgb directional_albedo(const geom_hit *h, vec3 wo)
     material scratch;
     bsdf b;
     const material *mat = geometry_material_at(h, wo, &scratch);
-    if (!bsdf_from_material(mat, geometry_shading_normal(h, mat), &b))
+    if (!bsdf_from_material(mat, geometry_shading_normal(h, mat), h->dpdu, h->v, &b))
         return rgb_grey(0.0);
     rgb sum = rgb_grey(0.0);
     for (int i = 0; i < N; ++i) {

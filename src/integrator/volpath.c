@@ -445,7 +445,7 @@ static bool bounce(path *pa, const geom_hit *h)
     bsdf b;
     material scratch;
     const material *mat = geometry_material_at(h, wo, &scratch);
-    if (!bsdf_from_material(mat, geometry_shading_normal(h, mat), &b))
+    if (!bsdf_from_material(mat, geometry_shading_normal(h, mat), h->dpdu, h->v, &b))
         return false;
     if (pa->depth++ >= sc->settings.max_depth)
         return false;

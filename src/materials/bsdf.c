@@ -4,7 +4,7 @@
 
 #include "core/sampling.h"
 
-bool bsdf_from_material(const material *m, vec3 ns, bsdf *out)
+bool bsdf_from_material(const material *m, vec3 ns, vec3 dpdu, double v, bsdf *out)
 {
     /* Only the fields of the kind are set: the struct holds every kind's
      * (a coated one's layers too), too much to clear on every hit. */
@@ -47,6 +47,18 @@ bool bsdf_from_material(const material *m, vec3 ns, bsdf *out)
         out->kind = BSDF_COATED;
         out->coat = m->coat;
         return true;
+    case MATERIAL_HAIR: {
+        /* pbrt-v4's Frame::FromXZ(dp/du, ns): x along the hair. */
+        vec3 s = v3_sub(dpdu, v3_scale(ns, v3_dot(dpdu, ns)));
+        if (v3_length_sq(s) > 0.0) {
+            out->s = v3_normalize(s);
+            out->t = v3_cross(ns, out->s);
+        }
+        out->kind = BSDF_HAIR;
+        out->hair = hair_make(2.0 * v - 1.0, m->eta, m->sigma_a, m->beta_m, m->beta_n,
+                              m->hair_alpha);
+        return true;
+    }
     case MATERIAL_MIX: /* resolved by material_at before */
     case MATERIAL_INTERFACE:
         return false;
@@ -78,6 +90,8 @@ bool bsdf_is_non_specular(const bsdf *b)
         return false;
     case BSDF_COATED:
         return layered_is_non_specular(&b->coat);
+    case BSDF_HAIR:
+        return true;
     }
     return false;
 }
@@ -116,6 +130,8 @@ rgb bsdf_f(const bsdf *b, vec3 wo_r, vec3 wi_r)
         return bxdf_dt_f(b->reflectance, b->transmittance, wo, wi);
     case BSDF_COATED:
         return layered_f(&b->coat, wo, wi);
+    case BSDF_HAIR:
+        return hair_f(&b->hair, wo, wi);
     }
     return rgb_grey(0.0);
 }
@@ -139,6 +155,8 @@ double bsdf_pdf(const bsdf *b, vec3 wo_r, vec3 wi_r)
         return bxdf_dt_pdf(b->reflectance, b->transmittance, wo, wi);
     case BSDF_COATED:
         return layered_pdf(&b->coat, wo, wi);
+    case BSDF_HAIR:
+        return hair_pdf(&b->hair, wo, wi);
     }
     return 0.0;
 }
@@ -189,6 +207,9 @@ bool bsdf_sample_f(const bsdf *b, vec3 wo_r, double uc, vec2 u, bsdf_sample *out
     case BSDF_COATED:
         ok = layered_sample(&b->coat, wo, uc, u, out);
         break;
+    case BSDF_HAIR:
+        ok = hair_sample(&b->hair, wo, uc, u, out);
+        break;
     }
     if (!ok)
         return false;
@@ -203,6 +224,7 @@ void bsdf_regularize(bsdf *b)
     case BSDF_DIFFUSE:
     case BSDF_THIN_DIELECTRIC:
     case BSDF_DIFFUSE_TRANSMISSION:
+    case BSDF_HAIR: /* pbrt-v4's HairBxDF::Regularize does nothing */
         break;
     case BSDF_CONDUCTOR:
     case BSDF_DIELECTRIC:

@@ -18,6 +18,7 @@
 
 #include "core/vec.h"
 #include "materials/bxdfs.h"
+#include "materials/hair.h"
 #include "materials/layered.h"
 #include "materials/material.h"
 
@@ -28,6 +29,7 @@ typedef enum {
     BSDF_THIN_DIELECTRIC,
     BSDF_DIFFUSE_TRANSMISSION,
     BSDF_COATED, /* coateddiffuse, coatedconductor: a layered BxDF */
+    BSDF_HAIR,   /* pbrt-v4's HairBxDF, in the frame of the hair's dp/du */
 } bsdf_kind;
 
 typedef struct {
@@ -40,12 +42,15 @@ typedef struct {
     double eta;       /* dielectric, thin dielectric: inside over outside */
     tr_distribution distrib; /* conductor, dielectric */
     layered coat;            /* coated */
+    hair_bxdf hair;          /* hair */
 } bsdf;
 
 /* The BSDF of a material at a hit with unit shading normal `ns`. False for a
  * material with no surface (interface) or one that scatters nothing (a black
- * diffuse reflectance): the path goes through, or ends. */
-bool bsdf_from_material(const material *m, vec3 ns, bsdf *out);
+ * diffuse reflectance): the path goes through, or ends. Hair also needs the
+ * hit's dp/du (its frame: x along it, as pbrt-v4) and v (the offset across
+ * the hair, h = 2 v - 1); the others ignore them. */
+bool bsdf_from_material(const material *m, vec3 ns, vec3 dpdu, double v, bsdf *out);
 
 /* True when the BSDF has a non-delta part that light sampling can reach. */
 bool bsdf_is_non_specular(const bsdf *b);

@@ -7,6 +7,7 @@
 #include "core/hash.h"
 #include "core/rng.h"
 
+#include "materials/hair.h"
 #include "materials/microfacet.h"
 
 material material_default(void)
@@ -73,6 +74,7 @@ bool material_transmits(const material *m)
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
+    case MATERIAL_HAIR:
         return true;
     case MATERIAL_DIFFUSE:
     case MATERIAL_CONDUCTOR:
@@ -271,6 +273,51 @@ static void read_dielectric(param_list *pl, const texture_set *ts, bool thin, ma
         read_roughness(pl, ts, out);
 }
 
+/* pbrt-v4's HairMaterial: the absorption from exactly one of "sigma_a",
+ * "reflectance" (or "color"), or "eumelanin"/"pheomelanin" (default:
+ * eumelanin 1.3, brown); pbrt-v4 warns and takes the first when several are
+ * given, haze refuses that. eta 1.55, beta_m 0.3, beta_n 0.3 (clamped to
+ * [0.01, 1]), alpha 2 degrees. */
+static rgb clamp01(rgb c);
+static void read_hair(param_list *pl, const texture_set *ts, material *out)
+{
+    out->kind = MATERIAL_HAIR;
+    out->eta = params_float(pl, "eta", 1.55);
+    out->beta_m = params_float(pl, "beta_m", 0.3);
+    out->beta_n = params_float(pl, "beta_n", 0.3);
+    out->hair_alpha = params_float(pl, "alpha", 2.0);
+    if (!(isfinite(out->eta) && out->eta > 0.0))
+        params_reject(pl, "eta", "hair \"eta\" must be finite and > 0, got %g", out->eta);
+    if (!isfinite(out->beta_m) || !isfinite(out->beta_n))
+        params_reject(pl, isfinite(out->beta_m) ? "beta_n" : "beta_m",
+                      "hair \"beta_m\" and \"beta_n\" must be finite");
+    if (!(isfinite(out->hair_alpha) && fabs(out->hair_alpha) <= 90.0))
+        params_reject(pl, "alpha", "hair \"alpha\" must be within [-90, 90] degrees, got %g",
+                      out->hair_alpha);
+    double bn = fmin(fmax(out->beta_n, 0.01), 1.0);
+    const char *colour = params_has(pl, "reflectance") ? "reflectance" : "color";
+    bool has_sigma = params_has(pl, "sigma_a"), has_colour = params_has(pl, colour);
+    bool has_melanin = params_has(pl, "eumelanin") || params_has(pl, "pheomelanin");
+    if (has_sigma + has_colour + has_melanin > 1)
+        params_reject(pl, has_sigma ? "sigma_a" : colour,
+                      "hair takes one of \"sigma_a\", \"reflectance\" (\"color\") and "
+                      "\"eumelanin\"/\"pheomelanin\" (pbrt-v4 uses the first and ignores the "
+                      "others with a warning)");
+    if (has_sigma) {
+        rgb s = params_rgb(pl, "sigma_a", rgb_grey(0.0));
+        out->sigma_a = rgb_make(fmax(s.r, 0.0), fmax(s.g, 0.0), fmax(s.b, 0.0));
+    } else if (has_colour) {
+        out->reflectance_tex = texture_param(pl, ts, colour, true);
+        rgb c = out->reflectance_tex ? rgb_grey(0.5) : params_rgb(pl, colour, rgb_grey(0.5));
+        out->sigma_a = hair_sigma_a_from_reflectance(clamp01(c), bn);
+    } else if (has_melanin) {
+        out->sigma_a = hair_sigma_a_from_concentration(params_float(pl, "eumelanin", 0.0),
+                                                       params_float(pl, "pheomelanin", 0.0));
+    } else {
+        out->sigma_a = hair_sigma_a_from_concentration(1.3, 0.0);
+    }
+}
+
 static rgb clamp01(rgb c)
 {
     return rgb_make(hz_clamp(c.r, 0, 1), hz_clamp(c.g, 0, 1), hz_clamp(c.b, 0, 1));
@@ -302,6 +349,14 @@ static void metal_at(const material *m, const texture_ctx *c, double outside, rg
         rgb kk = texture_eval(m->k_tex, c);
         *k = rgb_scale(rgb_make(fmax(kk.r, 0), fmax(kk.g, 0), fmax(kk.b, 0)), 1.0 / outside);
     }
+}
+
+bool material_needs_hair_frame(const material *m)
+{
+    if (m->kind == MATERIAL_MIX)
+        return (m->mix[0] && material_needs_hair_frame(m->mix[0])) ||
+               (m->mix[1] && material_needs_hair_frame(m->mix[1]));
+    return m->kind == MATERIAL_HAIR;
 }
 
 bool material_has_textures(const material *m)
@@ -349,6 +404,11 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
         o->coat.top.alpha_y = alpha_at(m, m->rough[1], m->coat.top.alpha_y, c);
         o->coat.bottom.alpha_x = alpha_at(m, m->rough[2], m->coat.bottom.alpha_x, c);
         o->coat.bottom.alpha_y = alpha_at(m, m->rough[3], m->coat.bottom.alpha_y, c);
+        break;
+    case MATERIAL_HAIR:
+        if (m->reflectance_tex)
+            o->sigma_a = hair_sigma_a_from_reflectance(clamp01(texture_eval(m->reflectance_tex, c)),
+                                                       fmin(fmax(m->beta_n, 0.01), 1.0));
         break;
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_MIX:
@@ -426,6 +486,8 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
             return HZ_ERROR;
     } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "thindielectric") == 0) {
         read_dielectric(pl, ts, strcmp(type, "thindielectric") == 0, out);
+    } else if (strcmp(type, "hair") == 0) {
+        read_hair(pl, ts, out);
     } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 ||
                strcmp(type, "none") == 0) {
         /* pbrt-v4 makes no material for all three: rays pass the surface,
@@ -436,13 +498,14 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
                           "Material \"%s\" is not supported (supported: \"diffuse\", "
                           "\"conductor\", \"dielectric\", \"thindielectric\", "
                           "\"diffusetransmission\", \"coateddiffuse\", \"coatedconductor\", "
-                          "\"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
+                          "\"hair\", \"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
                           type);
     }
     /* Every material with a surface takes pbrt-v4's "displacement": a float
      * texture bumps the shading normal; a constant one changes nothing (its
-     * gradient is 0, as in pbrt-v4). Mixes and interfaces leave it unused. */
-    if (out->kind != MATERIAL_MIX && out->kind != MATERIAL_INTERFACE) {
+     * gradient is 0, as in pbrt-v4). Mixes, interfaces and hair leave it unused. */
+    if (out->kind != MATERIAL_MIX && out->kind != MATERIAL_INTERFACE &&
+        out->kind != MATERIAL_HAIR) { /* pbrt-v4's hair has no displacement */
         out->displacement = texture_param(pl, ts, "displacement", false);
         if (!out->displacement && params_has(pl, "displacement"))
             params_float(pl, "displacement", 0.0);

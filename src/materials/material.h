@@ -20,6 +20,7 @@ typedef enum {
     MATERIAL_COATED_DIFFUSE,   /* varnish over a diffuse base (plastic, paint) */
     MATERIAL_COATED_CONDUCTOR, /* varnish over a metal */
     MATERIAL_MIX,              /* one of two materials per hit, chosen at random */
+    MATERIAL_HAIR,            /* pbrt-v4's hair: a rough absorbing dielectric cylinder */
     MATERIAL_INTERFACE,       /* a medium boundary: not a surface, rays pass through */
 } material_kind;
 
@@ -31,6 +32,11 @@ typedef struct material_s {
     double eta;               /* dielectric, thin dielectric */
     double alpha_x, alpha_y;  /* conductor, dielectric: Trowbridge-Reitz alphas */
     layered coat;             /* coated diffuse, coated conductor */
+    /* hair: absorption inside the fibre (from "sigma_a", "reflectance" (or
+     * "color") at beta_n, or the melanin concentrations), the longitudinal
+     * and azimuthal roughnesses and the scale tilt in degrees; eta above */
+    rgb sigma_a;
+    double beta_m, beta_n, hair_alpha;
     /* mix: the second material with probability `amount`, decided per hit
      * by a hash of the point and direction (pbrt-v4's MixMaterial); the
      * names until material_resolve_mixes points them at the materials. */
@@ -54,6 +60,8 @@ typedef struct material_s {
 
 /* m or (for a mix) any material it may pick has textures. */
 bool material_has_textures(const material *m);
+/* m or any material it may pick is hair: its hits need (u, v) and dp/du. */
+bool material_needs_hair_frame(const material *m);
 
 /* m with its textures evaluated at c: m itself when it has none, otherwise
  * *scratch filled with the values there. */

@@ -158,6 +158,38 @@ static void test_no_self_shadowing(void **state)
     }
 }
 
+/* Hair without absorption on a curve under a uniform sky of radiance 1
+ * reads 1 everywhere across it (the white furnace through the integrators:
+ * the hair's frame from dp/du, h from v, light from both sides), under
+ * volpath and singlescatter. */
+static void test_hair_furnace(void **state)
+{
+    (void)state;
+    const char *integrators[2] = {"Integrator \"volpath\" \"integer maxdepth\" 1",
+                                  "Integrator \"singlescatter\""};
+    for (int k = 0; k < 2; ++k) {
+        char text[1024];
+        snprintf(text, sizeof text,
+                 "LookAt 0 0 5  0 0 0  0 1 0\n"
+                 "Camera \"orthographic\" \"float screenwindow\" [-0.5 0.5 -0.5 0.5]\n"
+                 "Film \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 64\n"
+                 "Sampler \"zsobol\" \"integer pixelsamples\" 1024\n%s\n"
+                 "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                 "Material \"hair\" \"rgb sigma_a\" [0 0 0] \"float beta_m\" 0.5 "
+                 "\"float beta_n\" 0.5\n"
+                 "Shape \"curve\" \"point3 P\" [-2 0.1 0  -1 0 0.3  1 0 -0.3  2 -0.1 0] "
+                 "\"float width\" 0.5 \"string type\" \"cylinder\"\n",
+                 integrators[k]);
+        render_scene *rs = build_scene_or_fail(text, NULL);
+        for (int py = 26; py < 38; py += 3) {
+            pixel_eval e = eval_pixel(rs, 24.5, py + 0.5, 1024);
+            assert_true(e.hit);
+            expect_close(e.L.g, 1.0, 0.03, 0, integrators[k], 24, py);
+        }
+        render_scene_destroy(rs);
+    }
+}
+
 static void test_refusals(void **state)
 {
     (void)state;
@@ -199,6 +231,7 @@ int main(void)
         cmocka_unit_test(test_coverage),
         cmocka_unit_test(test_shading),
         cmocka_unit_test(test_no_self_shadowing),
+        cmocka_unit_test(test_hair_furnace),
         cmocka_unit_test(test_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
