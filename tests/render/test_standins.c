@@ -142,7 +142,8 @@ static void stage(void)
         "bunny-cloud.pbrt",      "explosion.pbrt",         "disney-cloud.pbrt",
         "clouds.pbrt",           "killeroo-simple.pbrt",   "geometry/creature.pbrt",
         "sanmiguel-courtyard.pbrt", "geometry/courtyard-mat.pbrt",
-        "geometry/courtyard-geom.pbrt", "crown.pbrt", "geometry/gem.ply"};
+        "geometry/courtyard-geom.pbrt", "crown.pbrt", "geometry/gem.ply",
+        "hair-eumel-2.pbrt", "geometry/straight-hair.pbrt.gz"};
     static const char *data[][2] = {{"box.nvdb", "bunny_cloud.nvdb"},
                                     {"box.nvdb", "wdas_cloud_quarter.nvdb"},
                                     {"box_fire.nvdb", "fire.nvdb"}};
@@ -158,6 +159,8 @@ static void stage(void)
         copy_file(from, to);
     }
     snprintf(to, sizeof to, "%s/textures/sky.exr", dir);
+    write_sky(to);
+    snprintf(to, sizeof to, "%s/textures/sunflowers_equiarea_blurred.exr", dir);
     write_sky(to);
     snprintf(to, sizeof to, "%s/textures/stone.png", dir);
     write_png(to, stone);
@@ -231,6 +234,7 @@ static void test_surface_scenes(void **state)
     render_standin("killeroo-simple", false, 0.001);
     render_standin("sanmiguel-courtyard", false, 0.01);
     render_standin("crown", false, 0.001);
+    render_standin("hair-eumel-2", false, 0.001);
 }
 
 int main(void)
