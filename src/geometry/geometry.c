@@ -1075,7 +1075,7 @@ const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scrat
 
 vec3 geometry_shading_normal(const geom_hit *h, const material *m)
 {
-    if (!m->displacement)
+    if (!m->displacement && !m->normal_map)
         return h->ns;
     /* pbrt-v4's shading frame: a mesh with normals takes ss = (ns x dpdu) x
      * ns and ts = ns x dpdu; otherwise dp/du and dp/dv themselves. */
@@ -1088,6 +1088,25 @@ vec3 geometry_shading_normal(const geom_hit *h, const material *m)
         } else {
             v3_basis(h->ns, &ss, &ts);
         }
+    }
+    if (m->normal_map) {
+        /* pbrt-v4's NormalMap: the image's (2 rgb - 1), normalised, in the
+         * frame (dp/du, n x dp/du, n) of the shading geometry; looked up
+         * without a footprint, at (u, 1 - v), repeated. */
+        texture_ctx c0 = {.u = h->u, .v = h->v, .p = h->p, .n = h->ng};
+        rgb t = texture_eval(m->normal_map, &c0);
+        vec3 l = v3(2.0 * t.r - 1.0, 2.0 * t.g - 1.0, 2.0 * t.b - 1.0);
+        vec3 x = v3_sub(ss, v3_scale(h->ns, v3_dot(ss, h->ns)));
+        if (!(v3_length_sq(l) > 0.0) || !(v3_length_sq(x) > 0.0))
+            return h->ns;
+        x = v3_normalize(x);
+        l = v3_normalize(l);
+        vec3 n = v3_add(v3_add(v3_scale(x, l.x), v3_scale(v3_cross(h->ns, x), l.y)),
+                        v3_scale(h->ns, l.z));
+        if (!v3_is_finite(n) || !(v3_length_sq(n) > 0.0))
+            return h->ns;
+        n = v3_normalize(n);
+        return v3_dot(n, h->ng) < 0.0 ? v3_neg(n) : n;
     }
     texture_ctx c = {.u = h->u, .v = h->v, .p = h->p, .dudx = h->dudx, .dudy = h->dudy,
                      .dvdx = h->dvdx, .dvdy = h->dvdy, .dpdx = h->dpdx, .dpdy = h->dpdy,

@@ -428,12 +428,6 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
     if (params_has(pl, "type"))
         type = params_string(pl, "type", type);
     *out = (material){.kind = MATERIAL_INTERFACE};
-    /* Out of scope for now (docs/differences-from-pbrt.md): say so rather
-     * than "unused parameter". */
-    if (params_has(pl, "normalmap"))
-        return hz_fail_at(err, params_loc(pl, "normalmap"),
-                          "\"normalmap\" is not supported: haze shades with the geometry's "
-                          "normals (no normal or bump mapping)");
 
     if (strcmp(type, "diffuse") == 0) {
         out->kind = MATERIAL_DIFFUSE;
@@ -510,11 +504,22 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
         if (!out->displacement && params_has(pl, "displacement"))
             params_float(pl, "displacement", 0.0);
     }
+    /* pbrt-v4 reads "normalmap" for every material but hair, mix and the
+     * interfaces; the image was read with the scene's textures. */
+    if (out->kind != MATERIAL_MIX && out->kind != MATERIAL_INTERFACE &&
+        out->kind != MATERIAL_HAIR) {
+        /* An image that could not be read was reported by the texture set
+         * (at this parameter): the material goes on without it. */
+        const char *nm = params_string(pl, "normalmap", NULL);
+        if (nm)
+            out->normal_map = texture_set_normal_map(ts, nm);
+    }
     bool rough_tex = out->rough[0] || out->rough[1] || out->rough[2] || out->rough[3];
     /* Read already by the roughness, when there is one. */
     out->remap_roughness = rough_tex ? params_bool(pl, "remaproughness", true) : true;
     out->textured = out->reflectance_tex || out->transmittance_tex || out->eta_tex ||
-                    out->k_tex || out->metal_r_tex || rough_tex || out->displacement;
+                    out->k_tex || out->metal_r_tex || rough_tex || out->displacement ||
+                    out->normal_map;
     char what[128];
     snprintf(what, sizeof what, "Material \"%s\"", type);
     return params_finish(pl, what, err);

@@ -56,6 +56,9 @@ typedef struct material_s {
     /* "texture displacement": a float texture that bumps the shading normal
      * (pbrt-v4's BumpMap, geometry_shading_normal); NULL: none. */
     const texture *displacement;
+    /* "string normalmap": the image's tangent-space normals replace the
+     * shading normal (pbrt-v4's NormalMap; it wins over displacement) */
+    const texture *normal_map;
 } material;
 
 /* m or (for a mix) any material it may pick has textures. */

@@ -84,6 +84,10 @@ struct texture_set {
     transform render_from_world;    /* for the textures' own spaces */
     texture *items;
     size_t count;
+    /* The materials' "normalmap" images, by file name (the scene's strings) */
+    texture *normal_maps;
+    const char **normal_map_names;
+    size_t normal_map_count;
 };
 
 static rgb eval_input(const tex_input *in, const texture_ctx *c)
@@ -822,6 +826,8 @@ static void free_images(texture *t)
         free(t->level[i].rgb);
 }
 
+static hz_status read_normal_maps(texture_set *s, scene_desc *sd, hz_errors *errs, hz_error *err);
+
 hz_status texture_set_create(scene_desc *sd, transform render_from_world, hz_errors *errs,
                              texture_set **out, hz_error *err)
 {
@@ -849,6 +855,10 @@ hz_status texture_set_create(scene_desc *sd, transform render_from_world, hz_err
         }
         s->count = i + 1;
     }
+    if (read_normal_maps(s, sd, errs, err) != HZ_OK) {
+        texture_set_destroy(s);
+        return HZ_ERROR;
+    }
     *out = s;
     return HZ_OK;
 }
@@ -859,6 +869,73 @@ void texture_set_destroy(texture_set *s)
         return;
     for (size_t i = 0; i < s->count; ++i)
         free_images(&s->items[i]);
+    for (size_t i = 0; i < s->normal_map_count; ++i)
+        free_images(&s->normal_maps[i]);
     free(s->items);
+    free(s->normal_maps);
+    free(s->normal_map_names);
     free(s);
+}
+
+const texture *texture_set_normal_map(const texture_set *s, const char *name)
+{
+    for (size_t i = 0; i < s->normal_map_count; ++i)
+        if (strcmp(s->normal_map_names[i], name) == 0)
+            return s->normal_maps[i].img.rgb ? &s->normal_maps[i] : NULL;
+    return NULL;
+}
+
+/* pbrt-v4's normal map: the image read as linear RGB (PNG or EXR), looked up
+ * bilinearly at (u, 1 - v) with repeat: an imagemap texture of those
+ * settings, evaluated without a footprint. */
+static hz_status read_normal_map(const char *name, file_loc loc, texture *t, hz_error *err)
+{
+    *t = (texture){.kind = TEX_IMAGEMAP, .spectrum = true, .su = 1.0, .sv = 1.0,
+                   .filter = FILTER_BILINEAR, .scale = 1.0};
+    bool png = has_suffix(name, ".png");
+    if (!png && !has_suffix(name, ".exr"))
+        return hz_fail_at(err, loc, "normal map \"%s\": haze reads .png and .exr", name);
+    char *path = path_of_scene_file(loc, name);
+    if (!path)
+        return hz_fail(err, "out of memory");
+    float *alpha = NULL;
+    hz_status st = png ? read_png(path, loc, 1, 1.0, &t->img, &alpha, err)
+                       : read_exr(path, loc, &t->img, &alpha, err);
+    free(alpha);
+    free(path);
+    if (st == HZ_OK && (t->img.width <= 0 || t->img.height <= 0))
+        return hz_fail_at(err, loc, "normal map \"%s\" is empty", name);
+    return st == HZ_OK ? build_pyramid(t, err) : st;
+}
+
+/* Every distinct "normalmap" of the scene's materials, read once. */
+static hz_status read_normal_maps(texture_set *s, scene_desc *sd, hz_errors *errs, hz_error *err)
+{
+    s->normal_maps = calloc(sd->material_count ? sd->material_count : 1, sizeof *s->normal_maps);
+    s->normal_map_names =
+        calloc(sd->material_count ? sd->material_count : 1, sizeof *s->normal_map_names);
+    if (!s->normal_maps || !s->normal_map_names)
+        return hz_fail(err, "out of memory");
+    for (size_t i = 0; i < sd->material_count; ++i) {
+        param_list *pl = &sd->materials[i].entity.params;
+        const char *name = params_peek_string(pl, "normalmap", NULL);
+        if (!name)
+            continue;
+        bool seen = false;
+        for (size_t j = 0; j < s->normal_map_count && !seen; ++j)
+            seen = strcmp(s->normal_map_names[j], name) == 0;
+        if (seen)
+            continue;
+        size_t k = s->normal_map_count++;
+        s->normal_map_names[k] = name;
+        if (read_normal_map(name, params_loc(pl, "normalmap"), &s->normal_maps[k], err) !=
+            HZ_OK) {
+            free_images(&s->normal_maps[k]);
+            s->normal_maps[k] = (texture){.kind = TEX_CONSTANT};
+            if (!err->loc.file || !errs)
+                return HZ_ERROR;
+            hz_errors_add(errs, err);
+        }
+    }
+    return HZ_OK;
 }

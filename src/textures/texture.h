@@ -39,6 +39,10 @@ void texture_set_destroy(texture_set *s);
 
 /* The texture of that name and value type, or NULL. */
 const texture *texture_set_find(const texture_set *s, const char *name, bool spectrum);
+/* The image a material's "string normalmap" names (read by
+ * texture_set_create, linear RGB, bilinear at (u, 1 - v), repeated), as an
+ * RGB texture; NULL when it could not be read (that error was reported). */
+const texture *texture_set_normal_map(const texture_set *s, const char *name);
 
 /* The value at c: rgb for spectrum textures, grey for float ones. */
 rgb texture_eval(const texture *t, const texture_ctx *c);

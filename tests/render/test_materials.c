@@ -402,7 +402,9 @@ static void test_integrator_and_parameters(void **state)
         {"WorldBegin\nMaterial \"interface\" \"float displacement\" 0.1\n",
          "unused parameter \"float displacement\""},
         {"WorldBegin\nMaterial \"coateddiffuse\" \"string normalmap\" \"n.png\"\n",
-         "\"normalmap\" is not supported"},
+         "test.pbrt:2:26: cannot read PNG \"n.png\""},
+        {"WorldBegin\nMaterial \"diffuse\" \"string normalmap\" \"n.tga\"\n",
+         "normal map \"n.tga\": haze reads .png and .exr"},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         build_scene_expect_error(cases[k].scene, msg, sizeof msg);

@@ -272,12 +272,64 @@ static void test_uv_on_shapes(void **state)
     check_uv("Rotate 90 1 0 0 Shape \"cylinder\"", uv_cylinder, 2e-3);
 }
 
+/* pbrt-v4's "normalmap": a 1x1 EXR of the tangent-space normal
+ * (sin t, 0, cos t) (or (0, sin t, cos t)), stored as 0.5 + 0.5 n, tilts a
+ * quad's shading normal toward its dp/du (dp/dv) by t: a diffuse quad under
+ * a distant light reads rho / pi E max(0, n . l) exactly. */
+static void test_normal_map(void **state)
+{
+    (void)state;
+    const double t = 30.0 * HZ_PI / 180.0;
+    const vec3 local[2] = {v3(sin(t), 0, cos(t)), v3(0, sin(t), cos(t))};
+    const vec3 lights[3] = {v3(1, 0, 1), v3(-1, 0, 1), v3(0, 1, 1)};
+    for (int k = 0; k < 2; ++k) {
+        exr_image img;
+        hz_error err;
+        assert_int_equal(exr_image_alloc(&img, 1, 1, 3, &err), HZ_OK);
+        const char *names[3] = {"B", "G", "R"};
+        const double val[3] = {local[k].z, local[k].y, local[k].x};
+        for (int c = 0; c < 3; ++c) {
+            snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", names[c]);
+            img.channels[c].pixels[0] = (float)(0.5 + 0.5 * val[c]);
+        }
+        char path[1024];
+        snprintf(path, sizeof path, "%s/normal_map_%d.exr", HAZE_TMP, k);
+        assert_int_equal(exr_write(path, &img, &err), HZ_OK);
+        exr_image_free(&img);
+        /* dp/du = +x, dp/dv = +y, n = +z: the local normal is the world one */
+        vec3 n = v3_normalize(v3(0.5 + 0.5 * local[k].x - 0.5, 0.5 + 0.5 * local[k].y - 0.5,
+                                 0.5 + 0.5 * local[k].z - 0.5));
+        for (int li = 0; li < 3; ++li) {
+            vec3 l = v3_normalize(lights[li]);
+            char text[2048];
+            snprintf(text, sizeof text,
+                     "LookAt 0 0 5  0 0 0  0 1 0\n"
+                     "Camera \"orthographic\" \"float screenwindow\" [-0.5 0.5 -0.5 0.5]\n"
+                     "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                     "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+                     "WorldBegin\nLightSource \"distant\" \"point3 from\" [%g %g %g] "
+                     "\"point3 to\" [0 0 0] \"rgb L\" [3 3 3]\n"
+                     "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5] "
+                     "\"string normalmap\" \"%s\"\n"
+                     "Shape \"trianglemesh\" \"point3 P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0] "
+                     "\"point2 uv\" [0 0 1 0 1 1 0 1] \"integer indices\" [0 1 2 0 2 3]\n",
+                     lights[li].x, lights[li].y, lights[li].z, path);
+            render_scene *rs = build_scene_or_fail(text, NULL);
+            pixel_eval e = eval_pixel(rs, 4.5, 4.5, 1);
+            double want = 0.5 * HZ_INV_PI * 3.0 * fmax(0.0, v3_dot(n, l));
+            expect_close(e.L.g, want, 1e-4, 1e-6, "normal map", 4, 4);
+            render_scene_destroy(rs);
+        }
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_checkerboard_ground),
         cmocka_unit_test(test_constant_image_is_constant_material),
         cmocka_unit_test(test_uv_on_shapes),
+        cmocka_unit_test(test_normal_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
