@@ -146,6 +146,23 @@ static double shape_alpha_at(const geom_shape *s, double u, double v, vec3 p)
     return texture_eval_float(s->alpha_tex, &c);
 }
 
+bool geometry_alpha_masked(const geom_shape *s, vec2 uv, vec3 p)
+{
+    if (!s->has_alpha)
+        return false;
+    double a = shape_alpha_at(s, uv.x, uv.y, p);
+    if (a >= 1.0)
+        return false;
+    if (!(a > 0.0))
+        return true;
+    const float v[3] = {(float)p.x, (float)p.y, (float)p.z};
+    uint64_t h = fnv1a(HZ_FNV_OFFSET, v, sizeof v);
+    h ^= h >> 33;
+    h *= 0xff51afd7ed558ccdull;
+    h ^= h >> 33;
+    return (double)(h >> 11) * 0x1.0p-53 > a;
+}
+
 /* Embree's filter for triangles with an alpha: drops the hits the alpha test
  * ignores, so Embree goes on to the next surface (camera and shadow rays). */
 static void alpha_filter(const struct RTCFilterFunctionNArguments *args)
@@ -427,6 +444,8 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
         }
     }
     out->has_alpha = out->alpha_tex || out->alpha < 1.0;
+    /* An alpha texture on an emitter is looked up at light samples too. */
+    out->hit_uv |= out->alpha_tex != NULL;
     bool cutout = out->has_alpha;
 
     RTCGeometry geom = NULL;

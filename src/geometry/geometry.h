@@ -176,6 +176,9 @@ double geometry_curve_hit(const geom_shape *s, unsigned prim, vec3 o, vec3 d, do
  * slerp of the end normals). */
 double geometry_curve_width(const geom_shape *s, size_t seg, double u);
 vec3 geometry_curve_ribbon_normal(const geom_shape *s, size_t seg, double u);
+/* pbrt-v4's AlphaMasked of an area light's point: alpha (its texture at uv
+ * and p) >= 1 shows it, <= 0 hides it, between a hash of p decides. */
+bool geometry_alpha_masked(const geom_shape *s, vec2 uv, vec3 p);
 /* pbrt-v4's (u, v) of sphere `s` at object-space point po (on it). */
 vec2 geometry_sphere_uv(const geom_shape *s, vec3 po);
 /* Every shape's hits carry (u, v) from now on (a gbuffer film's channels). */

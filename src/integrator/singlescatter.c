@@ -212,7 +212,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
     vec3 wo = v3_normalize(v3_neg(d));
     rgb Ls = rgb_grey(0.0);
     if (h.shape->area_light >= 0)
-        Ls = light_area_le(&sc->in.lights[h.shape->area_light], h.ng, wo, v2(h.u, h.v));
+        Ls = light_area_le(&sc->in.lights[h.shape->area_light], h.ng, wo, v2(h.u, h.v), h.p);
     if (rd->has_differentials)
         geometry_hit_footprint(&h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
     if (vs)

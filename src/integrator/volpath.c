@@ -385,7 +385,7 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
     const volpath_scene *sc = pa->sc;
     int li = h->shape->area_light;
     const light *l = &sc->in.lights[li];
-    rgb Le = light_area_le(l, h->ng, wo, v2(h->u, h->v));
+    rgb Le = light_area_le(l, h->ng, wo, v2(h->u, h->v), h->p);
     if (rgb_is_black(Le))
         return;
     if (pa->depth == 0 || pa->specular) {

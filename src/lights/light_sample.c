@@ -186,7 +186,7 @@ static bool area_sample_solid_angle(const light *l, vec3 p, vec3 pl, vec3 nl, ve
     out->pdf = pdf_dir;
     /* One-sided: only the side the normal faces emits (for an outward normal
      * that is the whole cone but its rim). */
-    out->L = light_area_le(l, nl, v3_neg(out->wi), uv);
+    out->L = light_area_le(l, nl, v3_neg(out->wi), uv, pl);
     if (rgb_is_black(out->L))
         return false;
     out->p_light = pl;
@@ -205,7 +205,7 @@ static bool area_sample_area(const light *l, vec3 p, vec3 pl, vec3 nl, vec2 uv,
     double cos_l = fabs(v3_dot(nl, out->wi));
     if (cos_l == 0.0)
         return false;
-    out->L = light_area_le(l, nl, v3_neg(out->wi), uv);
+    out->L = light_area_le(l, nl, v3_neg(out->wi), uv, pl);
     if (rgb_is_black(out->L))
         return false;
     out->pdf = pdf_area * d2 / cos_l;

@@ -372,10 +372,6 @@ static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, ligh
         return hz_fail_at(err, e->loc,
                           "AreaLightSource on a curve is not supported (pbrt-v4 cannot sample "
                           "curves either: it stops on such a light)");
-    if (shape->has_alpha)
-        return hz_fail_at(err, e->loc,
-                          "AreaLightSource on a shape with \"alpha\" is not supported (pbrt-v4 "
-                          "masks such an emitter's light by its alpha; haze does not yet)");
     const char *filename = params_string(pl, "filename", NULL);
     if (filename && params_has(pl, "L"))
         return hz_fail_at(err, params_loc(pl, "L"),
@@ -515,9 +511,11 @@ bool light_is_delta(const light *l)
     return false;
 }
 
-rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv)
+rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv, vec3 p)
 {
     if (!l->area.two_sided && v3_dot(n, w) <= 0.0)
+        return rgb_grey(0.0);
+    if (geometry_alpha_masked(l->area.shape, uv, p))
         return rgb_grey(0.0);
     if (!l->area.image)
         return l->emit;

@@ -148,8 +148,10 @@ typedef struct {
 bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_sample *out);
 
 /* Radiance leaving an area light's surface point with unit normal `n` and
- * surface parameters `uv` (which only an image light reads) toward `w`. */
-rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv);
+ * surface parameters `uv` (an image light and an alpha texture read them) at
+ * point `p` toward `w`; 0 where the shape's alpha masks it (pbrt-v4's
+ * AlphaMasked). */
+rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv, vec3 p);
 
 bool light_is_delta(const light *l);
 
