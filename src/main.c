@@ -265,7 +265,7 @@ static int write_partial(const render_outputs *outs, film *f, double ratio,
         {"haze:spp", spp},
         {"haze:render", outs->render_id},
     };
-    film_output out = {attrs, (int)(sizeof attrs / sizeof attrs[0]), &output_note};
+    film_output out = {attrs, (int)(sizeof attrs / sizeof attrs[0]), &output_note, stats->threads};
     char exr_path[PATH_MAX + 16], png_path[PATH_MAX + 16];
     outputs_partial_path(outs->exr, exr_path, sizeof exr_path);
     hz_error err = {0};
@@ -464,7 +464,7 @@ static int run_render(const cli *c, distributed *dist)
         attrs[nattrs++] = (film_attribute){"haze:target_error", target};
         attrs[nattrs++] = (film_attribute){"haze:spp_mean", mean_spp};
     }
-    film_output out = {attrs, nattrs, &output_note};
+    film_output out = {attrs, nattrs, &output_note, stats.threads};
     if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
         (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
         hz_error_print(stderr, &err);

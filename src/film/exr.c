@@ -8,6 +8,7 @@
 
 #include <errno.h>
 #include <limits.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -212,6 +213,146 @@ static hz_status exr_validate(const char *path, const exr_image *img, hz_error *
     return HZ_OK;
 }
 
+/* ---- chunks: packed and compressed in parallel, written in order ---- */
+
+/* One scanline chunk: where it lies, and its bytes once compressed. */
+typedef struct {
+    exr_chunk_info_t info;
+    void *bytes;
+    uint64_t size;
+} exr_chunk_out;
+
+typedef struct {
+    exr_context_t ctx;
+    int part;
+    const exr_image *img;
+    const exr_channel **sorted; /* in the file's channel order */
+    uint16_t **halfs;           /* half copies of half channels */
+    int lines;                  /* scanlines per chunk */
+    exr_chunk_out *chunks;
+    int chunk_count;
+    atomic_int next;    /* the next chunk a worker takes */
+    atomic_int failure; /* the first error (EXR_ERR_SUCCESS: none) */
+} exr_chunk_job;
+
+/* The pipeline's write step: keep the compressed bytes for the ordered write. */
+static exr_result_t exr_keep_chunk(exr_encode_pipeline_t *enc)
+{
+    exr_chunk_out *out = enc->encoding_user_data;
+    out->bytes = malloc(enc->compressed_bytes ? enc->compressed_bytes : 1);
+    if (!out->bytes)
+        return EXR_ERR_OUT_OF_MEMORY;
+    memcpy(out->bytes, enc->compressed_buffer, enc->compressed_bytes);
+    out->size = enc->compressed_bytes;
+    return EXR_ERR_SUCCESS;
+}
+
+/* Points the pipeline's channels at chunk k's first line. */
+static exr_result_t exr_chunk_channels(const exr_chunk_job *job, exr_encode_pipeline_t *enc, int k)
+{
+    const exr_image *img = job->img;
+    size_t off = (size_t)k * (size_t)job->lines * (size_t)img->width;
+    for (int16_t i = 0; i < enc->channel_count; i++) {
+        exr_coding_channel_info_t *cc = &enc->channels[i];
+        int c = 0;
+        while (c < img->channel_count && strcmp(job->sorted[c]->name, cc->channel_name) != 0)
+            c++;
+        if (c == img->channel_count) /* cannot happen: we declared every channel */
+            return EXR_ERR_INVALID_ARGUMENT;
+        if (job->sorted[c]->half) {
+            cc->encode_from_ptr = (const uint8_t *)(job->halfs[c] + off);
+            cc->user_bytes_per_element = 2;
+            cc->user_data_type = EXR_PIXEL_HALF;
+        } else {
+            cc->encode_from_ptr = (const uint8_t *)(job->sorted[c]->pixels + off);
+            cc->user_bytes_per_element = 4;
+            cc->user_data_type = EXR_PIXEL_FLOAT;
+        }
+        cc->user_pixel_stride = cc->user_bytes_per_element;
+        cc->user_line_stride = cc->user_bytes_per_element * img->width;
+    }
+    return EXR_ERR_SUCCESS;
+}
+
+/* A worker: packs and compresses the chunks it takes, with a pipeline of its
+ * own (OpenEXRCore reads only the context while encoding). */
+static void *exr_chunk_worker(void *arg)
+{
+    exr_chunk_job *job = arg;
+    exr_encode_pipeline_t enc;
+    bool ready = false;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    for (int k; rv == EXR_ERR_SUCCESS && atomic_load(&job->failure) == EXR_ERR_SUCCESS &&
+                (k = atomic_fetch_add(&job->next, 1)) < job->chunk_count;) {
+        exr_chunk_out *out = &job->chunks[k];
+        rv = ready ? exr_encoding_update(job->ctx, job->part, &out->info, &enc)
+                   : exr_encoding_initialize(job->ctx, job->part, &out->info, &enc);
+        if (rv)
+            break;
+        bool first = !ready;
+        ready = true;
+        if ((rv = exr_chunk_channels(job, &enc, k)))
+            break;
+        if (first) {
+            if ((rv = exr_encoding_choose_default_routines(job->ctx, job->part, &enc)))
+                break;
+            enc.yield_until_ready_fn = NULL; /* the order is kept by the writer */
+            enc.write_fn = exr_keep_chunk;
+        }
+        enc.encoding_user_data = out;
+        rv = exr_encoding_run(job->ctx, job->part, &enc);
+    }
+    if (ready)
+        exr_encoding_destroy(job->ctx, &enc);
+    if (rv) {
+        int none = EXR_ERR_SUCCESS;
+        atomic_compare_exchange_strong(&job->failure, &none, (int)rv);
+    }
+    return NULL;
+}
+
+/* Every chunk of the image: compressed by up to img->threads workers (the
+ * calling thread among them), then written in increasing y. */
+static exr_result_t exr_write_chunks(exr_context_t ctx, int part, const exr_image *img,
+                                     const exr_channel **sorted, uint16_t **halfs, int lines)
+{
+    int count = (img->height + lines - 1) / lines;
+    exr_chunk_job job = {.ctx = ctx, .part = part, .img = img, .sorted = sorted,
+                         .halfs = halfs, .lines = lines, .chunk_count = count};
+    atomic_init(&job.next, 0);
+    atomic_init(&job.failure, EXR_ERR_SUCCESS);
+    job.chunks = calloc((size_t)count, sizeof *job.chunks);
+    if (!job.chunks)
+        return EXR_ERR_OUT_OF_MEMORY;
+    exr_result_t rv = EXR_ERR_SUCCESS;
+    for (int k = 0; k < count && !rv; k++)
+        rv = exr_write_scanline_chunk_info(ctx, part, img->data_y0 + k * lines,
+                                           &job.chunks[k].info);
+    if (!rv) {
+        int helpers = img->threads > 1 ? img->threads - 1 : 0;
+        if (helpers > EXR_MAX_WRITE_THREADS - 1)
+            helpers = EXR_MAX_WRITE_THREADS - 1;
+        if (helpers > count - 1)
+            helpers = count - 1;
+        pthread_t tid[EXR_MAX_WRITE_THREADS];
+        int started = 0;
+        while (started < helpers &&
+               pthread_create(&tid[started], NULL, exr_chunk_worker, &job) == 0)
+            started++;
+        exr_chunk_worker(&job); /* no helper started: all of it here */
+        for (int t = 0; t < started; t++)
+            pthread_join(tid[t], NULL);
+        rv = atomic_load(&job.failure);
+    }
+    for (int k = 0; k < count && !rv; k++)
+        rv = exr_write_scanline_chunk(ctx, part, job.chunks[k].info.start_y, job.chunks[k].bytes,
+                                      job.chunks[k].size);
+    for (int k = 0; k < count; k++)
+        free(job.chunks[k].bytes);
+    free(job.chunks);
+    return rv;
+}
+
 /* Writes the whole file into io->fd. `sorted` lists the channels in the order
  * OpenEXRCore keeps them; half channels are converted into `half_buf`. */
 static hz_status exr_write_context(const char *path, const char *tmp, const exr_image *img,
@@ -231,8 +372,6 @@ static hz_status exr_write_context(const char *path, const char *tmp, const exr_
     const exr_channel **sorted = calloc((size_t)nc, sizeof *sorted);
     uint16_t **halfs = calloc((size_t)nc, sizeof *halfs);
     hz_status st = HZ_ERROR;
-    exr_encode_pipeline_t enc;
-    bool enc_init = false;
     if (!sorted || !halfs) {
         hz_fail(err, "exr: out of memory");
         goto done;
@@ -301,54 +440,13 @@ static hz_status exr_write_context(const char *path, const char *tmp, const exr_
         exr_fail_code(err, path, "write", rv, io);
         goto done;
     }
-    for (int y0 = 0; y0 < img->height; y0 += lines) {
-        exr_chunk_info_t ci;
-        if ((rv = exr_write_scanline_chunk_info(ctx, part, img->data_y0 + y0, &ci)))
-            break;
-        rv = enc_init ? exr_encoding_update(ctx, part, &ci, &enc)
-                      : exr_encoding_initialize(ctx, part, &ci, &enc);
-        if (rv)
-            break;
-        for (int16_t k = 0; k < enc.channel_count; k++) {
-            exr_coding_channel_info_t *cc = &enc.channels[k];
-            int c = 0;
-            while (c < nc && strcmp(sorted[c]->name, cc->channel_name) != 0)
-                c++;
-            if (c == nc) { /* cannot happen: we declared every channel */
-                rv = EXR_ERR_INVALID_ARGUMENT;
-                break;
-            }
-            size_t off = (size_t)y0 * (size_t)img->width;
-            if (sorted[c]->half) {
-                cc->encode_from_ptr = (const uint8_t *)(halfs[c] + off);
-                cc->user_bytes_per_element = 2;
-                cc->user_data_type = EXR_PIXEL_HALF;
-            } else {
-                cc->encode_from_ptr = (const uint8_t *)(sorted[c]->pixels + off);
-                cc->user_bytes_per_element = 4;
-                cc->user_data_type = EXR_PIXEL_FLOAT;
-            }
-            cc->user_pixel_stride = cc->user_bytes_per_element;
-            cc->user_line_stride = cc->user_bytes_per_element * img->width;
-        }
-        if (rv)
-            break;
-        if (!enc_init) {
-            enc_init = true;
-            if ((rv = exr_encoding_choose_default_routines(ctx, part, &enc)))
-                break;
-        }
-        if ((rv = exr_encoding_run(ctx, part, &enc)))
-            break;
-    }
+    rv = exr_write_chunks(ctx, part, img, sorted, halfs, lines);
     if (rv) {
         exr_fail_code(err, path, "write pixels of", rv, io);
         goto done;
     }
     st = HZ_OK;
 done:
-    if (enc_init)
-        exr_encoding_destroy(ctx, &enc);
     rv = exr_finish(&ctx); /* writes the chunk offset table */
     if (st == HZ_OK && rv != EXR_ERR_SUCCESS)
         st = exr_fail_code(err, path, "finish", rv, io);

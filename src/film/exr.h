@@ -31,7 +31,12 @@ typedef struct {
      * when has_chromaticities (the image is not in sRGB/Rec. 709). */
     bool has_chromaticities;
     float chromaticities[8];
+    /* exr_write: threads compressing chunks (0 or 1: the calling thread only;
+     * at most EXR_MAX_WRITE_THREADS). The file is the same for any count. */
+    int threads;
 } exr_image;
+
+#define EXR_MAX_WRITE_THREADS 64
 
 /* Allocates channels (zeroed); names are set by the caller. The display
  * window is set to the data size; data_x0/y0 to 0. */

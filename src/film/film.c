@@ -738,6 +738,7 @@ hz_status film_write_exr_with(const film *f, const char *path, double imaging_ra
     img.data_y0 = f->p.bounds.y0;
     img.display_width = f->p.xres;
     img.display_height = f->p.yres;
+    img.threads = out ? out->threads : 0;
     float values[MAX_CHANNELS];
     for (int y = 0; y < f->height; y++)
         for (int x = 0; x < f->width; x++) {

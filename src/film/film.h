@@ -185,6 +185,7 @@ typedef struct {
     const film_attribute *attributes;
     int attribute_count;
     tmp_file_note *note;
+    int threads; /* compressing the EXR's chunks (0: one) */
 } film_output;
 
 /* film_write_exr / film_write_png with extras (`out` may be NULL). */

@@ -137,6 +137,42 @@ static void round_trip(bool half)
     exr_image_free(&back);
 }
 
+/* Chunks compressed by several threads: the same bytes as one thread's file
+ * (written in order), and the same pixels back; more threads than chunks too. */
+static void test_threads_same_file(void **state)
+{
+    (void)state;
+    for (int half = 0; half < 2; half++) {
+        char one[512], many[512];
+        tmp_path(one, sizeof one, "threads1.exr");
+        tmp_path(many, sizeof many, "threadsN.exr");
+        exr_image img, back;
+        make_image(&img, half != 0);
+        hz_error err = {0};
+        img.threads = 1;
+        assert_int_equal(exr_write(one, &img, &err), HZ_OK);
+        size_t n1 = 0;
+        unsigned char *b1 = slurp(one, &n1);
+        assert_non_null(b1);
+        for (int threads = 2; threads <= 8; threads += 3) {
+            img.threads = threads;
+            assert_int_equal(exr_write(many, &img, &err), HZ_OK);
+            assert_no_temp_files(many);
+            size_t n2 = 0;
+            unsigned char *b2 = slurp(many, &n2);
+            assert_non_null(b2);
+            assert_int_equal(n1, n2);
+            assert_memory_equal(b1, b2, n1);
+            free(b2);
+            assert_int_equal(exr_read(many, &back, &err), HZ_OK);
+            assert_same_image(&img, &back);
+            exr_image_free(&back);
+        }
+        free(b1);
+        exr_image_free(&img);
+    }
+}
+
 static void test_round_trip_float(void **state)
 {
     (void)state;
@@ -359,6 +395,7 @@ int main(void)
         cmocka_unit_test(test_half_conversion),
         cmocka_unit_test(test_round_trip_float),
         cmocka_unit_test(test_round_trip_half),
+        cmocka_unit_test(test_threads_same_file),
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_write_missing_directory),
         cmocka_unit_test(test_failed_write_keeps_old_file),
