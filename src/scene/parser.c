@@ -334,6 +334,8 @@ static hz_status parse_root(const char *text, size_t len, const char *name, scen
     parse_directives(&ps, errs, &end, err);
     if (!ps.lex_failed && !ps.out_of_memory && parser_finish(&ps, end, err) != HZ_OK)
         hz_errors_add(errs, err);
+    if (!ps.lex_failed && !ps.out_of_memory)
+        parser_report_pending_materials(&ps, errs);
     bool oom = ps.out_of_memory;
     parser_state_free(&ps);
     if (!oom)

@@ -118,6 +118,8 @@ hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_
  * with no parameters (a constant texture, a diffuse material, a homogeneous
  * medium) unless one exists. Such a scene is reported, never rendered. */
 void parser_define_stand_in(parser *ps);
+/* After the parse: one error per NamedMaterial no MakeNamedMaterial defined. */
+void parser_report_pending_materials(const parser *ps, hz_errors *errs);
 void parser_state_free(parser *ps);
 void gstate_free(gstate *g);
 

@@ -298,6 +298,13 @@ static hz_status d_make_named_material(parser *ps, const token *d, hz_error *err
         read_named(ps, d, "MakeNamedMaterial", ATTR_MATERIAL, &name, &m.entity, err) != HZ_OK)
         return HZ_ERROR;
     long old = find_named_material(ps->sd, name);
+    if (old >= 0 && ps->sd->materials[old].pending) { /* used before: fill its place */
+        material_entity *p = &ps->sd->materials[old];
+        params_free(&p->entity.params);
+        p->entity = m.entity;
+        p->pending = false;
+        return HZ_OK;
+    }
     if (old >= 0) {
         file_loc at = ps->sd->materials[old].entity.loc;
         params_free(&m.entity.params);
@@ -315,11 +322,29 @@ static hz_status d_named_material(parser *ps, const token *d, hz_error *err)
         parser_string_arg(ps, d, &name, err) != HZ_OK)
         return HZ_ERROR;
     long i = find_named_material(ps->sd, name);
-    if (i < 0)
-        return hz_fail_at(err, d->loc, "NamedMaterial \"%s\" is not defined (MakeNamedMaterial "
-                                       "must come first)", name);
-    ps->gs.material = (int)i;
-    return HZ_OK;
+    if (i >= 0) {
+        ps->gs.material = (int)i;
+        return HZ_OK;
+    }
+    /* Defined later, as pbrt-v4 allows: a pending place for it. */
+    material_entity m = {.entity = {.loc = d->loc}, .name = (char *)name, .pending = true};
+    params_init(&m.entity.params, d->loc);
+    m.entity.type = (char *)parser_intern(ps, "diffuse");
+    if (!m.entity.type)
+        return parser_oom(ps, d->loc, err);
+    return add_material(ps, d, m, &ps->gs.material, err);
+}
+
+void parser_report_pending_materials(const parser *ps, hz_errors *errs)
+{
+    const scene_desc *sd = ps->sd;
+    for (size_t i = 0; i < sd->material_count; ++i)
+        if (sd->materials[i].pending) {
+            hz_error err;
+            hz_fail_at(&err, sd->materials[i].entity.loc,
+                       "NamedMaterial \"%s\": no MakeNamedMaterial defines it", sd->materials[i].name);
+            hz_errors_add(errs, &err);
+        }
 }
 
 static hz_status d_make_named_medium(parser *ps, const token *d, hz_error *err)
@@ -373,14 +398,18 @@ void parser_define_stand_in(parser *ps)
     const token d = {.loc = e.loc};
     hz_error err;
     switch (ps->defining.kind) {
-    case 'm':
-        if (find_named_material(sd, name) >= 0)
+    case 'm': {
+        long old = find_named_material(sd, name);
+        if (old >= 0) { /* a pending use keeps its diffuse stand-in, now defined */
+            sd->materials[old].pending = false;
             return;
+        }
         e.type = (char *)parser_intern(ps, "diffuse");
         if (e.type)
             add_material(ps, &d, (material_entity){.entity = e, .name = (char *)name}, NULL,
                          &err);
         return;
+    }
     case 'M':
         if (name[0] == '\0' || medium_defined(sd, name))
             return;

@@ -39,6 +39,10 @@ typedef struct {
 typedef struct {
     scene_entity entity;         /* "diffuse", "interface", ... */
     char *name;                  /* for MakeNamedMaterial; NULL for anonymous */
+    /* A NamedMaterial met before its MakeNamedMaterial (pbrt-v4 resolves names
+     * after the whole file): a "diffuse" stand-in at the NamedMaterial's place
+     * until the definition fills it; one still pending at the end is an error. */
+    bool pending;
 } material_entity;
 
 typedef struct {

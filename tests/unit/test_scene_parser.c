@@ -282,7 +282,27 @@ static void test_named_material(void **state)
     assert_int_equal(sd.shapes[0].material, 1);
     assert_int_equal(sd.shapes[1].material, 0);
     scene_desc_free(&sd);
-    parse_err("WorldBegin\n  NamedMaterial \"nope\"", "t.pbrt:2:3: NamedMaterial \"nope\" is not defined");
+    /* Used before its definition (pbrt-v4 resolves names after the file, and
+     * pbrt-v4-scenes' contemporary-bathroom relies on it): the definition
+     * fills the place the use made, with the definition's type, parameters
+     * and location. */
+    parse_ok("WorldBegin\nNamedMaterial \"later\"\nShape \"sphere\"\n"
+             "MakeNamedMaterial \"later\" \"string type\" \"conductor\" \"float roughness\" 0.2\n"
+             "NamedMaterial \"later\"\nShape \"sphere\"\n",
+             &sd);
+    assert_int_equal(sd.material_count, 1);
+    assert_string_equal(sd.materials[0].entity.type, "conductor");
+    assert_false(sd.materials[0].pending);
+    assert_true(params_has(&sd.materials[0].entity.params, "roughness"));
+    assert_int_equal(sd.materials[0].entity.loc.line, 4);
+    assert_int_equal(sd.shapes[0].material, 0);
+    assert_int_equal(sd.shapes[1].material, 0);
+    scene_desc_free(&sd);
+    parse_err("WorldBegin\n  NamedMaterial \"nope\"",
+              "t.pbrt:2:3: NamedMaterial \"nope\": no MakeNamedMaterial defines it");
+    parse_err("WorldBegin\nNamedMaterial \"a\"\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n"
+              "MakeNamedMaterial \"a\" \"string type\" \"diffuse\"",
+              "t.pbrt:4:1: named material \"a\" redefined (first at t.pbrt:3:1)");
     parse_err("WorldBegin\nMakeNamedMaterial \"a\" \"float x\" 1",
               "t.pbrt:2:1: MakeNamedMaterial \"a\" has no \"string type\" parameter");
     parse_err("WorldBegin\nMakeNamedMaterial \"a\" \"string type\" \"diffuse\"\n"
