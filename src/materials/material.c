@@ -203,16 +203,23 @@ static hz_status read_metal(param_list *pl, const texture_set *ts, const char *n
 /* What the coated materials share: thickness (0.01), albedo (0) and g (0)
  * of the medium between the layers, maxdepth (10) and nsamples (1) of the
  * random walks. */
-static void read_layers(param_list *pl, layered *l)
+static rgb clamp01(rgb c);
+static void read_layers(param_list *pl, const texture_set *ts, material *out)
 {
-    l->thickness = params_float(pl, "thickness", 0.01);
+    layered *l = &out->coat;
+    /* Float textures for thickness and g, a spectrum texture for albedo, as
+     * pbrt-v4 (kroken's materials give "texture thickness"). */
+    out->thickness_tex = texture_param(pl, ts, "thickness", false);
+    out->albedo_tex = texture_param(pl, ts, "albedo", true);
+    out->g_tex = texture_param(pl, ts, "g", false);
+    l->thickness = out->thickness_tex ? 0.01 : params_float(pl, "thickness", 0.01);
     if (!(isfinite(l->thickness) && l->thickness >= 0.0))
         params_reject(pl, "thickness", "\"thickness\" must be finite and >= 0, got %g",
                       l->thickness);
     l->thickness = fmax(l->thickness, 1e-300);
-    rgb a = params_rgb(pl, "albedo", rgb_grey(0.0));
-    l->albedo = rgb_make(hz_clamp(a.r, 0, 1), hz_clamp(a.g, 0, 1), hz_clamp(a.b, 0, 1));
-    l->g = hz_clamp(params_float(pl, "g", 0.0), -1.0, 1.0);
+    rgb a = out->albedo_tex ? rgb_grey(0.0) : params_rgb(pl, "albedo", rgb_grey(0.0));
+    l->albedo = clamp01(a);
+    l->g = out->g_tex ? 0.0 : hz_clamp(params_float(pl, "g", 0.0), -1.0, 1.0);
     l->max_depth = params_int(pl, "maxdepth", 10);
     l->n_samples = params_int(pl, "nsamples", 1);
     /* Bounded: each costs a random walk per evaluation. */
@@ -233,7 +240,7 @@ static void read_coated_diffuse(param_list *pl, const texture_set *ts, material 
     l->reflectance = rgb_make(hz_clamp(r.r, 0, 1), hz_clamp(r.g, 0, 1), hz_clamp(r.b, 0, 1));
     l->top = read_roughness_of(pl, "", ts, out->rough);
     l->eta = read_eta(pl, "eta");
-    read_layers(pl, l);
+    read_layers(pl, ts, out);
 }
 
 static hz_status read_coated_conductor(param_list *pl, const texture_set *ts, material *out,
@@ -251,7 +258,7 @@ static hz_status read_coated_conductor(param_list *pl, const texture_set *ts, ma
     /* The base sits under the coating: its index relative to it. */
     l->eta_rgb = rgb_scale(l->eta_rgb, 1.0 / l->eta);
     l->k = rgb_scale(l->k, 1.0 / l->eta);
-    read_layers(pl, l);
+    read_layers(pl, ts, out);
     return HZ_OK;
 }
 
@@ -278,7 +285,6 @@ static void read_dielectric(param_list *pl, const texture_set *ts, bool thin, ma
  * eumelanin 1.3, brown); pbrt-v4 warns and takes the first when several are
  * given, haze refuses that. eta 1.55, beta_m 0.3, beta_n 0.3 (clamped to
  * [0.01, 1]), alpha 2 degrees. */
-static rgb clamp01(rgb c);
 static void read_hair(param_list *pl, const texture_set *ts, material *out)
 {
     out->kind = MATERIAL_HAIR;
@@ -404,6 +410,14 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
         o->coat.top.alpha_y = alpha_at(m, m->rough[1], m->coat.top.alpha_y, c);
         o->coat.bottom.alpha_x = alpha_at(m, m->rough[2], m->coat.bottom.alpha_x, c);
         o->coat.bottom.alpha_y = alpha_at(m, m->rough[3], m->coat.bottom.alpha_y, c);
+        if (m->thickness_tex) /* finite and > 0: a layer of no thickness is 1e-300 thick */
+            o->coat.thickness = fmax(texture_eval_float(m->thickness_tex, c), 1e-300);
+        if (!(o->coat.thickness < INFINITY))
+            o->coat.thickness = m->coat.thickness;
+        if (m->albedo_tex)
+            o->coat.albedo = clamp01(texture_eval(m->albedo_tex, c));
+        if (m->g_tex)
+            o->coat.g = hz_clamp(texture_eval_float(m->g_tex, c), -1.0, 1.0);
         break;
     case MATERIAL_HAIR:
         if (m->reflectance_tex)
@@ -519,7 +533,7 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
     out->remap_roughness = rough_tex ? params_bool(pl, "remaproughness", true) : true;
     out->textured = out->reflectance_tex || out->transmittance_tex || out->eta_tex ||
                     out->k_tex || out->metal_r_tex || rough_tex || out->displacement ||
-                    out->normal_map;
+                    out->normal_map || out->thickness_tex || out->albedo_tex || out->g_tex;
     char what[128];
     snprintf(what, sizeof what, "Material \"%s\"", type);
     return params_finish(pl, what, err);

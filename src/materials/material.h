@@ -53,6 +53,7 @@ typedef struct material_s {
     const texture *reflectance_tex, *transmittance_tex;
     const texture *eta_tex, *k_tex, *metal_r_tex;
     const texture *rough[4];
+    const texture *thickness_tex, *albedo_tex, *g_tex; /* coated: the layer's */
     /* "texture displacement": a float texture that bumps the shading normal
      * (pbrt-v4's BumpMap, geometry_shading_normal); NULL: none. */
     const texture *displacement;
