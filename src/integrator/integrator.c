@@ -1,5 +1,6 @@
 #include "integrator/integrator.h"
 
+#include <stdio.h>
 #include <string.h>
 
 /* A scene with no Integrator directive (its default entity sits at line 0)
@@ -34,6 +35,90 @@ integrator_kind integrator_default_kind(const scene_desc *sd, const char **why, 
     return INTEGRATOR_SINGLESCATTER;
 }
 
+/* pbrt-v4's other integrators of the light transport volpath computes (the
+ * same converged image, other noise): rendered by volpath, with a warning.
+ * `media`: pbrt-v4's renders participating media (the others ignore them,
+ * as "path" does, which haze does not: refused with media). `tuning`: the
+ * parameters that tune only their own noise or speed, read and named in the
+ * warning as not used (each "T name", T the type: i integer, f float, b
+ * bool). */
+static const struct {
+    const char *name;
+    bool media, regularize;
+    const char *tuning[5];
+} volpath_stand_ins[] = {
+    {"bdpt", true, true, {NULL}},
+    {"mlt", true, true,
+     {"i bootstrapsamples", "i chains", "i mutationsperpixel", "f largestepprobability",
+      "f sigma"}},
+    {"simplevolpath", true, false, {NULL}},
+    {"sppm", false, false, {"i photonsperiteration", "f radius", "i seed"}},
+    {"simplepath", false, false, {"b samplelights"}},
+    {"randomwalk", false, false, {NULL}},
+    {"lightpath", false, false, {NULL}},
+};
+
+static hz_status stand_in_settings(scene_desc *sd, size_t k, FILE *warn, volpath_settings *out,
+                                   hz_error *err)
+{
+    scene_entity *e = &sd->integrator;
+    param_list *pl = &e->params;
+    const char *type = volpath_stand_ins[k].name;
+    if (!volpath_stand_ins[k].media && sd->medium_count > 0)
+        return hz_fail_at(err, e->loc,
+                          "Integrator \"%s\" with media: pbrt-v4's %s integrator ignores media, "
+                          "haze does not render them away; use \"volpath\"",
+                          type, type);
+    *out = (volpath_settings){.light_sampler = LIGHT_SAMPLER_BVH};
+    out->max_depth = params_int(pl, "maxdepth", 5);
+    if (out->max_depth < 0)
+        params_reject(pl, "maxdepth", "\"maxdepth\" must be >= 0");
+    if (volpath_stand_ins[k].regularize)
+        out->regularize = params_bool(pl, "regularize", false);
+    if (strcmp(type, "bdpt") == 0) {
+        static const char *views[2] = {"visualizestrategies", "visualizeweights"};
+        for (int i = 0; i < 2; ++i)
+            if (params_bool(pl, views[i], false))
+                params_reject(pl, views[i],
+                              "\"%s\" shows BDPT's strategies one by one, a debugging view: haze "
+                              "renders \"bdpt\" with volpath, which has none",
+                              views[i]);
+    }
+    if (strcmp(type, "simplepath") == 0 && !params_bool(pl, "samplebsdf", true))
+        params_reject(pl, "samplebsdf",
+                      "\"samplebsdf\" false leaves only light seen directly and through one "
+                      "light sample: haze renders \"simplepath\" with volpath, whose paths "
+                      "always continue");
+    char unused[256] = "";
+    for (int i = 0; i < 5 && volpath_stand_ins[k].tuning[i]; ++i) {
+        const char *name = volpath_stand_ins[k].tuning[i] + 2;
+        if (!params_has(pl, name))
+            continue;
+        switch (volpath_stand_ins[k].tuning[i][0]) { /* read with its type */
+        case 'i':
+            (void)params_int(pl, name, 0);
+            break;
+        case 'f':
+            (void)params_float(pl, name, 0.0);
+            break;
+        default:
+            (void)params_bool(pl, name, false);
+            break;
+        }
+        size_t n = strlen(unused);
+        snprintf(unused + n, sizeof unused - n, "%s\"%s\"", n ? ", " : "", name);
+    }
+    if (warn)
+        fprintf(warn,
+                "%s:%d:%d: warning: Integrator \"%s\" renders with haze's volpath (the same "
+                "converged image, other noise)%s%s%s\n",
+                e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, type,
+                unused[0] ? "; " : "", unused, unused[0] ? " not used" : "");
+    char what[64];
+    snprintf(what, sizeof what, "Integrator \"%s\"", type);
+    return params_finish(pl, what, err);
+}
+
 hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_params *out,
                                        hz_error *err)
 {
@@ -63,9 +148,16 @@ hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_pa
             return HZ_ERROR;
         return params_finish(pl, "Integrator \"singlescatter\"", err);
     }
+    for (size_t k = 0; k < sizeof volpath_stand_ins / sizeof volpath_stand_ins[0]; ++k)
+        if (strcmp(type, volpath_stand_ins[k].name) == 0) {
+            out->kind = INTEGRATOR_VOLPATH;
+            return stand_in_settings(sd, k, warn, &out->volpath, err);
+        }
     return hz_fail_at(err, e->loc,
                       "Integrator \"%s\" is not supported (supported: \"volpath\", \"path\" "
-                      "(without media), \"singlescatter\")",
+                      "(without media), \"singlescatter\"; rendered by volpath: \"bdpt\", "
+                      "\"mlt\", \"sppm\", \"simplevolpath\", \"simplepath\", \"randomwalk\", "
+                      "\"lightpath\")",
                       type);
 }
 

@@ -87,6 +87,44 @@ static void test_path_is_volpath_without_media(void **state)
     free(with_media);
 }
 
+/* pbrt-v4's bdpt, mlt, sppm and its other path tracers render with volpath
+ * (the same converged image), maxdepth and regularize honoured: the same
+ * pixels as volpath with them, media refused where pbrt-v4's ignores them,
+ * BDPT's debugging views refused. */
+static void test_other_integrators_are_volpath(void **state)
+{
+    (void)state;
+    char *vp = render_file("stand_in_volpath",
+                           "Integrator \"volpath\" \"integer maxdepth\" 3 \"bool regularize\" true",
+                           "--threads 2");
+    static const char *others[] = {
+        "Integrator \"bdpt\" \"integer maxdepth\" 3 \"bool regularize\" true",
+        "Integrator \"mlt\" \"integer maxdepth\" 3 \"bool regularize\" true \"integer chains\" 9 "
+        "\"float sigma\" 0.1"};
+    for (int i = 0; i < 2; ++i) {
+        char *name = sfmt("stand_in_%d", i);
+        char *exr = render_file(name, others[i], "--threads 2");
+        assert_true(exr_pixels_equal(exr, vp));
+        free(exr);
+        free(name);
+    }
+    char *other_depth = render_file("stand_in_depth", "Integrator \"bdpt\" \"integer maxdepth\" 1",
+                                    "--threads 2");
+    assert_false(exr_pixels_equal(other_depth, vp));
+    free(other_depth);
+    free(vp);
+    char msg[1024];
+    char *sppm = sfmt("%sIntegrator \"sppm\"\n%s", camera_text, scene_body);
+    build_scene_expect_error(sppm, msg, sizeof msg);
+    assert_non_null(strstr(msg, "test.pbrt:5:1: Integrator \"sppm\" with media"));
+    free(sppm);
+    char *view = sfmt("%sIntegrator \"bdpt\" \"bool visualizestrategies\" true\n%s", camera_text,
+                      scene_body);
+    build_scene_expect_error(view, msg, sizeof msg);
+    assert_non_null(strstr(msg, "\"visualizestrategies\" shows BDPT's strategies"));
+    free(view);
+}
+
 /* A scene naming no Integrator renders exactly as "singlescatter". */
 static void test_default_is_singlescatter(void **state)
 {
@@ -521,6 +559,7 @@ int main(void)
         cmocka_unit_test(test_threads_byte_identical),
         cmocka_unit_test(test_default_is_singlescatter),
         cmocka_unit_test(test_path_is_volpath_without_media),
+        cmocka_unit_test(test_other_integrators_are_volpath),
         cmocka_unit_test(test_empty_material_is_interface),
         cmocka_unit_test(test_parameters),
         cmocka_unit_test(test_cloud_without_integrator),
