@@ -379,6 +379,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
 static hz_status build(render_scene *rs, scene_desc *sd, const render_options *opt, FILE *warn,
                        hz_errors *errs, hz_error *err)
 {
+    for (size_t i = 0; warn && i < sd->warning_count; ++i)
+        fprintf(warn, "%s\n", sd->warnings[i]);
     if (build_all(rs, sd, opt, warn, errs, err) != HZ_OK)
         hz_errors_add(errs, err);
     return hz_errors_finish(errs, sd->files, sd->file_count, err);

@@ -139,6 +139,18 @@ bool params_reserve(param_list *pl)
     return grown != NULL;
 }
 
+bool params_add_shadowed(param_list *pl, param p)
+{
+    const param *old = find(pl, p.name);
+    if (!old || old->type != p.type || !params_reserve(pl)) {
+        param_free(&p);
+        return false;
+    }
+    p.optional = true;
+    pl->items[pl->count++] = p;
+    return true;
+}
+
 hz_status params_add(param_list *pl, param p, hz_error *err)
 {
     const param *old = find(pl, p.name);

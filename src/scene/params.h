@@ -64,6 +64,10 @@ bool params_copy(param_list *dst, const param_list *src);
  * the name is repeated, naming the place of the repetition, or when out of
  * memory ("out of memory" at p's place; not after params_reserve). */
 hz_status params_add(param_list *pl, param p, hz_error *err);
+/* Adds p after a parameter of the same name and type (reserved first): the
+ * first one is the one read, as pbrt-v4; this one is never reported unused.
+ * False (p freed) when there is no such first one. */
+bool params_add_shadowed(param_list *pl, param p);
 /* Room for one more parameter, so that the next params_add can fail only on a
  * repeated name (callers that must tell the two apart). False when out of
  * memory, pl unchanged. */

@@ -8,6 +8,7 @@
 #include <assert.h>
 #include <errno.h>
 #include <limits.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -81,6 +82,26 @@ static const char *directive_name(const token *d, char *buf, size_t n)
 {
     snprintf(buf, n, "%.*s", (int)(d->len < 40 ? d->len : 40), d->text);
     return buf;
+}
+
+hz_status parser_warn(parser *ps, file_loc at, hz_error *err, const char *fmt, ...)
+{
+    char msg[400], line[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    snprintf(line, sizeof line, "%s:%d:%d: warning: %s", at.file ? at.file : "<input>", at.line,
+             at.column, msg);
+    scene_desc *sd = ps->sd;
+    const char *kept = parser_intern(ps, line);
+    const char **grown = kept ? realloc(sd->warnings, (sd->warning_count + 1) * sizeof *grown)
+                              : NULL;
+    if (!grown)
+        return parser_oom(ps, at, err);
+    sd->warnings = grown;
+    sd->warnings[sd->warning_count++] = kept;
+    return HZ_OK;
 }
 
 hz_status parser_string_arg(parser *ps, const token *directive, const char **out, hz_error *err)

@@ -47,6 +47,7 @@ typedef struct {
     named_coordsys *coords;
     size_t coord_count, coord_cap;
     bool in_world;
+    bool warned_transform_begin; /* TransformBegin/End's deprecation, said once */
     file_loc seen_camera, seen_film, seen_sampler, seen_filter, seen_integrator, seen_accelerator;
     long current_object;      /* index being defined, -1 outside ObjectBegin */
 
@@ -84,6 +85,9 @@ typedef struct {
 hz_status parser_oom(parser *ps, file_loc loc, hz_error *err);
 /* An owned copy of `s` (NULL when out of memory: report it with parser_oom). */
 const char *parser_intern(parser *ps, const char *s);
+/* Records "FILE:LINE:COL: warning: MESSAGE" in the scene's warnings (printed
+ * when it is built). Fails only when out of memory. */
+hz_status parser_warn(parser *ps, file_loc at, hz_error *err, const char *fmt, ...) HZ_PRINTF(4, 5);
 hz_status parser_next(parser *ps, token *tok, hz_error *err);
 hz_status parser_peek(parser *ps, token *tok, hz_error *err);
 /* Next token must be a string: returns it decoded and interned. */

@@ -322,6 +322,27 @@ static hz_status d_attribute_end(parser *ps, const token *d, hz_error *err)
     return HZ_OK;
 }
 
+/* pbrt-v3's TransformBegin/End: pbrt-v4 reads them as AttributeBegin/End
+ * (saving the whole graphics state, not only the transform) and warns once. */
+static hz_status d_transform_begin(parser *ps, const token *d, hz_error *err)
+{
+    if (parser_need_world(ps, d, "TransformBegin", err) != HZ_OK)
+        return HZ_ERROR;
+    if (!ps->warned_transform_begin) {
+        ps->warned_transform_begin = true;
+        if (parser_warn(ps, d->loc, err,
+                        "TransformBegin/End are pbrt-v3's: read as AttributeBegin/End, as "
+                        "pbrt-v4 does") != HZ_OK)
+            return HZ_ERROR;
+    }
+    return parser_push_state(ps, 'a', d->loc, err);
+}
+
+static hz_status d_transform_end(parser *ps, const token *d, hz_error *err)
+{
+    return d_attribute_end(ps, d, err);
+}
+
 static hz_status d_world_begin(parser *ps, const token *d, hz_error *err)
 {
     if (parser_need_options(ps, d, "WorldBegin", NULL, err) != HZ_OK)
@@ -375,6 +396,8 @@ static const struct {
     {"ActiveTransform", d_active_transform},
     {"AttributeBegin", d_attribute_begin},
     {"AttributeEnd", d_attribute_end},
+    {"TransformBegin", d_transform_begin},
+    {"TransformEnd", d_transform_end},
     {"WorldBegin", d_world_begin},
     {"WorldEnd", d_world_end},
     {"Include", d_include},

@@ -85,6 +85,7 @@ void scene_desc_free(scene_desc *sd)
     for (size_t i = 0; i < sd->material_count; ++i)
         params_free(&sd->materials[i].entity.params);
     free(sd->materials);
+    free(sd->warnings);
     for (size_t i = 0; i < sd->light_count; ++i)
         params_free(&sd->lights[i].entity.params);
     free(sd->lights);

@@ -135,6 +135,12 @@ typedef struct {
     /* Owned strings (file names, names) that file_loc.file and others point to. */
     char **strings;
     size_t string_count, string_capacity;
+
+    /* What the parse accepted with a warning, whole "file:line:column:
+     * warning: ..." lines (among `strings`), in the order met; printed when
+     * the scene is built. */
+    const char **warnings;
+    size_t warning_count;
 } scene_desc;
 
 /* Parses `path` (and everything it includes). Follows pbrt-v4: shapes, lights,

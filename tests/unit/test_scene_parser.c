@@ -35,6 +35,33 @@ static void parse_err(const char *src, const char *want)
     assert_null(sd.strings);
 }
 
+/* pbrt-v4 reads the first of two parameters of one name and type (the
+ * other is shadowed, pbrt-v4-scenes' villa has such a roughness) and
+ * pbrt-v3's TransformBegin/End as AttributeBegin/End: both accepted with a
+ * warning recorded for the build to print. */
+static void test_pbrt_v4_leniencies(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    parse_ok("Camera \"perspective\" \"float fov\" 30\n   \"float fov\" 40\nWorldBegin\n"
+             "TransformBegin\nTranslate 1 2 3\nMaterial \"conductor\"\nTransformEnd\n"
+             "TransformBegin\nTransformEnd\nShape \"sphere\"\n",
+             &sd);
+    param_list *pl = &sd.camera.entity.params;
+    assert_true(params_float(pl, "fov", 0) == 30.0);
+    hz_error err;
+    assert_int_equal(params_finish(pl, "Camera", &err), HZ_OK); /* the second is not "unused" */
+    assert_int_equal(sd.warning_count, 2);
+    assert_non_null(strstr(sd.warnings[0], "t.pbrt:2:4: warning: parameter \"float fov\" given "
+                                           "again: the first (line 1) is used"));
+    assert_non_null(strstr(sd.warnings[1], "t.pbrt:4:1: warning: TransformBegin/End"));
+    /* The state came back: no transform, the default material. */
+    assert_int_equal(sd.shape_count, 1);
+    assert_int_equal(sd.shapes[0].material, -1);
+    scene_desc_free(&sd);
+    parse_err("WorldBegin\nTransformEnd", "t.pbrt:2:1: AttributeEnd without a matching");
+}
+
 static void assert_mat(const mat4 *m, const double want[4][4])
 {
     for (int r = 0; r < 4; ++r)
@@ -454,7 +481,8 @@ static void test_param_errors(void **state)
               "t.pbrt:2:21: parameter \"rgb I\" needs a multiple of 3 values, got 2");
     parse_err("WorldBegin\nShape \"trianglemesh\" \"point3 P\" [0 0 0 1]",
               "t.pbrt:2:22: parameter \"point3 P\" needs a multiple of 3 values, got 4");
-    parse_err("Camera \"perspective\" \"float fov\" 30\n   \"float fov\" 40",
+    /* Given again with another type: ambiguous, refused. */
+    parse_err("Camera \"perspective\" \"float fov\" 30\n   \"integer fov\" 40",
               "t.pbrt:2:4: parameter \"fov\" given twice (first at line 1)");
     parse_err("Camera \"perspective\" \"quaternion q\" 1",
               "t.pbrt:1:22: unknown parameter type \"quaternion\"");
@@ -848,6 +876,7 @@ int main(void)
         cmocka_unit_test(test_active_transform),
         cmocka_unit_test(test_active_transform_pbrt_rules),
         cmocka_unit_test(test_named_material),
+        cmocka_unit_test(test_pbrt_v4_leniencies),
         cmocka_unit_test(test_media),
         cmocka_unit_test(test_objects),
         cmocka_unit_test(test_attribute_defaults),
