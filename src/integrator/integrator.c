@@ -111,7 +111,8 @@ static hz_status stand_in_settings(scene_desc *sd, size_t k, FILE *warn, volpath
     if (warn)
         fprintf(warn,
                 "%s:%d:%d: warning: Integrator \"%s\" renders with haze's volpath (the same "
-                "converged image, other noise)%s%s%s\n",
+                "converged image, other noise; an image clamped by the Film's "
+                "maxcomponentvalue differs)%s%s%s\n",
                 e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, type,
                 unused[0] ? "; " : "", unused, unused[0] ? " not used" : "");
     char what[64];

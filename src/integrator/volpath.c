@@ -289,7 +289,7 @@ static rgb sample_ld(path *pa, const vertex *v)
     rgb r_l = rgb_scale(rgb_mul(s.r_l, pa->r_u), pmf * ls.pdf);
     rgb r_u = rgb_scale(rgb_mul(s.r_u, pa->r_u), scatter_pdf);
     rgb c = rgb_mul(rgb_mul(rgb_mul(pa->beta, f_hat), s.T), ls.L);
-    double den = light_is_delta(l) ? rgb_avg(r_l) : rgb_avg(rgb_add(r_l, r_u));
+    double den = light_only_sampled(l) ? rgb_avg(r_l) : rgb_avg(rgb_add(r_l, r_u));
     return den > 0.0 ? rgb_div(c, den) : rgb_grey(0.0);
 }
 

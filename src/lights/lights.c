@@ -258,6 +258,12 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
             /* pbrt-v4: illuminance of a uniform sky on an upward patch is π L. */
             scale *= illum / HZ_PI;
         }
+        /* pbrt-v4 makes an "L" with a portal a 1x1 image of the spectrum's
+         * RGB as it holds it, without the division by its luminance that
+         * its other lights make: a blackbody's luminance at peak 1, a
+         * sampled spectrum's own. */
+        if (!filename && params_has(pl, "portal"))
+            L = rgb_scale(L, params_illuminant_luminance(pl, "L"));
         out->emit = rgb_scale(L, scale);
         if (params_has(pl, "portal") &&
             read_portal(pl, render_from_world, render_from_light, out, err) != HZ_OK)
@@ -384,6 +390,7 @@ static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, ligh
     out->kind = LIGHT_AREA;
     out->area.two_sided = params_bool(pl, "twosided", false);
     out->area.shape = shape;
+    out->area.invisible = shape->has_alpha && !shape->alpha_tex && !(shape->alpha > 0.0);
     if (power > 0.0)
         scale *= area_power_scale(pl, shape, power, out->area.two_sided) /
                  (out->area.image ? light_image_luminance(out->area.image) : 1.0);
@@ -511,11 +518,16 @@ bool light_is_delta(const light *l)
     return false;
 }
 
+bool light_only_sampled(const light *l)
+{
+    return light_is_delta(l) || (l->kind == LIGHT_AREA && l->area.invisible);
+}
+
 rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv, vec3 p)
 {
     if (!l->area.two_sided && v3_dot(n, w) <= 0.0)
         return rgb_grey(0.0);
-    if (geometry_alpha_masked(l->area.shape, uv, p))
+    if (!l->area.invisible && geometry_alpha_masked(l->area.shape, uv, p))
         return rgb_grey(0.0);
     if (!l->area.image)
         return l->emit;

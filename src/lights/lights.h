@@ -91,6 +91,10 @@ typedef struct {
              * to render space with the transform at the sample's time */
             const geom_shape *shape;
             bool two_sided;
+            /* A shape of constant alpha 0: pbrt-v4's invisible emitter, never
+             * hit by a ray, emitting fully toward its light samples (which
+             * then take no MIS weight, as a delta light's). */
+            bool invisible;
             /* "filename": radiance emit times the image, bilinear at the
              * surface's (u, 1 - v) as pbrt-v4 (NULL: emit alone). */
             light_image *image;
@@ -154,6 +158,9 @@ bool light_sample_li(const light *l, vec3 p, vec3 n, double time, vec2 u, light_
 rgb light_area_le(const light *l, vec3 n, vec3 w, vec2 uv, vec3 p);
 
 bool light_is_delta(const light *l);
+/* Delta lights and invisible area lights: no ray can hit them, so their light
+ * samples are the only strategy (MIS weight 1). */
+bool light_only_sampled(const light *l);
 
 /* The intensity factor of point light `l` toward unit direction w (from the
  * light): 1 for an isotropic one, the image's for goniometric and

@@ -335,6 +335,14 @@ rgb params_illuminant(param_list *pl, const char *name, rgb def)
     return c;
 }
 
+double params_illuminant_luminance(const param_list *pl, const char *name)
+{
+    for (size_t i = 0; i < pl->count; ++i)
+        if (strcmp(pl->items[i].name, name) == 0)
+            return pl->items[i].luminance > 0.0 ? pl->items[i].luminance : 1.0;
+    return 1.0;
+}
+
 static const double *get_array(param_list *pl, const char *name, param_type type, size_t tuple,
                                size_t *n)
 {

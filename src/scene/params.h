@@ -43,6 +43,9 @@ typedef struct {
     bool used;
     bool optional;  /* a default from Attribute: never reported as unused (pbrt-v4's mayBeUnused) */
     rgb illuminant; /* spectrum: the RGB of the spectrum as a light's (params_illuminant) */
+    /* spectrum, blackbody: the luminance params_illuminant divides out
+     * (spectrum_*_luminance); 0: none (rgb, named illuminants) */
+    double luminance;
     double at_550;  /* spectrum: its value at 550 nm (an index that does not disperse) */
 } param;
 
@@ -105,6 +108,9 @@ rgb params_rgb(param_list *pl, const char *name, rgb def);
  * of a constant spectrum, which reflectances get): "spectrum I" [360 5 830 5]
  * is as bright as "rgb I" [1 1 1], slightly pink (equal-energy white). */
 rgb params_illuminant(param_list *pl, const char *name, rgb def);
+/* What params_illuminant divided the spectrum by (1 when nothing: rgb values,
+ * named illuminants, no such parameter). */
+double params_illuminant_luminance(const param_list *pl, const char *name);
 /* Arrays: NULL and *n = 0 when absent. For point3/normal/vector3/point2 *n counts
  * tuples, not scalars. */
 const double *params_floats(param_list *pl, const char *name, size_t *n);

@@ -169,6 +169,7 @@ static hz_status set_sampled(parser *ps, param *p, const double *lambda, const d
             break;
         }
     p->illuminant = spectrum_sampled_to_illuminant(lambda, value, pairs);
+    p->luminance = spectrum_sampled_luminance(lambda, value, pairs);
     return set_rgb(ps, p, spectrum_sampled_to_rgb(lambda, value, pairs), err);
 }
 
@@ -285,6 +286,7 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
         p->at_550 = vals[0].num;
         p->illuminant = vals[0].num > 0.0 ? spectrum_sampled_to_illuminant(NULL, NULL, 1)
                                           : rgb_grey(0.0);
+        p->luminance = vals[0].num;
     } else {
         if (n % 2 != 0)
             return hz_fail_at(err, p->loc,
@@ -376,6 +378,7 @@ static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_e
         if (!(vals[0].num > 0.0))
             return hz_fail_at(err, vals[0].loc, "parameter \"blackbody %s\": temperature must be > 0",
                               p->name);
+        p->luminance = spectrum_blackbody_luminance(vals[0].num);
         return set_rgb(ps, p, spectrum_blackbody_to_rgb(vals[0].num), err);
     case PARAM_POINT2:
     case PARAM_VECTOR2:

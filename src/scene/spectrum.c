@@ -117,6 +117,18 @@ void spectrum_blackbody_peak_to_rgb_n(const double *kelvin, rgb *out, size_t n)
     }
 }
 
+double spectrum_sampled_luminance(const double *lambda, const double *value, size_t n)
+{
+    return integrate_xyz(lambda, value, n).y / SPECTRUM_CIE_Y_INTEGRAL;
+}
+
+double spectrum_blackbody_luminance(double kelvin)
+{
+    double peak = planck(2.8977721e6 / kelvin, kelvin);
+    double y = blackbody_xyz(kelvin).y / SPECTRUM_CIE_Y_INTEGRAL;
+    return peak > 0.0 && isfinite(y / peak) ? y / peak : 0.0;
+}
+
 rgb spectrum_blackbody_to_rgb(double kelvin)
 {
     vec3 xyz = blackbody_xyz(kelvin);

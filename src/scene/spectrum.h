@@ -33,6 +33,11 @@ rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n)
  * scaled to luminance 1; n == 1 is a constant. Zero for a spectrum without
  * visible light. */
 rgb spectrum_sampled_to_illuminant(const double *lambda, const double *value, size_t n);
+/* The luminance of the spectrum as pbrt-v4 holds it, before a light divides
+ * it out (pbrt-v4's SpectrumToPhotometric): the sampled values as given, a
+ * blackbody normalised to 1 at its peak; in units where a constant 1 is 1. */
+double spectrum_sampled_luminance(const double *lambda, const double *value, size_t n);
+double spectrum_blackbody_luminance(double kelvin);
 /* T > 0. */
 rgb spectrum_blackbody_to_rgb(double kelvin);
 /* pbrt-v4's BlackbodySpectrum (Planck's law divided by its value at the

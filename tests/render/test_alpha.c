@@ -165,6 +165,33 @@ static void test_masked_emitters(void **state)
     assert_true(fabs(a / b - 1.0) < 0.02);
 }
 
+/* A constant alpha of 0 on an emitter is pbrt-v4's invisible light: no ray
+ * sees it, and it lights the scene fully through light samples (which then
+ * take no MIS weight: were they weighted against BSDF samples that can never
+ * hit it, the floor would come out darker). */
+static void test_invisible_emitter(void **state)
+{
+    (void)state;
+    const char *seen = "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n" QUAD "\"float alpha\" 0\n";
+    expect_fraction(region_mean("emit0", 64, seen, 8, 24, 8, 24), 0.0, 16384,
+                    "alpha 0 emitter seen");
+    const char *floor_fmt = "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
+                            "Shape \"trianglemesh\" \"point3 P\" [-3 -3 -1 3 -3 -1 3 3 -1 -3 3 -1] "
+                            "\"integer indices\" [0 1 2 0 2 3]\n"
+                            "AttributeBegin\nReverseOrientation\n"
+                            "AreaLightSource \"diffuse\" \"rgb L\" [4 4 4]\n"
+                            "Shape \"trianglemesh\" \"point3 P\" [1.2 -1 0.5 2.2 -1 0.5 2.2 1 0.5 "
+                            "1.2 1 0.5] \"integer indices\" [0 1 2 0 2 3] %s\nAttributeEnd\n";
+    char invisible[2048], opaque[2048];
+    snprintf(invisible, sizeof invisible, floor_fmt, "\"float alpha\" 0");
+    snprintf(opaque, sizeof opaque, floor_fmt, "");
+    double a = region_mean("floor_invisible", 256, invisible, 0, 32, 0, 32);
+    double b = region_mean("floor_opaque", 256, opaque, 0, 32, 0, 32);
+    print_message("floor under an invisible emitter %.5f, under the same opaque one %.5f\n", a, b);
+    assert_true(b > 0.01);
+    assert_true(fabs(a / b - 1.0) < 0.01);
+}
+
 static void test_refused(void **state)
 {
     (void)state;
@@ -186,6 +213,7 @@ int main(void)
         cmocka_unit_test(test_textured_alpha),
         cmocka_unit_test(test_shadows),
         cmocka_unit_test(test_masked_emitters),
+        cmocka_unit_test(test_invisible_emitter),
         cmocka_unit_test(test_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -412,7 +412,7 @@ static void test_errors(void **state)
                              msg, sizeof msg);
     assert_non_null(strstr(msg, "test.pbrt:2:"));
     assert_non_null(strstr(msg, "diffuse"));
-    build_scene_expect_error("Integrator \"bdpt\"\nWorldBegin\n", msg, sizeof msg);
+    build_scene_expect_error("Integrator \"ambientocclusion\"\nWorldBegin\n", msg, sizeof msg);
     assert_non_null(strstr(msg, "test.pbrt:1:"));
     assert_non_null(strstr(msg, "volpath"));
     build_scene_expect_error("WorldBegin\nLightSource \"goniometric\"\n", msg, sizeof msg);

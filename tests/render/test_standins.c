@@ -143,7 +143,10 @@ static void stage(void)
         "clouds.pbrt",           "killeroo-simple.pbrt",   "geometry/creature.pbrt",
         "sanmiguel-courtyard.pbrt", "geometry/courtyard-mat.pbrt",
         "geometry/courtyard-geom.pbrt", "crown.pbrt", "geometry/gem.ply",
-        "hair-eumel-2.pbrt", "geometry/straight-hair.pbrt.gz"};
+        "hair-eumel-2.pbrt", "geometry/straight-hair.pbrt.gz",
+        "contemporary-bathroom.pbrt", "geometry/bathroom-materials.pbrt",
+        "villa-daylight.pbrt", "geometry/villa-materials.pbrt",
+        "kroken.pbrt", "geometry/kroken-lights.pbrt", "geometry/kroken-materials.pbrt"};
     static const char *data[][2] = {{"box.nvdb", "bunny_cloud.nvdb"},
                                     {"box.nvdb", "wdas_cloud_quarter.nvdb"},
                                     {"box_fire.nvdb", "fire.nvdb"}};
@@ -235,6 +238,9 @@ static void test_surface_scenes(void **state)
     render_standin("sanmiguel-courtyard", false, 0.01);
     render_standin("crown", false, 0.001);
     render_standin("hair-eumel-2", false, 0.001);
+    render_standin("contemporary-bathroom", false, 0.01);
+    render_standin("villa-daylight", false, 0.01);
+    render_standin("kroken", false, 0.01);
 }
 
 int main(void)
