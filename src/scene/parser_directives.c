@@ -103,9 +103,12 @@ hz_status parser_need_options(parser *ps, const token *d, const char *name, file
     if (ps->in_world)
         return hz_fail_at(err, d->loc, "%s must come before WorldBegin", name);
     if (seen) {
-        if (seen->line > 0)
-            return hz_fail_at(err, d->loc, "%s given twice (first at %s:%d:%d)", name, seen->file,
-                              seen->line, seen->column);
+        /* pbrt-v4 takes the last (sanmiguel-realistic-courtyard gives two
+         * cameras); the caller replaces the first. */
+        if (seen->line > 0 &&
+            parser_warn(ps, d->loc, err, "%s given again: this one replaces the one at %s:%d:%d, "
+                        "as in pbrt-v4", name, seen->file, seen->line, seen->column) != HZ_OK)
+            return HZ_ERROR;
         *seen = d->loc;
     }
     return HZ_OK;

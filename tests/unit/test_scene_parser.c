@@ -440,10 +440,19 @@ static void test_options_and_colorspace(void **state)
 static void test_structure_errors(void **state)
 {
     (void)state;
+    scene_desc sd;
     parse_err("WorldBegin\n  Frobnicate 1", "t.pbrt:2:3: unknown directive 'Frobnicate'; supported: LookAt");
     parse_err("WorldBegin\nWorldEnd", "t.pbrt:2:1: WorldEnd does not exist in pbrt-v4");
     parse_err("WorldBegin\nCamera \"perspective\"", "t.pbrt:2:1: Camera must come before WorldBegin");
-    parse_err("Film \"rgb\"\n Film \"rgb\"", "t.pbrt:2:2: Film given twice (first at t.pbrt:1:1)");
+    /* pbrt-v4 takes the last of two option directives: so does haze, with a
+     * warning. */
+    parse_ok("Film \"rgb\" \"integer xresolution\" 8\n Film \"rgb\" \"integer xresolution\" 4\n"
+             "WorldBegin\n", &sd);
+    assert_true(params_int(&sd.film.params, "xresolution", 0) == 4);
+    assert_int_equal(sd.warning_count, 1);
+    assert_non_null(strstr(sd.warnings[0], "t.pbrt:2:2: warning: Film given again: this one "
+                                           "replaces the one at t.pbrt:1:1"));
+    scene_desc_free(&sd);
     parse_err("Shape \"sphere\"", "t.pbrt:1:1: Shape is only allowed after WorldBegin");
     parse_err("Material \"diffuse\"", "t.pbrt:1:1: Material is only allowed after WorldBegin");
     parse_err("LightSource \"point\"", "t.pbrt:1:1: LightSource is only allowed after WorldBegin");
