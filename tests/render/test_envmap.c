@@ -401,6 +401,7 @@ static int teardown(void **state)
  * + X^2) atan(Y / sqrt(1 + X^2)) + the same with X, Y swapped), X = Y =
  * 1 / 2. The portal's corner order sets the side light comes from: the
  * other order leaves the floor dark. */
+#define RGB_L "\"rgb L\" [2 2 2]"
 static void test_portal(void **state)
 {
     (void)state;
@@ -411,21 +412,21 @@ static void test_portal(void **state)
         "Sampler \"independent\"\n"
         "Integrator \"volpath\" \"integer maxdepth\" 1\n"
         "WorldBegin\n"
-        "LightSource \"infinite\" \"rgb L\" [2 2 2] \"point3 portal\" [%s]\n"
+        "LightSource \"infinite\" %s \"point3 portal\" [%s]\n"
         "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
         "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
         "  \"point3 P\" [-5 0 -5  5 0 -5  5 0 5  -5 0 5]\n";
     double X = 0.5, k = sqrt(1.0 + X * X);
     double F = 4.0 * (2.0 * X / k * atan(X / k)) / (2.0 * HZ_PI);
     char text[2048];
-    snprintf(text, sizeof text, fmt, "-1 2 -1  1 2 -1  1 2 1  -1 2 1");
+    snprintf(text, sizeof text, fmt, RGB_L, "-1 2 -1  1 2 -1  1 2 1  -1 2 1");
     render_scene *rs = build_scene_or_fail(text, NULL);
     pixel_eval e = eval_pixel(rs, 4.0, 4.0, 16384);
     render_scene_destroy(rs);
     assert_true(e.hit);
     print_message("portal: %.5f, closed form %.5f\n", e.L.r, 0.5 * 2.0 * F);
     assert_float_equal(e.L.r, 0.5 * 2.0 * F, 0.02 * 0.5 * 2.0 * F);
-    snprintf(text, sizeof text, fmt, "-1 2 -1  -1 2 1  1 2 1  1 2 -1");
+    snprintf(text, sizeof text, fmt, RGB_L, "-1 2 -1  -1 2 1  1 2 1  1 2 -1");
     rs = build_scene_or_fail(text, NULL);
     e = eval_pixel(rs, 4.0, 4.0, 256);
     render_scene_destroy(rs);
@@ -435,18 +436,7 @@ static void test_portal(void **state)
      * it holds the spectrum, not divided by the spectrum's luminance as its
      * other lights: a constant spectrum 2 is luminance 2 there (kroken's
      * blackbody sky through a window depends on it: 12.6% off before). */
-    static const char *spectral_fmt =
-        "LookAt 0 5 0  0 0 0  0 0 1\n"
-        "Camera \"orthographic\"\n"
-        "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
-        "Sampler \"independent\"\n"
-        "Integrator \"volpath\" \"integer maxdepth\" 1\n"
-        "WorldBegin\n"
-        "LightSource \"infinite\" \"spectrum L\" [2] \"point3 portal\" [%s]\n"
-        "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
-        "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
-        "  \"point3 P\" [-5 0 -5  5 0 -5  5 0 5  -5 0 5]\n";
-    snprintf(text, sizeof text, spectral_fmt, "-1 2 -1  1 2 -1  1 2 1  -1 2 1");
+    snprintf(text, sizeof text, fmt, "\"spectrum L\" [2]", "-1 2 -1  1 2 -1  1 2 1  -1 2 1");
     rs = build_scene_or_fail(text, NULL);
     e = eval_pixel(rs, 4.0, 4.0, 16384);
     render_scene_destroy(rs);
@@ -455,7 +445,7 @@ static void test_portal(void **state)
     assert_float_equal(Y, 0.5 * 2.0 * F, 0.02 * 0.5 * 2.0 * F);
 
     char msg[1024];
-    snprintf(text, sizeof text, fmt, "-1 2 -1  1 2 -1  1 2 1.5  -1 2 1");
+    snprintf(text, sizeof text, fmt, RGB_L, "-1 2 -1  1 2 -1  1 2 1.5  -1 2 1");
     build_scene_expect_error(text, msg, sizeof msg);
     assert_non_null(strstr(msg, "test.pbrt:7:"));
     assert_non_null(strstr(msg, "must be a rectangle"));

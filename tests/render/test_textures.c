@@ -103,6 +103,19 @@ static const char plane_fmt[] =
     "  \"integer indices\" [0 1 2 0 2 3]\n"
     "Shape \"sphere\" \"float radius\" 0.5\n";
 
+static double worst_difference(const exr_image *ia, const exr_image *ib)
+{
+    const char *ch[3] = {"R", "G", "B"};
+    double worst = 0;
+    for (int c = 0; c < 3; ++c) {
+        const float *pa = exr_find_channel(ia, ch[c])->pixels;
+        const float *pb = exr_find_channel(ib, ch[c])->pixels;
+        for (int i = 0; i < ia->width * ia->height; ++i)
+            worst = fmax(worst, fabs(pa[i] - pb[i]));
+    }
+    return worst;
+}
+
 static void test_constant_image_is_constant_material(void **state)
 {
     (void)state;
@@ -133,31 +146,11 @@ static void test_constant_image_is_constant_material(void **state)
     exr_image ia, ib;
     render_or_fail("tex_const_a", a, &ia);
     render_or_fail("tex_const_b", b, &ib);
-    const char *ch[3] = {"R", "G", "B"};
-    double worst = 0;
-    for (int c = 0; c < 3; ++c) {
-        const float *pa = exr_find_channel(&ia, ch[c])->pixels;
-        const float *pb = exr_find_channel(&ib, ch[c])->pixels;
-        for (int i = 0; i < ia.width * ia.height; ++i)
-            worst = fmax(worst, fabs(pa[i] - pb[i]));
-    }
+    double worst = worst_difference(&ia, &ib);
     print_message("imagemap vs constant: worst pixel difference %.3g\n", worst);
     assert_true(worst < 1e-5);
     exr_image_free(&ia);
     exr_image_free(&ib);
-}
-
-static double worst_difference(const exr_image *ia, const exr_image *ib)
-{
-    const char *ch[3] = {"R", "G", "B"};
-    double worst = 0;
-    for (int c = 0; c < 3; ++c) {
-        const float *pa = exr_find_channel(ia, ch[c])->pixels;
-        const float *pb = exr_find_channel(ib, ch[c])->pixels;
-        for (int i = 0; i < ia->width * ia->height; ++i)
-            worst = fmax(worst, fabs(pa[i] - pb[i]));
-    }
-    return worst;
 }
 
 /* The coated materials' layer as textures (pbrt-v4's float "thickness" and
