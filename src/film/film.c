@@ -65,6 +65,7 @@ void film_params_default(film_params *p)
     snprintf(p->filename, sizeof p->filename, "pbrt.exr");
     p->savefp16 = false; /* haze default; pbrt-v4 writes half by default */
     p->iso = 100.0;
+    p->scale = 1.0;
     p->max_component_value = INFINITY;
     p->diagonal = 35.0;
 }
@@ -207,6 +208,9 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
     p->iso = params_float(pl, "iso", 100.0);
     if (!(p->iso > 0.0 && isfinite(p->iso)))
         params_reject(pl, "iso", "\"float iso\" must be positive, got %g", p->iso);
+    p->scale = params_float(pl, "scale", 1.0);
+    if (!(p->scale > 0.0 && isfinite(p->scale)))
+        params_reject(pl, "scale", "\"float scale\" must be positive, got %g", p->scale);
     p->max_component_value = params_float(pl, "maxcomponentvalue", INFINITY);
     if (!(p->max_component_value > 0.0)) /* INFINITY is the default and allowed */
         params_reject(pl, "maxcomponentvalue", "\"float maxcomponentvalue\" must be positive, got %g",
@@ -716,6 +720,7 @@ static void exr_channel_values(const film *f, int px, int py, double ratio, floa
 hz_status film_write_exr_with(const film *f, const char *path, double imaging_ratio,
                               const film_output *out, hz_error *err)
 {
+    imaging_ratio *= f->p.scale;
     exr_image img;
     char names[MAX_CHANNELS][64];
     int nc = exr_channel_names(f, names);
@@ -760,6 +765,7 @@ hz_status film_write_exr_with(const film *f, const char *path, double imaging_ra
 hz_status film_write_png_with(const film *f, const char *path, double imaging_ratio,
                               const film_output *out, hz_error *err)
 {
+    imaging_ratio *= f->p.scale;
     size_t n = (size_t)f->width * (size_t)f->height;
     uint8_t *buf = malloc(n * 3);
     if (!buf)

@@ -25,6 +25,8 @@ typedef struct {
     char filename[4096];       /* "pbrt.exr" by default; -o overrides */
     bool savefp16;
     double iso;                /* 100 by default; imaging ratio = exposure time * iso / 100 */
+    double scale;              /* "scale" (1): pbrt-v4's before 2020, multiplying the image
+                                  written (not the clamp), kept for scenes that give it */
     bool write_z;              /* haze extension: "bool writedepth" adds a Z channel */
     bool write_variance;       /* haze: "bool writevariance" adds Variance.R/G/B */
     bool write_sample_count;   /* haze: "bool writesamplecount" adds SampleCount.Y */

@@ -305,6 +305,14 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
             memcpy(msg, err->message, sizeof msg);
             return hz_fail_at(err, sd->film.loc, "%s", msg);
         }
+        if (warn && params_has(&sd->film.params, "scale")) {
+            file_loc l = params_loc(&sd->film.params, "scale");
+            fprintf(warn,
+                    "%s:%d:%d: warning: Film \"scale\" was removed from pbrt-v4 in 2020 (\"iso\" "
+                    "replaces it) and today's pbrt-v4 refuses it; haze multiplies the image by it, "
+                    "as pbrt-v4 did\n",
+                    l.file ? l.file : "<input>", l.line, l.column);
+        }
         /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
         film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
         /* A gbuffer's positions and normals: camera space (at the shutter's

@@ -80,7 +80,9 @@ static void test_params_defaults(void **state)
     add_float(&e, "iso", 400);
     add_float(&e, "maxcomponentvalue", 10);
     add_string(&e, "sensor", "cie1931");
+    add_float(&e, "scale", 2.5);
     p = params_ok(&e);
+    assert_true(p.scale == 2.5);
     assert_int_equal(p.xres, 64);
     assert_int_equal(p.bounds.y1, 32);
     assert_string_equal(p.filename, "out/fog.EXR");
@@ -272,6 +274,24 @@ static void test_accumulation(void **state)
     assert_true(film_get_pixel(f, 0, 0, 1.0).r == 1.0);
     assert_true(film_get_pixel(f, 0, 1, 4.0).r == 2.0);
     film_destroy(f);
+
+    /* pbrt-v4's old Film "scale" multiplies the image written, after the
+     * clamp: (4, 2, 1) clamped to (2, 1, 0.5), written times 3. */
+    p.scale = 3.0;
+    f = film_create(&p, NULL);
+    assert_non_null(f);
+    film_add_sample(f, 1, 1, rgb_make(4.0, 2.0, 1.0), 1.0, INFINITY);
+    char path[512];
+    snprintf(path, sizeof path, "%s/film_scale.exr", HAZE_TMP);
+    hz_error werr = {0};
+    assert_int_equal(film_write_exr(f, path, 1.0, &werr), HZ_OK);
+    exr_image img;
+    assert_int_equal(exr_read(path, &img, &werr), HZ_OK);
+    const exr_channel *R = exr_find_channel(&img, "R"), *B = exr_find_channel(&img, "B");
+    assert_true(R->pixels[3] == 6.0f && B->pixels[3] == 1.5f);
+    exr_image_free(&img);
+    film_destroy(f);
+    p.scale = 1.0;
 
     /* Invalid bounds are refused. */
     p.bounds = (pixel_bounds){0, 0, 3, 2};
