@@ -288,6 +288,26 @@ static void curve_bounds(const struct RTCBoundsFunctionArguments *args)
     }
 }
 
+static double curve_at(const geom_shape *s, unsigned prim, double u, vec3 o, vec3 d, double t,
+                       geom_hit *hit);
+
+/* Whether curve s's hit at (u, t) on primitive prim survives its alpha
+ * (pbrt-v4's test of the hit; a masked hit is no hit of the segment, which a
+ * ray crosses once). */
+static bool curve_alpha_keeps(const geom_shape *s, unsigned prim, double u, vec3 o, vec3 d,
+                              double t)
+{
+    if (!s->has_alpha)
+        return true;
+    double a = s->alpha;
+    if (s->alpha_tex) {
+        geom_hit h;
+        double v = curve_at(s, prim, u, o, d, t, &h);
+        a = shape_alpha_at(s, hz_clamp(u, 0.0, 1.0), v, h.p);
+    }
+    return alpha_keeps(a, o, d, t);
+}
+
 static void curve_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
     assert(args->N == 1);
@@ -299,7 +319,7 @@ static void curve_intersect(const struct RTCIntersectFunctionNArguments *args)
     vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
     double u = 0.0;
     double t = geometry_curve_hit(s, args->primID, o, d, rh->ray.tnear, rh->ray.tfar, &u);
-    if (t < 0.0 || !((float)t < rh->ray.tfar))
+    if (t < 0.0 || !((float)t < rh->ray.tfar) || !curve_alpha_keeps(s, args->primID, u, o, d, t))
         return;
     rh->ray.tfar = (float)t;
     rh->hit.u = (float)u;
@@ -322,7 +342,8 @@ static void curve_occluded(const struct RTCOccludedFunctionNArguments *args)
     vec3 o = v3(r->org_x, r->org_y, r->org_z);
     vec3 d = v3(r->dir_x, r->dir_y, r->dir_z);
     double u;
-    if (geometry_curve_hit(s, args->primID, o, d, r->tnear, r->tfar, &u) >= 0.0)
+    double t = geometry_curve_hit(s, args->primID, o, d, r->tnear, r->tfar, &u);
+    if (t >= 0.0 && curve_alpha_keeps(s, args->primID, u, o, d, t))
         r->tfar = -INFINITY;
 }
 
@@ -351,16 +372,13 @@ static hz_status resolve_medium(const scene_desc *sd, const char *name, file_loc
  * intersected by pbrt-v4's algorithm (curve.c). Widths scale with the
  * transform (its volume's cube root: the scale of a similarity). */
 static hz_status build_curves(RTCDevice device, shape_entity *se, const shape_geometry *g,
-                              transform space_from_object, bool interface, bool cutout,
+                              transform space_from_object, bool interface,
                               geom_shape *out, RTCGeometry *geom_out, hz_error *err)
 {
     if (interface && out->medium_inside != out->medium_outside)
         return hz_fail_at(err, se->entity.loc,
                           "a curve cannot separate media (it encloses no volume): give it no "
                           "MediumInterface, or the same medium on both sides");
-    if (cutout)
-        return hz_fail_at(err, params_loc(&se->entity.params, "alpha"),
-                          "\"alpha\" on a curve is not supported");
     size_t n = g->segment_count;
     if (n > (UINT32_MAX >> g->split))
         return hz_fail_at(err, se->entity.loc, "curve has too many segments");
@@ -463,7 +481,7 @@ static hz_status build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
         rtcSetGeometryIntersectFunction(geom, sphere_intersect);
         rtcSetGeometryOccludedFunction(geom, sphere_occluded);
     } else if (g.kind == GEOMETRY_CURVES) {
-        if (build_curves(device, se, &g, space_from_object, interface, cutout, out, &geom, err) !=
+        if (build_curves(device, se, &g, space_from_object, interface, out, &geom, err) !=
             HZ_OK) {
             shape_geometry_free(&g);
             return HZ_ERROR;
@@ -1232,8 +1250,8 @@ static void triangle_uv(const geom_shape *s, unsigned prim, double b1, double b2
  * the point to the centre line (0.5 on it); a "cylinder" turns dp/dv about
  * dp/du by -lerp(v, -90, 90) degrees, so that the normal cross(dp/du, dp/dv)
  * rounds over the width. */
-static void curve_at(const geom_shape *s, unsigned prim, double u, vec3 o, vec3 d, double t,
-                     geom_hit *hit)
+static double curve_at(const geom_shape *s, unsigned prim, double u, vec3 o, vec3 d, double t,
+                       geom_hit *hit)
 {
     size_t seg = prim >> s->curve_split;
     const double *c = &s->curve_cp[12 * seg];
@@ -1291,6 +1309,7 @@ static void curve_at(const geom_shape *s, unsigned prim, double u, vec3 o, vec3 
         hit->dpdu = dpdu;
         hit->dpdv = dpdv;
     }
+    return v;
 }
 
 /* Fills p, ng, ns in the shape's own space (render or prototype), for the
