@@ -25,6 +25,17 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
     if (out->max_depth < 0)
         params_reject(pl, "maxdepth", "\"maxdepth\" must be >= 0");
     out->regularize = params_bool(pl, "regularize", false);
+    if (params_has(pl, "rrthreshold")) {
+        /* pbrt-v3's Russian roulette threshold: `pbrt --upgrade` drops it
+         * (roulette changes only the noise); today's pbrt-v4 refuses it. */
+        (void)params_float(pl, "rrthreshold", 1.0);
+        file_loc l = params_loc(pl, "rrthreshold");
+        if (warn)
+            fprintf(warn,
+                    "%s:%d:%d: warning: \"rrthreshold\" is pbrt-v3's (Russian roulette changes "
+                    "only the noise; pbrt-v4's --upgrade drops it): not used\n",
+                    l.file ? l.file : "<input>", l.line, l.column);
+    }
     out->force_diffuse = false; /* an Option, set by the scene */
     out->light_sampler = LIGHT_SAMPLER_BVH;
     const char *ls = params_string(pl, "lightsampler", "bvh");

@@ -98,10 +98,13 @@ static void test_other_integrators_are_volpath(void **state)
                            "Integrator \"volpath\" \"integer maxdepth\" 3 \"bool regularize\" true",
                            "--threads 2");
     static const char *others[] = {
+        /* pbrt-v3's rrthreshold (transparent-machines): read, not used */
+        "Integrator \"volpath\" \"integer maxdepth\" 3 \"bool regularize\" true "
+        "\"float rrthreshold\" 0",
         "Integrator \"bdpt\" \"integer maxdepth\" 3 \"bool regularize\" true",
         "Integrator \"mlt\" \"integer maxdepth\" 3 \"bool regularize\" true \"integer chains\" 9 "
         "\"float sigma\" 0.1"};
-    for (int i = 0; i < 2; ++i) {
+    for (int i = 0; i < 3; ++i) {
         char *name = sfmt("stand_in_%d", i);
         char *exr = render_file(name, others[i], "--threads 2");
         assert_true(exr_pixels_equal(exr, vp));
