@@ -20,6 +20,7 @@
 #include "mpi/distributed.h"
 #include "render/progress.h"
 #include "render/progressive.h"
+#include "render/step_pilot.h"
 #include "render/render_scene.h"
 #include "render/renderer.h"
 #include "scene/scene_desc.h"
@@ -93,7 +94,8 @@ static const char usage_text[] =
     "                          count) and write the complete passes done when the time\n"
     "                          since start runs out (docs/performance.md)\n"
     "  --target-error E        adaptive sampling: each pixel takes samples (4 at least, at\n"
-    "                          most --spp, default 16384) until its estimated relMSE is E\n";
+    "                          most --spp, default 16384) until its estimated relMSE is E;\n"
+    "                          marching estimators get a step picked for E first\n";
 
 typedef struct {
     const char *scene;
@@ -429,6 +431,16 @@ static int run_render(const cli *c, distributed *dist)
     double deadline = c->time_limit > 0 ? c->start_seconds + c->time_limit : 0.0;
     progressive_goal goal = {deadline, c->target_error};
     bool progressive = deadline > 0 || adaptive;
+    step_choice steps = {0};
+    if (adaptive) { /* the marching step's bias, before the passes measure the noise */
+        step_pilot_choose(rs, c->target_error, &steps);
+        if (steps.applies && rank0 && !c->quiet)
+            fprintf(stderr,
+                    "haze: --target-error %g: marching step %g voxels (shadow %g), estimated "
+                    "bias relMSE %.2g (a pilot of %d pixels, %d renders)\n",
+                    c->target_error, steps.step, steps.shadow_step, steps.bias, steps.pixels,
+                    steps.renders);
+    }
     if (distributed_render(dist, rs, &opt, progressive ? &goal : NULL, &stats, &err) != HZ_OK) {
         if (rank0)
             hz_error_print(stderr, &err);
@@ -452,7 +464,7 @@ static int run_render(const cli *c, distributed *dist)
     if (stats.spp != render_scene_sampler(rs)->spp) /* the id names the samples taken */
         snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
                  (unsigned long long)outputs_render_id(inputs_hash, rs, stats.spp, no_jitter));
-    film_attribute attrs[6] = {{"haze:render", outs.render_id}};
+    film_attribute attrs[7] = {{"haze:render", outs.render_id}};
     int nattrs = 1;
     if (progressive) {
         attrs[nattrs++] = (film_attribute){"haze:spp", spp};
@@ -460,9 +472,13 @@ static int run_render(const cli *c, distributed *dist)
     }
     if (deadline > 0)
         attrs[nattrs++] = (film_attribute){"haze:time_limit_s", limit};
+    char stepsize[64];
+    snprintf(stepsize, sizeof stepsize, "%g %g", steps.step, steps.shadow_step);
     if (adaptive) {
         attrs[nattrs++] = (film_attribute){"haze:target_error", target};
         attrs[nattrs++] = (film_attribute){"haze:spp_mean", mean_spp};
+        if (steps.applies)
+            attrs[nattrs++] = (film_attribute){"haze:stepsize", stepsize};
     }
     film_output out = {attrs, nattrs, &output_note, stats.threads};
     if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||

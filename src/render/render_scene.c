@@ -1,6 +1,8 @@
 /* The scene builder: runs every factory in order and owns what they build. */
 #include "render/render_scene.h"
 
+#include <assert.h>
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -499,6 +501,37 @@ render_memory render_scene_memory(const render_scene *rs)
         }
     }
     return mem;
+}
+
+static bool marches(transmittance_mode m)
+{
+    return m == TRANSMITTANCE_RAYMARCH || m == TRANSMITTANCE_JITTERED;
+}
+
+bool render_scene_marching(const render_scene *rs, render_marching *m)
+{
+    if (rs->integ.kind != INTEGRATOR_SINGLESCATTER)
+        return false;
+    const singlescatter_scene *sc = &rs->integ.singlescatter;
+    bool grids = false;
+    for (size_t i = 0; i < sc->in.medium_count; ++i)
+        grids |= sc->in.media[i].kind == MEDIUM_GRID;
+    const singlescatter_settings *set = &sc->settings;
+    if (!grids || !(marches(set->mode) || marches(set->shadow_mode)))
+        return false;
+    *m = (render_marching){set->mode, set->shadow_mode, set->step, set->shadow_step};
+    return true;
+}
+
+void render_scene_set_marching(render_scene *rs, const render_marching *m)
+{
+    assert(rs->integ.kind == INTEGRATOR_SINGLESCATTER);
+    singlescatter_settings set = rs->integ.singlescatter.settings;
+    set.mode = m->mode;
+    set.shadow_mode = m->shadow_mode;
+    set.step = m->step;
+    set.shadow_step = m->shadow_step;
+    rs->integ.singlescatter = singlescatter_scene_make(&rs->integ.singlescatter.in, set);
 }
 
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,

@@ -89,6 +89,18 @@ typedef struct {
 } render_memory;
 render_memory render_scene_memory(const render_scene *rs);
 
+/* The marching of a singlescatter scene with grid media (estimators and
+ * steps, voxels): false (m untouched) for other integrators, scenes without
+ * grid media, and tracking estimators, which have no marching bias. */
+typedef struct {
+    transmittance_mode mode, shadow_mode;
+    double step, shadow_step;
+} render_marching;
+bool render_scene_marching(const render_scene *rs, render_marching *m);
+/* Sets it (on a scene where render_scene_marching is true). Not while
+ * rendering. */
+void render_scene_set_marching(render_scene *rs, const render_marching *m);
+
 /* Radiance arriving along the camera ray `r`. `depth` receives the distance to the
  * first surface hit (INFINITY when none). Thread-safe; allocates nothing. */
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,

@@ -1,0 +1,39 @@
+/* --target-error's marching step (issue 20). With `raymarch` or `jittered`
+ * estimators the image converges to the marched integral, not the true one:
+ * their bias shrinks with the step, while the passes of --target-error only
+ * measure noise. Before the passes, a pilot picks the step: the scene's
+ * estimators run deterministically (raymarch, each pixel centre, the same
+ * sample for every step, so only the step changes) on a sparse grid of pixels
+ * at step h and h/2; twice their relMSE (haze diff's) estimates the bias of h
+ * (midpoint marching: halving the step at least halves the error). The step
+ * halves until that is at most STEP_PILOT_SHARE of the target, or doubles
+ * while twice the step still is; the shadow step keeps its ratio to it. */
+#ifndef HAZE_RENDER_STEP_PILOT_H
+#define HAZE_RENDER_STEP_PILOT_H
+
+#include <stdbool.h>
+
+#include "core/error.h"
+#include "render/render_scene.h"
+
+/* The share of --target-error left to the step's bias (the noise takes the rest). */
+#define STEP_PILOT_SHARE 0.25
+/* About this many pixels in the pilot grid; steps between these (voxels). */
+#define STEP_PILOT_PIXELS 2500
+#define STEP_PILOT_MIN_STEP (1.0 / 64.0)
+#define STEP_PILOT_MAX_STEP 64.0
+
+typedef struct {
+    bool applies;   /* a marching estimator in grid media: a step was chosen */
+    double step, shadow_step; /* voxels, set on the scene */
+    double bias;    /* the estimated relMSE of the chosen step */
+    int pixels;     /* in the pilot grid */
+    int renders;    /* pilot renders made */
+} step_choice;
+
+/* Chooses the step for `target_error` (> 0) and sets it on `rs`; nothing to
+ * do (applies false) when render_scene_marching is false. The same choice
+ * for any thread count and on every rank. */
+void step_pilot_choose(render_scene *rs, double target_error, step_choice *out);
+
+#endif
