@@ -44,6 +44,23 @@ static double distance_to_s(double x, double y, bool *interior)
     return best;
 }
 
+/* The S of width 0.1 seen straight down at 200x200 over [-2, 2]^2 under a
+ * white sky, `extra` on its Shape (a checkerboard "half" in u is defined). */
+static void s_scene(char *text, size_t n, const char *extra)
+{
+    snprintf(text, n,
+             "LookAt 0 0 5  0 0 0  0 1 0\n"
+             "Camera \"orthographic\" \"float screenwindow\" [-2 2 -2 2]\n"
+             "Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 200\n"
+             "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+             "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+             "Texture \"half\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float vscale\" 1 "
+             "\"float tex1\" 1 \"float tex2\" 0\n"
+             "Shape \"curve\" \"point3 P\" [-1.5 -1 0  -0.5 1 0  0.5 -1 0  1.5 1 0] "
+             "\"float width\" 0.1 %s\n",
+             extra);
+}
+
 /* An orthographic view straight down on the S of width 0.1: every pixel
  * centre clearly inside (distance < 0.4 w) is hit and every one clearly
  * outside (> 0.6 w, or beyond the end planes) is not; pbrt-v4's test
@@ -55,16 +72,8 @@ static void test_coverage(void **state)
     (void)state;
     const int res = 200;
     const double half = 2.0, w = 0.1, px = 2 * half / res;
-    char text[1024];
-    snprintf(text, sizeof text,
-             "LookAt 0 0 5  0 0 0  0 1 0\n"
-             "Camera \"orthographic\" \"float screenwindow\" [-2 2 -2 2]\n"
-             "Film \"rgb\" \"integer xresolution\" %d \"integer yresolution\" %d\n"
-             "Integrator \"volpath\" \"integer maxdepth\" 1\n"
-             "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"
-             "Shape \"curve\" \"point3 P\" [-1.5 -1 0  -0.5 1 0  0.5 -1 0  1.5 1 0] "
-             "\"float width\" %g\n",
-             res, res, w);
+    char text[1400];
+    s_scene(text, sizeof text, "");
     render_scene *rs = build_scene_or_fail(text, NULL);
     int hits = 0, wrong = 0;
     for (int y = 0; y < res; ++y)
@@ -94,17 +103,7 @@ static int covered(const char *extra)
 {
     const int res = 200;
     char text[1400];
-    snprintf(text, sizeof text,
-             "LookAt 0 0 5  0 0 0  0 1 0\n"
-             "Camera \"orthographic\" \"float screenwindow\" [-2 2 -2 2]\n"
-             "Film \"rgb\" \"integer xresolution\" %d \"integer yresolution\" %d\n"
-             "Integrator \"volpath\" \"integer maxdepth\" 1\n"
-             "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"
-             "Texture \"half\" \"float\" \"checkerboard\" \"float uscale\" 2 \"float vscale\" 1 "
-             "\"float tex1\" 1 \"float tex2\" 0\n"
-             "Shape \"curve\" \"point3 P\" [-1.5 -1 0  -0.5 1 0  0.5 -1 0  1.5 1 0] "
-             "\"float width\" 0.1 %s\n",
-             res, res, extra);
+    s_scene(text, sizeof text, extra);
     render_scene *rs = build_scene_or_fail(text, NULL);
     int hits = 0;
     for (int y = 0; y < res; ++y)
