@@ -42,6 +42,26 @@ hz_status hz_fail_at(hz_error *err, file_loc loc, const char *fmt, ...)
     return HZ_ERROR;
 }
 
+void hz_format_warning(char *buf, size_t n, file_loc at, const char *fmt, va_list ap)
+{
+    int k = snprintf(buf, n, "%s:%d:%d: warning: ", at.file ? at.file : "<input>", at.line,
+                     at.column);
+    if (k >= 0 && (size_t)k < n)
+        vsnprintf(buf + k, n - (size_t)k, fmt, ap);
+}
+
+void hz_warn_at(FILE *out, file_loc at, const char *fmt, ...)
+{
+    if (!out)
+        return;
+    char line[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    hz_format_warning(line, sizeof line, at, fmt, ap);
+    va_end(ap);
+    fprintf(out, "%s\n", line);
+}
+
 void hz_errors_add(hz_errors *l, const hz_error *e)
 {
     if (l->count == HZ_ERRORS_MAX) {

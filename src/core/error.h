@@ -37,6 +37,10 @@ typedef struct {
 hz_status hz_fail(hz_error *err, const char *fmt, ...) HZ_PRINTF(2, 3);
 /* Same, prefixed with "file:line:column: ". */
 hz_status hz_fail_at(hz_error *err, file_loc loc, const char *fmt, ...) HZ_PRINTF(3, 4);
+/* "FILE:LINE:COL: warning: MESSAGE" (FILE "<input>" when unnamed) into buf. */
+void hz_format_warning(char *buf, size_t n, file_loc at, const char *fmt, va_list ap);
+/* That line and a newline on `out`; nothing when `out` is NULL. */
+void hz_warn_at(FILE *out, file_loc at, const char *fmt, ...) HZ_PRINTF(3, 4);
 hz_status hz_vfail(hz_error *err, const char *fmt, va_list ap);
 
 /* Writes the message to `f`, each of its lines (several errors come one

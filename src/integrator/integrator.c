@@ -1,6 +1,5 @@
 #include "integrator/integrator.h"
 
-#include <stdio.h>
 #include <string.h>
 
 /* A scene with no Integrator directive (its default entity sits at line 0)
@@ -108,13 +107,10 @@ static hz_status stand_in_settings(scene_desc *sd, size_t k, FILE *warn, volpath
         size_t n = strlen(unused);
         snprintf(unused + n, sizeof unused - n, "%s\"%s\"", n ? ", " : "", name);
     }
-    if (warn)
-        fprintf(warn,
-                "%s:%d:%d: warning: Integrator \"%s\" renders with haze's volpath (the same "
-                "converged image, other noise; an image clamped by the Film's "
-                "maxcomponentvalue differs)%s%s%s\n",
-                e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, type,
-                unused[0] ? "; " : "", unused, unused[0] ? " not used" : "");
+    hz_warn_at(warn, e->loc,
+               "Integrator \"%s\" renders with haze's volpath (the same converged image, other "
+               "noise; an image clamped by the Film's maxcomponentvalue differs)%s%s%s",
+               type, unused[0] ? "; " : "", unused, unused[0] ? " not used" : "");
     char what[64];
     snprintf(what, sizeof what, "Integrator \"%s\"", type);
     return params_finish(pl, what, err);

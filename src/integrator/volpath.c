@@ -29,12 +29,9 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
         /* pbrt-v3's Russian roulette threshold: `pbrt --upgrade` drops it
          * (roulette changes only the noise); today's pbrt-v4 refuses it. */
         (void)params_float(pl, "rrthreshold", 1.0);
-        file_loc l = params_loc(pl, "rrthreshold");
-        if (warn)
-            fprintf(warn,
-                    "%s:%d:%d: warning: \"rrthreshold\" is pbrt-v3's (Russian roulette changes "
-                    "only the noise; pbrt-v4's --upgrade drops it): not used\n",
-                    l.file ? l.file : "<input>", l.line, l.column);
+        hz_warn_at(warn, params_loc(pl, "rrthreshold"),
+                   "\"rrthreshold\" is pbrt-v3's (Russian roulette changes only the noise; "
+                   "pbrt-v4's --upgrade drops it): not used");
     }
     out->force_diffuse = false; /* an Option, set by the scene */
     out->light_sampler = LIGHT_SAMPLER_BVH;
@@ -46,13 +43,9 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
     } else if (strcmp(ls, "exhaustive") == 0) {
         /* pbrt-v4's exhaustive sampler weighs every light by its BVH
          * importance at the point; the BVH sampler is its nearest. */
-        if (warn) {
-            file_loc l = params_loc(pl, "lightsampler");
-            fprintf(warn,
-                    "%s:%d:%d: warning: Integrator \"volpath\" \"lightsampler\" "
-                    "\"exhaustive\" is not supported; using \"bvh\"\n",
-                    l.file ? l.file : "<input>", l.line, l.column);
-        }
+        hz_warn_at(warn, params_loc(pl, "lightsampler"),
+                   "Integrator \"volpath\" \"lightsampler\" \"exhaustive\" is not supported; "
+                   "using \"bvh\"");
     } else if (strcmp(ls, "bvh") != 0) {
         params_reject(pl, "lightsampler",
                       "\"lightsampler\" \"%s\" is not one of \"uniform\", \"power\", \"bvh\", "

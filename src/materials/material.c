@@ -410,10 +410,10 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
         o->coat.top.alpha_y = alpha_at(m, m->rough[1], m->coat.top.alpha_y, c);
         o->coat.bottom.alpha_x = alpha_at(m, m->rough[2], m->coat.bottom.alpha_x, c);
         o->coat.bottom.alpha_y = alpha_at(m, m->rough[3], m->coat.bottom.alpha_y, c);
-        if (m->thickness_tex) /* finite and > 0: a layer of no thickness is 1e-300 thick */
-            o->coat.thickness = fmax(texture_eval_float(m->thickness_tex, c), 1e-300);
-        if (!(o->coat.thickness < INFINITY))
-            o->coat.thickness = m->coat.thickness;
+        if (m->thickness_tex) { /* > 0 (1e-300 for none or NaN); infinite: the default */
+            double th = texture_eval_float(m->thickness_tex, c);
+            o->coat.thickness = th == INFINITY ? m->coat.thickness : fmax(th, 1e-300);
+        }
         if (m->albedo_tex)
             o->coat.albedo = clamp01(texture_eval(m->albedo_tex, c));
         if (m->g_tex)

@@ -56,11 +56,10 @@ static hz_status check_motion(scene_desc *sd, FILE *warn, hz_error *err)
                               "supported; animate the ObjectInstance instead");
     for (size_t i = 0; i < sd->light_count; ++i) {
         light_entity *l = &sd->lights[i];
-        if (warn && animated(&l->world_from_light, &l->world_from_light_end))
-            fprintf(warn, "%s:%d:%d: warning: animated lights are not supported; using the start "
-                          "transform (as pbrt-v4)\n",
-                    l->entity.loc.file ? l->entity.loc.file : "<input>", l->entity.loc.line,
-                    l->entity.loc.column);
+        if (animated(&l->world_from_light, &l->world_from_light_end))
+            hz_warn_at(warn, l->entity.loc,
+                       "animated lights are not supported; using the start transform (as "
+                       "pbrt-v4)");
     }
     return HZ_OK;
 }
@@ -130,11 +129,10 @@ static hz_status read_accelerator(scene_entity *e, FILE *warn, hz_error *err)
     }
     if (params_finish(pl, "Accelerator", err) != HZ_OK)
         return HZ_ERROR;
-    if (warn)
-        fprintf(warn,
-                "%s:%d:%d: warning: Accelerator \"%s\" changes nothing in haze, which always "
-                "builds Embree's BVH (the image is the same)\n",
-                e->loc.file ? e->loc.file : "<input>", e->loc.line, e->loc.column, e->type);
+    hz_warn_at(warn, e->loc,
+               "Accelerator \"%s\" changes nothing in haze, which always builds Embree's BVH "
+               "(the image is the same)",
+               e->type);
     return HZ_OK;
 }
 
@@ -160,12 +158,9 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
             continue;
         if (gs->material->kind == MATERIAL_INTERFACE) {
             /* As pbrt-v4: an interface is no surface, so it cannot emit. */
-            file_loc l = sd->shapes[i].area_light.loc;
-            if (warn)
-                fprintf(warn,
-                        "%s:%d:%d: warning: ignoring the area light of a shape with "
-                        "Material \"interface\" (as pbrt-v4)\n",
-                        l.file ? l.file : "<input>", l.line, l.column);
+            hz_warn_at(warn, sd->shapes[i].area_light.loc,
+                       "ignoring the area light of a shape with Material \"interface\" (as "
+                       "pbrt-v4)");
             continue;
         }
         if (light_area_from_entity(&sd->shapes[i].area_light, gs, &rs->lights[rs->light_count],
@@ -286,10 +281,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (sampler_from_entity(&sd->sampler, seed, &rs->smp, err) == HZ_OK) {
         if (opt && opt->spp > 0)
             sampler_set_spp(&rs->smp, opt->spp);
-        if (rs->smp.warning[0] && warn)
-            fprintf(warn, "%s:%d:%d: warning: %s\n",
-                    sd->sampler.loc.file ? sd->sampler.loc.file : "<input>",
-                    sd->sampler.loc.line, sd->sampler.loc.column, rs->smp.warning);
+        if (rs->smp.warning[0])
+            hz_warn_at(warn, sd->sampler.loc, "%s", rs->smp.warning);
     } else if (collect(errs, err) != HZ_OK) {
         return HZ_ERROR;
     }
@@ -307,14 +300,11 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
             memcpy(msg, err->message, sizeof msg);
             return hz_fail_at(err, sd->film.loc, "%s", msg);
         }
-        if (warn && params_has(&sd->film.params, "scale")) {
-            file_loc l = params_loc(&sd->film.params, "scale");
-            fprintf(warn,
-                    "%s:%d:%d: warning: Film \"scale\" was removed from pbrt-v4 in 2020 (\"iso\" "
-                    "replaces it) and today's pbrt-v4 refuses it; haze multiplies the image by it, "
-                    "as pbrt-v4 did\n",
-                    l.file ? l.file : "<input>", l.line, l.column);
-        }
+        if (params_has(&sd->film.params, "scale"))
+            hz_warn_at(warn, params_loc(&sd->film.params, "scale"),
+                       "Film \"scale\" was removed from pbrt-v4 in 2020 (\"iso\" replaces it) "
+                       "and today's pbrt-v4 refuses it; haze multiplies the image by it, as "
+                       "pbrt-v4 did");
         /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
         film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
         /* A gbuffer's positions and normals: camera space (at the shutter's

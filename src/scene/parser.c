@@ -86,13 +86,11 @@ static const char *directive_name(const token *d, char *buf, size_t n)
 
 hz_status parser_warn(parser *ps, file_loc at, hz_error *err, const char *fmt, ...)
 {
-    char msg[400], line[512];
+    char line[512];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    hz_format_warning(line, sizeof line, at, fmt, ap);
     va_end(ap);
-    snprintf(line, sizeof line, "%s:%d:%d: warning: %s", at.file ? at.file : "<input>", at.line,
-             at.column, msg);
     scene_desc *sd = ps->sd;
     const char *kept = parser_intern(ps, line);
     const char **grown = kept ? realloc(sd->warnings, (sd->warning_count + 1) * sizeof *grown)
