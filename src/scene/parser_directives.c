@@ -341,11 +341,6 @@ static hz_status d_transform_begin(parser *ps, const token *d, hz_error *err)
     return parser_push_state(ps, 'a', d->loc, err);
 }
 
-static hz_status d_transform_end(parser *ps, const token *d, hz_error *err)
-{
-    return d_attribute_end(ps, d, err);
-}
-
 static hz_status d_world_begin(parser *ps, const token *d, hz_error *err)
 {
     if (parser_need_options(ps, d, "WorldBegin", NULL, err) != HZ_OK)
@@ -400,7 +395,7 @@ static const struct {
     {"AttributeBegin", d_attribute_begin},
     {"AttributeEnd", d_attribute_end},
     {"TransformBegin", d_transform_begin},
-    {"TransformEnd", d_transform_end},
+    {"TransformEnd", d_attribute_end},
     {"WorldBegin", d_world_begin},
     {"WorldEnd", d_world_end},
     {"Include", d_include},

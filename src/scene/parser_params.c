@@ -425,25 +425,24 @@ static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_e
     return HZ_OK;
 }
 
-/* A parameter given again with the same type: pbrt-v4 reads the first and
- * lets the others be (pbrt-v4-scenes' villa gives a roughness twice). */
-static bool shadows_same(const param_list *pl, const param *p)
+/* The parameter of that name already given, or NULL. */
+static const param *given_before(const param_list *pl, const char *name)
 {
     for (size_t i = 0; i < pl->count; ++i)
-        if (strcmp(pl->items[i].name, p->name) == 0)
-            return pl->items[i].type == p->type;
-    return false;
+        if (strcmp(pl->items[i].name, name) == 0)
+            return &pl->items[i];
+    return NULL;
 }
 
-static hz_status add_shadowed(parser *ps, param_list *out, param p, hz_error *err)
+/* A parameter given again with the same type as `first`: pbrt-v4 reads the
+ * first and lets the others be (pbrt-v4-scenes' villa gives a roughness
+ * twice). */
+static hz_status add_shadowed(parser *ps, param_list *out, param p, int first_line,
+                              hz_error *err)
 {
     file_loc at = p.loc;
-    int first = 0;
-    for (size_t i = 0; i < out->count && !first; ++i)
-        if (strcmp(out->items[i].name, p.name) == 0)
-            first = out->items[i].loc.line;
     if (parser_warn(ps, at, err, "parameter \"%s %s\" given again: the first (line %d) is used, "
-                    "as in pbrt-v4", param_type_name(p.type), p.name, first) != HZ_OK) {
+                    "as in pbrt-v4", param_type_name(p.type), p.name, first_line) != HZ_OK) {
         param_free(&p);
         return HZ_ERROR;
     }
@@ -477,8 +476,9 @@ static hz_status parse_one(parser *ps, const token *decl_tok, param_list *out, h
         /* Reserved first, params_add can only report a repeated name. */
         if (st == HZ_OK && !params_reserve(out))
             st = parser_oom(ps, p.loc, err);
-        if (st == HZ_OK && shadows_same(out, &p))
-            st = add_shadowed(ps, out, p, err);
+        const param *first = st == HZ_OK ? given_before(out, p.name) : NULL;
+        if (first && first->type == p.type)
+            st = add_shadowed(ps, out, p, first->loc.line, err);
         else if (st == HZ_OK)
             st = params_add(out, p, err); /* frees p on failure */
         else
