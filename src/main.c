@@ -308,8 +308,14 @@ static double resident_memory_mib(void)
     return n == 2 ? resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0) : 0.0;
 }
 
+/* When each phase of a render began (hz_clock_seconds), for --stats. */
+typedef struct {
+    double start, parse, build, render, write, end;
+} phase_times;
+
 /* --stats: one 'stat NAME VALUE' line per figure (docs/performance.md). */
-static void print_stats(const render_scene *rs, const render_stats *st, double baseline_mib)
+static void print_stats(const render_scene *rs, const render_stats *st, double baseline_mib,
+                        const phase_times *ph)
 {
     double px = st->pixels > 0 ? (double)st->pixels : 1.0, mib = 1.0 / (1024.0 * 1024.0);
     render_memory mem = render_scene_memory(rs);
@@ -328,6 +334,11 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
     printf("stat time_surfaces_s %.4f\n", other > 0.0 ? other : 0.0);
     printf("stat time_media_s %.4f\n", st->time_media_s);
     printf("stat time_film_s %.4f\n", st->time_film_s);
+    printf("stat time_start_s %.4f\n", ph->parse - ph->start);
+    printf("stat time_parse_s %.4f\n", ph->build - ph->parse);
+    printf("stat time_build_s %.4f\n", ph->render - ph->build);
+    printf("stat time_render_s %.4f\n", ph->write - ph->render);
+    printf("stat time_write_s %.4f\n", ph->end - ph->write);
     printf("stat memory_peak_mib %.2f\n", peak_memory_mib());
     printf("stat memory_baseline_mib %.2f\n", baseline_mib);
     printf("stat memory_grids_mib %.3f\n", mem.grids * mib);
@@ -377,6 +388,7 @@ static int run_render(const cli *c, distributed *dist)
 {
     hz_error err = {0};
     double baseline_mib = c->stats ? resident_memory_mib() : 0.0;
+    phase_times ph = {.start = c->start_seconds, .parse = hz_clock_seconds()};
     scene_desc sd;
     bool rank0 = distributed_rank(dist) == 0, mpi = distributed_size(dist) > 1;
     hz_errors parse_errs = {0};
@@ -397,6 +409,7 @@ static int run_render(const cli *c, distributed *dist)
                          .portable_isa = c->portable_isa != 0};
     render_scene *rs = NULL;
     hz_status st = HZ_ERROR;
+    ph.build = hz_clock_seconds();
     if (parsed)
         st = render_scene_create(&sd, &ro, rank0 ? stderr : NULL, &rs, &err);
     else if (read) /* the scene's other problems too, in one report */
@@ -432,6 +445,7 @@ static int run_render(const cli *c, distributed *dist)
     progressive_goal goal = {deadline, c->target_error};
     bool progressive = deadline > 0 || adaptive;
     step_choice steps = {0};
+    ph.render = hz_clock_seconds();
     if (adaptive) { /* the marching step's bias, before the passes measure the noise */
         step_pilot_choose(rs, c->target_error, &steps);
         if (steps.applies && rank0 && !c->quiet)
@@ -481,6 +495,7 @@ static int run_render(const cli *c, distributed *dist)
             attrs[nattrs++] = (film_attribute){"haze:stepsize", stepsize};
     }
     film_output out = {attrs, nattrs, &output_note, stats.threads};
+    ph.write = hz_clock_seconds();
     if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
         (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
         hz_error_print(stderr, &err);
@@ -526,8 +541,9 @@ static int run_render(const cli *c, distributed *dist)
                lookups, lookups[0] ? ", " : "", motion, peak_memory_mib());
         distributed_print_report(dist, stdout);
     }
+    ph.end = hz_clock_seconds();
     if (c->stats)
-        print_stats(rs, &stats, baseline_mib);
+        print_stats(rs, &stats, baseline_mib, &ph);
 done:
     render_scene_destroy(rs);
     if (read)
