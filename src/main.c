@@ -345,6 +345,7 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
     printf("stat memory_majorants_mib %.3f\n", mem.majorants * mib);
     printf("stat memory_film_mib %.3f\n", mem.film * mib);
     printf("stat memory_embree_mib %.3f\n", mem.embree * mib);
+    printf("stat memory_shadow_caches_mib %.3f\n", mem.shadow_caches * mib);
 }
 
 /* "static", or what moves: "motion: camera, surfaces, 1 medium". */

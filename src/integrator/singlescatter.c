@@ -15,7 +15,7 @@ singlescatter_settings singlescatter_settings_default(void)
     /* jittered: 8x lower RMSE than ratio tracking at equal time on
      * scenes/smoke.pbrt (docs/media.md), with a bias below the noise. */
     return (singlescatter_settings){
-        TRANSMITTANCE_JITTERED, TRANSMITTANCE_JITTERED, 1.0, 2.0, 65536.0, 1};
+        TRANSMITTANCE_JITTERED, TRANSMITTANCE_JITTERED, 1.0, 2.0, 65536.0, 1, 0.0};
 }
 
 static bool parse_mode(const char *name, transmittance_mode *out)
@@ -48,6 +48,10 @@ hz_status singlescatter_settings_from_entity(scene_entity *e, singlescatter_sett
     if (!(out->max_collisions >= 0.0))
         params_reject(pl, "maxcollisions",
                       "\"maxcollisions\" must be >= 0 (0: ratio tracking never falls back)");
+    out->shadow_cache = params_float(pl, "shadowcache", out->shadow_cache);
+    if (!(out->shadow_cache >= 0.0 && isfinite(out->shadow_cache)))
+        params_reject(pl, "shadowcache",
+                      "\"shadowcache\" must be a number of voxels >= 0 (0: no cache)");
     const char *mode = params_string(pl, "transmittance", "jittered");
     if (!(out->step > 0.0 && isfinite(out->step)))
         params_reject(pl, "stepsize", "\"stepsize\" must be a positive number of voxels");
@@ -77,7 +81,7 @@ singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
     bool stochastic = false;
     for (size_t i = 0; i < in->medium_count; ++i)
         stochastic |= in->media[i].kind == MEDIUM_GRID && settings.mode != TRANSMITTANCE_RAYMARCH;
-    return (singlescatter_scene){*in, settings, stochastic};
+    return (singlescatter_scene){*in, settings, stochastic, NULL};
 }
 
 /* The infinite lights seen along w (light sampling of image lights is not

@@ -16,6 +16,7 @@
 #include "film/film.h"
 #include "geometry/geometry.h"
 #include "integrator/path.h"
+#include "integrator/shadow_cache.h"
 #include "lights/lights.h"
 #include "media/medium.h"
 #include "sampler/sampler.h"
@@ -38,12 +39,15 @@ typedef struct {
                               0 = never */
     int light_samples;    /* samples of each light per scattering point (delta
                              lights: only with stochastic shadows, else 1) */
+    double shadow_cache;  /* node spacing of the shadow cache, voxels
+                             (integrator/shadow_cache.h); 0 = none */
 } singlescatter_settings;
 
 /* Defaults, then `Integrator "singlescatter"` parameters ("float stepsize" 1,
  * "float shadowstepsize" 2, "string transmittance" "jittered", "integer
  * lightsamples" 1, "string shadowtransmittance": as transmittance, "float
- * maxcollisions" 65536); errors name the entity's place. Does not call params_finish. */
+ * maxcollisions" 65536, "float shadowcache" 0); errors name the entity's place.
+ * Does not call params_finish. */
 hz_status singlescatter_settings_from_entity(scene_entity *e, singlescatter_settings *out,
                                              hz_error *err);
 singlescatter_settings singlescatter_settings_default(void);
@@ -55,6 +59,9 @@ typedef struct {
     /* Shadow transmittance is random (grid media with jittered or ratio
      * estimators): only then do delta lights take more than one sample. */
     bool stochastic_shadows;
+    /* The shadow caches of distant lights in grid media (settings.shadow_cache
+     * > 0; NULL: none), owned by the integrator (integrator_free). */
+    shadow_caches *caches;
 } singlescatter_scene;
 
 /* The scene as single scattering sees it (borrowed pointers). */

@@ -114,6 +114,14 @@ static rgb light_inscattered(const singlescatter_scene *vs, int mi, const light 
                              sampler_state *u, media_walk *walk)
 {
     const medium *m = &vs->in.media[mi];
+    const shadow_cache *cache = shadow_caches_get(vs->caches, mi, (size_t)(l - vs->in.lights));
+    if (cache) { /* a distant light: one direction, its shadow tabulated */
+        vec3 wi = l->distant.w;
+        double f = hg_phase(v3_dot(wo, wi), m->g);
+        if (rgb_is_black(l->emit) || !(f > 0.0))
+            return rgb_grey(0.0);
+        return rgb_scale(rgb_mul(l->emit, shadow_cache_transmittance(cache, x)), f);
+    }
     rgb L = rgb_grey(0.0);
     /* More samples of a delta light through deterministic transmittance
      * would repeat the same computation. */

@@ -250,6 +250,32 @@ static hz_status read_options(param_list *pl, const render_options *opt, uint64_
     return params_finish(pl, "Option", err);
 }
 
+/* The shadow cache replaces shadow rays of distant lights in grid media
+ * (integrator/shadow_cache.h): refused where it would change nothing or could
+ * not hold (anything moves). */
+static hz_status check_shadow_cache(const render_scene *rs, scene_desc *sd,
+                                    const integrator_inputs *in, hz_error *err)
+{
+    file_loc at = params_loc(&sd->integrator.params, "shadowcache");
+    render_motion motion = render_scene_motion(rs);
+    if (motion.surfaces || motion.media > 0)
+        return hz_fail_at(err, at,
+                          "\"shadowcache\" tabulates shadows once, for a static scene: here %s "
+                          "move",
+                          motion.media > 0 ? "media" : "surfaces");
+    bool grid = false, distant = false;
+    for (size_t i = 0; i < in->medium_count; ++i)
+        grid |= in->media[i].kind == MEDIUM_GRID;
+    for (size_t i = 0; i < in->light_count; ++i)
+        distant |= in->lights[i].kind == LIGHT_DISTANT;
+    if (!grid || !distant)
+        return hz_fail_at(err, at,
+                          "\"shadowcache\" caches distant lights' shadows in grid media: this "
+                          "scene has no %s, so it would change nothing",
+                          !grid ? "grid medium that rays enter" : "distant light");
+    return HZ_OK;
+}
+
 /* Builds what it can; see collect(). */
 static hz_status build_all(render_scene *rs, scene_desc *sd, const render_options *opt,
                            FILE *warn, hz_errors *errs, hz_error *err)
@@ -371,7 +397,10 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     bool media_used = rs->cam.medium >= 0 || geometry_references_media(rs->geom);
     integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media,
                             media_used ? rs->medium_count : 0};
-    return integrator_init(&rs->integ, &ip, &in, err);
+    if (ip.kind == INTEGRATOR_SINGLESCATTER && ip.singlescatter.shadow_cache > 0.0 &&
+        check_shadow_cache(rs, sd, &in, err) != HZ_OK)
+        return HZ_ERROR;
+    return integrator_init(&rs->integ, &ip, &in, warn, err);
 }
 
 /* Every error with a place in one run (sorted in file order, at most
@@ -467,7 +496,8 @@ render_motion render_scene_motion(const render_scene *rs)
 render_memory render_scene_memory(const render_scene *rs)
 {
     render_memory mem = {0.0, 0.0, film_memory_bytes(rs->film),
-                         (double)geometry_embree_peak_bytes(rs->geom)};
+                         (double)geometry_embree_peak_bytes(rs->geom),
+                         (double)shadow_caches_bytes(render_scene_shadow_caches(rs))};
     for (size_t i = 0; i < rs->medium_count; ++i) {
         const medium *md = &rs->media[i];
         switch (md->kind) {
@@ -491,6 +521,11 @@ render_memory render_scene_memory(const render_scene *rs)
         }
     }
     return mem;
+}
+
+const shadow_caches *render_scene_shadow_caches(const render_scene *rs)
+{
+    return rs->integ.kind == INTEGRATOR_SINGLESCATTER ? rs->integ.singlescatter.caches : NULL;
 }
 
 static bool marches(transmittance_mode m)
@@ -521,7 +556,9 @@ void render_scene_set_marching(render_scene *rs, const render_marching *m)
     set.shadow_mode = m->shadow_mode;
     set.step = m->step;
     set.shadow_step = m->shadow_step;
+    shadow_caches *caches = rs->integ.singlescatter.caches;
     rs->integ.singlescatter = singlescatter_scene_make(&rs->integ.singlescatter.in, set);
+    rs->integ.singlescatter.caches = caches;
 }
 
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,

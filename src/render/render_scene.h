@@ -83,11 +83,16 @@ typedef struct {
 render_motion render_scene_motion(const render_scene *rs);
 
 /* What the scene holds in memory, in bytes: NanoVDB buffers (density and
- * velocity grids, majorant grids), the film, and Embree's peak. */
+ * velocity grids, majorant grids), the film, Embree's peak and the shadow
+ * caches. */
 typedef struct {
-    double grids, majorants, film, embree;
+    double grids, majorants, film, embree, shadow_caches;
 } render_memory;
 render_memory render_scene_memory(const render_scene *rs);
+
+/* The singlescatter integrator's shadow caches (integrator/shadow_cache.h);
+ * NULL when it has none. */
+const shadow_caches *render_scene_shadow_caches(const render_scene *rs);
 
 /* The marching of a singlescatter scene with grid media (estimators and
  * steps, voxels): false (m untouched) for other integrators, scenes without

@@ -1,0 +1,403 @@
+#define _POSIX_C_SOURCE 200809L
+#include "integrator/shadow_cache.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/ray.h"
+
+/* A light-space grid: node (i, j, k) lies at origin + h (i ex + j ey + k ez),
+ * ez toward the light; 4 floats a node (optical depth R, G, B above it, and
+ * 1 where no surface lies above it, else 0), k the fastest index so that a
+ * column is contiguous. */
+struct shadow_cache {
+    vec3 origin, ex, ey, ez;
+    double h, inv_h; /* node spacing */
+    int n[3];
+    float *nodes;
+};
+
+struct shadow_caches {
+    size_t medium_count, light_count;
+    shadow_cache **pairs; /* [medium * light_count + light] */
+};
+
+/* Optical depths above this are stored as it (an infinite one would make
+ * 0 * inf in the interpolation); e^-1e30 is 0. */
+#define SHADOW_CACHE_TAU_MAX 1e30
+
+/* ---- building ---- */
+
+typedef struct {
+    const integrator_inputs *in;
+    shadow_cache *c;
+    int medium; /* the cached medium: the columns start in it */
+    atomic_int next_column;
+} build_job;
+
+/* One column's walk: the optical depth from its start to t, and where it
+ * records it at the nodes. */
+typedef struct {
+    const build_job *job;
+    medium_accessor *acc; /* one per medium */
+    double h;
+    int nz, next; /* nodes; the next to record, at t = (next + 1) h */
+    double tau[3];
+    double *cum; /* tau at each node, 3 a node */
+} column_walk;
+
+/* The density integral of a grid segment, fed piece by piece in order:
+ * only cells of the majorant grid that are not empty cost lookups. */
+typedef struct {
+    const medium *m;
+    medium_accessor *acc;
+    medium_grid_ray r;
+    double ca, cb; /* where the density can be non-zero */
+    majorant_walk mw;
+    majorant_segment seg;
+    bool more; /* seg is a cell not yet passed */
+} grid_pieces;
+
+/* Midpoints no more than h apart over [a, b]. */
+static double march(grid_pieces *g, double a, double b, double h)
+{
+    double n = ceil((b - a) / h);
+    if (n > 1e6)
+        n = 1e6;
+    double dt = (b - a) / n, sum = 0.0;
+    uint64_t lookups = 0;
+    for (int s = 0; s < (int)n; ++s)
+        sum += medium_density_at(g->m, g->acc, &g->r, a + (s + 0.5) * dt, &lookups);
+    return sum * dt;
+}
+
+/* The integral over [p, q], p at or past every earlier piece's end. */
+static double grid_piece(grid_pieces *g, double p, double q, double h)
+{
+    double lo = fmax(p, g->ca), hi = fmin(q, g->cb), integral = 0.0;
+    while (g->more && lo < hi) {
+        double a = fmax(lo, g->seg.t0), b = fmin(hi, g->seg.t1);
+        if (b > a && g->seg.max > 0.0)
+            integral += march(g, a, b, h);
+        if (g->seg.t1 > hi)
+            break;
+        g->more = majorant_walk_next(&g->mw, &g->seg);
+    }
+    return integral;
+}
+
+static void add_tau(column_walk *cw, const medium *m, double integral)
+{
+    rgb st = medium_sigma_t(m);
+    cw->tau[0] += st.r * integral;
+    cw->tau[1] += st.g * integral;
+    cw->tau[2] += st.b * integral;
+}
+
+/* The segment [a, b] of the column ray o + t w in medium mi (-1: none):
+ * its optical depth, cut at every node it passes, where tau is recorded. */
+static void accumulate(column_walk *cw, int mi, vec3 o, vec3 w, double a, double b)
+{
+    const medium *m = mi >= 0 ? &cw->job->in->media[mi] : NULL;
+    grid_pieces g = {.m = m, .ca = a, .cb = b};
+    bool grid = m && m->kind == MEDIUM_GRID && medium_grid_ray_make(m, o, w, 0.0, &g.r) &&
+                medium_grid_ray_clip(m, &g.r, &g.ca, &g.cb) &&
+                majorant_walk_start(&g.mw, &m->grid.majorant, g.r.o, g.r.d, g.ca, g.cb);
+    if (grid) {
+        g.acc = &cw->acc[mi];
+        g.more = majorant_walk_next(&g.mw, &g.seg);
+    }
+    bool homogeneous = m && m->kind == MEDIUM_HOMOGENEOUS;
+    for (double p = a;;) {
+        double tk = cw->next < cw->nz ? (cw->next + 1) * cw->h : INFINITY;
+        double q = fmin(tk, b);
+        if (q > p && (grid || homogeneous))
+            add_tau(cw, m, homogeneous ? q - p : grid_piece(&g, p, q, cw->h));
+        p = fmax(p, q);
+        if (cw->next >= cw->nz || !(tk <= b))
+            return;
+        memcpy(cw->cum + 3 * cw->next, cw->tau, sizeof cw->tau);
+        cw->next++;
+    }
+}
+
+static void build_column(const build_job *job, int column, medium_accessor *acc, double *cum)
+{
+    const shadow_cache *c = job->c;
+    int i = column / c->n[1], j = column % c->n[1];
+    column_walk cw = {.job = job, .acc = acc, .h = c->h, .nz = c->n[2], .cum = cum};
+    /* From one spacing below node (i, j, 0) toward the light: node k at
+     * t = (k + 1) h. */
+    vec3 w = c->ez;
+    vec3 o = v3_add(c->origin, v3_add(v3_scale(c->ex, i * c->h),
+                                      v3_sub(v3_scale(c->ey, j * c->h), v3_scale(w, c->h))));
+    const geometry *geom = job->in->geom;
+    int medium = job->medium;
+    double tmin = 0.0, t_start = 0.0, t_block = -INFINITY;
+    for (int crossing = 0;; ++crossing) {
+        geom_hit hit;
+        bool found = geometry_intersect(geom, o, w, tmin, INFINITY, 0.0, &hit);
+        double t_end = found          ? fmax(geometry_crossing_t(&hit, o, w), t_start)
+                       : medium >= 0 ? ray_far_t(o, w)
+                                     : INFINITY;
+        accumulate(&cw, medium, o, w, t_start, t_end);
+        if (!found)
+            break;
+        if (hit.shape->material->kind != MATERIAL_INTERFACE)
+            t_block = fmax(t_block, t_end);
+        if (crossing == GEOMETRY_MAX_CROSSINGS) { /* as a shadow ray: lost, black */
+            t_block = INFINITY;
+            break;
+        }
+        medium = geometry_medium_after(&hit, w, medium);
+        t_start = t_end;
+        tmin = geometry_step_past(&hit, o, w);
+    }
+    accumulate(&cw, -1, o, w, INFINITY, INFINITY); /* nodes a lost walk did not reach */
+    float *node = c->nodes + (size_t)column * (size_t)c->n[2] * 4;
+    for (int k = 0; k < c->n[2]; ++k, node += 4) {
+        for (int ch = 0; ch < 3; ++ch) {
+            double tau = cw.tau[ch] - cum[3 * k + ch];
+            node[ch] = (float)(tau > SHADOW_CACHE_TAU_MAX ? SHADOW_CACHE_TAU_MAX
+                               : tau > 0.0              ? tau
+                                                        : 0.0);
+        }
+        node[3] = (k + 1) * c->h < t_block ? 0.0f : 1.0f;
+    }
+}
+
+static void *build_worker(void *arg)
+{
+    build_job *job = arg;
+    const integrator_inputs *in = job->in;
+    medium_accessor *acc = calloc(in->medium_count, sizeof *acc);
+    double *cum = malloc((size_t)job->c->n[2] * 3 * sizeof *cum);
+    if (acc && cum) {
+        for (size_t m = 0; m < in->medium_count; ++m)
+            if (in->media[m].kind == MEDIUM_GRID)
+                medium_accessor_init(&in->media[m], &acc[m]);
+        int columns = job->c->n[0] * job->c->n[1];
+        for (int col; (col = atomic_fetch_add(&job->next_column, 1)) < columns;)
+            build_column(job, col, acc, cum);
+    } else { /* the caller sees columns left over */
+        free(acc);
+        free(cum);
+        return (void *)1;
+    }
+    free(acc);
+    free(cum);
+    return NULL;
+}
+
+/* The geometric mean of the render-space lengths of a voxel's edges. */
+static double voxel_length(const medium *m)
+{
+    transform render_from_index = transform_inverse(m->grid.index_from_render);
+    return cbrt(fabs(transform_det3(&render_from_index)));
+}
+
+static void cache_destroy(shadow_cache *c)
+{
+    if (c)
+        free(c->nodes);
+    free(c);
+}
+
+/* The cache of grid medium mi and distant light li, NULL with *err unset
+ * when the medium has no bounded support (an empty grid, a non-zero
+ * background). */
+static hz_status cache_create(const integrator_inputs *in, int mi, size_t li, double spacing,
+                              int threads, FILE *warn, shadow_cache **out, hz_error *err)
+{
+    *out = NULL;
+    const medium *m = &in->media[mi];
+    vec3 lo = m->grid.support_lo, hi = m->grid.support_hi;
+    if (m->grid.background != 0.0 || !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z))
+        return HZ_OK;
+    shadow_cache *c = calloc(1, sizeof *c);
+    if (!c)
+        return hz_fail(err, "shadow cache: out of memory");
+    c->ez = in->lights[li].distant.w;
+    v3_basis(c->ez, &c->ex, &c->ey);
+    /* The support box's corners in the light's frame. */
+    transform render_from_index = transform_inverse(m->grid.index_from_render);
+    double bmin[3] = {INFINITY, INFINITY, INFINITY}, bmax[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int k = 0; k < 8; ++k) {
+        vec3 q = transform_point(&render_from_index, v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y,
+                                                        k & 4 ? hi.z : lo.z));
+        double x[3] = {v3_dot(q, c->ex), v3_dot(q, c->ey), v3_dot(q, c->ez)};
+        for (int a = 0; a < 3; ++a) {
+            bmin[a] = fmin(bmin[a], x[a]);
+            bmax[a] = fmax(bmax[a], x[a]);
+        }
+    }
+    double voxel = voxel_length(m), h = spacing * voxel, nodes = 0.0;
+    for (int tries = 0; tries < 64; ++tries) {
+        nodes = 1.0;
+        for (int a = 0; a < 3; ++a)
+            nodes *= floor((bmax[a] - bmin[a]) / h) + 2.0;
+        if (nodes <= SHADOW_CACHE_MAX_NODES)
+            break;
+        h *= 1.01 * cbrt(nodes / SHADOW_CACHE_MAX_NODES);
+    }
+    if (!(nodes <= SHADOW_CACHE_MAX_NODES) || !(h > 0.0) || !isfinite(h)) {
+        cache_destroy(c);
+        return hz_fail(err, "shadow cache of medium \"%s\": its support cannot be covered",
+                       m->name ? m->name : "");
+    }
+    if (warn && h > spacing * voxel * 1.000001)
+        fprintf(warn,
+                "haze: warning: the shadow cache of medium \"%s\" would need more than %u "
+                "nodes at %g voxels: built at %.3g voxels\n",
+                m->name ? m->name : "", SHADOW_CACHE_MAX_NODES, spacing, h / voxel);
+    c->h = h;
+    c->inv_h = 1.0 / h;
+    for (int a = 0; a < 3; ++a)
+        c->n[a] = (int)(floor((bmax[a] - bmin[a]) / h) + 2.0);
+    c->origin = v3_add(v3_add(v3_scale(c->ex, bmin[0]), v3_scale(c->ey, bmin[1])),
+                       v3_scale(c->ez, bmin[2]));
+    size_t count = (size_t)c->n[0] * (size_t)c->n[1] * (size_t)c->n[2];
+    c->nodes = malloc(count * 4 * sizeof *c->nodes);
+    if (!c->nodes) {
+        cache_destroy(c);
+        return hz_fail(err, "shadow cache of medium \"%s\": out of memory for %zu nodes",
+                       m->name ? m->name : "", count);
+    }
+    build_job job = {.in = in, .c = c, .medium = mi};
+    atomic_init(&job.next_column, 0);
+    if (threads < 1)
+        threads = 1;
+    if (threads > 64)
+        threads = 64;
+    pthread_t tid[64];
+    int started = 0;
+    while (started < threads - 1 && pthread_create(&tid[started], NULL, build_worker, &job) == 0)
+        started++;
+    bool failed = build_worker(&job) != NULL;
+    for (int t = 0; t < started; ++t) {
+        void *rv = NULL;
+        pthread_join(tid[t], &rv);
+        failed |= rv != NULL;
+    }
+    if (failed) {
+        cache_destroy(c);
+        return hz_fail(err, "shadow cache of medium \"%s\": out of memory", m->name ? m->name : "");
+    }
+    *out = c;
+    return HZ_OK;
+}
+
+hz_status shadow_caches_create(const integrator_inputs *in, double spacing, int threads,
+                               FILE *warn, shadow_caches **out, hz_error *err)
+{
+    *out = NULL;
+    shadow_caches *cs = calloc(1, sizeof *cs);
+    size_t pairs = in->medium_count * in->light_count;
+    if (!cs || (pairs && !(cs->pairs = calloc(pairs, sizeof *cs->pairs)))) {
+        free(cs);
+        return hz_fail(err, "shadow cache: out of memory");
+    }
+    cs->medium_count = in->medium_count;
+    cs->light_count = in->light_count;
+    for (size_t mi = 0; mi < in->medium_count; ++mi) {
+        if (in->media[mi].kind != MEDIUM_GRID)
+            continue;
+        for (size_t li = 0; li < in->light_count; ++li) {
+            if (in->lights[li].kind != LIGHT_DISTANT)
+                continue;
+            if (cache_create(in, (int)mi, li, spacing, threads, warn,
+                             &cs->pairs[mi * in->light_count + li], err) != HZ_OK) {
+                shadow_caches_destroy(cs);
+                return HZ_ERROR;
+            }
+        }
+    }
+    *out = cs;
+    return HZ_OK;
+}
+
+void shadow_caches_destroy(shadow_caches *cs)
+{
+    if (!cs)
+        return;
+    for (size_t k = 0; k < cs->medium_count * cs->light_count; ++k)
+        cache_destroy(cs->pairs[k]);
+    free(cs->pairs);
+    free(cs);
+}
+
+const shadow_cache *shadow_caches_get(const shadow_caches *cs, int medium, size_t light)
+{
+    if (!cs || medium < 0 || (size_t)medium >= cs->medium_count || light >= cs->light_count)
+        return NULL;
+    return cs->pairs[(size_t)medium * cs->light_count + light];
+}
+
+size_t shadow_caches_bytes(const shadow_caches *cs)
+{
+    size_t bytes = 0;
+    for (size_t k = 0; cs && k < cs->medium_count * cs->light_count; ++k)
+        if (cs->pairs[k])
+            bytes += (size_t)cs->pairs[k]->n[0] * (size_t)cs->pairs[k]->n[1] *
+                     (size_t)cs->pairs[k]->n[2] * 4 * sizeof(float);
+    return bytes;
+}
+
+/* ---- lookups ---- */
+
+/* Catmull-Rom weights of the four samples around fraction t. */
+static inline void catmull_rom(double t, double w[4])
+{
+    double t2 = t * t, t3 = t2 * t;
+    w[0] = 0.5 * (-t3 + 2.0 * t2 - t);
+    w[1] = 0.5 * (3.0 * t3 - 5.0 * t2 + 2.0);
+    w[2] = 0.5 * (-3.0 * t3 + 4.0 * t2 + t);
+    w[3] = 0.5 * (t3 - t2);
+}
+
+rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p)
+{
+    vec3 d = v3_sub(p, c->origin);
+    double x[3] = {v3_dot(d, c->ex) * c->inv_h, v3_dot(d, c->ey) * c->inv_h,
+                   v3_dot(d, c->ez) * c->inv_h};
+    int i[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+        double top = c->n[a] - 1;
+        double v = x[a] > 0.0 ? (x[a] < top ? x[a] : top) : 0.0; /* also NaN: 0 */
+        i[a] = (int)v;
+        if (i[a] > c->n[a] - 2)
+            i[a] = c->n[a] - 2; /* n >= 2 on every axis */
+        f[a] = v - i[a];
+    }
+    /* Across the light: Catmull-Rom over 4 x 4 columns (the optical depth's
+     * curvature across columns is the cache's main error: 23x lower relMSE
+     * than bilinear at one voxel on the thick peer smoke); along it: linear. */
+    double wx[4], wy[4];
+    catmull_rom(f[0], wx);
+    catmull_rom(f[1], wy);
+    size_t col_stride = (size_t)c->n[2] * 4;
+    double acc[4] = {0.0, 0.0, 0.0, 0.0};
+    for (int a = 0; a < 4; ++a) {
+        int ix = i[0] - 1 + a;
+        ix = ix < 0 ? 0 : ix >= c->n[0] ? c->n[0] - 1 : ix;
+        for (int b = 0; b < 4; ++b) {
+            int iy = i[1] - 1 + b;
+            iy = iy < 0 ? 0 : iy >= c->n[1] ? c->n[1] - 1 : iy;
+            const float *n = c->nodes + ((size_t)ix * (size_t)c->n[1] + (size_t)iy) * col_stride +
+                             (size_t)i[2] * 4;
+            double w = wx[a] * wy[b], w0 = w * (1.0 - f[2]), w1 = w * f[2];
+            for (int k = 0; k < 4; ++k)
+                acc[k] += w0 * n[k] + w1 * n[4 + k];
+        }
+    }
+    /* The cubic can overshoot: depths stay >= 0, visibility in [0, 1]. */
+    double V = acc[3] < 1.0 ? acc[3] : 1.0;
+    if (!(V > 0.0))
+        return rgb_grey(0.0);
+    return rgb_make(V * exp(-fmax(acc[0], 0.0)), V * exp(-fmax(acc[1], 0.0)),
+                    V * exp(-fmax(acc[2], 0.0)));
+}
