@@ -64,7 +64,11 @@ cached_reference() {
 # twice the camera-ray step, as haze's defaults 1 / 2).
 integrator() {
     sstep=$(awk -v s="$2" 'BEGIN { print 2 * s }')
-    printf 'Integrator "singlescatter" "string transmittance" "%s" "float stepsize" %s "float shadowstepsize" %s' "$1" "$2" "$sstep"
+    # ESTIMATOR+cache: the shadow cache at the step's spacing (docs/media.md).
+    case $1 in
+    *+cache) printf 'Integrator "singlescatter" "string transmittance" "%s" "float stepsize" %s "float shadowstepsize" %s "float shadowcache" %s' "${1%+cache}" "$2" "$sstep" "$2" ;;
+    *) printf 'Integrator "singlescatter" "string transmittance" "%s" "float stepsize" %s "float shadowstepsize" %s' "$1" "$2" "$sstep" ;;
+    esac
 }
 
 # haze_id: what a cached reference depends on besides its scene: haze's

@@ -139,6 +139,7 @@ peer_config() {
         for s in $hsteps; do
             for spp in $hspps; do
                 rung jittered "$s" "$spp"
+                rung jittered+cache "$s" "$spp"
             done
         done
         # Deterministic at pixel centres: one sample is the converged pixel.
@@ -147,7 +148,9 @@ peer_config() {
             [ -n "$BENCH_QUICK" ] && rsteps="4 2"
             for s in $rsteps; do
                 rung raymarch "$s" 1
+                rung raymarch+cache "$s" 1
             done
+            [ -z "$BENCH_QUICK" ] && rung raymarch+cache 0.25 1
         fi
     done
 }
