@@ -449,12 +449,16 @@ static int run_render(const cli *c, distributed *dist)
     ph.render = hz_clock_seconds();
     if (adaptive) { /* the marching step's bias, before the passes measure the noise */
         step_pilot_choose(rs, c->target_error, &steps);
-        if (steps.applies && rank0 && !c->quiet)
+        if (steps.applies && rank0 && !c->quiet) {
+            char cache[64] = "";
+            if (steps.shadow_cache > 0.0)
+                snprintf(cache, sizeof cache, ", shadow cache %g", steps.shadow_cache);
             fprintf(stderr,
-                    "haze: --target-error %g: marching step %g voxels (shadow %g), estimated "
+                    "haze: --target-error %g: marching step %g voxels (shadow %g%s), estimated "
                     "bias relMSE %.2g (a pilot of %d pixels, %d renders)\n",
-                    c->target_error, steps.step, steps.shadow_step, steps.bias, steps.pixels,
-                    steps.renders);
+                    c->target_error, steps.step, steps.shadow_step, cache, steps.bias,
+                    steps.pixels, steps.renders);
+        }
     }
     if (distributed_render(dist, rs, &opt, progressive ? &goal : NULL, &stats, &err) != HZ_OK) {
         if (rank0)
@@ -489,6 +493,9 @@ static int run_render(const cli *c, distributed *dist)
         attrs[nattrs++] = (film_attribute){"haze:time_limit_s", limit};
     char stepsize[64];
     snprintf(stepsize, sizeof stepsize, "%g %g", steps.step, steps.shadow_step);
+    if (steps.shadow_cache > 0.0) /* "step shadowstep shadowcache" */
+        snprintf(stepsize, sizeof stepsize, "%g %g %g", steps.step, steps.shadow_step,
+                 steps.shadow_cache);
     if (adaptive) {
         attrs[nattrs++] = (film_attribute){"haze:target_error", target};
         attrs[nattrs++] = (film_attribute){"haze:spp_mean", mean_spp};

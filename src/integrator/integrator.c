@@ -159,15 +159,12 @@ hz_status integrator_params_from_scene(scene_desc *sd, FILE *warn, integrator_pa
 }
 
 hz_status integrator_init(integrator *out, const integrator_params *p,
-                          const integrator_inputs *in, FILE *warn, hz_error *err)
+                          const integrator_inputs *in, hz_error *err)
 {
     out->kind = p->kind;
     switch (p->kind) {
     case INTEGRATOR_SINGLESCATTER:
         out->singlescatter = singlescatter_scene_make(in, p->singlescatter);
-        if (p->singlescatter.shadow_cache > 0.0)
-            return shadow_caches_create(in, p->singlescatter.shadow_cache, 0, warn,
-                                        &out->singlescatter.caches, err);
         return HZ_OK;
     case INTEGRATOR_VOLPATH:
         return volpath_scene_init(&out->volpath, in, p->volpath, err);
@@ -179,8 +176,6 @@ void integrator_free(integrator *it)
 {
     switch (it->kind) {
     case INTEGRATOR_SINGLESCATTER:
-        shadow_caches_destroy(it->singlescatter.caches);
-        it->singlescatter.caches = NULL;
         break;
     case INTEGRATOR_VOLPATH:
         volpath_scene_free(&it->volpath);

@@ -48,10 +48,8 @@ typedef struct {
     };
 } integrator;
 
-/* Builds what the integrator precomputes (singlescatter's shadow caches),
- * with its warnings on `warn` (may be NULL). */
 hz_status integrator_init(integrator *out, const integrator_params *p,
-                          const integrator_inputs *in, FILE *warn, hz_error *err);
+                          const integrator_inputs *in, hz_error *err);
 void integrator_free(integrator *it);
 
 /* Radiance along the camera ray `r` (unit direction). `depth` receives the

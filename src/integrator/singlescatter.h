@@ -59,9 +59,10 @@ typedef struct {
     /* Shadow transmittance is random (grid media with jittered or ratio
      * estimators): only then do delta lights take more than one sample. */
     bool stochastic_shadows;
-    /* The shadow caches of distant lights in grid media (settings.shadow_cache
-     * > 0; NULL: none), owned by the integrator (integrator_free). */
-    shadow_caches *caches;
+    /* The shadow caches of distant lights in grid media at
+     * settings.shadow_cache (> 0; NULL: none), borrowed: their owner builds
+     * them (render/render_scene.c). */
+    const shadow_caches *caches;
 } singlescatter_scene;
 
 /* The scene as single scattering sees it (borrowed pointers). */

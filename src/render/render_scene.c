@@ -28,6 +28,11 @@ struct render_scene {
     size_t medium_count;
     integrator integ;
     scene_options options;
+    /* singlescatter's shadow caches, each at its spacing (voxels): the
+     * integrator reads the one of its settings; --target-error's pilot tries
+     * others (render_scene_set_marching). */
+    shadow_caches *caches[RENDER_SCENE_CACHES];
+    double cache_spacing[RENDER_SCENE_CACHES];
 };
 
 scene_options render_scene_options(const render_scene *rs) { return rs->options; }
@@ -250,30 +255,39 @@ static hz_status read_options(param_list *pl, const render_options *opt, uint64_
     return params_finish(pl, "Option", err);
 }
 
-/* The shadow cache replaces shadow rays of distant lights in grid media
- * (integrator/shadow_cache.h): refused where it would change nothing or could
- * not hold (anything moves). */
-static hz_status check_shadow_cache(const render_scene *rs, scene_desc *sd,
-                                    const integrator_inputs *in, hz_error *err)
+/* Why the shadow cache (integrator/shadow_cache.h) could not apply to the
+ * scene with integrator inputs `in`: NULL when it can (a static scene, a grid
+ * medium that rays enter, a distant light). */
+static const char *shadow_cache_obstacle(const render_scene *rs, const integrator_inputs *in)
 {
-    file_loc at = params_loc(&sd->integrator.params, "shadowcache");
     render_motion motion = render_scene_motion(rs);
     if (motion.surfaces || motion.media > 0)
-        return hz_fail_at(err, at,
-                          "\"shadowcache\" tabulates shadows once, for a static scene: here %s "
-                          "move",
-                          motion.media > 0 ? "media" : "surfaces");
+        return motion.media > 0 ? "media move" : "surfaces move";
     bool grid = false, distant = false;
     for (size_t i = 0; i < in->medium_count; ++i)
         grid |= in->media[i].kind == MEDIUM_GRID;
     for (size_t i = 0; i < in->light_count; ++i)
         distant |= in->lights[i].kind == LIGHT_DISTANT;
-    if (!grid || !distant)
+    return !grid ? "no grid medium that rays enter" : !distant ? "no distant light" : NULL;
+}
+
+/* The shadow cache replaces shadow rays of distant lights in grid media:
+ * refused where it would change nothing or could not hold (anything moves). */
+static hz_status check_shadow_cache(const render_scene *rs, scene_desc *sd,
+                                    const integrator_inputs *in, hz_error *err)
+{
+    const char *why = shadow_cache_obstacle(rs, in);
+    if (!why)
+        return HZ_OK;
+    file_loc at = params_loc(&sd->integrator.params, "shadowcache");
+    if (strstr(why, "move"))
         return hz_fail_at(err, at,
-                          "\"shadowcache\" caches distant lights' shadows in grid media: this "
-                          "scene has no %s, so it would change nothing",
-                          !grid ? "grid medium that rays enter" : "distant light");
-    return HZ_OK;
+                          "\"shadowcache\" tabulates shadows once, for a static scene: here %s",
+                          why);
+    return hz_fail_at(err, at,
+                      "\"shadowcache\" caches distant lights' shadows in grid media: this scene "
+                      "has %s, so it would change nothing",
+                      why);
 }
 
 /* Builds what it can; see collect(). */
@@ -397,10 +411,18 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     bool media_used = rs->cam.medium >= 0 || geometry_references_media(rs->geom);
     integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media,
                             media_used ? rs->medium_count : 0};
-    if (ip.kind == INTEGRATOR_SINGLESCATTER && ip.singlescatter.shadow_cache > 0.0 &&
-        check_shadow_cache(rs, sd, &in, err) != HZ_OK)
+    bool cached = ip.kind == INTEGRATOR_SINGLESCATTER && ip.singlescatter.shadow_cache > 0.0;
+    if (cached && check_shadow_cache(rs, sd, &in, err) != HZ_OK)
         return HZ_ERROR;
-    return integrator_init(&rs->integ, &ip, &in, warn, err);
+    if (integrator_init(&rs->integ, &ip, &in, err) != HZ_OK)
+        return HZ_ERROR;
+    if (!cached)
+        return HZ_OK;
+    rs->cache_spacing[0] = ip.singlescatter.shadow_cache;
+    if (shadow_caches_create(&in, rs->cache_spacing[0], 0, warn, &rs->caches[0], err) != HZ_OK)
+        return HZ_ERROR;
+    rs->integ.singlescatter.caches = rs->caches[0];
+    return HZ_OK;
 }
 
 /* Every error with a place in one run (sorted in file order, at most
@@ -451,6 +473,8 @@ void render_scene_destroy(render_scene *rs)
     if (!rs)
         return;
     integrator_free(&rs->integ);
+    for (int i = 0; i < RENDER_SCENE_CACHES; ++i)
+        shadow_caches_destroy(rs->caches[i]);
     for (size_t i = 0; i < rs->light_count; ++i)
         light_free(&rs->lights[i]);
     free(rs->lights);
@@ -528,6 +552,33 @@ const shadow_caches *render_scene_shadow_caches(const render_scene *rs)
     return rs->integ.kind == INTEGRATOR_SINGLESCATTER ? rs->integ.singlescatter.caches : NULL;
 }
 
+/* The caches at `spacing`: from the pool, or built into it (replacing the
+ * oldest that the integrator does not read). NULL when they cannot be built. */
+static const shadow_caches *cache_at(render_scene *rs, double spacing)
+{
+    for (int i = 0; i < RENDER_SCENE_CACHES; ++i)
+        if (rs->caches[i] && rs->cache_spacing[i] == spacing)
+            return rs->caches[i];
+    const shadow_caches *current = render_scene_shadow_caches(rs);
+    int slot = -1;
+    for (int i = 0; i < RENDER_SCENE_CACHES && slot < 0; ++i)
+        if (!rs->caches[i])
+            slot = i;
+    for (int i = 0; i < RENDER_SCENE_CACHES && slot < 0; ++i)
+        if (rs->caches[i] != current)
+            slot = i;
+    if (slot < 0)
+        return NULL;
+    shadow_caches_destroy(rs->caches[slot]);
+    rs->caches[slot] = NULL;
+    hz_error err = {0};
+    if (shadow_caches_create(&rs->integ.singlescatter.in, spacing, 0, NULL, &rs->caches[slot],
+                             &err) != HZ_OK)
+        return NULL;
+    rs->cache_spacing[slot] = spacing;
+    return rs->caches[slot];
+}
+
 static bool marches(transmittance_mode m)
 {
     return m == TRANSMITTANCE_RAYMARCH || m == TRANSMITTANCE_JITTERED;
@@ -544,7 +595,8 @@ bool render_scene_marching(const render_scene *rs, render_marching *m)
     const singlescatter_settings *set = &sc->settings;
     if (!grids || !(marches(set->mode) || marches(set->shadow_mode)))
         return false;
-    *m = (render_marching){set->mode, set->shadow_mode, set->step, set->shadow_step};
+    *m = (render_marching){set->mode, set->shadow_mode, set->step, set->shadow_step,
+                           set->shadow_cache, !shadow_cache_obstacle(rs, &sc->in)};
     return true;
 }
 
@@ -556,9 +608,22 @@ void render_scene_set_marching(render_scene *rs, const render_marching *m)
     set.shadow_mode = m->shadow_mode;
     set.step = m->step;
     set.shadow_step = m->shadow_step;
-    shadow_caches *caches = rs->integ.singlescatter.caches;
+    set.shadow_cache = m->shadow_cache;
+    const shadow_caches *caches = m->shadow_cache > 0.0 ? cache_at(rs, m->shadow_cache) : NULL;
+    if (!caches) /* none asked for, or none could be built: shadow rays */
+        set.shadow_cache = 0.0;
     rs->integ.singlescatter = singlescatter_scene_make(&rs->integ.singlescatter.in, set);
     rs->integ.singlescatter.caches = caches;
+}
+
+void render_scene_keep_current_cache(render_scene *rs)
+{
+    const shadow_caches *current = render_scene_shadow_caches(rs);
+    for (int i = 0; i < RENDER_SCENE_CACHES; ++i)
+        if (rs->caches[i] && rs->caches[i] != current) {
+            shadow_caches_destroy(rs->caches[i]);
+            rs->caches[i] = NULL;
+        }
 }
 
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,

@@ -100,11 +100,18 @@ const shadow_caches *render_scene_shadow_caches(const render_scene *rs);
 typedef struct {
     transmittance_mode mode, shadow_mode;
     double step, shadow_step;
+    double shadow_cache;       /* the shadow cache's spacing, voxels (0: none) */
+    bool shadow_cache_possible; /* static, a grid medium rays enter, a distant light */
 } render_marching;
 bool render_scene_marching(const render_scene *rs, render_marching *m);
-/* Sets it (on a scene where render_scene_marching is true). Not while
- * rendering. */
+/* Sets it (on a scene where render_scene_marching is true), building the
+ * shadow caches at a new spacing (a few are kept: setting an earlier
+ * spacing again reuses them; one that cannot be built means shadow rays).
+ * Not while rendering. */
 void render_scene_set_marching(render_scene *rs, const render_marching *m);
+/* Frees the shadow caches the scene's settings do not use. */
+void render_scene_keep_current_cache(render_scene *rs);
+#define RENDER_SCENE_CACHES 4
 
 /* Radiance arriving along the camera ray `r`. `depth` receives the distance to the
  * first surface hit (INFINITY when none). Thread-safe; allocates nothing. */

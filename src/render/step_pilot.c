@@ -24,13 +24,14 @@ static pilot_grid pilot_grid_make(const film_params *fp)
 
 /* The pilot image at `step`: raymarch at each pixel centre, sample 0. */
 static void pilot_render(render_scene *rs, const render_marching *base, double step,
-                         double shadow_ratio, const pilot_grid *g, rgb *out)
+                         double shadow_ratio, double cache_ratio, const pilot_grid *g, rgb *out)
 {
     render_marching m = *base;
     m.mode = TRANSMITTANCE_RAYMARCH;
     m.shadow_mode = TRANSMITTANCE_RAYMARCH;
     m.step = step;
     m.shadow_step = step * shadow_ratio;
+    m.shadow_cache = step * cache_ratio;
     render_scene_set_marching(rs, &m);
     const camera *cam = render_scene_camera(rs);
     const sampler *smp = render_scene_sampler(rs);
@@ -77,6 +78,11 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
                    malloc((size_t)n * sizeof(rgb))};
     double goal = STEP_PILOT_SHARE * target_error;
     double ratio = base.shadow_step / base.step, h = base.step;
+    /* The shadow cache keeps the scene's ratio to the step, or where the
+     * scene has none but could, the step's own spacing. */
+    double cache_ratio = base.shadow_cache > 0.0     ? base.shadow_cache / base.step
+                         : base.shadow_cache_possible ? 1.0
+                                                      : 0.0;
     if (!img[0] || !img[1] || !img[2] || n < 1) { /* keep the scene's steps */
         for (int k = 0; k < 3; ++k)
             free(img[k]);
@@ -84,14 +90,14 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
     }
     /* img[0]: at h; img[1]: at h / 2. */
     int renders = 0;
-    pilot_render(rs, &base, h, ratio, &g, img[0]);
-    pilot_render(rs, &base, h / 2.0, ratio, &g, img[1]);
+    pilot_render(rs, &base, h, ratio, cache_ratio, &g, img[0]);
+    pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, img[1]);
     renders += 2;
     double bias = 2.0 * rel_mse(img[0], img[1], n);
     if (bias <= goal) {
         /* Coarser while twice the step still meets the goal. */
         while (2.0 * h <= STEP_PILOT_MAX_STEP) {
-            pilot_render(rs, &base, 2.0 * h, ratio, &g, img[2]);
+            pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, img[2]);
             ++renders;
             double coarse = 2.0 * rel_mse(img[2], img[0], n);
             if (!(coarse <= goal))
@@ -110,7 +116,7 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
             rgb *t = img[0];
             img[0] = img[1];
             img[1] = t;
-            pilot_render(rs, &base, h / 2.0, ratio, &g, img[1]);
+            pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, img[1]);
             ++renders;
             bias = 2.0 * rel_mse(img[0], img[1], n);
         }
@@ -118,8 +124,12 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
     render_marching m = base;
     m.step = h;
     m.shadow_step = h * ratio;
+    m.shadow_cache = h * cache_ratio;
     render_scene_set_marching(rs, &m);
-    *out = (step_choice){true, m.step, m.shadow_step, bias, n, renders};
+    render_scene_keep_current_cache(rs);
+    render_marching set;
+    render_scene_marching(rs, &set); /* 0 if the cache could not be built */
+    *out = (step_choice){true, m.step, m.shadow_step, set.shadow_cache, bias, n, renders};
     for (int k = 0; k < 3; ++k)
         free(img[k]);
 }

@@ -7,7 +7,11 @@
  * at step h and h/2; twice their relMSE (haze diff's) estimates the bias of h
  * (midpoint marching: halving the step at least halves the error). The step
  * halves until that is at most STEP_PILOT_SHARE of the target, or doubles
- * while twice the step still is; the shadow step keeps its ratio to it. */
+ * while twice the step still is; the shadow step keeps its ratio to it. The
+ * shadow cache's spacing (integrator/shadow_cache.h) does too; where the
+ * scene has none but one applies (a static scene, a distant light, a grid
+ * medium), the pilot uses one at the step's spacing, its bias measured with
+ * the step's. */
 #ifndef HAZE_RENDER_STEP_PILOT_H
 #define HAZE_RENDER_STEP_PILOT_H
 
@@ -26,6 +30,7 @@
 typedef struct {
     bool applies;   /* a marching estimator in grid media: a step was chosen */
     double step, shadow_step; /* voxels, set on the scene */
+    double shadow_cache;      /* voxels, set on the scene (0: none) */
     double bias;    /* the estimated relMSE of the chosen step */
     int pixels;     /* in the pilot grid */
     int renders;    /* pilot renders made */

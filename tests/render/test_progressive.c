@@ -478,9 +478,9 @@ static double centre_rel_mse(const render_scene *a, const render_scene *b)
 
 /* --target-error's step pilot: from a coarse step (8 voxels, relMSE far
  * above the target) it halves down to a step whose bias, measured over the
- * whole image against a step 16 times finer, is within its share of E; it
- * does not go needlessly fine (twice its step misses the share); a tracking
- * estimator is left alone. */
+ * whole image against a step 16 times finer with exact shadow rays, is within
+ * its share of E; it does not go needlessly fine (twice its step misses the
+ * share); a tracking estimator is left alone. */
 static void test_step_pilot(void **state)
 {
     (void)state;
@@ -490,10 +490,15 @@ static void test_step_pilot(void **state)
     free(text);
     step_choice ch;
     step_pilot_choose(rs, E, &ch);
-    print_message("pilot: step %g (shadow %g), bias %.3g, %d pixels, %d renders\n", ch.step,
-                  ch.shadow_step, ch.bias, ch.pixels, ch.renders);
+    print_message("pilot: step %g (shadow %g, cache %g), bias %.3g, %d pixels, %d renders\n",
+                  ch.step, ch.shadow_step, ch.shadow_cache, ch.bias, ch.pixels, ch.renders);
     assert_true(ch.applies);
     assert_true(ch.step < 8.0 && ch.shadow_step == 2.0 * ch.step);
+    /* A static grid under a distant light: the pilot uses a shadow cache at
+     * the step (its bias measured with the step's, against exact shadow
+     * rays below). */
+    assert_true(ch.shadow_cache == ch.step);
+    assert_non_null(render_scene_shadow_caches(rs));
     assert_true(ch.bias <= STEP_PILOT_SHARE * E);
     double fine_step = ch.step / 16.0;
     text = pilot_scene("raymarch", fine_step);
