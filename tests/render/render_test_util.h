@@ -182,4 +182,50 @@ static inline void expect_rgb_close(rgb got, rgb want, double rel, double abs_to
     expect_close(got.b, want.b, rel, abs_tol, what, fx, fy);
 }
 
+/* The fog sphere grid (volumes/fog_sphere.vdb) under a distant light, 32x32:
+ * singlescatter with `estimator` at `step` voxels, shadow rays at
+ * `shadow_step`, the shadow cache at `cache` (0: none). Free it. */
+static inline char *fog_sphere_scene(const char *estimator, double step, double shadow_step,
+                                     double cache)
+{
+    char *s = malloc(4096);
+    assert_non_null(s);
+    snprintf(s, 4096,
+             "LookAt 0 0.3 -4  0 0 0  0 1 0\n"
+             "Camera \"perspective\" \"float fov\" 35\n"
+             "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
+             "Integrator \"singlescatter\" \"string transmittance\" \"%s\"\n"
+             "    \"float stepsize\" %g \"float shadowstepsize\" %g \"float shadowcache\" %g\n"
+             "WorldBegin\n"
+             "LightSource \"distant\" \"point3 from\" [1 3 -2] \"point3 to\" [0 0 0]"
+             " \"rgb L\" [3 3 3]\n"
+             "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"%s\"\n"
+             "    \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [12 12 12]\n"
+             "AttributeBegin\n  Material \"interface\"\n  MediumInterface \"m\" \"\"\n"
+             "  Shape \"sphere\" \"float radius\" 1.1\nAttributeEnd\n",
+             estimator, step, shadow_step, cache, HAZE_SCENES "/../volumes/fog_sphere.vdb");
+    return s;
+}
+
+/* haze diff's relMSE over a w x h image at pixel centres (sample 0) of a
+ * against b; *b_mean (may be NULL) gets b's mean over pixels and channels. */
+static inline double centre_rel_mse(const render_scene *a, const render_scene *b, int w, int h,
+                                    double *b_mean)
+{
+    double sum = 0.0, mean = 0.0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            rgb la = eval_pixel(a, x + 0.5, y + 0.5, 1).L, lb = eval_pixel(b, x + 0.5, y + 0.5, 1).L;
+            for (int c = 0; c < 3; ++c) {
+                double d = rgb_ch(la, c) - rgb_ch(lb, c), r = rgb_ch(lb, c) + 0.01;
+                sum += d * d / (r * r);
+                mean += rgb_ch(lb, c);
+            }
+        }
+    if (b_mean)
+        *b_mean = mean / (3.0 * w * h);
+    return sum / (3.0 * w * h);
+}
+
 #endif

@@ -436,44 +436,10 @@ static void test_target_error_render(void **state)
     render_scene_destroy(rb);
 }
 
-/* The fog sphere grid (volumes/fog_sphere.vdb) under a distant light, marched
- * with `estimator` at `step` voxels (shadow step twice it). */
+/* The fog sphere marched with `estimator` at `step` voxels (shadow step twice it). */
 static char *pilot_scene(const char *estimator, double step)
 {
-    char *s = malloc(4096);
-    assert_non_null(s);
-    snprintf(s, 4096,
-             "LookAt 0 0.3 -4  0 0 0  0 1 0\n"
-             "Camera \"perspective\" \"float fov\" 35\n"
-             "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\n"
-             "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
-             "Integrator \"singlescatter\" \"string transmittance\" \"%s\"\n"
-             "    \"float stepsize\" %g \"float shadowstepsize\" %g\n"
-             "WorldBegin\n"
-             "LightSource \"distant\" \"point3 from\" [1 3 -2] \"point3 to\" [0 0 0]"
-             " \"rgb L\" [3 3 3]\n"
-             "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"%s\"\n"
-             "    \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [12 12 12]\n"
-             "AttributeBegin\n  Material \"interface\"\n  MediumInterface \"m\" \"\"\n"
-             "  Shape \"sphere\" \"float radius\" 1.1\nAttributeEnd\n",
-             estimator, step, 2.0 * step, HAZE_SCENES "/../volumes/fog_sphere.vdb");
-    return s;
-}
-
-/* haze diff's relMSE over the whole image at pixel centres (sample 0) of a
- * against b. */
-static double centre_rel_mse(const render_scene *a, const render_scene *b)
-{
-    double sum = 0.0;
-    for (int y = 0; y < 32; ++y)
-        for (int x = 0; x < 32; ++x) {
-            rgb la = eval_pixel(a, x + 0.5, y + 0.5, 1).L, lb = eval_pixel(b, x + 0.5, y + 0.5, 1).L;
-            for (int c = 0; c < 3; ++c) {
-                double d = rgb_ch(la, c) - rgb_ch(lb, c), r = rgb_ch(lb, c) + 0.01;
-                sum += d * d / (r * r);
-            }
-        }
-    return sum / (3.0 * 32 * 32);
+    return fog_sphere_scene(estimator, step, 2.0 * step, 0.0);
 }
 
 /* --target-error's step pilot: from a coarse step (8 voxels, relMSE far
@@ -507,7 +473,8 @@ static void test_step_pilot(void **state)
     text = pilot_scene("raymarch", 2.0 * ch.step);
     render_scene *coarse = build_scene_or_fail(text, NULL);
     free(text);
-    double chosen = centre_rel_mse(rs, fine), twice = centre_rel_mse(coarse, fine);
+    double chosen = centre_rel_mse(rs, fine, 32, 32, NULL),
+           twice = centre_rel_mse(coarse, fine, 32, 32, NULL);
     print_message("whole image against step %g: chosen %.3g, twice the step %.3g (share %.3g)\n",
                   fine_step, chosen, twice, STEP_PILOT_SHARE * E);
     assert_true(chosen <= STEP_PILOT_SHARE * E);

@@ -76,40 +76,9 @@ static void test_closed_form(void **state)
     render_scene_destroy(rs);
 }
 
-/* The fog sphere grid under a distant light (tests/render/test_progressive.c's
- * pilot scene), marched at step 1 voxel, with shadow rays or a cache. */
-static char *sphere_scene(double cache)
-{
-    return sfmt("LookAt 0 0.3 -4  0 0 0  0 1 0\n"
-                "Camera \"perspective\" \"float fov\" 35\n"
-                "Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\n"
-                "Integrator \"singlescatter\" \"string transmittance\" \"raymarch\"\n"
-                "    \"float stepsize\" 1 \"float shadowstepsize\" 0.25 \"float shadowcache\" %g\n"
-                "WorldBegin\n"
-                "LightSource \"distant\" \"point3 from\" [1 3 -2] \"point3 to\" [0 0 0]"
-                " \"rgb L\" [3 3 3]\n"
-                "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"%s\"\n"
-                "    \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [12 12 12]\n"
-                "AttributeBegin\n  Material \"interface\"\n  MediumInterface \"m\" \"\"\n"
-                "  Shape \"sphere\" \"float radius\" 1.1\nAttributeEnd\n",
-                cache, VOLUMES "/fog_sphere.vdb");
-}
-
-static double centre_rel_mse(const render_scene *a, const render_scene *b, double *mean)
-{
-    double sum = 0.0, m = 0.0;
-    for (int y = 0; y < 32; ++y)
-        for (int x = 0; x < 32; ++x) {
-            rgb la = eval_pixel(a, x + 0.5, y + 0.5, 1).L, lb = eval_pixel(b, x + 0.5, y + 0.5, 1).L;
-            for (int c = 0; c < 3; ++c) {
-                double d = rgb_ch(la, c) - rgb_ch(lb, c), r = rgb_ch(lb, c) + 0.01;
-                sum += d * d / (r * r);
-                m += rgb_ch(lb, c);
-            }
-        }
-    *mean = m / (3.0 * 32 * 32);
-    return sum / (3.0 * 32 * 32);
-}
+/* The fog sphere marched at step 1 voxel, with shadow rays (a quarter voxel)
+ * or a cache. */
+static char *sphere_scene(double cache) { return fog_sphere_scene("raymarch", 1.0, 0.25, cache); }
 
 /* Against exact shadow rays (marched at a quarter voxel), the whole image's
  * relMSE falls as the spacing shrinks, and is small at half a voxel. */
@@ -126,7 +95,7 @@ static void test_converges_to_shadow_rays(void **state)
         text = sphere_scene(spacings[k]);
         render_scene *rs = build_scene_or_fail(text, NULL);
         free(text);
-        double e = centre_rel_mse(rs, exact, &mean);
+        double e = centre_rel_mse(rs, exact, 32, 32, &mean);
         print_message("spacing %g voxels: relMSE %.3g against shadow rays (image mean %.4g)\n",
                       spacings[k], e, mean);
         assert_true(e < prev);
