@@ -6,6 +6,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "core/ray.h"
 
@@ -182,14 +183,11 @@ static void *build_worker(void *arg)
         int columns = job->c->n[0] * job->c->n[1];
         for (int col; (col = atomic_fetch_add(&job->next_column, 1)) < columns;)
             build_column(job, col, acc, cum);
-    } else { /* the caller sees columns left over */
-        free(acc);
-        free(cum);
-        return (void *)1;
     }
+    bool failed = !acc || !cum; /* the others build every column; the cache fails */
     free(acc);
     free(cum);
-    return NULL;
+    return failed ? (void *)1 : NULL;
 }
 
 /* The geometric mean of the render-space lengths of a voxel's edges. */
@@ -268,8 +266,10 @@ static hz_status cache_create(const integrator_inputs *in, int mi, size_t li, do
     }
     build_job job = {.in = in, .c = c, .medium = mi};
     atomic_init(&job.next_column, 0);
-    if (threads < 1)
-        threads = 1;
+    if (threads < 1) {
+        long cores = sysconf(_SC_NPROCESSORS_ONLN);
+        threads = cores < 1 ? 1 : cores > 64 ? 64 : (int)cores;
+    }
     if (threads > 64)
         threads = 64;
     pthread_t tid[64];

@@ -552,8 +552,8 @@ const shadow_caches *render_scene_shadow_caches(const render_scene *rs)
     return rs->integ.kind == INTEGRATOR_SINGLESCATTER ? rs->integ.singlescatter.caches : NULL;
 }
 
-/* The caches at `spacing`: from the pool, or built into it (replacing the
- * oldest that the integrator does not read). NULL when they cannot be built. */
+/* The caches at `spacing`: from the pool, or built into a free slot (or one
+ * whose caches the integrator does not read). NULL when they cannot be built. */
 static const shadow_caches *cache_at(render_scene *rs, double spacing)
 {
     for (int i = 0; i < RENDER_SCENE_CACHES; ++i)
