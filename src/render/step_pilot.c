@@ -88,29 +88,32 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
             free(img[k]);
         return;
     }
-    /* img[0]: at h; img[1]: at h / 2. */
+    /* Coarser first: twice the step's bias is estimated from it and h
+     * (img[0]: at h, img[2]: at 2h), without a render finer than h. */
     int renders = 0;
+    double bias = INFINITY;
     pilot_render(rs, &base, h, ratio, cache_ratio, &g, img[0]);
-    pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, img[1]);
-    renders += 2;
-    double bias = 2.0 * rel_mse(img[0], img[1], n);
-    if (bias <= goal) {
-        /* Coarser while twice the step still meets the goal. */
-        while (2.0 * h <= STEP_PILOT_MAX_STEP) {
-            pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, img[2]);
-            ++renders;
-            double coarse = 2.0 * rel_mse(img[2], img[0], n);
-            if (!(coarse <= goal))
-                break;
-            h *= 2.0;
-            bias = coarse;
-            rgb *t = img[1];
-            img[1] = img[0];
-            img[0] = img[2];
-            img[2] = t;
-        }
-    } else {
-        /* Finer until it does. */
+    ++renders;
+    bool coarser = false;
+    while (2.0 * h <= STEP_PILOT_MAX_STEP) {
+        pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, img[2]);
+        ++renders;
+        double coarse = 2.0 * rel_mse(img[2], img[0], n);
+        if (!(coarse <= goal))
+            break;
+        coarser = true;
+        h *= 2.0;
+        bias = coarse;
+        rgb *t = img[0];
+        img[0] = img[2];
+        img[2] = t;
+    }
+    if (!coarser) {
+        /* h itself: finer until its bias (against h / 2 in img[1]) meets
+         * the goal. */
+        pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, img[1]);
+        ++renders;
+        bias = 2.0 * rel_mse(img[0], img[1], n);
         while (!(bias <= goal) && h / 2.0 >= STEP_PILOT_MIN_STEP) {
             h /= 2.0;
             rgb *t = img[0];

@@ -5,9 +5,11 @@
  * estimators run deterministically (raymarch, each pixel centre, the same
  * sample for every step, so only the step changes) on a sparse grid of pixels
  * at step h and h/2; twice their relMSE (haze diff's) estimates the bias of h
- * (midpoint marching: halving the step at least halves the error). The step
- * halves until that is at most STEP_PILOT_SHARE of the target, or doubles
- * while twice the step still is; the shadow step keeps its ratio to it. The
+ * (midpoint marching: halving the step at least halves the error). From the
+ * scene's step the step doubles while twice it still has a bias of at most
+ * STEP_PILOT_SHARE of the target (renders at h and 2h: nothing finer than the
+ * scene's step is rendered then), else halves until it has; the shadow step
+ * keeps its ratio to it. The
  * shadow cache's spacing (integrator/shadow_cache.h) does too; where the
  * scene has none but one applies (a static scene, a distant light, a grid
  * medium), the pilot uses one at the step's spacing, its bias measured with

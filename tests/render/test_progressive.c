@@ -483,6 +483,26 @@ static void test_step_pilot(void **state)
     render_scene_destroy(fine);
     render_scene_destroy(coarse);
 
+    /* From a fine step and a loose target it goes coarser, renders nothing
+     * finer than the scene's step, and stays within the share. */
+    const double loose = 1e-2;
+    text = pilot_scene("raymarch", 0.25);
+    rs = build_scene_or_fail(text, NULL);
+    free(text);
+    step_pilot_choose(rs, loose, &ch);
+    print_message("pilot from step 0.25 for E = %g: step %g, %d renders\n", loose, ch.step,
+                  ch.renders);
+    assert_true(ch.applies && ch.step > 0.25);
+    text = pilot_scene("raymarch", ch.step / 16.0);
+    fine = build_scene_or_fail(text, NULL);
+    free(text);
+    chosen = centre_rel_mse(rs, fine, 32, 32, NULL);
+    print_message("whole image against step %g: chosen %.3g (share %.3g)\n", ch.step / 16.0,
+                  chosen, STEP_PILOT_SHARE * loose);
+    assert_true(chosen <= STEP_PILOT_SHARE * loose);
+    render_scene_destroy(rs);
+    render_scene_destroy(fine);
+
     text = pilot_scene("residual", 8.0);
     rs = build_scene_or_fail(text, NULL);
     free(text);
