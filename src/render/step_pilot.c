@@ -22,13 +22,13 @@ static pilot_grid pilot_grid_make(const film_params *fp)
     return g;
 }
 
-/* The pilot image at `step`: raymarch at each pixel centre, sample 0. */
+/* The pilot image at `step`: the scene's estimators at each pixel centre,
+ * samples 0 .. k - 1 of it (out[pixel * k + sample]). */
 static void pilot_render(render_scene *rs, const render_marching *base, double step,
-                         double shadow_ratio, double cache_ratio, const pilot_grid *g, rgb *out)
+                         double shadow_ratio, double cache_ratio, const pilot_grid *g, int k,
+                         rgb *out)
 {
     render_marching m = *base;
-    m.mode = TRANSMITTANCE_RAYMARCH;
-    m.shadow_mode = TRANSMITTANCE_RAYMARCH;
     m.step = step;
     m.shadow_step = step * shadow_ratio;
     m.shadow_cache = step * cache_ratio;
@@ -41,26 +41,45 @@ static void pilot_render(render_scene *rs, const render_marching *base, double s
             int x = g->x0 + i * g->stride, y = g->y0 + j * g->stride;
             camera_sample cs = {v2(x + 0.5, y + 0.5), v2(0.5, 0.5), 0.5, 1.0};
             ray_differential rd;
-            rgb L = rgb_grey(0.0);
-            if (camera_generate_ray_differential(cam, cs, &rd)) {
-                sampler_state st;
-                sampler_start(smp, x, y, 0, &st);
-                double depth;
-                L = render_scene_li(rs, &rd, &st, &depth, &counters);
+            bool ray = camera_generate_ray_differential(cam, cs, &rd);
+            for (int s = 0; s < k; ++s) {
+                rgb L = rgb_grey(0.0);
+                if (ray) {
+                    sampler_state st;
+                    sampler_start(smp, x, y, s, &st);
+                    double depth;
+                    L = render_scene_li(rs, &rd, &st, &depth, &counters);
+                }
+                out[(size_t)(j * g->nx + i) * (size_t)k + (size_t)s] = L;
             }
-            out[j * g->nx + i] = L;
         }
 }
 
-/* haze diff's relMSE of a against b: mean of (a - b)^2 / (b + 0.01)^2 over
- * pixels and channels. */
-static double rel_mse(const rgb *a, const rgb *b, int n)
+/* haze diff's relMSE of the expected image a against b, mean of (a -
+ * b)^2 / (b + 0.01)^2 over pixels and channels, from k paired samples of
+ * each pixel (the same sample indices: their noise is correlated): per pixel
+ * and channel the squared mean difference less its variance (s^2 / k of the
+ * differences), at least 0. With k = 1 (deterministic estimators) the plain
+ * relMSE. */
+static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k)
 {
     double sum = 0.0;
     for (int i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) {
-            double d = rgb_ch(a[i], c) - rgb_ch(b[i], c), r = rgb_ch(b[i], c) + 0.01;
-            double e = d * d / (r * r);
+            double md = 0.0, mb = 0.0;
+            for (int s = 0; s < k; ++s) {
+                md += rgb_ch(a[(size_t)i * k + s], c) - rgb_ch(b[(size_t)i * k + s], c);
+                mb += rgb_ch(b[(size_t)i * k + s], c);
+            }
+            md /= k;
+            mb /= k;
+            double var = 0.0;
+            for (int s = 0; k > 1 && s < k; ++s) {
+                double d = rgb_ch(a[(size_t)i * k + s], c) - rgb_ch(b[(size_t)i * k + s], c) - md;
+                var += d * d;
+            }
+            double sq = k > 1 ? md * md - var / ((double)k * (k - 1)) : md * md;
+            double r = mb + 0.01, e = sq > 0.0 ? sq / (r * r) : 0.0;
             sum += isfinite(e) ? e : 0.0;
         }
     return n > 0 ? sum / (3.0 * n) : 0.0;
@@ -74,8 +93,15 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
         return;
     pilot_grid g = pilot_grid_make(film_get_params(render_scene_film(rs)));
     int n = g.nx * g.ny;
-    rgb *img[3] = {malloc((size_t)n * sizeof(rgb)), malloc((size_t)n * sizeof(rgb)),
-                   malloc((size_t)n * sizeof(rgb))};
+    /* Jittered marching (or tracked shadows) is random: several samples of
+     * each pixel centre, so that the noise can be told from the bias. */
+    int k = base.mode == TRANSMITTANCE_RAYMARCH && base.shadow_mode == TRANSMITTANCE_RAYMARCH
+                ? 1
+                : STEP_PILOT_SAMPLES;
+    if (k > render_scene_sampler(rs)->spp)
+        k = render_scene_sampler(rs)->spp;
+    size_t bytes = (size_t)n * (size_t)k * sizeof(rgb);
+    rgb *img[3] = {malloc(bytes), malloc(bytes), malloc(bytes)};
     double goal = STEP_PILOT_SHARE * target_error;
     double ratio = base.shadow_step / base.step, h = base.step;
     /* The shadow cache keeps the scene's ratio to the step, or where the
@@ -84,21 +110,21 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
                          : base.shadow_cache_possible ? 1.0
                                                       : 0.0;
     if (!img[0] || !img[1] || !img[2] || n < 1) { /* keep the scene's steps */
-        for (int k = 0; k < 3; ++k)
-            free(img[k]);
+        for (int q = 0; q < 3; ++q)
+            free(img[q]);
         return;
     }
     /* Coarser first: twice the step's bias is estimated from it and h
      * (img[0]: at h, img[2]: at 2h), without a render finer than h. */
     int renders = 0;
     double bias = INFINITY;
-    pilot_render(rs, &base, h, ratio, cache_ratio, &g, img[0]);
+    pilot_render(rs, &base, h, ratio, cache_ratio, &g, k, img[0]);
     ++renders;
     bool coarser = false;
     while (2.0 * h <= STEP_PILOT_MAX_STEP) {
-        pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, img[2]);
+        pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, k, img[2]);
         ++renders;
-        double coarse = 2.0 * rel_mse(img[2], img[0], n);
+        double coarse = 2.0 * bias_rel_mse(img[2], img[0], n, k);
         if (!(coarse <= goal))
             break;
         coarser = true;
@@ -111,17 +137,17 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
     if (!coarser) {
         /* h itself: finer until its bias (against h / 2 in img[1]) meets
          * the goal. */
-        pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, img[1]);
+        pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, k, img[1]);
         ++renders;
-        bias = 2.0 * rel_mse(img[0], img[1], n);
+        bias = 2.0 * bias_rel_mse(img[0], img[1], n, k);
         while (!(bias <= goal) && h / 2.0 >= STEP_PILOT_MIN_STEP) {
             h /= 2.0;
             rgb *t = img[0];
             img[0] = img[1];
             img[1] = t;
-            pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, img[1]);
+            pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, k, img[1]);
             ++renders;
-            bias = 2.0 * rel_mse(img[0], img[1], n);
+            bias = 2.0 * bias_rel_mse(img[0], img[1], n, k);
         }
     }
     render_marching m = base;
@@ -133,6 +159,6 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
     render_marching set;
     render_scene_marching(rs, &set); /* 0 if the cache could not be built */
     *out = (step_choice){true, m.step, m.shadow_step, set.shadow_cache, bias, n, renders};
-    for (int k = 0; k < 3; ++k)
-        free(img[k]);
+    for (int q = 0; q < 3; ++q)
+        free(img[q]);
 }

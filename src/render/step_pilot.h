@@ -2,9 +2,11 @@
  * estimators the image converges to the marched integral, not the true one:
  * their bias shrinks with the step, while the passes of --target-error only
  * measure noise. Before the passes, a pilot picks the step: the scene's
- * estimators run deterministically (raymarch, each pixel centre, the same
- * sample for every step, so only the step changes) on a sparse grid of pixels
- * at step h and h/2; twice their relMSE (haze diff's) estimates the bias of h
+ * estimators run at the pixel centres of a sparse grid of pixels at step h
+ * and h/2, with the same samples for every step (one for `raymarch`, which
+ * is deterministic there; STEP_PILOT_SAMPLES for `jittered`, whose noise is
+ * then subtracted: per pixel the squared mean difference less its variance);
+ * twice their relMSE (haze diff's) estimates the bias of h
  * (midpoint marching: halving the step at least halves the error). From the
  * scene's step the step doubles while twice it still has a bias of at most
  * STEP_PILOT_SHARE of the target (renders at h and 2h: nothing finer than the
@@ -26,6 +28,8 @@
 #define STEP_PILOT_SHARE 0.25
 /* About this many pixels in the pilot grid; steps between these (voxels). */
 #define STEP_PILOT_PIXELS 2500
+/* Samples per pilot pixel of a random (jittered) estimator. */
+#define STEP_PILOT_SAMPLES 8
 #define STEP_PILOT_MIN_STEP (1.0 / 64.0)
 #define STEP_PILOT_MAX_STEP 64.0
 

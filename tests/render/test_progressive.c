@@ -503,6 +503,35 @@ static void test_step_pilot(void **state)
     render_scene_destroy(rs);
     render_scene_destroy(fine);
 
+    /* Jittered marching: its noise is told from its bias (8 paired samples
+     * per pilot pixel); the chosen step's bias, from 64 samples per pixel
+     * against a raymarch 16 times finer, is within the share. */
+    text = pilot_scene("jittered", 8.0);
+    rs = build_scene_or_fail(text, NULL);
+    free(text);
+    step_pilot_choose(rs, E, &ch);
+    print_message("pilot, jittered: step %g, estimated bias %.3g, %d renders\n", ch.step, ch.bias,
+                  ch.renders);
+    assert_true(ch.applies && ch.step < 8.0);
+    text = pilot_scene("raymarch", ch.step / 16.0);
+    fine = build_scene_or_fail(text, NULL);
+    free(text);
+    double sum = 0.0;
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+            rgb a = eval_pixel(rs, x + 0.5, y + 0.5, 64).L, b = eval_pixel(fine, x + 0.5, y + 0.5, 1).L;
+            for (int c = 0; c < 3; ++c) {
+                double d = rgb_ch(a, c) - rgb_ch(b, c), r = rgb_ch(b, c) + 0.01;
+                sum += d * d / (r * r);
+            }
+        }
+    chosen = sum / (3.0 * 32 * 32);
+    print_message("jittered at step %g, 64 spp, against raymarch at step %g: %.3g (share %.3g)\n",
+                  ch.step, ch.step / 16.0, chosen, STEP_PILOT_SHARE * E);
+    assert_true(chosen <= STEP_PILOT_SHARE * E);
+    render_scene_destroy(rs);
+    render_scene_destroy(fine);
+
     text = pilot_scene("residual", 8.0);
     rs = build_scene_or_fail(text, NULL);
     free(text);
