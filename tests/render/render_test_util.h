@@ -208,15 +208,17 @@ static inline char *fog_sphere_scene(const char *estimator, double step, double 
     return s;
 }
 
-/* haze diff's relMSE over a w x h image at pixel centres (sample 0) of a
- * against b; *b_mean (may be NULL) gets b's mean over pixels and channels. */
+/* haze diff's relMSE over a w x h image at pixel centres of a (the mean of
+ * samples 0 .. a_spp - 1) against b (sample 0); *b_mean (may be NULL) gets
+ * b's mean over pixels and channels. */
 static inline double centre_rel_mse(const render_scene *a, const render_scene *b, int w, int h,
-                                    double *b_mean)
+                                    int a_spp, double *b_mean)
 {
     double sum = 0.0, mean = 0.0;
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-            rgb la = eval_pixel(a, x + 0.5, y + 0.5, 1).L, lb = eval_pixel(b, x + 0.5, y + 0.5, 1).L;
+            rgb la = eval_pixel(a, x + 0.5, y + 0.5, a_spp).L;
+            rgb lb = eval_pixel(b, x + 0.5, y + 0.5, 1).L;
             for (int c = 0; c < 3; ++c) {
                 double d = rgb_ch(la, c) - rgb_ch(lb, c), r = rgb_ch(lb, c) + 0.01;
                 sum += d * d / (r * r);

@@ -442,6 +442,29 @@ static char *pilot_scene(const char *estimator, double step)
     return fog_sphere_scene(estimator, step, 2.0 * step, 0.0);
 }
 
+/* The pilot from `step` with `estimator` for target E: its choice, and the
+ * chosen step's whole-image relMSE (spp samples a pixel) against a raymarch
+ * 16 times finer with exact shadow rays. */
+static double pilot_bias(const char *estimator, double step, double E, int spp, step_choice *ch)
+{
+    char *text = pilot_scene(estimator, step);
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    free(text);
+    step_pilot_choose(rs, E, ch);
+    assert_true(ch->applies);
+    text = pilot_scene("raymarch", ch->step / 16.0);
+    render_scene *fine = build_scene_or_fail(text, NULL);
+    free(text);
+    double e = centre_rel_mse(rs, fine, 32, 32, spp, NULL);
+    print_message("pilot (%s from step %g, E = %g): step %g, estimated bias %.3g, %d renders; "
+                  "%d spp against step %g: %.3g (share %.3g)\n",
+                  estimator, step, E, ch->step, ch->bias, ch->renders, spp, ch->step / 16.0, e,
+                  STEP_PILOT_SHARE * E);
+    render_scene_destroy(rs);
+    render_scene_destroy(fine);
+    return e;
+}
+
 /* --target-error's step pilot: from a coarse step (8 voxels, relMSE far
  * above the target) it halves down to a step whose bias, measured over the
  * whole image against a step 16 times finer with exact shadow rays, is within
@@ -473,8 +496,8 @@ static void test_step_pilot(void **state)
     text = pilot_scene("raymarch", 2.0 * ch.step);
     render_scene *coarse = build_scene_or_fail(text, NULL);
     free(text);
-    double chosen = centre_rel_mse(rs, fine, 32, 32, NULL),
-           twice = centre_rel_mse(coarse, fine, 32, 32, NULL);
+    double chosen = centre_rel_mse(rs, fine, 32, 32, 1, NULL),
+           twice = centre_rel_mse(coarse, fine, 32, 32, 1, NULL);
     print_message("whole image against step %g: chosen %.3g, twice the step %.3g (share %.3g)\n",
                   fine_step, chosen, twice, STEP_PILOT_SHARE * E);
     assert_true(chosen <= STEP_PILOT_SHARE * E);
@@ -483,54 +506,14 @@ static void test_step_pilot(void **state)
     render_scene_destroy(fine);
     render_scene_destroy(coarse);
 
-    /* From a fine step and a loose target it goes coarser, renders nothing
-     * finer than the scene's step, and stays within the share. */
-    const double loose = 1e-2;
-    text = pilot_scene("raymarch", 0.25);
-    rs = build_scene_or_fail(text, NULL);
-    free(text);
-    step_pilot_choose(rs, loose, &ch);
-    print_message("pilot from step 0.25 for E = %g: step %g, %d renders\n", loose, ch.step,
-                  ch.renders);
-    assert_true(ch.applies && ch.step > 0.25);
-    text = pilot_scene("raymarch", ch.step / 16.0);
-    fine = build_scene_or_fail(text, NULL);
-    free(text);
-    chosen = centre_rel_mse(rs, fine, 32, 32, NULL);
-    print_message("whole image against step %g: chosen %.3g (share %.3g)\n", ch.step / 16.0,
-                  chosen, STEP_PILOT_SHARE * loose);
-    assert_true(chosen <= STEP_PILOT_SHARE * loose);
-    render_scene_destroy(rs);
-    render_scene_destroy(fine);
-
+    /* From a fine step and a loose target it goes coarser (renders nothing
+     * finer than the scene's step) and stays within the share. */
+    chosen = pilot_bias("raymarch", 0.25, 1e-2, 1, &ch);
+    assert_true(ch.step > 0.25 && chosen <= STEP_PILOT_SHARE * 1e-2);
     /* Jittered marching: its noise is told from its bias (8 paired samples
-     * per pilot pixel); the chosen step's bias, from 64 samples per pixel
-     * against a raymarch 16 times finer, is within the share. */
-    text = pilot_scene("jittered", 8.0);
-    rs = build_scene_or_fail(text, NULL);
-    free(text);
-    step_pilot_choose(rs, E, &ch);
-    print_message("pilot, jittered: step %g, estimated bias %.3g, %d renders\n", ch.step, ch.bias,
-                  ch.renders);
-    assert_true(ch.applies && ch.step < 8.0);
-    text = pilot_scene("raymarch", ch.step / 16.0);
-    fine = build_scene_or_fail(text, NULL);
-    free(text);
-    double sum = 0.0;
-    for (int y = 0; y < 32; ++y)
-        for (int x = 0; x < 32; ++x) {
-            rgb a = eval_pixel(rs, x + 0.5, y + 0.5, 64).L, b = eval_pixel(fine, x + 0.5, y + 0.5, 1).L;
-            for (int c = 0; c < 3; ++c) {
-                double d = rgb_ch(a, c) - rgb_ch(b, c), r = rgb_ch(b, c) + 0.01;
-                sum += d * d / (r * r);
-            }
-        }
-    chosen = sum / (3.0 * 32 * 32);
-    print_message("jittered at step %g, 64 spp, against raymarch at step %g: %.3g (share %.3g)\n",
-                  ch.step, ch.step / 16.0, chosen, STEP_PILOT_SHARE * E);
-    assert_true(chosen <= STEP_PILOT_SHARE * E);
-    render_scene_destroy(rs);
-    render_scene_destroy(fine);
+     * per pilot pixel); measured with 64 samples per pixel. */
+    chosen = pilot_bias("jittered", 8.0, E, 64, &ch);
+    assert_true(ch.step < 8.0 && chosen <= STEP_PILOT_SHARE * E);
 
     text = pilot_scene("residual", 8.0);
     rs = build_scene_or_fail(text, NULL);

@@ -95,7 +95,7 @@ static void test_converges_to_shadow_rays(void **state)
         text = sphere_scene(spacings[k]);
         render_scene *rs = build_scene_or_fail(text, NULL);
         free(text);
-        double e = centre_rel_mse(rs, exact, 32, 32, &mean);
+        double e = centre_rel_mse(rs, exact, 32, 32, 1, &mean);
         print_message("spacing %g voxels: relMSE %.3g against shadow rays (image mean %.4g)\n",
                       spacings[k], e, mean);
         assert_true(e < prev);
