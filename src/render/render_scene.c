@@ -256,19 +256,24 @@ static hz_status read_options(param_list *pl, const render_options *opt, uint64_
 }
 
 /* Why the shadow cache (integrator/shadow_cache.h) could not apply to the
- * scene with integrator inputs `in`: NULL when it can (a static scene, a grid
- * medium that rays enter, a distant light). */
+ * scene with integrator inputs `in`, as the end of a sentence: NULL when it
+ * can (a static scene, a grid medium that rays enter, a distant light). */
 static const char *shadow_cache_obstacle(const render_scene *rs, const integrator_inputs *in)
 {
     render_motion motion = render_scene_motion(rs);
     if (motion.surfaces || motion.media > 0)
-        return motion.media > 0 ? "media move" : "surfaces move";
+        return motion.media > 0 ? "tabulates shadows once, for a static scene: here media move"
+                                : "tabulates shadows once, for a static scene: here surfaces move";
     bool grid = false, distant = false;
     for (size_t i = 0; i < in->medium_count; ++i)
         grid |= in->media[i].kind == MEDIUM_GRID;
     for (size_t i = 0; i < in->light_count; ++i)
         distant |= in->lights[i].kind == LIGHT_DISTANT;
-    return !grid ? "no grid medium that rays enter" : !distant ? "no distant light" : NULL;
+    return !grid      ? "caches distant lights' shadows in grid media: this scene has no grid "
+                        "medium that rays enter, so it would change nothing"
+           : !distant ? "caches distant lights' shadows in grid media: this scene has no distant "
+                        "light, so it would change nothing"
+                      : NULL;
 }
 
 /* The shadow cache replaces shadow rays of distant lights in grid media:
@@ -277,17 +282,9 @@ static hz_status check_shadow_cache(const render_scene *rs, scene_desc *sd,
                                     const integrator_inputs *in, hz_error *err)
 {
     const char *why = shadow_cache_obstacle(rs, in);
-    if (!why)
-        return HZ_OK;
-    file_loc at = params_loc(&sd->integrator.params, "shadowcache");
-    if (strstr(why, "move"))
-        return hz_fail_at(err, at,
-                          "\"shadowcache\" tabulates shadows once, for a static scene: here %s",
-                          why);
-    return hz_fail_at(err, at,
-                      "\"shadowcache\" caches distant lights' shadows in grid media: this scene "
-                      "has %s, so it would change nothing",
-                      why);
+    return why ? hz_fail_at(err, params_loc(&sd->integrator.params, "shadowcache"),
+                            "\"shadowcache\" %s", why)
+               : HZ_OK;
 }
 
 /* Builds what it can; see collect(). */
