@@ -39,6 +39,18 @@ static char *render_file(const char *name, const char *integrator, const char *a
     return exr;
 }
 
+/* The scene with Integrator line `integrator` over the medium scene body is
+ * refused with a message containing `what`. */
+static void expect_integrator_refused(const char *integrator, const char *what)
+{
+    char msg[1024];
+    char *text = sfmt("%s%s\n%s", camera_text, integrator, scene_body);
+    build_scene_expect_error(text, msg, sizeof msg);
+    if (!strstr(msg, what))
+        fail_msg("expected \"%s\" in: %s", what, msg);
+    free(text);
+}
+
 /* Same scene and seed: the same bytes on one thread and on two. */
 static void test_threads_byte_identical(void **state)
 {
@@ -80,11 +92,8 @@ static void test_path_is_volpath_without_media(void **state)
     render_scene_destroy(b);
     free(pa);
     free(vp);
-    char msg[1024];
-    char *with_media = sfmt("%sIntegrator \"path\"\n%s", camera_text, scene_body);
-    build_scene_expect_error(with_media, msg, sizeof msg);
-    assert_non_null(strstr(msg, "test.pbrt:5:1: Integrator \"path\" with media"));
-    free(with_media);
+    expect_integrator_refused("Integrator \"path\"",
+                              "test.pbrt:5:1: Integrator \"path\" with media");
 }
 
 /* pbrt-v4's bdpt, mlt, sppm and its other path tracers render with volpath
@@ -116,16 +125,10 @@ static void test_other_integrators_are_volpath(void **state)
     assert_false(exr_pixels_equal(other_depth, vp));
     free(other_depth);
     free(vp);
-    char msg[1024];
-    char *sppm = sfmt("%sIntegrator \"sppm\"\n%s", camera_text, scene_body);
-    build_scene_expect_error(sppm, msg, sizeof msg);
-    assert_non_null(strstr(msg, "test.pbrt:5:1: Integrator \"sppm\" with media"));
-    free(sppm);
-    char *view = sfmt("%sIntegrator \"bdpt\" \"bool visualizestrategies\" true\n%s", camera_text,
-                      scene_body);
-    build_scene_expect_error(view, msg, sizeof msg);
-    assert_non_null(strstr(msg, "\"visualizestrategies\" shows BDPT's strategies"));
-    free(view);
+    expect_integrator_refused("Integrator \"sppm\"",
+                              "test.pbrt:5:1: Integrator \"sppm\" with media");
+    expect_integrator_refused("Integrator \"bdpt\" \"bool visualizestrategies\" true",
+                              "\"visualizestrategies\" shows BDPT's strategies");
 }
 
 /* A scene naming no Integrator renders exactly as "singlescatter". */
