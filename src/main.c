@@ -448,7 +448,7 @@ static int run_render(const cli *c, distributed *dist)
     step_choice steps = {0};
     ph.render = hz_clock_seconds();
     if (adaptive) { /* the marching step's bias, before the passes measure the noise */
-        step_pilot_choose(rs, c->target_error, &steps);
+        step_pilot_choose(rs, c->target_error, c->threads, &steps);
         if (steps.applies && rank0 && !c->quiet) {
             char cache[64] = "";
             if (steps.shadow_cache > 0.0)

@@ -8,7 +8,6 @@
 
 #include <errno.h>
 #include <limits.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -18,6 +17,8 @@
 #include <unistd.h>
 
 #include <openexr.h>
+
+#include "core/parallel.h"
 
 /* ---- half floats ---------------------------------------------------- */
 
@@ -329,19 +330,12 @@ static exr_result_t exr_write_chunks(exr_context_t ctx, int part, const exr_imag
         rv = exr_write_scanline_chunk_info(ctx, part, img->data_y0 + k * lines,
                                            &job.chunks[k].info);
     if (!rv) {
-        int helpers = img->threads > 1 ? img->threads - 1 : 0;
-        if (helpers > EXR_MAX_WRITE_THREADS - 1)
-            helpers = EXR_MAX_WRITE_THREADS - 1;
-        if (helpers > count - 1)
-            helpers = count - 1;
-        pthread_t tid[EXR_MAX_WRITE_THREADS];
-        int started = 0;
-        while (started < helpers &&
-               pthread_create(&tid[started], NULL, exr_chunk_worker, &job) == 0)
-            started++;
-        exr_chunk_worker(&job); /* no helper started: all of it here */
-        for (int t = 0; t < started; t++)
-            pthread_join(tid[t], NULL);
+        int threads = img->threads < 1 ? 1 : img->threads;
+        if (threads > EXR_MAX_WRITE_THREADS)
+            threads = EXR_MAX_WRITE_THREADS;
+        if (threads > count)
+            threads = count;
+        hz_parallel_run(threads, exr_chunk_worker, &job); /* failures in job.failure */
         rv = atomic_load(&job.failure);
     }
     for (int k = 0; k < count && !rv; k++)

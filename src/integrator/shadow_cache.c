@@ -2,12 +2,11 @@
 #include "integrator/shadow_cache.h"
 
 #include <math.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
+#include "core/parallel.h"
 #include "core/ray.h"
 
 /* A light-space grid: node (i, j, k) lies at origin + h (i ex + j ey + k ez),
@@ -266,22 +265,7 @@ static hz_status cache_create(const integrator_inputs *in, int mi, size_t li, do
     }
     build_job job = {.in = in, .c = c, .medium = mi};
     atomic_init(&job.next_column, 0);
-    if (threads < 1) {
-        long cores = sysconf(_SC_NPROCESSORS_ONLN);
-        threads = cores < 1 ? 1 : cores > 64 ? 64 : (int)cores;
-    }
-    if (threads > 64)
-        threads = 64;
-    pthread_t tid[64];
-    int started = 0;
-    while (started < threads - 1 && pthread_create(&tid[started], NULL, build_worker, &job) == 0)
-        started++;
-    bool failed = build_worker(&job) != NULL;
-    for (int t = 0; t < started; ++t) {
-        void *rv = NULL;
-        pthread_join(tid[t], &rv);
-        failed |= rv != NULL;
-    }
+    bool failed = !hz_parallel_run(threads, build_worker, &job);
     if (failed) {
         cache_destroy(c);
         return hz_fail(err, "shadow cache of medium \"%s\": out of memory", m->name ? m->name : "");

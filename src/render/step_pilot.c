@@ -1,8 +1,10 @@
 #include "render/step_pilot.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 
+#include "core/parallel.h"
 #include "sampler/sampler.h"
 
 typedef struct {
@@ -22,37 +24,64 @@ static pilot_grid pilot_grid_make(const film_params *fp)
     return g;
 }
 
+typedef struct {
+    render_scene *rs;
+    const pilot_grid *g;
+    int k;
+    rgb *out;
+    atomic_int next; /* the next pixel of the grid to take */
+} pilot_job;
+
+enum { PILOT_PIXELS_PER_TAKE = 16 };
+
+static void *pilot_worker(void *arg)
+{
+    pilot_job *job = arg;
+    const pilot_grid *g = job->g;
+    const camera *cam = render_scene_camera(job->rs);
+    const sampler *smp = render_scene_sampler(job->rs);
+    integrator_counters counters = {0};
+    int n = g->nx * g->ny;
+    for (;;) {
+        int p0 = atomic_fetch_add(&job->next, PILOT_PIXELS_PER_TAKE);
+        if (p0 >= n)
+            break;
+        int p1 = p0 + PILOT_PIXELS_PER_TAKE < n ? p0 + PILOT_PIXELS_PER_TAKE : n;
+        for (int p = p0; p < p1; ++p) {
+            int x = g->x0 + (p % g->nx) * g->stride, y = g->y0 + (p / g->nx) * g->stride;
+            camera_sample cs = {v2(x + 0.5, y + 0.5), v2(0.5, 0.5), 0.5, 1.0};
+            ray_differential rd;
+            bool ray = camera_generate_ray_differential(cam, cs, &rd);
+            for (int s = 0; s < job->k; ++s) {
+                rgb L = rgb_grey(0.0);
+                if (ray) {
+                    sampler_state st;
+                    sampler_start(smp, x, y, s, &st);
+                    double depth;
+                    L = render_scene_li(job->rs, &rd, &st, &depth, &counters);
+                }
+                job->out[(size_t)p * (size_t)job->k + (size_t)s] = L;
+            }
+        }
+    }
+    return NULL;
+}
+
 /* The pilot image at `step`: the scene's estimators at each pixel centre,
- * samples 0 .. k - 1 of it (out[pixel * k + sample]). */
+ * samples 0 .. k - 1 of it (out[pixel * k + sample]), on `threads` threads
+ * (each value depends only on its pixel and sample). */
 static void pilot_render(render_scene *rs, const render_marching *base, double step,
                          double shadow_ratio, double cache_ratio, const pilot_grid *g, int k,
-                         rgb *out)
+                         int threads, rgb *out)
 {
     render_marching m = *base;
     m.step = step;
     m.shadow_step = step * shadow_ratio;
     m.shadow_cache = step * cache_ratio;
     render_scene_set_marching(rs, &m);
-    const camera *cam = render_scene_camera(rs);
-    const sampler *smp = render_scene_sampler(rs);
-    integrator_counters counters = {0};
-    for (int j = 0; j < g->ny; ++j)
-        for (int i = 0; i < g->nx; ++i) {
-            int x = g->x0 + i * g->stride, y = g->y0 + j * g->stride;
-            camera_sample cs = {v2(x + 0.5, y + 0.5), v2(0.5, 0.5), 0.5, 1.0};
-            ray_differential rd;
-            bool ray = camera_generate_ray_differential(cam, cs, &rd);
-            for (int s = 0; s < k; ++s) {
-                rgb L = rgb_grey(0.0);
-                if (ray) {
-                    sampler_state st;
-                    sampler_start(smp, x, y, s, &st);
-                    double depth;
-                    L = render_scene_li(rs, &rd, &st, &depth, &counters);
-                }
-                out[(size_t)(j * g->nx + i) * (size_t)k + (size_t)s] = L;
-            }
-        }
+    pilot_job job = {.rs = rs, .g = g, .k = k, .out = out};
+    atomic_init(&job.next, 0);
+    hz_parallel_run(threads, pilot_worker, &job);
 }
 
 /* haze diff's relMSE of the expected image a against b, mean of (a -
@@ -85,7 +114,7 @@ static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k)
     return n > 0 ? sum / (3.0 * n) : 0.0;
 }
 
-void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
+void step_pilot_choose(render_scene *rs, double target_error, int threads, step_choice *out)
 {
     *out = (step_choice){0};
     render_marching base;
@@ -118,11 +147,11 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
      * (img[0]: at h, img[2]: at 2h), without a render finer than h. */
     int renders = 0;
     double bias = INFINITY;
-    pilot_render(rs, &base, h, ratio, cache_ratio, &g, k, img[0]);
+    pilot_render(rs, &base, h, ratio, cache_ratio, &g, k, threads, img[0]);
     ++renders;
     bool coarser = false;
     while (2.0 * h <= STEP_PILOT_MAX_STEP) {
-        pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, k, img[2]);
+        pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, k, threads, img[2]);
         ++renders;
         double coarse = 2.0 * bias_rel_mse(img[2], img[0], n, k);
         if (!(coarse <= goal))
@@ -137,7 +166,7 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
     if (!coarser) {
         /* h itself: finer until its bias (against h / 2 in img[1]) meets
          * the goal. */
-        pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, k, img[1]);
+        pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, k, threads, img[1]);
         ++renders;
         bias = 2.0 * bias_rel_mse(img[0], img[1], n, k);
         while (!(bias <= goal) && h / 2.0 >= STEP_PILOT_MIN_STEP) {
@@ -145,7 +174,7 @@ void step_pilot_choose(render_scene *rs, double target_error, step_choice *out)
             rgb *t = img[0];
             img[0] = img[1];
             img[1] = t;
-            pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, k, img[1]);
+            pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, k, threads, img[1]);
             ++renders;
             bias = 2.0 * bias_rel_mse(img[0], img[1], n, k);
         }

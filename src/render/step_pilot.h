@@ -42,9 +42,10 @@ typedef struct {
     int renders;    /* pilot renders made */
 } step_choice;
 
-/* Chooses the step for `target_error` (> 0) and sets it on `rs`; nothing to
- * do (applies false) when render_scene_marching is false. The same choice
- * for any thread count and on every rank. */
-void step_pilot_choose(render_scene *rs, double target_error, step_choice *out);
+/* Chooses the step for `target_error` (> 0) and sets it on `rs`, rendering
+ * the pilot on `threads` threads (<= 0: every core); nothing to do (applies
+ * false) when render_scene_marching is false. The same choice for any thread
+ * count and on every rank. */
+void step_pilot_choose(render_scene *rs, double target_error, int threads, step_choice *out);
 
 #endif

@@ -450,7 +450,7 @@ static double pilot_bias(const char *estimator, double step, double E, int spp, 
     char *text = pilot_scene(estimator, step);
     render_scene *rs = build_scene_or_fail(text, NULL);
     free(text);
-    step_pilot_choose(rs, E, ch);
+    step_pilot_choose(rs, E, 2, ch);
     assert_true(ch->applies);
     text = pilot_scene("raymarch", ch->step / 16.0);
     render_scene *fine = build_scene_or_fail(text, NULL);
@@ -478,7 +478,7 @@ static void test_step_pilot(void **state)
     render_scene *rs = build_scene_or_fail(text, NULL);
     free(text);
     step_choice ch;
-    step_pilot_choose(rs, E, &ch);
+    step_pilot_choose(rs, E, 2, &ch);
     print_message("pilot: step %g (shadow %g, cache %g), bias %.3g, %d pixels, %d renders\n",
                   ch.step, ch.shadow_step, ch.shadow_cache, ch.bias, ch.pixels, ch.renders);
     assert_true(ch.applies);
@@ -514,11 +514,19 @@ static void test_step_pilot(void **state)
      * per pilot pixel); measured with 64 samples per pixel. */
     chosen = pilot_bias("jittered", 8.0, E, 64, &ch);
     assert_true(ch.step < 8.0 && chosen <= STEP_PILOT_SHARE * E);
+    /* The same choice and estimate on one thread as on two. */
+    text = pilot_scene("jittered", 8.0);
+    rs = build_scene_or_fail(text, NULL);
+    free(text);
+    step_choice one;
+    step_pilot_choose(rs, E, 1, &one);
+    render_scene_destroy(rs);
+    assert_true(one.step == ch.step && one.bias == ch.bias && one.renders == ch.renders);
 
     text = pilot_scene("residual", 8.0);
     rs = build_scene_or_fail(text, NULL);
     free(text);
-    step_pilot_choose(rs, E, &ch);
+    step_pilot_choose(rs, E, 2, &ch);
     assert_false(ch.applies);
     render_scene_destroy(rs);
 }
