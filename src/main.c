@@ -93,9 +93,10 @@ static const char usage_text[] =
     "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
     "                          count) and write the complete passes done when the time\n"
     "                          since start runs out (docs/performance.md)\n"
-    "  --target-error E        adaptive sampling: each pixel takes samples (4 at least, at\n"
-    "                          most --spp, default 16384) until its estimated relMSE is E;\n"
-    "                          marching estimators get a step picked for E first\n";
+    "  --target-error E        adaptive sampling: pixels take samples (0.2 / sqrt(E) at\n"
+    "                          least, at most --spp, default 16384) until the image's\n"
+    "                          estimated relMSE is E; marching estimators get a step\n"
+    "                          picked for E first, whose bias takes part of E\n";
 
 typedef struct {
     const char *scene;
@@ -443,7 +444,7 @@ static int run_render(const cli *c, distributed *dist)
                             .timing = c->stats != 0};
     render_stats stats;
     double deadline = c->time_limit > 0 ? c->start_seconds + c->time_limit : 0.0;
-    progressive_goal goal = {deadline, c->target_error};
+    progressive_goal goal = {deadline, c->target_error, 0.0};
     bool progressive = deadline > 0 || adaptive;
     step_choice steps = {0};
     ph.render = hz_clock_seconds();
@@ -459,6 +460,8 @@ static int run_render(const cli *c, distributed *dist)
                     c->target_error, steps.step, steps.shadow_step, cache, steps.bias,
                     steps.pixels, steps.renders);
         }
+        if (steps.applies)
+            goal.bias = steps.bias;
     }
     if (distributed_render(dist, rs, &opt, progressive ? &goal : NULL, &stats, &err) != HZ_OK) {
         if (rank0)

@@ -317,7 +317,7 @@ static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_
     po.active = active;
     hz_status st = HZ_OK;
     while (done < spp) {
-        int end = active ? progressive_error_next_end(&pe, done, spp, goal->target_error)
+        int end = active ? progressive_error_next_end(&pe, done, spp, goal)
                          : progressive_pass_end(done, spp);
         double work = (double)(end - done) * (double)left;
         /* {every rank fits, every rank is done}: go on when all fit and not all are done */
@@ -348,7 +348,7 @@ static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_
              * every tile then reach every rank, which decides for its own. */
             progressive_error_measure(&pe, f, snap, active, po.sample_begin, done, ratio);
             reduce_all_chunked(pe.tile_sums, 3 * (size_t)pe.tile_count);
-            left = progressive_error_select(&pe, f, goal->target_error, active, NULL);
+            left = progressive_error_select(&pe, f, goal, active, NULL);
         }
         if (o->progress)
             fprintf(o->progress, "pass %d: %d of %d spp\n", mine->passes, done, spp);

@@ -75,7 +75,7 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
     long left = (long)npix;
     hz_status st = HZ_OK;
     while (done < spp && left > 0) {
-        int end = active ? progressive_error_next_end(&pe, done, spp, goal->target_error)
+        int end = active ? progressive_error_next_end(&pe, done, spp, goal)
                          : progressive_pass_end(done, spp);
         double start = hz_clock_seconds();
         /* The next pass's work, in samples, against the last one's. */
@@ -121,7 +121,7 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
         double estimate = 0.0;
         if (active && done >= PROGRESSIVE_MIN_SPP) {
             progressive_error_measure(&pe, f, snap, active, o.sample_begin, done, ratio);
-            left = progressive_error_select(&pe, f, goal->target_error, active, &estimate);
+            left = progressive_error_select(&pe, f, goal, active, &estimate);
         }
         if (opt->progress) {
             char el[32], px[96] = "";

@@ -31,15 +31,26 @@ typedef struct {
      * each pixel's variance (progressive_error). Needs a film that keeps
      * variance and sample counts. */
     double target_error;
+    /* The estimated relMSE of the marching bias (step_pilot_choose), spent
+     * before the noise: the image stops when its noise estimate reaches
+     * progressive_noise_target. 0: none. */
+    double bias;
 } progressive_goal;
 
+/* The noise's share of a target error: target_error less the bias, at least
+ * half of target_error. */
+double progressive_noise_target(const progressive_goal *goal);
+
 /* Samples before the first estimate (a variance needs two), and before the
- * image's estimate is trusted to stop the render. The tuning of the
- * estimates, measured on the benchmark scenes (docs/performance.md): the
- * image stops at SAFETY * E; every pixel takes at least MIN_SCALE / sqrt(E)
- * samples; LOWER_BOUND_K: see progressive_error. */
+ * image's estimate is trusted at face value. The tuning of the estimates,
+ * measured on the benchmark scenes (docs/performance.md): the image stops at
+ * SAFETY * E, before TRUST_SPP samples at EARLY_SAFETY * E (from 1 + 1 and
+ * 2 + 2 samples the halves estimate ran up to 1.4x low on smoke.pbrt);
+ * every pixel takes at least MIN_SCALE / sqrt(E) samples; LOWER_BOUND_K: see
+ * progressive_error. */
 enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8 };
 #define PROGRESSIVE_SAFETY 1.0
+#define PROGRESSIVE_EARLY_SAFETY 0.5
 #define PROGRESSIVE_MIN_SCALE 0.2
 #define PROGRESSIVE_LOWER_BOUND_K 0.5
 
@@ -83,18 +94,21 @@ void progressive_error_free(progressive_error *pe);
 void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
                                const unsigned char *active, int n0, int n,
                                double imaging_ratio);
-/* Clears active[i] of each pixel that has its share (above), or of all when
- * the image's estimate is at most `target`; the tile sums may first have been
- * summed across ranks. Returns the pixels left active; *estimate (may be
- * NULL): the image's estimated relMSE. */
-long progressive_error_select(const progressive_error *pe, const film *f, double target,
-                              unsigned char *active, double *estimate);
+/* Clears active[i] of each pixel that has its share (above; its least count
+ * from goal->target_error), or of all when the image's estimate is at most
+ * progressive_noise_target(goal); the tile sums may first have been summed
+ * across ranks. Returns the pixels left active; *estimate (may be NULL): the
+ * image's estimated relMSE. */
+long progressive_error_select(const progressive_error *pe, const film *f,
+                              const progressive_goal *goal, unsigned char *active,
+                              double *estimate);
 
 /* The end of the next pass of a render with a target error: once the
  * estimate is trusted, the count at which it (falling as 1/n) reaches the
- * target, at least a quarter more and at most twice `done`; before that,
- * progressive_pass_end. */
-int progressive_error_next_end(const progressive_error *pe, int done, int spp, double target);
+ * noise target, at least a quarter more and at most twice `done`; before
+ * that, progressive_pass_end. */
+int progressive_error_next_end(const progressive_error *pe, int done, int spp,
+                               const progressive_goal *goal);
 
 /* renderer_run in passes until the sampler's count or the goal. The first
  * pass always runs to its end unless *opt->cancel is set; a later pass starts

@@ -109,9 +109,17 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
     }
 }
 
-long progressive_error_select(const progressive_error *pe, const film *f, double target,
-                              unsigned char *active, double *estimate)
+double progressive_noise_target(const progressive_goal *goal)
 {
+    double left = goal->target_error - goal->bias, least = 0.5 * goal->target_error;
+    return left > least ? left : least; /* a NaN bias: the least */
+}
+
+long progressive_error_select(const progressive_error *pe, const film *f,
+                              const progressive_goal *goal, unsigned char *active,
+                              double *estimate)
+{
+    double target = progressive_noise_target(goal);
     double e_sum = 0.0, root_sum = 0.0, pixels = 0.0;
     for (int t = 0; t < pe->tile_count; ++t) { /* in tile order: the same sum on every rank */
         const double *sums = pe->tile_sums + 3 * (size_t)t;
@@ -124,13 +132,15 @@ long progressive_error_select(const progressive_error *pe, const film *f, double
     if (estimate)
         *estimate = image;
     size_t n = (size_t)pe->w * pe->h;
-    if (pe->samples >= PROGRESSIVE_TRUST_SPP && !(image > PROGRESSIVE_SAFETY * target)) {
+    double stop = pe->samples >= PROGRESSIVE_TRUST_SPP ? PROGRESSIVE_SAFETY * target
+                                                       : PROGRESSIVE_EARLY_SAFETY * target;
+    if (!(image > stop)) {
         /* reached (a NaN estimate goes on) */
         memset(active, 0, n);
         return 0;
     }
     double scale = root_sum / pixels / target; /* n*_i = sqrt(r_i) * scale */
-    double min_samples = ceil(PROGRESSIVE_MIN_SCALE / sqrt(target));
+    double min_samples = ceil(PROGRESSIVE_MIN_SCALE / sqrt(goal->target_error));
     long left = 0;
     for (int y = 0; y < pe->h; ++y)
         for (int x = 0; x < pe->w; ++x) {
@@ -150,8 +160,10 @@ long progressive_error_select(const progressive_error *pe, const film *f, double
     return left;
 }
 
-int progressive_error_next_end(const progressive_error *pe, int done, int spp, double target)
+int progressive_error_next_end(const progressive_error *pe, int done, int spp,
+                               const progressive_goal *goal)
 {
+    double target = progressive_noise_target(goal);
     if (pe->samples < PROGRESSIVE_TRUST_SPP || !(pe->estimate > 0.0) || done <= 0)
         return progressive_pass_end(done, spp);
     /* The count where the estimate, falling as 1/n, reaches the target. */

@@ -135,7 +135,7 @@ static void test_all_passes_bit_identical(void **state)
         render_stats st;
         hz_error err = {0};
         assert_int_equal(
-            renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() + 1e6, 0}, &st, &err), HZ_OK);
+            renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() + 1e6, 0, 0}, &st, &err), HZ_OK);
         assert_int_equal(st.spp, 12);
         assert_int_equal(st.passes, 5);
         assert_false(st.interrupted);
@@ -161,7 +161,7 @@ static void test_first_pass_always_completes(void **state)
     renderer_options opt = {.threads = 2};
     render_stats st;
     hz_error err = {0};
-    assert_int_equal(renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() - 1.0, 0}, &st, &err),
+    assert_int_equal(renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() - 1.0, 0, 0}, &st, &err),
                      HZ_OK);
     assert_int_equal(st.spp, 1);
     assert_int_equal(st.passes, 1);
@@ -210,7 +210,7 @@ static void test_cut_pass_undone(void **state)
                             .cancel = &c.cancel};
     render_stats st;
     hz_error err = {0};
-    assert_int_equal(renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() + 1e6, 0}, &st, &err),
+    assert_int_equal(renderer_run_progressive(rs, &opt, &(progressive_goal){hz_clock_seconds() + 1e6, 0, 0}, &st, &err),
                      HZ_OK);
     assert_int_equal(st.tile_count, c.tile_count);
     assert_int_equal(st.spp, 2);
@@ -310,7 +310,7 @@ static void test_error_estimate(void **state)
 
     /* The image's (halves) estimate. */
     double estimate = 0.0;
-    long on = progressive_error_select(&pe, f, 1e-9, active, &estimate);
+    long on = progressive_error_select(&pe, f, &(progressive_goal){0.0, 1e-9, 0.0}, active, &estimate);
     if (verbose_on())
         print_message("halves %.4g (%.4g)\n", estimate, want);
     /* unbiased over the value; over its lower bound (the right half's mean
@@ -322,7 +322,7 @@ static void test_error_estimate(void **state)
      * 0.384 / E; at E = 0.012, 8 and 32: the left half (16 samples) stops, the
      * right goes on (the estimate, 0.02, is above 0.7 E). */
     memset(active, 1, sizeof active);
-    on = progressive_error_select(&pe, f, 0.012, active, NULL);
+    on = progressive_error_select(&pe, f, &(progressive_goal){0.0, 0.012, 0.0}, active, NULL);
     int left_on = 0, right_on = 0;
     for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 64; ++x)
@@ -336,10 +336,17 @@ static void test_error_estimate(void **state)
 
     /* A target the estimate meets: every pixel stops. */
     memset(active, 1, sizeof active);
-    assert_int_equal(progressive_error_select(&pe, f, want / 0.5, active, NULL), 0);
-    assert_int_equal(progressive_error_next_end(&pe, 16, 1024, want / 0.5), 20);
+    progressive_goal met = {0.0, 1.8 * want, 0.0};
+    assert_int_equal(progressive_error_select(&pe, f, &met, active, NULL), 0);
+    assert_int_equal(progressive_error_next_end(&pe, 16, 1024, &met), 20);
+    /* The same target after a marching bias of half of it: the noise's share,
+     * 0.9 want, is below the estimate, and pixels go on. */
+    memset(active, 1, sizeof active);
+    progressive_goal spent = {0.0, 1.8 * want, 0.9 * want};
+    assert_true(progressive_noise_target(&spent) == 0.9 * want);
+    assert_true(progressive_error_select(&pe, f, &spent, active, NULL) > 0);
     /* A target 10x below: the next pass doubles (1/n: 14x the samples). */
-    assert_int_equal(progressive_error_next_end(&pe, 16, 1024, want / 10), 32);
+    assert_int_equal(progressive_error_next_end(&pe, 16, 1024, &(progressive_goal){0.0, want / 10, 0.0}), 32);
     progressive_error_free(&pe);
     film_snapshot_destroy(before);
     film_destroy(f);
@@ -353,7 +360,7 @@ static void render_adaptive(const char *text, int threads, double target, film_s
     renderer_options opt = {.threads = threads};
     hz_error err = {0};
     assert_int_equal(
-        renderer_run_progressive(rs, &opt, &(progressive_goal){0.0, target}, st, &err), HZ_OK);
+        renderer_run_progressive(rs, &opt, &(progressive_goal){0.0, target, 0.0}, st, &err), HZ_OK);
     *out = film_snapshot_create(render_scene_film(rs), &err);
     assert_non_null(*out);
     *keep = rs;
