@@ -143,25 +143,44 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads, step_
             free(img[q]);
         return;
     }
-    /* Coarser first: twice the step's bias is estimated from it and h
-     * (img[0]: at h, img[2]: at 2h), without a render finer than h. */
+    /* Coarser first, and cheapest first: the bias of 2x is estimated from x
+     * and 2x (img[0]: at x, img[2]: at 2x), starting at x = 2h, so a scene
+     * whose step goes coarser never renders its own; only when twice its step
+     * fails is h rendered (img[1]), for the bias of 2h. Nothing finer than h
+     * is rendered unless h fails. */
     int renders = 0;
-    double bias = INFINITY;
-    pilot_render(rs, &base, h, ratio, cache_ratio, &g, k, threads, img[0]);
+    double bias = INFINITY, x = 4.0 * h <= STEP_PILOT_MAX_STEP ? 2.0 * h : h;
+    pilot_render(rs, &base, x, ratio, cache_ratio, &g, k, threads, img[0]);
     ++renders;
     bool coarser = false;
-    while (2.0 * h <= STEP_PILOT_MAX_STEP) {
-        pilot_render(rs, &base, 2.0 * h, ratio, cache_ratio, &g, k, threads, img[2]);
+    while (2.0 * x <= STEP_PILOT_MAX_STEP) {
+        pilot_render(rs, &base, 2.0 * x, ratio, cache_ratio, &g, k, threads, img[2]);
         ++renders;
         double coarse = 2.0 * bias_rel_mse(img[2], img[0], n, k);
         if (!(coarse <= goal))
             break;
         coarser = true;
-        h *= 2.0;
+        x *= 2.0;
         bias = coarse;
         rgb *t = img[0];
         img[0] = img[2];
         img[2] = t;
+    }
+    if (coarser) {
+        h = x;
+    } else if (x > h) {
+        pilot_render(rs, &base, h, ratio, cache_ratio, &g, k, threads, img[1]);
+        ++renders;
+        double coarse = 2.0 * bias_rel_mse(img[0], img[1], n, k);
+        if (coarse <= goal) {
+            coarser = true;
+            h = x;
+            bias = coarse;
+        } else { /* img[0]: at h */
+            rgb *t = img[0];
+            img[0] = img[1];
+            img[1] = t;
+        }
     }
     if (!coarser) {
         /* h itself: finer until its bias (against h / 2 in img[1]) meets

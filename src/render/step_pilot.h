@@ -9,8 +9,9 @@
  * twice their relMSE (haze diff's) estimates the bias of h
  * (midpoint marching: halving the step at least halves the error). From the
  * scene's step the step doubles while twice it still has a bias of at most
- * STEP_PILOT_SHARE of the target (renders at h and 2h: nothing finer than the
- * scene's step is rendered then), else halves until it has; the shadow step
+ * STEP_PILOT_SHARE of the target (cheapest first: 4h against 2h before 2h
+ * against h, so a step that goes coarser never renders the scene's own, and
+ * nothing finer is rendered), else halves until it has; the shadow step
  * keeps its ratio to it. The
  * shadow cache's spacing (integrator/shadow_cache.h) does too; where the
  * scene has none but one applies (a static scene, a distant light, a grid
