@@ -346,7 +346,7 @@ static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_
         if (active && done >= PROGRESSIVE_MIN_SPP) {
             /* Each rank measures its tiles (the others' sum to 0); the sums of
              * every tile then reach every rank, which decides for its own. */
-            progressive_error_measure(&pe, f, snap, active, po.sample_begin, done, ratio);
+            progressive_error_measure(&pe, f, snap, active, po.sample_begin, done, ratio, po.threads);
             reduce_all_chunked(pe.tile_sums, 3 * (size_t)pe.tile_count);
             left = progressive_error_select(&pe, f, goal, active, NULL);
         }

@@ -120,7 +120,7 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
         total.passes = passes;
         double estimate = 0.0;
         if (active && done >= PROGRESSIVE_MIN_SPP) {
-            progressive_error_measure(&pe, f, snap, active, o.sample_begin, done, ratio);
+            progressive_error_measure(&pe, f, snap, active, o.sample_begin, done, ratio, opt->threads);
             left = progressive_error_select(&pe, f, goal, active, &estimate);
         }
         if (opt->progress) {

@@ -90,10 +90,10 @@ typedef struct {
 hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error *err);
 void progressive_error_free(progressive_error *pe);
 /* Measures e_i of every pixel and the sums of each tile (tiles without
- * samples sum to exactly 0). */
+ * samples sum to exactly 0), tiles on `threads` threads (<= 0: every core). */
 void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
                                const unsigned char *active, int n0, int n,
-                               double imaging_ratio);
+                               double imaging_ratio, int threads);
 /* Clears active[i] of each pixel that has its share (above; its least count
  * from goal->target_error), or of all when the image's estimate is at most
  * progressive_noise_target(goal); the tile sums may first have been summed

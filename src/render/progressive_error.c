@@ -2,9 +2,11 @@
  * (progressive_error in progressive.h). */
 #include <assert.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel.h"
 #include "render/progressive.h"
 
 enum { T = RENDERER_TILE_SIZE };
@@ -54,59 +56,87 @@ static double relative_error(rgb var, rgb m, rgb var_m)
     return sum / 3.0;
 }
 
-void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
-                               const unsigned char *active, int n0, int n,
-                               double imaging_ratio)
+typedef struct {
+    progressive_error *pe;
+    const film *f;
+    const film_snapshot *before;
+    const unsigned char *active;
+    double half_scale, imaging_ratio;
+    atomic_int next; /* the next tile to measure */
+} measure_job;
+
+/* One tile: its pixels' e_i and halves estimates, and its sums. */
+static void measure_tile(const measure_job *job, int t)
 {
+    progressive_error *pe = job->pe;
+    const film *f = job->f;
+    double ratio = job->imaging_ratio;
     int w = pe->w, h = pe->h;
     double own[T * T];
     rgb means[T * T];
+    int tx = (t % pe->tiles_x) * T, ty = (t / pe->tiles_x) * T;
+    int tw = w - tx < T ? w - tx : T, th = h - ty < T ? h - ty : T;
+    for (int y = 0; y < th; ++y)
+        for (int x = 0; x < tw; ++x)
+            means[y * T + x] = film_get_pixel(f, pe->x0 + tx + x, pe->y0 + ty + y, ratio);
+    for (int y = 0; y < th; ++y)
+        for (int x = 0; x < tw; ++x) {
+            int px = pe->x0 + tx + x, py = pe->y0 + ty + y;
+            rgb m = means[y * T + x], var = film_get_variance(f, px, py, ratio);
+            own[y * T + x] = relative_error(var, m, var);
+            size_t i = (size_t)(ty + y) * w + tx + x;
+            if (job->active[i]) { /* rendered in the last pass: a new halves estimate */
+                rgb d = rgb_sub(m, film_snapshot_pixel(job->before, f, px, py, ratio));
+                pe->halves[i] = relative_error(rgb_mul(d, rgb_scale(d, job->half_scale)), m, var);
+            }
+        }
+    double *sums = pe->tile_sums + 3 * (size_t)t;
+    sums[0] = sums[1] = sums[2] = 0.0;
+    for (int y = 0; y < th; ++y)
+        for (int x = 0; x < tw; ++x) {
+            double sum = 0.0;
+            int k = 0;
+            for (int yy = y - 1; yy <= y + 1; ++yy)
+                for (int xx = x - 1; xx <= x + 1; ++xx)
+                    if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
+                        sum += own[yy * T + xx];
+                        ++k;
+                    }
+            double self = own[y * T + x], e = sum / k > self ? sum / k : self;
+            size_t i = (size_t)(ty + y) * w + tx + x;
+            pe->e[i] = e;
+            long samples = film_get_sample_count(f, pe->x0 + tx + x, pe->y0 + ty + y);
+            if (samples > 0) {
+                sums[0] += pe->halves[i];
+                sums[1] += sqrt(e * (double)samples);
+                sums[2] += 1.0;
+            }
+        }
+}
+
+static void *measure_worker(void *arg)
+{
+    measure_job *job = arg;
+    for (int t; (t = atomic_fetch_add(&job->next, 1)) < job->pe->tile_count;)
+        measure_tile(job, t);
+    return NULL;
+}
+
+void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
+                               const unsigned char *active, int n0, int n,
+                               double imaging_ratio, int threads)
+{
     /* Var of an n-sample mean from the difference D of the means of the
      * first n0 and the last k = n - n0 samples, D^2 n0 k / n^2, where the
      * film shows d = m_n - m_n0 = D k / n: d^2 n0 / k. */
-    double half_scale = (double)n0 / (double)(n - n0);
+    measure_job job = {.pe = pe, .f = f, .before = before, .active = active,
+                       .half_scale = (double)n0 / (double)(n - n0),
+                       .imaging_ratio = imaging_ratio};
+    atomic_init(&job.next, 0);
     pe->samples = n;
-    memset(pe->tile_sums, 0, (size_t)3 * pe->tile_count * sizeof(double));
-    for (int t = 0; t < pe->tile_count; ++t) {
-        int tx = (t % pe->tiles_x) * T, ty = (t / pe->tiles_x) * T;
-        int tw = w - tx < T ? w - tx : T, th = h - ty < T ? h - ty : T;
-        for (int y = 0; y < th; ++y)
-            for (int x = 0; x < tw; ++x)
-                means[y * T + x] = film_get_pixel(f, pe->x0 + tx + x, pe->y0 + ty + y,
-                                                  imaging_ratio);
-        for (int y = 0; y < th; ++y)
-            for (int x = 0; x < tw; ++x) {
-                int px = pe->x0 + tx + x, py = pe->y0 + ty + y;
-                rgb m = means[y * T + x], var = film_get_variance(f, px, py, imaging_ratio);
-                own[y * T + x] = relative_error(var, m, var);
-                size_t i = (size_t)(ty + y) * w + tx + x;
-                if (active[i]) { /* rendered in the last pass: a new halves estimate */
-                    rgb d = rgb_sub(m, film_snapshot_pixel(before, f, px, py, imaging_ratio));
-                    pe->halves[i] = relative_error(rgb_mul(d, rgb_scale(d, half_scale)), m, var);
-                }
-            }
-        for (int y = 0; y < th; ++y)
-            for (int x = 0; x < tw; ++x) {
-                double sum = 0.0;
-                int k = 0;
-                for (int yy = y - 1; yy <= y + 1; ++yy)
-                    for (int xx = x - 1; xx <= x + 1; ++xx)
-                        if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
-                            sum += own[yy * T + xx];
-                            ++k;
-                        }
-                double self = own[y * T + x], e = sum / k > self ? sum / k : self;
-                size_t i = (size_t)(ty + y) * w + tx + x;
-                pe->e[i] = e;
-                long samples = film_get_sample_count(f, pe->x0 + tx + x, pe->y0 + ty + y);
-                if (samples > 0) {
-                    double *sums = pe->tile_sums + 3 * (size_t)t;
-                    sums[0] += pe->halves[i];
-                    sums[1] += sqrt(e * (double)samples);
-                    sums[2] += 1.0;
-                }
-            }
-    }
+    /* Each tile's figures depend on its own pixels only: the same for any
+     * thread count. */
+    hz_parallel_run(threads, measure_worker, &job);
 }
 
 double progressive_noise_target(const progressive_goal *goal)

@@ -279,7 +279,7 @@ static void test_error_estimate(void **state)
     assert_int_equal(progressive_error_init(&pe, f, &err), HZ_OK);
     unsigned char active[64 * 32];
     memset(active, 1, sizeof active);
-    progressive_error_measure(&pe, f, before, active, 8, 16, 1.0);
+    progressive_error_measure(&pe, f, before, active, 8, 16, 1.0, 2);
     double d = 0.51 * 0.51, want = (0.01 + 0.16) / 2.0 / 16.0 / d;
     /* e_i (allocation) of pixels away from the halves' border and the tile
      * edges: the larger of own and neighbours' mean, a little above sigma^2/n */
