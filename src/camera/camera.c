@@ -284,11 +284,14 @@ static void camera_space_ray(const camera *c, camera_sample s, vec3 *o, vec3 *d,
     }
 }
 
-/* render_from_camera at the ray's time: a moving camera interpolates. */
-static transform render_from_camera_at(const camera *c, double time)
+/* render_from_camera at the ray's time: a moving camera interpolates into
+ * *moving; a static one is used in place (not copied for every ray). */
+static const transform *render_from_camera_at(const camera *c, double time, transform *moving)
 {
-    return c->motion ? animated_transform_at(&c->render_from_camera_motion, time)
-                     : c->render_from_camera;
+    if (!c->motion)
+        return &c->render_from_camera;
+    *moving = animated_transform_at(&c->render_from_camera_motion, time);
+    return moving;
 }
 
 static ray render_ray(const camera *c, const transform *render_from_camera, vec3 o, vec3 d,
@@ -308,8 +311,9 @@ bool camera_generate_ray(const camera *c, camera_sample s, ray *out)
     vec2 p_lens;
     camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);
     double time = hz_lerp(s.time, c->shutter_open, c->shutter_close);
-    transform rfc = render_from_camera_at(c, time);
-    *out = render_ray(c, &rfc, o, d, time);
+    transform moving;
+    const transform *rfc = render_from_camera_at(c, time, &moving);
+    *out = render_ray(c, rfc, o, d, time);
     return true;
 }
 
@@ -352,8 +356,9 @@ bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_diff
     vec2 p_lens = v2(0.0, 0.0);
     camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);
     double time = hz_lerp(s.time, c->shutter_open, c->shutter_close);
-    transform rfc = render_from_camera_at(c, time);
-    out->r = render_ray(c, &rfc, o, d, time);
+    transform moving;
+    const transform *rfc = render_from_camera_at(c, time, &moving);
+    out->r = render_ray(c, rfc, o, d, time);
 
     vec3 ox, dx, oy, dy;
     if (c->kind == CAMERA_SPHERICAL) {
@@ -368,10 +373,10 @@ bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_diff
         shifted_ray(c, p_camera, c->dx_camera, p_lens, o, d, &ox, &dx);
         shifted_ray(c, p_camera, c->dy_camera, p_lens, o, d, &oy, &dy);
     }
-    out->rx_o = transform_point(&rfc, ox);
-    out->rx_d = v3_normalize(transform_vector(&rfc, dx));
-    out->ry_o = transform_point(&rfc, oy);
-    out->ry_d = v3_normalize(transform_vector(&rfc, dy));
+    out->rx_o = transform_point(rfc, ox);
+    out->rx_d = v3_normalize(transform_vector(rfc, dx));
+    out->ry_o = transform_point(rfc, oy);
+    out->ry_d = v3_normalize(transform_vector(rfc, dy));
     out->has_differentials = true;
     return true;
 }
