@@ -6,6 +6,7 @@
 #include "film/filter.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +16,8 @@
 /* Largest radius accepted: the sampling table has (32 r)^2 cells. */
 #define FILTER_MAX_RADIUS 32.0
 #define ONE_MINUS_EPSILON 0x1.fffffffffffffp-1
+/* Buckets of u in each sampling cdf's guide table. */
+#define FILTER_GUIDE 64
 
 struct filter {
     filter_kind kind;
@@ -29,6 +32,10 @@ struct filter {
     double *row_int;   /* ny: integral of |f| over each row (per unit x) */
     double *marg_cdf;  /* ny+1 */
     double marg_int;   /* integral of |f| over the domain */
+    /* Guide tables (FILTER_GUIDE + 1 per cdf): entry j is find_interval at u
+     * = j / FILTER_GUIDE, so a lookup searches only between two entries. */
+    uint32_t *row_guide;  /* ny*(FILTER_GUIDE+1) */
+    uint32_t *marg_guide; /* FILTER_GUIDE+1 */
 };
 
 static double gaussian(double x, double sigma)
@@ -82,6 +89,53 @@ double filter_evaluate(const filter *f, vec2 p)
 
 /* ---- FilterSampler ------------------------------------------------- */
 
+/* Largest i in [0, n) with cdf[i] <= u; cdf has n+1 entries. */
+static size_t find_interval(const double *cdf, size_t n, double u)
+{
+    size_t lo = 0, hi = n;
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (cdf[mid] <= u)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* find_interval's answer from the guide table g of cdf: the same index,
+ * searched between the entries of u's bucket (widened by one where u's
+ * bucket rounds across a boundary). */
+static size_t find_interval_guided(const double *cdf, size_t n, const uint32_t *g, double u)
+{
+    double b = u * FILTER_GUIDE;
+    size_t j = b > 0.0 ? (size_t)b : 0;
+    if (j >= FILTER_GUIDE)
+        j = FILTER_GUIDE - 1;
+    size_t lo = g[j], hi = (size_t)g[j + 1] + 1;
+    while (lo > 0 && cdf[lo] > u)
+        --lo;
+    if (hi > n)
+        hi = n;
+    while (hi < n && cdf[hi] <= u)
+        ++hi;
+    /* find_interval's invariants: cdf[lo] <= u (or lo = 0), cdf[hi] > u (or hi = n). */
+    while (hi - lo > 1) {
+        size_t mid = (lo + hi) / 2;
+        if (cdf[mid] <= u)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+static void build_guide(const double *cdf, size_t n, uint32_t *g)
+{
+    for (size_t j = 0; j <= FILTER_GUIDE; ++j)
+        g[j] = (uint32_t)find_interval(cdf, n, (double)j / FILTER_GUIDE);
+}
+
 static hz_status build_table(filter *f, hz_error *err)
 {
     f->nx = (int)(32.0 * f->radius.x);
@@ -120,27 +174,21 @@ static hz_status build_table(filter *f, hz_error *err)
     f->marg_int = total * w; /* integral of |f| over the whole domain */
     for (size_t y = 1; y <= ny; y++)
         f->marg_cdf[y] = total == 0.0 ? (double)y / ny : f->marg_cdf[y] / total;
+    f->row_guide = malloc(ny * (FILTER_GUIDE + 1) * sizeof *f->row_guide);
+    f->marg_guide = malloc((FILTER_GUIDE + 1) * sizeof *f->marg_guide);
+    if (!f->row_guide || !f->marg_guide)
+        return hz_fail(err, "filter: out of memory for the sampling table");
+    for (size_t y = 0; y < ny; y++)
+        build_guide(f->row_cdf + y * (nx + 1), nx, f->row_guide + y * (FILTER_GUIDE + 1));
+    build_guide(f->marg_cdf, ny, f->marg_guide);
     return HZ_OK;
 }
 
-/* Largest i in [0, n) with cdf[i] <= u; cdf has n+1 entries. */
-static size_t find_interval(const double *cdf, size_t n, double u)
-{
-    size_t lo = 0, hi = n;
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (cdf[mid] <= u)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
 /* Samples one piecewise-constant 1D distribution: position in [0,1) and the cell. */
-static double sample_1d(const double *cdf, size_t n, double u, size_t *cell)
+static double sample_1d(const double *cdf, size_t n, const uint32_t *guide, double u,
+                        size_t *cell)
 {
-    size_t o = find_interval(cdf, n, u);
+    size_t o = find_interval_guided(cdf, n, guide, u);
     double du = u - cdf[o];
     if (cdf[o + 1] - cdf[o] > 0.0)
         du /= cdf[o + 1] - cdf[o];
@@ -156,8 +204,9 @@ static filter_sample sample_table(const filter *f, vec2 u)
     if (f->marg_int == 0.0)
         return s;
     size_t cy, cx;
-    double ty = sample_1d(f->marg_cdf, ny, u.y, &cy);
-    double tx = sample_1d(f->row_cdf + cy * (nx + 1), nx, u.x, &cx);
+    double ty = sample_1d(f->marg_cdf, ny, f->marg_guide, u.y, &cy);
+    double tx = sample_1d(f->row_cdf + cy * (nx + 1), nx,
+                          f->row_guide + cy * (FILTER_GUIDE + 1), u.x, &cx);
     s.p = v2(-f->radius.x + 2.0 * f->radius.x * tx, -f->radius.y + 2.0 * f->radius.y * ty);
     double v = f->f[cy * nx + cx];
     /* f / pdf with pdf = |f| / integral(|f|); a zero cell has zero probability. */
@@ -230,6 +279,8 @@ void filter_destroy(filter *f)
     free(f->row_cdf);
     free(f->row_int);
     free(f->marg_cdf);
+    free(f->row_guide);
+    free(f->marg_guide);
     free(f);
 }
 
