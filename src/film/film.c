@@ -14,6 +14,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "core/big_alloc.h"
 #include "film/exr.h"
 #include "film/png.h"
 #include "scene/params.h"
@@ -325,15 +326,15 @@ film *film_create(const film_params *p, hz_error *err)
     f->clamp_ratio = 1.0;
     atomic_init(&f->nonfinite, 0);
     size_t n = (size_t)f->width * (size_t)f->height;
-    f->pixels = calloc(n, sizeof *f->pixels);
+    f->pixels = hz_big_calloc(n, sizeof *f->pixels);
     if (p->write_z)
-        f->depth = calloc(n, sizeof *f->depth);
+        f->depth = hz_big_calloc(n, sizeof *f->depth);
     if (p->write_variance)
-        f->moments = calloc(n, sizeof *f->moments);
+        f->moments = hz_big_calloc(n, sizeof *f->moments);
     if (p->write_sample_count)
-        f->count = calloc(n, sizeof *f->count);
+        f->count = hz_big_calloc(n, sizeof *f->count);
     if (p->gbuffer)
-        f->gbuf = calloc(n, sizeof *f->gbuf);
+        f->gbuf = hz_big_calloc(n, sizeof *f->gbuf);
     f->output_from_render = transform_identity();
     if (!f->pixels || (p->write_z && !f->depth) || (p->write_variance && !f->moments) ||
         (p->write_sample_count && !f->count) || (p->gbuffer && !f->gbuf)) {
@@ -440,9 +441,9 @@ film_snapshot *film_snapshot_create(film *f, hz_error *err)
     film_get_accumulators(f, &acc);
     bool ok = s != NULL;
     for (int i = 0; ok && i < FILM_DOUBLE_ARRAYS; ++i)
-        if (acc.doubles[i] && !(s->doubles[i] = malloc(acc.double_count[i] * sizeof(double))))
+        if (acc.doubles[i] && !(s->doubles[i] = hz_big_malloc(acc.double_count[i] * sizeof(double))))
             ok = false;
-    if (ok && acc.counts && !(s->counts = malloc(acc.count_count * sizeof(uint32_t))))
+    if (ok && acc.counts && !(s->counts = hz_big_malloc(acc.count_count * sizeof(uint32_t))))
         ok = false;
     if (!ok) {
         film_snapshot_destroy(s);

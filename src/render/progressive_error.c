@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/big_alloc.h"
 #include "core/parallel.h"
 #include "render/progressive.h"
 
@@ -23,8 +24,8 @@ hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error 
     pe->tiles_x = (pe->w + T - 1) / T;
     pe->tile_count = pe->tiles_x * ((pe->h + T - 1) / T);
     size_t n = (size_t)pe->w * pe->h;
-    pe->e = malloc((n ? n : 1) * sizeof *pe->e);
-    pe->halves = calloc(n ? n : 1, sizeof *pe->halves);
+    pe->e = hz_big_malloc((n ? n : 1) * sizeof *pe->e);
+    pe->halves = hz_big_calloc(n ? n : 1, sizeof *pe->halves);
     pe->tile_sums = calloc((size_t)(pe->tile_count ? 3 * pe->tile_count : 1), sizeof(double));
     if (!pe->e || !pe->halves || !pe->tile_sums) {
         progressive_error_free(pe);
