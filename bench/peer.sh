@@ -134,7 +134,7 @@ peer_config() {
             echo "  peer $cfg haze $mode $1 step $2 spp $3: $t s, rmse relmse $e" >&2
         }
         hsteps="1 2 4"
-        hspps="1 4 16"
+        hspps="1 2 4 8 16"
         [ -n "$BENCH_QUICK" ] && hsteps=2 && hspps="1 4"
         for s in $hsteps; do
             for spp in $hspps; do
