@@ -155,6 +155,32 @@ static transform raster_from_screen(const double w[4], int xres, int yres)
     return transform_compose(raster_from_ndc, ndc_from_screen);
 }
 
+/* camera.pinhole: camera_from_raster maps film point (x, y, 0) to the
+ * homogeneous h = A (x, y, 1), the camera-space point h / w with w constant
+ * over the film (the perspective's inverse at z = 0) and positive, so the
+ * direction is normalize(A (x, y, 1)); render_from_camera's rotation R
+ * (affine: no homogeneous row) folds in as R A. */
+static void pinhole_fold(camera *c)
+{
+    const transform *cr = &c->camera_from_raster, *rc = &c->render_from_camera;
+    const double(*m)[4] = cr->m.m;
+    const double(*r)[4] = rc->m.m;
+    c->pinhole = false;
+    if (c->kind != CAMERA_PERSPECTIVE || c->lens_radius > 0.0 || c->motion)
+        return;
+    if (m[3][0] != 0.0 || m[3][1] != 0.0 || !(m[3][3] > 0.0) || r[3][0] != 0.0 ||
+        r[3][1] != 0.0 || r[3][2] != 0.0 || r[3][3] != 1.0)
+        return;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            int col = j == 2 ? 3 : j; /* film z is 0: A's columns x, y and the constant */
+            c->pinhole_from_film[i][j] =
+                r[i][0] * m[0][col] + r[i][1] * m[1][col] + r[i][2] * m[2][col];
+        }
+    c->pinhole_o = v3(r[0][3], r[1][3], r[2][3]);
+    c->pinhole = true;
+}
+
 hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err)
 {
     if (camera_config_check(cfg, err))
@@ -225,6 +251,7 @@ hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err)
                             "[%g %g %g %g], %dx%d)",
                        cfg->fov, c.screen_window[0], c.screen_window[1], c.screen_window[2],
                        c.screen_window[3], c.xres, c.yres);
+    pinhole_fold(&c);
     *out = c;
     return HZ_OK;
 }
@@ -307,6 +334,17 @@ static ray render_ray(const camera *c, const transform *render_from_camera, vec3
 
 bool camera_generate_ray(const camera *c, camera_sample s, ray *out)
 {
+    if (c->pinhole) {
+        const double(*a)[3] = c->pinhole_from_film;
+        double x = s.p_film.x, y = s.p_film.y;
+        out->o = c->pinhole_o;
+        out->d = v3_normalize(v3(a[0][0] * x + a[0][1] * y + a[0][2],
+                                 a[1][0] * x + a[1][1] * y + a[1][2],
+                                 a[2][0] * x + a[2][1] * y + a[2][2]));
+        out->time = hz_lerp(s.time, c->shutter_open, c->shutter_close);
+        out->medium = c->medium;
+        return true;
+    }
     vec3 o, d, p_camera;
     vec2 p_lens;
     camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);
@@ -352,6 +390,21 @@ static void shifted_ray(const camera *c, vec3 p_camera, vec3 delta, vec2 p_lens,
 
 bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_differential *out)
 {
+    if (c->pinhole) { /* the rays through the film points one pixel over */
+        camera_sample sx = s, sy = s;
+        sx.p_film.x += 1.0;
+        sy.p_film.y += 1.0;
+        ray rx, ry;
+        camera_generate_ray(c, s, &out->r);
+        camera_generate_ray(c, sx, &rx);
+        camera_generate_ray(c, sy, &ry);
+        out->rx_o = rx.o;
+        out->rx_d = rx.d;
+        out->ry_o = ry.o;
+        out->ry_d = ry.d;
+        out->has_differentials = true;
+        return true;
+    }
     vec3 o, d, p_camera;
     vec2 p_lens = v2(0.0, 0.0);
     camera_space_ray(c, s, &o, &d, &p_camera, &p_lens);

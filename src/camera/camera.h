@@ -46,6 +46,14 @@ typedef struct {
     vec3 dx_camera, dy_camera;    /* one-pixel steps in camera space (differentials) */
     int xres, yres;               /* full film resolution */
     bool equirect;                /* spherical: "equirectangular" mapping, else "equalarea" */
+    /* A static perspective camera without a lens, in one step
+     * (camera_generate_ray): the render-space direction through film point
+     * (x, y) is normalize(pinhole_from_film * (x, y, 1)), from pinhole_o;
+     * camera_from_raster's homogeneous divide and the two transforms folded
+     * into one 3x3 matrix (the same ray to rounding). */
+    bool pinhole;
+    double pinhole_from_film[3][3];
+    vec3 pinhole_o;
 } camera;
 
 /* Everything camera_create reads from the scene, already interpreted: the
