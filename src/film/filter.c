@@ -89,10 +89,10 @@ double filter_evaluate(const filter *f, vec2 p)
 
 /* ---- FilterSampler ------------------------------------------------- */
 
-/* Largest i in [0, n) with cdf[i] <= u; cdf has n+1 entries. */
-static size_t find_interval(const double *cdf, size_t n, double u)
+/* The largest i in [lo, hi) with cdf[i] <= u, given cdf[lo] <= u (or lo =
+ * 0) and cdf[hi] > u (or hi = the cdf's cell count). */
+static size_t bisect(const double *cdf, size_t lo, size_t hi, double u)
 {
-    size_t lo = 0, hi = n;
     while (hi - lo > 1) {
         size_t mid = (lo + hi) / 2;
         if (cdf[mid] <= u)
@@ -101,6 +101,12 @@ static size_t find_interval(const double *cdf, size_t n, double u)
             hi = mid;
     }
     return lo;
+}
+
+/* Largest i in [0, n) with cdf[i] <= u; cdf has n+1 entries. */
+static size_t find_interval(const double *cdf, size_t n, double u)
+{
+    return bisect(cdf, 0, n, u);
 }
 
 /* find_interval's answer from the guide table g of cdf: the same index,
@@ -119,15 +125,7 @@ static size_t find_interval_guided(const double *cdf, size_t n, const uint32_t *
         hi = n;
     while (hi < n && cdf[hi] <= u)
         ++hi;
-    /* find_interval's invariants: cdf[lo] <= u (or lo = 0), cdf[hi] > u (or hi = n). */
-    while (hi - lo > 1) {
-        size_t mid = (lo + hi) / 2;
-        if (cdf[mid] <= u)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    return lo;
+    return bisect(cdf, lo, hi, u);
 }
 
 static void build_guide(const double *cdf, size_t n, uint32_t *g)

@@ -10,19 +10,7 @@
 
 #include "film/filter.h"
 #include "scene/params.h"
-#include "unit/entity_util.h"
-
-static filter *make_filter(const char *type)
-{
-    scene_entity e;
-    entity_init(&e, type);
-    hz_error err = {0};
-    filter *f = filter_create(&e, &err);
-    if (!f)
-        fail_msg("%s", err.message);
-    entity_free(&e);
-    return f;
-}
+#include "unit/filter_util.h"
 
 static double gauss(double x, double s) { return exp(-x * x / (2 * s * s)) / sqrt(2 * HZ_PI * s * s); }
 

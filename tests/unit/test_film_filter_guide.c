@@ -9,19 +9,8 @@
 #include <cmocka.h>
 
 #include "film/filter.c"
-#include "unit/entity_util.h"
+#include "unit/filter_util.h"
 
-static filter *make_filter(const char *type)
-{
-    scene_entity e;
-    entity_init(&e, type);
-    hz_error err = {0};
-    filter *f = filter_create(&e, &err);
-    if (!f)
-        fail_msg("%s", err.message);
-    entity_free(&e);
-    return f;
-}
 
 static uint64_t xorshift(uint64_t *x)
 {
