@@ -309,7 +309,7 @@ static void test_spherical_directions(void **state)
     fixture_init(&f, "spherical");
     const char *equirect = "equirectangular";
     param p = {.type = PARAM_STRING, .name = dup("mapping"), .count = 1,
-               .loc = {"scene.pbrt", 4, 5}};
+               .loc = {.file = "scene.pbrt", .line = 4, .column = 5}};
     p.strs = malloc(sizeof *p.strs);
     assert_non_null(p.strs);
     p.strs[0] = dup(equirect);
@@ -358,7 +358,7 @@ static void test_spherical_refusals(void **state)
                  "ignores it): remove it");
     fixture_init(&f, "spherical");
     param p = {.type = PARAM_STRING, .name = dup("mapping"), .count = 1,
-               .loc = {"scene.pbrt", 6, 2}};
+               .loc = {.file = "scene.pbrt", .line = 6, .column = 2}};
     p.strs = malloc(sizeof *p.strs);
     assert_non_null(p.strs);
     p.strs[0] = dup("fisheye");
