@@ -89,7 +89,12 @@ static double gamma_q(double a, double x)
  * bins' quadrature only approximates). Also checks each sample's f and pdf
  * against bsdf_f and bsdf_pdf. */
 #define CHI2_TESTS 15
-static void chi2_test(const char *what, material m, vec3 wo)
+/* chi2_test with sub x sub midpoints per bin: a rough refraction's spike
+ * near the critical angle needs more than 24 (at eta 1.33, alpha 0.6 the
+ * statistic's p was 0.003 with 24 under gcc and below 0.001 under clang, whose
+ * random stream differs: v2(rng, rng) evaluates its arguments in the other
+ * order; with 48: 0.36 and 0.43). */
+static void chi2_test_sub(const char *what, material m, vec3 wo, int sub)
 {
     bsdf b = make(m);
     const int n = 1000000;
@@ -115,7 +120,6 @@ static void chi2_test(const char *what, material m, vec3 wo)
         pi = pi < 0 ? 0 : pi >= N_PHI ? N_PHI - 1 : pi;
         obs[ci * N_PHI + pi] += 1.0;
     }
-    const int sub = 24;
     double dc = 2.0 / N_COS, dp = 2.0 * HZ_PI / N_PHI;
     for (int ci = 0; ci < N_COS; ++ci)
         for (int pi = 0; pi < N_PHI; ++pi) {
@@ -149,6 +153,11 @@ static void chi2_test(const char *what, material m, vec3 wo)
     assert_true(p > 1.0 - pow(1.0 - 0.01, 1.0 / CHI2_TESTS));
 }
 
+static void chi2_test(const char *what, material m, vec3 wo)
+{
+    chi2_test_sub(what, m, wo, 24);
+}
+
 static void chi2_conductor(void **state)
 {
     (void)state;
@@ -164,7 +173,7 @@ static void chi2_dielectric(void **state)
     chi2_test("dielectric 1.5 a 0.3, outside", dielectric(1.5, 0.3), dir(0.8, 0.2));
     chi2_test("dielectric 1.5 a 0.3, inside", dielectric(1.5, 0.3), dir(-0.8, 0.2));
     chi2_test("dielectric 1.5 a 0.5, inside grazing", dielectric(1.5, 0.5), dir(-0.3, 4.0));
-    chi2_test("dielectric 1.33 a 0.6", dielectric(1.33, 0.6), dir(0.4, 1.0));
+    chi2_test_sub("dielectric 1.33 a 0.6", dielectric(1.33, 0.6), dir(0.4, 1.0), 48);
     chi2_test("dielectric 0.7 a 0.2", dielectric(0.7, 0.2), dir(0.9, 5.0));
 }
 
