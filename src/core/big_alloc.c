@@ -25,8 +25,8 @@ static void advise_huge(void *p, size_t bytes)
 
 void *hz_big_calloc(size_t count, size_t size)
 {
-    void *p = calloc(count, size);
-    if (p && size && count <= SIZE_MAX / size)
+    void *p = calloc(count, size); /* NULL when count * size overflows */
+    if (p)
         advise_huge(p, count * size);
     return p;
 }

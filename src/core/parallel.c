@@ -1,13 +1,14 @@
 #define _POSIX_C_SOURCE 200809L
 #include "core/parallel.h"
 
+#include <limits.h>
 #include <pthread.h>
 #include <unistd.h>
 
 int hz_core_count(void)
 {
     long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n < 1 ? 1 : n > HZ_PARALLEL_MAX_THREADS ? HZ_PARALLEL_MAX_THREADS : (int)n;
+    return n < 1 ? 1 : n > INT_MAX ? INT_MAX : (int)n;
 }
 
 bool hz_parallel_run(int threads, void *(*fn)(void *), void *ctx)

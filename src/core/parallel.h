@@ -8,7 +8,7 @@
 
 enum { HZ_PARALLEL_MAX_THREADS = 64 };
 
-/* The online cores, at least 1. */
+/* The online cores, at least 1 (the renderer's default thread count). */
 int hz_core_count(void);
 
 /* Runs fn(ctx) on `threads` threads (<= 0: every core; at most

@@ -9,13 +9,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
-#include <unistd.h>
 
 #if defined(__SSE2__)
 #include <xmmintrin.h>
 #endif
 
 #include "core/clock.h"
+#include "core/parallel.h"
 #include "render/progress.h"
 
 enum { TILE_SIZE = RENDERER_TILE_SIZE };
@@ -176,12 +176,6 @@ static void *worker_main(void *p)
     return NULL;
 }
 
-int renderer_default_threads(void)
-{
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n < 1 ? 1 : (int)n;
-}
-
 static double now_seconds(void) { return hz_clock_seconds(); }
 
 hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
@@ -221,7 +215,7 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
                                       motion.camera || motion.surfaces || motion.media > 0,
                                       camera_has_lens(render_scene_camera(rs))};
 
-    int threads = opt->threads > 0 ? opt->threads : renderer_default_threads();
+    int threads = opt->threads > 0 ? opt->threads : hz_core_count();
     if (threads > job.tile_count)
         threads = job.tile_count > 0 ? job.tile_count : 1;
     job.counters = calloc((size_t)threads, sizeof *job.counters);

@@ -93,7 +93,4 @@ typedef struct {
 camera_sample renderer_camera_sample_needs(const filter *flt, sampler_state *st, int px, int py,
                                            camera_sample_needs needs);
 
-/* Number of online processors (at least 1). */
-int renderer_default_threads(void);
-
 #endif
