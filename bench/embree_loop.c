@@ -6,7 +6,11 @@
  * rtcIntersect1/rtcOccluded1, shading trivially (Lambert with one albedo, no
  * materials, no film). What haze spends beyond this loop is its own overhead.
  *
- * Usage: embree_loop SCENE.pbrt [--spp N] [--threads N]
+ * Usage: embree_loop SCENE.pbrt [--spp N] [--threads N] [--packet N] [--camera-only]
+ * --packet 4, 8 or 16 traces the camera rays of that many neighbouring pixels
+ * of a row (the same sample index) as one packet (rtcIntersect4/8/16) instead
+ * of one by one (1, the default); the shadow rays stay single.
+ * --camera-only traces no shadow rays.
  * Prints one line: wall time of the loop, rays traced, and the image mean (so
  * the work cannot be optimised away). */
 #define _POSIX_C_SOURCE 200809L
@@ -14,6 +18,7 @@
 #include <embree3/rtcore.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdbool.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,6 +36,8 @@ typedef struct {
     const render_scene *rs;
     RTCScene scene;
     int spp, width, height;
+    int packet;       /* camera rays per rtcIntersectN: 1, 4, 8 or 16 */
+    bool camera_only; /* no shadow rays */
     atomic_int next_row;
 } loop_job;
 
@@ -47,9 +54,14 @@ static double seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static double shade(loop_worker *w, const ray *r)
+/* A camera ray's hit: its distance (INFINITY: none) and Embree's normal. */
+typedef struct {
+    float t;
+    vec3 ng;
+} loop_hit;
+
+static loop_hit trace1(loop_worker *w, const ray *r)
 {
-    loop_job *job = w->job;
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRayHit rh;
@@ -62,15 +74,82 @@ static double shade(loop_worker *w, const ray *r)
     rh.ray.mask = 0xFFFFFFFFu;
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(job->scene, &ctx, &rh);
+    rtcIntersect1(w->job->scene, &ctx, &rh);
     w->camera_rays++;
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
-        return 0.0;
-    vec3 p = ray_at(r, (double)rh.ray.tfar);
+        return (loop_hit){INFINITY, v3(0.0, 0.0, 0.0)};
+    return (loop_hit){rh.ray.tfar, v3((double)rh.hit.Ng_x, (double)rh.hit.Ng_y, (double)rh.hit.Ng_z)};
+}
+
+/* rays[0..n) (n <= 16; valid[k] false: no ray) as one packet of `size`
+ * (4, 8 or 16). The SoA layouts of RTCRayHit4/8/16 are the same up to the
+ * width: one generic one of 16 lanes, passed with its width. */
+static void trace_packet(loop_worker *w, const ray *rays, const bool *valid, int n, int size,
+                         loop_hit *out)
+{
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    RTC_ALIGN(64) int lanes[16];
+    RTC_ALIGN(64) struct RTCRayHit16 rh16;
+    RTC_ALIGN(64) struct RTCRayHit8 rh8;
+    RTC_ALIGN(64) struct RTCRayHit4 rh4;
+    /* fill through pointers to the fields of the chosen width */
+#define FILL(RH)                                                                    \
+    for (int k = 0; k < size; ++k) {                                                \
+        bool on = k < n && valid[k];                                                \
+        lanes[k] = on ? -1 : 0;                                                     \
+        const ray *r = &rays[on ? k : 0];                                           \
+        RH.ray.org_x[k] = (float)r->o.x, RH.ray.org_y[k] = (float)r->o.y;           \
+        RH.ray.org_z[k] = (float)r->o.z;                                            \
+        RH.ray.dir_x[k] = (float)r->d.x, RH.ray.dir_y[k] = (float)r->d.y;           \
+        RH.ray.dir_z[k] = (float)r->d.z;                                            \
+        RH.ray.tnear[k] = 0.0f, RH.ray.tfar[k] = INFINITY, RH.ray.time[k] = 0.0f;   \
+        RH.ray.mask[k] = 0xFFFFFFFFu, RH.ray.id[k] = 0, RH.ray.flags[k] = 0;        \
+        RH.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;                                 \
+        RH.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;                              \
+    }
+#define READ(RH)                                                                    \
+    for (int k = 0; k < n; ++k)                                                     \
+        out[k] = !valid[k] || RH.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID           \
+                     ? (loop_hit){INFINITY, v3(0.0, 0.0, 0.0)}                      \
+                     : (loop_hit){RH.ray.tfar[k], v3((double)RH.hit.Ng_x[k],       \
+                                                     (double)RH.hit.Ng_y[k],       \
+                                                     (double)RH.hit.Ng_z[k])};
+    switch (size) {
+    case 4:
+        FILL(rh4)
+        rtcIntersect4(lanes, w->job->scene, &ctx, &rh4);
+        READ(rh4)
+        break;
+    case 8:
+        FILL(rh8)
+        rtcIntersect8(lanes, w->job->scene, &ctx, &rh8);
+        READ(rh8)
+        break;
+    default:
+        FILL(rh16)
+        rtcIntersect16(lanes, w->job->scene, &ctx, &rh16);
+        READ(rh16)
+        break;
+    }
+#undef FILL
+#undef READ
+    for (int k = 0; k < n; ++k)
+        w->camera_rays += valid[k];
+}
+
+static double shade(loop_worker *w, const ray *r, loop_hit h)
+{
+    loop_job *job = w->job;
+    if (!(h.t < INFINITY) || job->camera_only)
+        return isfinite(h.t) ? 1.0 : 0.0;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    vec3 p = ray_at(r, (double)h.t);
     /* Embree's unnormalised normal (object space under instances: enough for
      * trivial shading), turned toward the camera. haze's spheres leave it 0
      * (it computes their normals in double afterwards): face the camera. */
-    vec3 ng = v3((double)rh.hit.Ng_x, (double)rh.hit.Ng_y, (double)rh.hit.Ng_z);
+    vec3 ng = h.ng;
     vec3 n = v3_dot(ng, ng) > 0.0 ? v3_normalize(ng) : v3_neg(r->d);
     if (v3_dot(n, r->d) > 0.0)
         n = v3_neg(n);
@@ -114,14 +193,36 @@ static void *worker_main(void *p)
         int y = atomic_fetch_add(&job->next_row, 1);
         if (y >= job->height)
             break;
-        for (int x = 0; x < job->width; ++x)
+        if (job->packet <= 1) {
+            for (int x = 0; x < job->width; ++x)
+                for (int i = 0; i < job->spp; ++i) {
+                    sampler_state st;
+                    sampler_start(smp, x, y, i, &st);
+                    camera_sample cs = renderer_camera_sample(flt, &st, x, y);
+                    ray r;
+                    if (camera_generate_ray(cam, cs, &r))
+                        w->sum += shade(w, &r, trace1(w, &r)) * cs.filter_weight;
+                }
+            continue;
+        }
+        for (int x0 = 0; x0 < job->width; x0 += job->packet)
             for (int i = 0; i < job->spp; ++i) {
-                sampler_state st;
-                sampler_start(smp, x, y, i, &st);
-                camera_sample cs = renderer_camera_sample(flt, &st, x, y);
-                ray r;
-                if (camera_generate_ray(cam, cs, &r))
-                    w->sum += shade(w, &r) * cs.filter_weight;
+                ray rays[16];
+                bool valid[16];
+                double weight[16];
+                loop_hit hits[16];
+                int n = job->width - x0 < job->packet ? job->width - x0 : job->packet;
+                for (int k = 0; k < n; ++k) {
+                    sampler_state st;
+                    sampler_start(smp, x0 + k, y, i, &st);
+                    camera_sample cs = renderer_camera_sample(flt, &st, x0 + k, y);
+                    weight[k] = cs.filter_weight;
+                    valid[k] = camera_generate_ray(cam, cs, &rays[k]);
+                }
+                trace_packet(w, rays, valid, n, job->packet, hits);
+                for (int k = 0; k < n; ++k)
+                    if (valid[k])
+                        w->sum += shade(w, &rays[k], hits[k]) * weight[k];
             }
     }
     return NULL;
@@ -130,21 +231,29 @@ static void *worker_main(void *p)
 int main(int argc, char **argv)
 {
     const char *path = NULL;
-    int spp = 0, threads = 1;
+    int spp = 0, threads = 1, packet = 1;
+    bool camera_only = false;
     for (int i = 1; i < argc; ++i) {
         if (strcmp(argv[i], "--spp") == 0 && i + 1 < argc)
             spp = atoi(argv[++i]);
         else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc)
             threads = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--packet") == 0 && i + 1 < argc)
+            packet = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--camera-only") == 0)
+            camera_only = true;
         else if (!path && argv[i][0] != '-')
             path = argv[i];
         else {
-            fprintf(stderr, "usage: embree_loop SCENE.pbrt [--spp N] [--threads N]\n");
+            fprintf(stderr, "usage: embree_loop SCENE.pbrt [--spp N] [--threads N] "
+                            "[--packet 1|4|8|16] [--camera-only]\n");
             return 2;
         }
     }
-    if (!path || threads < 1 || threads > 256 || spp < 0) {
-        fprintf(stderr, "usage: embree_loop SCENE.pbrt [--spp N] [--threads N]\n");
+    if (!path || threads < 1 || threads > 256 || spp < 0 ||
+        (packet != 1 && packet != 4 && packet != 8 && packet != 16)) {
+        fprintf(stderr, "usage: embree_loop SCENE.pbrt [--spp N] [--threads N] [--packet 1|4|8|16] "
+                        "[--camera-only]\n");
         return 2;
     }
     hz_error err = {0};
@@ -165,7 +274,9 @@ int main(int argc, char **argv)
                     .scene = geometry_embree_scene(render_scene_geometry(rs)),
                     .spp = render_scene_sampler(rs)->spp,
                     .width = fp->xres,
-                    .height = fp->yres};
+                    .height = fp->yres,
+                    .packet = packet,
+                    .camera_only = camera_only};
     atomic_init(&job.next_row, 0);
     loop_worker *w = calloc((size_t)threads, sizeof *w);
     pthread_t *tid = calloc((size_t)threads, sizeof *tid);

@@ -239,39 +239,77 @@ static double sphere_hit_t(const geom_shape *s, vec3 o_space, vec3 d_space, doub
     return -1.0;
 }
 
+/* Embree's rays and hits of width N (RTCRayN, RTCHitN) are structures of
+ * arrays, field f of lane i at [f * N + i] (for N = 1 the layout of RTCRay and
+ * RTCHit): haze traces single rays, but the callbacks serve any width. */
+enum { RAY_ORG = 0, RAY_TNEAR = 3, RAY_DIR = 4, RAY_TFAR = 8 };
+enum { HIT_NG = 0, HIT_U = 3, HIT_V = 4, HIT_PRIM = 5, HIT_GEOM = 6, HIT_INST = 7 };
+
+static float *ray_lane(void *ray, unsigned N, unsigned field, unsigned i)
+{
+    return (float *)ray + field * N + i;
+}
+
+static unsigned *hit_lane(void *hit, unsigned N, unsigned field, unsigned i)
+{
+    return (unsigned *)hit + field * N + i;
+}
+
+static void ray_lane_read(void *ray, unsigned N, unsigned i, vec3 *o, vec3 *d)
+{
+    *o = v3(*ray_lane(ray, N, RAY_ORG, i), *ray_lane(ray, N, RAY_ORG + 1, i),
+            *ray_lane(ray, N, RAY_ORG + 2, i));
+    *d = v3(*ray_lane(ray, N, RAY_DIR, i), *ray_lane(ray, N, RAY_DIR + 1, i),
+            *ray_lane(ray, N, RAY_DIR + 2, i));
+}
+
+/* Records a hit of user geometry on lane i of rayhit (normal 0: haze
+ * recomputes it in double later). */
+static void hit_lane_write(const struct RTCIntersectFunctionNArguments *args, unsigned i,
+                           double t, double u)
+{
+    unsigned N = args->N;
+    float *ray = (float *)args->rayhit;
+    void *hit = ray + 12 * N; /* RTCRayHitN: the RTCRayN, then the RTCHitN */
+    *ray_lane(ray, N, RAY_TFAR, i) = (float)t;
+    for (unsigned k = 0; k < 3; ++k)
+        *(float *)hit_lane(hit, N, HIT_NG + k, i) = 0.0f;
+    *(float *)hit_lane(hit, N, HIT_U, i) = (float)u;
+    *(float *)hit_lane(hit, N, HIT_V, i) = 0.0f;
+    *hit_lane(hit, N, HIT_PRIM, i) = args->primID;
+    *hit_lane(hit, N, HIT_GEOM, i) = args->geomID;
+    *hit_lane(hit, N, HIT_INST, i) = args->context->instID[0];
+}
+
 static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
-    assert(args->N == 1);
-    if (!args->valid[0])
-        return;
     const geom_shape *s = args->geometryUserPtr;
-    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
-    vec3 o = v3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z);
-    vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
-    double t = sphere_hit_t(s, o, d, rh->ray.tnear, rh->ray.tfar);
-    if (t < 0.0)
-        return;
-    rh->ray.tfar = (float)t;
-    rh->hit.u = rh->hit.v = 0.0f;
-    rh->hit.Ng_x = rh->hit.Ng_y = rh->hit.Ng_z = 0.0f; /* recomputed in double later */
-    rh->hit.primID = args->primID;
-    rh->hit.geomID = args->geomID;
-    rh->hit.instID[0] = args->context->instID[0];
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i])
+            continue;
+        vec3 o, d;
+        ray_lane_read(args->rayhit, args->N, i, &o, &d);
+        double t = sphere_hit_t(s, o, d, *ray_lane(args->rayhit, args->N, RAY_TNEAR, i),
+                                *ray_lane(args->rayhit, args->N, RAY_TFAR, i));
+        if (t >= 0.0)
+            hit_lane_write(args, i, t, 0.0);
+    }
 }
 
 static void sphere_occluded(const struct RTCOccludedFunctionNArguments *args)
 {
-    assert(args->N == 1);
-    if (!args->valid[0])
-        return;
     const geom_shape *s = args->geometryUserPtr;
     if (s->material->kind == MATERIAL_INTERFACE)
         return;
-    struct RTCRay *r = (struct RTCRay *)args->ray;
-    vec3 o = v3(r->org_x, r->org_y, r->org_z);
-    vec3 d = v3(r->dir_x, r->dir_y, r->dir_z);
-    if (sphere_hit_t(s, o, d, r->tnear, r->tfar) >= 0.0)
-        r->tfar = -INFINITY;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i])
+            continue;
+        vec3 o, d;
+        ray_lane_read(args->ray, args->N, i, &o, &d);
+        float *tfar = ray_lane(args->ray, args->N, RAY_TFAR, i);
+        if (sphere_hit_t(s, o, d, *ray_lane(args->ray, args->N, RAY_TNEAR, i), *tfar) >= 0.0)
+            *tfar = -INFINITY;
+    }
 }
 
 static void curve_bounds(const struct RTCBoundsFunctionArguments *args)
@@ -310,41 +348,39 @@ static bool curve_alpha_keeps(const geom_shape *s, unsigned prim, double u, vec3
 
 static void curve_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
-    assert(args->N == 1);
-    if (!args->valid[0])
-        return;
     const geom_shape *s = args->geometryUserPtr;
-    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
-    vec3 o = v3(rh->ray.org_x, rh->ray.org_y, rh->ray.org_z);
-    vec3 d = v3(rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z);
-    double u = 0.0;
-    double t = geometry_curve_hit(s, args->primID, o, d, rh->ray.tnear, rh->ray.tfar, &u);
-    if (t < 0.0 || !((float)t < rh->ray.tfar) || !curve_alpha_keeps(s, args->primID, u, o, d, t))
-        return;
-    rh->ray.tfar = (float)t;
-    rh->hit.u = (float)u;
-    rh->hit.v = 0.0f;
-    rh->hit.Ng_x = rh->hit.Ng_y = rh->hit.Ng_z = 0.0f; /* recomputed in double later */
-    rh->hit.primID = args->primID;
-    rh->hit.geomID = args->geomID;
-    rh->hit.instID[0] = args->context->instID[0];
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i])
+            continue;
+        vec3 o, d;
+        ray_lane_read(args->rayhit, args->N, i, &o, &d);
+        float tfar = *ray_lane(args->rayhit, args->N, RAY_TFAR, i);
+        double u = 0.0;
+        double t = geometry_curve_hit(s, args->primID, o, d,
+                                      *ray_lane(args->rayhit, args->N, RAY_TNEAR, i), tfar, &u);
+        if (t < 0.0 || !((float)t < tfar) || !curve_alpha_keeps(s, args->primID, u, o, d, t))
+            continue;
+        hit_lane_write(args, i, t, u);
+    }
 }
 
 static void curve_occluded(const struct RTCOccludedFunctionNArguments *args)
 {
-    assert(args->N == 1);
-    if (!args->valid[0])
-        return;
     const geom_shape *s = args->geometryUserPtr;
     if (s->material->kind == MATERIAL_INTERFACE)
         return;
-    struct RTCRay *r = (struct RTCRay *)args->ray;
-    vec3 o = v3(r->org_x, r->org_y, r->org_z);
-    vec3 d = v3(r->dir_x, r->dir_y, r->dir_z);
-    double u;
-    double t = geometry_curve_hit(s, args->primID, o, d, r->tnear, r->tfar, &u);
-    if (t >= 0.0 && curve_alpha_keeps(s, args->primID, u, o, d, t))
-        r->tfar = -INFINITY;
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (!args->valid[i])
+            continue;
+        vec3 o, d;
+        ray_lane_read(args->ray, args->N, i, &o, &d);
+        float *tfar = ray_lane(args->ray, args->N, RAY_TFAR, i);
+        double u;
+        double t = geometry_curve_hit(s, args->primID, o, d,
+                                      *ray_lane(args->ray, args->N, RAY_TNEAR, i), *tfar, &u);
+        if (t >= 0.0 && curve_alpha_keeps(s, args->primID, u, o, d, t))
+            *tfar = -INFINITY;
+    }
 }
 
 /* Shadow rays pass through interfaces (they bound media, not surfaces). */
