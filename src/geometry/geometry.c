@@ -281,22 +281,29 @@ static void hit_lane_write(const struct RTCIntersectFunctionNArguments *args, un
     *hit_lane(hit, N, HIT_INST, i) = args->context->instID[0];
 }
 
-static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
+/* The hit of one ray with primitive prim of user geometry s in (tnear,
+ * tfar): its t (and the curve's u), or -1. */
+typedef double (*lane_hit_fn)(const geom_shape *s, unsigned prim, vec3 o, vec3 d, double tnear,
+                              double tfar, double *u);
+
+static void intersect_lanes(const struct RTCIntersectFunctionNArguments *args, lane_hit_fn hit)
 {
-    const geom_shape *s = args->geometryUserPtr;
     for (unsigned i = 0; i < args->N; ++i) {
         if (!args->valid[i])
             continue;
         vec3 o, d;
         ray_lane_read(args->rayhit, args->N, i, &o, &d);
-        double t = sphere_hit_t(s, o, d, *ray_lane(args->rayhit, args->N, RAY_TNEAR, i),
-                                *ray_lane(args->rayhit, args->N, RAY_TFAR, i));
+        double u = 0.0;
+        double t = hit(args->geometryUserPtr, args->primID, o, d,
+                       *ray_lane(args->rayhit, args->N, RAY_TNEAR, i),
+                       *ray_lane(args->rayhit, args->N, RAY_TFAR, i), &u);
         if (t >= 0.0)
-            hit_lane_write(args, i, t, 0.0);
+            hit_lane_write(args, i, t, u);
     }
 }
 
-static void sphere_occluded(const struct RTCOccludedFunctionNArguments *args)
+/* Shadow rays: a hit blocks a lane unless the shape is an interface. */
+static void occlude_lanes(const struct RTCOccludedFunctionNArguments *args, lane_hit_fn hit)
 {
     const geom_shape *s = args->geometryUserPtr;
     if (s->material->kind == MATERIAL_INTERFACE)
@@ -307,9 +314,29 @@ static void sphere_occluded(const struct RTCOccludedFunctionNArguments *args)
         vec3 o, d;
         ray_lane_read(args->ray, args->N, i, &o, &d);
         float *tfar = ray_lane(args->ray, args->N, RAY_TFAR, i);
-        if (sphere_hit_t(s, o, d, *ray_lane(args->ray, args->N, RAY_TNEAR, i), *tfar) >= 0.0)
+        double u;
+        if (hit(s, args->primID, o, d, *ray_lane(args->ray, args->N, RAY_TNEAR, i), *tfar, &u) >=
+            0.0)
             *tfar = -INFINITY;
     }
+}
+
+static double sphere_lane_hit(const geom_shape *s, unsigned prim, vec3 o, vec3 d, double tnear,
+                              double tfar, double *u)
+{
+    (void)prim;
+    *u = 0.0;
+    return sphere_hit_t(s, o, d, tnear, tfar);
+}
+
+static void sphere_intersect(const struct RTCIntersectFunctionNArguments *args)
+{
+    intersect_lanes(args, sphere_lane_hit);
+}
+
+static void sphere_occluded(const struct RTCOccludedFunctionNArguments *args)
+{
+    occlude_lanes(args, sphere_lane_hit);
 }
 
 static void curve_bounds(const struct RTCBoundsFunctionArguments *args)
@@ -346,41 +373,33 @@ static bool curve_alpha_keeps(const geom_shape *s, unsigned prim, double u, vec3
     return alpha_keeps(a, o, d, t);
 }
 
+/* A curve's hit that survives its alpha; a shadow ray's hit needs no more,
+ * a camera or bounce ray's must also stay below tfar once rounded to float
+ * (the t Embree keeps). */
+static double curve_lane_hit(const geom_shape *s, unsigned prim, vec3 o, vec3 d, double tnear,
+                             double tfar, double *u)
+{
+    double t = geometry_curve_hit(s, prim, o, d, tnear, tfar, u);
+    return t >= 0.0 && curve_alpha_keeps(s, prim, *u, o, d, t) ? t : -1.0;
+}
+
+static double curve_lane_hit_closer(const geom_shape *s, unsigned prim, vec3 o, vec3 d,
+                                    double tnear, double tfar, double *u)
+{
+    double t = geometry_curve_hit(s, prim, o, d, tnear, tfar, u);
+    if (t < 0.0 || !((float)t < (float)tfar) || !curve_alpha_keeps(s, prim, *u, o, d, t))
+        return -1.0;
+    return t;
+}
+
 static void curve_intersect(const struct RTCIntersectFunctionNArguments *args)
 {
-    const geom_shape *s = args->geometryUserPtr;
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (!args->valid[i])
-            continue;
-        vec3 o, d;
-        ray_lane_read(args->rayhit, args->N, i, &o, &d);
-        float tfar = *ray_lane(args->rayhit, args->N, RAY_TFAR, i);
-        double u = 0.0;
-        double t = geometry_curve_hit(s, args->primID, o, d,
-                                      *ray_lane(args->rayhit, args->N, RAY_TNEAR, i), tfar, &u);
-        if (t < 0.0 || !((float)t < tfar) || !curve_alpha_keeps(s, args->primID, u, o, d, t))
-            continue;
-        hit_lane_write(args, i, t, u);
-    }
+    intersect_lanes(args, curve_lane_hit_closer);
 }
 
 static void curve_occluded(const struct RTCOccludedFunctionNArguments *args)
 {
-    const geom_shape *s = args->geometryUserPtr;
-    if (s->material->kind == MATERIAL_INTERFACE)
-        return;
-    for (unsigned i = 0; i < args->N; ++i) {
-        if (!args->valid[i])
-            continue;
-        vec3 o, d;
-        ray_lane_read(args->ray, args->N, i, &o, &d);
-        float *tfar = ray_lane(args->ray, args->N, RAY_TFAR, i);
-        double u;
-        double t = geometry_curve_hit(s, args->primID, o, d,
-                                      *ray_lane(args->ray, args->N, RAY_TNEAR, i), *tfar, &u);
-        if (t >= 0.0 && curve_alpha_keeps(s, args->primID, u, o, d, t))
-            *tfar = -INFINITY;
-    }
+    occlude_lanes(args, curve_lane_hit);
 }
 
 /* Shadow rays pass through interfaces (they bound media, not surfaces). */
