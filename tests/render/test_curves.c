@@ -2,9 +2,13 @@
  * points within half its width of it, between its end planes), the shading
  * of flat, cylinder and ribbon curves under a distant light (pbrt-v4's
  * normals: a cylinder's rounds over v), no self-shadowing under a uniform
- * sky, and the refusals. (Against pbrt-v4's own images of the same files:
+ * sky, the refusals, and packets of rays against single rays. (Against
  * coverage within 0.4%, shading within 0.3%; docs/scene-format.md.) */
 #include "render_test_util.h"
+
+#include <embree3/rtcore.h>
+
+#include "geometry/geometry.h"
 
 /* The bezier of the tests: a planar S in z = 0. */
 static const double S[4][2] = {{-1.5, -1.0}, {-0.5, 1.0}, {0.5, -1.0}, {1.5, 1.0}};
@@ -264,6 +268,77 @@ static void test_refusals(void **state)
     }
 }
 
+/* Embree's packets reach haze's user geometry (curves, spheres) with N > 1
+ * lanes: rays straight down through the S and a sphere under it, traced one
+ * by one and as packets of 8 (every other lane off), give the same hits, u
+ * and t, and the same shadow-ray verdicts. */
+static void test_packets(void **state)
+{
+    (void)state;
+    char text[1600];
+    s_scene(text, sizeof text, "");
+    strcat(text, "AttributeBegin\nTranslate 0.3 0 -1\nShape \"sphere\" \"float radius\" 0.8\n"
+                 "AttributeEnd\n");
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    RTCScene scene = geometry_embree_scene(render_scene_geometry(rs));
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    int hits = 0, blocked = 0;
+    unsigned first = RTC_INVALID_GEOMETRY_ID, other = RTC_INVALID_GEOMETRY_ID;
+    for (int row = 0; row < 40; ++row)
+        for (int x0 = 0; x0 < 40; x0 += 8) {
+            RTC_ALIGN(32) int valid[8];
+            RTC_ALIGN(32) struct RTCRayHit8 rh8;
+            RTC_ALIGN(32) struct RTCRay8 r8;
+            struct RTCRayHit one[8];
+            for (int k = 0; k < 8; ++k) {
+                float x = -2.0f + 0.1f * (float)(x0 + k) + 0.05f, y = -2.0f + 0.1f * row + 0.05f;
+                valid[k] = (k & 1) ? 0 : -1;
+                memset(&one[k], 0, sizeof one[k]);
+                one[k].ray.org_x = x, one[k].ray.org_y = y, one[k].ray.org_z = 5.0f;
+                one[k].ray.dir_z = -1.0f;
+                one[k].ray.tfar = INFINITY;
+                one[k].ray.mask = 0xFFFFFFFFu;
+                one[k].hit.geomID = one[k].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+                rh8.ray.org_x[k] = r8.org_x[k] = x;
+                rh8.ray.org_y[k] = r8.org_y[k] = y;
+                rh8.ray.org_z[k] = r8.org_z[k] = 5.0f;
+                rh8.ray.dir_x[k] = r8.dir_x[k] = 0.0f;
+                rh8.ray.dir_y[k] = r8.dir_y[k] = 0.0f;
+                rh8.ray.dir_z[k] = r8.dir_z[k] = -1.0f;
+                rh8.ray.tnear[k] = r8.tnear[k] = 0.0f;
+                rh8.ray.tfar[k] = r8.tfar[k] = INFINITY;
+                rh8.ray.time[k] = r8.time[k] = 0.0f;
+                rh8.ray.mask[k] = r8.mask[k] = 0xFFFFFFFFu;
+                rh8.ray.id[k] = r8.id[k] = 0;
+                rh8.ray.flags[k] = r8.flags[k] = 0;
+                rh8.hit.geomID[k] = rh8.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+            }
+            rtcIntersect8(valid, scene, &ctx, &rh8);
+            rtcOccluded8(valid, scene, &ctx, &r8);
+            for (int k = 0; k < 8; k += 2) {
+                struct RTCRay shadow = one[k].ray;
+                rtcIntersect1(scene, &ctx, &one[k]);
+                rtcOccluded1(scene, &ctx, &shadow);
+                assert_int_equal(rh8.hit.geomID[k], one[k].hit.geomID);
+                assert_true((shadow.tfar < 0.0f) == (r8.tfar[k] < 0.0f));
+                blocked += shadow.tfar < 0.0f;
+                if (one[k].hit.geomID == RTC_INVALID_GEOMETRY_ID)
+                    continue;
+                ++hits;
+                if (first == RTC_INVALID_GEOMETRY_ID)
+                    first = one[k].hit.geomID;
+                else if (one[k].hit.geomID != first)
+                    other = one[k].hit.geomID;
+                assert_int_equal(rh8.hit.primID[k], one[k].hit.primID);
+                assert_true(rh8.ray.tfar[k] == one[k].ray.tfar && rh8.hit.u[k] == one[k].hit.u);
+            }
+        }
+    /* both shapes seen: the sphere (radius 0.8) and the S (area 0.39) */
+    assert_true(hits > 100 && blocked == hits && other != RTC_INVALID_GEOMETRY_ID);
+    render_scene_destroy(rs);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -273,6 +348,7 @@ int main(void)
         cmocka_unit_test(test_no_self_shadowing),
         cmocka_unit_test(test_hair_furnace),
         cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_packets),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
