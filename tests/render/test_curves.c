@@ -3,7 +3,8 @@
  * of flat, cylinder and ribbon curves under a distant light (pbrt-v4's
  * normals: a cylinder's rounds over v), no self-shadowing under a uniform
  * sky, the refusals, and packets of rays against single rays. (Against
- * coverage within 0.4%, shading within 0.3%; docs/scene-format.md.) */
+ * pbrt-v4's own images of the same files: coverage within 0.4%, shading
+ * within 0.3%; docs/scene-format.md.) */
 #include "render_test_util.h"
 
 #include <embree3/rtcore.h>
