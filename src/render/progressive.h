@@ -52,17 +52,21 @@ enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8 };
 #define PROGRESSIVE_SAFETY 1.0
 #define PROGRESSIVE_EARLY_SAFETY 0.5
 #define PROGRESSIVE_MIN_SCALE 0.2
-#define PROGRESSIVE_LOWER_BOUND_K 0.5
+#define PROGRESSIVE_LOWER_BOUND_K 0.7
 
 /* The error estimates behind --target-error. A pixel's relative error is
  * haze diff's relMSE term, Var / (b + 0.01)^2 with b the converged value;
  * for b haze takes m_lo = max(0, |m| - K sqrt(Var[m])), K =
  * PROGRESSIVE_LOWER_BOUND_K, because a pixel's own mean m is high exactly when
  * a rare bright sample also raised its variance (with m itself the estimate
- * was 3x too low at 4 spp on smoke.pbrt). Channel mean. Neighbourhoods end at
+ * was 3x too low at 4 spp on smoke.pbrt; with K = 0.5, 0.82-0.86 of the
+ * estimate over the converged value on cloud-volpath.pbrt, whose renders
+ * then missed E = 1e-2 by 16-31%; docs/performance.md). Channel mean. Neighbourhoods end at
  * tile edges, so a tile's figures depend on its own pixels only (under MPI
  * each rank measures the tiles it owns).
- * - Allocation, per pixel: e_i from the film's variance of the mean (s^2/n),
+ * - Allocation, per pixel: e_i from the film's variance of the mean (s^2/n,
+ *   the variance per sample at least the spread of the 3x3 neighbours'
+ *   means: first samples that agree show none at a partly covered edge),
  *   the larger of its own and its 3x3 neighbours' mean (few samples
  *   underestimate a variance). The fewest samples reaching a mean error E
  *   give pixel i n_i proportional to sqrt(r_i), r_i = e_i n_i the error of

@@ -66,6 +66,28 @@ typedef struct {
     atomic_int next; /* the next tile to measure */
 } measure_job;
 
+/* The variance over the 3x3 neighbourhood (within the tile) of the pixel
+ * means around (x, y), per channel: the pixel filter reaches into the
+ * neighbours, so a pixel's samples vary at least as much as their means do.
+ * A floor under a pixel's own variance per sample: a few samples that agree
+ * (all missing a partly covering edge, or a quantised path contribution) show
+ * none (docs/performance.md). */
+static rgb spread_of_means(const rgb *means, int x, int y, int tw, int th)
+{
+    rgb sum = rgb_grey(0.0), sq = rgb_grey(0.0);
+    int k = 0;
+    for (int yy = y - 1; yy <= y + 1; ++yy)
+        for (int xx = x - 1; xx <= x + 1; ++xx)
+            if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
+                rgb m = means[yy * T + xx];
+                sum = rgb_add(sum, m);
+                sq = rgb_add(sq, rgb_mul(m, m));
+                ++k;
+            }
+    rgb mean = rgb_scale(sum, 1.0 / k), v = rgb_sub(rgb_scale(sq, 1.0 / k), rgb_mul(mean, mean));
+    return rgb_make(fmax(v.r, 0.0), fmax(v.g, 0.0), fmax(v.b, 0.0));
+}
+
 /* One tile: its pixels' e_i and halves estimates, and its sums. */
 static void measure_tile(const measure_job *job, int t)
 {
@@ -84,6 +106,11 @@ static void measure_tile(const measure_job *job, int t)
         for (int x = 0; x < tw; ++x) {
             int px = pe->x0 + tx + x, py = pe->y0 + ty + y;
             rgb m = means[y * T + x], var = film_get_variance(f, px, py, ratio);
+            long n = film_get_sample_count(f, px, py);
+            if (n > 0) {
+                rgb floor = rgb_scale(spread_of_means(means, x, y, tw, th), 1.0 / (double)n);
+                var = rgb_make(fmax(var.r, floor.r), fmax(var.g, floor.g), fmax(var.b, floor.b));
+            }
             own[y * T + x] = relative_error(var, m, var);
             size_t i = (size_t)(ty + y) * w + tx + x;
             if (job->active[i]) { /* rendered in the last pass: a new halves estimate */

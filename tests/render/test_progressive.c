@@ -303,10 +303,10 @@ static void test_error_estimate(void **state)
         print_message("e left %.4g (%.4g), right %.4g (%.4g)\n", left, 0.01 / 16 / d, right,
                       0.16 / 16 / d);
     /* Conservative: the larger of own and neighbours' mean, over the lower
-     * bound of the value (at a noise of the mean 0.05 of it, about +20%; at
-     * 0.2, +80%) */
+     * bound of the value (at a noise of the mean 0.05 of it, about +25%; at
+     * 0.2, about +110%) */
     assert_true(left >= 0.01 / 16 / d && left <= 1.3 * 0.01 / 16 / d);
-    assert_true(right >= 0.16 / 16 / d && right <= 2.0 * 0.16 / 16 / d);
+    assert_true(right >= 0.16 / 16 / d && right <= 2.4 * 0.16 / 16 / d);
 
     /* The image's (halves) estimate. */
     double estimate = 0.0;
@@ -314,8 +314,8 @@ static void test_error_estimate(void **state)
     if (verbose_on())
         print_message("halves %.4g (%.4g)\n", estimate, want);
     /* unbiased over the value; over its lower bound (the right half's mean
-     * noise is 0.2 of it): up to 1.6x */
-    assert_true(estimate >= want && estimate <= 1.6 * want);
+     * noise is 0.2 of it): up to 1.8x */
+    assert_true(estimate >= want && estimate <= 1.8 * want);
     assert_int_equal(on, 64 * 32); /* far from 1e-9: every pixel goes on */
 
     /* A target between the halves' shares: n*_left = 0.096 / E, n*_right =
@@ -336,14 +336,14 @@ static void test_error_estimate(void **state)
 
     /* A target the estimate meets: every pixel stops. */
     memset(active, 1, sizeof active);
-    progressive_goal met = {0.0, 1.8 * want, 0.0};
+    progressive_goal met = {0.0, 2.0 * want, 0.0};
     assert_int_equal(progressive_error_select(&pe, f, &met, active, NULL), 0);
     assert_int_equal(progressive_error_next_end(&pe, 16, 1024, &met), 20);
     /* The same target after a marching bias of half of it: the noise's share,
-     * 0.9 want, is below the estimate, and pixels go on. */
+     * want, is below the estimate, and pixels go on. */
     memset(active, 1, sizeof active);
-    progressive_goal spent = {0.0, 1.8 * want, 0.9 * want};
-    assert_true(progressive_noise_target(&spent) == 0.9 * want);
+    progressive_goal spent = {0.0, 2.0 * want, want};
+    assert_true(progressive_noise_target(&spent) == want);
     assert_true(progressive_error_select(&pe, f, &spent, active, NULL) > 0);
     /* A target 10x below: the next pass doubles (1/n: 14x the samples). */
     assert_int_equal(progressive_error_next_end(&pe, 16, 1024, &(progressive_goal){0.0, want / 10, 0.0}), 32);
@@ -441,6 +441,70 @@ static void test_target_error_render(void **state)
     film_snapshot_destroy(b);
     render_scene_destroy(ra);
     render_scene_destroy(rb);
+}
+
+/* The relMSE of film f against ref's film (haze diff's). */
+static double film_rel_mse(film *f, film *ref, int w, int h)
+{
+    double rel = 0.0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            rgb p = film_get_pixel(f, x, y, 1.0), r = film_get_pixel(ref, x, y, 1.0);
+            double c[3] = {p.r - r.r, p.g - r.g, p.b - r.b}, q[3] = {r.r, r.g, r.b};
+            for (int k = 0; k < 3; ++k)
+                rel += c[k] * c[k] / ((q[k] + 0.01) * (q[k] + 0.01)) / 3.0;
+        }
+    return rel / (w * h);
+}
+
+/* Multiple scattering in a dense, bright sphere of fog over black (volpath,
+ * albedo 0.97): path contributions come in a few discrete levels, so a
+ * pixel's first samples often agree: on the silhouette, two samples that
+ * both miss a partly covering sphere, inside, two equal paths. With only
+ * their own variance such pixels stopped at the least count, and the image
+ * missed E = 1e-2 (relMSE 0.012-0.018 for seeds 1-3); the spread of the
+ * neighbours' means is a floor under it. Three seeds meet E against a
+ * 4096-sample render. */
+static void test_target_error_heavy_tails(void **state)
+{
+    (void)state;
+    const char *text =
+        "LookAt 0 1 -4  0 0.7 0  0 1 0\n"
+        "Camera \"perspective\" \"float fov\" 30\n"
+        "Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 24\n"
+        "Sampler \"zsobol\" \"integer pixelsamples\" 4096\n"
+        "Integrator \"volpath\" \"integer maxdepth\" 64\n"
+        "WorldBegin\n"
+        "LightSource \"distant\" \"point3 from\" [1 3 -2] \"point3 to\" [0 0 0]"
+        " \"rgb L\" [3 3 3]\n"
+        "MakeNamedMedium \"cloud\" \"string type\" \"homogeneous\"\n"
+        "    \"rgb sigma_a\" [0.25 0.25 0.25] \"rgb sigma_s\" [8 8 8]\n"
+        "AttributeBegin\n"
+        "  Material \"interface\"\n"
+        "  MediumInterface \"cloud\" \"\"\n"
+        "  Translate 0 0.7 0\n"
+        "  Shape \"sphere\" \"float radius\" 0.8\n"
+        "AttributeEnd\n";
+    const double target = 1e-2;
+    render_scene *ref = build_scene_or_fail(text, NULL);
+    renderer_options opt = {.threads = 2};
+    render_stats st;
+    hz_error err = {0};
+    assert_int_equal(renderer_run(ref, &opt, &st, &err), HZ_OK);
+    for (uint64_t seed = 1; seed <= 3; ++seed) {
+        render_options ro = {.statistics = true, .spp = 4096, .seed = seed};
+        render_scene *rs = build_scene_or_fail(text, &ro);
+        assert_int_equal(renderer_run_progressive(rs, &opt, &(progressive_goal){0.0, target, 0.0},
+                                                  &st, &err),
+                         HZ_OK);
+        double rel = film_rel_mse(render_scene_film(rs), render_scene_film(ref), 24, 24);
+        if (verbose_on())
+            print_message("heavy tails, seed %d: relMSE %.4g (target %.3g), %.2f spp mean\n",
+                          (int)seed, rel, target, st.samples / (24.0 * 24));
+        assert_true(rel <= target);
+        render_scene_destroy(rs);
+    }
+    render_scene_destroy(ref);
 }
 
 /* The fog sphere marched with `estimator` at `step` voxels (shadow step twice it). */
@@ -634,6 +698,7 @@ int main(void)
         cmocka_unit_test(test_command_line),
         cmocka_unit_test(test_error_estimate),
         cmocka_unit_test(test_target_error_render),
+        cmocka_unit_test(test_target_error_heavy_tails),
         cmocka_unit_test(test_step_pilot),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
