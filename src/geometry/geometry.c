@@ -386,10 +386,8 @@ static double curve_lane_hit(const geom_shape *s, unsigned prim, vec3 o, vec3 d,
 static double curve_lane_hit_closer(const geom_shape *s, unsigned prim, vec3 o, vec3 d,
                                     double tnear, double tfar, double *u)
 {
-    double t = geometry_curve_hit(s, prim, o, d, tnear, tfar, u);
-    if (t < 0.0 || !((float)t < (float)tfar) || !curve_alpha_keeps(s, prim, *u, o, d, t))
-        return -1.0;
-    return t;
+    double t = curve_lane_hit(s, prim, o, d, tnear, tfar, u);
+    return t >= 0.0 && (float)t < (float)tfar ? t : -1.0;
 }
 
 static void curve_intersect(const struct RTCIntersectFunctionNArguments *args)

@@ -97,6 +97,7 @@ static void measure_tile(const measure_job *job, int t)
     int w = pe->w, h = pe->h;
     double own[T * T];
     rgb means[T * T];
+    long counts[T * T];
     int tx = (t % pe->tiles_x) * T, ty = (t / pe->tiles_x) * T;
     int tw = w - tx < T ? w - tx : T, th = h - ty < T ? h - ty : T;
     for (int y = 0; y < th; ++y)
@@ -106,7 +107,7 @@ static void measure_tile(const measure_job *job, int t)
         for (int x = 0; x < tw; ++x) {
             int px = pe->x0 + tx + x, py = pe->y0 + ty + y;
             rgb m = means[y * T + x], var = film_get_variance(f, px, py, ratio);
-            long n = film_get_sample_count(f, px, py);
+            long n = counts[y * T + x] = film_get_sample_count(f, px, py);
             if (n > 0) {
                 rgb floor = rgb_scale(spread_of_means(means, x, y, tw, th), 1.0 / (double)n);
                 var = rgb_make(fmax(var.r, floor.r), fmax(var.g, floor.g), fmax(var.b, floor.b));
@@ -133,7 +134,7 @@ static void measure_tile(const measure_job *job, int t)
             double self = own[y * T + x], e = sum / k > self ? sum / k : self;
             size_t i = (size_t)(ty + y) * w + tx + x;
             pe->e[i] = e;
-            long samples = film_get_sample_count(f, pe->x0 + tx + x, pe->y0 + ty + y);
+            long samples = counts[y * T + x];
             if (samples > 0) {
                 sums[0] += pe->halves[i];
                 sums[1] += sqrt(e * (double)samples);
