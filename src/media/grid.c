@@ -611,3 +611,154 @@ void grid_region_range(const grid *g, grid_ibox box, float *min, float *max)
     *min = r.min;
     *max = r.max;
 }
+
+/* ---- where a region may be non-zero ---- */
+
+static void support_add(grid_ibox *acc, bool *any, const int64_t lo[3], const int64_t hi[3])
+{
+    for (int a = 0; a < 3; ++a) {
+        if (!*any || lo[a] < acc->min[a])
+            acc->min[a] = (int32_t)lo[a];
+        if (!*any || hi[a] > acc->max[a])
+            acc->max[a] = (int32_t)hi[a];
+    }
+    *any = true;
+}
+
+/* A node or tile of edge `dim` at `origin`, constant over its voxels of `box`. */
+static void support_add_block(const int32_t origin[3], int32_t dim, grid_ibox box, grid_ibox *acc,
+                              bool *any)
+{
+    int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = box.min[a] > origin[a] ? box.min[a] : origin[a];
+        hi[a] = box.max[a] < (int64_t)origin[a] + dim - 1 ? box.max[a] : (int64_t)origin[a] + dim - 1;
+        if (hi[a] < lo[a])
+            return;
+    }
+    support_add(acc, any, lo, hi);
+}
+
+static int lowest_bit(uint32_t m) { return __builtin_ctz(m); }
+static int highest_bit(uint32_t m) { return 31 - __builtin_clz(m); }
+
+/* Bits of the voxels (y, z) with y in [y0, y1] and z in [z0, z1] in one x
+ * slice of a leaf's mask (bit 8 y + z). */
+static uint64_t leaf_yz_mask(int y0, int y1, int z0, int z1)
+{
+    uint64_t zbits = ((1ull << (z1 + 1)) - 1) & ~((1ull << z0) - 1), m = 0;
+    for (int y = y0; y <= y1; ++y)
+        m |= zbits << (8 * y);
+    return m;
+}
+
+/* The active voxels of a leaf inside `box`, from its value mask (bit
+ * 64 x + 8 y + z is voxel origin + (x, y, z)). */
+static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const int32_t origin[3],
+                         grid_ibox box, grid_ibox *acc, bool *any)
+{
+    int r0[3], r1[3];
+    for (int a = 0; a < 3; ++a) {
+        int64_t lo = (int64_t)box.min[a] - origin[a], hi = (int64_t)box.max[a] - origin[a];
+        r0[a] = lo < 0 ? 0 : (int)lo;
+        r1[a] = hi > 7 ? 7 : (int)hi;
+        if (r1[a] < r0[a])
+            return;
+    }
+    uint64_t yz = leaf_yz_mask(r0[1], r1[1], r0[2], r1[2]), all = 0;
+    uint32_t xs = 0;
+    for (int x = r0[0]; x <= r1[0]; ++x) {
+        pnanovdb_address_t at =
+            pnanovdb_address_offset(leaf.address, PNANOVDB_LEAF_OFF_VALUE_MASK + 8u * (uint32_t)x);
+        uint64_t slice = ((uint64_t)pnanovdb_read_uint32(g->buf, pnanovdb_address_offset(at, 4u)) << 32 |
+                          pnanovdb_read_uint32(g->buf, at)) &
+                         yz;
+        if (slice) {
+            xs |= 1u << x;
+            all |= slice;
+        }
+    }
+    if (!xs)
+        return;
+    uint32_t ys = 0, zs = 0;
+    for (int y = 0; y < 8; ++y) {
+        uint32_t byte = (uint32_t)(all >> (8 * y)) & 0xFFu;
+        if (byte)
+            ys |= 1u << y;
+        zs |= byte;
+    }
+    const int64_t lo[3] = {origin[0] + lowest_bit(xs), origin[1] + lowest_bit(ys),
+                           origin[2] + lowest_bit(zs)};
+    const int64_t hi[3] = {origin[0] + highest_bit(xs), origin[1] + highest_bit(ys),
+                           origin[2] + highest_bit(zs)};
+    support_add(acc, any, lo, hi);
+}
+
+static void lower_support(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
+                          grid_ibox box, grid_ibox *acc, bool *any)
+{
+    int32_t lo[3], hi[3];
+    if (!child_range(origin, 128, 8, box, lo, hi))
+        return;
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+                uint32_t n = (uint32_t)((x << 8) | (y << 4) | z);
+                int32_t child_origin[3] = {origin[0] + 8 * x, origin[1] + 8 * y, origin[2] + 8 * z};
+                if (pnanovdb_lower_get_child_mask(g->buf, lower, n))
+                    leaf_support(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n),
+                                 child_origin, box, acc, any);
+                else if (pnanovdb_read_float(g->buf, pnanovdb_lower_get_table_address(
+                                                         FLOAT_GRID, g->buf, lower, n)) != 0.0f)
+                    support_add_block(child_origin, 8, box, acc, any);
+            }
+}
+
+static void upper_support(const grid *g, pnanovdb_upper_handle_t upper, const int32_t origin[3],
+                          grid_ibox box, grid_ibox *acc, bool *any)
+{
+    int32_t lo[3], hi[3];
+    if (!child_range(origin, 4096, 128, box, lo, hi))
+        return;
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+                uint32_t n = (uint32_t)((x << 10) | (y << 5) | z);
+                int32_t child_origin[3] = {origin[0] + 128 * x, origin[1] + 128 * y,
+                                           origin[2] + 128 * z};
+                if (pnanovdb_upper_get_child_mask(g->buf, upper, n))
+                    lower_support(g, pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n),
+                                  child_origin, box, acc, any);
+                else if (pnanovdb_read_float(g->buf, pnanovdb_upper_get_table_address(
+                                                         FLOAT_GRID, g->buf, upper, n)) != 0.0f)
+                    support_add_block(child_origin, 128, box, acc, any);
+            }
+}
+
+bool grid_region_support(const grid *g, grid_ibox box, grid_ibox *out)
+{
+    assert(g->type == FLOAT_GRID);
+    if (g->background != 0.0f) {
+        *out = box;
+        return true;
+    }
+    bool any = false;
+    uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
+    for (uint32_t t = 0; t < count; ++t) {
+        pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(FLOAT_GRID, g->root, t);
+        uint64_t key = pnanovdb_root_tile_get_key(g->buf, tile);
+        int32_t origin[3] = {key_axis(key, 42), key_axis(key, 21), key_axis(key, 0)};
+        int32_t lo[3], hi[3];
+        if (!child_range(origin, 4096, 4096, box, lo, hi))
+            continue;
+        if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile))) {
+            if (pnanovdb_read_float(g->buf, pnanovdb_root_tile_get_value_address(
+                                                FLOAT_GRID, g->buf, tile)) != 0.0f)
+                support_add_block(origin, 4096, box, out, &any);
+        } else {
+            upper_support(g, pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile), origin,
+                          box, out, &any);
+        }
+    }
+    return any;
+}

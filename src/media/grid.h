@@ -146,4 +146,11 @@ grid_node grid_node_at(const grid *g, grid_level level, int32_t i, int32_t j, in
  * region [a, b], pass the voxels floor(a) .. floor(b) + 1. */
 void grid_region_range(const grid *g, grid_ibox box, float *min, float *max);
 
+/* The smallest index box inside `box` that holds every voxel of `box` whose
+ * value may be non-zero: the active voxels of leaves (from their masks:
+ * inactive voxels are taken to hold the background, as above) and tiles with
+ * a non-zero value. False when there is none (the region is all zero). A
+ * grid whose background is not 0 returns `box` itself. */
+bool grid_region_support(const grid *g, grid_ibox box, grid_ibox *out);
+
 #endif

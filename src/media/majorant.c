@@ -85,6 +85,49 @@ static majorant_bounds span_bounds(const source *src, const int64_t first[3], in
     return b;
 }
 
+/* The box of a cell (voxels first .. first + cell - 1 per axis, bounds b)
+ * where the trilinear density may be non-zero: a point p reads voxels
+ * floor(p) and floor(p) + 1, moved by up to `pad`, so only points within
+ * 1 + pad voxels of a non-zero voxel can be non-zero; one voxel more absorbs
+ * rounding, as in span_bounds. */
+static majorant_box cell_box(const source *src, const int64_t first[3], int32_t cell,
+                             majorant_bounds b)
+{
+    const majorant_box full = {{0, 0, 0},
+                               {MAJORANT_BOX_UNITS, MAJORANT_BOX_UNITS, MAJORANT_BOX_UNITS}};
+    majorant_box box = full;
+    if (!(b.max > 0.0f) || src->empty)
+        return full; /* walks skip an empty cell whole */
+    grid_ibox region, nz;
+    int64_t reach[3];
+    for (int a = 0; a < 3; ++a) {
+        reach[a] = 1 + (int64_t)src->pad[a];
+        int64_t v0 = first[a] - reach[a], v1 = first[a] + cell + reach[a];
+        region.min[a] = (int32_t)(v0 < INT32_MIN ? INT32_MIN : v0);
+        region.max[a] = (int32_t)(v1 > INT32_MAX ? INT32_MAX : v1);
+    }
+    if (!grid_region_support(src->g, region, &nz)) {
+        box.lo[0] = box.lo[1] = box.lo[2] = MAJORANT_BOX_UNITS;
+        box.hi[0] = box.hi[1] = box.hi[2] = 0;
+        return box;
+    }
+    for (int a = 0; a < 3; ++a) {
+        int64_t lo = (int64_t)nz.min[a] - reach[a] - 1 - first[a];
+        int64_t hi = (int64_t)nz.max[a] + reach[a] + 1 - first[a];
+        lo = lo < 0 ? 0 : lo > cell ? cell : lo;
+        hi = hi < 0 ? 0 : hi > cell ? cell : hi;
+        box.lo[a] = (uint8_t)(lo * MAJORANT_BOX_UNITS / cell); /* floor */
+        box.hi[a] = (uint8_t)((hi * MAJORANT_BOX_UNITS + cell - 1) / cell); /* ceil */
+    }
+    /* A box that cuts less than a quarter of the cell off every side saves
+     * fewer lookups than its extra intervals cost: the whole cell. */
+    bool worth = false;
+    for (int a = 0; a < 3; ++a)
+        worth = worth || box.lo[a] > box.hi[a] || box.lo[a] >= MAJORANT_BOX_UNITS / 4 ||
+                box.hi[a] <= MAJORANT_BOX_UNITS * 3 / 4;
+    return worth ? box : full;
+}
+
 /* A brick whose bounds are one value holds that value in every cell (the
  * density's min = max, and no emission or none that could vary). */
 static bool uniform_bounds(majorant_bounds b) { return b.max == b.min && b.emit == 0.0f; }
@@ -134,7 +177,7 @@ static size_t bound_bricks(const source *src, majorant_grid *mg)
  * brick must keep them), false when all are equal (their bounds are then the
  * brick's, tighter than the brick's own query). */
 static bool bound_cells(const source *src, majorant_grid *mg, const int32_t brick[3],
-                        majorant_bounds *cells, majorant_bounds *uniform)
+                        majorant_bounds *cells, majorant_box *boxes, majorant_bounds *uniform)
 {
     size_t i = 0;
     bool differ = false;
@@ -146,6 +189,8 @@ static bool bound_cells(const source *src, majorant_grid *mg, const int32_t bric
                 for (int a = 0; a < 3; ++a)
                     first[a] = mg->origin[a] + ((int64_t)brick[a] * B + c3[a]) * mg->cell;
                 cells[i] = span_bounds(src, first, mg->cell);
+                if (boxes)
+                    boxes[i] = cell_box(src, first, mg->cell, cells[i]);
                 differ = differ || !same_bounds(cells[i], cells[0]);
             }
     *uniform = cells[0];
@@ -197,7 +242,9 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
     if (varied == 0)
         return HZ_OK;
     out->cells = malloc(varied * CELLS_PER_BRICK * sizeof *out->cells);
-    if (!out->cells) {
+    if (!em && grid_background(g) == 0.0f)
+        out->boxes = malloc(varied * CELLS_PER_BRICK * sizeof *out->boxes);
+    if (!out->cells || (!em && grid_background(g) == 0.0f && !out->boxes)) {
         majorant_grid_free(out);
         return hz_fail(err, "out of memory for a majorant grid of %zu cells",
                        varied * CELLS_PER_BRICK);
@@ -210,8 +257,9 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
                 if (uniform_bounds(br->bounds))
                     continue;
                 const int32_t b3[3] = {x, y, z};
-                majorant_bounds *cells = out->cells + out->stored_bricks * CELLS_PER_BRICK;
-                if (bound_cells(&src, out, b3, cells, &br->bounds))
+                size_t at = out->stored_bricks * CELLS_PER_BRICK;
+                if (bound_cells(&src, out, b3, out->cells + at, out->boxes ? out->boxes + at : NULL,
+                                &br->bounds))
                     br->cells = (int32_t)out->stored_bricks++;
             }
     if (out->stored_bricks < varied) { /* give back what uniform bricks did not keep */
@@ -224,6 +272,16 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
                 free(out->cells);
             out->cells = kept;
         }
+        if (out->boxes) {
+            kept = out->stored_bricks
+                       ? realloc(out->boxes, out->stored_bricks * CELLS_PER_BRICK * sizeof *out->boxes)
+                       : NULL;
+            if (kept || !out->stored_bricks) {
+                if (!kept)
+                    free(out->boxes);
+                out->boxes = kept;
+            }
+        }
     }
     return HZ_OK;
 }
@@ -232,8 +290,10 @@ void majorant_grid_free(majorant_grid *mg)
 {
     free(mg->bricks);
     free(mg->cells);
+    free(mg->boxes);
     mg->bricks = NULL;
     mg->cells = NULL;
+    mg->boxes = NULL;
     mg->stored_bricks = 0;
     mg->res[0] = mg->res[1] = mg->res[2] = 0;
 }
@@ -241,7 +301,8 @@ void majorant_grid_free(majorant_grid *mg)
 size_t majorant_grid_bytes(const majorant_grid *mg)
 {
     return (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2] * sizeof *mg->bricks +
-           mg->stored_bricks * CELLS_PER_BRICK * sizeof *mg->cells;
+           mg->stored_bricks * CELLS_PER_BRICK *
+               (sizeof *mg->cells + (mg->boxes ? sizeof *mg->boxes : 0));
 }
 
 
@@ -281,6 +342,7 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
     w->mg = mg;
     w->done = true;
     w->cell = NULL;
+    w->clip_cell = NULL;
     if (!mg->bricks || !(t0 <= t1))
         return false;
     const double o3[3] = {o.x, o.y, o.z}, d3[3] = {d.x, d.y, d.z};
@@ -351,3 +413,36 @@ void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, doubl
     w->cell = w->mg->cells + (size_t)br->cells * CELLS_PER_BRICK + cell_index(w->cell_ijk);
 }
 
+void majorant_walk_clip(majorant_walk *w)
+{
+    const majorant_box *bx = &w->mg->boxes[w->cell - w->mg->cells];
+    double t0 = -INFINITY, t1 = INFINITY;
+    for (int a = 0; a < 3; ++a) {
+        double c = (double)w->brick[a] * B + w->cell_ijk[a];
+        /* A side on the cell's face is no plane: the DDA ends the cell there
+         * (computing the same place another way would leave slivers) */
+        double lo = bx->lo[a] == 0 ? -INFINITY : c + bx->lo[a] * (1.0 / MAJORANT_BOX_UNITS);
+        double hi = bx->hi[a] == MAJORANT_BOX_UNITS ? INFINITY
+                                                    : c + bx->hi[a] * (1.0 / MAJORANT_BOX_UNITS);
+        if (bx->lo[a] > bx->hi[a]) { /* nowhere */
+            t0 = INFINITY;
+            break;
+        }
+        if (w->du[a] == 0.0) {
+            if (!(w->u0[a] >= lo && w->u0[a] <= hi))
+                t0 = INFINITY;
+            continue;
+        }
+        double ta = (lo - w->u0[a]) / w->du[a], tb = (hi - w->u0[a]) / w->du[a];
+        if (ta > tb) {
+            double t = ta;
+            ta = tb;
+            tb = t;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+    }
+    w->clip_cell = w->cell;
+    w->clip_t0 = t0;
+    w->clip_t1 = t1;
+}

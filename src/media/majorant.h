@@ -61,12 +61,21 @@ typedef struct {
     int32_t cells;          /* its first cell in majorant_grid.cells, or -1: uniform */
 } majorant_brick;
 
+/* Where in a stored cell the density may be non-zero: [lo, hi] per axis in
+ * 64ths of the cell from its first voxel, rounded outward (lo > hi: nowhere).
+ * Walks report the rest of the cell as empty. */
+#define MAJORANT_BOX_UNITS 64
+typedef struct {
+    uint8_t lo[3], hi[3];
+} majorant_box;
+
 typedef struct {
     int32_t res[3];          /* bricks per axis */
     int32_t origin[3];       /* index coordinate of brick (0,0,0)'s first voxel */
     int32_t cell;            /* edge of a cell in voxels */
     majorant_brick *bricks;  /* res[0]*res[1]*res[2], x fastest */
     majorant_bounds *cells;  /* MAJORANT_BRICK^3 per non-uniform brick, x fastest */
+    majorant_box *boxes;     /* one per stored cell, or NULL (a grid with an emission grid) */
     size_t stored_bricks;    /* bricks that store their cells */
 } majorant_grid;
 
@@ -98,6 +107,9 @@ typedef struct {
     ptrdiff_t cell_stride[3];     /* step[a] x the cell's stride along a */
     double cell_next[3], cell_delta[3];
     double brick_exit;
+    /* where the current cell's box lies on the ray (boxes only) */
+    const majorant_bounds *clip_cell; /* the cell clip_t0/clip_t1 belong to */
+    double clip_t0, clip_t1;
     bool done;
 } majorant_walk;
 
@@ -121,8 +133,16 @@ static inline size_t majorant_brick_index(const majorant_grid *mg, const int32_t
            (size_t)b[0];
 }
 
+static inline bool majorant_box_full(const majorant_box *bx)
+{
+    return (bx->lo[0] | bx->lo[1] | bx->lo[2]) == 0 &&
+           (bx->hi[0] & bx->hi[1] & bx->hi[2]) == MAJORANT_BOX_UNITS;
+}
+
 /* Starts the cell level in a brick that stores its cells, at w->t. */
 void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, double exit);
+/* Sets clip_t0/clip_t1 to the current cell's box along the ray. */
+void majorant_walk_clip(majorant_walk *w);
 
 static inline int majorant_nearest_axis(const double t[3])
 {
@@ -163,7 +183,23 @@ static inline bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
             int a = majorant_nearest_axis(w->cell_next);
             int32_t c = w->cell_ijk[a] + w->step[a];
             bool leave = !(w->cell_next[a] < w->brick_exit) || (uint32_t)c >= MAJORANT_BRICK;
-            majorant_walk_emit(w, seg, leave ? w->brick_exit : w->cell_next[a], *w->cell);
+            double exit = leave ? w->brick_exit : w->cell_next[a];
+            majorant_bounds b = *w->cell;
+            if (w->mg->boxes && b.max > 0.0f &&
+                !majorant_box_full(&w->mg->boxes[w->cell - w->mg->cells])) {
+                /* up to three intervals: before the box, in it, after it */
+                if (w->clip_cell != w->cell)
+                    majorant_walk_clip(w);
+                bool inside = !(w->t < w->clip_t0) && w->t < w->clip_t1;
+                double change = w->t < w->clip_t0 ? w->clip_t0 : w->clip_t1;
+                if (!inside)
+                    b = (majorant_bounds){0.0f, 0.0f, 0.0f};
+                if (change > w->t && change < exit) {
+                    majorant_walk_emit(w, seg, change, b); /* the cell goes on */
+                    return true;
+                }
+            }
+            majorant_walk_emit(w, seg, exit, b);
             if (leave) {
                 w->cell = NULL;
                 majorant_walk_next_brick(w, majorant_nearest_axis(w->brick_next));
