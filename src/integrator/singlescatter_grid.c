@@ -181,11 +181,15 @@ rgb singlescatter_grid_transmittance(const singlescatter_scene *vs, const medium
         strata s;
         strata_make(&s, &gr, t0, t1, set->shadow_step, offset, &walk->r);
         double tau = 0.0;
+        bool skip = false; /* strata to skip up to seg.t0 (empty cells before it) */
         while (next_cell(&mw, &seg, walk)) {
             if (!(seg.max > 0.0)) {
-                strata_skip_to(&s, seg.t1);
+                skip = true;
                 continue;
             }
+            if (skip)
+                strata_skip_to(&s, seg.t0);
+            skip = false;
             for (; strata_before(&s, seg.t1); strata_next(&s))
                 tau += grid_ray_density(&gr, s.t, walk);
         }
@@ -412,9 +416,21 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
 void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, vec3 w, double t0,
                                 double t1, rgb *beta, rgb *L, sampler_state *u, media_walk *walk)
 {
-    segment_walk sw = {.vs = vs, .mi = mi, .m = &vs->in.media[mi], .o = o, .w = w,
-                       .wo = v3_neg(w), .T = *beta, .Lseg = rgb_grey(0.0), .u = u,
-                       .walk = walk};
+    /* Field by field: an initialiser would zero the accessors too (~2 KB
+     * per segment), which grid_ray_init sets up as the medium needs. */
+    segment_walk sw;
+    sw.vs = vs;
+    sw.mi = mi;
+    sw.m = &vs->in.media[mi];
+    sw.o = o;
+    sw.w = w;
+    sw.wo = v3_neg(w);
+    sw.T = *beta;
+    sw.Lseg = rgb_grey(0.0);
+    sw.tau = 0.0;
+    sw.cutoff = 0.0;
+    sw.u = u;
+    sw.walk = walk;
     majorant_walk mw;
     if (!grid_ray_init(&sw.gr, &mw, sw.m, o, w, walk->time, &t0, &t1))
         return;
@@ -435,15 +451,20 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     if (!marching)
         sw.tau = exp1(&walk->r);
     double sigma_max = rgb_max(sw.sigma_t);
-    bool alive = true;
+    bool alive = true, skip = false; /* skip: strata up to seg.t0 lie in empty cells */
     majorant_segment seg;
     while (alive && next_cell(&mw, &seg, walk)) {
-        if (!(seg.max > 0.0)) {
-            /* No density: only free emission, integrated over the strata. */
-            if (sw.free_emission && seg.emit > 0.0)
-                alive = march_strata(&sw, seg.t1);
-            else
-                strata_skip_to(&sw.s, seg.t1);
+        /* No density and no free emission: nothing to sample (the strata are
+         * skipped when the next interval that has something begins). */
+        if (!(seg.max > 0.0) && !(sw.free_emission && seg.emit > 0.0)) {
+            skip = true;
+            continue;
+        }
+        if (skip)
+            strata_skip_to(&sw.s, seg.t0);
+        skip = false;
+        if (!(seg.max > 0.0)) { /* free emission only, integrated over the strata */
+            alive = march_strata(&sw, seg.t1);
             continue;
         }
         if (marching) {
