@@ -117,9 +117,20 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
 {
     if (!(t1 > t0))
         return rgb_grey(1.0);
-    tracker tr = {.src = {.m = m, .grid = m->kind == MEDIUM_GRID || m->kind == MEDIUM_RGBGRID},
-                  .hero = hero, .emission = emission, .walk = walk,
-                  .fn = fn, .ctx = ctx, .T_maj = rgb_grey(1.0)};
+    /* Field by field: an initialiser would zero the accessors too (several
+     * hundred bytes per segment), which medium_accessor_init sets up as the
+     * medium needs. */
+    tracker tr;
+    tr.src.m = m;
+    tr.src.grid = m->kind == MEDIUM_GRID || m->kind == MEDIUM_RGBGRID;
+    tr.src.cloud = false;
+    tr.hero = hero;
+    tr.emission = emission;
+    tr.walk = walk;
+    tr.fn = fn;
+    tr.ctx = ctx;
+    tr.T_maj = rgb_grey(1.0);
+    tr.collisions = 0;
     switch (m->kind) {
     case MEDIUM_HOMOGENEOUS:
         return track_span(&tr, t0, t1, 1.0, 0.0) || tr.collisions > VOLPATH_MAX_COLLISIONS
