@@ -62,6 +62,15 @@ static inline rgb rgb_add(rgb a, rgb b) { return (rgb){a.r + b.r, a.g + b.g, a.b
 static inline rgb rgb_mul(rgb a, rgb b) { return (rgb){a.r * b.r, a.g * b.g, a.b * b.b}; }
 static inline rgb rgb_sub(rgb a, rgb b) { return (rgb){a.r - b.r, a.g - b.g, a.b - b.b}; }
 static inline rgb rgb_scale(rgb a, double s) { return (rgb){a.r * s, a.g * s, a.b * s}; }
+/* e^{-sigma d} per channel; a channel that does not attenuate stays 1 (0 *
+ * INFINITY would be NaN). A grey sigma takes one exp. */
+static inline rgb rgb_exp_neg(rgb sigma, double d)
+{
+    if (sigma.r == sigma.g && sigma.g == sigma.b)
+        return rgb_grey(sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0);
+    return (rgb){sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0, sigma.g > 0.0 ? exp(-sigma.g * d) : 1.0,
+                 sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0};
+}
 static inline bool rgb_is_black(rgb a) { return a.r == 0.0 && a.g == 0.0 && a.b == 0.0; }
 static inline double rgb_max(rgb a) { return fmax(a.r, fmax(a.g, a.b)); }
 static inline double rgb_avg(rgb a) { return (a.r + a.g + a.b) / 3.0; }

@@ -12,14 +12,6 @@
  * bounds the work of absurd step sizes (the step grows instead). */
 #define SINGLESCATTER_MAX_STRATA 1000000
 
-/* e^{-sigma d} per channel; a channel that does not attenuate stays 1 (0 * INFINITY is NaN). */
-static inline rgb rgb_exp_neg(rgb sigma, double d)
-{
-    return rgb_make(sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0,
-                    sigma.g > 0.0 ? exp(-sigma.g * d) : 1.0,
-                    sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0);
-}
-
 /* Russian roulette on a walk's throughput: below SINGLESCATTER_RR_THRESHOLD it survives
  * with probability max(beta)/threshold and is scaled up to compensate. Returns
  * false when the walk ends (beta is then 0). */

@@ -2,14 +2,6 @@
 
 #include <math.h>
 
-/* e^{-sigma d} per channel; a channel that does not attenuate stays 1. */
-static rgb exp_neg(rgb sigma, double d)
-{
-    return rgb_make(sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0,
-                    sigma.g > 0.0 ? exp(-sigma.g * d) : 1.0,
-                    sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0);
-}
-
 /* Where the coefficients come from: constant (homogeneous), a grid's
  * density along an index-space ray, or a cloud's along a medium-space ray. */
 typedef struct {
@@ -69,20 +61,20 @@ static bool track_span(tracker *tr, double a, double b, double bound, double ext
         sigma_maj = rgb_add(sigma_maj, rgb_grey(extra));
     double rate = rgb_ch(sigma_maj, tr->hero);
     if (!(rate > 0.0)) {
-        tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, b - a));
+        tr->T_maj = rgb_mul(tr->T_maj, rgb_exp_neg(sigma_maj, b - a));
         return true;
     }
     for (double t = a;;) {
         double tn = t - log1p(-rng_uniform(&tr->walk->r)) / rate;
         if (!(tn < b)) {
-            tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, b - t));
+            tr->T_maj = rgb_mul(tr->T_maj, rgb_exp_neg(sigma_maj, b - t));
             return true;
         }
         if (++tr->collisions > VOLPATH_MAX_COLLISIONS) {
             tr->T_maj = rgb_grey(0.0);
             return false;
         }
-        tr->T_maj = rgb_mul(tr->T_maj, exp_neg(sigma_maj, tn - t));
+        tr->T_maj = rgb_mul(tr->T_maj, rgb_exp_neg(sigma_maj, tn - t));
         volpath_event ev;
         if (tr->src.grid && m->kind == MEDIUM_RGBGRID) {
             vec3 p = medium_point_at(m, &tr->src.acc, &tr->src.r, tn, &tr->walk->lookups);
