@@ -694,44 +694,40 @@ static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const int32
     support_add(acc, any, lo, hi);
 }
 
-static void lower_support(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
-                          grid_ibox box, grid_ibox *acc, bool *any)
+/* The children of an internal node (GRID_LOWER: 16^3 leaves of 8^3 voxels;
+ * GRID_UPPER: 32^3 lower nodes of 128^3) that overlap `box`. */
+static void internal_support(const grid *g, grid_level level, pnanovdb_address_t node,
+                             const int32_t origin[3], grid_ibox box, grid_ibox *acc, bool *any)
 {
+    bool upper = level == GRID_UPPER;
+    int32_t child_dim = upper ? 128 : 8, shift = upper ? 5 : 4;
     int32_t lo[3], hi[3];
-    if (!child_range(origin, 128, 8, box, lo, hi))
+    if (!child_range(origin, child_dim << shift, child_dim, box, lo, hi))
         return;
     for (int32_t x = lo[0]; x <= hi[0]; ++x)
         for (int32_t y = lo[1]; y <= hi[1]; ++y)
             for (int32_t z = lo[2]; z <= hi[2]; ++z) {
-                uint32_t n = (uint32_t)((x << 8) | (y << 4) | z);
-                int32_t child_origin[3] = {origin[0] + 8 * x, origin[1] + 8 * y, origin[2] + 8 * z};
-                if (pnanovdb_lower_get_child_mask(g->buf, lower, n))
-                    leaf_support(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n),
-                                 child_origin, box, acc, any);
-                else if (pnanovdb_read_float(g->buf, pnanovdb_lower_get_table_address(
-                                                         FLOAT_GRID, g->buf, lower, n)) != 0.0f)
-                    support_add_block(child_origin, 8, box, acc, any);
-            }
-}
-
-static void upper_support(const grid *g, pnanovdb_upper_handle_t upper, const int32_t origin[3],
-                          grid_ibox box, grid_ibox *acc, bool *any)
-{
-    int32_t lo[3], hi[3];
-    if (!child_range(origin, 4096, 128, box, lo, hi))
-        return;
-    for (int32_t x = lo[0]; x <= hi[0]; ++x)
-        for (int32_t y = lo[1]; y <= hi[1]; ++y)
-            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
-                uint32_t n = (uint32_t)((x << 10) | (y << 5) | z);
-                int32_t child_origin[3] = {origin[0] + 128 * x, origin[1] + 128 * y,
-                                           origin[2] + 128 * z};
-                if (pnanovdb_upper_get_child_mask(g->buf, upper, n))
-                    lower_support(g, pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n),
-                                  child_origin, box, acc, any);
-                else if (pnanovdb_read_float(g->buf, pnanovdb_upper_get_table_address(
-                                                         FLOAT_GRID, g->buf, upper, n)) != 0.0f)
-                    support_add_block(child_origin, 128, box, acc, any);
+                uint32_t n = (uint32_t)((x << (2 * shift)) | (y << shift) | z);
+                int32_t child_origin[3] = {origin[0] + child_dim * x, origin[1] + child_dim * y,
+                                           origin[2] + child_dim * z};
+                pnanovdb_upper_handle_t up = {node};
+                pnanovdb_lower_handle_t low = {node};
+                if (upper ? pnanovdb_upper_get_child_mask(g->buf, up, n)
+                          : pnanovdb_lower_get_child_mask(g->buf, low, n)) {
+                    if (upper)
+                        internal_support(g, GRID_LOWER,
+                                         pnanovdb_upper_get_child(FLOAT_GRID, g->buf, up, n).address,
+                                         child_origin, box, acc, any);
+                    else
+                        leaf_support(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, low, n),
+                                     child_origin, box, acc, any);
+                    continue;
+                }
+                pnanovdb_address_t tile =
+                    upper ? pnanovdb_upper_get_table_address(FLOAT_GRID, g->buf, up, n)
+                          : pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, low, n);
+                if (pnanovdb_read_float(g->buf, tile) != 0.0f)
+                    support_add_block(child_origin, child_dim, box, acc, any);
             }
 }
 
@@ -756,8 +752,9 @@ bool grid_region_support(const grid *g, grid_ibox box, grid_ibox *out)
                                                 FLOAT_GRID, g->buf, tile)) != 0.0f)
                 support_add_block(origin, 4096, box, out, &any);
         } else {
-            upper_support(g, pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile), origin,
-                          box, out, &any);
+            internal_support(g, GRID_UPPER,
+                             pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile).address,
+                             origin, box, out, &any);
         }
     }
     return any;

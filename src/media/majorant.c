@@ -326,6 +326,25 @@ bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *o
     return true;
 }
 
+/* Narrows [*t0, *t1] to where u0 + t du lies in [lo, hi] (one axis of a slab
+ * test); false when the ray runs parallel to the slab outside it.
+ * Comparisons, not fmax/fmin (library calls on this hot path); NaN cannot
+ * occur: du is finite. */
+static inline bool slab_clip(double u0, double du, double lo, double hi, double *t0, double *t1)
+{
+    if (du == 0.0)
+        return u0 >= lo && u0 <= hi;
+    double ta = (lo - u0) / du, tb = (hi - u0) / du;
+    if (ta > tb) {
+        double t = ta;
+        ta = tb;
+        tb = t;
+    }
+    *t0 = ta > *t0 ? ta : *t0;
+    *t1 = tb < *t1 ? tb : *t1;
+    return true;
+}
+
 /* floor(u) clamped to [0, n - 1], without a libm call (u is finite). */
 static inline int32_t clamped_floor(double u, int32_t n)
 {
@@ -351,22 +370,8 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
     for (int a = 0; a < 3; ++a) {
         w->u0[a] = (o3[a] - mg->origin[a]) / mg->cell;
         w->du[a] = d3[a] / mg->cell;
-        double end = (double)mg->res[a] * B;
-        if (w->du[a] == 0.0) {
-            if (!(w->u0[a] >= 0.0 && w->u0[a] <= end))
-                return false;
-            continue;
-        }
-        double ta = (0.0 - w->u0[a]) / w->du[a], tb = (end - w->u0[a]) / w->du[a];
-        if (ta > tb) {
-            double t = ta;
-            ta = tb;
-            tb = t;
-        }
-        /* Comparisons, not fmax/fmin (library calls on this hot path); NaN
-         * cannot occur: du is finite and non-zero. */
-        t0 = ta > t0 ? ta : t0;
-        t1 = tb < t1 ? tb : t1;
+        if (!slab_clip(w->u0[a], w->du[a], 0.0, (double)mg->res[a] * B, &t0, &t1))
+            return false;
     }
     if (!(t0 < t1))
         return false;
@@ -428,19 +433,10 @@ void majorant_walk_clip(majorant_walk *w)
             t0 = INFINITY;
             break;
         }
-        if (w->du[a] == 0.0) {
-            if (!(w->u0[a] >= lo && w->u0[a] <= hi))
-                t0 = INFINITY;
-            continue;
+        if (!slab_clip(w->u0[a], w->du[a], lo, hi, &t0, &t1)) {
+            t0 = INFINITY;
+            break;
         }
-        double ta = (lo - w->u0[a]) / w->du[a], tb = (hi - w->u0[a]) / w->du[a];
-        if (ta > tb) {
-            double t = ta;
-            ta = tb;
-            tb = t;
-        }
-        t0 = ta > t0 ? ta : t0;
-        t1 = tb < t1 ? tb : t1;
     }
     w->clip_cell = w->cell;
     w->clip_t0 = t0;
