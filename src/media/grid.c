@@ -575,17 +575,29 @@ static int32_t key_axis(uint64_t key, int shift)
     return (int32_t)(bits << 12);
 }
 
+/* Root tile t (a 4096^3 child or tile), its first voxel, and whether it
+ * overlaps `box`. */
+static bool root_tile_overlaps(const grid *g, uint32_t t, grid_ibox box,
+                               pnanovdb_root_tile_handle_t *tile, int32_t origin[3])
+{
+    *tile = pnanovdb_root_get_tile(FLOAT_GRID, g->root, t);
+    uint64_t key = pnanovdb_root_tile_get_key(g->buf, *tile);
+    origin[0] = key_axis(key, 42);
+    origin[1] = key_axis(key, 21);
+    origin[2] = key_axis(key, 0);
+    int32_t lo[3], hi[3];
+    return child_range(origin, 4096, 4096, box, lo, hi);
+}
+
 void grid_region_range(const grid *g, grid_ibox box, float *min, float *max)
 {
     assert(g->type == FLOAT_GRID);
     region_range r = {INFINITY, -INFINITY, 0};
     uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
     for (uint32_t t = 0; t < count; ++t) {
-        pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(FLOAT_GRID, g->root, t);
-        uint64_t key = pnanovdb_root_tile_get_key(g->buf, tile);
-        int32_t origin[3] = {key_axis(key, 42), key_axis(key, 21), key_axis(key, 0)};
-        int32_t lo[3], hi[3];
-        if (!child_range(origin, 4096, 4096, box, lo, hi))
+        pnanovdb_root_tile_handle_t tile;
+        int32_t origin[3];
+        if (!root_tile_overlaps(g, t, box, &tile, origin))
             continue;
         if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile))) {
             float v = pnanovdb_read_float(
@@ -741,11 +753,9 @@ bool grid_region_support(const grid *g, grid_ibox box, grid_ibox *out)
     bool any = false;
     uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
     for (uint32_t t = 0; t < count; ++t) {
-        pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(FLOAT_GRID, g->root, t);
-        uint64_t key = pnanovdb_root_tile_get_key(g->buf, tile);
-        int32_t origin[3] = {key_axis(key, 42), key_axis(key, 21), key_axis(key, 0)};
-        int32_t lo[3], hi[3];
-        if (!child_range(origin, 4096, 4096, box, lo, hi))
+        pnanovdb_root_tile_handle_t tile;
+        int32_t origin[3];
+        if (!root_tile_overlaps(g, t, box, &tile, origin))
             continue;
         if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile))) {
             if (pnanovdb_read_float(g->buf, pnanovdb_root_tile_get_value_address(
