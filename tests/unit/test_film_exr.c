@@ -188,8 +188,7 @@ static void test_zip_chunks_read_back(void **state)
         assert_int_equal(exr_image_alloc(&img, w, h, 4, NULL), HZ_OK);
         uint32_t s = 99;
         for (int c = 0; c < 4; c++) {
-            snprintf(img.channels[c].name, sizeof img.channels[c].name, "%s", "ABGR" + c);
-            img.channels[c].name[1] = '\0';
+            snprintf(img.channels[c].name, sizeof img.channels[c].name, "%c", "ABGR"[c]);
             img.channels[c].half = !noise && c == 1;
             for (int y = 0; y < h; y++)
                 for (int x = 0; x < w; x++) {
