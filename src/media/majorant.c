@@ -23,6 +23,7 @@ typedef struct {
     const majorant_emission *em; /* NULL: none */
     grid_ibox em_active;
     bool em_empty;
+    transform index_from_eindex; /* em not aligned: back from its index space */
 } source;
 
 /* The range of `g` over `box` (its index space); the background alone when
@@ -44,23 +45,29 @@ static int32_t clamp_index(double v)
     return v <= (double)INT32_MIN ? INT32_MIN : v >= (double)INT32_MAX ? INT32_MAX : (int32_t)v;
 }
 
+/* A box of voxels in another index space (to = t from): its corners mapped,
+ * rounded out by a voxel (trilinear lookups read the next one). */
+static grid_ibox map_box(const transform *t, grid_ibox box)
+{
+    vec3 lo, hi;
+    transform_box(t, v3(box.min[0], box.min[1], box.min[2]), v3(box.max[0], box.max[1], box.max[2]),
+                  &lo, &hi);
+    const double lo3[3] = {lo.x, lo.y, lo.z}, hi3[3] = {hi.x, hi.y, hi.z};
+    grid_ibox out;
+    for (int a = 0; a < 3; ++a) {
+        out.min[a] = clamp_index(floor(lo3[a]) - 1.0);
+        out.max[a] = clamp_index(ceil(hi3[a]) + 1.0);
+    }
+    return out;
+}
+
 /* The emission grid's upper bound over a box of density voxels: the box's
  * corners mapped into its index space, rounded out by a voxel (its
  * trilinear lookups read the next one). */
 static float emission_bound(const source *src, grid_ibox box)
 {
     const majorant_emission *em = src->em;
-    grid_ibox ebox = box;
-    if (!em->aligned) {
-        vec3 lo, hi;
-        transform_box(&em->eindex_from_index, v3(box.min[0], box.min[1], box.min[2]),
-                      v3(box.max[0], box.max[1], box.max[2]), &lo, &hi);
-        const double lo3[3] = {lo.x, lo.y, lo.z}, hi3[3] = {hi.x, hi.y, hi.z};
-        for (int a = 0; a < 3; ++a) {
-            ebox.min[a] = clamp_index(floor(lo3[a]) - 1.0);
-            ebox.max[a] = clamp_index(ceil(hi3[a]) + 1.0);
-        }
-    }
+    grid_ibox ebox = em->aligned ? box : map_box(&em->eindex_from_index, box);
     float vmin, vmax;
     range_over(em->grid, &src->em_active, src->em_empty, ebox, &vmin, &vmax);
     return fmaxf(vmax, 0.0f);
@@ -86,18 +93,18 @@ static majorant_bounds span_bounds(const source *src, const int64_t first[3], in
 }
 
 /* The box of a cell (voxels first .. first + cell - 1 per axis, bounds b)
- * where the trilinear density may be non-zero: a point p reads voxels
- * floor(p) and floor(p) + 1, moved by up to `pad`, so only points within
- * 1 + pad voxels of a non-zero voxel can be non-zero; one voxel more absorbs
- * rounding, as in span_bounds. */
+ * where the trilinear density (or an aligned emission grid) may be non-zero:
+ * a point p reads voxels floor(p) and floor(p) + 1, moved by up to `pad`, so
+ * only points within 1 + pad voxels of a non-zero voxel can be non-zero; one
+ * voxel more absorbs rounding, as in span_bounds. */
 static majorant_box cell_box(const source *src, const int64_t first[3], int32_t cell,
                              majorant_bounds b)
 {
     const majorant_box full = {{0, 0, 0},
                                {MAJORANT_BOX_UNITS, MAJORANT_BOX_UNITS, MAJORANT_BOX_UNITS}};
     majorant_box box = full;
-    if (!(b.max > 0.0f) || src->empty)
-        return full; /* walks skip an empty cell whole */
+    if (!(b.max > 0.0f))
+        return full; /* walks take a cell without density whole */
     grid_ibox region, nz;
     int64_t reach[3];
     for (int a = 0; a < 3; ++a) {
@@ -106,7 +113,28 @@ static majorant_box cell_box(const source *src, const int64_t first[3], int32_t 
         region.min[a] = (int32_t)(v0 < INT32_MIN ? INT32_MIN : v0);
         region.max[a] = (int32_t)(v1 > INT32_MAX ? INT32_MAX : v1);
     }
-    if (!grid_region_support(src->g, region, &nz)) {
+    bool any = !src->empty && grid_region_support(src->g, region, &nz);
+    /* and the emission grid, in its index space: its non-zero voxels,
+     * dilated by its own voxel of reach, mapped back */
+    const majorant_emission *em = src->em;
+    grid_ibox enz;
+    if (em && !src->em_empty &&
+        grid_region_support(em->grid, em->aligned ? region : map_box(&em->eindex_from_index, region),
+                            &enz)) {
+        if (!em->aligned) {
+            for (int a = 0; a < 3; ++a) {
+                enz.min[a] = clamp_index((double)enz.min[a] - 1.0);
+                enz.max[a] = clamp_index((double)enz.max[a] + 1.0);
+            }
+            enz = map_box(&src->index_from_eindex, enz);
+        }
+        for (int a = 0; a < 3; ++a) {
+            nz.min[a] = !any || enz.min[a] < nz.min[a] ? enz.min[a] : nz.min[a];
+            nz.max[a] = !any || enz.max[a] > nz.max[a] ? enz.max[a] : nz.max[a];
+        }
+        any = true;
+    }
+    if (!any) {
         box.lo[0] = box.lo[1] = box.lo[2] = MAJORANT_BOX_UNITS;
         box.hi[0] = box.hi[1] = box.hi[2] = 0;
         return box;
@@ -209,10 +237,13 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
         l3[a] = fmin(fmax(l3[a], (double)INT32_MIN), (double)INT32_MAX);
         h3[a] = fmin(fmax(h3[a], (double)INT32_MIN), (double)INT32_MAX);
     }
-    source src = {g, {{0}, {0}}, false, pad, em, {{0}, {0}}, true};
+    source src = {.g = g, .pad = pad, .em = em, .em_empty = true};
     src.empty = !grid_index_bounds(g, &src.active);
-    if (em)
+    if (em) {
         src.em_empty = !grid_index_bounds(em->grid, &src.em_active);
+        if (!em->aligned)
+            src.index_from_eindex = transform_inverse(em->eindex_from_index);
+    }
     /* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose
      * varied bricks fit MAJORANT_MAX_STORED_CELLS. */
     size_t varied;
@@ -242,9 +273,11 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
     if (varied == 0)
         return HZ_OK;
     out->cells = malloc(varied * CELLS_PER_BRICK * sizeof *out->cells);
-    if (!em && grid_background(g) == 0.0f)
+    /* Boxes need zero backgrounds (an emission grid's always is, medium.c). */
+    bool boxes = grid_background(g) == 0.0f && (!em || grid_background(em->grid) == 0.0f);
+    if (boxes)
         out->boxes = malloc(varied * CELLS_PER_BRICK * sizeof *out->boxes);
-    if (!out->cells || (!em && grid_background(g) == 0.0f && !out->boxes)) {
+    if (!out->cells || (boxes && !out->boxes)) {
         majorant_grid_free(out);
         return hz_fail(err, "out of memory for a majorant grid of %zu cells",
                        varied * CELLS_PER_BRICK);

@@ -75,7 +75,7 @@ typedef struct {
     int32_t cell;            /* edge of a cell in voxels */
     majorant_brick *bricks;  /* res[0]*res[1]*res[2], x fastest */
     majorant_bounds *cells;  /* MAJORANT_BRICK^3 per non-uniform brick, x fastest */
-    majorant_box *boxes;     /* one per stored cell; NULL with an emission grid or a non-zero background */
+    majorant_box *boxes;     /* one per stored cell; NULL with a non-zero background */
     size_t stored_bricks;    /* bricks that store their cells */
 } majorant_grid;
 

@@ -13,6 +13,7 @@
 #include <stdlib.h>
 
 #include "core/rng.h"
+#include "core/transform.h"
 #include "media/grid.h"
 #include "media/majorant.h"
 
@@ -285,6 +286,88 @@ static void boxes_hold_on_every_volume(void **state)
     boxes_hold_no_density(VOLUMES "sparse.vdb", 2, 0.1);
 }
 
+/* With an emission grid (smoke.vdb's density standing in for the flame of
+ * sparse.vdb's balls, or the balls themselves shifted) the boxes hold both:
+ * every interval a box cut reads 0 in the density and in the emission,
+ * whether the emission grid shares the density's index space or has voxels
+ * of its own (half as many per axis and shifted, or shifted by 4.5 voxels). */
+static void boxes_hold_emission_in(const char *emission_file, bool aligned, transform shifted)
+{
+    grid *g = NULL, *e = NULL;
+    hz_error err = {0};
+    if (grid_load(VOLUMES "sparse.vdb", "density", &g, &err) != HZ_OK ||
+        grid_load(emission_file, "density", &e, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    vec3 lo, hi, elo, ehi;
+    assert_true(grid_support_bounds(g, &lo, &hi));
+    assert_true(grid_support_bounds(e, &elo, &ehi));
+    lo = v3(fmin(lo.x, elo.x), fmin(lo.y, elo.y), fmin(lo.z, elo.z));
+    hi = v3(fmax(hi.x, ehi.x), fmax(hi.y, ehi.y), fmax(hi.z, ehi.z));
+    transform eindex_from_index = aligned ? transform_identity() : shifted;
+    if (!aligned) { /* the support: the emission's box mapped into the density's index space */
+        transform index_from_eindex = transform_inverse(eindex_from_index);
+        transform_box(&index_from_eindex, elo, ehi, &elo, &ehi);
+        assert_true(grid_support_bounds(g, &lo, &hi));
+        lo = v3(fmin(lo.x, elo.x), fmin(lo.y, elo.y), fmin(lo.z, elo.z));
+        hi = v3(fmax(hi.x, ehi.x), fmax(hi.y, ehi.y), fmax(hi.z, ehi.z));
+    }
+    majorant_emission em = {e, aligned, eindex_from_index};
+    majorant_grid mg;
+    int32_t pad[3] = {0, 0, 0};
+    assert_int_equal(majorant_grid_build(g, &em, lo, hi, pad, &mg, &err), HZ_OK);
+    assert_non_null(mg.boxes);
+    grid_accessor ga, ea;
+    grid_accessor_init(g, &ga);
+    grid_accessor_init(e, &ea);
+    rng r = rng_seeded(5);
+    int checked = 0, glowing = 0;
+    for (int i = 0; i < 4000; ++i) {
+        vec3 o = v3(lo.x + rng_uniform(&r) * (hi.x - lo.x), lo.y + rng_uniform(&r) * (hi.y - lo.y),
+                    lo.z + rng_uniform(&r) * (hi.z - lo.z));
+        vec3 d = v3(rng_uniform(&r) - 0.5, rng_uniform(&r) - 0.5, rng_uniform(&r) - 0.5);
+        majorant_walk w;
+        if (!majorant_walk_start(&w, &mg, o, d, -1000.0, 1000.0))
+            continue;
+        majorant_segment s;
+        while (majorant_walk_next(&w, &s)) {
+            double len = s.t1 - s.t0;
+            majorant_bounds c;
+            double tm = 0.5 * (s.t0 + s.t1);
+            if (!(len > 0.0) || s.max > 0.0 ||
+                !majorant_grid_bounds_at(&mg, v3(o.x + tm * d.x, o.y + tm * d.y, o.z + tm * d.z), &c) ||
+                !(c.max > 0.0f))
+                continue; /* only intervals a box cut */
+            glowing += c.emit > 0.0f;
+            for (int k = 0; k <= 8; ++k) {
+                double t = s.t0 + len * k / 8.0;
+                vec3 p = v3(o.x + t * d.x, o.y + t * d.y, o.z + t * d.z);
+                double dp = grid_density_index(g, &ga, p),
+                       ep = grid_density_index(e, &ea, transform_point(&eindex_from_index, p));
+                if (dp != 0.0 || ep != 0.0)
+                    fail_msg("density %g, emission %g at (%g %g %g) in an interval reported empty",
+                             dp, ep, p.x, p.y, p.z);
+                ++checked;
+            }
+        }
+    }
+    assert_true(checked > 1000);
+    assert_true(glowing > 0); /* cut cells where the emission grid is non-zero elsewhere */
+    majorant_grid_free(&mg);
+    grid_destroy(g);
+    grid_destroy(e);
+}
+
+static void boxes_hold_emission(void **state)
+{
+    (void)state;
+    boxes_hold_emission_in(VOLUMES "smoke.vdb", true, transform_identity());
+    boxes_hold_emission_in(VOLUMES "smoke.vdb", false,
+                           transform_compose(transform_translate(v3(3, -2, 5)),
+                                             transform_scale(v3(0.5, 0.5, 0.5))));
+    /* the balls' own flame, 4.5 voxels off: the cut edges meet it */
+    boxes_hold_emission_in(VOLUMES "sparse.vdb", false, transform_translate(v3(4.5, 0, 0)));
+}
+
 static void empty_support_has_no_cells(void **state)
 {
     (void)state;
@@ -384,6 +467,7 @@ int main(void)
         cmocka_unit_test(padding_widens),
         cmocka_unit_test(walk_visits_crossed_cells),
         cmocka_unit_test(boxes_hold_on_every_volume),
+        cmocka_unit_test(boxes_hold_emission),
         cmocka_unit_test(empty_support_has_no_cells),
         cmocka_unit_test(huge_supports_stay_bounded),
         cmocka_unit_test(memory_follows_active_data),
