@@ -57,7 +57,7 @@ peer_config() {
     if has_option disable-pixel-jitter; then modes="centre aa"; else
         echo "  (haze has no --disable-pixel-jitter: pixel-centre comparison skipped)" >&2
     fi
-    ref_spp=64
+    ref_spp=256
     [ -n "$BENCH_QUICK" ] && ref_spp=16
     for mode in $modes; do
         flag=
