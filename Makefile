@@ -42,8 +42,10 @@ fuzz: deps
 	cmake --build build-fuzz -j $(JOBS) --target fuzz_scene fuzz_exr fuzz_nvdb
 	sh fuzz/run.sh build-fuzz $(FUZZ_SECONDS)
 
-# Speed against accuracy (bench/README.md): about 25 min on two cores (15 with
-# the references cached in bench/cache/); BENCH_QUICK=1 is a ~4 min smoke run into
+# Speed against accuracy (bench/README.md): the peer, target and yardstick parts
+# took 25 min on two cores with the references cached in bench/cache/ (a first
+# run renders them too: the peer's anti-aliased ones ~5 min, the smoke target's
+# 7 min, ...); BENCH_QUICK=1 is a ~4 min smoke run into
 # bench/cache/quick-results/. Writes bench/results/trade.md and trade.png.
 bench: all
 	BENCH_QUICK=$(BENCH_QUICK) sh bench/run.sh $(BUILD)/haze
