@@ -382,8 +382,6 @@ rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p)
     double V = acc[3] < 1.0 ? acc[3] : 1.0;
     if (!(V > 0.0))
         return rgb_grey(0.0);
-    if (acc[0] == acc[1] && acc[1] == acc[2]) /* a grey medium: one exp */
-        return rgb_grey(V * exp(-fmax(acc[0], 0.0)));
-    return rgb_make(V * exp(-fmax(acc[0], 0.0)), V * exp(-fmax(acc[1], 0.0)),
-                    V * exp(-fmax(acc[2], 0.0)));
+    rgb depth = rgb_make(fmax(acc[0], 0.0), fmax(acc[1], 0.0), fmax(acc[2], 0.0));
+    return rgb_scale(rgb_exp_neg(depth, 1.0), V);
 }
