@@ -48,6 +48,10 @@ struct geometry {
     vec3 (*interface_boxes)[2];
     size_t interface_box_count;
     bool interfaces_anywhere;
+    /* A render-space box around every static shape (padded as the interface
+     * boxes): rays that miss it skip Embree. Not kept when something moves. */
+    bool has_world_box;
+    vec3 world_box[2];
     double start_time, end_time; /* TransformTimes */
     const texture_set *textures; /* for "texture alpha" while building */
     /* Bytes Embree holds (its memory monitor): now and at most. */
@@ -960,6 +964,27 @@ static hz_status find_interfaces(geometry *g, hz_error *err)
     return HZ_OK;
 }
 
+/* The world box, when nothing moves (Embree's bounds of the scene, padded
+ * as the interface boxes). An empty scene has an empty box. */
+static void find_world_box(geometry *g)
+{
+    if (g->motion)
+        return;
+    struct RTCBounds b;
+    rtcGetSceneBounds(g->scene, &b);
+    vec3 lo = v3(b.lower_x, b.lower_y, b.lower_z), hi = v3(b.upper_x, b.upper_y, b.upper_z);
+    g->has_world_box = true;
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) {
+        g->world_box[0] = v3(1.0, 1.0, 1.0);
+        g->world_box[1] = v3(-1.0, -1.0, -1.0);
+        return;
+    }
+    double pad = 1e-5 * v3_max_component(v3_max(v3_abs(lo), v3_abs(hi))) + 1e-30;
+    vec3 d = v3(pad, pad, pad);
+    g->world_box[0] = v3_sub(lo, d);
+    g->world_box[1] = v3_add(hi, d);
+}
+
 bool geometry_may_cross_interface(const geometry *g, vec3 o, vec3 d, double tmax)
 {
     if (g->interfaces_anywhere)
@@ -1011,6 +1036,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
         return HZ_ERROR;
     }
     rtcCommitScene(g->scene);
+    find_world_box(g);
     if (check_device(g->device, err) != HZ_OK || find_interfaces(g, err) != HZ_OK) {
         geometry_destroy(g);
         return HZ_ERROR;
@@ -1466,10 +1492,20 @@ static bool embree_can_trace(vec3 o, vec3 d, double tmin, double tmax)
            (float)tmin <= large;
 }
 
+/* Whether the segment [tmin, tmax] of the ray certainly hits nothing: it
+ * misses the padded box around every static shape. */
+static bool misses_world_box(const geometry *g, vec3 o, vec3 d, double tmin, double tmax)
+{
+    double t0 = tmin, t1 = tmax;
+    return g->has_world_box && !box_clip_ray(o, d, g->world_box[0], g->world_box[1], &t0, &t1);
+}
+
 bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
                         geom_hit *hit)
 {
     if (!embree_can_trace(o, d, tmin, tmax))
+        return false;
+    if (misses_world_box(g, o, d, tmin, tmax))
         return false;
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -1522,6 +1558,8 @@ bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double ti
 {
     if (!embree_can_trace(o, d, 0.0, tmax))
         return true;
+    if (misses_world_box(g, o, d, 0.0, tmax))
+        return false;
     struct RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     struct RTCRay r;

@@ -49,6 +49,68 @@ static void test_far_rays_cross_each_face_once(void **state)
     free(box);
 }
 
+/* Rays that skip Embree (they miss the box around every shape) lose no hit:
+ * rays aimed just inside the edges and corners of a box mesh, from outside,
+ * hit it, and rays aimed at the tops of two spheres hit at their tangent
+ * points; an empty scene is hit by nothing. */
+static void test_world_box_keeps_grazing_hits(void **state)
+{
+    (void)state;
+    vec3 lo = v3(-0.6, 0.1, -0.3), hi = v3(0.7, 2.2, 0.9);
+    char *box = box_mesh(lo, hi);
+    char *text = sfmt("LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n%s"
+                      "Translate 3 0 0\nShape \"sphere\" \"float radius\" 0.7\n"
+                      "Translate 0 -7 0\nShape \"sphere\" \"float radius\" 0.3\n",
+                      box);
+    render_scene *rs = build(text);
+    const geometry *g = render_scene_geometry(rs);
+    rng r = rng_seeded(5);
+    geom_hit h;
+    for (int i = 0; i < 20000; ++i) {
+        /* A point on an edge of the box (two coordinates on faces), moved
+         * inward by 1e-5 of the box along each face's normal. */
+        double u[3] = {rng_uniform(&r), rng_uniform(&r), rng_uniform(&r)};
+        int free_axis = i % 3;
+        double t[3], l3[3] = {lo.x, lo.y, lo.z}, h3[3] = {hi.x, hi.y, hi.z};
+        for (int a = 0; a < 3; ++a) {
+            double in = 1e-5 * (h3[a] - l3[a]);
+            if (a == free_axis)
+                t[a] = l3[a] + u[a] * (h3[a] - l3[a]);
+            else
+                t[a] = u[a] < 0.5 ? l3[a] + in : h3[a] - in;
+        }
+        if (i % 7 == 0) /* a corner */
+            t[free_axis] = u[free_axis] < 0.5 ? l3[free_axis] + 1e-5 : h3[free_axis] - 1e-5;
+        vec3 target = v3(t[0], t[1], t[2]);
+        /* From outside: away from the box's centre, at 5 to 50 units. */
+        vec3 out = v3_sub(target, v3_scale(v3_add(lo, hi), 0.5));
+        vec3 dir = sample_uniform_sphere(v2(rng_uniform(&r), rng_uniform(&r)));
+        if (v3_dot(dir, out) < 0.0)
+            dir = v3_neg(dir);
+        vec3 o = v3_add(target, v3_scale(dir, 5.0 + 45.0 * rng_uniform(&r)));
+        if (!geometry_intersect(g, o, v3_neg(dir), 0.0, INFINITY, 0.0, &h))
+            fail_msg("ray %d at %.9g %.9g %.9g: no hit", i, target.x, target.y, target.z);
+        assert_true(geometry_occluded(g, o, v3_neg(dir), v3_length(v3_sub(target, o)) + 1e-3, 0.0));
+    }
+    /* Tangent to the spheres at their tops, from far away along z. */
+    assert_true(geometry_intersect(g, v3(3, 0.7 - 1e-5, -40), v3(0, 0, 1), 0.0, INFINITY, 0.0, &h));
+    assert_true(fabs(h.p.z) < 1e-2);
+    assert_true(geometry_intersect(g, v3(3, -6.7 - 1e-5, 30), v3(0, 0, -1), 0.0, INFINITY, 0.0,
+                                   &h));
+    assert_true(geometry_occluded(g, v3(3, -6.7 - 1e-5, 30), v3(0, 0, -1), 60.0, 0.0));
+    assert_false(geometry_intersect(g, v3(3, -6.7 + 1e-5, 30), v3(0, 0, -1), 0.0, INFINITY, 0.0,
+                                    &h)); /* above the small sphere, below the big one */
+    render_scene_destroy(rs);
+    free(text);
+    free(box);
+
+    rs = build("LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n");
+    g = render_scene_geometry(rs);
+    assert_false(geometry_intersect(g, v3(0, 0, 0), v3(0, 0, 1), 0.0, INFINITY, 0.0, &h));
+    assert_false(geometry_occluded(g, v3(0, 0, 0), v3(0, 0, 1), INFINITY, 0.0));
+    render_scene_destroy(rs);
+}
+
 /* pbrt-v4's partial sphere: a ray down the axis of a sphere cut at zmax 0.5
  * passes the opening and meets the inside at z = -1; one cut at phimax 90
  * is hit only where 0 <= phi <= 90 degrees; every hit lies on the part. */
@@ -89,6 +151,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_far_rays_cross_each_face_once),
         cmocka_unit_test(test_partial_sphere),
+        cmocka_unit_test(test_world_box_keeps_grazing_hits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
