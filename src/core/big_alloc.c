@@ -23,11 +23,31 @@ static void advise_huge(void *p, size_t bytes)
 #endif
 }
 
+/* Maps every page of the buffer writable now, before the render threads
+ * touch it: their first access is a read (sums are read, then written),
+ * which maps the shared zero page, and the write that follows faults again
+ * and interrupts the other cores to flush the zero page from their TLBs. */
+static void populate_write(void *p, size_t bytes)
+{
+#ifdef MADV_POPULATE_WRITE
+    const uintptr_t page = 4096;
+    uintptr_t a = ((uintptr_t)p + page - 1) & ~(page - 1);
+    uintptr_t e = ((uintptr_t)p + bytes) & ~(page - 1);
+    if (e > a)
+        (void)madvise((void *)a, e - a, MADV_POPULATE_WRITE);
+#else
+    (void)p;
+    (void)bytes;
+#endif
+}
+
 void *hz_big_calloc(size_t count, size_t size)
 {
     void *p = calloc(count, size); /* NULL when count * size overflows */
-    if (p)
+    if (p) {
         advise_huge(p, count * size);
+        populate_write(p, count * size);
+    }
     return p;
 }
 
