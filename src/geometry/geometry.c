@@ -1496,8 +1496,28 @@ static bool embree_can_trace(vec3 o, vec3 d, double tmin, double tmax)
  * misses the padded box around every static shape. */
 static bool misses_world_box(const geometry *g, vec3 o, vec3 d, double tmin, double tmax)
 {
+    if (!g->has_world_box)
+        return false;
+    /* The slab test with reciprocals (box_clip_ray divides: 6 divisions on
+     * every Embree query were 5% of a peer render). A NaN (0 * inf where the
+     * origin lies on a slab's plane and the ray runs in it) restricts
+     * nothing: the answer is then "may hit", which is always safe. */
+    const double o3[3] = {o.x, o.y, o.z}, d3[3] = {d.x, d.y, d.z};
+    const double lo[3] = {g->world_box[0].x, g->world_box[0].y, g->world_box[0].z};
+    const double hi[3] = {g->world_box[1].x, g->world_box[1].y, g->world_box[1].z};
     double t0 = tmin, t1 = tmax;
-    return g->has_world_box && !box_clip_ray(o, d, g->world_box[0], g->world_box[1], &t0, &t1);
+    for (int a = 0; a < 3; ++a) {
+        double inv = 1.0 / d3[a];
+        double tn = (lo[a] - o3[a]) * inv, tf = (hi[a] - o3[a]) * inv;
+        if (tn > tf) {
+            double t = tn;
+            tn = tf;
+            tf = t;
+        }
+        t0 = tn > t0 ? tn : t0;
+        t1 = tf < t1 ? tf : t1;
+    }
+    return t0 > t1;
 }
 
 bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
