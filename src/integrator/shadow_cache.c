@@ -18,6 +18,7 @@ struct shadow_cache {
     double h, inv_h; /* node spacing */
     int n[3];
     float *nodes;
+    bool grey; /* every node's three depths are equal: lookups do one */
 };
 
 struct shadow_caches {
@@ -270,6 +271,9 @@ static hz_status cache_create(const integrator_inputs *in, int mi, size_t li, do
         cache_destroy(c);
         return hz_fail(err, "shadow cache of medium \"%s\": out of memory", m->name ? m->name : "");
     }
+    c->grey = true;
+    for (size_t k = 0; k < count && c->grey; ++k)
+        c->grey = c->nodes[4 * k] == c->nodes[4 * k + 1] && c->nodes[4 * k] == c->nodes[4 * k + 2];
     *out = c;
     return HZ_OK;
 }
@@ -374,10 +378,17 @@ rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p)
             const float *n = c->nodes + ((size_t)ix * (size_t)c->n[1] + (size_t)iy) * col_stride +
                              (size_t)i[2] * 4;
             double w = wx[a] * wy[b], w0 = w * (1.0 - f[2]), w1 = w * f[2];
-            for (int k = 0; k < 4; ++k)
-                acc[k] += w0 * n[k] + w1 * n[4 + k];
+            if (c->grey) {
+                acc[0] += w0 * n[0] + w1 * n[4];
+                acc[3] += w0 * n[3] + w1 * n[7];
+            } else {
+                for (int k = 0; k < 4; ++k)
+                    acc[k] += w0 * n[k] + w1 * n[4 + k];
+            }
         }
     }
+    if (c->grey)
+        acc[1] = acc[2] = acc[0];
     /* The cubic can overshoot: depths stay >= 0, visibility in [0, 1]. */
     double V = acc[3] < 1.0 ? acc[3] : 1.0;
     if (!(V > 0.0))

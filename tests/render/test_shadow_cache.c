@@ -6,10 +6,11 @@
 
 #include "integrator/shadow_cache.h"
 
-/* Density 1 over [-2, 2]^3 (4^3 voxels of 1), seen through an interface box
+/* Density 1 over [-2, 2]^3 (4^3 voxels of 1), sigma_t (0.75, 1, 1.5) or,
+ * `grey`, 1 (the lookup then interpolates one depth), seen through an interface box
  * [-1, 1]^3; a distant light along w ~ (0.1, 1, 0.1); an opaque quad at
  * y = 1.5 over x >= 0.3 shades part of the box. */
-static char *box_scene(double spacing, bool occluder)
+static char *box_scene(double spacing, bool occluder, bool grey)
 {
     char *box = box_mesh(v3(-1, -1, -1), v3(1, 1, 1));
     char *s = sfmt(
@@ -23,10 +24,10 @@ static char *box_scene(double spacing, bool occluder)
         "  \"integer nz\" 4 \"point3 p0\" [-2 -2 -2] \"point3 p1\" [2 2 2]\n"
         "  \"float density\" [1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1\n"
         "                     1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1 1]\n"
-        "  \"rgb sigma_a\" [0.25 0.5 1] \"rgb sigma_s\" [0.5 0.5 0.5]\n"
+        "  \"rgb sigma_a\" %s \"rgb sigma_s\" [0.5 0.5 0.5]\n"
         "AttributeBegin\n  Material \"interface\"\n  MediumInterface \"m\" \"\"\n  %s\nAttributeEnd\n"
         "%s",
-        spacing, box,
+        spacing, grey ? "[0.5 0.5 0.5]" : "[0.25 0.5 1]", box,
         occluder ? "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
                    "  \"point3 P\" [0.3 1.5 -3  3 1.5 -3  3 1.5 3  0.3 1.5 3]\n"
                  : "");
@@ -44,16 +45,15 @@ static vec3 render_point(const render_scene *rs, vec3 world)
  * leaves through the top face, the optical depth is linear across the
  * light and along it, which the interpolation reproduces: the cache gives
  * exp(-sigma_t (1 - y) / w_y) to float precision. Under the quad it is 0. */
-static void test_closed_form(void **state)
+static void check_closed_form(bool grey)
 {
-    (void)state;
-    char *text = box_scene(0.125, true);
+    char *text = box_scene(0.125, true, grey);
     render_scene *rs = build_scene_or_fail(text, NULL);
     free(text);
     const shadow_cache *c = shadow_caches_get(render_scene_shadow_caches(rs), 0, 0);
     assert_non_null(c);
     vec3 w = v3_normalize(v3(0.1, 1.0, 0.1));
-    rgb sigma_t = rgb_make(0.75, 1.0, 1.5);
+    rgb sigma_t = grey ? rgb_grey(1.0) : rgb_make(0.75, 1.0, 1.5);
     rng r = rng_seeded(7);
     double worst = 0.0;
     for (int k = 0; k < 200; ++k) {
@@ -74,6 +74,13 @@ static void test_closed_form(void **state)
     render_memory mem = render_scene_memory(rs);
     assert_true(mem.shadow_caches > 0.0);
     render_scene_destroy(rs);
+}
+
+static void test_closed_form(void **state)
+{
+    (void)state;
+    check_closed_form(false);
+    check_closed_form(true);
 }
 
 /* The fog sphere marched at step 1 voxel, with shadow rays (a quarter voxel)
@@ -121,10 +128,10 @@ static void expect_refused(const char *text, const char *what)
 static void test_refusals(void **state)
 {
     (void)state;
-    char *text = box_scene(-1.0, false);
+    char *text = box_scene(-1.0, false, false);
     expect_refused(text, ">= 0");
     free(text);
-    text = box_scene(1.0, false);
+    text = box_scene(1.0, false, false);
     char *p = strstr(text, "LightSource \"distant\""), *end = p ? strchr(p, '\n') : NULL;
     assert_non_null(end);
     char *point = sfmt("%.*sLightSource \"point\" \"point3 from\" [0 3 0] \"rgb I\" [1 1 1]%s",
