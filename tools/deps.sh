@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config
   libembree-dev      # surfaces (Embree 3 C API)
   libopenexr-dev     # images (OpenEXRCore C API)
-  libdeflate-dev     # the EXR writer's ZIP chunks (faster than zlib, same streams)
+  libisal-dev        # the EXR writer's ZIP chunks (ISA-L's igzip: faster than zlib, same streams)
   libpng-dev         # --preview PNG
   zlib1g-dev         # ZIP-compressed .nvdb files (NanoVDB codec)
   libcmocka-dev      # test framework

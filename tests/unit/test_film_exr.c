@@ -173,7 +173,7 @@ static void test_threads_same_file(void **state)
     }
 }
 
-/* The writer's own ZIP (libdeflate behind OpenEXR's byte split and
+/* The writer's own ZIP (ISA-L's igzip behind OpenEXR's byte split and
  * predictor) read back by OpenEXRCore's zlib decoder: a smooth image with a
  * black border compresses to a fraction of its bytes and comes back exactly;
  * noise that does not shrink is stored raw and comes back too. */
