@@ -15,6 +15,7 @@
 #include <strings.h>
 
 #include "core/big_alloc.h"
+#include "core/parallel.h"
 #include "film/exr.h"
 #include "film/png.h"
 #include "scene/params.h"
@@ -718,6 +719,34 @@ static void exr_channel_values(const film *f, int px, int py, double ratio, floa
         *o++ = (float)f->count[i];
 }
 
+/* The image's channels from the film, in bands of rows taken by the
+ * writer's threads (the channels' first touch spread over them too). */
+typedef struct {
+    const film *f;
+    exr_image *img;
+    double ratio;
+    int nc;
+    atomic_int next_row;
+} exr_fill_job;
+
+enum { EXR_FILL_ROWS = 16 };
+
+static void *exr_fill_worker(void *arg)
+{
+    exr_fill_job *job = arg;
+    const film *f = job->f;
+    float values[MAX_CHANNELS];
+    for (int y0; (y0 = atomic_fetch_add(&job->next_row, EXR_FILL_ROWS)) < f->height;)
+        for (int y = y0; y < y0 + EXR_FILL_ROWS && y < f->height; y++)
+            for (int x = 0; x < f->width; x++) {
+                size_t i = (size_t)y * (size_t)f->width + (size_t)x;
+                exr_channel_values(f, x + f->p.bounds.x0, y + f->p.bounds.y0, job->ratio, values);
+                for (int c = 0; c < job->nc; c++)
+                    job->img->channels[c].pixels[i] = values[c];
+            }
+    return NULL;
+}
+
 hz_status film_write_exr_with(const film *f, const char *path, double imaging_ratio,
                               const film_output *out, hz_error *err)
 {
@@ -745,15 +774,9 @@ hz_status film_write_exr_with(const film *f, const char *path, double imaging_ra
     img.display_width = f->p.xres;
     img.display_height = f->p.yres;
     img.threads = out ? out->threads : 0;
-    float values[MAX_CHANNELS];
-    for (int y = 0; y < f->height; y++)
-        for (int x = 0; x < f->width; x++) {
-            size_t i = (size_t)y * (size_t)f->width + (size_t)x;
-            exr_channel_values(f, x + f->p.bounds.x0, y + f->p.bounds.y0, imaging_ratio,
-                               values);
-            for (int c = 0; c < nc; c++)
-                img.channels[c].pixels[i] = values[c];
-        }
+    exr_fill_job job = {.f = f, .img = &img, .ratio = imaging_ratio, .nc = nc};
+    atomic_init(&job.next_row, 0);
+    hz_parallel_run(img.threads < 1 ? 1 : img.threads, exr_fill_worker, &job);
     hz_status st = exr_image_add_attribute(&img, "software", "haze " HAZE_VERSION, err);
     for (int a = 0; out && st == HZ_OK && a < out->attribute_count; a++)
         st = exr_image_add_attribute(&img, out->attributes[a].name, out->attributes[a].value, err);
