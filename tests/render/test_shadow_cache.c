@@ -7,7 +7,7 @@
 #include "integrator/shadow_cache.h"
 
 /* Density 1 over [-2, 2]^3 (4^3 voxels of 1), sigma_t (0.75, 1, 1.5) or,
- * `grey`, 1 (the lookup then interpolates one depth), seen through an interface box
+ * `grey`, 1, seen through an interface box
  * [-1, 1]^3; a distant light along w ~ (0.1, 1, 0.1); an opaque quad at
  * y = 1.5 over x >= 0.3 shades part of the box. */
 static char *box_scene(double spacing, bool occluder, bool grey)
