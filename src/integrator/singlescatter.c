@@ -103,7 +103,10 @@ static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
 {
     path_shadow_ray sr = path_surface_shadow_ray(h, ls);
     int start = sc->in.medium_count == 0 ? -1 : geometry_medium_after(h, sr.w, medium);
-    if (path_shadow_ray_in_vacuum(sc->in.geom, start, &sr)) {
+    /* From vacuum, through interfaces only into media that hold no density
+     * along the ray (clear space in a sparse grid): an occlusion test. */
+    if (path_shadow_ray_in_vacuum(sc->in.geom, start, &sr) ||
+        (start < 0 && singlescatter_media_clear(sc, sr.o, sr.w, 0.0, sr.tmax, walk))) {
         counters->shadow_rays++;
         return rgb_grey(geometry_occluded(sc->in.geom, sr.o, sr.w, sr.tmax, walk->time) ? 0.0 : 1.0);
     }

@@ -288,10 +288,35 @@ static inline bool outside_support(const grid *g, vec3 p)
                                           n + ((c & 1u) << 6) + ((c & 2u) << 2) + (c >> 2));       \
             return;                                                                                \
         }                                                                                          \
-        for (int c = 1; c < 8; ++c) {                                                              \
-            ijk = coord(i + (c & 1), j + ((c >> 1) & 1), k + (c >> 2));                            \
-            addr[c] = pnanovdb_readaccessor_get_value_address(type, g->buf, &a->acc, &ijk);        \
-        }                                                                                          \
+        /* The corners lie in up to 8 aligned 8^3 blocks (leaves, or tiles                      \
+         * whose value covers the block): one tree lookup per block, then                      \
+         * offsets in its leaf. */                                                               \
+        const int bx = (i & 7) == 7, by = ((j & 7) == 7) << 1, bz = ((k & 7) == 7) << 2;          \
+        pnanovdb_uint32_t blevel[8];                                                             \
+        pnanovdb_leaf_handle_t bleaf[8];                                                         \
+        pnanovdb_address_t baddr[8];                                                             \
+        bool done[8] = {true, false, false, false, false, false, false, false};                  \
+        blevel[0] = level;                                                                       \
+        bleaf[0] = a->acc.leaf;                                                                  \
+        baddr[0] = addr[0];                                                                      \
+        for (int c = 1; c < 8; ++c) {                                                            \
+            int32_t ci = i + (c & 1), cj = j + ((c >> 1) & 1), ck = k + (c >> 2);                 \
+            int b = ((c & 1) & bx) | (c & 2 & by) | (c & 4 & bz);                                 \
+            if (!done[b]) {                                                                      \
+                ijk = coord(ci, cj, ck);                                                         \
+                baddr[b] = pnanovdb_readaccessor_get_value_address_and_level(                    \
+                    type, g->buf, &a->acc, &ijk, &blevel[b]);                                    \
+                bleaf[b] = a->acc.leaf;                                                          \
+                done[b] = true;                                                                  \
+                addr[c] = baddr[b];                                                              \
+                continue;                                                                        \
+            }                                                                                    \
+            addr[c] = blevel[b] > 0 ? baddr[b]                                                   \
+                                    : pnanovdb_leaf_get_table_address(                           \
+                                          type, g->buf, bleaf[b],                                \
+                                          (uint32_t)(ci & 7) << 6 | (uint32_t)(cj & 7) << 3 |     \
+                                              (uint32_t)(ck & 7));                               \
+        }                                                                                        \
     }
 
 CORNER_ADDRESSES(float_corners, FLOAT_GRID)
