@@ -1075,6 +1075,77 @@ static void test_extreme_g(void **state)
     }
 }
 
+/* sparse.vdb's balls in an interface box over a floor, under a low distant
+ * light that casts their shadows on the floor beside the box (+x), seen from
+ * above that floor; with `blocker`, a box of zero-density homogeneous medium
+ * below the floor, out of every ray's way. */
+static char *sparse_floor_scene(bool blocker)
+{
+    char *encl = box_mesh(v3(-1.05, -0.05, -1.05), v3(1.05, 2.05, 1.05));
+    char *far = box_mesh(v3(-1, -31, -1), v3(1, -29, 1));
+    char *s = sfmt("LookAt 6 4 0   2.5 -0.1 0   0 1 0\n"
+                   "Camera \"perspective\" \"float fov\" 50\n"
+                   "Film \"rgb\" \"integer xresolution\" 48 \"integer yresolution\" 36\n"
+                   "Integrator \"singlescatter\" \"string transmittance\" \"raymarch\"\n"
+                   "WorldBegin\n"
+                   "LightSource \"distant\" \"point3 from\" [-3 1.5 0] \"point3 to\" [0 0 0]\n"
+                   "    \"rgb L\" [6 6 5.7]\n"
+                   "MakeNamedMedium \"blobs\" \"string type\" \"nanovdb\"\n"
+                   "    \"string filename\" \"%s/sparse.vdb\" \"string gridname\" \"density\"\n"
+                   "    \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [20 20 20] \"float g\" 0.3\n"
+                   "Material \"diffuse\" \"rgb reflectance\" [0.3 0.3 0.3]\n"
+                   "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+                   "    \"point3 P\" [-20 -0.1 -20  20 -0.1 -20  20 -0.1 20  -20 -0.1 20]\n"
+                   "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"blobs\" \"\"\n%s"
+                   "AttributeEnd\n"
+                   "%s%s%s",
+                   VOLUMES, encl,
+                   blocker ? "MakeNamedMedium \"clear\" \"string type\" \"homogeneous\"\n"
+                             "    \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [0 0 0]\n"
+                             "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"clear\" \"\"\n"
+                           : "",
+                   blocker ? far : "", blocker ? "AttributeEnd\n" : "");
+    free(encl);
+    free(far);
+    return s;
+}
+
+/* A shadow ray from vacuum whose media hold no density along it is an
+ * occlusion test (singlescatter_media_clear); where it meets a ball it is a
+ * walk. With the homogeneous medium in the scene the test never applies
+ * (every ray walks): the two images agree pixel for pixel, balls' shadows on
+ * the floor included, and both have them. */
+static void test_clear_shadow_rays(void **state)
+{
+    (void)state;
+    char *ta = sparse_floor_scene(false), *tb = sparse_floor_scene(true);
+    render_scene *a = build(ta), *b = build(tb);
+    free(ta);
+    free(tb);
+    int differ = 0;
+    double lo = INFINITY, hi = 0.0;
+    for (int y = 0; y < 36; ++y)
+        for (int x = 0; x < 48; ++x) {
+            pixel_eval pa = eval_pixel(a, x + 0.5, y + 0.5, 1);
+            pixel_eval pb = eval_pixel(b, x + 0.5, y + 0.5, 1);
+            if (pa.L.r != pb.L.r || pa.L.g != pb.L.g || pa.L.b != pb.L.b) {
+                if (differ++ < 5)
+                    print_error("pixel (%d, %d): %.17g %.17g %.17g against %.17g %.17g %.17g\n", x,
+                                y, pa.L.r, pa.L.g, pa.L.b, pb.L.r, pb.L.g, pb.L.b);
+            }
+            if (pa.hit && pa.p_world.y < -0.09 && pa.p_world.x > 1.2 && pa.p_world.x < 5) {
+                lo = fmin(lo, pa.L.r); /* the floor beside the box: lit, and shadowed */
+                hi = fmax(hi, pa.L.r);
+            }
+        }
+    assert_int_equal(differ, 0);
+    print_message("floor beside the box: %g .. %g\n", lo, hi);
+    assert_true(hi > 0.1);
+    assert_true(lo < 0.5 * hi); /* a ball's shadow */
+    render_scene_destroy(a);
+    render_scene_destroy(b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1092,6 +1163,7 @@ int main(void)
         cmocka_unit_test(test_extreme_density_grid),
         cmocka_unit_test(test_vanishing_density),
         cmocka_unit_test(test_extreme_g),
+        cmocka_unit_test(test_clear_shadow_rays),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
