@@ -163,29 +163,6 @@ static double march_tau(grid_ray *gr, double a, double b, double step, media_wal
 
 /* ---- transmittance (shadow rays) ---- */
 
-bool singlescatter_media_clear(const singlescatter_scene *vs, vec3 o, vec3 w, double t_from,
-                               double tmax, media_walk *walk)
-{
-    for (size_t i = 0; i < vs->in.medium_count; ++i) {
-        const medium *m = &vs->in.media[i];
-        if (m->kind != MEDIUM_GRID || m->grid.background != 0.0)
-            return false;
-        medium_grid_ray r;
-        if (!medium_grid_ray_make(m, o, w, walk->time, &r))
-            return false;
-        double t0 = t_from, t1 = tmax;
-        majorant_walk mw;
-        if (!medium_grid_ray_clip(m, &r, &t0, &t1) ||
-            !majorant_walk_start(&mw, &m->grid.majorant, r.o, r.d, t0, t1))
-            continue; /* the ray misses where the density can be non-zero */
-        majorant_segment seg;
-        while (next_cell(&mw, &seg, walk))
-            if (seg.max > 0.0)
-                return false;
-    }
-    return true;
-}
-
 rgb singlescatter_grid_transmittance(const singlescatter_scene *vs, const medium *m, vec3 o, vec3 w,
                                      double t0, double t1, media_walk *walk)
 {

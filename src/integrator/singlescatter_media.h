@@ -44,15 +44,6 @@
 rgb singlescatter_shadow_transmittance(const singlescatter_scene *vs, vec3 o, vec3 w, double tmin,
                                        double tmax, int medium, media_walk *walk);
 
-/* Whether no medium of the scene has density anywhere along o + t w,
- * t in [t0, tmax], at the walk's time: every medium is a grid with a zero
- * background whose majorant cells along the ray are all empty. A shadow ray
- * from vacuum that holds for is an occlusion test: its media pass all light,
- * whichever interfaces it crosses. Adds the cells it visits to the walk's
- * majorant steps. */
-bool singlescatter_media_clear(const singlescatter_scene *vs, vec3 o, vec3 w, double t0,
-                               double tmax, media_walk *walk);
-
 /* The segment [t0, t1] (t1 may be INFINITY) of the unit-direction ray o + t w in
  * medium `m`: adds beta × (in-scattered radiance) to *L and multiplies beta by
  * the segment's transmittance (estimated; may become 0 by Russian roulette).

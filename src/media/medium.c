@@ -871,6 +871,31 @@ bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0,
     return box_clip_ray(r->o, r->d, r->lo, r->hi, t0, t1);
 }
 
+bool media_clear_along(const medium *media, size_t n, vec3 o, vec3 d, double t0, double t1,
+                       double time, uint64_t *cells)
+{
+    for (size_t i = 0; i < n; ++i) {
+        const medium *m = &media[i];
+        if (m->kind != MEDIUM_GRID || m->grid.background != 0.0)
+            return false;
+        medium_grid_ray r;
+        if (!medium_grid_ray_make(m, o, d, time, &r))
+            return false;
+        double a = t0, b = t1;
+        majorant_walk w;
+        if (!medium_grid_ray_clip(m, &r, &a, &b) ||
+            !majorant_walk_start(&w, &m->grid.majorant, r.o, r.d, a, b))
+            continue; /* the ray misses where the density can be non-zero */
+        majorant_segment seg;
+        while (majorant_walk_next(&w, &seg)) {
+            ++*cells;
+            if (seg.max > 0.0)
+                return false;
+        }
+    }
+    return true;
+}
+
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1)
 {
     if (!(*t0 <= *t1)) /* also NaN */

@@ -201,6 +201,15 @@ bool medium_grid_ray_clip(const medium *m, const medium_grid_ray *r, double *t0,
  * grids. False when nothing is left. */
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1);
 
+/* Whether none of the n media has density anywhere along o + t d, t in
+ * [t0, t1], at `time`: each is a grid with a zero background whose majorant
+ * cells on the ray are all empty (or the ray misses its support). A shadow
+ * ray from vacuum for which this holds passes all light through whatever
+ * interfaces it crosses: an occlusion test decides it. *cells counts the
+ * majorant cells visited. */
+bool media_clear_along(const medium *media, size_t n, vec3 o, vec3 d, double t0, double t1,
+                       double time, uint64_t *cells);
+
 /* Clips the render-space ray o + t d, t in [*t0, *t1], to a cloud medium's
  * box. False when nothing is left. */
 bool medium_cloud_clip(const medium *m, vec3 o, vec3 d, double *t0, double *t1);

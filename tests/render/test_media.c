@@ -1079,14 +1079,14 @@ static void test_extreme_g(void **state)
  * light that casts their shadows on the floor beside the box (+x), seen from
  * above that floor; with `blocker`, a box of zero-density homogeneous medium
  * below the floor, out of every ray's way. */
-static char *sparse_floor_scene(bool blocker)
+static char *sparse_floor_scene(const char *integrator, bool blocker)
 {
     char *encl = box_mesh(v3(-1.05, -0.05, -1.05), v3(1.05, 2.05, 1.05));
     char *far = box_mesh(v3(-1, -31, -1), v3(1, -29, 1));
     char *s = sfmt("LookAt 6 4 0   2.5 -0.1 0   0 1 0\n"
                    "Camera \"perspective\" \"float fov\" 50\n"
                    "Film \"rgb\" \"integer xresolution\" 48 \"integer yresolution\" 36\n"
-                   "Integrator \"singlescatter\" \"string transmittance\" \"raymarch\"\n"
+                   "%s\n"
                    "WorldBegin\n"
                    "LightSource \"distant\" \"point3 from\" [-3 1.5 0] \"point3 to\" [0 0 0]\n"
                    "    \"rgb L\" [6 6 5.7]\n"
@@ -1099,7 +1099,7 @@ static char *sparse_floor_scene(bool blocker)
                    "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"blobs\" \"\"\n%s"
                    "AttributeEnd\n"
                    "%s%s%s",
-                   VOLUMES, encl,
+                   integrator, VOLUMES, encl,
                    blocker ? "MakeNamedMedium \"clear\" \"string type\" \"homogeneous\"\n"
                              "    \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [0 0 0]\n"
                              "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"clear\" \"\"\n"
@@ -1111,14 +1111,14 @@ static char *sparse_floor_scene(bool blocker)
 }
 
 /* A shadow ray from vacuum whose media hold no density along it is an
- * occlusion test (singlescatter_media_clear); where it meets a ball it is a
- * walk. With the homogeneous medium in the scene the test never applies
- * (every ray walks): the two images agree pixel for pixel, balls' shadows on
- * the floor included, and both have them. */
-static void test_clear_shadow_rays(void **state)
+ * occlusion test (media_clear_along); where it meets a ball it is a walk.
+ * With the homogeneous medium in the scene the test never applies (every ray
+ * walks): the two images agree pixel for pixel, balls' shadows on the floor
+ * included, and both have them; under singlescatter (raymarch) and volpath
+ * (one bounce: direct light). */
+static void check_clear_shadow_rays(const char *integrator)
 {
-    (void)state;
-    char *ta = sparse_floor_scene(false), *tb = sparse_floor_scene(true);
+    char *ta = sparse_floor_scene(integrator, false), *tb = sparse_floor_scene(integrator, true);
     render_scene *a = build(ta), *b = build(tb);
     free(ta);
     free(tb);
@@ -1144,6 +1144,13 @@ static void test_clear_shadow_rays(void **state)
     assert_true(lo < 0.5 * hi); /* a ball's shadow */
     render_scene_destroy(a);
     render_scene_destroy(b);
+}
+
+static void test_clear_shadow_rays(void **state)
+{
+    (void)state;
+    check_clear_shadow_rays("Integrator \"singlescatter\" \"string transmittance\" \"raymarch\"");
+    check_clear_shadow_rays("Integrator \"volpath\" \"integer maxdepth\" 1");
 }
 
 int main(void)
