@@ -4,6 +4,8 @@
 
 #include <math.h>
 #include <stdbool.h>
+#include <stdint.h>
+#include <string.h>
 
 #define HZ_PI 3.14159265358979323846
 #define HZ_INV_PI 0.31830988618379067154
@@ -81,6 +83,21 @@ static inline double rgb_luminance(rgb a) { return 0.2126 * a.r + 0.7152 * a.g +
 
 static inline double hz_clamp(double v, double lo, double hi) { return v < lo ? lo : (v > hi ? hi : v); }
 static inline double hz_lerp(double t, double a, double b) { return (1.0 - t) * a + t * b; }
+/* nextafter(x, INFINITY) inline (stepping past surfaces calls it for every
+ * crossing): the next double up; +inf and NaN stay, +-0 give the smallest
+ * subnormal. */
+static inline double hz_next_up(double x)
+{
+    if (!(x < INFINITY)) /* +inf, NaN */
+        return x;
+    if (x == 0.0)
+        return 0x1p-1074;
+    uint64_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    bits += x > 0.0 ? 1 : UINT64_MAX; /* toward +inf: up in magnitude, or down */
+    memcpy(&x, &bits, sizeof x);
+    return x;
+}
 static inline double hz_radians(double deg) { return deg * (HZ_PI / 180.0); }
 
 #endif

@@ -1629,7 +1629,7 @@ double geometry_step_past(const geom_hit *h, vec3 o, vec3 d)
     double dt = dn != 0.0 ? v3_dot(v3_sub(past, h->p), h->ng) / dn : 0.0;
     /* Past Embree's own (float) t of the hit too, whatever rounding put
      * h->p at. */
-    return fmax(fmax(t_hit + dt, nextafter(t_hit, INFINITY)), nextafter(h->t, INFINITY));
+    return fmax(fmax(t_hit + dt, hz_next_up(t_hit)), hz_next_up(h->t));
 }
 
 double geometry_crossing_t(const geom_hit *h, vec3 o, vec3 w)

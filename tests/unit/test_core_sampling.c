@@ -7,8 +7,10 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <string.h>
 
 #include "core/sampling.h"
+#include "core/vec.h"
 #include "unit/assert_util.h"
 
 enum { N = 200000 };
@@ -119,12 +121,43 @@ static void test_exponential(void **state)
     assert_near(sample_exponential(1 - exp(-1.0), 2), 0.5, 1e-15);
 }
 
+/* hz_next_up is nextafter(x, INFINITY), bit for bit: at zeros, subnormals,
+ * powers of two (where the spacing changes), infinities, NaN and random
+ * doubles of both signs. */
+static void test_next_up(void **state)
+{
+    (void)state;
+    const double special[] = {0.0, -0.0, 0x1p-1074, -0x1p-1074, 0x1p-1022, -0x1p-1022, 1.0, -1.0,
+                              0x1.fffffffffffffp-1, -0x1.fffffffffffffp-1, 0x1.fffffffffffffp+1023,
+                              -0x1.fffffffffffffp+1023, INFINITY, -INFINITY, 1e-310, -1e-310};
+    for (size_t i = 0; i < sizeof special / sizeof special[0]; ++i) {
+        double x = special[i], a = hz_next_up(x), b = nextafter(x, INFINITY);
+        if (memcmp(&a, &b, sizeof a) != 0)
+            fail_msg("hz_next_up(%a) = %a, nextafter gives %a", x, a, b);
+    }
+    assert_true(isnan(hz_next_up(NAN)));
+    uint64_t r = 0x9e3779b97f4a7c15ull;
+    for (int i = 0; i < 100000; ++i) {
+        r ^= r << 13;
+        r ^= r >> 7;
+        r ^= r << 17;
+        double x;
+        memcpy(&x, &r, sizeof x);
+        if (isnan(x))
+            continue;
+        double a = hz_next_up(x), b = nextafter(x, INFINITY);
+        if (memcmp(&a, &b, sizeof a) != 0)
+            fail_msg("hz_next_up(%a) = %a, nextafter gives %a", x, a, b);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_disks),       cmocka_unit_test(test_regular_polygon),
         cmocka_unit_test(test_triangle),    cmocka_unit_test(test_sphere_and_hemispheres),
         cmocka_unit_test(test_exponential),
+        cmocka_unit_test(test_next_up),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
