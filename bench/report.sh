@@ -78,7 +78,7 @@ report_peer() {
     echo
     echo "haze's references: at pixel centres a deterministic raymarch (step 0.0625),"
     echo "whose error is estimated from the same render at twice the steps (MSE/9);"
-    echo "anti-aliased, 64 spp of tracking, whose Monte Carlo noise is measured with a"
+    echo "anti-aliased, 256 spp of tracking, whose Monte Carlo noise is measured with a"
     echo "second, independent reference at a quarter of the samples (B against A:"
     echo "E[MSE] = var A + var B = 5 var A):"
     echo
