@@ -7,16 +7,24 @@
 
 enum { HUGE_PAGE = 2 * 1024 * 1024 };
 
-/* Advice only: without THP, or where the call fails, the buffer is the same. */
+#if defined(MADV_HUGEPAGE) || defined(MADV_POPULATE_WRITE)
+/* madvise over the whole `align`-aligned stretches inside [p, p + bytes).
+ * Advice only: where the call fails, the buffer is the same. */
+static void advise_inside(void *p, size_t bytes, uintptr_t align, int advice)
+{
+    uintptr_t a = ((uintptr_t)p + align - 1) & ~(align - 1);
+    uintptr_t e = ((uintptr_t)p + bytes) & ~(align - 1);
+    if (e > a)
+        (void)madvise((void *)a, e - a, advice);
+}
+#endif
+
+/* Transparent huge pages over the aligned interior (without THP, nothing). */
 static void advise_huge(void *p, size_t bytes)
 {
 #ifdef MADV_HUGEPAGE
-    if (!p || bytes < 2 * (size_t)HUGE_PAGE)
-        return;
-    uintptr_t a = ((uintptr_t)p + HUGE_PAGE - 1) & ~(uintptr_t)(HUGE_PAGE - 1);
-    uintptr_t e = ((uintptr_t)p + bytes) & ~(uintptr_t)(HUGE_PAGE - 1);
-    if (e > a)
-        (void)madvise((void *)a, e - a, MADV_HUGEPAGE);
+    if (p && bytes >= 2 * (size_t)HUGE_PAGE)
+        advise_inside(p, bytes, HUGE_PAGE, MADV_HUGEPAGE);
 #else
     (void)p;
     (void)bytes;
@@ -30,11 +38,7 @@ static void advise_huge(void *p, size_t bytes)
 static void populate_write(void *p, size_t bytes)
 {
 #ifdef MADV_POPULATE_WRITE
-    const uintptr_t page = 4096;
-    uintptr_t a = ((uintptr_t)p + page - 1) & ~(page - 1);
-    uintptr_t e = ((uintptr_t)p + bytes) & ~(page - 1);
-    if (e > a)
-        (void)madvise((void *)a, e - a, MADV_POPULATE_WRITE);
+    advise_inside(p, bytes, 4096, MADV_POPULATE_WRITE);
 #else
     (void)p;
     (void)bytes;

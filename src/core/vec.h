@@ -10,6 +10,13 @@
 #define HZ_PI 3.14159265358979323846
 #define HZ_INV_PI 0.31830988618379067154
 
+/* fmax and fmin as glibc computes them (a NaN argument yields the other;
+ * equal arguments, +0 and -0 included, yield b), inline: the compiler calls
+ * libm for fmax and fmin, which hot loops pay for (a few million calls a
+ * frame through rgb_max alone). */
+static inline double hz_fmax(double a, double b) { return a > b || b != b ? a : b; }
+static inline double hz_fmin(double a, double b) { return a < b || b != b ? a : b; }
+
 typedef struct { double x, y; } vec2;
 typedef struct { double x, y, z; } vec3;
 /* Linear (scene-referred) RGB in the sRGB/Rec.709 primaries. */
@@ -36,15 +43,15 @@ static inline vec3 v3_lerp(double t, vec3 a, vec3 b)
 }
 static inline double v3_max_component(vec3 a)
 {
-    return fmax(a.x, fmax(a.y, a.z));
+    return hz_fmax(a.x, hz_fmax(a.y, a.z));
 }
 static inline vec3 v3_min(vec3 a, vec3 b)
 {
-    return v3(fmin(a.x, b.x), fmin(a.y, b.y), fmin(a.z, b.z));
+    return v3(hz_fmin(a.x, b.x), hz_fmin(a.y, b.y), hz_fmin(a.z, b.z));
 }
 static inline vec3 v3_max(vec3 a, vec3 b)
 {
-    return v3(fmax(a.x, b.x), fmax(a.y, b.y), fmax(a.z, b.z));
+    return v3(hz_fmax(a.x, b.x), hz_fmax(a.y, b.y), hz_fmax(a.z, b.z));
 }
 static inline vec3 v3_abs(vec3 a) { return v3(fabs(a.x), fabs(a.y), fabs(a.z)); }
 static inline bool v3_is_finite(vec3 a) { return isfinite(a.x) && isfinite(a.y) && isfinite(a.z); }
@@ -74,7 +81,7 @@ static inline rgb rgb_exp_neg(rgb sigma, double d)
                  sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0};
 }
 static inline bool rgb_is_black(rgb a) { return a.r == 0.0 && a.g == 0.0 && a.b == 0.0; }
-static inline double rgb_max(rgb a) { return fmax(a.r, fmax(a.g, a.b)); }
+static inline double rgb_max(rgb a) { return hz_fmax(a.r, hz_fmax(a.g, a.b)); }
 static inline double rgb_avg(rgb a) { return (a.r + a.g + a.b) / 3.0; }
 /* Channel i (0 r, 1 g, 2 b). */
 static inline double rgb_ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }

@@ -1629,7 +1629,7 @@ double geometry_step_past(const geom_hit *h, vec3 o, vec3 d)
     double dt = dn != 0.0 ? v3_dot(v3_sub(past, h->p), h->ng) / dn : 0.0;
     /* Past Embree's own (float) t of the hit too, whatever rounding put
      * h->p at. */
-    return fmax(fmax(t_hit + dt, hz_next_up(t_hit)), hz_next_up(h->t));
+    return hz_fmax(hz_fmax(t_hit + dt, hz_next_up(t_hit)), hz_next_up(h->t));
 }
 
 double geometry_crossing_t(const geom_hit *h, vec3 o, vec3 w)
@@ -1638,6 +1638,6 @@ double geometry_crossing_t(const geom_hit *h, vec3 o, vec3 w)
     vec3 off = v3_sub(h->p, v3_add(o, v3_scale(w, h->t)));
     double c = dn != 0.0 ? v3_dot(off, h->ng) / dn : 0.0;
     /* A correction beyond float rounding (a ray grazing the surface) keeps h->t. */
-    double scale = fmax(fmax(fabs(h->p.x), fabs(h->p.y)), fmax(fabs(h->p.z), fabs(h->t)));
+    double scale = hz_fmax(hz_fmax(fabs(h->p.x), fabs(h->p.y)), hz_fmax(fabs(h->p.z), fabs(h->t)));
     return fabs(c) <= 0x1p-12 * scale ? h->t + c : h->t;
 }

@@ -212,7 +212,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
             goto done;
         }
         medium = geometry_medium_after(&h, d, medium);
-        t_start = fmax(t_hit, t_start);
+        t_start = hz_fmax(t_hit, t_start);
         tmin = geometry_step_past(&h, o, d);
     }
     *depth = v3_length(v3_sub(h.p, r->o));

@@ -64,8 +64,8 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
             tmin = geometry_step_past(&h, o, w);
             continue;
         }
-        double t_end = hit ? fmax(geometry_crossing_t(&h, o, w), t_start)
-                     : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
+        double t_end = hit ? hz_fmax(geometry_crossing_t(&h, o, w), t_start)
+                     : medium >= 0 ? hz_fmin(tmax, ray_far_t(o, w)) : tmax;
         if (medium >= 0) {
             T = rgb_mul(T,
                         segment_transmittance(vs, &vs->in.media[medium], o, w, t_start, t_end, walk));
@@ -102,7 +102,7 @@ rgb singlescatter_shadow_transmittance(const singlescatter_scene *vs, vec3 o, ve
 static rgb scatter_shadow(const singlescatter_scene *vs, vec3 x, vec3 w, double tmax, int mi,
                           media_walk *walk)
 {
-    double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    double e = PATH_SHADOW_BACKOFF * hz_fmax(hz_fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
     return shadow_walk(vs, v3_sub(x, v3_scale(w, e)), w, 0.0, e, tmax + e, mi, walk);
 }
 
