@@ -61,12 +61,20 @@ typedef struct {
 
 path_shadow_ray path_surface_shadow_ray(const geom_hit *h, const light_sample *ls);
 
-/* True when shadow ray r, starting in medium `start` (-1: vacuum), stays in
- * vacuum all the way: then geometry_occluded alone decides it, as in a scene
- * without media (no walk through surfaces, no random numbers). */
-static inline bool path_shadow_ray_in_vacuum(const geometry *g, int start, const path_shadow_ray *r)
+/* True when shadow ray r, starting in medium `start` (-1: vacuum), meets no
+ * medium that can attenuate it: it stays in vacuum all the way, or every
+ * medium it may enter has no density along it (media_clear_along: clear
+ * space in a sparse grid, whatever interfaces it crosses). Then
+ * geometry_occluded alone decides it, as in a scene without media (no walk
+ * through surfaces, no random numbers). *cells counts the majorant cells the
+ * second test visits. */
+static inline bool path_shadow_ray_unattenuated(const integrator_inputs *in, int start,
+                                                const path_shadow_ray *r, double time,
+                                                uint64_t *cells)
 {
-    return start < 0 && !geometry_may_cross_interface(g, r->o, r->w, r->tmax);
+    return start < 0 && (!geometry_may_cross_interface(in->geom, r->o, r->w, r->tmax) ||
+                         media_clear_along(in->media, in->medium_count, r->o, r->w, 0.0, r->tmax,
+                                           time, cells));
 }
 
 /* The same ray for a walk through media: w made unit (tmax a distance), and

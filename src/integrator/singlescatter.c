@@ -103,11 +103,7 @@ static rgb shadow(const singlescatter_scene *sc, const geom_hit *h, int medium,
 {
     path_shadow_ray sr = path_surface_shadow_ray(h, ls);
     int start = sc->in.medium_count == 0 ? -1 : geometry_medium_after(h, sr.w, medium);
-    /* From vacuum, through interfaces only into media that hold no density
-     * along the ray (clear space in a sparse grid): an occlusion test. */
-    if (path_shadow_ray_in_vacuum(sc->in.geom, start, &sr) ||
-        (start < 0 && media_clear_along(sc->in.media, sc->in.medium_count, sr.o, sr.w, 0.0, sr.tmax,
-                                         walk->time, &walk->majorant_steps))) {
+    if (path_shadow_ray_unattenuated(&sc->in, start, &sr, walk->time, &walk->majorant_steps)) {
         counters->shadow_rays++;
         return rgb_grey(geometry_occluded(sc->in.geom, sr.o, sr.w, sr.tmax, walk->time) ? 0.0 : 1.0);
     }

@@ -236,12 +236,9 @@ static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_sta
         const geom_hit *h = v->h;
         path_shadow_ray sr = path_surface_shadow_ray(h, ls);
         int start = sc->in.medium_count == 0 ? -1 : geometry_medium_after(h, sr.w, v->medium);
-        /* From vacuum, through interfaces only into media that hold no
-         * density along the ray (clear space in a sparse grid): an
-         * occlusion test, which leaves r_u and r_l as they are. */
-        if (path_shadow_ray_in_vacuum(sc->in.geom, start, &sr) ||
-            (start < 0 && media_clear_along(sc->in.media, sc->in.medium_count, sr.o, sr.w, 0.0,
-                                            sr.tmax, pa->walk.time, &pa->walk.majorant_steps))) {
+        /* An occlusion test leaves r_u and r_l as they are. */
+        if (path_shadow_ray_unattenuated(&sc->in, start, &sr, pa->walk.time,
+                                         &pa->walk.majorant_steps)) {
             pa->counters->shadow_rays++;
             return !geometry_occluded(sc->in.geom, sr.o, sr.w, sr.tmax, pa->walk.time);
         }
