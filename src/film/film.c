@@ -455,25 +455,53 @@ film_snapshot *film_snapshot_create(film *f, hz_error *err)
     return s;
 }
 
-/* save: film -> snapshot; otherwise snapshot -> film. */
-static void snapshot_copy(film_snapshot *s, film *f, bool save)
+/* Copies elements [a, b) of every accumulator array, each pixel's `per`
+ * values (doubles, or one count) together. save: film -> snapshot;
+ * otherwise snapshot -> film. */
+static void snapshot_copy_range(film_snapshot *s, const film_accumulators *acc, size_t npix,
+                                size_t a, size_t b, bool save)
+{
+    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
+        if (acc->doubles[i]) {
+            size_t per = acc->double_count[i] / npix;
+            double *film_side = acc->doubles[i] + a * per, *copy = s->doubles[i] + a * per;
+            size_t n = (b - a) * per * sizeof(double);
+            if (save)
+                memcpy(copy, film_side, n);
+            else
+                memcpy(film_side, copy, n);
+        }
+    if (acc->counts) {
+        size_t n = (b - a) * sizeof(uint32_t);
+        if (save)
+            memcpy(s->counts + a, acc->counts + a, n);
+        else
+            memcpy(acc->counts + a, s->counts + a, n);
+    }
+}
+
+/* The pixels of `mask` (NULL: all), in runs of consecutive ones. */
+static void snapshot_copy(film_snapshot *s, film *f, const unsigned char *mask, bool save)
 {
     film_accumulators acc;
     film_get_accumulators(f, &acc);
-    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
-        if (acc.doubles[i]) {
-            size_t n = acc.double_count[i] * sizeof(double);
-            if (save)
-                memcpy(s->doubles[i], acc.doubles[i], n);
-            else
-                memcpy(acc.doubles[i], s->doubles[i], n);
+    size_t npix = (size_t)f->width * (size_t)f->height;
+    if (npix == 0)
+        return;
+    if (!mask) {
+        snapshot_copy_range(s, &acc, npix, 0, npix, save);
+    } else {
+        for (size_t i = 0; i < npix;) {
+            if (!mask[i]) {
+                ++i;
+                continue;
+            }
+            size_t j = i + 1;
+            while (j < npix && mask[j])
+                ++j;
+            snapshot_copy_range(s, &acc, npix, i, j, save);
+            i = j;
         }
-    if (acc.counts) {
-        size_t n = acc.count_count * sizeof(uint32_t);
-        if (save)
-            memcpy(s->counts, acc.counts, n);
-        else
-            memcpy(acc.counts, s->counts, n);
     }
     if (save)
         s->nonfinite = film_nonfinite_count(f);
@@ -481,11 +509,21 @@ static void snapshot_copy(film_snapshot *s, film *f, bool save)
         film_add_nonfinite(f, s->nonfinite - film_nonfinite_count(f));
 }
 
-void film_snapshot_save(film_snapshot *s, film *f) { snapshot_copy(s, f, true); }
+void film_snapshot_save(film_snapshot *s, film *f) { snapshot_copy(s, f, NULL, true); }
 
 void film_snapshot_restore(const film_snapshot *s, film *f)
 {
-    snapshot_copy((film_snapshot *)s, f, false); /* reads s only */
+    snapshot_copy((film_snapshot *)s, f, NULL, false); /* reads s only */
+}
+
+void film_snapshot_save_pixels(film_snapshot *s, film *f, const unsigned char *mask)
+{
+    snapshot_copy(s, f, mask, true);
+}
+
+void film_snapshot_restore_pixels(const film_snapshot *s, film *f, const unsigned char *mask)
+{
+    snapshot_copy((film_snapshot *)s, f, mask, false);
 }
 
 rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,

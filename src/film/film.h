@@ -172,7 +172,12 @@ film_snapshot *film_snapshot_create(film *f, hz_error *err);
 void film_snapshot_destroy(film_snapshot *s);
 void film_snapshot_save(film_snapshot *s, film *f);
 void film_snapshot_restore(const film_snapshot *s, film *f);
-/* film_get_pixel as of the last film_snapshot_save. */
+/* The same for the pixels whose `mask` byte (row-major over the film's
+ * bounds) is non-zero; the others' copies keep what they held. A pass that
+ * adds samples only to those pixels is undone by restoring the same mask. */
+void film_snapshot_save_pixels(film_snapshot *s, film *f, const unsigned char *mask);
+void film_snapshot_restore_pixels(const film_snapshot *s, film *f, const unsigned char *mask);
+/* film_get_pixel as of the last save that covered the pixel. */
 rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,
                         double imaging_ratio);
 

@@ -329,7 +329,7 @@ static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_
             break;
         double start = now_seconds();
         if (snap)
-            film_snapshot_save(snap, f);
+            film_snapshot_save_pixels(snap, f, active);
         atomic_store(&log->next, 0);
         po.sample_begin = done;
         po.sample_end = end;

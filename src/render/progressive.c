@@ -84,7 +84,7 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
                            !progressive_pass_fits(start, deadline, last_seconds, last_samples,
                                                   next_samples)))
             break;
-        film_snapshot_save(snap, f);
+        film_snapshot_save_pixels(snap, f, active); /* a pass renders only these */
         o.sample_begin = done;
         o.sample_end = end;
         o.deadline = passes > 0 ? goal->deadline : 0.0; /* the first pass always ends */
@@ -105,7 +105,7 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
                 total.samples = pass.samples;
                 total.passes = 0;
             } else {
-                film_snapshot_restore(snap, f);
+                film_snapshot_restore_pixels(snap, f, active);
             }
             break;
         }

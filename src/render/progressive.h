@@ -89,12 +89,17 @@ typedef struct {
      * sqrt(r_i) and the pixels with samples (as doubles, to be summed across
      * ranks). */
     double *tile_sums; /* 3 * tile_count */
+    /* The same sums of this process's film, kept between measures: a tile
+     * the last pass did not render is not measured again. */
+    double *tile_own;
 } progressive_error;
 
 hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error *err);
 void progressive_error_free(progressive_error *pe);
 /* Measures e_i of every pixel and the sums of each tile (tiles without
- * samples sum to exactly 0), tiles on `threads` threads (<= 0: every core). */
+ * samples sum to exactly 0), tiles on `threads` threads (<= 0: every core).
+ * Tiles with no pixel in `active` (the pixels the last pass rendered) keep
+ * the figures of the previous measure: the first must have all active. */
 void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
                                const unsigned char *active, int n0, int n,
                                double imaging_ratio, int threads);

@@ -27,7 +27,8 @@ hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error 
     pe->e = hz_big_malloc((n ? n : 1) * sizeof *pe->e);
     pe->halves = hz_big_calloc(n ? n : 1, sizeof *pe->halves);
     pe->tile_sums = calloc((size_t)(pe->tile_count ? 3 * pe->tile_count : 1), sizeof(double));
-    if (!pe->e || !pe->halves || !pe->tile_sums) {
+    pe->tile_own = calloc((size_t)(pe->tile_count ? 3 * pe->tile_count : 1), sizeof(double));
+    if (!pe->e || !pe->halves || !pe->tile_sums || !pe->tile_own) {
         progressive_error_free(pe);
         return hz_fail(err, "out of memory for the error estimate (--target-error)");
     }
@@ -39,6 +40,7 @@ void progressive_error_free(progressive_error *pe)
     free(pe->e);
     free(pe->halves);
     free(pe->tile_sums);
+    free(pe->tile_own);
     memset(pe, 0, sizeof *pe);
 }
 
@@ -88,18 +90,35 @@ static rgb spread_of_means(const rgb *means, int x, int y, int tw, int th)
     return rgb_make(fmax(v.r, 0.0), fmax(v.g, 0.0), fmax(v.b, 0.0));
 }
 
-/* One tile: its pixels' e_i and halves estimates, and its sums. */
+/* Whether the last pass rendered some pixel of the tile at (tx, ty). */
+static bool tile_rendered(const progressive_error *pe, const unsigned char *active, int tx,
+                          int ty, int tw, int th)
+{
+    for (int y = 0; y < th; ++y) {
+        const unsigned char *row = active + (size_t)(ty + y) * pe->w + tx;
+        for (int x = 0; x < tw; ++x)
+            if (row[x])
+                return true;
+    }
+    return false;
+}
+
+/* One tile: its pixels' e_i and halves estimates, and its sums. A tile that
+ * the last pass did not render keeps them: they depend on its own pixels
+ * only, which have not changed. */
 static void measure_tile(const measure_job *job, int t)
 {
     progressive_error *pe = job->pe;
     const film *f = job->f;
     double ratio = job->imaging_ratio;
     int w = pe->w, h = pe->h;
+    int tx = (t % pe->tiles_x) * T, ty = (t / pe->tiles_x) * T;
+    int tw = w - tx < T ? w - tx : T, th = h - ty < T ? h - ty : T;
+    if (!tile_rendered(pe, job->active, tx, ty, tw, th))
+        return;
     double own[T * T];
     rgb means[T * T];
     long counts[T * T];
-    int tx = (t % pe->tiles_x) * T, ty = (t / pe->tiles_x) * T;
-    int tw = w - tx < T ? w - tx : T, th = h - ty < T ? h - ty : T;
     for (int y = 0; y < th; ++y)
         for (int x = 0; x < tw; ++x)
             means[y * T + x] = film_get_pixel(f, pe->x0 + tx + x, pe->y0 + ty + y, ratio);
@@ -119,7 +138,7 @@ static void measure_tile(const measure_job *job, int t)
                 pe->halves[i] = relative_error(rgb_mul(d, rgb_scale(d, job->half_scale)), m, var);
             }
         }
-    double *sums = pe->tile_sums + 3 * (size_t)t;
+    double *sums = pe->tile_own + 3 * (size_t)t;
     sums[0] = sums[1] = sums[2] = 0.0;
     for (int y = 0; y < th; ++y)
         for (int x = 0; x < tw; ++x) {
@@ -166,6 +185,9 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
     /* Each tile's figures depend on its own pixels only: the same for any
      * thread count. */
     hz_parallel_run(threads, measure_worker, &job);
+    /* tile_sums may be summed across ranks next: each rank's own sums stay
+     * in tile_own. */
+    memcpy(pe->tile_sums, pe->tile_own, 3 * (size_t)pe->tile_count * sizeof(double));
 }
 
 double progressive_noise_target(const progressive_goal *goal)

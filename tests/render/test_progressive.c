@@ -352,6 +352,89 @@ static void test_error_estimate(void **state)
     film_destroy(f);
 }
 
+/* Bit-for-bit copies of every accumulator array of f. */
+static double *copy_accumulators(film *f, size_t *count)
+{
+    film_accumulators acc;
+    film_get_accumulators(f, &acc);
+    size_t n = 0;
+    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
+        n += acc.double_count[i];
+    n += acc.count_count; /* counts stored as doubles: exact below 2^53 */
+    double *out = malloc(n * sizeof *out), *p = out;
+    assert_non_null(out);
+    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
+        for (size_t k = 0; k < acc.double_count[i]; ++k)
+            *p++ = acc.doubles[i][k];
+    for (size_t k = 0; k < acc.count_count; ++k)
+        *p++ = (double)acc.counts[k];
+    *count = n;
+    return out;
+}
+
+/* A pass of --target-error saves and restores only the pixels it renders,
+ * and measures only the tiles it rendered: a masked snapshot undoes samples
+ * added to its pixels exactly, and a measure whose active tiles did not
+ * change gives the figures of a full one, also when the tile sums were
+ * summed across ranks in between. */
+static void test_masked_snapshot_and_measure(void **state)
+{
+    (void)state;
+    film *f = noise_film();
+    uint64_t rng = 777;
+    add_noise(f, 4, &rng);
+    hz_error err = {0};
+    film_snapshot *snap = film_snapshot_create(f, &err);
+    assert_non_null(snap);
+    add_noise(f, 4, &rng);
+    unsigned char mask[64 * 32], all[64 * 32];
+    memset(all, 1, sizeof all);
+    for (int i = 0; i < 64 * 32; ++i) /* runs of 1-3 pixels, across rows */
+        mask[i] = (i / 3 + i % 7) % 3 == 0;
+    size_t n0, n1, n2;
+    double *before = copy_accumulators(f, &n0);
+    film_snapshot_save_pixels(snap, f, mask);
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            if (mask[y * 64 + x])
+                film_add_sample(f, x, y, rgb_grey(0.25 + 0.01 * x), 0.5, INFINITY);
+    double *during = copy_accumulators(f, &n1);
+    assert_true(n1 == n0 && memcmp(before, during, n0 * sizeof *before) != 0);
+    film_snapshot_restore_pixels(snap, f, mask);
+    double *after = copy_accumulators(f, &n2);
+    assert_true(n2 == n0 && memcmp(before, after, n0 * sizeof *before) == 0);
+    free(before);
+    free(during);
+    free(after);
+
+    /* The halves against the last full save, then the left tiles again. */
+    film_snapshot_save(snap, f);
+    add_noise(f, 4, &rng);
+    progressive_error pe;
+    assert_int_equal(progressive_error_init(&pe, f, &err), HZ_OK);
+    progressive_error_measure(&pe, f, snap, all, 12, 16, 1.0, 2);
+    size_t sums = 3 * (size_t)pe.tile_count;
+    double *full = malloc(sums * sizeof *full), *e = malloc(64 * 32 * sizeof *e);
+    assert_non_null(full);
+    assert_non_null(e);
+    memcpy(full, pe.tile_sums, sums * sizeof *full);
+    memcpy(e, pe.e, 64 * 32 * sizeof *e);
+    for (size_t i = 0; i < sums; ++i) /* as summed over two ranks */
+        pe.tile_sums[i] *= 2.0;
+    unsigned char left[64 * 32];
+    for (int i = 0; i < 64 * 32; ++i)
+        left[i] = i % 64 < 16 && i % 5 == 0; /* some pixels of the left tiles */
+    progressive_error_measure(&pe, f, snap, left, 12, 16, 1.0, 2);
+    assert_true(full[0] > 0.0 && full[sums - 3] > 0.0);
+    assert_memory_equal(pe.tile_sums, full, sums * sizeof *full);
+    assert_memory_equal(pe.e, e, 64 * 32 * sizeof *e);
+    free(full);
+    free(e);
+    progressive_error_free(&pe);
+    film_snapshot_destroy(snap);
+    film_destroy(f);
+}
+
 static void render_adaptive(const char *text, int threads, double target, film_snapshot **out,
                             render_stats *st, render_scene **keep)
 {
@@ -697,6 +780,7 @@ int main(void)
         cmocka_unit_test(test_cut_pass_undone),
         cmocka_unit_test(test_command_line),
         cmocka_unit_test(test_error_estimate),
+        cmocka_unit_test(test_masked_snapshot_and_measure),
         cmocka_unit_test(test_target_error_render),
         cmocka_unit_test(test_target_error_heavy_tails),
         cmocka_unit_test(test_step_pilot),
