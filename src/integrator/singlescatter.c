@@ -175,8 +175,10 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
     vec3 o = r->o, d = r->d;
     int medium = r->medium;
     media_walk walk = {.time = r->time};
-    if (sc->in.medium_count > 0)
-        walk.r = rng_seeded(sampler_stream_seed(st));
+    /* The walk's rng is seeded once the ray meets something: a camera ray
+     * from vacuum that misses everything (most of a small subject's frame)
+     * skips the hashing. The dimension is taken now, as before. */
+    int seed_dim = sc->in.medium_count > 0 ? sampler_reserve_dim(st) : -1;
     rgb beta = rgb_grey(1.0), L = rgb_grey(0.0);
     geom_hit h;
     /* Media fill the exact spans between crossings; only the next query
@@ -184,6 +186,10 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
     double tmin = 0.0, t_start = 0.0;
     for (int crossing = 0;; ++crossing) {
         bool hit = geometry_intersect(sc->in.geom, o, d, tmin, INFINITY, r->time, &h);
+        if (seed_dim >= 0 && (hit || medium >= 0)) {
+            walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
+            seed_dim = -1;
+        }
         /* A ray that leaves the scene inside a medium ends at HZ_FAR_COORD
          * (core/ray.h): no medium point beyond it is traced. */
         double t_hit = !hit ? (medium >= 0 ? ray_far_t(o, d) : INFINITY)

@@ -527,8 +527,10 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
     path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
                .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium}};
+    /* As singlescatter_li: the rng is seeded once the ray meets something. */
+    int seed_dim = -1;
     if (media) {
-        pa.walk.r = rng_seeded(sampler_stream_seed(st));
+        seed_dim = sampler_reserve_dim(st);
         pa.hero = (int)fmin(2.0, floor(3.0 * sampler_1d(st)));
     }
     bool camera_ray = true;
@@ -538,6 +540,10 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
         vp_ray *ray = &pa.ray;
         geom_hit h;
         bool hit = geometry_intersect(sc->in.geom, ray->o, ray->d, ray->tmin, INFINITY, r->time, &h);
+        if (seed_dim >= 0 && (hit || ray->medium >= 0)) {
+            pa.walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
+            seed_dim = -1;
+        }
         bool opaque = hit && h.shape->material->kind != MATERIAL_INTERFACE;
         if (hit && h.t < ray->t_fill) { /* behind a medium point the ray leaves */
             if (++crossing > GEOMETRY_MAX_CROSSINGS) {

@@ -281,7 +281,12 @@ vec2 sampler_pixel_2d(sampler_state *st)
     return sample_2d(st, dim_hash(st, TAG_PIXEL, 0), true);
 }
 
+uint64_t sampler_stream_seed_at(const sampler_state *st, int dim)
+{
+    return smp_hash2(dim_hash(st, TAG_STREAM, (uint64_t)dim), (uint32_t)st->index);
+}
+
 uint64_t sampler_stream_seed(sampler_state *st)
 {
-    return smp_hash2(dim_hash(st, TAG_STREAM, (uint64_t)st->dim++), (uint32_t)st->index);
+    return sampler_stream_seed_at(st, st->dim++);
 }

@@ -48,5 +48,10 @@ vec2 sampler_pixel_2d(sampler_state *st);
 /* A seed for an rng stream (core/rng.h) of this pixel sample, for estimators that
  * use an unbounded number of random numbers; consumes one dimension. */
 uint64_t sampler_stream_seed(sampler_state *st);
+/* sampler_stream_seed in two steps, for a seed that may not be needed: the
+ * dimension is taken now (sampler_skip(st, 1) returning it), the value
+ * computed later, the same as sampler_stream_seed's at that point. */
+static inline int sampler_reserve_dim(sampler_state *st) { return st->dim++; }
+uint64_t sampler_stream_seed_at(const sampler_state *st, int dim);
 
 #endif

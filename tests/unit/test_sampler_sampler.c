@@ -63,6 +63,36 @@ static void test_permutation(void **state)
     assert_int_equal(smp_sobol0(2), 0x40000000u);
 }
 
+/* A seed whose dimension is reserved and whose value is computed later is
+ * sampler_stream_seed's at the reservation, and the dimensions after it are
+ * where they were; different pixels, samples and dimensions give different
+ * seeds. */
+static void test_deferred_stream_seed(void **state)
+{
+    (void)state;
+    for (int kind = 0; kind < 3; kind++) {
+        sampler s = make((sampler_kind)kind, 16, 7);
+        for (int i = 0; i < 16; i++) {
+            sampler_state a, b;
+            sampler_start(&s, 4, 2, i, &a);
+            sampler_start(&s, 4, 2, i, &b);
+            double ua = sampler_1d(&a), ub = sampler_1d(&b);
+            uint64_t now = sampler_stream_seed(&a);
+            int dim = sampler_reserve_dim(&b);
+            double va = sampler_1d(&a), vb = sampler_1d(&b);
+            vec2 wa = sampler_2d(&a), wb = sampler_2d(&b);
+            assert_true(ua == ub && va == vb && wa.x == wb.x && wa.y == wb.y);
+            assert_true(sampler_stream_seed_at(&b, dim) == now);
+            assert_true(sampler_stream_seed_at(&b, dim + 1) != now);
+            sampler_state c;
+            sampler_start(&s, 4, 2, (i + 1) % 16, &c);
+            assert_true(sampler_stream_seed_at(&c, dim) != now);
+            sampler_start(&s, 5, 2, i, &c);
+            assert_true(sampler_stream_seed_at(&c, dim) != now);
+        }
+    }
+}
+
 static void test_range_and_determinism(void **state)
 {
     (void)state;
@@ -330,6 +360,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_permutation),
         cmocka_unit_test(test_range_and_determinism),
+        cmocka_unit_test(test_deferred_stream_seed),
         cmocka_unit_test(test_stratified_strata),
         cmocka_unit_test(test_sobol_nets),
         cmocka_unit_test(test_integration_error),
