@@ -769,19 +769,44 @@ typedef struct {
 
 enum { EXR_FILL_ROWS = 16 };
 
+/* Rows [y0, y1) of a film with colour and alpha only (no AOV): the values
+ * of exr_channel_values without its per-pixel dispatch. */
+static void exr_fill_rgba(const exr_fill_job *job, int y0, int y1)
+{
+    const film *f = job->f;
+    float *r = job->img->channels[0].pixels, *g = job->img->channels[1].pixels;
+    float *b = job->img->channels[2].pixels, *a = job->img->channels[3].pixels;
+    for (size_t i = (size_t)y0 * (size_t)f->width, end = (size_t)y1 * (size_t)f->width; i < end;
+         ++i) {
+        rgb v = pixel_value(&f->pixels[i], job->ratio);
+        r[i] = (float)v.r;
+        g[i] = (float)v.g;
+        b[i] = (float)v.b;
+        a[i] = f->pixels[i].w != 0.0 ? 1.0f : 0.0f;
+    }
+}
+
 static void *exr_fill_worker(void *arg)
 {
     exr_fill_job *job = arg;
     const film *f = job->f;
     float values[MAX_CHANNELS];
-    for (int y0; (y0 = atomic_fetch_add(&job->next_row, EXR_FILL_ROWS)) < f->height;)
-        for (int y = y0; y < y0 + EXR_FILL_ROWS && y < f->height; y++)
+    bool rgba_only = !f->depth && !f->gbuf && !f->moments && !f->count;
+    assert(!rgba_only || job->nc == 4);
+    for (int y0; (y0 = atomic_fetch_add(&job->next_row, EXR_FILL_ROWS)) < f->height;) {
+        int y1 = y0 + EXR_FILL_ROWS < f->height ? y0 + EXR_FILL_ROWS : f->height;
+        if (rgba_only) {
+            exr_fill_rgba(job, y0, y1);
+            continue;
+        }
+        for (int y = y0; y < y1; y++)
             for (int x = 0; x < f->width; x++) {
                 size_t i = (size_t)y * (size_t)f->width + (size_t)x;
                 exr_channel_values(f, x + f->p.bounds.x0, y + f->p.bounds.y0, job->ratio, values);
                 for (int c = 0; c < job->nc; c++)
                     job->img->channels[c].pixels[i] = values[c];
             }
+    }
     return NULL;
 }
 
