@@ -140,6 +140,7 @@ peer_config() {
             for spp in $hspps; do
                 rung jittered "$s" "$spp"
                 rung jittered+cache "$s" "$spp"
+                rung jittered+finecache "$s" "$spp"
             done
         done
         # Deterministic at pixel centres: one sample is the converged pixel.
@@ -149,6 +150,7 @@ peer_config() {
             for s in $rsteps; do
                 rung raymarch "$s" 1
                 rung raymarch+cache "$s" 1
+                rung raymarch+finecache "$s" 1
             done
             [ -z "$BENCH_QUICK" ] && rung raymarch+cache 0.25 1
         fi

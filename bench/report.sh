@@ -74,7 +74,8 @@ report_peer() {
     echo "Renders (each against its own converged image; vdb_render renders one ray"
     echo "per pixel centre, haze \`centre\` with --disable-pixel-jitter, \`aa\` anti-aliased;"
     echo "haze \`raymarch S\` and \`jittered S\` rungs, step S, shadow step 2S; \`+cache\`:"
-    echo "the same with \`\"float shadowcache\" S\`, docs/media.md):"
+    echo "the same with \`\"float shadowcache\" S\`, docs/media.md; \`+finecache\`: with"
+    echo "\`\"float shadowcache\" S/2\`):"
     echo
     echo "haze's references: at pixel centres a deterministic raymarch (step 0.0625),"
     echo "whose error is estimated from the same render at twice the steps (MSE/9);"

@@ -4,7 +4,8 @@
 # floor: relMSE(ref2, ref) is twice the reference's own error) with jittered
 # marching at step 0.5 / shadow step 1 (finer than any step the pilot picks
 # here, so the errors below include the rungs' marching bias), rungs of
-# jittered at steps 1, 2, 4, with and without the shadow cache, at 1, 2, 4, ...
+# jittered at steps 1, 2, 4, without the shadow cache and with it at the step
+# and at half the step, at 1, 2, 4, ...
 # spp, and --target-error E; each run's time and relMSE.
 # Appends "scene mode value seconds relmse spp_mean rung" rows to
 # $RESULTS/target.tsv (mode: uniform (value: spp; rung: "estimator step"),
@@ -44,6 +45,7 @@ target_scene() {
 target_run() {
     printf 'scene\tmode\tvalue\tseconds\trelmse\tspp_mean\trung\n' >"$RESULTS/target.tsv"
     grid="jittered:1 jittered:2 jittered:4 jittered+cache:1 jittered+cache:2 jittered+cache:4"
+    grid="$grid jittered+finecache:1 jittered+finecache:2 jittered+finecache:4"
     if [ -n "$BENCH_QUICK" ]; then
         target_scene "$BENCH/scenes/cloud.pbrt" cloud 64 "1 2 4 8" "1e-2 1e-3" "jittered:1 jittered+cache:2"
         target_scene "$BENCH/scenes/fog-dof.pbrt" fog-dof 64 "1 4 16" "1e-2" "jittered:1"
@@ -66,7 +68,8 @@ report_target() {
     echo "spp), so the errors include the rungs' marching bias; \`floor\` is the reference's"
     echo "own relMSE (half that of a second reference against it), subtracted before the"
     echo "verdict. Rungs: jittered at steps 1, 2, 4 (shadow step twice), with (\`+cache\`:"
-    echo "\`\"float shadowcache\"\` at the step) and without the shadow cache, at uniform spp."
+    echo "\`\"float shadowcache\"\` at the step; \`+finecache\`: at half the step) and without"
+    echo "the shadow cache, at uniform spp."
     echo "--target-error starts from the scene's settings (jittered, step 1); \`steps\` is"
     echo "what its pilot chose (step, shadow step, cache). \`best rung\` is the fastest rung"
     echo "whose relMSE less the floor is at or below E."
