@@ -35,7 +35,7 @@ report_ladder() {
     echo "Error against each scene's converged reference ($ladder_ref_est tracking, cached"
     echo "in bench/cache/), over R, G, B. Time is the process wall clock (start-up,"
     echo "scene loading and EXR writing included; the median of three runs when one"
-    echo "takes under 2 s), $THREADS threads. Shadow step = 2 x step. \`*\` marks the"
+    echo "takes under 2 s, of seven under 0.5 s), $THREADS threads. Shadow step = 2 x step. \`*\` marks the"
     echo "scene's Pareto front (no faster rung has a relMSE within 5% of it)."
     echo
     for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/ladder.tsv" | uniq); do
@@ -132,7 +132,7 @@ report_bounce() {
     echo "Against each scene's converged \`volpath\` reference (maxdepth 1000), every rung at the"
     echo "same spp, 2 threads, seed 1. *mean* is the relative error of the image mean over R, G, B:"
     echo "the light a missing bounce leaves out (the mean's noise is far below it); relMSE adds"
-    echo "each rung's own noise. *time* is the process wall clock (median of three under 2 s)."
+    echo "each rung's own noise. *time* is the process wall clock (median of three under 2 s, of seven under 0.5 s)."
     echo
     for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/bounce.tsv" | uniq); do
         awk -F'\t' -v s="$scene" '$1 == s && $2 == "reference" { printf "### %s (reference: %s spp, image mean %s)\n", s, $4, $8 }' "$RESULTS/bounce.tsv"
