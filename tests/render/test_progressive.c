@@ -263,18 +263,27 @@ static void add_noise(film *f, int samples, uint64_t *state)
             }
 }
 
+/* A noise film with `samples` per pixel, a copy of it, then `samples` more. */
+static film *noise_film_and_copy(uint64_t seed, int samples, film_snapshot **copy)
+{
+    film *f = noise_film();
+    uint64_t rng = seed;
+    add_noise(f, samples, &rng);
+    hz_error err = {0};
+    *copy = film_snapshot_create(f, &err);
+    assert_non_null(*copy);
+    add_noise(f, samples, &rng);
+    return f;
+}
+
 /* The estimates against the closed form: Var[mean] = sigma^2 / n, relative
  * (0.5 + 0.01)^2; the allocation gives the noisier half 4x the samples. */
 static void test_error_estimate(void **state)
 {
     (void)state;
-    film *f = noise_film();
-    uint64_t rng = 12345;
-    add_noise(f, 8, &rng);
+    film_snapshot *before;
+    film *f = noise_film_and_copy(12345, 8, &before);
     hz_error err = {0};
-    film_snapshot *before = film_snapshot_create(f, &err);
-    assert_non_null(before);
-    add_noise(f, 8, &rng);
     progressive_error pe;
     assert_int_equal(progressive_error_init(&pe, f, &err), HZ_OK);
     unsigned char active[64 * 32];
@@ -380,13 +389,10 @@ static double *copy_accumulators(film *f, size_t *count)
 static void test_masked_snapshot_and_measure(void **state)
 {
     (void)state;
-    film *f = noise_film();
-    uint64_t rng = 777;
-    add_noise(f, 4, &rng);
+    film_snapshot *snap;
+    film *f = noise_film_and_copy(777, 4, &snap);
+    uint64_t rng = 778;
     hz_error err = {0};
-    film_snapshot *snap = film_snapshot_create(f, &err);
-    assert_non_null(snap);
-    add_noise(f, 4, &rng);
     unsigned char mask[64 * 32], all[64 * 32];
     memset(all, 1, sizeof all);
     for (int i = 0; i < 64 * 32; ++i) /* runs of 1-3 pixels, across rows */
