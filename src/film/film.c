@@ -435,7 +435,7 @@ void film_snapshot_destroy(film_snapshot *s)
     free(s);
 }
 
-film_snapshot *film_snapshot_create(film *f, hz_error *err)
+film_snapshot *film_snapshot_alloc(film *f, hz_error *err)
 {
     film_snapshot *s = calloc(1, sizeof *s);
     film_accumulators acc;
@@ -451,7 +451,15 @@ film_snapshot *film_snapshot_create(film *f, hz_error *err)
         hz_fail(err, "out of memory for a copy of the film");
         return NULL;
     }
-    film_snapshot_save(s, f);
+    s->nonfinite = film_nonfinite_count(f);
+    return s;
+}
+
+film_snapshot *film_snapshot_create(film *f, hz_error *err)
+{
+    film_snapshot *s = film_snapshot_alloc(f, err);
+    if (s)
+        film_snapshot_save(s, f);
     return s;
 }
 

@@ -169,6 +169,9 @@ void film_add_nonfinite(film *f, long n);
  * short) and to see a pixel's value at the time of the copy. */
 typedef struct film_snapshot film_snapshot;
 film_snapshot *film_snapshot_create(film *f, hz_error *err);
+/* The copy's memory only: its pixels are undefined until a save covers
+ * them (a progressive render's first pass is never undone). */
+film_snapshot *film_snapshot_alloc(film *f, hz_error *err);
 void film_snapshot_destroy(film_snapshot *s);
 void film_snapshot_save(film_snapshot *s, film *f);
 void film_snapshot_restore(const film_snapshot *s, film *f);

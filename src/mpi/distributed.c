@@ -300,7 +300,7 @@ static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_
     if (goal->target_error > 0) {
         if (progressive_error_init(&pe, f, err) != HZ_OK)
             return HZ_ERROR;
-        if (!(active = malloc(npix ? npix : 1)) || !(snap = film_snapshot_create(f, err))) {
+        if (!(active = malloc(npix ? npix : 1)) || !(snap = film_snapshot_alloc(f, err))) {
             free(active);
             progressive_error_free(&pe);
             return hz_fail(err, "out of memory for the pixel mask (--target-error)");

@@ -57,7 +57,9 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
         }
         memset(active, 1, npix);
     }
-    film_snapshot *snap = film_snapshot_create(f, err);
+    /* Copies from the second pass on: the first is never undone, and the
+     * halves estimate starts at the second. */
+    film_snapshot *snap = film_snapshot_alloc(f, err);
     if (!snap) {
         free(active);
         progressive_error_free(&pe);
@@ -84,7 +86,8 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
                            !progressive_pass_fits(start, deadline, last_seconds, last_samples,
                                                   next_samples)))
             break;
-        film_snapshot_save_pixels(snap, f, active); /* a pass renders only these */
+        if (passes > 0)
+            film_snapshot_save_pixels(snap, f, active); /* a pass renders only these */
         o.sample_begin = done;
         o.sample_end = end;
         o.deadline = passes > 0 ? goal->deadline : 0.0; /* the first pass always ends */
