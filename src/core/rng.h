@@ -1,6 +1,6 @@
 /* A small counter-based random stream (SplitMix64) for estimators that need an
  * unbounded number of random numbers per sample (ratio tracking, Russian
- * roulette). Seed it from the pixel sampler (sampler_stream_seed) so images stay
+ * roulette). Seed it from the pixel sampler (sampler_stream_seed_at) so images stay
  * independent of the thread count. */
 #ifndef HAZE_CORE_RNG_H
 #define HAZE_CORE_RNG_H

@@ -176,7 +176,8 @@ void film_snapshot_destroy(film_snapshot *s);
 void film_snapshot_save(film_snapshot *s, film *f);
 void film_snapshot_restore(const film_snapshot *s, film *f);
 /* The same for the pixels whose `mask` byte (row-major over the film's
- * bounds) is non-zero; the others' copies keep what they held. A pass that
+ * bounds) is non-zero, every pixel for a NULL mask; the others' copies keep
+ * what they held. A pass that
  * adds samples only to those pixels is undone by restoring the same mask. */
 void film_snapshot_save_pixels(film_snapshot *s, film *f, const unsigned char *mask);
 void film_snapshot_restore_pixels(const film_snapshot *s, film *f, const unsigned char *mask);

@@ -286,7 +286,3 @@ uint64_t sampler_stream_seed_at(const sampler_state *st, int dim)
     return smp_hash2(dim_hash(st, TAG_STREAM, (uint64_t)dim), (uint32_t)st->index);
 }
 
-uint64_t sampler_stream_seed(sampler_state *st)
-{
-    return sampler_stream_seed_at(st, st->dim++);
-}

@@ -46,11 +46,10 @@ static inline void sampler_skip(sampler_state *st, int n) { st->dim += n; }
 /* The film position sample: the first 2D dimension, stratified across the pixel's samples. */
 vec2 sampler_pixel_2d(sampler_state *st);
 /* A seed for an rng stream (core/rng.h) of this pixel sample, for estimators that
- * use an unbounded number of random numbers; consumes one dimension. */
-uint64_t sampler_stream_seed(sampler_state *st);
-/* sampler_stream_seed in two steps, for a seed that may not be needed: the
- * dimension is taken now (sampler_skip(st, 1) returning it), the value
- * computed later, the same as sampler_stream_seed's at that point. */
+ * use an unbounded number of random numbers, in two steps: its dimension is
+ * taken when the sample's dimensions reach it (sampler_skip(st, 1) returning
+ * it), its value computed from it when needed, if ever (the same value
+ * whenever: it depends on the pixel, the sample and the dimension only). */
 static inline int sampler_reserve_dim(sampler_state *st) { return st->dim++; }
 uint64_t sampler_stream_seed_at(const sampler_state *st, int dim);
 
