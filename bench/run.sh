@@ -9,6 +9,8 @@ HAZE=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
 BENCH=$(cd "$(dirname "$0")" && pwd)
 CACHE=$BENCH/cache
 THREADS=${BENCH_THREADS:-2}
+# The compiled helpers of bench/CMakeLists.txt, next to haze in its build tree.
+EXR_EXTRAPOLATE=${EXR_EXTRAPOLATE:-$(dirname "$HAZE")/bench/exr_extrapolate}
 BENCH_QUICK=${BENCH_QUICK:-}
 RESULTS=$BENCH/results
 [ -n "$BENCH_QUICK" ] && RESULTS=$CACHE/quick-results
