@@ -54,12 +54,12 @@ peer_config() {
             { echo "bench: $EXR_EXTRAPOLATE failed" >&2; exit 1; }
     fi
     # The ladder: vdb_render's best step / shadow-step pairs (issue 20): each
-    # step with shadow steps of half, one and two steps, and down to 0.125
+    # step with shadow steps of half, one and two steps, and down to 0.0625
     # voxels for the finest errors (step 0.25 gains nothing over 0.5 there:
     # 2x the time for the same error, as the shadow step dominates). Its time goes to the shadow rays (steps x
     # shadow steps lookups), so at coarse errors a coarse step with a finer
     # shadow step is its fastest (the "S/SS" rungs in trade.md).
-    pairs="4/8 4/4 4/2 2/4 2/2 2/1 1/2 1/1 1/0.5 1/0.25 0.5/1 0.5/0.5 0.5/0.25 0.5/0.125"
+    pairs="4/8 4/4 4/2 2/4 2/2 2/1 1/2 1/1 1/0.5 1/0.25 0.5/1 0.5/0.5 0.5/0.25 0.5/0.125 0.5/0.0625"
     [ -n "$BENCH_QUICK" ] && pairs="2/4 2/2 1/2"
     for p in $pairs; do
         s=${p%/*} ss=${p#*/}
