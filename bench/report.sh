@@ -72,7 +72,9 @@ report_peer() {
     awk -F'\t' 'NR > 1 { printf "| %s | %s | %.4g | %.4g | %.4g | %.4g | %+.2f%% |\n", $1, $2, $3, $4, $5, $6, 100 * $7 }' "$RESULTS/peer-match.tsv"
     echo
     echo "Renders (each against its own converged image; vdb_render renders one ray"
-    echo "per pixel centre, haze \`centre\` with --disable-pixel-jitter, \`aa\` anti-aliased;"
+    echo "per pixel centre, its rungs \`S/SS\` at step S and shadow step SS voxels, against"
+    echo "its image extrapolated to shadow step 0 (bench/README.md);"
+    echo "haze \`centre\` with --disable-pixel-jitter, \`aa\` anti-aliased;"
     echo "haze \`raymarch S\` and \`jittered S\` rungs, step S, shadow step 2S; \`+cache\`:"
     echo "the same with \`\"float shadowcache\" S\`, docs/media.md; \`+finecache\`: with"
     echo "\`\"float shadowcache\" S/2\`):"
