@@ -41,7 +41,8 @@ static inline void ray_scale_differentials(ray_differential *rd, double s)
 
 static inline bool point_within(vec3 p, double limit)
 {
-    return fabs(p.x) <= limit && fabs(p.y) <= limit && fabs(p.z) <= limit;
+    /* & not &&: three compares without branches (false for a NaN, as ever). */
+    return (fabs(p.x) <= limit) & (fabs(p.y) <= limit) & (fabs(p.z) <= limit);
 }
 
 /* The distance along o + t d (unit d, o within HZ_MAX_COORD) to where a
