@@ -46,24 +46,32 @@ static int run(const char *fine, const char *coarse, const char *out)
     return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-static void path_of(char *buf, size_t n, const char *what)
+/* The three files of a case, named by the process and `tag`; FINE (5 x 3,
+ * k = 1) and COARSE (coarse_w x 3, k = 4) written. */
+typedef struct {
+    char fine[512], coarse[512], out[512];
+} case_files;
+
+static void case_setup(case_files *f, const char *tag, int coarse_w)
 {
-    snprintf(buf, n, "%s/extrapolate-%ld-%s.exr", HAZE_TMP, (long)getpid(), what);
+    snprintf(f->fine, sizeof f->fine, "%s/extrapolate-%ld-%s-fine.exr", HAZE_TMP, (long)getpid(),
+             tag);
+    snprintf(f->coarse, sizeof f->coarse, "%s/extrapolate-%ld-%s-coarse.exr", HAZE_TMP,
+             (long)getpid(), tag);
+    snprintf(f->out, sizeof f->out, "%s/extrapolate-%ld-%s-out.exr", HAZE_TMP, (long)getpid(), tag);
+    write_image(f->fine, 5, 3, 1);
+    write_image(f->coarse, coarse_w, 3, 4);
 }
 
 static void test_every_value(void **state)
 {
     (void)state;
-    char fine[512], coarse[512], out[512];
-    path_of(fine, sizeof fine, "fine");
-    path_of(coarse, sizeof coarse, "coarse");
-    path_of(out, sizeof out, "out");
-    write_image(fine, 5, 3, 1);
-    write_image(coarse, 5, 3, 4);
-    assert_int_equal(run(fine, coarse, out), 0);
+    case_files f;
+    case_setup(&f, "values", 5);
+    assert_int_equal(run(f.fine, f.coarse, f.out), 0);
     exr_image img = {0};
     hz_error err = {0};
-    assert_int_equal(exr_read(out, &img, &err), HZ_OK);
+    assert_int_equal(exr_read(f.out, &img, &err), HZ_OK);
     assert_int_equal(img.width, 5);
     assert_int_equal(img.height, 3);
     assert_int_equal(img.channel_count, 4);
@@ -76,32 +84,28 @@ static void test_every_value(void **state)
         }
     }
     exr_image_free(&img);
-    unlink(fine);
-    unlink(coarse);
-    unlink(out);
+    unlink(f.fine);
+    unlink(f.coarse);
+    unlink(f.out);
 }
 
 static void test_refusals(void **state)
 {
     (void)state;
-    char fine[512], coarse[512], out[512];
-    path_of(fine, sizeof fine, "fine2");
-    path_of(coarse, sizeof coarse, "coarse2");
-    path_of(out, sizeof out, "out2");
-    write_image(fine, 5, 3, 1);
-    write_image(coarse, 4, 3, 4);
-    assert_int_equal(run(fine, coarse, out), 1);
-    assert_int_not_equal(access(out, F_OK), 0);
-    assert_int_equal(run(fine, "/nonexistent/x.exr", out), 1);
-    assert_int_not_equal(access(out, F_OK), 0);
-    write_image(coarse, 5, 3, 4);
-    assert_int_equal(run(fine, coarse, "/nonexistent/out.exr"), 1);
+    case_files f;
+    case_setup(&f, "refusals", 4); /* COARSE one column narrower */
+    assert_int_equal(run(f.fine, f.coarse, f.out), 1);
+    assert_int_not_equal(access(f.out, F_OK), 0);
+    assert_int_equal(run(f.fine, "/nonexistent/x.exr", f.out), 1);
+    assert_int_not_equal(access(f.out, F_OK), 0);
+    write_image(f.coarse, 5, 3, 4);
+    assert_int_equal(run(f.fine, f.coarse, "/nonexistent/out.exr"), 1);
     char cmd[1024];
-    snprintf(cmd, sizeof cmd, "%s %s 2>/dev/null", EXR_EXTRAPOLATE_BIN, fine);
+    snprintf(cmd, sizeof cmd, "%s %s 2>/dev/null", EXR_EXTRAPOLATE_BIN, f.fine);
     int st = system(cmd);
     assert_true(WIFEXITED(st) && WEXITSTATUS(st) == 2);
-    unlink(fine);
-    unlink(coarse);
+    unlink(f.fine);
+    unlink(f.coarse);
 }
 
 int main(void)
