@@ -88,15 +88,25 @@ haze_id() {
     echo "$v $t"
 }
 
-# cache_key FILE... -- WORDS: a hash of the files' contents, the words and haze_id.
-cache_key() {
+# key_of EXTRA FILE... -- WORDS: a hash of the files' contents, the words and
+# EXTRA (when not empty).
+key_of() {
+    key_extra=$1
+    shift
     {
         while [ $# -gt 0 ] && [ "$1" != -- ]; do cat "$1"; shift; done
         [ "$1" = -- ] && shift
         echo "$*"
-        haze_id
+        [ -z "$key_extra" ] || echo "$key_extra"
     } | sha256sum | cut -c1-16
 }
+
+# cache_key FILE... -- WORDS: for what haze renders, with haze_id.
+cache_key() { key_of "$(haze_id)" "$@"; }
+
+# content_key FILE... -- WORDS: without haze_id, for vdb_render's references,
+# which survive changes to haze.
+content_key() { key_of "" "$@"; }
 
 # has_option NAME: haze render accepts --NAME (features being added on main).
 has_option() { "$HAZE" --help 2>&1 | grep -q -e "--$1\b"; }

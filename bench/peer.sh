@@ -26,6 +26,13 @@ vdb() {
         -step "$2" -shadowstep "$3" -cpus "$THREADS"
 }
 
+# vdb_ref_path CONFIG STEP WORDS: the cache file of a vdb_render reference
+# at STEP (WORDS: its shadow step, and how it was made), keyed by the volume,
+# vdb_render's version and its arguments, not by haze's.
+vdb_ref_path() {
+    echo "$CACHE/vdb-ref-$1-$(content_key "$BENCH/../volumes/smoke.vdb" -- "vdb $(vdb_render -version 2>&1) $PEER_VIEW $PEER_LIGHT $(peer_coefficients "$1") $2 $3").exr"
+}
+
 peer_config() {
     cfg=$1
     # vdb_render's converged image. Its error is first order in the shadow
@@ -37,28 +44,28 @@ peer_config() {
     # with shadow steps fine enough would take most of an hour.
     vref_step=0.05 vref_sstep=0.125
     [ -n "$BENCH_QUICK" ] && vref_step=0.1 vref_sstep=0.25
-    vref_key=$(cache_key "$BENCH/../volumes/smoke.vdb" -- "vdb $(vdb_render -version 2>&1) $PEER_VIEW $PEER_LIGHT $(peer_coefficients "$cfg") $vref_step $vref_sstep extrapolated")
-    vref=$CACHE/vdb-ref-$cfg-$vref_key.exr
+    vref=$(vdb_ref_path "$cfg" "$vref_step" "$vref_sstep extrapolated")
     if [ ! -f "$vref" ]; then
-        for ss in "$vref_sstep" "$(awk -v s="$vref_sstep" 'BEGIN { print 2 * s }')"; do
-            key=$(cache_key "$BENCH/../volumes/smoke.vdb" -- "vdb $(vdb_render -version 2>&1) $PEER_VIEW $PEER_LIGHT $(peer_coefficients "$cfg") $vref_step $ss")
-            [ -f "$CACHE/vdb-ref-$cfg-$key.exr" ] && continue
+        coarse_sstep=$(awk -v s="$vref_sstep" 'BEGIN { print 2 * s }')
+        for ss in "$vref_sstep" "$coarse_sstep"; do
+            out=$(vdb_ref_path "$cfg" "$vref_step" "$ss")
+            [ -f "$out" ] && continue
             echo "  vdb_render reference $cfg: step $vref_step, shadow step $ss" >&2
             t=$(timed vdb "$cfg" "$vref_step" "$ss" "$CACHE/vdb-tmp.exr")
-            mv "$CACHE/vdb-tmp.exr" "$CACHE/vdb-ref-$cfg-$key.exr"
+            mv "$CACHE/vdb-tmp.exr" "$out"
             echo "  vdb_render reference $cfg took $t s" >&2
         done
-        fine=$(cache_key "$BENCH/../volumes/smoke.vdb" -- "vdb $(vdb_render -version 2>&1) $PEER_VIEW $PEER_LIGHT $(peer_coefficients "$cfg") $vref_step $vref_sstep")
-        coarse=$(cache_key "$BENCH/../volumes/smoke.vdb" -- "vdb $(vdb_render -version 2>&1) $PEER_VIEW $PEER_LIGHT $(peer_coefficients "$cfg") $vref_step $(awk -v s="$vref_sstep" 'BEGIN { print 2 * s }')")
-        "$EXR_EXTRAPOLATE" "$CACHE/vdb-ref-$cfg-$fine.exr" "$CACHE/vdb-ref-$cfg-$coarse.exr" "$vref" ||
+        "$EXR_EXTRAPOLATE" "$(vdb_ref_path "$cfg" "$vref_step" "$vref_sstep")" \
+            "$(vdb_ref_path "$cfg" "$vref_step" "$coarse_sstep")" "$vref" ||
             { echo "bench: $EXR_EXTRAPOLATE failed" >&2; exit 1; }
     fi
     # The ladder: vdb_render's best step / shadow-step pairs (issue 20): each
     # step with shadow steps of half, one and two steps, and down to 0.0625
     # voxels for the finest errors (step 0.25 gains nothing over 0.5 there:
-    # 2x the time for the same error, as the shadow step dominates). Its time goes to the shadow rays (steps x
-    # shadow steps lookups), so at coarse errors a coarse step with a finer
-    # shadow step is its fastest (the "S/SS" rungs in trade.md).
+    # 2x the time for the same error, as the shadow step dominates). Its time
+    # goes to the shadow rays (steps x shadow steps lookups), so at coarse
+    # errors a coarse step with a finer shadow step is its fastest (the
+    # "S/SS" rungs in trade.md).
     pairs="4/8 4/4 4/2 2/4 2/2 2/1 1/2 1/1 1/0.5 1/0.25 0.5/1 0.5/0.5 0.5/0.25 0.5/0.125 0.5/0.0625"
     [ -n "$BENCH_QUICK" ] && pairs="2/4 2/2 1/2"
     for p in $pairs; do
