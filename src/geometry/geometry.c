@@ -985,6 +985,141 @@ static void find_world_box(geometry *g)
     g->world_box[1] = v3_add(hi, d);
 }
 
+/* The padded render-space box of a static shape (as the interface boxes). */
+static void shape_box(const geom_shape *s, vec3 *lo_out, vec3 *hi_out)
+{
+    vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
+    switch (s->kind) {
+    case GEOMETRY_SPHERE: {
+        double r = s->radius;
+        transform_box(&s->space_from_object, v3(-r, -r, -r), v3(r, r, r), &lo, &hi);
+        break;
+    }
+    case GEOMETRY_TRIANGLES:
+        for (size_t v = 0; v < s->vertex_count; ++v) {
+            const float *f = &s->p[3 * v];
+            vec3 p = v3(f[0], f[1], f[2]);
+            lo = v3_min(lo, p);
+            hi = v3_max(hi, p);
+        }
+        break;
+    case GEOMETRY_CURVES:
+        for (size_t i = 0; i < s->segment_count << s->curve_split; ++i) {
+            vec3 a, b;
+            geometry_curve_bounds(s, (unsigned)i, &a, &b);
+            lo = v3_min(lo, a);
+            hi = v3_max(hi, b);
+        }
+        break;
+    }
+    double pad = 1e-5 * v3_max_component(v3_max(v3_abs(lo), v3_abs(hi))) + 1e-30;
+    *lo_out = v3_sub(lo, v3(pad, pad, pad));
+    *hi_out = v3_add(hi, v3(pad, pad, pad));
+}
+
+/* Meshes up to this many triangles are checked for convexity (all pairs of
+ * triangle and vertex: at most 64 x 192). */
+#define GEOMETRY_MAX_CONVEX_TRIANGLES 64
+
+/* The outward normals of a convex mesh (geom_shape.outward), or NULL when
+ * some vertex lies in front of some triangle's plane by more than float
+ * rounding (1e-6 of the mesh's extent). A degenerate triangle (Embree never
+ * reports it) gets a zero normal. */
+static double *convex_outward(const geom_shape *s)
+{
+    double *out = malloc(3 * s->triangle_count * sizeof *out);
+    if (!out)
+        return NULL;
+    vec3 lo, hi;
+    shape_box(s, &lo, &hi);
+    double tol = 1e-6 * v3_max_component(v3_sub(hi, lo));
+    for (size_t t = 0; t < s->triangle_count; ++t) {
+        vec3 v[3];
+        for (int k = 0; k < 3; ++k) {
+            const float *f = &s->p[3 * s->indices[3 * t + (size_t)k]];
+            v[k] = v3(f[0], f[1], f[2]);
+        }
+        vec3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
+        double len = v3_length(n);
+        if (!(len > 0.0)) {
+            out[3 * t] = out[3 * t + 1] = out[3 * t + 2] = 0.0;
+            continue;
+        }
+        n = v3_scale(n, 1.0 / len);
+        double front = 0.0, behind = 0.0;
+        for (size_t k = 0; k < s->vertex_count; ++k) {
+            const float *f = &s->p[3 * k];
+            double h = v3_dot(v3_sub(v3(f[0], f[1], f[2]), v[0]), n);
+            front = hz_fmax(front, h);
+            behind = hz_fmax(behind, -h);
+        }
+        if (front > tol && behind > tol) {
+            free(out);
+            return NULL;
+        }
+        if (front > tol)
+            n = v3_neg(n);
+        out[3 * t] = n.x;
+        out[3 * t + 1] = n.y;
+        out[3 * t + 2] = n.z;
+    }
+    return out;
+}
+
+/* geom_shape.outward and the boxes of the other shapes, for the small convex
+ * meshes that change the medium, when nothing moves or is instanced. */
+static hz_status find_convex_interfaces(geometry *g, hz_error *err)
+{
+    if (g->motion || g->instance_count > 0 || g->object_count > 0 || g->shape_count == 0)
+        return HZ_OK;
+    bool any = false;
+    for (size_t i = 0; i < g->shape_count; ++i) {
+        const geom_shape *s = &g->shapes[i];
+        any |= changes_medium(s) && s->kind == GEOMETRY_TRIANGLES &&
+               s->triangle_count <= GEOMETRY_MAX_CONVEX_TRIANGLES;
+    }
+    if (!any)
+        return HZ_OK;
+    size_t n = g->shape_count;
+    vec3(*box)[2] = malloc(n * sizeof *box);
+    vec3(*before)[2] = malloc((n + 1) * sizeof *before);
+    vec3(*after)[2] = malloc((n + 1) * sizeof *after);
+    if (!box || !before || !after) {
+        free(box);
+        free(before);
+        free(after);
+        return hz_fail(err, "out of memory");
+    }
+    /* before[i]: the union of the boxes of shapes 0..i-1; after[i]: of i..n-1. */
+    before[0][0] = after[n][0] = v3(INFINITY, INFINITY, INFINITY);
+    before[0][1] = after[n][1] = v3(-INFINITY, -INFINITY, -INFINITY);
+    for (size_t i = 0; i < n; ++i) {
+        box[i][0] = v3(INFINITY, INFINITY, INFINITY);
+        box[i][1] = v3(-INFINITY, -INFINITY, -INFINITY);
+        if (!g->shapes[i].left_out)
+            shape_box(&g->shapes[i], &box[i][0], &box[i][1]);
+        before[i + 1][0] = v3_min(before[i][0], box[i][0]);
+        before[i + 1][1] = v3_max(before[i][1], box[i][1]);
+    }
+    for (size_t i = n; i-- > 0;) {
+        after[i][0] = v3_min(after[i + 1][0], box[i][0]);
+        after[i][1] = v3_max(after[i + 1][1], box[i][1]);
+    }
+    for (size_t i = 0; i < n; ++i) {
+        geom_shape *s = &g->shapes[i];
+        if (!changes_medium(s) || s->kind != GEOMETRY_TRIANGLES ||
+            s->triangle_count > GEOMETRY_MAX_CONVEX_TRIANGLES)
+            continue;
+        s->outward = convex_outward(s);
+        s->others_lo = v3_min(before[i][0], after[i + 1][0]);
+        s->others_hi = v3_max(before[i][1], after[i + 1][1]);
+    }
+    free(box);
+    free(before);
+    free(after);
+    return HZ_OK;
+}
+
 bool geometry_may_cross_interface(const geometry *g, vec3 o, vec3 d, double tmax)
 {
     if (g->interfaces_anywhere)
@@ -1037,7 +1172,8 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
     }
     rtcCommitScene(g->scene);
     find_world_box(g);
-    if (check_device(g->device, err) != HZ_OK || find_interfaces(g, err) != HZ_OK) {
+    if (check_device(g->device, err) != HZ_OK || find_interfaces(g, err) != HZ_OK ||
+        find_convex_interfaces(g, err) != HZ_OK) {
         geometry_destroy(g);
         return HZ_ERROR;
     }
@@ -1047,6 +1183,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
 
 static void free_shape_arrays(geom_shape *s)
 {
+    free(s->outward);
     free(s->n);
     free(s->uv);
     free(s->curve_cp);
@@ -1494,17 +1631,15 @@ static bool embree_can_trace(vec3 o, vec3 d, double tmin, double tmax)
 
 /* Whether the segment [tmin, tmax] of the ray certainly hits nothing: it
  * misses the padded box around every static shape. */
-static bool misses_world_box(const geometry *g, vec3 o, vec3 d, double tmin, double tmax)
+static inline bool misses_box(vec3 box_lo, vec3 box_hi, vec3 o, vec3 d, double tmin, double tmax)
 {
-    if (!g->has_world_box)
-        return false;
     /* The slab test with reciprocals (box_clip_ray divides: 6 divisions on
      * every Embree query were 5% of a peer render). A NaN (0 * inf where the
      * origin lies on a slab's plane and the ray runs in it) restricts
      * nothing: the answer is then "may hit", which is always safe. */
     const double o3[3] = {o.x, o.y, o.z}, d3[3] = {d.x, d.y, d.z};
-    const double lo[3] = {g->world_box[0].x, g->world_box[0].y, g->world_box[0].z};
-    const double hi[3] = {g->world_box[1].x, g->world_box[1].y, g->world_box[1].z};
+    const double lo[3] = {box_lo.x, box_lo.y, box_lo.z};
+    const double hi[3] = {box_hi.x, box_hi.y, box_hi.z};
     double t0 = tmin, t1 = tmax;
     for (int a = 0; a < 3; ++a) {
         double inv = 1.0 / d3[a];
@@ -1520,13 +1655,26 @@ static bool misses_world_box(const geometry *g, vec3 o, vec3 d, double tmin, dou
     return t0 > t1;
 }
 
+static bool misses_world_box(const geometry *g, vec3 o, vec3 d, double tmin, double tmax)
+{
+    return g->has_world_box && misses_box(g->world_box[0], g->world_box[1], o, d, tmin, tmax);
+}
+
+static bool trace(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
+                  geom_hit *hit);
+
 bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
                         geom_hit *hit)
 {
     /* Either test's "no" means no hit, so their order changes no answer;
      * the world box first spares most rays of a small subject the other. */
-    if (misses_world_box(g, o, d, tmin, tmax))
-        return false;
+    return !misses_world_box(g, o, d, tmin, tmax) && trace(g, o, d, tmin, tmax, time, hit);
+}
+
+/* geometry_intersect after the box test. */
+static bool trace(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, double time,
+                  geom_hit *hit)
+{
     if (!embree_can_trace(o, d, tmin, tmax))
         return false;
     struct RTCIntersectContext ctx;
@@ -1574,6 +1722,27 @@ bool geometry_intersect(const geometry *g, vec3 o, vec3 d, double tmin, double t
         hit->dpdv = transform_vector(&render_from_instance, hit->dpdv);
     }
     return true;
+}
+
+const geom_shape *geometry_left_for_good(const geom_hit *h, vec3 d)
+{
+    const double *n = h->shape->outward;
+    if (!n)
+        return NULL;
+    n += 3 * (size_t)h->prim;
+    return d.x * n[0] + d.y * n[1] + d.z * n[2] > 0.0 ? h->shape : NULL;
+}
+
+bool geometry_intersect_past(const geometry *g, const geom_shape *left, vec3 o, vec3 d,
+                             double tmin, double tmax, double time, geom_hit *hit)
+{
+    /* The box of the other shapes lies inside the world box: it replaces
+     * that test. With no other shape, nothing is left to hit. */
+    if (left)
+        return left->others_lo.x <= left->others_hi.x &&
+               !misses_box(left->others_lo, left->others_hi, o, d, tmin, tmax) &&
+               trace(g, o, d, tmin, tmax, time, hit);
+    return geometry_intersect(g, o, d, tmin, tmax, time, hit);
 }
 
 bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double time)

@@ -98,6 +98,13 @@ typedef struct {
      * object space, space_from_object the identity) and render_from_object at
      * a time is geom_motion_at(motion, time). NULL for static shapes. */
     const geom_motion *motion;
+    /* A small static convex mesh that changes the medium, in a scene where
+     * nothing moves or is instanced (geometry_left_for_good): per triangle
+     * its unit normal pointing away from the mesh (every vertex lies on or
+     * behind each triangle's plane), or NULL; and the padded box around
+     * every other shape (empty, lo > hi, when there is none). */
+    double *outward; /* 3 per triangle */
+    vec3 others_lo, others_hi;
 } geom_shape;
 
 typedef struct {
@@ -253,6 +260,19 @@ static inline int geometry_medium_after(const geom_hit *h, vec3 w, int current)
         return current;
     return v3_dot(w, h->ng) > 0.0 ? s->medium_outside : s->medium_inside;
 }
+
+/* The shape a ray leaves for good at hit h, going on along d past it: a
+ * convex mesh (geom_shape.outward) the ray crosses outward, whose surface
+ * lies behind the plane it leaves through. NULL when there is no such
+ * shape. */
+const geom_shape *geometry_left_for_good(const geom_hit *h, vec3 d);
+
+/* geometry_intersect for a ray that has left `left` for good (NULL: none,
+ * the same as geometry_intersect): when it misses the box around every other
+ * shape, it hits nothing, without asking Embree. The answer is
+ * geometry_intersect's. */
+bool geometry_intersect_past(const geometry *g, const geom_shape *left, vec3 o, vec3 d,
+                             double tmin, double tmax, double time, geom_hit *hit);
 
 /* The ray parameter just past hit `h` of o + t d: where the line crosses the
  * origin offset of the far side. Staying on the same line (rather than

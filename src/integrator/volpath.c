@@ -90,6 +90,7 @@ typedef struct {
     vec3 o, d; /* unit d */
     double tmin, t_fill;
     int medium;
+    const geom_shape *left; /* left for good at the last crossing (geometry_left_for_good) */
 } vp_ray;
 
 /* Leaving surface hit h along w. With media, the medium also fills the bit
@@ -101,13 +102,13 @@ static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media
     vec3 o = geometry_leave_origin(h, w);
     int after = geometry_medium_after(h, w, medium);
     if (!media)
-        return (vp_ray){o, w, 0.0, 0.0, after};
+        return (vp_ray){o, w, 0.0, 0.0, after, NULL};
     vec3 off = v3_sub(o, h->p);
     double wn = fabs(v3_dot(w, h->ng));
     double e = v3_length(off) * 16.0;
     if (wn * e > fabs(v3_dot(off, h->ng)))
         e = fabs(v3_dot(off, h->ng)) / wn;
-    return (vp_ray){v3_sub(o, v3_scale(w, e)), w, e, 0.0, after};
+    return (vp_ray){v3_sub(o, v3_scale(w, e)), w, e, 0.0, after, NULL};
 }
 
 /* Leaving the medium point x along w: Embree sees x rounded to float, which
@@ -117,7 +118,7 @@ static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media
 static vp_ray ray_from_medium(vec3 x, vec3 w, int medium)
 {
     double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
-    return (vp_ray){v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium};
+    return (vp_ray){v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium, NULL};
 }
 
 /* ---- path state ---- */
@@ -179,9 +180,10 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
     const volpath_scene *sc = pa->sc;
     pa->walk.shadow_rays++;
     double t_start = t_fill;
+    const geom_shape *left = NULL; /* left for good at the last crossing */
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
-        bool hit = geometry_intersect(sc->in.geom, o, w, tmin, tmax, pa->walk.time, &h);
+        bool hit = geometry_intersect_past(sc->in.geom, left, o, w, tmin, tmax, pa->walk.time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
             if (h.t >= t_fill)
                 return false;
@@ -190,6 +192,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
                 return false;
             }
             tmin = geometry_step_past(&h, o, w);
+            left = NULL;
             continue;
         }
         /* Unbounded media end at HZ_FAR_COORD (core/ray.h). */
@@ -214,6 +217,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         medium = geometry_medium_after(&h, w, medium);
         t_start = t_end;
         tmin = geometry_step_past(&h, o, w);
+        left = geometry_left_for_good(&h, w);
     }
 }
 
@@ -526,7 +530,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
     bool media = sc->in.medium_count > 0;
     path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
-               .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium}};
+               .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium, NULL}};
     /* As singlescatter_li: the rng is seeded once the ray meets something. */
     int seed_dim = -1;
     if (media) {
@@ -539,7 +543,8 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
     for (;;) {
         vp_ray *ray = &pa.ray;
         geom_hit h;
-        bool hit = geometry_intersect(sc->in.geom, ray->o, ray->d, ray->tmin, INFINITY, r->time, &h);
+        bool hit = geometry_intersect_past(sc->in.geom, ray->left, ray->o, ray->d, ray->tmin,
+                                           INFINITY, r->time, &h);
         if (seed_dim >= 0 && (hit || ray->medium >= 0)) {
             pa.walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
             seed_dim = -1;
@@ -553,6 +558,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
             if (!opaque)
                 ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
             ray->tmin = geometry_step_past(&h, ray->o, ray->d);
+            ray->left = opaque ? NULL : geometry_left_for_good(&h, ray->d);
             continue;
         }
         /* A path leaving the scene inside a medium ends at HZ_FAR_COORD. */
@@ -585,6 +591,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
             ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
             t_start = t_hit;
             ray->tmin = geometry_step_past(&h, ray->o, ray->d);
+            ray->left = geometry_left_for_good(&h, ray->d);
             continue;
         }
         if (camera_ray) {

@@ -258,6 +258,18 @@ static inline bool outside_support(const grid *g, vec3 p)
              p.y <= g->support_hi.y && p.z >= g->support_lo.z && p.z <= g->support_hi.z);
 }
 
+/* floor(x) as an integer and x - floor(x), for x inside the support (so in
+ * int32 range): the truncation, one less below zero where it rounded up.
+ * The same values as floor() (a libm call without SSE4.1: 3 per lookup were
+ * 12% of its instructions). */
+static inline int32_t floor_frac(double x, double *frac)
+{
+    int32_t i = (int32_t)x;
+    i -= x < (double)i;
+    *frac = x - (double)i;
+    return i;
+}
+
 /* The addresses of the eight voxels (i + dx, j + dy, k + dz), dx, dy, dz in
  * {0, 1}, of a trilinear lookup, corner c having dx = c & 1, dy = (c >> 1) & 1,
  * dz = c >> 2. The first corner is found through the accessor, which tells at
@@ -327,10 +339,10 @@ double grid_density_index(const grid *g, grid_accessor *a, vec3 p)
     assert(g->type == FLOAT_GRID);
     if (outside_support(g, p))
         return g->background;
-    double fx = floor(p.x), fy = floor(p.y), fz = floor(p.z);
-    double tx = p.x - fx, ty = p.y - fy, tz = p.z - fz;
+    double tx, ty, tz;
+    int32_t i = floor_frac(p.x, &tx), j = floor_frac(p.y, &ty), k = floor_frac(p.z, &tz);
     pnanovdb_address_t addr[8];
-    float_corners(g, a, (int32_t)fx, (int32_t)fy, (int32_t)fz, addr);
+    float_corners(g, a, i, j, k, addr);
     double v[8];
     for (int c = 0; c < 8; ++c)
         v[c] = pnanovdb_read_float(g->buf, addr[c]);
@@ -352,10 +364,10 @@ vec3 grid_vec3_index(const grid *g, grid_accessor *a, vec3 p)
     assert(g->type == VEC3_GRID);
     if (outside_support(g, p))
         return g->background_vec;
-    double fx = floor(p.x), fy = floor(p.y), fz = floor(p.z);
-    double tx = p.x - fx, ty = p.y - fy, tz = p.z - fz;
+    double tx, ty, tz;
+    int32_t i = floor_frac(p.x, &tx), j = floor_frac(p.y, &ty), k = floor_frac(p.z, &tz);
     pnanovdb_address_t addr[8];
-    vec3_corners(g, a, (int32_t)fx, (int32_t)fy, (int32_t)fz, addr);
+    vec3_corners(g, a, i, j, k, addr);
     vec3 v[8];
     for (int c = 0; c < 8; ++c)
         v[c] = read_vec3(g->buf, addr[c]);

@@ -146,12 +146,110 @@ static void test_partial_sphere(void **state)
     render_scene_destroy(rs);
 }
 
+/* Two boxes in one mesh ([lo, hi] and [lo, hi] moved by `shift`): not
+ * convex, so a ray leaving one box may still meet the other. */
+static char *two_box_mesh(vec3 lo, vec3 hi, vec3 shift)
+{
+    static const int quads[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                    {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+    char pts[2048] = "", ids[1024] = "";
+    size_t np = 0, ni = 0;
+    for (int b = 0; b < 2; ++b) {
+        vec3 s = b ? shift : v3(0, 0, 0);
+        for (int i = 0; i < 8; ++i)
+            np += (size_t)snprintf(pts + np, sizeof pts - np, "%g %g %g ",
+                                   (i & 1 ? hi.x : lo.x) + s.x, (i & 2 ? hi.y : lo.y) + s.y,
+                                   (i & 4 ? hi.z : lo.z) + s.z);
+        for (int f = 0; f < 6; ++f) {
+            const int *q = quads[f];
+            ni += (size_t)snprintf(ids + ni, sizeof ids - ni, "%d %d %d %d %d %d ", 8 * b + q[0],
+                                   8 * b + q[1], 8 * b + q[2], 8 * b + q[0], 8 * b + q[2],
+                                   8 * b + q[3]);
+        }
+    }
+    return sfmt("Shape \"trianglemesh\" \"integer indices\" [%s] \"point3 P\" [%s]\n", ids, pts);
+}
+
+/* A ray that leaves a convex interface mesh for good skips Embree when it
+ * misses every other shape's box (geometry_intersect_past): along walks of
+ * random rays through a convex box, a sphere, a floor and a non-convex mesh
+ * of two boxes, every query answers as geometry_intersect does (hit, shape
+ * and t); the convex box is left for good exactly where the walk goes on
+ * outside it, the non-convex mesh never. */
+static void test_left_for_good_keeps_every_hit(void **state)
+{
+    (void)state;
+    vec3 lo = v3(-1.0, -0.5, -0.8), hi = v3(0.9, 1.5, 1.1);
+    char *box = box_mesh(lo, hi);
+    char *pair = two_box_mesh(v3(-0.5, -0.5, 3.0), v3(0.5, 0.5, 3.6), v3(0.0, 0.0, 1.4));
+    char *text = sfmt("LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+                      "MakeNamedMedium \"m\" \"string type\" \"homogeneous\"\n"
+                      "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"m\" \"\"\n%s"
+                      "AttributeEnd\n"
+                      "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"m\" \"\"\n%s"
+                      "AttributeEnd\n"
+                      "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+                      "  \"point3 P\" [-20 -3 -20  20 -3 -20  20 -3 20  -20 -3 20]\n"
+                      "AttributeBegin\nTranslate 3 0.5 0\nShape \"sphere\" \"float radius\" 0.7\n"
+                      "AttributeEnd\n",
+                      box, pair);
+    render_scene *rs = build(text);
+    const geometry *g = render_scene_geometry(rs);
+    rng r = rng_seeded(13);
+    int left_box = 0, skipped = 0, box_exits = 0;
+    for (int i = 0; i < 20000; ++i) {
+        /* Half the rays start inside the convex box, half anywhere near. */
+        vec3 o = i % 2 ? v3(lo.x + (hi.x - lo.x) * rng_uniform(&r),
+                            lo.y + (hi.y - lo.y) * rng_uniform(&r),
+                            lo.z + (hi.z - lo.z) * rng_uniform(&r))
+                       : v3(10.0 * rng_uniform(&r) - 5.0, 6.0 * rng_uniform(&r) - 2.5,
+                            10.0 * rng_uniform(&r) - 4.0);
+        vec3 w = sample_uniform_sphere(v2(rng_uniform(&r), rng_uniform(&r)));
+        double tmin = 0.0;
+        const geom_shape *left = NULL;
+        for (int k = 0; k < 10; ++k) {
+            geom_hit ref, h;
+            bool want = geometry_intersect(g, o, w, tmin, INFINITY, 0.0, &ref);
+            bool got = geometry_intersect_past(g, left, o, w, tmin, INFINITY, 0.0, &h);
+            if (got != want || (got && (h.shape != ref.shape || h.t != ref.t)))
+                fail_msg("ray %d crossing %d: %d against %d", i, k, got, want);
+            skipped += left && !want;
+            if (!got)
+                break;
+            tmin = geometry_step_past(&h, o, w);
+            left = geometry_left_for_good(&h, w);
+            /* Where the walk goes on: outside the convex box or in it. */
+            vec3 q = v3_add(o, v3_scale(w, h.t + 1e-3));
+            bool outside = q.x < lo.x || q.x > hi.x || q.y < lo.y || q.y > hi.y || q.z < lo.z ||
+                           q.z > hi.z;
+            /* (The mesh's vertices are floats.) */
+            bool on_box = h.p.z < 2.9 && v3_length(v3_sub(h.p, v3(3, 0.5, 0))) > 0.71 &&
+                          h.p.y > -2.9;
+            if (left ? !(on_box && outside) : on_box && outside)
+                fail_msg("ray %d at %g %g %g: left for good %d, on the box %d, outside %d", i,
+                         h.p.x, h.p.y, h.p.z, left != NULL, on_box, outside);
+            left_box += left != NULL;
+            box_exits += on_box && outside;
+        }
+    }
+    /* Every exit of the convex box is left for good, and most walks then
+     * skip Embree. */
+    assert_int_equal(left_box, box_exits);
+    assert_true(left_box > 10000);
+    assert_true(skipped > 5000);
+    render_scene_destroy(rs);
+    free(text);
+    free(pair);
+    free(box);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_far_rays_cross_each_face_once),
         cmocka_unit_test(test_partial_sphere),
         cmocka_unit_test(test_world_box_keeps_grazing_hits),
+        cmocka_unit_test(test_left_for_good_keeps_every_hit),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
