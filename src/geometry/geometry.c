@@ -52,6 +52,10 @@ struct geometry {
      * boxes): rays that miss it skip Embree. Not kept when something moves. */
     bool has_world_box;
     vec3 world_box[2];
+    /* geometry_convex_around, per medium (NULL: none); NULL when no shape
+     * has planes. */
+    const geom_shape **convex_around;
+    size_t convex_around_count;
     double start_time, end_time; /* TransformTimes */
     const texture_set *textures; /* for "texture alpha" while building */
     /* Bytes Embree holds (its memory monitor): now and at most. */
@@ -1021,18 +1025,14 @@ static void shape_box(const geom_shape *s, vec3 *lo_out, vec3 *hi_out)
  * triangle and vertex: at most 64 x 192). */
 #define GEOMETRY_MAX_CONVEX_TRIANGLES 64
 
-/* The outward normals of a convex mesh (geom_shape.outward), or NULL when
- * some vertex lies in front of some triangle's plane by more than float
- * rounding (1e-6 of the mesh's extent). A degenerate triangle (Embree never
- * reports it) gets a zero normal. */
-static double *convex_outward(const geom_shape *s)
+/* The planes of a convex mesh (geom_shape.planes), or NULL when some vertex
+ * lies in front of some triangle's plane by more than `tol`. A degenerate
+ * triangle (Embree never reports it) gets a zero plane. */
+static double *convex_planes(const geom_shape *s, double tol)
 {
-    double *out = malloc(3 * s->triangle_count * sizeof *out);
+    double *out = malloc(4 * s->triangle_count * sizeof *out);
     if (!out)
         return NULL;
-    vec3 lo, hi;
-    shape_box(s, &lo, &hi);
-    double tol = 1e-6 * v3_max_component(v3_sub(hi, lo));
     for (size_t t = 0; t < s->triangle_count; ++t) {
         vec3 v[3];
         for (int k = 0; k < 3; ++k) {
@@ -1042,7 +1042,7 @@ static double *convex_outward(const geom_shape *s)
         vec3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
         double len = v3_length(n);
         if (!(len > 0.0)) {
-            out[3 * t] = out[3 * t + 1] = out[3 * t + 2] = 0.0;
+            out[4 * t] = out[4 * t + 1] = out[4 * t + 2] = out[4 * t + 3] = 0.0;
             continue;
         }
         n = v3_scale(n, 1.0 / len);
@@ -1059,16 +1059,65 @@ static double *convex_outward(const geom_shape *s)
         }
         if (front > tol)
             n = v3_neg(n);
-        out[3 * t] = n.x;
-        out[3 * t + 1] = n.y;
-        out[3 * t + 2] = n.z;
+        out[4 * t] = n.x;
+        out[4 * t + 1] = n.y;
+        out[4 * t + 2] = n.z;
+        out[4 * t + 3] = v3_dot(n, v[0]);
     }
     return out;
 }
 
-/* geom_shape.outward and the boxes of the other shapes, for the small convex
- * meshes that change the medium, when nothing moves or is instanced. */
-static hz_status find_convex_interfaces(geometry *g, hz_error *err)
+/* geom_shape.faces from its planes: triangles whose planes agree (normals
+ * within 1e-9, offsets within convex_tol) share a face. */
+static hz_status convex_faces(geom_shape *s)
+{
+    size_t n = s->triangle_count;
+    uint32_t *face_of = malloc(n * sizeof *face_of);
+    s->faces = malloc(n * sizeof *s->faces);
+    s->face_tris = malloc(n * sizeof *s->face_tris);
+    if (!face_of || !s->faces || !s->face_tris) {
+        free(face_of);
+        return HZ_ERROR;
+    }
+    size_t faces = 0;
+    for (size_t t = 0; t < n; ++t) {
+        const double *pl = &s->planes[4 * t];
+        face_of[t] = UINT32_MAX;
+        if (pl[0] == 0.0 && pl[1] == 0.0 && pl[2] == 0.0)
+            continue; /* degenerate: never hit */
+        size_t f = 0;
+        while (f < faces &&
+               !(fabs(s->faces[f].n[0] - pl[0]) <= 1e-9 && fabs(s->faces[f].n[1] - pl[1]) <= 1e-9 &&
+                 fabs(s->faces[f].n[2] - pl[2]) <= 1e-9 &&
+                 fabs(s->faces[f].c - pl[3]) <= s->convex_tol))
+            ++f;
+        if (f == faces) {
+            s->faces[faces] = (geom_face){{pl[0], pl[1], pl[2]}, pl[3], 0, 0};
+            ++faces;
+        }
+        face_of[t] = (uint32_t)f;
+        s->faces[f].count++;
+    }
+    uint32_t next = 0;
+    for (size_t f = 0; f < faces; ++f) {
+        s->faces[f].first = next;
+        next += s->faces[f].count;
+        s->faces[f].count = 0;
+    }
+    for (size_t t = 0; t < n; ++t)
+        if (face_of[t] != UINT32_MAX) {
+            geom_face *f = &s->faces[face_of[t]];
+            s->face_tris[f->first + f->count++] = (uint32_t)t;
+        }
+    s->face_count = faces;
+    free(face_of);
+    return HZ_OK;
+}
+
+/* geom_shape.planes and the boxes of the other shapes, for the small convex
+ * meshes that change the medium, when nothing moves or is instanced; and
+ * geometry_convex_around's table. */
+static hz_status find_convex_interfaces(geometry *g, size_t medium_count, hz_error *err)
 {
     if (g->motion || g->instance_count > 0 || g->object_count > 0 || g->shape_count == 0)
         return HZ_OK;
@@ -1110,13 +1159,30 @@ static hz_status find_convex_interfaces(geometry *g, hz_error *err)
         if (!changes_medium(s) || s->kind != GEOMETRY_TRIANGLES ||
             s->triangle_count > GEOMETRY_MAX_CONVEX_TRIANGLES)
             continue;
-        s->outward = convex_outward(s);
+        /* Float rounding: 1e-6 of the mesh's extent. */
+        s->convex_tol = 1e-6 * v3_max_component(v3_sub(box[i][1], box[i][0]));
+        s->planes = convex_planes(s, s->convex_tol);
+        if (s->planes && convex_faces(s) != HZ_OK) {
+            free(box);
+            free(before);
+            free(after);
+            return hz_fail(err, "out of memory");
+        }
         s->others_lo = v3_min(before[i][0], after[i + 1][0]);
         s->others_hi = v3_max(before[i][1], after[i + 1][1]);
     }
     free(box);
     free(before);
     free(after);
+    g->convex_around = calloc(medium_count ? medium_count : 1, sizeof *g->convex_around);
+    if (!g->convex_around)
+        return hz_fail(err, "out of memory");
+    g->convex_around_count = medium_count;
+    for (size_t i = n; i-- > 0;) {
+        const geom_shape *s = &g->shapes[i];
+        if (s->planes && s->medium_inside >= 0 && (size_t)s->medium_inside < medium_count)
+            g->convex_around[s->medium_inside] = s;
+    }
     return HZ_OK;
 }
 
@@ -1173,7 +1239,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
     rtcCommitScene(g->scene);
     find_world_box(g);
     if (check_device(g->device, err) != HZ_OK || find_interfaces(g, err) != HZ_OK ||
-        find_convex_interfaces(g, err) != HZ_OK) {
+        find_convex_interfaces(g, sd->medium_count, err) != HZ_OK) {
         geometry_destroy(g);
         return HZ_ERROR;
     }
@@ -1183,7 +1249,9 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
 
 static void free_shape_arrays(geom_shape *s)
 {
-    free(s->outward);
+    free(s->planes);
+    free(s->faces);
+    free(s->face_tris);
     free(s->n);
     free(s->uv);
     free(s->curve_cp);
@@ -1222,6 +1290,7 @@ void geometry_destroy(geometry *g)
         free(g->instances[i].motion.steps);
     free(g->instances);
     free(g->interface_boxes);
+    free(g->convex_around);
     if (g->scene)
         rtcReleaseScene(g->scene);
     if (g->device)
@@ -1724,24 +1793,115 @@ static bool trace(const geometry *g, vec3 o, vec3 d, double tmin, double tmax, d
     return true;
 }
 
-const geom_shape *geometry_left_for_good(const geom_hit *h, vec3 d)
+geom_past geometry_past(const geom_hit *h, vec3 d)
 {
-    const double *n = h->shape->outward;
+    geom_past past = {NULL, NULL};
+    const double *n = h->shape->planes;
     if (!n)
-        return NULL;
-    n += 3 * (size_t)h->prim;
-    return d.x * n[0] + d.y * n[1] + d.z * n[2] > 0.0 ? h->shape : NULL;
+        return past;
+    n += 4 * (size_t)h->prim;
+    double dn = d.x * n[0] + d.y * n[1] + d.z * n[2];
+    if (dn > 0.0)
+        past.left = h->shape;
+    else if (dn < 0.0)
+        past.within = h->shape;
+    return past;
 }
 
-bool geometry_intersect_past(const geometry *g, const geom_shape *left, vec3 o, vec3 d,
-                             double tmin, double tmax, double time, geom_hit *hit)
+const geom_shape *geometry_convex_around(const geometry *g, int medium)
+{
+    return medium >= 0 && (size_t)medium < g->convex_around_count ? g->convex_around[medium]
+                                                                   : NULL;
+}
+
+/* How far q lies inside triangle `prim` of s (the least of its three edge
+ * functions over twice the triangle's area, in units of its size: >= 0
+ * inside), and q's barycentrics (Embree's u, v). */
+static double triangle_inside(const geom_shape *s, unsigned prim, vec3 q, double *u, double *v)
+{
+    const uint32_t *tri = &s->indices[3 * prim];
+    vec3 p0 = vertex(s, tri[0]), p1 = vertex(s, tri[1]), p2 = vertex(s, tri[2]);
+    vec3 n = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
+    double nn = v3_dot(n, n);
+    if (!(nn > 0.0))
+        return -INFINITY;
+    double b1 = v3_dot(v3_cross(v3_sub(p2, p0), v3_sub(q, p0)), n) / -nn;
+    double b2 = v3_dot(v3_cross(v3_sub(q, p0), v3_sub(p1, p0)), n) / -nn;
+    *u = b1;
+    *v = b2;
+    return hz_fmin(hz_fmin(b1, b2), 1.0 - b1 - b2);
+}
+
+/* The next hit of a ray inside convex mesh s (geom_past.within): 1 with
+ * *hit filled (the mesh's exit), 0 for none within [tmin, tmax], -1 when
+ * Embree must answer (the origin is not inside, another shape's box lies on
+ * the way, the exit is not found on a triangle, or the hit needs more than
+ * the plane). */
+static int convex_exit(const geom_shape *s, vec3 o, vec3 d, double tmin, double tmax,
+                       geom_hit *hit)
+{
+    if (s->hit_uv || s->n || !embree_can_trace(o, d, tmin, tmax))
+        return -1;
+    vec3 p = v3_add(o, v3_scale(d, tmin));
+    double t_exit = INFINITY;
+    const geom_face *exit = NULL;
+    for (size_t k = 0; k < s->face_count; ++k) {
+        const geom_face *f = &s->faces[k];
+        double h = f->n[0] * p.x + f->n[1] * p.y + f->n[2] * p.z - f->c;
+        if (!(h <= s->convex_tol))
+            return -1; /* not inside (or NaN) */
+        double dn = f->n[0] * d.x + f->n[1] * d.y + f->n[2] * d.z;
+        if (dn > 0.0 && -h < t_exit * dn) {
+            t_exit = -h / dn;
+            exit = f;
+        }
+    }
+    if (!exit || !(t_exit >= 0.0))
+        return -1;
+    double t = tmin + t_exit;
+    bool others = s->others_lo.x <= s->others_hi.x;
+    if (t > tmax)
+        return others && !misses_box(s->others_lo, s->others_hi, o, d, tmin, tmax) ? -1 : 0;
+    if (others && !misses_box(s->others_lo, s->others_hi, o, d, tmin, t))
+        return -1;
+    /* The exit face's triangle that holds the point. */
+    vec3 q = v3_add(o, v3_scale(d, t));
+    double best = -INFINITY, u = 0.0, v = 0.0;
+    unsigned prim = 0;
+    for (uint32_t i = 0; i < exit->count && best < 0.0; ++i) {
+        unsigned k = s->face_tris[exit->first + i];
+        double bu = 0.0, bv = 0.0, in = triangle_inside(s, k, q, &bu, &bv);
+        if (in > best) {
+            best = in;
+            prim = k;
+            u = bu;
+            v = bv;
+        }
+    }
+    if (!(best >= -1e-7))
+        return -1;
+    hit->t = t;
+    hit->prim = prim;
+    hit->shape = s;
+    surface_at(s, prim, u, v, o, d, t, hit);
+    return 1;
+}
+
+bool geometry_intersect_past(const geometry *g, geom_past past, vec3 o, vec3 d, double tmin,
+                             double tmax, double time, geom_hit *hit)
 {
     /* The box of the other shapes lies inside the world box: it replaces
      * that test. With no other shape, nothing is left to hit. */
+    const geom_shape *left = past.left;
     if (left)
         return left->others_lo.x <= left->others_hi.x &&
                !misses_box(left->others_lo, left->others_hi, o, d, tmin, tmax) &&
                trace(g, o, d, tmin, tmax, time, hit);
+    if (past.within) {
+        int found = convex_exit(past.within, o, d, tmin, tmax, hit);
+        if (found >= 0)
+            return found;
+    }
     return geometry_intersect(g, o, d, tmin, tmax, time, hit);
 }
 

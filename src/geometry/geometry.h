@@ -43,6 +43,14 @@ typedef struct {
  * motion Embree intersects (its segment choice and interpolation, in double). */
 transform geom_motion_at(const geom_motion *m, double time);
 
+/* A face of a convex mesh (geom_shape.faces): the plane of some of its
+ * triangles, n . x = c with n the unit normal pointing away from the mesh,
+ * and those triangles, geom_shape.face_tris[first .. first + count). */
+typedef struct {
+    double n[3], c;
+    uint32_t first, count;
+} geom_face;
+
 /* One shape as the renderer sees it. Top-level shapes live in render space,
  * shapes of an object (ObjectBegin) in that object's prototype space. */
 typedef struct {
@@ -99,11 +107,16 @@ typedef struct {
      * a time is geom_motion_at(motion, time). NULL for static shapes. */
     const geom_motion *motion;
     /* A small static convex mesh that changes the medium, in a scene where
-     * nothing moves or is instanced (geometry_left_for_good): per triangle
-     * its unit normal pointing away from the mesh (every vertex lies on or
-     * behind each triangle's plane), or NULL; and the padded box around
-     * every other shape (empty, lo > hi, when there is none). */
-    double *outward; /* 3 per triangle */
+     * nothing moves or is instanced (geometry_past): per triangle its plane,
+     * the unit normal pointing away from the mesh (every vertex lies on or
+     * behind each triangle's plane, up to convex_tol) and its dot product
+     * with the triangle's vertices; or NULL. And the padded box around every
+     * other shape (empty, lo > hi, when there is none). */
+    double *planes; /* 4 per triangle */
+    double convex_tol;
+    geom_face *faces; /* the distinct planes, each with its triangles */
+    size_t face_count;
+    uint32_t *face_tris;
     vec3 others_lo, others_hi;
 } geom_shape;
 
@@ -261,18 +274,30 @@ static inline int geometry_medium_after(const geom_hit *h, vec3 w, int current)
     return v3_dot(w, h->ng) > 0.0 ? s->medium_outside : s->medium_inside;
 }
 
-/* The shape a ray leaves for good at hit h, going on along d past it: a
- * convex mesh (geom_shape.outward) the ray crosses outward, whose surface
- * lies behind the plane it leaves through. NULL when there is no such
- * shape. */
-const geom_shape *geometry_left_for_good(const geom_hit *h, vec3 d);
+/* What a ray knows of the convex meshes (geom_shape.planes) it has crossed:
+ * the one it has left for good (it crossed it outward: the whole mesh lies
+ * behind the plane it left through), or the one it has entered. The zero
+ * value knows nothing. */
+typedef struct {
+    const geom_shape *left, *within;
+} geom_past;
 
-/* geometry_intersect for a ray that has left `left` for good (NULL: none,
- * the same as geometry_intersect): when it misses the box around every other
- * shape, it hits nothing, without asking Embree. The answer is
- * geometry_intersect's. */
-bool geometry_intersect_past(const geometry *g, const geom_shape *left, vec3 o, vec3 d,
-                             double tmin, double tmax, double time, geom_hit *hit);
+/* What a ray going on along d past hit h knows (geometry_step_past). */
+geom_past geometry_past(const geom_hit *h, vec3 d);
+
+/* A convex mesh whose inside is medium `medium` (-1 or none: NULL): where a
+ * ray that starts in that medium most likely is (geom_past.within, which
+ * geometry_intersect_past checks). */
+const geom_shape *geometry_convex_around(const geometry *g, int medium);
+
+/* geometry_intersect, with what the ray knows. A ray that has left a convex
+ * mesh for good and misses the box around every other shape hits nothing;
+ * one inside a convex mesh (its origin at tmin behind every plane) whose
+ * path to the mesh's exit misses that box hits the exit, found from the
+ * planes. Neither asks Embree. The answer is geometry_intersect's (the exit
+ * in double, on the plane Embree tests). */
+bool geometry_intersect_past(const geometry *g, geom_past past, vec3 o, vec3 d, double tmin,
+                             double tmax, double time, geom_hit *hit);
 
 /* The ray parameter just past hit `h` of o + t d: where the line crosses the
  * origin offset of the far side. Staying on the same line (rather than

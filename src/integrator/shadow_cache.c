@@ -137,10 +137,10 @@ static void build_column(const build_job *job, int column, medium_accessor *acc,
     const geometry *geom = job->in->geom;
     int medium = job->medium;
     double tmin = 0.0, t_start = 0.0, t_block = -INFINITY;
-    const geom_shape *left = NULL; /* left for good at the last crossing */
+    geom_past past = {NULL, NULL}; /* what the last crossing tells */
     for (int crossing = 0;; ++crossing) {
         geom_hit hit;
-        bool found = geometry_intersect_past(geom, left, o, w, tmin, INFINITY, 0.0, &hit);
+        bool found = geometry_intersect_past(geom, past, o, w, tmin, INFINITY, 0.0, &hit);
         double t_end = found          ? fmax(geometry_crossing_t(&hit, o, w), t_start)
                        : medium >= 0 ? ray_far_t(o, w)
                                      : INFINITY;
@@ -156,7 +156,7 @@ static void build_column(const build_job *job, int column, medium_accessor *acc,
         medium = geometry_medium_after(&hit, w, medium);
         t_start = t_end;
         tmin = geometry_step_past(&hit, o, w);
-        left = geometry_left_for_good(&hit, w);
+        past = geometry_past(&hit, w);
     }
     accumulate(&cw, -1, o, w, INFINITY, INFINITY); /* nodes a lost walk did not reach */
     float *node = c->nodes + (size_t)column * (size_t)c->n[2] * 4;

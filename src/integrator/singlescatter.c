@@ -184,9 +184,9 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
     /* Media fill the exact spans between crossings; only the next query
      * starts past the surface (tmin). */
     double tmin = 0.0, t_start = 0.0;
-    const geom_shape *left = NULL; /* left for good at the last crossing */
+    geom_past past = {NULL, NULL}; /* what the last crossing tells */
     for (int crossing = 0;; ++crossing) {
-        bool hit = geometry_intersect_past(sc->in.geom, left, o, d, tmin, INFINITY, r->time, &h);
+        bool hit = geometry_intersect_past(sc->in.geom, past, o, d, tmin, INFINITY, r->time, &h);
         if (seed_dim >= 0 && (hit || medium >= 0)) {
             walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
             seed_dim = -1;
@@ -217,7 +217,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
         medium = geometry_medium_after(&h, d, medium);
         t_start = hz_fmax(t_hit, t_start);
         tmin = geometry_step_past(&h, o, d);
-        left = geometry_left_for_good(&h, d);
+        past = geometry_past(&h, d);
     }
     *depth = v3_length(v3_sub(h.p, r->o));
 

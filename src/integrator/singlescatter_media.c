@@ -51,10 +51,12 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
     /* Media fill the exact spans between crossings; only the next query
      * starts past the surface (tmin). */
     double t_start = t_fill;
-    const geom_shape *left = NULL; /* left for good at the last crossing */
+    /* What the last crossing tells; at the start, the convex mesh the ray's
+     * medium most likely fills (checked). */
+    geom_past past = {NULL, geometry_convex_around(vs->in.geom, medium)};
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
-        bool hit = geometry_intersect_past(vs->in.geom, left, o, w, tmin, tmax, walk->time, &h);
+        bool hit = geometry_intersect_past(vs->in.geom, past, o, w, tmin, tmax, walk->time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
             if (h.t >= t_fill)
                 return rgb_grey(0.0);
@@ -63,7 +65,7 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
                 return rgb_grey(0.0);
             }
             tmin = geometry_step_past(&h, o, w);
-            left = NULL;
+            past = (geom_past){NULL, NULL};
             continue;
         }
         double t_end = hit ? hz_fmax(geometry_crossing_t(&h, o, w), t_start)
@@ -83,7 +85,7 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
         medium = geometry_medium_after(&h, w, medium);
         t_start = t_end;
         tmin = geometry_step_past(&h, o, w);
-        left = geometry_left_for_good(&h, w);
+        past = geometry_past(&h, w);
     }
 }
 

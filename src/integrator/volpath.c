@@ -90,7 +90,7 @@ typedef struct {
     vec3 o, d; /* unit d */
     double tmin, t_fill;
     int medium;
-    const geom_shape *left; /* left for good at the last crossing (geometry_left_for_good) */
+    geom_past past; /* what the last crossing tells (geometry_past) */
 } vp_ray;
 
 /* Leaving surface hit h along w. With media, the medium also fills the bit
@@ -102,13 +102,13 @@ static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media
     vec3 o = geometry_leave_origin(h, w);
     int after = geometry_medium_after(h, w, medium);
     if (!media)
-        return (vp_ray){o, w, 0.0, 0.0, after, NULL};
+        return (vp_ray){o, w, 0.0, 0.0, after, {NULL, NULL}};
     vec3 off = v3_sub(o, h->p);
     double wn = fabs(v3_dot(w, h->ng));
     double e = v3_length(off) * 16.0;
     if (wn * e > fabs(v3_dot(off, h->ng)))
         e = fabs(v3_dot(off, h->ng)) / wn;
-    return (vp_ray){v3_sub(o, v3_scale(w, e)), w, e, 0.0, after, NULL};
+    return (vp_ray){v3_sub(o, v3_scale(w, e)), w, e, 0.0, after, {NULL, NULL}};
 }
 
 /* Leaving the medium point x along w: Embree sees x rounded to float, which
@@ -118,7 +118,7 @@ static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media
 static vp_ray ray_from_medium(vec3 x, vec3 w, int medium)
 {
     double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
-    return (vp_ray){v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium, NULL};
+    return (vp_ray){v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium, {NULL, NULL}};
 }
 
 /* ---- path state ---- */
@@ -180,10 +180,12 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
     const volpath_scene *sc = pa->sc;
     pa->walk.shadow_rays++;
     double t_start = t_fill;
-    const geom_shape *left = NULL; /* left for good at the last crossing */
+    /* What the last crossing tells; at the start, the convex mesh the ray's
+     * medium most likely fills (checked). */
+    geom_past past = {NULL, geometry_convex_around(sc->in.geom, medium)};
     for (int crossing = 0;; ++crossing) {
         geom_hit h;
-        bool hit = geometry_intersect_past(sc->in.geom, left, o, w, tmin, tmax, pa->walk.time, &h);
+        bool hit = geometry_intersect_past(sc->in.geom, past, o, w, tmin, tmax, pa->walk.time, &h);
         if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
             if (h.t >= t_fill)
                 return false;
@@ -192,7 +194,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
                 return false;
             }
             tmin = geometry_step_past(&h, o, w);
-            left = NULL;
+            past = (geom_past){NULL, NULL};
             continue;
         }
         /* Unbounded media end at HZ_FAR_COORD (core/ray.h). */
@@ -217,7 +219,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         medium = geometry_medium_after(&h, w, medium);
         t_start = t_end;
         tmin = geometry_step_past(&h, o, w);
-        left = geometry_left_for_good(&h, w);
+        past = geometry_past(&h, w);
     }
 }
 
@@ -530,7 +532,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
     bool media = sc->in.medium_count > 0;
     path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
-               .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium, NULL}};
+               .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium, {NULL, NULL}}};
     /* As singlescatter_li: the rng is seeded once the ray meets something. */
     int seed_dim = -1;
     if (media) {
@@ -543,7 +545,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
     for (;;) {
         vp_ray *ray = &pa.ray;
         geom_hit h;
-        bool hit = geometry_intersect_past(sc->in.geom, ray->left, ray->o, ray->d, ray->tmin,
+        bool hit = geometry_intersect_past(sc->in.geom, ray->past, ray->o, ray->d, ray->tmin,
                                            INFINITY, r->time, &h);
         if (seed_dim >= 0 && (hit || ray->medium >= 0)) {
             pa.walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
@@ -558,7 +560,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
             if (!opaque)
                 ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
             ray->tmin = geometry_step_past(&h, ray->o, ray->d);
-            ray->left = opaque ? NULL : geometry_left_for_good(&h, ray->d);
+            ray->past = opaque ? (geom_past){NULL, NULL} : geometry_past(&h, ray->d);
             continue;
         }
         /* A path leaving the scene inside a medium ends at HZ_FAR_COORD. */
@@ -591,7 +593,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
             ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
             t_start = t_hit;
             ray->tmin = geometry_step_past(&h, ray->o, ray->d);
-            ray->left = geometry_left_for_good(&h, ray->d);
+            ray->past = geometry_past(&h, ray->d);
             continue;
         }
         if (camera_ray) {
