@@ -332,6 +332,32 @@ static ray render_ray(const camera *c, const transform *render_from_camera, vec3
     return r;
 }
 
+bool camera_raster_bounds(const camera *c, vec3 lo, vec3 hi, double out[4])
+{
+    if (c->motion || camera_has_lens(c) ||
+        (c->kind != CAMERA_PERSPECTIVE && c->kind != CAMERA_ORTHOGRAPHIC))
+        return false;
+    transform camera_from_render = transform_inverse(c->render_from_camera);
+    out[0] = out[2] = INFINITY;
+    out[1] = out[3] = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+        vec3 p = v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+        vec3 pc = transform_point(&camera_from_render, p);
+        /* A perspective camera's rays leave the eye toward z > 0: a corner
+         * at or behind it has no image (the box may surround the eye). */
+        if (c->kind == CAMERA_PERSPECTIVE && !(pc.z > 1e-9 * v3_length(pc)))
+            return false;
+        vec3 r = transform_point(&c->raster_from_camera, pc);
+        if (!(isfinite(r.x) && isfinite(r.y)))
+            return false;
+        out[0] = fmin(out[0], r.x);
+        out[1] = fmax(out[1], r.x);
+        out[2] = fmin(out[2], r.y);
+        out[3] = fmax(out[3], r.y);
+    }
+    return true;
+}
+
 bool camera_generate_ray(const camera *c, camera_sample s, ray *out)
 {
     if (c->pinhole) {

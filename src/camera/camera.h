@@ -103,6 +103,12 @@ double camera_imaging_ratio(const camera *c, const film_params *film);
 
 /* Returns false when the sample makes no ray. Rays are normalised and in render space. */
 bool camera_generate_ray(const camera *c, camera_sample s, ray *out);
+/* For a static perspective or orthographic camera without a lens: a raster
+ * rectangle out = {x0, x1, y0, y1} outside which no camera ray meets the
+ * render-space box [lo, hi] (the bounds of its corners' images). False when
+ * there is none: another camera, or a corner at or behind a perspective
+ * camera's eye plane. */
+bool camera_raster_bounds(const camera *c, vec3 lo, vec3 hi, double out[4]);
 /* Whether rays depend on camera_sample.p_lens (a thin lens). */
 static inline bool camera_has_lens(const camera *c) { return c->lens_radius > 0.0; }
 bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_differential *out);

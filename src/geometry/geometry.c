@@ -1186,6 +1186,13 @@ static hz_status find_convex_interfaces(geometry *g, size_t medium_count, hz_err
     return HZ_OK;
 }
 
+bool geometry_static_box(const geometry *g, vec3 *lo, vec3 *hi)
+{
+    *lo = g->world_box[0];
+    *hi = g->world_box[1];
+    return g->has_world_box;
+}
+
 bool geometry_may_cross_interface(const geometry *g, vec3 o, vec3 d, double tmax)
 {
     if (g->interfaces_anywhere)

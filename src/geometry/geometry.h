@@ -224,6 +224,11 @@ bool geometry_references_media(const geometry *g);
  * true whenever one moves or lies in an object). */
 bool geometry_may_cross_interface(const geometry *g, vec3 o, vec3 d, double tmax);
 
+/* The render-space box, padded, around every shape when nothing moves (lo >
+ * hi when there is no shape): a ray that misses it hits nothing. False when
+ * something moves. */
+bool geometry_static_box(const geometry *g, vec3 *lo, vec3 *hi);
+
 /* Top-level shapes, in scene_desc.shapes order (index = shape index). */
 size_t geometry_shape_count(const geometry *g);
 geom_shape *geometry_shape(geometry *g, size_t i);

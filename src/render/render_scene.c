@@ -489,6 +489,24 @@ void render_scene_destroy(render_scene *rs)
 }
 
 const camera *render_scene_camera(const render_scene *rs) { return &rs->cam; }
+
+bool render_scene_black_outside(const render_scene *rs, double out[4])
+{
+    if (rs->cam.medium >= 0)
+        return false;
+    for (size_t i = 0; i < rs->light_count; ++i)
+        if (rs->lights[i].kind == LIGHT_INFINITE)
+            return false;
+    vec3 lo, hi;
+    if (!geometry_static_box(rs->geom, &lo, &hi))
+        return false;
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) { /* no shape: every ray misses */
+        out[0] = out[2] = INFINITY;
+        out[1] = out[3] = -INFINITY;
+        return true;
+    }
+    return camera_raster_bounds(&rs->cam, lo, hi, out);
+}
 film *render_scene_film(render_scene *rs) { return rs->film; }
 const sampler *render_scene_sampler(const render_scene *rs) { return &rs->smp; }
 const filter *render_scene_filter(const render_scene *rs) { return rs->filt; }

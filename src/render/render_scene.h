@@ -69,6 +69,12 @@ const sampler *render_scene_sampler(const render_scene *rs);
 const filter *render_scene_filter(const render_scene *rs);
 /* The scene's surfaces and lights (for bench/embree_loop.c). */
 const geometry *render_scene_geometry(const render_scene *rs);
+/* A raster rectangle out = {x0, x1, y0, y1} (empty when x0 > x1) outside
+ * which a camera ray's radiance is black and nothing is hit: the camera in
+ * vacuum, no infinite light, and no shape outside the image of the box
+ * around the static shapes (camera_raster_bounds). False when it cannot
+ * be told. */
+bool render_scene_black_outside(const render_scene *rs, double out[4]);
 size_t render_scene_light_count(const render_scene *rs);
 const light *render_scene_lights(const render_scene *rs);
 

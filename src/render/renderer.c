@@ -47,6 +47,11 @@ typedef struct {
     const volatile sig_atomic_t *cancel; /* NULL: never */
     atomic_int stop;
     camera_sample_needs needs;
+    /* Raster rectangle outside which camera rays hit nothing and bring
+     * black (render_scene_black_outside), grown by the reach of a pixel's
+     * samples; its tiles skip the integrator. */
+    bool black_outside;
+    double raster_bounds[4];
     integrator_counters *counters; /* one per thread */
     uint64_t *busy_ns;         /* one per thread */
     long *rendered;            /* pixels rendered, one per thread */
@@ -87,7 +92,18 @@ camera_sample renderer_camera_sample_needs(const filter *flt, sampler_state *st,
     return cs;
 }
 
-static void render_pixel(render_job *job, int px, int py, integrator_counters *counters)
+/* Whether every sample of the tile [x0, x1) x [y0, y1) lies outside the
+ * job's raster bounds. */
+static bool tile_black(const render_job *job, int x0, int y0, int x1, int y1)
+{
+    const double *b = job->raster_bounds;
+    return job->black_outside && (x1 < b[0] || x0 > b[1] || y1 < b[2] || y0 > b[3]);
+}
+
+/* `black`: the pixel's camera rays hit nothing and bring black (tile_black):
+ * the integrator is not asked, the film gets the same samples. */
+static void render_pixel(render_job *job, int px, int py, bool black,
+                         integrator_counters *counters)
 {
     const camera *cam = render_scene_camera(job->rs);
     const sampler *smp = render_scene_sampler(job->rs);
@@ -113,8 +129,14 @@ static void render_pixel(render_job *job, int px, int py, integrator_counters *c
         double depth = INFINITY;
         film_surface vs; /* visible_surface_at sets every field of a hit */
         vs.hit = false;
-        rgb L = render_scene_li_surface(job->rs, &rd, &st, &depth, job->surfaces ? &vs : NULL,
+        rgb L;
+        if (black) {
+            L = rgb_grey(0.0);
+            counters->camera_rays++;
+        } else {
+            L = render_scene_li_surface(job->rs, &rd, &st, &depth, job->surfaces ? &vs : NULL,
                                         counters);
+        }
         uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
         film_add_sample(f, px, py, L, cs.filter_weight, depth);
         if (job->surfaces)
@@ -157,11 +179,12 @@ static void *worker_main(void *p)
         int x1 = x0 + TILE_SIZE < job->bounds.x1 ? x0 + TILE_SIZE : job->bounds.x1;
         int y1 = y0 + TILE_SIZE < job->bounds.y1 ? y0 + TILE_SIZE : job->bounds.y1;
         int w = job->bounds.x1 - job->bounds.x0;
+        bool black = tile_black(job, x0, y0, x1, y1);
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x)
                 if (!job->active ||
                     job->active[(size_t)(y - job->bounds.y0) * w + (x - job->bounds.x0)]) {
-                    render_pixel(job, x, y, counters);
+                    render_pixel(job, x, y, black, counters);
                     ++rendered;
                 }
         atomic_fetch_add(&job->tiles_done, 1);
@@ -214,6 +237,17 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     job.needs = (camera_sample_needs){!opt->disable_pixel_jitter,
                                       motion.camera || motion.surfaces || motion.media > 0,
                                       camera_has_lens(render_scene_camera(rs))};
+    job.black_outside = render_scene_black_outside(rs, job.raster_bounds);
+    if (job.black_outside) {
+        /* A pixel's samples lie within the filter's radius of its centre
+         * (at it without jitter): one pixel more for rounding. */
+        vec2 r = opt->disable_pixel_jitter ? v2(0.0, 0.0)
+                                           : filter_radius(render_scene_filter(rs));
+        job.raster_bounds[0] -= r.x + 1.0;
+        job.raster_bounds[1] += r.x + 1.0;
+        job.raster_bounds[2] -= r.y + 1.0;
+        job.raster_bounds[3] += r.y + 1.0;
+    }
 
     int threads = opt->threads > 0 ? opt->threads : hz_core_count();
     if (threads > job.tile_count)
