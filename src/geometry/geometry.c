@@ -920,76 +920,8 @@ static bool changes_medium(const geom_shape *s)
            s->medium_inside != s->medium_outside;
 }
 
-/* Beyond this many medium-changing shapes the boxes cost more than they save. */
-#define GEOMETRY_MAX_INTERFACE_BOXES 16
-
-/* Fills g's interface boxes (see struct geometry). */
-static hz_status find_interfaces(geometry *g, hz_error *err)
-{
-    for (size_t o = 0; o < g->object_count; ++o)
-        for (size_t i = 0; i < g->objects[o].shape_count; ++i)
-            g->interfaces_anywhere |= changes_medium(&g->objects[o].shapes[i]);
-    size_t n = 0;
-    for (size_t i = 0; i < g->shape_count; ++i)
-        if (changes_medium(&g->shapes[i])) {
-            n++;
-            g->interfaces_anywhere |= g->shapes[i].motion != NULL;
-        }
-    if (n > GEOMETRY_MAX_INTERFACE_BOXES)
-        g->interfaces_anywhere = true;
-    if (g->interfaces_anywhere || n == 0)
-        return HZ_OK;
-    g->interface_boxes = malloc(n * sizeof *g->interface_boxes);
-    if (!g->interface_boxes)
-        return hz_fail(err, "out of memory");
-    for (size_t i = 0; i < g->shape_count; ++i) {
-        const geom_shape *s = &g->shapes[i];
-        if (!changes_medium(s))
-            continue;
-        vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
-        if (s->kind == GEOMETRY_SPHERE) {
-            double r = s->radius;
-            transform_box(&s->space_from_object, v3(-r, -r, -r), v3(r, r, r), &lo, &hi);
-        } else {
-            for (size_t v = 0; v < s->vertex_count; ++v) {
-                const float *f = &s->p[3 * v];
-                vec3 p = v3(f[0], f[1], f[2]);
-                lo = v3_min(lo, p);
-                hi = v3_max(hi, p);
-            }
-        }
-        /* Padded well beyond the rounding of Embree's float hits. */
-        double pad = 1e-5 * v3_max_component(v3_max(v3_abs(lo), v3_abs(hi))) + 1e-30;
-        vec3 d = v3(pad, pad, pad);
-        g->interface_boxes[g->interface_box_count][0] = v3_sub(lo, d);
-        g->interface_boxes[g->interface_box_count][1] = v3_add(hi, d);
-        g->interface_box_count++;
-    }
-    return HZ_OK;
-}
-
-/* The world box, when nothing moves (Embree's bounds of the scene, padded
- * as the interface boxes). An empty scene has an empty box. */
-static void find_world_box(geometry *g)
-{
-    if (g->motion)
-        return;
-    struct RTCBounds b;
-    rtcGetSceneBounds(g->scene, &b);
-    vec3 lo = v3(b.lower_x, b.lower_y, b.lower_z), hi = v3(b.upper_x, b.upper_y, b.upper_z);
-    g->has_world_box = true;
-    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) {
-        g->world_box[0] = v3(1.0, 1.0, 1.0);
-        g->world_box[1] = v3(-1.0, -1.0, -1.0);
-        return;
-    }
-    double pad = 1e-5 * v3_max_component(v3_max(v3_abs(lo), v3_abs(hi))) + 1e-30;
-    vec3 d = v3(pad, pad, pad);
-    g->world_box[0] = v3_sub(lo, d);
-    g->world_box[1] = v3_add(hi, d);
-}
-
-/* The padded render-space box of a static shape (as the interface boxes). */
+/* The render-space box of a static shape, padded well beyond the rounding
+ * of Embree's float hits. */
 static void shape_box(const geom_shape *s, vec3 *lo_out, vec3 *hi_out)
 {
     vec3 lo = v3(INFINITY, INFINITY, INFINITY), hi = v3(-INFINITY, -INFINITY, -INFINITY);
@@ -1019,6 +951,60 @@ static void shape_box(const geom_shape *s, vec3 *lo_out, vec3 *hi_out)
     double pad = 1e-5 * v3_max_component(v3_max(v3_abs(lo), v3_abs(hi))) + 1e-30;
     *lo_out = v3_sub(lo, v3(pad, pad, pad));
     *hi_out = v3_add(hi, v3(pad, pad, pad));
+}
+
+/* Beyond this many medium-changing shapes the boxes cost more than they save. */
+#define GEOMETRY_MAX_INTERFACE_BOXES 16
+
+/* Fills g's interface boxes (see struct geometry). */
+static hz_status find_interfaces(geometry *g, hz_error *err)
+{
+    for (size_t o = 0; o < g->object_count; ++o)
+        for (size_t i = 0; i < g->objects[o].shape_count; ++i)
+            g->interfaces_anywhere |= changes_medium(&g->objects[o].shapes[i]);
+    size_t n = 0;
+    for (size_t i = 0; i < g->shape_count; ++i)
+        if (changes_medium(&g->shapes[i])) {
+            n++;
+            g->interfaces_anywhere |= g->shapes[i].motion != NULL;
+        }
+    if (n > GEOMETRY_MAX_INTERFACE_BOXES)
+        g->interfaces_anywhere = true;
+    if (g->interfaces_anywhere || n == 0)
+        return HZ_OK;
+    g->interface_boxes = malloc(n * sizeof *g->interface_boxes);
+    if (!g->interface_boxes)
+        return hz_fail(err, "out of memory");
+    for (size_t i = 0; i < g->shape_count; ++i) {
+        const geom_shape *s = &g->shapes[i];
+        if (!changes_medium(s))
+            continue;
+        shape_box(s, &g->interface_boxes[g->interface_box_count][0],
+                  &g->interface_boxes[g->interface_box_count][1]);
+        g->interface_box_count++;
+    }
+    return HZ_OK;
+}
+
+/* The world box, when nothing moves (Embree's bounds of the scene, padded
+ * as the interface boxes). An empty scene has an empty box. */
+static void find_world_box(geometry *g)
+{
+    if (g->motion)
+        return;
+    struct RTCBounds b;
+    rtcGetSceneBounds(g->scene, &b);
+    vec3 lo = v3(b.lower_x, b.lower_y, b.lower_z), hi = v3(b.upper_x, b.upper_y, b.upper_z);
+    g->has_world_box = true;
+    if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) {
+        g->world_box[0] = v3(1.0, 1.0, 1.0);
+        g->world_box[1] = v3(-1.0, -1.0, -1.0);
+        return;
+    }
+    double pad = 1e-5 * v3_max_component(v3_max(v3_abs(lo), v3_abs(hi))) + 1e-30;
+    vec3 d = v3(pad, pad, pad);
+    g->world_box[0] = v3_sub(lo, d);
+    g->world_box[1] = v3_add(hi, d);
 }
 
 /* Meshes up to this many triangles are checked for convexity (all pairs of
