@@ -56,6 +56,10 @@ struct geometry {
      * has planes. */
     const geom_shape **convex_around;
     size_t convex_around_count;
+    /* The largest convex mesh (geom_shape.planes), or NULL: a ray that knows
+     * nothing (geom_past's zero value) and misses the box of the other shapes
+     * finds its entry from the planes (geometry_intersect_past). */
+    const geom_shape *convex_entry;
     double start_time, end_time; /* TransformTimes */
     const texture_set *textures; /* for "texture alpha" while building */
     /* Bytes Embree holds (its memory monitor): now and at most. */
@@ -1053,6 +1057,41 @@ static double *convex_planes(const geom_shape *s, double tol)
     return out;
 }
 
+static vec3 vertex(const geom_shape *s, uint32_t i);
+
+/* geom_shape.convex_tris. */
+static geom_convex_tri *convex_tris(const geom_shape *s)
+{
+    geom_convex_tri *out = malloc(s->triangle_count * sizeof *out);
+    if (!out)
+        return NULL;
+    for (size_t t = 0; t < s->triangle_count; ++t) {
+        const uint32_t *tri = &s->indices[3 * t];
+        vec3 p0 = vertex(s, tri[0]), p1 = vertex(s, tri[1]), p2 = vertex(s, tri[2]);
+        vec3 e1 = v3_sub(p1, p0), e2 = v3_sub(p2, p0), n = v3_cross(e1, e2);
+        double nn = v3_dot(n, n);
+        /* b1 = ((q - p0) x e2) . n / |n|^2, b2 = (e1 x (q - p0)) . n / |n|^2;
+         * a degenerate triangle holds no point. */
+        vec3 a1 = nn > 0.0 ? v3_scale(v3_cross(e2, n), 1.0 / nn) : v3(0, 0, 0);
+        vec3 a2 = nn > 0.0 ? v3_scale(v3_cross(n, e1), 1.0 / nn) : v3(0, 0, 0);
+        geom_convex_tri *c = &out[t];
+        c->b1[0] = a1.x;
+        c->b1[1] = a1.y;
+        c->b1[2] = a1.z;
+        c->b1[3] = nn > 0.0 ? -v3_dot(a1, p0) : -1.0;
+        c->b2[0] = a2.x;
+        c->b2[1] = a2.y;
+        c->b2[2] = a2.z;
+        c->b2[3] = nn > 0.0 ? -v3_dot(a2, p0) : -1.0;
+        c->p2 = p2;
+        c->n = v3_cross(v3_sub(p0, p2), v3_sub(p1, p2));
+        c->ng = v3_normalize(c->n);
+        if (s->flip_normal)
+            c->ng = v3_neg(c->ng);
+    }
+    return out;
+}
+
 /* geom_shape.faces from its planes: triangles whose planes agree (normals
  * within 1e-9, offsets within convex_tol) share a face. */
 static hz_status convex_faces(geom_shape *s)
@@ -1148,7 +1187,7 @@ static hz_status find_convex_interfaces(geometry *g, size_t medium_count, hz_err
         /* Float rounding: 1e-6 of the mesh's extent. */
         s->convex_tol = 1e-6 * v3_max_component(v3_sub(box[i][1], box[i][0]));
         s->planes = convex_planes(s, s->convex_tol);
-        if (s->planes && convex_faces(s) != HZ_OK) {
+        if (s->planes && (convex_faces(s) != HZ_OK || !(s->convex_tris = convex_tris(s)))) {
             free(box);
             free(before);
             free(after);
@@ -1164,10 +1203,15 @@ static hz_status find_convex_interfaces(geometry *g, size_t medium_count, hz_err
     if (!g->convex_around)
         return hz_fail(err, "out of memory");
     g->convex_around_count = medium_count;
+    double largest = -1.0;
     for (size_t i = n; i-- > 0;) {
         const geom_shape *s = &g->shapes[i];
         if (s->planes && s->medium_inside >= 0 && (size_t)s->medium_inside < medium_count)
             g->convex_around[s->medium_inside] = s;
+        if (s->planes && s->face_count > 0 && s->convex_tol > largest) {
+            largest = s->convex_tol; /* proportional to the mesh's extent */
+            g->convex_entry = s;
+        }
     }
     return HZ_OK;
 }
@@ -1245,6 +1289,7 @@ static void free_shape_arrays(geom_shape *s)
     free(s->planes);
     free(s->faces);
     free(s->face_tris);
+    free(s->convex_tris);
     free(s->n);
     free(s->uv);
     free(s->curve_cp);
@@ -1807,22 +1852,32 @@ const geom_shape *geometry_convex_around(const geometry *g, int medium)
                                                                    : NULL;
 }
 
-/* How far q lies inside triangle `prim` of s (the least of its three edge
- * functions over twice the triangle's area, in units of its size: >= 0
- * inside), and q's barycentrics (Embree's u, v). */
+/* How far q lies inside triangle `prim` of convex mesh s (the least of its
+ * barycentrics: >= 0 inside), and its barycentrics (Embree's u, v). */
 static double triangle_inside(const geom_shape *s, unsigned prim, vec3 q, double *u, double *v)
 {
-    const uint32_t *tri = &s->indices[3 * prim];
-    vec3 p0 = vertex(s, tri[0]), p1 = vertex(s, tri[1]), p2 = vertex(s, tri[2]);
-    vec3 n = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
-    double nn = v3_dot(n, n);
-    if (!(nn > 0.0))
-        return -INFINITY;
-    double b1 = v3_dot(v3_cross(v3_sub(p2, p0), v3_sub(q, p0)), n) / -nn;
-    double b2 = v3_dot(v3_cross(v3_sub(q, p0), v3_sub(p1, p0)), n) / -nn;
+    const geom_convex_tri *c = &s->convex_tris[prim];
+    double b1 = c->b1[0] * q.x + c->b1[1] * q.y + c->b1[2] * q.z + c->b1[3];
+    double b2 = c->b2[0] * q.x + c->b2[1] * q.y + c->b2[2] * q.z + c->b2[3];
     *u = b1;
     *v = b2;
     return hz_fmin(hz_fmin(b1, b2), 1.0 - b1 - b2);
+}
+
+/* surface_at for triangle `prim` of convex mesh s (no uv, no shading
+ * normals), with its cached plane: the same values. */
+static void convex_surface_at(const geom_shape *s, unsigned prim, double u, double v, vec3 o,
+                              vec3 d, double t, geom_hit *hit)
+{
+    const geom_convex_tri *c = &s->convex_tris[prim];
+    double dn = v3_dot(d, c->n);
+    if (dn == 0.0) {
+        surface_at(s, prim, u, v, o, d, t, hit);
+        return;
+    }
+    hit->p_error = 0.0;
+    hit->p = v3_add(o, v3_scale(d, v3_dot(v3_sub(c->p2, o), c->n) / dn));
+    hit->ng = hit->ns = c->ng;
 }
 
 /* The next hit of a ray inside convex mesh s (geom_past.within): 1 with
@@ -1876,7 +1931,77 @@ static int convex_exit(const geom_shape *s, vec3 o, vec3 d, double tmin, double 
     hit->t = t;
     hit->prim = prim;
     hit->shape = s;
-    surface_at(s, prim, u, v, o, d, t, hit);
+    convex_surface_at(s, prim, u, v, o, d, t, hit);
+    return 1;
+}
+
+/* The next hit of a ray whose origin at tmin lies outside convex mesh s,
+ * when the ray misses the box of every other shape: 1 with *hit filled (the
+ * mesh's entry, where the last of the planes it enters through is crossed),
+ * 0 for none within [tmin, tmax], -1 when Embree must answer (the origin is
+ * inside or within rounding of a plane, the ray grazes an edge, another
+ * shape's box lies on the way, the entry is not found on a triangle, or the
+ * hit needs more than the plane). */
+static int convex_entry(const geom_shape *s, vec3 o, vec3 d, double tmin, double tmax,
+                        geom_hit *hit)
+{
+    if (s->hit_uv || s->n || !embree_can_trace(o, d, tmin, tmax))
+        return -1;
+    if (s->others_lo.x <= s->others_hi.x &&
+        !misses_box(s->others_lo, s->others_hi, o, d, tmin, tmax))
+        return -1;
+    vec3 p = v3_add(o, v3_scale(d, tmin));
+    double t_near = 0.0, t_far = INFINITY;
+    const geom_face *entry = NULL;
+    for (size_t k = 0; k < s->face_count; ++k) {
+        const geom_face *f = &s->faces[k];
+        double h = f->n[0] * p.x + f->n[1] * p.y + f->n[2] * p.z - f->c;
+        if (!(fabs(h) > s->convex_tol))
+            return -1; /* on the surface (or NaN) */
+        double dn = f->n[0] * d.x + f->n[1] * d.y + f->n[2] * d.z;
+        if (h > 0.0) {
+            if (!(dn < 0.0))
+                return 0; /* in front of this plane and not moving towards it */
+            if (h > t_near * -dn) {
+                t_near = h / -dn;
+                entry = f;
+            }
+        } else if (dn > 0.0 && -h < t_far * dn) {
+            t_far = -h / dn;
+        }
+    }
+    if (!entry)
+        return -1; /* inside */
+    /* Where the entry and exit planes cross within rounding the ray grazes
+     * an edge: Embree decides. */
+    double slack = 1e-6 * (t_near + fabs(tmin));
+    if (t_near > t_far + slack)
+        return 0;
+    if (!(t_near < t_far - slack))
+        return -1;
+    double t = tmin + t_near;
+    if (t > tmax)
+        return 0;
+    /* The entry face's triangle that holds the point. */
+    vec3 q = v3_add(o, v3_scale(d, t));
+    double best = -INFINITY, u = 0.0, v = 0.0;
+    unsigned prim = 0;
+    for (uint32_t i = 0; i < entry->count && best < 0.0; ++i) {
+        unsigned k = s->face_tris[entry->first + i];
+        double bu = 0.0, bv = 0.0, in = triangle_inside(s, k, q, &bu, &bv);
+        if (in > best) {
+            best = in;
+            prim = k;
+            u = bu;
+            v = bv;
+        }
+    }
+    if (!(best >= -1e-7))
+        return -1;
+    hit->t = t;
+    hit->prim = prim;
+    hit->shape = s;
+    convex_surface_at(s, prim, u, v, o, d, t, hit);
     return 1;
 }
 
@@ -1895,7 +2020,14 @@ bool geometry_intersect_past(const geometry *g, geom_past past, vec3 o, vec3 d, 
         if (found >= 0)
             return found;
     }
-    return geometry_intersect(g, o, d, tmin, tmax, time, hit);
+    if (misses_world_box(g, o, d, tmin, tmax))
+        return false;
+    if (g->convex_entry) {
+        int found = convex_entry(g->convex_entry, o, d, tmin, tmax, hit);
+        if (found >= 0)
+            return found;
+    }
+    return trace(g, o, d, tmin, tmax, time, hit);
 }
 
 bool geometry_occluded(const geometry *g, vec3 o, vec3 d, double tmax, double time)

@@ -51,6 +51,15 @@ typedef struct {
     uint32_t first, count;
 } geom_face;
 
+/* A triangle of a convex mesh, for hits found from its planes: q's
+ * barycentrics (Embree's u, v) are b1 . (q, 1) and b2 . (q, 1); p2 and
+ * n = (p0 - p2) x (p1 - p2) are surface_at's, in double; ng its geometric
+ * normal. */
+typedef struct {
+    double b1[4], b2[4];
+    vec3 p2, n, ng;
+} geom_convex_tri;
+
 /* One shape as the renderer sees it. Top-level shapes live in render space,
  * shapes of an object (ObjectBegin) in that object's prototype space. */
 typedef struct {
@@ -117,6 +126,7 @@ typedef struct {
     geom_face *faces; /* the distinct planes, each with its triangles */
     size_t face_count;
     uint32_t *face_tris;
+    geom_convex_tri *convex_tris; /* per triangle */
     vec3 others_lo, others_hi;
 } geom_shape;
 

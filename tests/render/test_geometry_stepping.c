@@ -257,6 +257,69 @@ static void test_left_for_good_keeps_every_hit(void **state)
     free(box);
 }
 
+/* A ray that knows nothing and misses the box of every other shape finds
+ * its entry into the largest convex interface mesh from the planes
+ * (geometry_intersect_past): random rays from around a convex box, half of
+ * them aimed at it, with a sphere beside it, answer as geometry_intersect
+ * does (hit, shape, point and t). An entry found from the planes shows in
+ * its t, a double where Embree's is a float. */
+static void test_entry_from_planes(void **state)
+{
+    (void)state;
+    vec3 lo = v3(-1.0, -0.5, -0.8), hi = v3(0.9, 1.5, 1.1);
+    char *box = box_mesh(lo, hi);
+    char *text = sfmt("LookAt 0 0 0  0 0 1  0 1 0\nCamera \"perspective\"\nWorldBegin\n"
+                      "MakeNamedMedium \"m\" \"string type\" \"homogeneous\"\n"
+                      "AttributeBegin\nMaterial \"interface\"\nMediumInterface \"m\" \"\"\n%s"
+                      "AttributeEnd\n"
+                      "AttributeBegin\nTranslate 3 0.5 0\nShape \"sphere\" \"float radius\" 0.7\n"
+                      "AttributeEnd\n",
+                      box);
+    render_scene *rs = build(text);
+    const geometry *g = render_scene_geometry(rs);
+    rng r = rng_seeded(29);
+    const geom_shape *convex = geometry_convex_around(g, 0);
+    assert_non_null(convex);
+    int hits = 0, box_hits = 0, from_planes = 0, misses = 0;
+    for (int i = 0; i < 40000; ++i) {
+        vec3 o = v3(12.0 * rng_uniform(&r) - 6.0, 8.0 * rng_uniform(&r) - 3.5,
+                    12.0 * rng_uniform(&r) - 6.0);
+        vec3 w = sample_uniform_sphere(v2(rng_uniform(&r), rng_uniform(&r)));
+        if (i % 2) {
+            vec3 aim = v3(lo.x + (hi.x - lo.x) * rng_uniform(&r),
+                          lo.y + (hi.y - lo.y) * rng_uniform(&r),
+                          lo.z + (hi.z - lo.z) * rng_uniform(&r));
+            w = v3_scale(v3_sub(aim, o), 0.5 + rng_uniform(&r));
+        }
+        double tmin = i % 3 ? 0.0 : 0.1 * rng_uniform(&r);
+        geom_hit ref, h;
+        bool want = geometry_intersect(g, o, w, tmin, INFINITY, 0.0, &ref);
+        bool got = geometry_intersect_past(g, (geom_past){NULL, NULL}, o, w, tmin, INFINITY, 0.0,
+                                           &h);
+        if (got != want ||
+            (got && (h.shape != ref.shape || h.prim != ref.prim ||
+                     !(fabs(h.t - ref.t) <= 1e-5 * (1.0 + ref.t)) ||
+                     !(v3_length(v3_sub(h.p, ref.p)) <= 1e-12 * (1.0 + ref.t)) ||
+                     !(v3_length(v3_sub(h.ng, ref.ng)) <= 1e-12))))
+            fail_msg("ray %d: %d against %d (t %.17g against %.17g)", i, got, want,
+                     got ? h.t : 0.0, want ? ref.t : 0.0);
+        hits += got;
+        misses += !got;
+        box_hits += got && h.shape == convex;
+        from_planes += got && h.shape == convex && (double)(float)h.t != h.t;
+    }
+    print_message("hits %d (the box %d, from the planes %d), misses %d\n", hits, box_hits,
+                  from_planes, misses);
+    assert_true(box_hits > 15000);
+    /* All but the rays from inside the box and those whose way passes the
+     * sphere's box (95% here). */
+    assert_true(from_planes > 0.9 * box_hits);
+    assert_true(misses > 10000);
+    render_scene_destroy(rs);
+    free(text);
+    free(box);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -264,6 +327,7 @@ int main(void)
         cmocka_unit_test(test_partial_sphere),
         cmocka_unit_test(test_world_box_keeps_grazing_hits),
         cmocka_unit_test(test_left_for_good_keeps_every_hit),
+        cmocka_unit_test(test_entry_from_planes),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
