@@ -100,10 +100,37 @@ static bool tile_black(const render_job *job, int x0, int y0, int x1, int y1)
     return job->black_outside && (x1 < b[0] || x0 > b[1] || y1 < b[2] || y0 > b[3]);
 }
 
-/* `black`: the pixel's camera rays hit nothing and bring black (tile_black):
- * the integrator is not asked, the film gets the same samples. */
-static void render_pixel(render_job *job, int px, int py, bool black,
-                         integrator_counters *counters)
+/* A pixel of a black tile (tile_black): its camera rays hit nothing and
+ * bring black. They exist (a perspective or orthographic camera without a
+ * lens makes every ray it is asked for), so the film gets the samples it
+ * would get: black, with each sample's filter weight (1 at pixel centres,
+ * drawn as render_pixel draws it otherwise). Neither the rays nor the
+ * integrator are made. */
+static void render_black_pixel(render_job *job, int px, int py, integrator_counters *counters)
+{
+    const sampler *smp = render_scene_sampler(job->rs);
+    const filter *flt = render_scene_filter(job->rs);
+    film *f = render_scene_film(job->rs);
+    film_surface vs;
+    vs.hit = false;
+    for (int i = job->sample_begin; i < job->sample_end; ++i) {
+        double weight = 1.0;
+        if (job->needs.jitter) {
+            sampler_state st;
+            sampler_start(smp, px, py, i, &st);
+            weight = filter_sample_offset(flt, sampler_pixel_2d(&st)).weight;
+        }
+        counters->camera_rays++;
+        uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
+        film_add_sample(f, px, py, rgb_grey(0.0), weight, INFINITY);
+        if (job->surfaces)
+            film_add_surface(f, px, py, weight, &vs);
+        if (counters->timed)
+            counters->film_ns += hz_clock_ns() - t0;
+    }
+}
+
+static void render_pixel(render_job *job, int px, int py, integrator_counters *counters)
 {
     const camera *cam = render_scene_camera(job->rs);
     const sampler *smp = render_scene_sampler(job->rs);
@@ -129,14 +156,8 @@ static void render_pixel(render_job *job, int px, int py, bool black,
         double depth = INFINITY;
         film_surface vs; /* visible_surface_at sets every field of a hit */
         vs.hit = false;
-        rgb L;
-        if (black) {
-            L = rgb_grey(0.0);
-            counters->camera_rays++;
-        } else {
-            L = render_scene_li_surface(job->rs, &rd, &st, &depth, job->surfaces ? &vs : NULL,
+        rgb L = render_scene_li_surface(job->rs, &rd, &st, &depth, job->surfaces ? &vs : NULL,
                                         counters);
-        }
         uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
         film_add_sample(f, px, py, L, cs.filter_weight, depth);
         if (job->surfaces)
@@ -184,7 +205,10 @@ static void *worker_main(void *p)
             for (int x = x0; x < x1; ++x)
                 if (!job->active ||
                     job->active[(size_t)(y - job->bounds.y0) * w + (x - job->bounds.x0)]) {
-                    render_pixel(job, x, y, black, counters);
+                    if (black)
+                        render_black_pixel(job, x, y, counters);
+                    else
+                        render_pixel(job, x, y, counters);
                     ++rendered;
                 }
         atomic_fetch_add(&job->tiles_done, 1);
