@@ -75,7 +75,8 @@ float exr_half_to_float(uint16_t h)
 
 /* ---- image helpers -------------------------------------------------- */
 
-hz_status exr_image_alloc(exr_image *img, int width, int height, int channel_count, hz_error *err)
+static hz_status exr_image_alloc_with(exr_image *img, int width, int height, int channel_count,
+                                      bool pixels, hz_error *err)
 {
     memset(img, 0, sizeof *img);
     if (width < 1 || height < 1 || channel_count < 1)
@@ -90,7 +91,7 @@ hz_status exr_image_alloc(exr_image *img, int width, int height, int channel_cou
     img->height = height;
     img->display_width = width;
     img->display_height = height;
-    for (int c = 0; c < channel_count; c++) {
+    for (int c = 0; c < channel_count && pixels; c++) {
         img->channels[c].pixels = calloc(n, sizeof(float));
         if (!img->channels[c].pixels) {
             exr_image_free(img);
@@ -99,6 +100,17 @@ hz_status exr_image_alloc(exr_image *img, int width, int height, int channel_cou
         }
     }
     return HZ_OK;
+}
+
+hz_status exr_image_alloc(exr_image *img, int width, int height, int channel_count, hz_error *err)
+{
+    return exr_image_alloc_with(img, width, height, channel_count, true, err);
+}
+
+hz_status exr_image_alloc_lines(exr_image *img, int width, int height, int channel_count,
+                                hz_error *err)
+{
+    return exr_image_alloc_with(img, width, height, channel_count, false, err);
 }
 
 void exr_image_free(exr_image *img)
@@ -207,7 +219,7 @@ static hz_status exr_validate(const char *path, const exr_image *img, hz_error *
         return hz_fail(err, "%s: EXR data window out of range", path);
     for (int c = 0; c < img->channel_count; c++) {
         const exr_channel *ch = &img->channels[c];
-        if (!ch->name[0] || !memchr(ch->name, 0, sizeof ch->name) || !ch->pixels)
+        if (!ch->name[0] || !memchr(ch->name, 0, sizeof ch->name) || (!ch->pixels && !img->fill))
             return hz_fail(err, "%s: EXR channel %d has no name or no pixels", path, c);
         for (int d = 0; d < c; d++)
             if (strcmp(ch->name, img->channels[d].name) == 0)
@@ -316,11 +328,49 @@ static exr_result_t exr_zip_chunk(exr_encode_pipeline_t *enc)
     return EXR_ERR_SUCCESS;
 }
 
-/* Points the pipeline's channels at chunk k's first line. */
-static exr_result_t exr_chunk_channels(const exr_chunk_job *job, exr_encode_pipeline_t *enc, int k)
+/* A worker's lines of chunk k for exr_image.fill: per channel of the
+ * image (in its own order), lines x width floats, and their halfs for half
+ * channels. */
+typedef struct {
+    float *lines;
+    uint16_t *halfs;
+    float **rows; /* per channel: its part of `lines` */
+} exr_chunk_lines;
+
+static void exr_chunk_lines_free(exr_chunk_lines *cl)
+{
+    free(cl->lines);
+    free(cl->halfs);
+    free(cl->rows);
+}
+
+static exr_result_t exr_chunk_lines_init(const exr_chunk_job *job, exr_chunk_lines *cl)
+{
+    const exr_image *img = job->img;
+    size_t n = (size_t)job->lines * (size_t)img->width, nc = (size_t)img->channel_count;
+    cl->lines = malloc(nc * n * sizeof *cl->lines);
+    cl->halfs = malloc(nc * n * sizeof *cl->halfs);
+    cl->rows = malloc(nc * sizeof *cl->rows);
+    if (!cl->lines || !cl->halfs || !cl->rows)
+        return EXR_ERR_OUT_OF_MEMORY;
+    for (size_t c = 0; c < nc; c++)
+        cl->rows[c] = cl->lines + c * n;
+    return EXR_ERR_SUCCESS;
+}
+
+/* Points the pipeline's channels at chunk k's first line: in the image, or
+ * (cl not NULL) in cl, filled now. */
+static exr_result_t exr_chunk_channels(const exr_chunk_job *job, exr_encode_pipeline_t *enc, int k,
+                                       exr_chunk_lines *cl)
 {
     const exr_image *img = job->img;
     size_t off = (size_t)k * (size_t)job->lines * (size_t)img->width;
+    if (cl) {
+        int y0 = k * job->lines;
+        int y1 = y0 + job->lines < img->height ? y0 + job->lines : img->height;
+        img->fill(img->fill_ctx, y0, y1, cl->rows);
+        off = 0;
+    }
     for (int16_t i = 0; i < enc->channel_count; i++) {
         exr_coding_channel_info_t *cc = &enc->channels[i];
         int c = 0;
@@ -328,12 +378,24 @@ static exr_result_t exr_chunk_channels(const exr_chunk_job *job, exr_encode_pipe
             c++;
         if (c == img->channel_count) /* cannot happen: we declared every channel */
             return EXR_ERR_INVALID_ARGUMENT;
+        /* the image's own index of the channel */
+        const float *pixels = cl ? cl->rows[job->sorted[c] - img->channels] : job->sorted[c]->pixels;
         if (job->sorted[c]->half) {
-            cc->encode_from_ptr = (const uint8_t *)(job->halfs[c] + off);
+            const uint16_t *h;
+            if (cl) {
+                size_t n = (size_t)enc->chunk.height * (size_t)img->width;
+                uint16_t *o = cl->halfs + (size_t)c * (size_t)job->lines * (size_t)img->width;
+                for (size_t j = 0; j < n; j++)
+                    o[j] = exr_half_from_float(pixels[j]);
+                h = o;
+            } else {
+                h = job->halfs[c] + off;
+            }
+            cc->encode_from_ptr = (const uint8_t *)h;
             cc->user_bytes_per_element = 2;
             cc->user_data_type = EXR_PIXEL_HALF;
         } else {
-            cc->encode_from_ptr = (const uint8_t *)(job->sorted[c]->pixels + off);
+            cc->encode_from_ptr = (const uint8_t *)(pixels + off);
             cc->user_bytes_per_element = 4;
             cc->user_data_type = EXR_PIXEL_FLOAT;
         }
@@ -352,6 +414,9 @@ static void *exr_chunk_worker(void *arg)
     bool ready = false;
     exr_zip_worker zip = {.level_buf = malloc(EXR_ZIP_LEVEL_BUF)};
     exr_result_t rv = zip.level_buf ? EXR_ERR_SUCCESS : EXR_ERR_OUT_OF_MEMORY;
+    exr_chunk_lines lines = {NULL, NULL, NULL};
+    if (rv == EXR_ERR_SUCCESS && job->img->fill)
+        rv = exr_chunk_lines_init(job, &lines);
     for (int k; rv == EXR_ERR_SUCCESS && atomic_load(&job->failure) == EXR_ERR_SUCCESS &&
                 (k = atomic_fetch_add(&job->next, 1)) < job->chunk_count;) {
         exr_chunk_out *out = &job->chunks[k];
@@ -361,7 +426,7 @@ static void *exr_chunk_worker(void *arg)
             break;
         bool first = !ready;
         ready = true;
-        if ((rv = exr_chunk_channels(job, &enc, k)))
+        if ((rv = exr_chunk_channels(job, &enc, k, job->img->fill ? &lines : NULL)))
             break;
         if (first) {
             if ((rv = exr_encoding_choose_default_routines(job->ctx, job->part, &enc)))
@@ -380,6 +445,7 @@ static void *exr_chunk_worker(void *arg)
         exr_encoding_destroy(job->ctx, &enc);
     free(zip.level_buf);
     free(zip.scratch);
+    exr_chunk_lines_free(&lines);
     if (rv) {
         int none = EXR_ERR_SUCCESS;
         atomic_compare_exchange_strong(&job->failure, &none, (int)rv);
@@ -476,7 +542,7 @@ static hz_status exr_write_context(const char *path, const char *tmp, const exr_
             exr_fail_code(err, path, "add a channel to", rv, io);
             goto done;
         }
-        if (sorted[c]->half) {
+        if (sorted[c]->half && !img->fill) {
             halfs[c] = malloc(npix * sizeof(uint16_t));
             if (!halfs[c]) {
                 hz_fail(err, "exr: out of memory");

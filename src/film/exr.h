@@ -34,6 +34,14 @@ typedef struct {
     /* exr_write: threads compressing chunks (0 or 1: the calling thread only;
      * at most EXR_MAX_WRITE_THREADS). The file is the same for any count. */
     int threads;
+    /* exr_write: when set, the lines are made chunk by chunk as they are
+     * compressed, and the channels have no pixels (NULL): fill(fill_ctx, y0,
+     * y1, pixels) sets lines [y0, y1) of the data window (0 its top line) of
+     * channel c in pixels[c], width values per line. The writer's threads
+     * call it at once for disjoint lines. The file is the same as from
+     * pixels holding those values. */
+    void (*fill)(void *fill_ctx, int y0, int y1, float *const *pixels);
+    void *fill_ctx;
 } exr_image;
 
 #define EXR_MAX_WRITE_THREADS 64
@@ -41,6 +49,9 @@ typedef struct {
 /* Allocates channels (zeroed); names are set by the caller. The display
  * window is set to the data size; data_x0/y0 to 0. */
 hz_status exr_image_alloc(exr_image *img, int width, int height, int channel_count, hz_error *err);
+/* The same without the pixels, for exr_image.fill. */
+hz_status exr_image_alloc_lines(exr_image *img, int width, int height, int channel_count,
+                                hz_error *err);
 /* Frees the channels and the attribute arrays (which must be heap memory:
  * add attributes with exr_image_add_attribute). */
 void exr_image_free(exr_image *img);

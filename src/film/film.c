@@ -765,57 +765,41 @@ static void exr_channel_values(const film *f, int px, int py, double ratio, floa
         *o++ = (float)f->count[i];
 }
 
-/* The image's channels from the film, in bands of rows taken by the
- * writer's threads (the channels' first touch spread over them too). */
+/* What exr_fill_lines makes the image's lines from. */
 typedef struct {
     const film *f;
-    exr_image *img;
     double ratio;
     int nc;
-    atomic_int next_row;
 } exr_fill_job;
 
-enum { EXR_FILL_ROWS = 16 };
-
-/* Rows [y0, y1) of a film with colour and alpha only (no AOV): the values
- * of exr_channel_values without its per-pixel dispatch. */
-static void exr_fill_rgba(const exr_fill_job *job, int y0, int y1)
+/* exr_image.fill: lines [y0, y1) of the image's channels from the film,
+ * made by the writer's threads as they compress them. A film with colour
+ * and alpha only (no AOV) skips exr_channel_values' per-pixel dispatch. */
+static void exr_fill_lines(void *ctx, int y0, int y1, float *const *pixels)
 {
+    const exr_fill_job *job = ctx;
     const film *f = job->f;
-    float *r = job->img->channels[0].pixels, *g = job->img->channels[1].pixels;
-    float *b = job->img->channels[2].pixels, *a = job->img->channels[3].pixels;
-    for (size_t i = (size_t)y0 * (size_t)f->width, end = (size_t)y1 * (size_t)f->width; i < end;
-         ++i) {
-        rgb v = pixel_value(&f->pixels[i], job->ratio);
-        r[i] = (float)v.r;
-        g[i] = (float)v.g;
-        b[i] = (float)v.b;
-        a[i] = f->pixels[i].w != 0.0 ? 1.0f : 0.0f;
-    }
-}
-
-static void *exr_fill_worker(void *arg)
-{
-    exr_fill_job *job = arg;
-    const film *f = job->f;
-    float values[MAX_CHANNELS];
-    bool rgba_only = !f->depth && !f->gbuf && !f->moments && !f->count;
-    assert(!rgba_only || job->nc == 4);
-    for (int y0; (y0 = atomic_fetch_add(&job->next_row, EXR_FILL_ROWS)) < f->height;) {
-        int y1 = y0 + EXR_FILL_ROWS < f->height ? y0 + EXR_FILL_ROWS : f->height;
-        if (rgba_only) {
-            exr_fill_rgba(job, y0, y1);
-            continue;
+    size_t first = (size_t)y0 * (size_t)f->width, end = (size_t)y1 * (size_t)f->width;
+    if (!f->depth && !f->gbuf && !f->moments && !f->count) {
+        assert(job->nc == 4);
+        float *r = pixels[0], *g = pixels[1], *b = pixels[2], *a = pixels[3];
+        for (size_t i = first; i < end; ++i) {
+            rgb v = pixel_value(&f->pixels[i], job->ratio);
+            r[i - first] = (float)v.r;
+            g[i - first] = (float)v.g;
+            b[i - first] = (float)v.b;
+            a[i - first] = f->pixels[i].w != 0.0 ? 1.0f : 0.0f;
         }
-        for (int y = y0; y < y1; y++)
-            for (int x = 0; x < f->width; x++) {
-                size_t i = (size_t)y * (size_t)f->width + (size_t)x;
-                exr_channel_values(f, x + f->p.bounds.x0, y + f->p.bounds.y0, job->ratio, values);
-                for (int c = 0; c < job->nc; c++)
-                    job->img->channels[c].pixels[i] = values[c];
-            }
+        return;
     }
-    return NULL;
+    float values[MAX_CHANNELS];
+    for (int y = y0; y < y1; y++)
+        for (int x = 0; x < f->width; x++) {
+            size_t i = (size_t)y * (size_t)f->width + (size_t)x;
+            exr_channel_values(f, x + f->p.bounds.x0, y + f->p.bounds.y0, job->ratio, values);
+            for (int c = 0; c < job->nc; c++)
+                pixels[c][i - first] = values[c];
+        }
 }
 
 hz_status film_write_exr_with(const film *f, const char *path, double imaging_ratio,
@@ -825,7 +809,7 @@ hz_status film_write_exr_with(const film *f, const char *path, double imaging_ra
     exr_image img;
     char names[MAX_CHANNELS][64];
     int nc = exr_channel_names(f, names);
-    if (exr_image_alloc(&img, f->width, f->height, nc, err) != HZ_OK)
+    if (exr_image_alloc_lines(&img, f->width, f->height, nc, err) != HZ_OK)
         return HZ_ERROR;
     if (f->p.color_space != COLOR_SPACE_SRGB) {
         double xy[8];
@@ -845,9 +829,9 @@ hz_status film_write_exr_with(const film *f, const char *path, double imaging_ra
     img.display_width = f->p.xres;
     img.display_height = f->p.yres;
     img.threads = out ? out->threads : 0;
-    exr_fill_job job = {.f = f, .img = &img, .ratio = imaging_ratio, .nc = nc};
-    atomic_init(&job.next_row, 0);
-    hz_parallel_run(img.threads < 1 ? 1 : img.threads, exr_fill_worker, &job);
+    exr_fill_job job = {.f = f, .ratio = imaging_ratio, .nc = nc};
+    img.fill = exr_fill_lines;
+    img.fill_ctx = &job;
     hz_status st = exr_image_add_attribute(&img, "software", "haze " HAZE_VERSION, err);
     for (int a = 0; out && st == HZ_OK && a < out->attribute_count; a++)
         st = exr_image_add_attribute(&img, out->attributes[a].name, out->attributes[a].value, err);
