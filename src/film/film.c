@@ -540,6 +540,20 @@ rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,
     return pixel_value((const film_pixel *)s->doubles[0] + film_index(f, px, py), imaging_ratio);
 }
 
+/* West (1979): the weighted form of Welford's update, with weight aw > 0. */
+static inline void moments_add(film_moments *m, double aw, rgb L)
+{
+    double x[3] = {L.r, L.g, L.b};
+    m->w += aw;
+    m->w2 += aw * aw;
+    double k = aw / m->w;
+    for (int c = 0; c < 3; c++) {
+        double d = x[c] - m->mean[c];
+        m->mean[c] += k * d;
+        m->m2[c] += aw * d * (x[c] - m->mean[c]);
+    }
+}
+
 void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth)
 {
     if (!isfinite(L.r) || !isfinite(L.g) || !isfinite(L.b) || !isfinite(weight)) {
@@ -567,19 +581,24 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
         f->depth[i].sum += fabs(weight) * depth;
         f->depth[i].w += fabs(weight);
     }
-    if (f->moments && weight != 0.0) {
-        /* West (1979): the weighted form of Welford's update. */
-        film_moments *m = &f->moments[i];
-        double aw = fabs(weight), x[3] = {L.r, L.g, L.b};
-        m->w += aw;
-        m->w2 += aw * aw;
-        double k = aw / m->w;
-        for (int c = 0; c < 3; c++) {
-            double d = x[c] - m->mean[c];
-            m->mean[c] += k * d;
-            m->m2[c] += aw * d * (x[c] - m->mean[c]);
-        }
+    if (f->moments && weight != 0.0)
+        moments_add(&f->moments[i], fabs(weight), L);
+    if (f->count && f->count[i] != UINT32_MAX)
+        f->count[i]++;
+}
+
+void film_add_black(film *f, int px, int py, double weight)
+{
+    if (!isfinite(weight)) {
+        atomic_fetch_add_explicit(&f->nonfinite, 1, memory_order_relaxed);
+        return;
     }
+    /* The colour sums stay as they are: a black sample adds weight * 0 (or
+     * -0, which changes no sum: they start at +0). */
+    size_t i = film_index(f, px, py);
+    f->pixels[i].w += weight;
+    if (f->moments && weight != 0.0)
+        moments_add(&f->moments[i], fabs(weight), rgb_grey(0.0));
     if (f->count && f->count[i] != UINT32_MAX)
         f->count[i]++;
 }

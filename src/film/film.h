@@ -103,6 +103,8 @@ const film_params *film_get_params(const film *f);
  * max_component_value (see film_set_imaging_ratio). Z is the mean of the
  * finite depths weighted by |weight|, +INFINITY where no sample hit. */
 void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth);
+/* film_add_sample(f, px, py, black, weight, INFINITY): the same sums. */
+void film_add_black(film *f, int px, int py, double weight);
 /* A gbuffer film (params.gbuffer) wants each sample's visible surface. */
 bool film_wants_surface(const film *f);
 /* Adds a sample's visible surface to pixel (px, py), with the weight its

@@ -122,7 +122,7 @@ static void render_black_pixel(render_job *job, int px, int py, integrator_count
         }
         counters->camera_rays++;
         uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
-        film_add_sample(f, px, py, rgb_grey(0.0), weight, INFINITY);
+        film_add_black(f, px, py, weight);
         if (job->surfaces)
             film_add_surface(f, px, py, weight, &vs);
         if (counters->timed)

@@ -454,6 +454,41 @@ static void test_variance_equal_weights(void **state)
     film_destroy(f);
 }
 
+/* film_add_black is film_add_sample of a black sample at no depth: the
+ * same pixel, variance, sample count and non-finite count, bit for bit,
+ * for positive, negative, zero and NaN weights, after coloured samples too. */
+static void test_black_samples(void **state)
+{
+    (void)state;
+    film *a = stats_film(3, 2, false, 10.0), *b = stats_film(3, 2, false, 10.0);
+    double w[] = {0.7268, -0.2, 0.0, 1.5, NAN, 0.3};
+    for (int i = 0; i < 6; i++) {
+        film_add_sample(a, 1, 1, rgb_grey(0.0), w[i], INFINITY);
+        film_add_black(b, 1, 1, w[i]);
+        if (i == 3) { /* pixel (2, 0): colour, then black */
+            film_add_sample(a, 2, 0, rgb_make(0.5, 2.0, 30.0), 0.8, 1.0);
+            film_add_sample(b, 2, 0, rgb_make(0.5, 2.0, 30.0), 0.8, 1.0);
+        }
+        film_add_sample(a, 2, 0, rgb_grey(0.0), w[i], INFINITY);
+        film_add_black(b, 2, 0, w[i]);
+    }
+    for (int py = 0; py < 2; py++)
+        for (int px = 0; px < 3; px++) {
+            rgb pa = film_get_pixel(a, px, py, 1.0), pb = film_get_pixel(b, px, py, 1.0);
+            rgb va = film_get_variance(a, px, py, 1.0), vb = film_get_variance(b, px, py, 1.0);
+            assert_memory_equal(&pa, &pb, sizeof pa);
+            assert_memory_equal(&va, &vb, sizeof va);
+            assert_int_equal(film_get_sample_count(a, px, py), film_get_sample_count(b, px, py));
+        }
+    assert_int_equal(film_get_sample_count(b, 1, 1), 5);
+    assert_true(film_get_pixel(b, 2, 0, 1.0).g > 0.0);
+    assert_true(film_get_variance(b, 2, 0, 1.0).b > 0.0);
+    assert_int_equal(film_nonfinite_count(a), 2);
+    assert_int_equal(film_nonfinite_count(b), 2);
+    film_destroy(a);
+    film_destroy(b);
+}
+
 static void test_variance_weighted(void **state)
 {
     (void)state;
@@ -666,6 +701,7 @@ int main(void)
         cmocka_unit_test(test_write_exr),
         cmocka_unit_test(test_variance_equal_weights),
         cmocka_unit_test(test_variance_weighted),
+        cmocka_unit_test(test_black_samples),
         cmocka_unit_test(test_write_statistics),
         cmocka_unit_test(test_write_png),
         cmocka_unit_test(test_gbuffer_pixel),
