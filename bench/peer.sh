@@ -66,7 +66,10 @@ peer_config() {
     # goes to the shadow rays (steps x shadow steps lookups), so at coarse
     # errors a coarse step with a finer shadow step is its fastest (the
     # "S/SS" rungs in trade.md).
-    pairs="4/8 4/4 4/2 2/4 2/2 2/1 1/2 1/1 1/0.5 1/0.25 0.5/1 0.5/0.5 0.5/0.25 0.5/0.125 0.5/0.0625"
+    # Steps 8 and 6 too, with shadow steps of one, a half and a quarter step:
+    # the coarse end sampled as finely as haze's raymarch ladder samples it
+    # (steps 8, 6, 5, 4 and 3).
+    pairs="8/8 8/4 8/2 6/6 6/3 6/1.5 4/8 4/4 4/2 2/4 2/2 2/1 1/2 1/1 1/0.5 1/0.25 0.5/1 0.5/0.5 0.5/0.25 0.5/0.125 0.5/0.0625"
     [ -n "$BENCH_QUICK" ] && pairs="2/4 2/2 1/2"
     for p in $pairs; do
         s=${p%/*} ss=${p#*/}
@@ -169,7 +172,7 @@ peer_config() {
         done
         # Deterministic at pixel centres: one sample is the converged pixel.
         if [ "$mode" = centre ]; then
-            rsteps="8 4 2 1 0.5"
+            rsteps="8 6 5 4 3 2 1 0.5"
             [ -n "$BENCH_QUICK" ] && rsteps="4 2"
             for s in $rsteps; do
                 rung raymarch "$s" 1
