@@ -2,7 +2,8 @@
 #define _POSIX_C_SOURCE 200809L
 #include "media/vdb_module.h"
 
-#include <dlfcn.h>
+#include "core/module.h"
+
 #include <errno.h>
 #include <pthread.h>
 #include <stdarg.h>
@@ -25,7 +26,12 @@
 #define HAZE_VDB_READER_BUILD_PATH ""
 #endif
 
-#define MODULE_PATH_MAX 4096
+#define MODULE_PATH_MAX HZ_MODULE_PATH_MAX
+
+static const hz_module_spec vdb_module_spec = {
+    "HAZE_OPENVDB_MODULE", HAZE_OPENVDB_MODULE_NAME, HAZE_OPENVDB_MODULE_BUILD_PATH,
+    HAZE_OPENVDB_ENTRY,    HAZE_OPENVDB_ABI,         sizeof(haze_openvdb_api),
+    "OpenVDB"};
 
 /* The outcome of the one search for the module: the only state in this file.
  * It is written once, by module_search under pthread_once, and only read after
@@ -50,72 +56,6 @@ __attribute__((format(printf, 3, 4))) static void message(char *out, size_t size
     va_end(ap);
 }
 
-/* dlopens `path` and checks its entry table; on failure returns NULL with the
- * reason (starting with the path) in `why`. */
-static const haze_openvdb_api *try_load(const char *path, char *why, size_t why_size)
-{
-    void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!handle) {
-        const char *e = dlerror();
-        message(why, why_size, "%s", e ? e : path);
-        return NULL;
-    }
-    /* The entry table is a data symbol: no object-to-function pointer cast. */
-    const haze_openvdb_api *api = dlsym(handle, HAZE_OPENVDB_ENTRY);
-    if (!api) {
-        message(why, why_size, "%s: no %s table (not a haze OpenVDB module)", path,
-                 HAZE_OPENVDB_ENTRY);
-        dlclose(handle);
-        return NULL;
-    }
-    if (api->abi_version != HAZE_OPENVDB_ABI || api->struct_size != sizeof *api) {
-        message(why, why_size,
-                 "%s: module ABI version %u (table of %u bytes), this haze needs version %d "
-                 "(%zu bytes): a module from another haze build",
-                 path, (unsigned)api->abi_version, (unsigned)api->struct_size, HAZE_OPENVDB_ABI,
-                 sizeof *api);
-        dlclose(handle);
-        return NULL;
-    }
-    return api;
-}
-
-/* The module file next to the executable, or "" if /proc/self/exe is unreadable. */
-static void next_to_executable(char *out, size_t size)
-{
-    char exe[MODULE_PATH_MAX];
-    ssize_t n = readlink("/proc/self/exe", exe, sizeof exe - 1);
-    out[0] = '\0';
-    if (n <= 0)
-        return;
-    exe[n] = '\0';
-    char *slash = strrchr(exe, '/');
-    if (!slash)
-        return;
-    slash[1] = '\0';
-    int len = snprintf(out, size, "%s%s", exe, HAZE_OPENVDB_MODULE_NAME);
-    if (len < 0 || (size_t)len >= size)
-        out[0] = '\0';
-}
-
-/* Where the module is looked for, in order (vdb_module.h); returns the count. */
-static int candidates_of(char candidates[2][MODULE_PATH_MAX])
-{
-    int count = 0;
-    const char *env = getenv("HAZE_OPENVDB_MODULE");
-    if (env && env[0]) {
-        message(candidates[count++], MODULE_PATH_MAX, "%s", env);
-    } else {
-        next_to_executable(candidates[count], MODULE_PATH_MAX);
-        if (candidates[count][0])
-            count++;
-        const char *built = HAZE_OPENVDB_MODULE_BUILD_PATH;
-        if (built[0] && (count == 0 || strcmp(candidates[0], built) != 0))
-            message(candidates[count++], MODULE_PATH_MAX, "%s", built);
-    }
-    return count;
-}
-
 static void not_found(char *out, size_t size, int count, const char *reasons)
 {
     message(out, size,
@@ -126,26 +66,18 @@ static void not_found(char *out, size_t size, int count, const char *reasons)
 
 static void module_search(void)
 {
-    char candidates[2][MODULE_PATH_MAX];
-    int count = candidates_of(candidates);
-    char reasons[2 * MODULE_PATH_MAX + 8] = "";
-    for (int i = 0; i < count; ++i) {
-        char why[MODULE_PATH_MAX + 256];
-        the_module.api = try_load(candidates[i], why, sizeof why);
-        if (the_module.api) {
-            message(the_module.path, sizeof the_module.path, "%s", candidates[i]);
-            return;
-        }
-        size_t used = strlen(reasons);
-        message(reasons + used, sizeof reasons - used, "%s%s", i ? "; " : "", why);
-    }
-    not_found(the_module.error, sizeof the_module.error, count, reasons);
+    char reasons[2 * MODULE_PATH_MAX + 8];
+    int count = 0;
+    the_module.api = hz_module_open(&vdb_module_spec, the_module.path, sizeof the_module.path,
+                                    reasons, sizeof reasons, &count);
+    if (!the_module.api)
+        not_found(the_module.error, sizeof the_module.error, count, reasons);
 }
 
 hz_status vdb_module_locate(char *path, size_t path_size, char *err, size_t err_size)
 {
-    char candidates[2][MODULE_PATH_MAX];
-    int count = candidates_of(candidates);
+    char candidates[HZ_MODULE_CANDIDATES][MODULE_PATH_MAX];
+    int count = hz_module_candidates(&vdb_module_spec, candidates);
     char reasons[2 * MODULE_PATH_MAX + 8] = "";
     for (int i = 0; i < count; ++i) {
         if (access(candidates[i], R_OK) == 0) {

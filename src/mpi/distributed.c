@@ -1,24 +1,30 @@
 /* One image across MPI ranks: launch detection, agreement, render and gather
- * (the tile hand-out is in tile_service.c). Without HAZE_HAVE_MPI only the
- * one-rank path is compiled. */
+ * (the tile hand-out is in tile_service.c). MPI itself is called through the
+ * MPI module (mpi_module.h), loaded only when mpirun launched this process;
+ * a build without MPI (HAZE_HAVE_MPI undefined) has no module to load. */
 #define _POSIX_C_SOURCE 200809L
 #include "mpi/distributed.h"
 
 #include "core/hash.h"
+#include "core/module.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 #include <unistd.h>
 
-#ifdef HAZE_HAVE_MPI
-#include <mpi.h>
-
-#include <stdatomic.h>
-
+#include "mpi/mpi_module.h"
 #include "mpi/tile_service.h"
 #include "render/progressive.h"
+
+/* Set by the build: the module's file name and its absolute path in the build tree. */
+#ifndef HAZE_MPI_MODULE_NAME
+#define HAZE_MPI_MODULE_NAME "libhaze_mpi.so"
+#endif
+#ifndef HAZE_MPI_MODULE_BUILD_PATH
+#define HAZE_MPI_MODULE_BUILD_PATH ""
 #endif
 
 /* Per-rank figures gathered on rank 0 after a render (as doubles). */
@@ -35,7 +41,7 @@ enum {
 
 struct distributed {
     int rank, size;
-    bool mpi; /* MPI_Init_thread succeeded: MPI_Finalize at the end */
+    const haze_mpi_api *mpi; /* MPI_Init_thread succeeded: MPI_Finalize at the end */
     char host[256];
     /* Rank 0 after distributed_render: FIG_COUNT figures per rank. */
     double *figures;
@@ -57,27 +63,38 @@ hz_status distributed_create(distributed **out, hz_error *err)
     if (gethostname(d->host, sizeof d->host - 1) != 0)
         snprintf(d->host, sizeof d->host, "?");
     if (distributed_launched()) {
+        const char *n = getenv("OMPI_COMM_WORLD_SIZE");
 #ifdef HAZE_HAVE_MPI
-        int provided = 0;
-        if (MPI_Init_thread(NULL, NULL, MPI_THREAD_SERIALIZED, &provided) != MPI_SUCCESS) {
+        static const hz_module_spec spec = {
+            "HAZE_MPI_MODULE", HAZE_MPI_MODULE_NAME, HAZE_MPI_MODULE_BUILD_PATH,
+            HAZE_MPI_ENTRY,    HAZE_MPI_ABI,         sizeof(haze_mpi_api),
+            "MPI"};
+        char path[HZ_MODULE_PATH_MAX], reasons[2 * HZ_MODULE_PATH_MAX + 8];
+        int tried = 0;
+        const haze_mpi_api *api =
+            hz_module_open(&spec, path, sizeof path, reasons, sizeof reasons, &tried);
+        if (!api) {
+            free(d);
+            return hz_fail(err, "launched by mpirun, but cannot load the MPI module (tried %s); "
+                                "set HAZE_MPI_MODULE to the module's path",
+                           tried ? reasons : "no path");
+        }
+        int provided = 0, serialized = 0;
+        char name[256];
+        if (api->init(&d->rank, &d->size, name, (int)sizeof name, &provided, &serialized) != 0) {
             free(d);
             return hz_fail(err, "MPI_Init_thread failed");
         }
-        d->mpi = true;
-        MPI_Comm_rank(MPI_COMM_WORLD, &d->rank);
-        MPI_Comm_size(MPI_COMM_WORLD, &d->size);
-        char name[MPI_MAX_PROCESSOR_NAME];
-        int len = 0;
-        if (MPI_Get_processor_name(name, &len) == MPI_SUCCESS && len > 0)
-            snprintf(d->host, sizeof d->host, "%.*s", len, name);
-        if (provided < MPI_THREAD_SERIALIZED) {
+        d->mpi = api;
+        if (name[0])
+            snprintf(d->host, sizeof d->host, "%s", name);
+        if (!serialized) {
             distributed_destroy(d);
             return hz_fail(err, "the MPI library offers thread level %d; haze needs "
                                 "MPI_THREAD_SERIALIZED",
                            provided);
         }
 #else
-        const char *n = getenv("OMPI_COMM_WORLD_SIZE");
         if (n && atoi(n) > 1) {
             free(d);
             return hz_fail(err, "launched by mpirun with %s ranks, but this haze was built "
@@ -86,6 +103,7 @@ hz_status distributed_create(distributed **out, hz_error *err)
                            n);
         }
 #endif
+        (void)n;
     }
     *out = d;
     return HZ_OK;
@@ -95,10 +113,8 @@ void distributed_destroy(distributed *d)
 {
     if (!d)
         return;
-#ifdef HAZE_HAVE_MPI
     if (d->mpi)
-        MPI_Finalize();
-#endif
+        d->mpi->finalize();
     free(d->figures);
     free(d);
 }
@@ -129,7 +145,6 @@ uint64_t distributed_fingerprint(uint64_t inputs_hash, const render_scene *rs)
     return sampler_fingerprint(h, render_scene_sampler(rs));
 }
 
-#ifdef HAZE_HAVE_MPI
 /* What each rank tells rank 0 at an agreement point. */
 typedef struct {
     int32_t status;
@@ -164,10 +179,9 @@ static hz_status agree_all(distributed *d, hz_status local, const char *message,
     if (d->rank == 0) {
         all = malloc((size_t)d->size * sizeof *all);
         if (!all)
-            MPI_Abort(MPI_COMM_WORLD, 1);
+            d->mpi->abort(1);
     }
-    MPI_Gather(&mine, (int)sizeof mine, MPI_BYTE, all, (int)sizeof mine, MPI_BYTE, 0,
-               MPI_COMM_WORLD);
+    d->mpi->gather(&mine, (int)sizeof mine, HAZE_MPI_BYTE, all, 0);
     if (d->rank == 0) {
         for (int r = 0; r < d->size; ++r) {
             const char *why = NULL;
@@ -183,7 +197,7 @@ static hz_status agree_all(distributed *d, hz_status local, const char *message,
         }
         free(all);
     }
-    MPI_Bcast(&ok, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    d->mpi->bcast(&ok, 1, HAZE_MPI_INT, 0);
     return ok ? HZ_OK : HZ_ERROR;
 }
 
@@ -201,7 +215,6 @@ static void keep_first(void *ctx, int rank, const verdict *v, const char *why)
     else
         fprintf(stderr, "haze: rank %d on host %s: %s\n", rank, v->host, why);
 }
-#endif
 
 hz_status distributed_agree(distributed *d, hz_status local, const hz_error *local_err,
                             uint64_t fingerprint, FILE *report)
@@ -211,15 +224,9 @@ hz_status distributed_agree(distributed *d, hz_status local, const hz_error *loc
             hz_error_print(report, local_err);
         return local;
     }
-#ifdef HAZE_HAVE_MPI
     return agree_all(d, local, local_err->message, fingerprint, true, report_line, report);
-#else
-    (void)fingerprint;
-    return local;
-#endif
 }
 
-#ifdef HAZE_HAVE_MPI
 static double now_seconds(void)
 {
     struct timespec ts;
@@ -228,23 +235,23 @@ static double now_seconds(void)
 }
 
 /* Element-wise sum onto rank 0, in chunks that fit MPI's int counts. */
-static void reduce_sum(void *buf, size_t count, MPI_Datatype type, size_t elem_size, int rank)
+static void reduce_sum(const haze_mpi_api *mpi, void *buf, size_t count, haze_mpi_type type,
+                       size_t elem_size)
 {
     const size_t chunk = (size_t)1 << 24;
     for (size_t off = 0; off < count; off += chunk) {
         int n = (int)(count - off < chunk ? count - off : chunk);
-        void *b = (char *)buf + off * elem_size;
-        MPI_Reduce(rank == 0 ? MPI_IN_PLACE : b, b, n, type, MPI_SUM, 0, MPI_COMM_WORLD);
+        mpi->reduce((char *)buf + off * elem_size, n, type, HAZE_MPI_SUM, 0);
     }
 }
 
 /* Element-wise sum on every rank, in chunks that fit MPI's int counts. */
-static void reduce_all_chunked(double *buf, size_t count)
+static void reduce_all_chunked(const haze_mpi_api *mpi, double *buf, size_t count)
 {
     const size_t chunk = (size_t)1 << 24;
     for (size_t off = 0; off < count; off += chunk) {
         int n = (int)(count - off < chunk ? count - off : chunk);
-        MPI_Allreduce(MPI_IN_PLACE, buf + off, n, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+        mpi->allreduce(buf + off, n, HAZE_MPI_DOUBLE, HAZE_MPI_SUM);
     }
 }
 
@@ -283,7 +290,8 @@ static int tile_log_replay(void *p)
 /* The passes after the first of a progressive render across ranks: a pass
  * starts when every rank expects to finish it by the deadline and some rank
  * has pixels above the target error. */
-static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_log *log,
+static hz_status later_passes(const haze_mpi_api *mpi, render_scene *rs,
+                              const renderer_options *o, tile_log *log,
                               const progressive_goal *goal, double first_seconds,
                               render_stats *mine, hz_error *err)
 {
@@ -324,7 +332,7 @@ static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_
         int flags[2] = {progressive_pass_fits(now_seconds(), deadline, last_seconds, last_work,
                                               work),
                         left == 0};
-        MPI_Allreduce(MPI_IN_PLACE, flags, 2, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+        mpi->allreduce(flags, 2, HAZE_MPI_INT, HAZE_MPI_MIN);
         if (!flags[0] || flags[1])
             break;
         double start = now_seconds();
@@ -347,7 +355,7 @@ static hz_status later_passes(render_scene *rs, const renderer_options *o, tile_
             /* Each rank measures its tiles (the others' sum to 0); the sums of
              * every tile then reach every rank, which decides for its own. */
             progressive_error_measure(&pe, f, snap, active, po.sample_begin, done, ratio, po.threads);
-            reduce_all_chunked(pe.tile_sums, 3 * (size_t)pe.tile_count);
+            reduce_all_chunked(mpi, pe.tile_sums, 3 * (size_t)pe.tile_count);
             left = progressive_error_select(&pe, f, goal, active, NULL);
         }
         if (o->progress)
@@ -367,11 +375,11 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     const film_params *fp = film_get_params(f);
     hz_error local = {0};
     tile_service *ts = NULL;
-    if (tile_service_create(MPI_COMM_WORLD, tile_count_of(fp), &ts, &local) != HZ_OK) {
+    if (tile_service_create(d->mpi, d->rank, d->size, tile_count_of(fp), &ts, &local) != HZ_OK) {
         /* Without its service (rank 0) or its requests (others) the run
          * cannot go on, nor can the ranks agree on it: end the job. */
         fprintf(stderr, "haze: rank %d on host %s: %s\n", d->rank, d->host, local.message);
-        MPI_Abort(MPI_COMM_WORLD, 1);
+        d->mpi->abort(1);
     }
     renderer_options o = *opt;
     o.cancel = NULL;
@@ -387,7 +395,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
         log.tiles = malloc((size_t)tile_count_of(fp) * sizeof *log.tiles);
         if (!log.tiles) {
             fprintf(stderr, "haze: rank %d on host %s: out of memory\n", d->rank, d->host);
-            MPI_Abort(MPI_COMM_WORLD, 1);
+            d->mpi->abort(1);
         }
         o.next_tile = tile_log_claim;
         o.tile_ctx = &log;
@@ -408,11 +416,12 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     if (goal) {
         /* Every rank agrees the first pass went well before any starts the next. */
         int ok = st == HZ_OK;
-        MPI_Allreduce(MPI_IN_PLACE, &ok, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+        d->mpi->allreduce(&ok, 1, HAZE_MPI_INT, HAZE_MPI_MIN);
         if (ok && o.progress)
             fprintf(o.progress, "pass 1: %d of %d spp\n", mine.spp,
                     render_scene_sampler(rs)->spp);
-        if (ok && later_passes(rs, &o, &log, goal, render_seconds, &mine, &local) != HZ_OK)
+        if (ok && later_passes(d->mpi, rs, &o, &log, goal, render_seconds, &mine, &local) !=
+                      HZ_OK)
             st = HZ_ERROR; /* renderer_run fails only before any thread starts */
         free(log.tiles);
         render_seconds = now_seconds() - t0;
@@ -433,15 +442,16 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     film_get_accumulators(f, &acc);
     for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
         if (acc.doubles[i])
-            reduce_sum(acc.doubles[i], acc.double_count[i], MPI_DOUBLE, sizeof(double), d->rank);
+            reduce_sum(d->mpi, acc.doubles[i], acc.double_count[i], HAZE_MPI_DOUBLE,
+                       sizeof(double));
     if (acc.counts)
-        reduce_sum(acc.counts, acc.count_count, MPI_UINT32_T, sizeof(uint32_t), d->rank);
+        reduce_sum(d->mpi, acc.counts, acc.count_count, HAZE_MPI_UINT32, sizeof(uint32_t));
     long own_nonfinite = film_nonfinite_count(f);
     uint64_t sums[6] = {mine.camera_rays, mine.shadow_rays, mine.density_lookups,
                         (uint64_t)own_nonfinite, mine.majorant_steps, mine.lost_paths};
-    reduce_sum(sums, 6, MPI_UINT64_T, sizeof(uint64_t), d->rank);
+    reduce_sum(d->mpi, sums, 6, HAZE_MPI_UINT64, sizeof(uint64_t));
     double times[4] = {mine.time_busy_s, mine.time_media_s, mine.time_film_s, mine.samples};
-    reduce_sum(times, 4, MPI_DOUBLE, sizeof(double), d->rank);
+    reduce_sum(d->mpi, times, 4, HAZE_MPI_DOUBLE, sizeof(double));
     double fig[FIG_COUNT] = {0};
     fig[FIG_TILES] = mine.tiles_done;
     fig[FIG_THREADS] = mine.threads;
@@ -455,9 +465,9 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     if (d->rank == 0) {
         d->figures = calloc((size_t)d->size * FIG_COUNT, sizeof *d->figures);
         if (!d->figures)
-            MPI_Abort(MPI_COMM_WORLD, 1);
+            d->mpi->abort(1);
     }
-    MPI_Gather(fig, FIG_COUNT, MPI_DOUBLE, d->figures, FIG_COUNT, MPI_DOUBLE, 0, MPI_COMM_WORLD);
+    d->mpi->gather(fig, FIG_COUNT, HAZE_MPI_DOUBLE, d->figures, 0);
     d->gather_seconds = now_seconds() - t_gather;
 
     *stats = mine;
@@ -483,17 +493,12 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     }
     return HZ_OK;
 }
-#endif
 
 hz_status distributed_render(distributed *d, render_scene *rs, const renderer_options *opt,
                              const progressive_goal *goal, render_stats *stats, hz_error *err)
 {
-#ifdef HAZE_HAVE_MPI
     if (d->size > 1)
         return render_mpi(d, rs, opt, goal, stats, err);
-#else
-    (void)d;
-#endif
     if (goal)
         return renderer_run_progressive(rs, opt, goal, stats, err);
     return renderer_run(rs, opt, stats, err);

@@ -25,8 +25,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "mpi/tile_service.h"
 
-#ifdef HAZE_HAVE_MPI
-
 #include <pthread.h>
 #include <stdbool.h>
 #include <stdatomic.h>
@@ -43,13 +41,13 @@ enum { MAX_SLOTS = 32767 - TAG_TILE_BASE };
 typedef struct {
     pthread_t owner;
     int index;
-    MPI_Request req;
+    haze_mpi_request *req;
     int tile;     /* the reply lands here */
     bool pending; /* a request is out */
 } claim_slot;
 
 struct tile_service {
-    MPI_Comm comm;
+    const haze_mpi_api *mpi;
     int rank, size, tile_count;
     atomic_int next; /* rank 0: the next tile index to hand out */
     pthread_t thread; /* rank 0 with size > 1 */
@@ -87,24 +85,22 @@ static void *service_main(void *p)
     int finished = 0;
     long nap_ns = NAP_MIN_NS;
     while (finished < s->size - 1) {
-        int msg = 0;
-        MPI_Request req;
-        MPI_Status st;
-        MPI_Irecv(&msg, 1, MPI_INT, MPI_ANY_SOURCE, MPI_ANY_TAG, s->comm, &req);
-        for (;;) {
-            int done = 0;
-            MPI_Test(&req, &done, &st);
-            if (done)
-                break;
+        int msg = 0, source = 0, tag = 0;
+        haze_mpi_request *req = s->mpi->irecv(&msg, 1, HAZE_MPI_INT, HAZE_MPI_ANY, HAZE_MPI_ANY);
+        if (!req) {
+            fprintf(stderr, "haze: out of memory in the tile service\n");
+            s->mpi->abort(1); /* the other ranks would wait for tiles forever */
+        }
+        while (!s->mpi->test(req, &source, &tag)) {
             struct timespec nap = {0, nap_ns};
             nanosleep(&nap, NULL);
             nap_ns = nap_ns * 2 < NAP_MAX_NS ? nap_ns * 2 : NAP_MAX_NS;
         }
         nap_ns = NAP_MIN_NS;
-        if (st.MPI_TAG == TAG_CLAIM) {
+        if (tag == TAG_CLAIM) {
             int t = take_local(s);
-            MPI_Send(&t, 1, MPI_INT, st.MPI_SOURCE, TAG_TILE_BASE + msg, s->comm);
-        } else if (st.MPI_TAG == TAG_FINISH) {
+            s->mpi->send(&t, 1, HAZE_MPI_INT, source, TAG_TILE_BASE + msg);
+        } else if (tag == TAG_FINISH) {
             ++finished;
         }
     }
@@ -114,14 +110,15 @@ static void *service_main(void *p)
     return NULL;
 }
 
-hz_status tile_service_create(MPI_Comm comm, int tile_count, tile_service **out, hz_error *err)
+hz_status tile_service_create(const haze_mpi_api *mpi, int rank, int size, int tile_count,
+                              tile_service **out, hz_error *err)
 {
     tile_service *s = calloc(1, sizeof *s);
     if (!s)
         return hz_fail(err, "out of memory for the tile service");
-    s->comm = comm;
-    MPI_Comm_rank(comm, &s->rank);
-    MPI_Comm_size(comm, &s->size);
+    s->mpi = mpi;
+    s->rank = rank;
+    s->size = size;
     s->tile_count = tile_count;
     atomic_init(&s->next, 0);
     atomic_init(&s->local_claims, 0);
@@ -160,7 +157,7 @@ static claim_slot *my_slot(tile_service *s)
         return NULL;
     c->owner = self;
     c->index = s->slot_count;
-    c->req = MPI_REQUEST_NULL;
+    c->req = NULL;
     s->slots[s->slot_count++] = c;
     return c;
 }
@@ -169,8 +166,12 @@ static claim_slot *my_slot(tile_service *s)
  * Under s->lock. */
 static void post_claim(tile_service *s, claim_slot *c)
 {
-    MPI_Irecv(&c->tile, 1, MPI_INT, 0, TAG_TILE_BASE + c->index, s->comm, &c->req);
-    MPI_Send(&c->index, 1, MPI_INT, 0, TAG_CLAIM, s->comm);
+    c->req = s->mpi->irecv(&c->tile, 1, HAZE_MPI_INT, 0, TAG_TILE_BASE + c->index);
+    if (!c->req) {
+        fprintf(stderr, "haze: out of memory for a tile request\n");
+        s->mpi->abort(1); /* a lost worker would leave tiles unrendered */
+    }
+    s->mpi->send(&c->index, 1, HAZE_MPI_INT, 0, TAG_CLAIM);
     c->pending = true;
 }
 
@@ -187,16 +188,17 @@ int tile_service_next(void *service)
     if (!c) {
         pthread_mutex_unlock(&s->lock);
         fprintf(stderr, "haze: out of memory for a tile request\n");
-        MPI_Abort(s->comm, 1); /* a lost worker would leave tiles unrendered */
+        s->mpi->abort(1); /* a lost worker would leave tiles unrendered */
     }
     if (!c->pending)
         post_claim(s, c); /* the thread's first claim */
     pthread_mutex_unlock(&s->lock);
     bool late = false;
     for (int i = 0;; ++i) {
-        int done = 0;
         pthread_mutex_lock(&s->lock);
-        MPI_Test(&c->req, &done, MPI_STATUS_IGNORE);
+        int done = s->mpi->test(c->req, NULL, NULL);
+        if (done)
+            c->req = NULL;
         pthread_mutex_unlock(&s->lock);
         if (done)
             break;
@@ -238,13 +240,14 @@ int tile_service_finish(tile_service *s)
      * collect the reply, counting a tile it will never render. */
     for (int i = 0; i < s->slot_count; ++i)
         if (s->slots[i]->pending) {
-            MPI_Wait(&s->slots[i]->req, MPI_STATUS_IGNORE);
+            s->mpi->wait(s->slots[i]->req);
+            s->slots[i]->req = NULL;
             s->slots[i]->pending = false;
             lost += s->slots[i]->tile >= 0;
         }
     if (s->rank != 0) {
         int done = 0;
-        MPI_Send(&done, 1, MPI_INT, 0, TAG_FINISH, s->comm);
+        s->mpi->send(&done, 1, HAZE_MPI_INT, 0, TAG_FINISH);
     } else if (s->thread_started) {
         pthread_join(s->thread, NULL);
         s->thread_started = false;
@@ -271,7 +274,3 @@ void tile_service_destroy(tile_service *s)
     pthread_mutex_destroy(&s->lock);
     free(s);
 }
-
-#else
-typedef int tile_service_unused; /* ISO C: a translation unit declares something */
-#endif

@@ -1,19 +1,19 @@
 /* The dynamic tile hand-out of a render across MPI ranks (internal to
- * src/mpi, built only with HAZE_HAVE_MPI): rank 0 holds the tile counter; its
+ * src/mpi, over the MPI module): rank 0 holds the tile counter; its
  * own worker threads take indices from it directly, a service thread answers
  * the other ranks' requests. docs/mpi.md explains the choice. */
 #ifndef HAZE_MPI_TILE_SERVICE_H
 #define HAZE_MPI_TILE_SERVICE_H
 
-#ifdef HAZE_HAVE_MPI
-#include <mpi.h>
-
 #include "core/error.h"
+#include "mpi/mpi_module.h"
 
 typedef struct tile_service tile_service;
 
-/* Every rank calls this before rendering; rank 0 starts its service thread. */
-hz_status tile_service_create(MPI_Comm comm, int tile_count, tile_service **out, hz_error *err);
+/* Every rank calls this before rendering, with its rank and the world's
+ * size; rank 0 starts its service thread. */
+hz_status tile_service_create(const haze_mpi_api *mpi, int rank, int size, int tile_count,
+                              tile_service **out, hz_error *err);
 /* renderer_options.next_tile: the next tile index, -1 when none is left.
  * Thread-safe. On ranks other than 0 a thread keeps one request ahead, so it
  * must call this until it returns -1. */
@@ -37,5 +37,4 @@ typedef struct {
 tile_claim_stats tile_service_claims(const tile_service *s);
 void tile_service_destroy(tile_service *s);
 
-#endif
 #endif

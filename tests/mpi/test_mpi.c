@@ -261,6 +261,25 @@ static void test_failing_rank_named(void **state)
     expect_untouched(out);
 }
 
+/* Launched by mpirun without a loadable MPI module: every rank refuses
+ * with the paths it tried, rather than rendering the whole image each; the
+ * output is left alone. */
+static void test_missing_module_refused(void **state)
+{
+    (void)state;
+    char out[1200], cmd[8192], text[16384];
+    existing_output("nomodule.exr", out, sizeof out);
+    snprintf(cmd, sizeof cmd,
+             "'%s' -np 2 --oversubscribe -x HAZE_MPI_MODULE='%s/no-such-libhaze_mpi.so' '%s' "
+             "render '%s' -o '%s' --quiet",
+             HAZE_MPIEXEC, dir, HAZE_BIN, scene, out);
+    assert_int_not_equal(run_shell(cmd, text, sizeof text), 0);
+    if (!strstr(text, "cannot load the MPI module") || !strstr(text, "no-such-libhaze_mpi.so"))
+        fail_msg("expected \"cannot load the MPI module (tried ...no-such-libhaze_mpi.so\" in: %s",
+                 text);
+    expect_untouched(out);
+}
+
 /* MPMD: rank 1 was given another spp, so its tiles would not fit the image. */
 static void test_mismatched_rank_refused(void **state)
 {
@@ -363,6 +382,7 @@ int main(void)
         cmocka_unit_test(test_time_limit_passes),
         cmocka_unit_test(test_target_error_ranks),
         cmocka_unit_test(test_failing_rank_named),
+        cmocka_unit_test(test_missing_module_refused),
         cmocka_unit_test(test_mismatched_rank_refused),
         cmocka_unit_test(test_killed_rank_fails_run),
     };
