@@ -9,9 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
-/* snprintf that may cut long paths short (the result is a message, not a path). */
-__attribute__((format(printf, 3, 4))) static void message(char *out, size_t size,
-                                                          const char *fmt, ...)
+void hz_module_message(char *out, size_t size, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
@@ -43,14 +41,14 @@ int hz_module_candidates(const hz_module_spec *spec,
     int count = 0;
     const char *env = getenv(spec->env);
     if (env && env[0]) {
-        message(out[count++], HZ_MODULE_PATH_MAX, "%s", env);
+        hz_module_message(out[count++], HZ_MODULE_PATH_MAX, "%s", env);
     } else {
         next_to_executable(spec->file_name, out[count], HZ_MODULE_PATH_MAX);
         if (out[count][0])
             count++;
         const char *built = spec->build_path;
         if (built[0] && (count == 0 || strcmp(out[0], built) != 0))
-            message(out[count++], HZ_MODULE_PATH_MAX, "%s", built);
+            hz_module_message(out[count++], HZ_MODULE_PATH_MAX, "%s", built);
     }
     return count;
 }
@@ -68,23 +66,23 @@ static const void *try_load(const hz_module_spec *spec, const char *path, char *
     void *handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (!handle) {
         const char *e = dlerror();
-        message(why, why_size, "%s", e ? e : path);
+        hz_module_message(why, why_size, "%s", e ? e : path);
         return NULL;
     }
     /* The entry table is a data symbol: no object-to-function pointer cast. */
     const table_head *head = dlsym(handle, spec->entry);
     if (!head) {
-        message(why, why_size, "%s: no %s table (not a haze %s module)", path, spec->entry,
-                spec->kind);
+        hz_module_message(why, why_size, "%s: no %s table (not a haze %s module)", path,
+                          spec->entry, spec->kind);
         dlclose(handle);
         return NULL;
     }
     if (head->abi_version != spec->abi_version || head->struct_size != spec->struct_size) {
-        message(why, why_size,
-                "%s: module ABI version %u (table of %u bytes), this haze needs version %u "
-                "(%u bytes): a module from another haze build",
-                path, (unsigned)head->abi_version, (unsigned)head->struct_size,
-                (unsigned)spec->abi_version, (unsigned)spec->struct_size);
+        hz_module_message(why, why_size,
+                          "%s: module ABI version %u (table of %u bytes), this haze needs "
+                          "version %u (%u bytes): a module from another haze build",
+                          path, (unsigned)head->abi_version, (unsigned)head->struct_size,
+                          (unsigned)spec->abi_version, (unsigned)spec->struct_size);
         dlclose(handle);
         return NULL;
     }
@@ -103,12 +101,13 @@ const void *hz_module_open(const hz_module_spec *spec, char *path, size_t path_s
         char why[HZ_MODULE_PATH_MAX + 256];
         const void *table = try_load(spec, candidates[i], why, sizeof why);
         if (table) {
-            message(path, path_size, "%s", candidates[i]);
+            hz_module_message(path, path_size, "%s", candidates[i]);
             return table;
         }
         size_t used = strlen(reasons);
         if (used < reasons_size)
-            message(reasons + used, reasons_size - used, "%s%s", i ? "; " : "", why);
+            hz_module_message(reasons + used, reasons_size - used, "%s%s", i ? "; " : "",
+                              why);
     }
     return NULL;
 }

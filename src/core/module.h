@@ -14,6 +14,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/error.h"
+
 typedef struct {
     const char *env;        /* the variable naming the module's path */
     const char *file_name;  /* looked for next to the executable */
@@ -37,5 +39,9 @@ int hz_module_candidates(const hz_module_spec *spec,
  * message. */
 const void *hz_module_open(const hz_module_spec *spec, char *path, size_t path_size,
                            char *reasons, size_t reasons_size, int *tried);
+
+/* snprintf that may cut long paths short (the result is a message, not a
+ * path). */
+void hz_module_message(char *out, size_t size, const char *fmt, ...) HZ_PRINTF(3, 4);
 
 #endif

@@ -1880,6 +1880,34 @@ static void convex_surface_at(const geom_shape *s, unsigned prim, double u, doub
     hit->ng = hit->ns = c->ng;
 }
 
+/* The hit of o + t d on face f of convex mesh s: the face's triangle that
+ * holds the point. 1 with *hit filled, -1 (Embree must answer) when none
+ * does. */
+static int face_hit(const geom_shape *s, const geom_face *f, vec3 o, vec3 d, double t,
+                    geom_hit *hit)
+{
+    vec3 q = v3_add(o, v3_scale(d, t));
+    double best = -INFINITY, u = 0.0, v = 0.0;
+    unsigned prim = 0;
+    for (uint32_t i = 0; i < f->count && best < 0.0; ++i) {
+        unsigned k = s->face_tris[f->first + i];
+        double bu = 0.0, bv = 0.0, in = triangle_inside(s, k, q, &bu, &bv);
+        if (in > best) {
+            best = in;
+            prim = k;
+            u = bu;
+            v = bv;
+        }
+    }
+    if (!(best >= -1e-7))
+        return -1;
+    hit->t = t;
+    hit->prim = prim;
+    hit->shape = s;
+    convex_surface_at(s, prim, u, v, o, d, t, hit);
+    return 1;
+}
+
 /* The next hit of a ray inside convex mesh s (geom_past.within): 1 with
  * *hit filled (the mesh's exit), 0 for none within [tmin, tmax], -1 when
  * Embree must answer (the origin is not inside, another shape's box lies on
@@ -1912,27 +1940,7 @@ static int convex_exit(const geom_shape *s, vec3 o, vec3 d, double tmin, double 
         return others && !misses_box(s->others_lo, s->others_hi, o, d, tmin, tmax) ? -1 : 0;
     if (others && !misses_box(s->others_lo, s->others_hi, o, d, tmin, t))
         return -1;
-    /* The exit face's triangle that holds the point. */
-    vec3 q = v3_add(o, v3_scale(d, t));
-    double best = -INFINITY, u = 0.0, v = 0.0;
-    unsigned prim = 0;
-    for (uint32_t i = 0; i < exit->count && best < 0.0; ++i) {
-        unsigned k = s->face_tris[exit->first + i];
-        double bu = 0.0, bv = 0.0, in = triangle_inside(s, k, q, &bu, &bv);
-        if (in > best) {
-            best = in;
-            prim = k;
-            u = bu;
-            v = bv;
-        }
-    }
-    if (!(best >= -1e-7))
-        return -1;
-    hit->t = t;
-    hit->prim = prim;
-    hit->shape = s;
-    convex_surface_at(s, prim, u, v, o, d, t, hit);
-    return 1;
+    return face_hit(s, exit, o, d, t, hit);
 }
 
 /* The next hit of a ray whose origin at tmin lies outside convex mesh s,
@@ -1982,27 +1990,7 @@ static int convex_entry(const geom_shape *s, vec3 o, vec3 d, double tmin, double
     double t = tmin + t_near;
     if (t > tmax)
         return 0;
-    /* The entry face's triangle that holds the point. */
-    vec3 q = v3_add(o, v3_scale(d, t));
-    double best = -INFINITY, u = 0.0, v = 0.0;
-    unsigned prim = 0;
-    for (uint32_t i = 0; i < entry->count && best < 0.0; ++i) {
-        unsigned k = s->face_tris[entry->first + i];
-        double bu = 0.0, bv = 0.0, in = triangle_inside(s, k, q, &bu, &bv);
-        if (in > best) {
-            best = in;
-            prim = k;
-            u = bu;
-            v = bv;
-        }
-    }
-    if (!(best >= -1e-7))
-        return -1;
-    hit->t = t;
-    hit->prim = prim;
-    hit->shape = s;
-    convex_surface_at(s, prim, u, v, o, d, t, hit);
-    return 1;
+    return face_hit(s, entry, o, d, t, hit);
 }
 
 bool geometry_intersect_past(const geometry *g, geom_past past, vec3 o, vec3 d, double tmin,

@@ -6,7 +6,6 @@
 
 #include <errno.h>
 #include <pthread.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,22 +45,13 @@ typedef struct {
 static pthread_once_t module_once = PTHREAD_ONCE_INIT;
 static module_state the_module;
 
-/* snprintf that may cut long paths short (the result is a message, not a path). */
-__attribute__((format(printf, 3, 4))) static void message(char *out, size_t size,
-                                                          const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(out, size, fmt, ap);
-    va_end(ap);
-}
-
 static void not_found(char *out, size_t size, int count, const char *reasons)
 {
-    message(out, size,
-            "cannot load the OpenVDB module that reading .vdb files needs (tried %s); "
-            "convert the file to .nvdb, or set HAZE_OPENVDB_MODULE to the module's path",
-            count ? reasons : "no path");
+    hz_module_message(out, size,
+                      "cannot load the OpenVDB module that reading .vdb files needs (tried "
+                      "%s); convert the file to .nvdb, or set HAZE_OPENVDB_MODULE to the "
+                      "module's path",
+                      count ? reasons : "no path");
 }
 
 static void module_search(void)
@@ -81,12 +71,12 @@ hz_status vdb_module_locate(char *path, size_t path_size, char *err, size_t err_
     char reasons[2 * MODULE_PATH_MAX + 8] = "";
     for (int i = 0; i < count; ++i) {
         if (access(candidates[i], R_OK) == 0) {
-            message(path, path_size, "%s", candidates[i]);
+            hz_module_message(path, path_size, "%s", candidates[i]);
             return HZ_OK;
         }
         size_t used = strlen(reasons);
-        message(reasons + used, sizeof reasons - used, "%s%s: %s", i ? "; " : "", candidates[i],
-                strerror(errno));
+        hz_module_message(reasons + used, sizeof reasons - used, "%s%s: %s", i ? "; " : "",
+                          candidates[i], strerror(errno));
     }
     if (err && err_size)
         not_found(err, err_size, count, reasons);
@@ -100,7 +90,7 @@ hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_siz
     if (*api)
         return HZ_OK;
     if (err && err_size)
-        message(err, err_size, "%s", the_module.error);
+        hz_module_message(err, err_size, "%s", the_module.error);
     return HZ_ERROR;
 }
 
@@ -108,7 +98,7 @@ void vdb_reader_path(char *out, size_t size)
 {
     const char *env = getenv("HAZE_VDB_READER");
     if (env && env[0]) {
-        message(out, size, "%s", env);
+        hz_module_message(out, size, "%s", env);
         return;
     }
     char exe[MODULE_PATH_MAX];
@@ -118,10 +108,10 @@ void vdb_reader_path(char *out, size_t size)
         char *slash = strrchr(exe, '/');
         if (slash) {
             slash[1] = '\0';
-            message(out, size, "%s%s", exe, HAZE_VDB_READER_NAME);
+            hz_module_message(out, size, "%s%s", exe, HAZE_VDB_READER_NAME);
             if (access(out, X_OK) == 0)
                 return;
         }
     }
-    message(out, size, "%s", HAZE_VDB_READER_BUILD_PATH);
+    hz_module_message(out, size, "%s", HAZE_VDB_READER_BUILD_PATH);
 }

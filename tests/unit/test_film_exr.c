@@ -137,6 +137,20 @@ static void round_trip(bool half)
     exr_image_free(&back);
 }
 
+/* Writes img to `name` in HAZE_TMP and returns the file's bytes (path in `path`). */
+static unsigned char *written(exr_image *img, const char *name, char *path, size_t path_size,
+                              size_t *len)
+{
+    hz_error err = {0};
+    tmp_path(path, path_size, name);
+    if (exr_write(path, img, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_no_temp_files(path);
+    unsigned char *bytes = slurp(path, len);
+    assert_non_null(bytes);
+    return bytes;
+}
+
 /* Chunks compressed by several threads: the same bytes as one thread's file
  * (written in order), and the same pixels back; more threads than chunks too. */
 static void test_threads_same_file(void **state)
@@ -144,23 +158,16 @@ static void test_threads_same_file(void **state)
     (void)state;
     for (int half = 0; half < 2; half++) {
         char one[512], many[512];
-        tmp_path(one, sizeof one, "threads1.exr");
-        tmp_path(many, sizeof many, "threadsN.exr");
         exr_image img, back;
         make_image(&img, half != 0);
         hz_error err = {0};
         img.threads = 1;
-        assert_int_equal(exr_write(one, &img, &err), HZ_OK);
         size_t n1 = 0;
-        unsigned char *b1 = slurp(one, &n1);
-        assert_non_null(b1);
+        unsigned char *b1 = written(&img, "threads1.exr", one, sizeof one, &n1);
         for (int threads = 2; threads <= 8; threads += 3) {
             img.threads = threads;
-            assert_int_equal(exr_write(many, &img, &err), HZ_OK);
-            assert_no_temp_files(many);
             size_t n2 = 0;
-            unsigned char *b2 = slurp(many, &n2);
-            assert_non_null(b2);
+            unsigned char *b2 = written(&img, "threadsN.exr", many, sizeof many, &n2);
             assert_int_equal(n1, n2);
             assert_memory_equal(b1, b2, n1);
             free(b2);
@@ -201,16 +208,12 @@ static void test_lines_filled_same_file(void **state)
     (void)state;
     for (int half = 0; half < 2; half++) {
         char one[512], filled[512];
-        tmp_path(one, sizeof one, "pixels.exr");
-        tmp_path(filled, sizeof filled, "filled.exr");
         exr_image img, lines;
         make_image(&img, half != 0);
         hz_error err = {0};
         img.threads = 1;
-        assert_int_equal(exr_write(one, &img, &err), HZ_OK);
         size_t n1 = 0;
-        unsigned char *b1 = slurp(one, &n1);
-        assert_non_null(b1);
+        unsigned char *b1 = written(&img, "pixels.exr", one, sizeof one, &n1);
         assert_int_equal(exr_image_alloc_lines(&lines, img.width, img.height, img.channel_count,
                                                &err),
                          HZ_OK);
@@ -232,12 +235,10 @@ static void test_lines_filled_same_file(void **state)
             lines.fill = fill_from;
             lines.fill_ctx = &src;
             lines.threads = threads;
-            assert_int_equal(exr_write(filled, &lines, &err), HZ_OK);
+            size_t n2 = 0;
+            unsigned char *b2 = written(&lines, "filled.exr", filled, sizeof filled, &n2);
             for (int y = 0; y < img.height; y++)
                 assert_int_equal(src.asked[y], 1);
-            size_t n2 = 0;
-            unsigned char *b2 = slurp(filled, &n2);
-            assert_non_null(b2);
             assert_int_equal(n1, n2);
             assert_memory_equal(b1, b2, n1);
             free(b2);
