@@ -94,6 +94,58 @@ static void test_rectangle_and_empty_scene(void **state)
     render_scene_destroy(rs);
 }
 
+/* Whether the camera ray through raster point (x, y) hits a shape. */
+static bool ray_hits(const camera *cam, const geometry *g, double x, double y)
+{
+    camera_sample cs = {.p_film = v2(x, y), .p_lens = v2(0.5, 0.5), .time = 0.5,
+                        .filter_weight = 1.0};
+    ray ry;
+    geom_hit h;
+    return camera_generate_ray(cam, cs, &ry) &&
+           geometry_intersect(g, ry.o, ry.d, 0.0, INFINITY, 0.0, &h);
+}
+
+/* The rectangle is tight around an axis-aligned box mesh seen in perspective: its
+ * corners project onto the rectangle's sides, so along each side rays a
+ * quarter pixel inside hit it somewhere, and rays a quarter pixel outside
+ * never do (scanned every 0.01 pixel). A rectangle 2 pixels too small or
+ * too large fails. */
+static void test_rectangle_tight(void **state)
+{
+    (void)state;
+    render_scene *rs =
+        build("LookAt 0.7 1.1 -4  0.2 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
+              "Film \"rgb\" \"integer xresolution\" 64 \"integer yresolution\" 48\n"
+              "WorldBegin\nTranslate 0.3 -0.2 0.4\n"
+              "Shape \"trianglemesh\" \"integer indices\" [0 6 2  0 4 6  1 3 7  1 7 5  0 1 5  "
+              "0 5 4  2 7 3  2 6 7  0 3 1  0 2 3  4 5 7  4 7 6]\n"
+              "  \"point3 P\" [-0.6 -0.4 -0.5  0.6 -0.4 -0.5  -0.6 0.4 -0.5  0.6 0.4 -0.5  "
+              "-0.6 -0.4 0.5  0.6 -0.4 0.5  -0.6 0.4 0.5  0.6 0.4 0.5]\n");
+    double b[4];
+    assert_true(render_scene_black_outside(rs, b));
+    const camera *cam = render_scene_camera(rs);
+    const geometry *g = render_scene_geometry(rs);
+    assert_true(b[0] > 1.0 && b[1] < 63.0 && b[2] > 1.0 && b[3] < 47.0);
+    for (int side = 0; side < 4; ++side) {
+        bool vertical = side < 2; /* x = b[side], scanning y */
+        double at = b[side], dir = side % 2 ? -1.0 : 1.0; /* inward */
+        double lo = vertical ? b[2] : b[0], hi = vertical ? b[3] : b[1];
+        int inside = 0;
+        for (double u = lo; u <= hi; u += 0.01) {
+            double xi = vertical ? at + 0.25 * dir : u, yi = vertical ? u : at + 0.25 * dir;
+            double xo = vertical ? at - 0.25 * dir : u, yo = vertical ? u : at - 0.25 * dir;
+            inside += ray_hits(cam, g, xi, yi);
+            if (ray_hits(cam, g, xo, yo))
+                fail_msg("side %d: the ray through %g %g, outside [%g %g] x [%g %g], hits", side,
+                         xo, yo, b[0], b[1], b[2], b[3]);
+        }
+        if (inside == 0)
+            fail_msg("side %d: no ray a quarter pixel inside [%g %g] x [%g %g] hits", side, b[0],
+                     b[1], b[2], b[3]);
+    }
+    render_scene_destroy(rs);
+}
+
 /* Refused: light from the sky, a camera inside a medium, a lens, a shape
  * around the camera (part of it behind the eye) and a moving shape. */
 static void test_refused(void **state)
@@ -127,6 +179,7 @@ int main(void)
         cmocka_unit_test(test_perspective_rays_outside_miss),
         cmocka_unit_test(test_orthographic_rays_outside_miss),
         cmocka_unit_test(test_rectangle_and_empty_scene),
+        cmocka_unit_test(test_rectangle_tight),
         cmocka_unit_test(test_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
