@@ -907,14 +907,51 @@ static hz_status build_instances(geometry *g, scene_desc *sd, transform render_f
     return HZ_OK;
 }
 
-static RTCDevice new_device(bool portable_isa)
+/* Scenes of at most this many primitives build their BVH on the calling
+ * thread (Embree's "threads=1"): Embree's task scheduler starting its worker
+ * threads for the first build took a median 4.7 ms with a 12-triangle
+ * scene, the device and the build 1.2 ms in all without them (40 runs each),
+ * and the workers then spin beside the render threads. A build this small
+ * takes well under a millisecond on one thread. */
+enum { GEOMETRY_SMALL_SCENE = 10000 };
+
+/* The primitives the scene's shapes give Embree, at most, or SIZE_MAX when
+ * some shape's count is unknown before it is built (a PLY file, a
+ * subdivision surface, ...). Reads the parameters without marking them used. */
+static size_t primitive_bound(const scene_desc *sd)
+{
+    size_t n = sd->instance_count;
+    for (size_t i = 0; i < sd->shape_count + sd->object_shape_count; ++i) {
+        const scene_entity *e = i < sd->shape_count ? &sd->shapes[i].entity
+                                                    : &sd->object_shapes[i - sd->shape_count].entity;
+        const char *count_of = NULL;
+        if (strcmp(e->type, "trianglemesh") == 0 || strcmp(e->type, "bilinearmesh") == 0)
+            count_of = "indices";
+        else if (strcmp(e->type, "curve") == 0)
+            count_of = "P";
+        else if (strcmp(e->type, "sphere") != 0)
+            return SIZE_MAX;
+        size_t k = 1;
+        for (size_t j = 0; count_of && j < e->params.count; ++j)
+            if (strcmp(e->params.items[j].name, count_of) == 0)
+                k = e->params.items[j].count;
+        n += k;
+    }
+    return n;
+}
+
+static RTCDevice new_device(bool portable_isa, bool small)
 {
     /* Embree's choice is the widest ISA the CPU has (AVX-512 here: 12% faster
      * than SSE4.2 on bench/scenes/surfaces.pbrt). Hit points are recomputed
      * in double (surface_at), so an ISA changes an image only where rays
      * graze a shared edge; pinning SSE4.2 removes even that across machines.
      * Fall back to Embree's choice on a CPU without SSE4.2. */
-    RTCDevice d = portable_isa ? rtcNewDevice("isa=sse4.2") : NULL;
+    RTCDevice d = NULL;
+    if (portable_isa)
+        d = rtcNewDevice(small ? "isa=sse4.2,threads=1" : "isa=sse4.2");
+    if (!d && small)
+        d = rtcNewDevice("threads=1");
     return d ? d : rtcNewDevice(NULL);
 }
 
@@ -1247,7 +1284,7 @@ hz_status geometry_create(scene_desc *sd, transform render_from_world, const mat
     g->start_time = sd->transform_start_time;
     g->end_time = sd->transform_end_time;
     g->textures = textures;
-    g->device = new_device(portable_isa);
+    g->device = new_device(portable_isa, primitive_bound(sd) <= GEOMETRY_SMALL_SCENE);
     if (!g->device) {
         free(g);
         return hz_fail(err, "cannot create the Embree device (error %d)",
