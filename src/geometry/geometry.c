@@ -924,18 +924,24 @@ static size_t primitive_bound(const scene_desc *sd)
     for (size_t i = 0; i < sd->shape_count + sd->object_shape_count; ++i) {
         const scene_entity *e = i < sd->shape_count ? &sd->shapes[i].entity
                                                     : &sd->object_shapes[i - sd->shape_count].entity;
+        /* A mesh has fewer triangles than index values; a curve fewer
+         * segments than control point coordinates, each cut into at most
+         * 2^8 pieces (its "splitdepth"). */
         const char *count_of = NULL;
-        if (strcmp(e->type, "trianglemesh") == 0 || strcmp(e->type, "bilinearmesh") == 0)
+        int shift = 0;
+        if (strcmp(e->type, "trianglemesh") == 0 || strcmp(e->type, "bilinearmesh") == 0) {
             count_of = "indices";
-        else if (strcmp(e->type, "curve") == 0)
+        } else if (strcmp(e->type, "curve") == 0) {
             count_of = "P";
-        else if (strcmp(e->type, "sphere") != 0)
+            shift = 8;
+        } else if (strcmp(e->type, "sphere") != 0) {
             return SIZE_MAX;
+        }
         size_t k = 1;
         for (size_t j = 0; count_of && j < e->params.count; ++j)
             if (strcmp(e->params.items[j].name, count_of) == 0)
                 k = e->params.items[j].count;
-        n += k;
+        n += k << shift;
     }
     return n;
 }
