@@ -63,7 +63,6 @@ hz_status distributed_create(distributed **out, hz_error *err)
     if (gethostname(d->host, sizeof d->host - 1) != 0)
         snprintf(d->host, sizeof d->host, "?");
     if (distributed_launched()) {
-        const char *n = getenv("OMPI_COMM_WORLD_SIZE");
 #ifdef HAZE_HAVE_MPI
         static const hz_module_spec spec = {
             "HAZE_MPI_MODULE", HAZE_MPI_MODULE_NAME, HAZE_MPI_MODULE_BUILD_PATH,
@@ -95,6 +94,7 @@ hz_status distributed_create(distributed **out, hz_error *err)
                            provided);
         }
 #else
+        const char *n = getenv("OMPI_COMM_WORLD_SIZE");
         if (n && atoi(n) > 1) {
             free(d);
             return hz_fail(err, "launched by mpirun with %s ranks, but this haze was built "
@@ -103,7 +103,6 @@ hz_status distributed_create(distributed **out, hz_error *err)
                            n);
         }
 #endif
-        (void)n;
     }
     *out = d;
     return HZ_OK;
