@@ -286,6 +286,18 @@ static int tile_log_replay(void *p)
     return i < atomic_load(&l->count) ? l->tiles[i] : -1;
 }
 
+/* progressive_error_measure of this rank's tiles after a pass from n0 to n
+ * samples (the others' sum to 0); the sums of every tile then reach every
+ * rank, which selects its own pixels. Returns the pixels left active. */
+static long measure_ranks(const haze_mpi_api *mpi, progressive_error *pe, const film *f,
+                          const film_snapshot *before, unsigned char *active, int n0, int n,
+                          double ratio, int threads, const progressive_goal *goal)
+{
+    progressive_error_measure(pe, f, before, active, n0, n, ratio, threads);
+    reduce_all_chunked(mpi, pe->tile_sums, 3 * (size_t)pe->tile_count);
+    return progressive_error_select(pe, f, goal, active, NULL);
+}
+
 /* The passes after the first of a progressive render across ranks: a pass
  * starts when every rank expects to finish it by the deadline and some rank
  * has pixels above the target error. */
@@ -323,6 +335,8 @@ static hz_status later_passes(const haze_mpi_api *mpi, render_scene *rs,
     po.progress = NULL;
     po.active = active;
     hz_status st = HZ_OK;
+    if (active && done >= PROGRESSIVE_MIN_SPP) /* the first pass took every pixel to `done` */
+        left = measure_ranks(mpi, &pe, f, NULL, active, 0, done, ratio, po.threads, goal);
     while (done < spp) {
         int end = active ? progressive_error_next_end(&pe, done, spp, goal)
                          : progressive_pass_end(done, spp);
@@ -350,13 +364,9 @@ static hz_status later_passes(const haze_mpi_api *mpi, render_scene *rs,
         done = end;
         mine->spp = done;
         mine->passes++;
-        if (active && done >= PROGRESSIVE_MIN_SPP) {
-            /* Each rank measures its tiles (the others' sum to 0); the sums of
-             * every tile then reach every rank, which decides for its own. */
-            progressive_error_measure(&pe, f, snap, active, po.sample_begin, done, ratio, po.threads);
-            reduce_all_chunked(mpi, pe.tile_sums, 3 * (size_t)pe.tile_count);
-            left = progressive_error_select(&pe, f, goal, active, NULL);
-        }
+        if (active && done >= PROGRESSIVE_MIN_SPP)
+            left = measure_ranks(mpi, &pe, f, snap, active, po.sample_begin, done, ratio,
+                                 po.threads, goal);
         if (o->progress)
             fprintf(o->progress, "pass %d: %d of %d spp\n", mine->passes, done, spp);
     }
@@ -390,7 +400,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
     tile_log log = {.ts = ts};
     atomic_init(&log.count, 0);
     atomic_init(&log.next, 0);
-    if (goal) { /* the first pass: one sample per pixel, its tiles recorded */
+    if (goal) { /* the first pass (progressive_first_end), its tiles recorded */
         log.tiles = malloc((size_t)tile_count_of(fp) * sizeof *log.tiles);
         if (!log.tiles) {
             fprintf(stderr, "haze: rank %d on host %s: out of memory\n", d->rank, d->host);
@@ -398,7 +408,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
         }
         o.next_tile = tile_log_claim;
         o.tile_ctx = &log;
-        o.sample_end = progressive_pass_end(0, render_scene_sampler(rs)->spp);
+        o.sample_end = progressive_first_end(goal, render_scene_sampler(rs)->spp);
     }
     render_stats mine;
     memset(&mine, 0, sizeof mine);

@@ -16,6 +16,13 @@ int progressive_pass_end(int begin, int spp)
     return begin <= spp / 2 ? 2 * begin : spp;
 }
 
+int progressive_first_end(const progressive_goal *goal, int spp)
+{
+    if (goal && goal->target_error > 0 && spp >= PROGRESSIVE_MIN_SPP)
+        return PROGRESSIVE_MIN_SPP;
+    return progressive_pass_end(0, spp);
+}
+
 bool progressive_pass_fits(double now, double deadline, double last_seconds, double last_work,
                            double work)
 {

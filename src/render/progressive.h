@@ -17,6 +17,13 @@
  * then twice `begin`, at most spp. */
 int progressive_pass_end(int begin, int spp);
 
+/* The end of the first pass of a render towards `goal`: progressive_pass_end's
+ * 1, or with a target error the PROGRESSIVE_MIN_SPP samples its first
+ * estimate needs (at most spp). The first pass is never undone, so it needs
+ * no copy of the film. */
+struct progressive_goal;
+int progressive_first_end(const struct progressive_goal *goal, int spp);
+
 /* Whether a pass of `work` (pixel samples), started at `now`, is expected to
  * end by `deadline`, given that the last pass took `last_seconds` for
  * `last_work` (time proportional to work). */
@@ -24,7 +31,7 @@ bool progressive_pass_fits(double now, double deadline, double last_seconds, dou
                            double work);
 
 /* When passes stop before the sampler's count. */
-typedef struct {
+typedef struct progressive_goal {
     double deadline;     /* hz_clock_seconds() time; 0: none (--time-limit) */
     /* The image's relative error to reach, 0: none (--target-error): relMSE
      * as `haze diff` reports it against the converged image, estimated from
@@ -97,7 +104,10 @@ typedef struct {
 hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error *err);
 void progressive_error_free(progressive_error *pe);
 /* Measures e_i of every pixel and the sums of each tile (tiles without
- * samples sum to exactly 0), tiles on `threads` threads (<= 0: every core).
+ * samples sum to exactly 0), tiles on `threads` threads (<= 0: every core),
+ * after a pass that took the active pixels from n0 to n samples. `before`:
+ * the film before that pass; unused after the first pass (n0 = 0, two
+ * samples), whose halves estimate is the film's own variance.
  * Tiles with no pixel in `active` (the pixels the last pass rendered) keep
  * the figures of the previous measure: the first must have all active. */
 void progressive_error_measure(progressive_error *pe, const film *f, const film_snapshot *before,
@@ -112,8 +122,8 @@ long progressive_error_select(const progressive_error *pe, const film *f,
                               const progressive_goal *goal, unsigned char *active,
                               double *estimate);
 
-/* The end of the next pass of a render with a target error: once the
- * estimate is trusted, the count at which it (falling as 1/n) reaches the
+/* The end of the next pass of a render with a target error: the first
+ * (done = 0) as progressive_first_end; once the estimate is trusted, the count at which it (falling as 1/n) reaches the
  * noise target, at least a quarter more and at most twice `done`; before
  * that, progressive_pass_end. */
 int progressive_error_next_end(const progressive_error *pe, int done, int spp,

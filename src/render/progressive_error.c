@@ -125,7 +125,7 @@ static void measure_tile(const measure_job *job, int t)
     for (int y = 0; y < th; ++y)
         for (int x = 0; x < tw; ++x) {
             int px = pe->x0 + tx + x, py = pe->y0 + ty + y;
-            rgb m = means[y * T + x], var = film_get_variance(f, px, py, ratio);
+            rgb m = means[y * T + x], film_var = film_get_variance(f, px, py, ratio), var = film_var;
             long n = counts[y * T + x] = film_get_sample_count(f, px, py);
             if (n > 0) {
                 rgb floor = rgb_scale(spread_of_means(means, x, y, tw, th), 1.0 / (double)n);
@@ -134,8 +134,15 @@ static void measure_tile(const measure_job *job, int t)
             own[y * T + x] = relative_error(var, m, var);
             size_t i = (size_t)(ty + y) * w + tx + x;
             if (job->active[i]) { /* rendered in the last pass: a new halves estimate */
-                rgb d = rgb_sub(m, film_snapshot_pixel(job->before, f, px, py, ratio));
-                pe->halves[i] = relative_error(rgb_mul(d, rgb_scale(d, job->half_scale)), m, var);
+                /* After the first pass (two samples, no copy before it) the
+                 * halves of the pixel are its two samples, and their squared
+                 * change scaled as below is the film's own s^2 / n. */
+                rgb sq = film_var;
+                if (job->before) {
+                    rgb d = rgb_sub(m, film_snapshot_pixel(job->before, f, px, py, ratio));
+                    sq = rgb_mul(d, rgb_scale(d, job->half_scale));
+                }
+                pe->halves[i] = relative_error(sq, m, var);
             }
         }
     double *sums = pe->tile_own + 3 * (size_t)t;
@@ -177,7 +184,7 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
     /* Var of an n-sample mean from the difference D of the means of the
      * first n0 and the last k = n - n0 samples, D^2 n0 k / n^2, where the
      * film shows d = m_n - m_n0 = D k / n: d^2 n0 / k. */
-    measure_job job = {.pe = pe, .f = f, .before = before, .active = active,
+    measure_job job = {.pe = pe, .f = f, .before = n0 > 0 ? before : NULL, .active = active,
                        .half_scale = (double)n0 / (double)(n - n0),
                        .imaging_ratio = imaging_ratio};
     atomic_init(&job.next, 0);
@@ -245,7 +252,9 @@ int progressive_error_next_end(const progressive_error *pe, int done, int spp,
                                const progressive_goal *goal)
 {
     double target = progressive_noise_target(goal);
-    if (pe->samples < PROGRESSIVE_TRUST_SPP || !(pe->estimate > 0.0) || done <= 0)
+    if (done <= 0)
+        return progressive_first_end(goal, spp);
+    if (pe->samples < PROGRESSIVE_TRUST_SPP || !(pe->estimate > 0.0))
         return progressive_pass_end(done, spp);
     /* The count where the estimate, falling as 1/n, reaches the target. */
     double want = ceil((double)done * pe->estimate / (PROGRESSIVE_SAFETY * target));
