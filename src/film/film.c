@@ -419,9 +419,15 @@ static rgb pixel_value(const film_pixel *p, double imaging_ratio)
     return rgb_make(p->r * s, p->g * s, p->b * s);
 }
 
+/* The saved pixels' accumulators, packed in the order of the last save's
+ * mask (a save touches only as much of the copy as it saves: a pass over a
+ * tenth of the image writes, and faults in, a tenth of it), with each saved
+ * pixel's place; a save of every pixel keeps the film's own order. */
 struct film_snapshot {
     double *doubles[FILM_DOUBLE_ARRAYS];
     uint32_t *counts;
+    size_t *slot;   /* per film pixel: its place in the copy, when !identity */
+    bool identity;  /* the last save covered every pixel, in place */
     long nonfinite;
 };
 
@@ -432,6 +438,7 @@ void film_snapshot_destroy(film_snapshot *s)
     for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
         free(s->doubles[i]);
     free(s->counts);
+    free(s->slot);
     free(s);
 }
 
@@ -445,6 +452,9 @@ film_snapshot *film_snapshot_alloc(film *f, hz_error *err)
         if (acc.doubles[i] && !(s->doubles[i] = hz_big_malloc(acc.double_count[i] * sizeof(double))))
             ok = false;
     if (ok && acc.counts && !(s->counts = hz_big_malloc(acc.count_count * sizeof(uint32_t))))
+        ok = false;
+    size_t npix = (size_t)f->width * (size_t)f->height;
+    if (ok && !(s->slot = malloc((npix ? npix : 1) * sizeof *s->slot)))
         ok = false;
     if (!ok) {
         film_snapshot_destroy(s);
@@ -463,16 +473,16 @@ film_snapshot *film_snapshot_create(film *f, hz_error *err)
     return s;
 }
 
-/* Copies elements [a, b) of every accumulator array, each pixel's `per`
- * values (doubles, or one count) together. save: film -> snapshot;
- * otherwise snapshot -> film. */
+/* Copies pixels [a, b) of every accumulator array, each pixel's `per`
+ * values (doubles, or one count) together, to or from the copy's pixels
+ * [at, at + b - a). save: film -> snapshot; otherwise snapshot -> film. */
 static void snapshot_copy_range(film_snapshot *s, const film_accumulators *acc, size_t npix,
-                                size_t a, size_t b, bool save)
+                                size_t a, size_t b, size_t at, bool save)
 {
     for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
         if (acc->doubles[i]) {
             size_t per = acc->double_count[i] / npix;
-            double *film_side = acc->doubles[i] + a * per, *copy = s->doubles[i] + a * per;
+            double *film_side = acc->doubles[i] + a * per, *copy = s->doubles[i] + at * per;
             size_t n = (b - a) * per * sizeof(double);
             if (save)
                 memcpy(copy, film_side, n);
@@ -482,13 +492,14 @@ static void snapshot_copy_range(film_snapshot *s, const film_accumulators *acc, 
     if (acc->counts) {
         size_t n = (b - a) * sizeof(uint32_t);
         if (save)
-            memcpy(s->counts + a, acc->counts + a, n);
+            memcpy(s->counts + at, acc->counts + a, n);
         else
-            memcpy(acc->counts + a, s->counts + a, n);
+            memcpy(acc->counts + a, s->counts + at, n);
     }
 }
 
-/* The pixels of `mask` (NULL: all), in runs of consecutive ones. */
+/* The pixels of `mask` (NULL: all, in place), in runs of consecutive ones,
+ * packed in mask order; a save records each pixel's place. */
 static void snapshot_copy(film_snapshot *s, film *f, const unsigned char *mask, bool save)
 {
     film_accumulators acc;
@@ -497,8 +508,11 @@ static void snapshot_copy(film_snapshot *s, film *f, const unsigned char *mask, 
     if (npix == 0)
         return;
     if (!mask) {
-        snapshot_copy_range(s, &acc, npix, 0, npix, save);
+        assert(save || s->identity); /* a full restore follows a full save */
+        snapshot_copy_range(s, &acc, npix, 0, npix, 0, save);
     } else {
+        assert(save || !s->identity);
+        size_t at = 0;
         for (size_t i = 0; i < npix;) {
             if (!mask[i]) {
                 ++i;
@@ -507,14 +521,20 @@ static void snapshot_copy(film_snapshot *s, film *f, const unsigned char *mask, 
             size_t j = i + 1;
             while (j < npix && mask[j])
                 ++j;
-            snapshot_copy_range(s, &acc, npix, i, j, save);
+            snapshot_copy_range(s, &acc, npix, i, j, at, save);
+            if (save)
+                for (size_t k = i; k < j; ++k)
+                    s->slot[k] = at + (k - i);
+            at += j - i;
             i = j;
         }
     }
-    if (save)
+    if (save) {
+        s->identity = mask == NULL;
         s->nonfinite = film_nonfinite_count(f);
-    else
+    } else {
         film_add_nonfinite(f, s->nonfinite - film_nonfinite_count(f));
+    }
 }
 
 void film_snapshot_save(film_snapshot *s, film *f) { snapshot_copy(s, f, NULL, true); }
@@ -537,7 +557,9 @@ void film_snapshot_restore_pixels(const film_snapshot *s, film *f, const unsigne
 rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,
                         double imaging_ratio)
 {
-    return pixel_value((const film_pixel *)s->doubles[0] + film_index(f, px, py), imaging_ratio);
+    size_t i = film_index(f, px, py);
+    return pixel_value((const film_pixel *)s->doubles[0] + (s->identity ? i : s->slot[i]),
+                       imaging_ratio);
 }
 
 /* West (1979): the weighted form of Welford's update, with weight aw > 0. */

@@ -178,12 +178,13 @@ void film_snapshot_destroy(film_snapshot *s);
 void film_snapshot_save(film_snapshot *s, film *f);
 void film_snapshot_restore(const film_snapshot *s, film *f);
 /* The same for the pixels whose `mask` byte (row-major over the film's
- * bounds) is non-zero, every pixel for a NULL mask; the others' copies keep
- * what they held. A pass that
- * adds samples only to those pixels is undone by restoring the same mask. */
+ * bounds) is non-zero, every pixel for a NULL mask. The copy holds the last
+ * save only, packed: a save of k pixels writes k pixels' worth of the copy.
+ * A pass that adds samples only to those pixels is undone by restoring the
+ * same mask as the last save. */
 void film_snapshot_save_pixels(film_snapshot *s, film *f, const unsigned char *mask);
 void film_snapshot_restore_pixels(const film_snapshot *s, film *f, const unsigned char *mask);
-/* film_get_pixel as of the last save that covered the pixel. */
+/* film_get_pixel as of the last save, which covered the pixel. */
 rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,
                         double imaging_ratio);
 

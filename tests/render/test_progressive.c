@@ -399,11 +399,23 @@ static void test_masked_snapshot_and_measure(void **state)
         mask[i] = (i / 3 + i % 7) % 3 == 0;
     size_t n0, n1, n2;
     double *before = copy_accumulators(f, &n0);
+    rgb *value = malloc(64 * 32 * sizeof *value);
+    assert_non_null(value);
+    for (int i = 0; i < 64 * 32; ++i)
+        value[i] = film_get_pixel(f, i % 64, i / 64, 1.0);
     film_snapshot_save_pixels(snap, f, mask);
     for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 64; ++x)
             if (mask[y * 64 + x])
                 film_add_sample(f, x, y, rgb_grey(0.25 + 0.01 * x), 0.5, INFINITY);
+    /* The copy is packed (the masked pixels in mask order): each pixel is
+     * found in its place. */
+    for (int i = 0; i < 64 * 32; ++i)
+        if (mask[i]) {
+            rgb was = film_snapshot_pixel(snap, f, i % 64, i / 64, 1.0);
+            assert_memory_equal(&was, &value[i], sizeof was);
+        }
+    free(value);
     double *during = copy_accumulators(f, &n1);
     assert_true(n1 == n0 && memcmp(before, during, n0 * sizeof *before) != 0);
     film_snapshot_restore_pixels(snap, f, mask);
