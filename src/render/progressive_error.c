@@ -44,19 +44,24 @@ void progressive_error_free(progressive_error *pe)
     memset(pe, 0, sizeof *pe);
 }
 
-/* Var / (m_lo + 0.01)^2, channel mean, with m_lo = max(0, |m| - k sqrt(var_m)):
- * the denominator of relMSE is the converged value, and a pixel's own mean
- * is high exactly when a rare bright sample also raised its variance. */
-static double relative_error(rgb var, rgb m, rgb var_m)
+/* The squared denominators of a pixel's relative error, (m_lo + 0.01)^2 per
+ * channel, with m_lo = max(0, |m| - k sqrt(var_m)): the denominator of
+ * relMSE is the converged value, and a pixel's own mean is high exactly when
+ * a rare bright sample also raised its variance. */
+static void error_denominators(rgb m, rgb var_m, double d2[3])
 {
-    double v[3] = {var.r, var.g, var.b}, mm[3] = {m.r, m.g, m.b}, vm[3] = {var_m.r, var_m.g, var_m.b};
-    double sum = 0.0;
+    double mm[3] = {m.r, m.g, m.b}, vm[3] = {var_m.r, var_m.g, var_m.b};
     for (int c = 0; c < 3; ++c) {
         double lo = fabs(mm[c]) - PROGRESSIVE_LOWER_BOUND_K * sqrt(vm[c]);
         double d = (lo > 0.0 ? lo : 0.0) + 0.01;
-        sum += v[c] / (d * d);
+        d2[c] = d * d;
     }
-    return sum / 3.0;
+}
+
+/* Var / (m_lo + 0.01)^2, channel mean. */
+static double relative_error(rgb var, const double d2[3])
+{
+    return (var.r / d2[0] + var.g / d2[1] + var.b / d2[2]) / 3.0;
 }
 
 typedef struct {
@@ -131,7 +136,9 @@ static void measure_tile(const measure_job *job, int t)
                 rgb floor = rgb_scale(spread_of_means(means, x, y, tw, th), 1.0 / (double)n);
                 var = rgb_make(fmax(var.r, floor.r), fmax(var.g, floor.g), fmax(var.b, floor.b));
             }
-            own[y * T + x] = relative_error(var, m, var);
+            double d2[3];
+            error_denominators(m, var, d2);
+            own[y * T + x] = relative_error(var, d2);
             size_t i = (size_t)(ty + y) * w + tx + x;
             if (job->active[i]) { /* rendered in the last pass: a new halves estimate */
                 /* After the first pass (two samples, no copy before it) the
@@ -142,7 +149,7 @@ static void measure_tile(const measure_job *job, int t)
                     rgb d = rgb_sub(m, film_snapshot_pixel(job->before, f, px, py, ratio));
                     sq = rgb_mul(d, rgb_scale(d, job->half_scale));
                 }
-                pe->halves[i] = relative_error(sq, m, var);
+                pe->halves[i] = relative_error(sq, d2);
             }
         }
     double *sums = pe->tile_own + 3 * (size_t)t;
