@@ -84,16 +84,22 @@ yardsticks_run() {
         done
         # The whole process tree's peak (GNU time: haze, or its .vdb reader
         # process while it converts the grid, whichever is larger): the .vdb
-        # scene against the .nvdb one (issue 20: at most 1.5x).
+        # scene against the .nvdb one (issue 20: at most 1.5x, "convert
+        # without holding OpenVDB's tree and the NanoVDB buffer at once, or
+        # cache the conversion"). Two rows: a render as users meet it from a
+        # file's second render on (the conversion cache, on by default:
+        # media/vdb_cache.h), and the first render, which converts.
         if [ -x /usr/bin/time ] && [ -f "$CACHE/smoke-nvdb.pbrt" ]; then
-            kv=$(HAZE_CACHE_DIR= /usr/bin/time -f %M "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
-            kn=$(/usr/bin/time -f %M "$HAZE" render "$CACHE/smoke-nvdb.pbrt" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
-            r=$(awk -v a="$kv" -v b="$kn" 'BEGIN { printf "%.2f", a / b }')
-            yard_row memory_vdb_over_nvdb "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "smoke.pbrt peak RSS of haze and its reader process (GNU time): .vdb $(awk -v k="$kv" 'BEGIN { printf "%.1f", k / 1024 }') MiB, .nvdb $(awk -v k="$kn" 'BEGIN { printf "%.1f", k / 1024 }') MiB"
-            # A second render of the .vdb reads the converted grid from the
-            # cache (a scratch cache directory: the first run fills it).
             rm -rf "$CACHE/vdb-cache"
             HAZE_CACHE_DIR="$CACHE/vdb-cache" "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet
+            kc=$(HAZE_CACHE_DIR="$CACHE/vdb-cache" /usr/bin/time -f %M "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
+            kv=$(HAZE_CACHE_DIR= /usr/bin/time -f %M "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
+            kn=$(/usr/bin/time -f %M "$HAZE" render "$CACHE/smoke-nvdb.pbrt" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet 2>&1 | tail -1)
+            mib() { awk -v k="$1" 'BEGIN { printf "%.1f", k / 1024 }'; }
+            r=$(awk -v a="$kc" -v b="$kn" 'BEGIN { printf "%.2f", a / b }')
+            yard_row memory_vdb_over_nvdb "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "smoke.pbrt peak RSS (GNU time) from the second render on (the conversion cache, the default): .vdb $(mib "$kc") MiB, .nvdb $(mib "$kn") MiB"
+            r=$(awk -v a="$kv" -v b="$kn" 'BEGIN { printf "%.2f", a / b }')
+            yard_row memory_vdb_converting_over_nvdb "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "the first render, which converts: peak RSS of haze and its reader process, .vdb $(mib "$kv") MiB (the reader's; libopenvdb's mapped pages ~30 MiB of it, docs/performance.md), .nvdb $(mib "$kn") MiB"
             t_conv=$(timed env HAZE_CACHE_DIR= "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet)
             t_hit=$(timed env HAZE_CACHE_DIR="$CACHE/vdb-cache" "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet)
             t_nvdb=$(timed "$HAZE" render "$CACHE/smoke-nvdb.pbrt" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet)
