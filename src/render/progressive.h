@@ -17,13 +17,6 @@
  * then twice `begin`, at most spp. */
 int progressive_pass_end(int begin, int spp);
 
-/* The end of the first pass of a render towards `goal`: progressive_pass_end's
- * 1, or with a target error the PROGRESSIVE_MIN_SPP samples its first
- * estimate needs (at most spp). The first pass is never undone, so it needs
- * no copy of the film. */
-struct progressive_goal;
-int progressive_first_end(const struct progressive_goal *goal, int spp);
-
 /* Whether a pass of `work` (pixel samples), started at `now`, is expected to
  * end by `deadline`, given that the last pass took `last_seconds` for
  * `last_work` (time proportional to work). */
@@ -31,7 +24,7 @@ bool progressive_pass_fits(double now, double deadline, double last_seconds, dou
                            double work);
 
 /* When passes stop before the sampler's count. */
-typedef struct progressive_goal {
+typedef struct {
     double deadline;     /* hz_clock_seconds() time; 0: none (--time-limit) */
     /* The image's relative error to reach, 0: none (--target-error): relMSE
      * as `haze diff` reports it against the converged image, estimated from
@@ -43,6 +36,12 @@ typedef struct progressive_goal {
      * progressive_noise_target. 0: none. */
     double bias;
 } progressive_goal;
+
+/* The end of the first pass of a render towards `goal`: progressive_pass_end's
+ * 1, or with a target error the PROGRESSIVE_MIN_SPP samples its first
+ * estimate needs (at most spp). The first pass is never undone, so it needs
+ * no copy of the film. */
+int progressive_first_end(const progressive_goal *goal, int spp);
 
 /* The noise's share of a target error: target_error less the bias, at least
  * half of target_error. */
@@ -123,9 +122,9 @@ long progressive_error_select(const progressive_error *pe, const film *f,
                               double *estimate);
 
 /* The end of the next pass of a render with a target error: the first
- * (done = 0) as progressive_first_end; once the estimate is trusted, the count at which it (falling as 1/n) reaches the
- * noise target, at least a quarter more and at most twice `done`; before
- * that, progressive_pass_end. */
+ * (done = 0) as progressive_first_end; once the estimate is trusted, the
+ * count at which it (falling as 1/n) reaches the noise target, at least a
+ * quarter more and at most twice `done`; before that, progressive_pass_end. */
 int progressive_error_next_end(const progressive_error *pe, int done, int spp,
                                const progressive_goal *goal);
 
