@@ -99,7 +99,7 @@ yardsticks_run() {
             r=$(awk -v a="$kc" -v b="$kn" 'BEGIN { printf "%.2f", a / b }')
             yard_row memory_vdb_over_nvdb "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "smoke.pbrt peak RSS (GNU time) from the second render on (the conversion cache, the default): .vdb $(mib "$kc") MiB, .nvdb $(mib "$kn") MiB"
             r=$(awk -v a="$kv" -v b="$kn" 'BEGIN { printf "%.2f", a / b }')
-            yard_row memory_vdb_converting_over_nvdb "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "the first render, which converts: peak RSS of haze and its reader process, .vdb $(mib "$kv") MiB (the reader's; libopenvdb's mapped pages ~30 MiB of it, docs/performance.md), .nvdb $(mib "$kn") MiB"
+            yard_row memory_vdb_converting_over_nvdb "$r" "<= 1.5" "$(verdict "$r" le 1.5)" "the first render, which converts: peak RSS of haze and its reader process, .vdb $(mib "$kv") MiB (the reader's, most of it libopenvdb's mapped file: docs/performance.md), .nvdb $(mib "$kn") MiB"
             t_conv=$(timed env HAZE_CACHE_DIR= "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet)
             t_hit=$(timed env HAZE_CACHE_DIR="$CACHE/vdb-cache" "$HAZE" render "$v" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet)
             t_nvdb=$(timed "$HAZE" render "$CACHE/smoke-nvdb.pbrt" --spp 1 --threads "$THREADS" -o "$CACHE/memory.exr" --quiet)
