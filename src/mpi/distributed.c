@@ -294,7 +294,7 @@ static long measure_ranks(const haze_mpi_api *mpi, progressive_error *pe, const 
                           double ratio, int threads, const progressive_goal *goal)
 {
     progressive_error_measure(pe, f, before, active, n0, n, ratio, threads);
-    reduce_all_chunked(mpi, pe->tile_sums, 3 * (size_t)pe->tile_count);
+    reduce_all_chunked(mpi, pe->tile_sums, PROGRESSIVE_TILE_SUMS * (size_t)pe->tile_count);
     return progressive_error_select(pe, f, goal, active, NULL);
 }
 

@@ -48,15 +48,13 @@ int progressive_first_end(const progressive_goal *goal, int spp);
 double progressive_noise_target(const progressive_goal *goal);
 
 /* Samples before the first estimate (a variance needs two), and before the
- * image's estimate is trusted at face value. The tuning of the estimates,
- * measured on the benchmark scenes (docs/performance.md): the image stops at
- * SAFETY * E, before TRUST_SPP samples at EARLY_SAFETY * E (from 1 + 1 and
- * 2 + 2 samples the halves estimate ran up to 1.4x low on smoke.pbrt);
- * every pixel takes at least MIN_SCALE / sqrt(E) samples; LOWER_BOUND_K: see
- * progressive_error. */
-enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8 };
+ * passes are sized by the image's estimate (before, they double). The
+ * tuning of the estimates, measured on the benchmark scenes
+ * (docs/performance.md): the image stops at SAFETY * E; every pixel takes at
+ * least MIN_SCALE / sqrt(E) samples; LOWER_BOUND_K: see progressive_error.
+ * TILE_SUMS: the sums per tile of progressive_error. */
+enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8, PROGRESSIVE_TILE_SUMS = 7 };
 #define PROGRESSIVE_SAFETY 1.0
-#define PROGRESSIVE_EARLY_SAFETY 0.5
 #define PROGRESSIVE_MIN_SCALE 0.2
 #define PROGRESSIVE_LOWER_BOUND_K 0.7
 
@@ -81,20 +79,36 @@ enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8 };
  *   edge or a rare path); a pixel with n_i >= n*_i takes no more samples.
  * - When to stop, for the image: the mean over pixels of the "halves"
  *   estimate: the squared change of a pixel's value over its last pass,
- *   scaled to the variance of its mean. Unlike s^2/n it follows the
- *   faster-than-1/n convergence of stratified (Sobol') samples. It is
- *   trusted from PROGRESSIVE_TRUST_SPP samples on, against
- *   PROGRESSIVE_SAFETY * E. */
+ *   scaled to the variance of its mean, against PROGRESSIVE_SAFETY * E.
+ *   Unlike s^2/n it follows the faster-than-1/n convergence of stratified
+ *   (Sobol') samples, and over a pass that doubled them it is corrected for
+ *   that convergence, read from the passes' changes (`convergence`: for
+ *   independent samples the squared change scaled so is the variance of the
+ *   mean, for stratified ones up to 3x it). */
 typedef struct {
     int x0, y0, w, h, tiles_x, tile_count;
     int samples;       /* of the pixels rendered in the last pass */
     double estimate;   /* the image's relMSE, by the last progressive_error_select */
     double *e;         /* per pixel */
     double *halves;    /* per pixel: the halves estimate of its last pass */
-    /* Per tile, in tile order: the sums of the halves estimates, of
-     * sqrt(r_i) and the pixels with samples (as doubles, to be summed across
-     * ranks). */
-    double *tile_sums; /* 3 * tile_count */
+    /* Per pixel, the squared changes (per channel) of its last two passes,
+     * the last first: the convergence of the passes (progressive_error_select). */
+    float *changes;
+    /* The last three measured passes, the last first: each from n0 to n0 + k
+     * samples (k = 0: none). */
+    int pass_n0[3], pass_k[3];
+    bool unfolded;     /* the last measure's halves are not yet corrected */
+    /* The factor by which the variance of the image's mean fell over the
+     * last pass, as progressive_error_select read it (2: as for independent
+     * samples). */
+    double convergence;
+    /* Per tile, in tile order, PROGRESSIVE_TILE_SUMS doubles (to be summed
+     * across ranks): over the pixels with samples, the sums of the halves
+     * estimates (before the correction for their convergence), of sqrt(r_i)
+     * and the pixels; then over the pixels the last pass rendered, of their
+     * halves, and of the relative squared changes of the last three passes
+     * (the last first, over the current denominators). */
+    double *tile_sums;
     /* The same sums of this process's film, kept between measures: a tile
      * the last pass did not render is not measured again. */
     double *tile_own;
@@ -115,9 +129,12 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
 /* Clears active[i] of each pixel that has its share (above; its least count
  * from goal->target_error), or of all when the image's estimate is at most
  * progressive_noise_target(goal); the tile sums may first have been summed
- * across ranks. Returns the pixels left active; *estimate (may be NULL): the
- * image's estimated relMSE. */
-long progressive_error_select(const progressive_error *pe, const film *f,
+ * across ranks. The first call after a measure corrects the last pass's
+ * halves estimates for the passes' convergence (in the tile sums too, and
+ * the same on every rank). `active`: the pixels of the last measure's pass.
+ * Returns the pixels left active; *estimate (may be NULL): the image's
+ * estimated relMSE. */
+long progressive_error_select(progressive_error *pe, const film *f,
                               const progressive_goal *goal, unsigned char *active,
                               double *estimate);
 

@@ -26,9 +26,12 @@ hz_status progressive_error_init(progressive_error *pe, const film *f, hz_error 
     size_t n = (size_t)pe->w * pe->h;
     pe->e = hz_big_malloc((n ? n : 1) * sizeof *pe->e);
     pe->halves = hz_big_calloc(n ? n : 1, sizeof *pe->halves);
-    pe->tile_sums = calloc((size_t)(pe->tile_count ? 3 * pe->tile_count : 1), sizeof(double));
-    pe->tile_own = calloc((size_t)(pe->tile_count ? 3 * pe->tile_count : 1), sizeof(double));
-    if (!pe->e || !pe->halves || !pe->tile_sums || !pe->tile_own) {
+    pe->changes = hz_big_calloc(n ? 6 * n : 1, sizeof *pe->changes);
+    size_t sums = pe->tile_count ? (size_t)PROGRESSIVE_TILE_SUMS * pe->tile_count : 1;
+    pe->tile_sums = calloc(sums, sizeof(double));
+    pe->tile_own = calloc(sums, sizeof(double));
+    pe->convergence = 2.0;
+    if (!pe->e || !pe->halves || !pe->changes || !pe->tile_sums || !pe->tile_own) {
         progressive_error_free(pe);
         return hz_fail(err, "out of memory for the error estimate (--target-error)");
     }
@@ -39,6 +42,7 @@ void progressive_error_free(progressive_error *pe)
 {
     free(pe->e);
     free(pe->halves);
+    free(pe->changes);
     free(pe->tile_sums);
     free(pe->tile_own);
     memset(pe, 0, sizeof *pe);
@@ -95,6 +99,20 @@ static rgb spread_of_means(const rgb *means, int x, int y, int tw, int th)
     return rgb_make(fmax(v.r, 0.0), fmax(v.g, 0.0), fmax(v.b, 0.0));
 }
 
+/* Adds a pixel of the last pass to its tile's sums (progressive_error):
+ * its halves estimate, and the changes of the last three passes relative to
+ * its current denominators: d2c (this one's squared change) and the two
+ * before it in `last` (as before this measure). */
+static void pass_sums(double *sums, double halves, rgb d2c, const float *last, const double d2[3])
+{
+    double c0 = relative_error(d2c, d2), c1 = relative_error(rgb_make(last[0], last[1], last[2]), d2),
+           c2 = relative_error(rgb_make(last[3], last[4], last[5]), d2);
+    sums[3] += halves;
+    sums[4] += c0;
+    sums[5] += c1;
+    sums[6] += c2;
+}
+
 /* Whether the last pass rendered some pixel of the tile at (tx, ty). */
 static bool tile_rendered(const progressive_error *pe, const unsigned char *active, int tx,
                           int ty, int tw, int th)
@@ -119,8 +137,13 @@ static void measure_tile(const measure_job *job, int t)
     int w = pe->w, h = pe->h;
     int tx = (t % pe->tiles_x) * T, ty = (t / pe->tiles_x) * T;
     int tw = w - tx < T ? w - tx : T, th = h - ty < T ? h - ty : T;
-    if (!tile_rendered(pe, job->active, tx, ty, tw, th))
+    double *sums = pe->tile_own + PROGRESSIVE_TILE_SUMS * (size_t)t;
+    if (!tile_rendered(pe, job->active, tx, ty, tw, th)) {
+        for (int k = 3; k < PROGRESSIVE_TILE_SUMS; ++k)
+            sums[k] = 0.0; /* no pixel of it in the last pass */
         return;
+    }
+    double pass[PROGRESSIVE_TILE_SUMS] = {0}; /* the sums over the last pass's pixels */
     double own[T * T];
     rgb means[T * T];
     long counts[T * T];
@@ -144,16 +167,28 @@ static void measure_tile(const measure_job *job, int t)
                 /* After the first pass (two samples, no copy before it) the
                  * halves of the pixel are its two samples, and their squared
                  * change scaled as below is the film's own s^2 / n. */
-                rgb sq = film_var;
+                rgb sq = film_var, d2c = film_var; /* d2c: the squared change */
                 if (job->before) {
                     rgb d = rgb_sub(m, film_snapshot_pixel(job->before, f, px, py, ratio));
-                    sq = rgb_mul(d, rgb_scale(d, job->half_scale));
+                    d2c = rgb_mul(d, d);
+                    sq = rgb_scale(d2c, job->half_scale);
                 }
                 pe->halves[i] = relative_error(sq, d2);
+                if (n > 0)
+                    pass_sums(pass, pe->halves[i], d2c, pe->changes + 6 * i, d2);
+                /* The last two passes' changes, the last first (after the
+                 * first pass: as from one sample to two, (x1 - x2)^2 / 4). */
+                float *c = pe->changes + 6 * i;
+                c[3] = job->before ? c[0] : 0.0f;
+                c[4] = job->before ? c[1] : 0.0f;
+                c[5] = job->before ? c[2] : 0.0f;
+                c[0] = (float)d2c.r;
+                c[1] = (float)d2c.g;
+                c[2] = (float)d2c.b;
             }
         }
-    double *sums = pe->tile_own + 3 * (size_t)t;
-    sums[0] = sums[1] = sums[2] = 0.0;
+    for (int k = 0; k < PROGRESSIVE_TILE_SUMS; ++k)
+        sums[k] = pass[k];
     for (int y = 0; y < th; ++y)
         for (int x = 0; x < tw; ++x) {
             double sum = 0.0;
@@ -196,12 +231,21 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
                        .imaging_ratio = imaging_ratio};
     atomic_init(&job.next, 0);
     pe->samples = n;
+    for (int p = 2; p > 0; --p) {
+        pe->pass_n0[p] = n0 > 0 ? pe->pass_n0[p - 1] : 0;
+        pe->pass_k[p] = n0 > 0 ? pe->pass_k[p - 1] : 0;
+    }
+    /* The first pass, two samples: as a pass from one to two. */
+    pe->pass_n0[0] = n0 > 0 ? n0 : 1;
+    pe->pass_k[0] = n0 > 0 ? n - n0 : 1;
+    pe->unfolded = true;
     /* Each tile's figures depend on its own pixels only: the same for any
      * thread count. */
     hz_parallel_run(threads, measure_worker, &job);
     /* tile_sums may be summed across ranks next: each rank's own sums stay
      * in tile_own. */
-    memcpy(pe->tile_sums, pe->tile_own, 3 * (size_t)pe->tile_count * sizeof(double));
+    memcpy(pe->tile_sums, pe->tile_own,
+           PROGRESSIVE_TILE_SUMS * (size_t)pe->tile_count * sizeof(double));
 }
 
 double progressive_noise_target(const progressive_goal *goal)
@@ -210,26 +254,71 @@ double progressive_noise_target(const progressive_goal *goal)
     return left > least ? left : least; /* a NaN bias: the least */
 }
 
-long progressive_error_select(const progressive_error *pe, const film *f,
+/* Whether the pass `p` (0: the last) doubled its pixels' samples. */
+static bool pass_doubled(const progressive_error *pe, int p)
+{
+    return pe->pass_k[p] > 0 && pe->pass_k[p] == pe->pass_n0[p];
+}
+
+/* The factor x = V(n/2) / V(n) by which the variance of the image's mean
+ * fell over the last pass (n/2 to n samples), from 2 (independent samples)
+ * to 4. For nested halves, each as well stratified as the other, the halves
+ * estimate H(n) is V(n/2) - V(n) (its covariance term is 2 V(n) - V(n/2)):
+ * V(n) = H(n) / (x - 1), where taking H(n) for V(n) assumes x = 2.
+ * Scrambled Sobol' points converge unevenly (in 2D better at powers of 4
+ * than between them), so x alternates from pass to pass: with r1 = c1 / c0
+ * and r2 = c2 / c1 the ratios of the last three passes' changes (`s`: their
+ * sums over the same pixels, relative to the same denominators), which are
+ * x (x' - 1) / (x - 1) and x' (x - 1) / (x' - 1) for x' the factor of the
+ * pass before, x = r1 (r2 + 1) / (r1 + 1); a power law (x = x') gives r1 =
+ * r2 = x. Without a third pass r2 = 2. 2 unless the last two passes doubled
+ * their samples. */
+static double convergence_factor(const progressive_error *pe, const double *s)
+{
+    if (!pass_doubled(pe, 0) || !pass_doubled(pe, 1) || !(s[4] > 0.0) || !(s[5] > 0.0))
+        return 2.0;
+    double r1 = s[5] / s[4], r2 = pass_doubled(pe, 2) && s[6] > 0.0 ? s[6] / s[5] : 2.0;
+    double x = r1 * (r2 + 1.0) / (r1 + 1.0);
+    return x > 2.0 ? (x < 4.0 ? x : 4.0) : 2.0; /* a NaN: 2 */
+}
+
+long progressive_error_select(progressive_error *pe, const film *f,
                               const progressive_goal *goal, unsigned char *active,
                               double *estimate)
 {
     double target = progressive_noise_target(goal);
+    if (pe->unfolded) {
+        /* The last pass's halves, from H(n) as V(n) to H(n) / (x - 1). */
+        double s[PROGRESSIVE_TILE_SUMS] = {0};
+        for (int t = 0; t < pe->tile_count; ++t) /* in tile order: the same on every rank */
+            for (int k = 0; k < PROGRESSIVE_TILE_SUMS; ++k)
+                s[k] += pe->tile_sums[PROGRESSIVE_TILE_SUMS * (size_t)t + k];
+        pe->convergence = convergence_factor(pe, s);
+        double factor = 1.0 / (pe->convergence - 1.0) - 1.0;
+        for (int t = 0; t < pe->tile_count; ++t)
+            for (int r = 0; r < 2; ++r) {
+                double *sums = (r ? pe->tile_own : pe->tile_sums) + PROGRESSIVE_TILE_SUMS * (size_t)t;
+                sums[0] += factor * sums[3];
+                sums[3] = 0.0;
+            }
+        for (size_t i = 0, n = (size_t)pe->w * pe->h; factor != 0.0 && i < n; ++i)
+            if (active[i])
+                pe->halves[i] *= 1.0 + factor;
+        pe->unfolded = false;
+    }
     double e_sum = 0.0, root_sum = 0.0, pixels = 0.0;
     for (int t = 0; t < pe->tile_count; ++t) { /* in tile order: the same sum on every rank */
-        const double *sums = pe->tile_sums + 3 * (size_t)t;
+        const double *sums = pe->tile_sums + PROGRESSIVE_TILE_SUMS * (size_t)t;
         e_sum += sums[0];
         root_sum += sums[1];
         pixels += sums[2];
     }
     double image = pixels > 0.0 ? e_sum / pixels : 0.0;
-    ((progressive_error *)pe)->estimate = image;
+    pe->estimate = image;
     if (estimate)
         *estimate = image;
     size_t n = (size_t)pe->w * pe->h;
-    double stop = pe->samples >= PROGRESSIVE_TRUST_SPP ? PROGRESSIVE_SAFETY * target
-                                                       : PROGRESSIVE_EARLY_SAFETY * target;
-    if (!(image > stop)) {
+    if (!(image > PROGRESSIVE_SAFETY * target)) {
         /* reached (a NaN estimate goes on) */
         memset(active, 0, n);
         return 0;

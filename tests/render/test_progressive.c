@@ -361,6 +361,113 @@ static void test_error_estimate(void **state)
     film_destroy(f);
 }
 
+/* Base-2 radical inverse of i (van der Corput): its first 2^m points are
+ * the 2^m strata of [0, 1), each half of them the strata of the other's
+ * size. */
+static double van_der_corput(uint32_t i)
+{
+    i = (i << 16) | (i >> 16);
+    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
+    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
+    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
+    i = ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
+    return i * 0x1p-32;
+}
+
+/* Samples [n0, n) of every pixel of a noise film: a line 0.5 + A (u - 0.5)
+ * over a van der Corput sequence shifted by the pixel's own random offset.
+ * The mean of the first n = 2^m samples is 0.5 + A (d - 1 / (2n)), d
+ * uniform in [0, 1/n): Var = A^2 / (12 n^2), falling as n^-2, and the
+ * halves estimate H(n) = V(n/2) - V(n) = 3 V(n). */
+static void add_stratified(film *f, int n0, int n, const double *shift, double amplitude)
+{
+    for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 64; ++x)
+            for (int i = n0; i < n; ++i) {
+                double u = van_der_corput((uint32_t)i) + shift[y * 64 + x];
+                u -= floor(u);
+                film_add_sample(f, x, y, rgb_grey(0.5 + amplitude * (u - 0.5)), 1.0, INFINITY);
+            }
+}
+
+/* Passes of 2, 2, 4 and 8 samples measured as a render measures them; the
+ * image's estimate after each. */
+static void measured_passes(film *f, void (*add)(film *, int, int, void *), void *ctx,
+                            progressive_error *pe, double estimates[4])
+{
+    hz_error err = {0};
+    assert_int_equal(progressive_error_init(pe, f, &err), HZ_OK);
+    film_snapshot *before = film_snapshot_alloc(f, &err);
+    assert_non_null(before);
+    unsigned char active[64 * 32];
+    progressive_goal far = {0.0, 1e-9, 0.0}; /* every pixel goes on */
+    int ends[4] = {2, 4, 8, 16};
+    for (int p = 0, done = 0; p < 4; done = ends[p++]) {
+        memset(active, 1, sizeof active);
+        if (done > 0)
+            film_snapshot_save(before, f);
+        add(f, done, ends[p], ctx);
+        progressive_error_measure(pe, f, before, active, done, ends[p], 1.0, 2);
+        assert_int_equal(progressive_error_select(pe, f, &far, active, &estimates[p]), 64 * 32);
+    }
+    film_snapshot_destroy(before);
+}
+
+typedef struct {
+    double shift[64 * 32];
+    double amplitude;
+    uint64_t rng;
+} sample_source;
+
+static void add_stratified_pass(film *f, int n0, int n, void *ctx)
+{
+    sample_source *src = ctx;
+    add_stratified(f, n0, n, src->shift, src->amplitude);
+}
+
+static void add_noise_pass(film *f, int n0, int n, void *ctx)
+{
+    add_noise(f, n - n0, &((sample_source *)ctx)->rng);
+}
+
+/* The halves estimate corrected by the convergence of the passes: samples
+ * whose mean's variance falls as n^-2 read a factor x = 4 per doubling and
+ * the estimate falls from H(n) = 3 V(n) to about V(n); independent samples
+ * read about 2 and keep it (both against the closed forms). */
+static void test_convergence_correction(void **state)
+{
+    (void)state;
+    static sample_source src = {.amplitude = 0.4, .rng = 777};
+    for (int i = 0; i < 64 * 32; ++i) { /* uniform offsets */
+        src.rng = src.rng * 6364136223846793005ull + 1442695040888963407ull;
+        src.shift[i] = ((src.rng >> 11) + 0.5) * 0x1p-53;
+    }
+    film *f = noise_film();
+    progressive_error pe;
+    double est[4];
+    measured_passes(f, add_stratified_pass, &src, &pe, est);
+    double d = 0.51 * 0.51, v16 = 0.16 / 12.0 / (16.0 * 16.0) / d;
+    if (verbose_on())
+        print_message("stratified: x %.3f, estimates %.4g %.4g %.4g %.4g, V(16) %.4g\n",
+                      pe.convergence, est[0], est[1], est[2], est[3], v16);
+    assert_true(pe.convergence > 3.6 && pe.convergence <= 4.0);
+    assert_true(est[3] >= 0.95 * v16 && est[3] <= 1.25 * v16); /* uncorrected: 3 V(16) */
+    progressive_error_free(&pe);
+    film_destroy(f);
+
+    f = noise_film();
+    src.rng = 4242;
+    measured_passes(f, add_noise_pass, &src, &pe, est);
+    /* sigma^2 / n over (0.5 + 0.01)^2, the image's mean of both halves */
+    double iid = (0.01 + 0.16) / 2.0 / 16.0 / d;
+    if (verbose_on())
+        print_message("independent: x %.3f, estimate %.4g (%.4g)\n", pe.convergence, est[3], iid);
+    assert_true(pe.convergence >= 2.0 && pe.convergence < 2.3);
+    assert_true(est[3] >= 0.85 * iid && est[3] <= 1.8 * iid);
+    progressive_error_free(&pe);
+    film_destroy(f);
+}
+
 /* Bit-for-bit copies of every accumulator array of f. */
 static double *copy_accumulators(film *f, size_t *count)
 {
@@ -431,7 +538,7 @@ static void test_masked_snapshot_and_measure(void **state)
     progressive_error pe;
     assert_int_equal(progressive_error_init(&pe, f, &err), HZ_OK);
     progressive_error_measure(&pe, f, snap, all, 12, 16, 1.0, 2);
-    size_t sums = 3 * (size_t)pe.tile_count;
+    size_t sums = PROGRESSIVE_TILE_SUMS * (size_t)pe.tile_count;
     double *full = malloc(sums * sizeof *full), *e = malloc(64 * 32 * sizeof *e);
     assert_non_null(full);
     assert_non_null(e);
@@ -443,8 +550,19 @@ static void test_masked_snapshot_and_measure(void **state)
     for (int i = 0; i < 64 * 32; ++i)
         left[i] = i % 64 < 16 && i % 5 == 0; /* some pixels of the left tiles */
     progressive_error_measure(&pe, f, snap, left, 12, 16, 1.0, 2);
-    assert_true(full[0] > 0.0 && full[sums - 3] > 0.0);
-    assert_memory_equal(pe.tile_sums, full, sums * sizeof *full);
+    assert_true(full[0] > 0.0 && full[sums - PROGRESSIVE_TILE_SUMS] > 0.0);
+    /* Every tile's figures of its pixels (halves, roots, pixels) are those of
+     * the full measure; the sums over the last pass's pixels only the left
+     * tiles have. */
+    for (int t = 0; t < pe.tile_count; ++t) {
+        const double *got = pe.tile_sums + PROGRESSIVE_TILE_SUMS * (size_t)t,
+                     *want = full + PROGRESSIVE_TILE_SUMS * (size_t)t;
+        assert_memory_equal(got, want, 3 * sizeof *got);
+        if (t % pe.tiles_x == 0)
+            assert_true(got[3] > 0.0 && got[3] < want[3] && got[4] > 0.0 && got[5] > 0.0);
+        else
+            assert_true(got[3] == 0.0 && got[4] == 0.0 && got[5] == 0.0);
+    }
     assert_memory_equal(pe.e, e, 64 * 32 * sizeof *e);
     free(full);
     free(e);
@@ -548,8 +666,10 @@ static void test_pass_estimates(void **state)
      * one-sample passes: at equal weights (this scene's samples have them)
      * both are (a - b)^2 / 4 per pixel, equal to rounding (3e-16 relative
      * when written). */
+    progressive_error_free(&pe); /* a new render: no passes before */
     rs = build_scene_or_fail(FOG_SPHERE_SCENE, &ro);
     f = render_scene_film(rs);
+    assert_int_equal(progressive_error_init(&pe, f, &err), HZ_OK);
     renderer_options one = {.threads = 2, .sample_begin = 0, .sample_end = 1};
     assert_int_equal(renderer_run(rs, &one, &st, &err), HZ_OK);
     copy = film_snapshot_create(f, &err);
@@ -898,6 +1018,7 @@ int main(void)
         cmocka_unit_test(test_cut_pass_undone),
         cmocka_unit_test(test_command_line),
         cmocka_unit_test(test_error_estimate),
+        cmocka_unit_test(test_convergence_correction),
         cmocka_unit_test(test_masked_snapshot_and_measure),
         cmocka_unit_test(test_target_error_render),
         cmocka_unit_test(test_pass_estimates),
