@@ -51,10 +51,13 @@ double progressive_noise_target(const progressive_goal *goal);
  * passes are sized by the image's estimate (before, they double). The
  * tuning of the estimates, measured on the benchmark scenes
  * (docs/performance.md): the image stops at SAFETY * E; every pixel takes at
- * least MIN_SCALE / sqrt(E) samples; LOWER_BOUND_K: see progressive_error.
- * TILE_SUMS: the sums per tile of progressive_error. */
+ * least MIN_SCALE / sqrt(E) samples; LOWER_BOUND_K: see progressive_error;
+ * from a convergence of DOUBLING_CONVERGENCE (progressive_error) on, passes
+ * double (progressive_error_next_end). TILE_SUMS: the sums per tile of
+ * progressive_error. */
 enum { PROGRESSIVE_MIN_SPP = 2, PROGRESSIVE_TRUST_SPP = 8, PROGRESSIVE_TILE_SUMS = 7 };
 #define PROGRESSIVE_SAFETY 1.0
+#define PROGRESSIVE_DOUBLING_CONVERGENCE 2.2
 #define PROGRESSIVE_MIN_SCALE 0.2
 #define PROGRESSIVE_LOWER_BOUND_K 0.7
 
@@ -139,9 +142,11 @@ long progressive_error_select(progressive_error *pe, const film *f,
                               double *estimate);
 
 /* The end of the next pass of a render with a target error: the first
- * (done = 0) as progressive_first_end; once the estimate is trusted, the
- * count at which it (falling as 1/n) reaches the noise target, at least a
- * quarter more and at most twice `done`; before that, progressive_pass_end. */
+ * (done = 0) as progressive_first_end; from PROGRESSIVE_TRUST_SPP samples
+ * on, unless the passes converge at PROGRESSIVE_DOUBLING_CONVERGENCE or
+ * faster, the count at which the estimate (falling as 1/n) reaches the noise
+ * target, at least a quarter more and at most twice `done`; else
+ * progressive_pass_end. */
 int progressive_error_next_end(const progressive_error *pe, int done, int spp,
                                const progressive_goal *goal);
 

@@ -350,7 +350,11 @@ int progressive_error_next_end(const progressive_error *pe, int done, int spp,
     double target = progressive_noise_target(goal);
     if (done <= 0)
         return progressive_first_end(goal, spp);
-    if (pe->samples < PROGRESSIVE_TRUST_SPP || !(pe->estimate > 0.0))
+    /* While the passes converge clearly faster than independent samples,
+     * they double: the convergence of a pass of another size is not read,
+     * and its estimate is not corrected for it. */
+    if (pe->samples < PROGRESSIVE_TRUST_SPP || !(pe->estimate > 0.0) ||
+        pe->convergence >= PROGRESSIVE_DOUBLING_CONVERGENCE)
         return progressive_pass_end(done, spp);
     /* The count where the estimate, falling as 1/n, reaches the target. */
     double want = ceil((double)done * pe->estimate / (PROGRESSIVE_SAFETY * target));
