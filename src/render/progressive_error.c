@@ -264,21 +264,30 @@ static bool pass_doubled(const progressive_error *pe, int p)
  * fell over the last pass (n/2 to n samples), from 2 (independent samples)
  * to 4. For nested halves, each as well stratified as the other, the halves
  * estimate H(n) is V(n/2) - V(n) (its covariance term is 2 V(n) - V(n/2)):
- * V(n) = H(n) / (x - 1), where taking H(n) for V(n) assumes x = 2.
- * Scrambled Sobol' points converge unevenly (in 2D better at powers of 4
- * than between them), so x alternates from pass to pass: with r1 = c1 / c0
- * and r2 = c2 / c1 the ratios of the last three passes' changes (`s`: their
- * sums over the same pixels, relative to the same denominators), which are
- * x (x' - 1) / (x - 1) and x' (x - 1) / (x' - 1) for x' the factor of the
- * pass before, x = r1 (r2 + 1) / (r1 + 1); a power law (x = x') gives r1 =
- * r2 = x. Without a third pass r2 = 2. 2 unless the last two passes doubled
- * their samples. */
+ * V(n) = H(n) / (x - 1), where taking H(n) for V(n) assumes x = 2. It is
+ * read from the sums over the image of the last passes' changes c0, c1, c2
+ * (the last first, over the same pixels and denominators: `s`), which are
+ * H(n), H(n/2), H(n/4), under two models, each exact for its kind, and the
+ * slower of the two taken:
+ * - Scrambled Sobol' points converge unevenly (in 2D better at powers of 4
+ *   than between them), so x alternates from pass to pass: with r1 = c1 /
+ *   c0 = x (x' - 1) / (x - 1) and r2 = c2 / c1 = x' (x - 1) / (x' - 1), x'
+ *   the factor of the pass before, x = r1 (r2 + 1) / (r1 + 1) (without a
+ *   third pass, r2 = 2);
+ * - a stratified part and one that is not converge at different rates,
+ *   V(n) = A / n^2 + B / n, the second taking over as n grows: H(n) = 3 A /
+ *   n^2 + B / n, H(n/2) = 12 A / n^2 + 2 B / n, and V(n) = (5 c0 - c1) / 3.
+ * 2 unless the last two passes doubled their samples. */
 static double convergence_factor(const progressive_error *pe, const double *s)
 {
     if (!pass_doubled(pe, 0) || !pass_doubled(pe, 1) || !(s[4] > 0.0) || !(s[5] > 0.0))
         return 2.0;
     double r1 = s[5] / s[4], r2 = pass_doubled(pe, 2) && s[6] > 0.0 ? s[6] / s[5] : 2.0;
-    double x = r1 * (r2 + 1.0) / (r1 + 1.0);
+    double alternating = r1 * (r2 + 1.0) / (r1 + 1.0);
+    double mixed_variance = (5.0 * s[4] - s[5]) / 3.0, mixed = 1.0 + s[4] / mixed_variance;
+    if (!(mixed_variance > 0.0))
+        mixed = 4.0;
+    double x = alternating < mixed ? alternating : mixed;
     return x > 2.0 ? (x < 4.0 ? x : 4.0) : 2.0; /* a NaN: 2 */
 }
 
