@@ -51,12 +51,18 @@ void progressive_error_free(progressive_error *pe)
 /* The squared denominators of a pixel's relative error, (m_lo + 0.01)^2 per
  * channel, with m_lo = max(0, |m| - k sqrt(var_m)): the denominator of
  * relMSE is the converged value, and a pixel's own mean is high exactly when
- * a rare bright sample also raised its variance. */
-static void error_denominators(rgb m, rgb var_m, double d2[3])
+ * a rare bright sample also raised its variance. From
+ * PROGRESSIVE_SINGLE_SAMPLE_SPP samples (n) on, a mean that is one sample's
+ * (sd of the mean at least PROGRESSIVE_SINGLE_SAMPLE_SD of it: exactly 1
+ * for one non-zero sample among zeros, 0.71 for two) has m_lo = 0: without
+ * that sample its value could be anything below. */
+static void error_denominators(rgb m, rgb var_m, long n, double d2[3])
 {
     double mm[3] = {m.r, m.g, m.b}, vm[3] = {var_m.r, var_m.g, var_m.b};
     for (int c = 0; c < 3; ++c) {
-        double lo = fabs(mm[c]) - PROGRESSIVE_LOWER_BOUND_K * sqrt(vm[c]);
+        double sd = sqrt(vm[c]), lo = fabs(mm[c]) - PROGRESSIVE_LOWER_BOUND_K * sd;
+        if (n >= PROGRESSIVE_SINGLE_SAMPLE_SPP && sd >= PROGRESSIVE_SINGLE_SAMPLE_SD * fabs(mm[c]))
+            lo = 0.0;
         double d = (lo > 0.0 ? lo : 0.0) + 0.01;
         d2[c] = d * d;
     }
@@ -160,7 +166,7 @@ static void measure_tile(const measure_job *job, int t)
                 var = rgb_make(fmax(var.r, floor.r), fmax(var.g, floor.g), fmax(var.b, floor.b));
             }
             double d2[3];
-            error_denominators(m, var, d2);
+            error_denominators(m, var, n, d2);
             own[y * T + x] = relative_error(var, d2);
             size_t i = (size_t)(ty + y) * w + tx + x;
             if (job->active[i]) { /* rendered in the last pass: a new halves estimate */
