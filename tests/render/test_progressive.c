@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "sampler/sampler_math.h"
 #include "cli_util.h"
 #include "core/clock.h"
 #include "film/exr.h"
@@ -364,15 +365,7 @@ static void test_error_estimate(void **state)
 /* Base-2 radical inverse of i (van der Corput): its first 2^m points are
  * the 2^m strata of [0, 1), each half of them the strata of the other's
  * size. */
-static double van_der_corput(uint32_t i)
-{
-    i = (i << 16) | (i >> 16);
-    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
-    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
-    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
-    i = ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
-    return i * 0x1p-32;
-}
+static double van_der_corput(uint32_t i) { return smp_reverse_bits32(i) * 0x1p-32; }
 
 /* Samples [n0, n) of every pixel of a noise film: a line 0.5 + A (u - 0.5)
  * over a van der Corput sequence shifted by the pixel's own random offset.

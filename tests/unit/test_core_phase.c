@@ -10,6 +10,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "sampler/sampler_math.h"
 #include "core/rng.h"
 #include "core/phase.h"
 #include "unit/assert_util.h"
@@ -91,15 +92,7 @@ static void phase_extreme_g_is_finite(void **state)
 }
 
 /* Radical inverse base 2 (van der Corput). */
-static double van_der_corput(uint32_t i)
-{
-    i = (i << 16) | (i >> 16);
-    i = ((i & 0x00ff00ffu) << 8) | ((i & 0xff00ff00u) >> 8);
-    i = ((i & 0x0f0f0f0fu) << 4) | ((i & 0xf0f0f0f0u) >> 4);
-    i = ((i & 0x33333333u) << 2) | ((i & 0xccccccccu) >> 2);
-    i = ((i & 0x55555555u) << 1) | ((i & 0xaaaaaaaau) >> 1);
-    return (double)i * 0x1.0p-32;
-}
+static double van_der_corput(uint32_t i) { return smp_reverse_bits32(i) * 0x1p-32; }
 
 #define SAMPLES 200000
 #define BINS 20
