@@ -14,6 +14,14 @@
 # "seed S") or floor).
 # Sourced by bench/run.sh (needs lib.sh and its variables).
 
+# target_render E SEED: --target-error E of target_scene's $v into $out;
+# sets t (seconds), e (relMSE against $ref) and m (mean samples per pixel).
+target_render() {
+    t=$(timed "$HAZE" render "$v" --target-error "$1" --threads "$THREADS" --seed "$2" -o "$out" --quiet)
+    e=$(errors "$out" "$ref" | cut -d' ' -f2)
+    m=$("$HAZE" info "$out" | awk '$1 == "haze:spp_mean" { gsub(/"/, "", $3); print $3 }')
+}
+
 # target_scene SCENE NAME REF_SPP "SPPS" "TARGETS" "RUNGS" (RUNGS: "est:step ...")
 target_scene() {
     line=$(integrator jittered 0.5)
@@ -35,9 +43,7 @@ target_scene() {
     # --target-error from the scene's own settings (jittered, step 1).
     variant "$v" "$1" "$(integrator jittered 1)"
     for te in $5; do
-        t=$(timed "$HAZE" render "$v" --target-error "$te" --threads "$THREADS" --seed 1 -o "$out" --quiet)
-        e=$(errors "$out" "$ref" | cut -d' ' -f2)
-        m=$("$HAZE" info "$out" | awk '$1 == "haze:spp_mean" { gsub(/"/, "", $3); print $3 }')
+        target_render "$te" 1
         st=$("$HAZE" info "$out" | awk '$1 == "haze:stepsize" { $1 = $2 = ""; gsub(/"/, ""); sub(/^ +/, ""); print }')
         printf '%s\ttarget\t%s\t%s\t%s\t%s\t%s\n' "$2" "$te" "$t" "$e" "$m" "${st:--}" >>"$RESULTS/target.tsv"
         echo "  $2 --target-error $te: $t s, relmse $e, $m spp mean, steps ${st:--}" >&2
@@ -47,9 +53,7 @@ target_scene() {
     for seed in ${BENCH_TARGET_SEEDS-2 3}; do
         for te in $5; do
             awk -v e="$te" 'BEGIN { exit !(e >= 1e-3) }' || continue
-            t=$(timed "$HAZE" render "$v" --target-error "$te" --threads "$THREADS" --seed "$seed" -o "$out" --quiet)
-            e=$(errors "$out" "$ref" | cut -d' ' -f2)
-            m=$("$HAZE" info "$out" | awk '$1 == "haze:spp_mean" { gsub(/"/, "", $3); print $3 }')
+            target_render "$te" "$seed"
             printf '%s\tseed\t%s\t%s\t%s\t%s\tseed %s\n' "$2" "$te" "$t" "$e" "$m" "$seed" >>"$RESULTS/target.tsv"
             echo "  $2 --target-error $te --seed $seed: $t s, relmse $e, $m spp mean" >&2
         done
