@@ -979,6 +979,15 @@ static void test_step_pilot(void **state)
     step_pilot_choose(rs, E, 1, &one);
     render_scene_destroy(rs);
     assert_true(one.step == ch.step && one.bias == ch.bias && one.renders == ch.renders);
+    /* The same with the render capped at 2 samples a pixel (--spp 2): the
+     * pilot's 8 samples are its own, not the render's 2. */
+    text = pilot_scene("jittered", 8.0);
+    rs = build_scene_or_fail(text, &(render_options){.spp = 2});
+    free(text);
+    step_choice capped;
+    step_pilot_choose(rs, E, 2, &capped);
+    render_scene_destroy(rs);
+    assert_true(capped.step == ch.step && capped.bias == ch.bias && capped.renders == ch.renders);
 
     text = pilot_scene("residual", 8.0);
     rs = build_scene_or_fail(text, NULL);
