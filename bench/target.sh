@@ -10,8 +10,9 @@
 # at E >= 1e-3 with the seeds of BENCH_TARGET_SEEDS (default 2 3).
 # Appends "scene mode value seconds relmse spp_mean rung" rows to
 # $RESULTS/target.tsv (mode: uniform (value: spp; rung: "estimator step"),
-# target (value: E; rung: the steps the pilot chose), seed (value: E; rung:
-# "seed S") or floor).
+# target (value: E; rung: the steps the pilot chose), pilot (value: E;
+# seconds: the step pilot's, from an untimed --stats run), seed (value: E;
+# rung: "seed S") or floor).
 # Sourced by bench/run.sh (needs lib.sh and its variables).
 
 # target_render E SEED: --target-error E of target_scene's $v into $out;
@@ -43,6 +44,11 @@ target_scene() {
     # --target-error from the scene's own settings (jittered, step 1).
     variant "$v" "$1" "$(integrator jittered 1)"
     for te in $5; do
+        # The pilot's own time (stat time_pilot_s), in a run of its own:
+        # --stats reads clocks in the render loop, so the timed run has none.
+        p=$("$HAZE" render "$v" --target-error "$te" --spp 1 --threads "$THREADS" --seed 1 -o "$out" --quiet --stats |
+            awk '$1 == "stat" && $2 == "time_pilot_s" { print $3 }')
+        printf '%s\tpilot\t%s\t%s\t-\t-\t-\n' "$2" "$te" "${p:-0}" >>"$RESULTS/target.tsv"
         target_render "$te" 1
         st=$("$HAZE" info "$out" | awk '$1 == "haze:stepsize" { $1 = $2 = ""; gsub(/"/, ""); sub(/^ +/, ""); print }')
         printf '%s\ttarget\t%s\t%s\t%s\t%s\t%s\n' "$2" "$te" "$t" "$e" "$m" "${st:--}" >>"$RESULTS/target.tsv"
@@ -89,30 +95,39 @@ report_target() {
     echo "\`\"float shadowcache\"\` at the step; \`+finecache\`: at half the step) and without"
     echo "the shadow cache, at uniform spp."
     echo "--target-error starts from the scene's settings (jittered, step 1); \`steps\` is"
-    echo "what its pilot chose (step, shadow step, cache). \`best rung\` is the fastest rung"
-    echo "whose relMSE less the floor is at or below E. \`E = ..., seed S\`: the same"
-    echo "render with other seeds, whose errors are checked too (not timed against rungs)."
+    echo "what its pilot chose (step, shadow step, cache), \`pilot\` the seconds the pilot"
+    echo "took (\`stat time_pilot_s\`, in a run of its own). \`best rung\` is the fastest rung"
+    echo "whose relMSE less the floor is at or below E; \`best of 2+ spp\` the fastest such"
+    echo "rung of at least two samples, the fewest an estimate of the error needs."
+    echo "\`E = ..., seed S\`: the same render with other seeds, whose errors are checked"
+    echo "too (not timed against rungs)."
     echo
     for scene in $(awk -F'\t' 'NR > 1 { print $1 }' "$RESULTS/target.tsv" | uniq); do
         awk -F'\t' -v s="$scene" '
             $1 != s { next }
             $2 == "floor" { floor = $5; printf "### %s (reference %s spp, floor %.2g)\n\n", s, $3, $5
-                print "| run | seconds | relMSE | spp mean | steps | relMSE - floor <= E | best rung | time / best |"
-                print "|---|---|---|---|---|---|---|---|"; next }
-            $2 == "uniform" { n++; us[n] = $7 ", " $3 " spp"; ut[n] = $4; ue[n] = $5
-                printf "| %s, %s spp | %.3g | %.3g | %s | | | | |\n", $7, $3, $4, $5, $6; next }
+                print "| run | seconds | relMSE | spp mean | steps | pilot | relMSE - floor <= E | best rung | time / best | best of 2+ spp | time / it |"
+                print "|---|---|---|---|---|---|---|---|---|---|---|"; next }
+            $2 == "uniform" { n++; us[n] = $7 ", " $3 " spp"; ut[n] = $4; ue[n] = $5; un[n] = $3
+                printf "| %s, %s spp | %.3g | %.3g | %s | | | | | | | |\n", $7, $3, $4, $5, $6; next }
+            $2 == "pilot" { pilot[$3] = $4; next }
             $2 == "target" {
-                best = -1
-                for (i = 1; i <= n; ++i) if (ue[i] - floor <= $3 && (best < 0 || ut[i] < ut[best])) best = i
+                best = -1; two = -1
+                for (i = 1; i <= n; ++i) if (ue[i] - floor <= $3) {
+                    if (best < 0 || ut[i] < ut[best]) best = i
+                    if (un[i] >= 2 && (two < 0 || ut[i] < ut[two])) two = i
+                }
                 ok = ($5 - floor <= $3) ? "yes" : "**no**"
-                if (best > 0)
-                    printf "| E = %s | %.3g | %.3g | %s | %s | %s | %s, %.3g s | %.2f |\n", $3, $4, $5, $6, $7, ok, us[best], ut[best], $4 / ut[best]
-                else
-                    printf "| E = %s | %.3g | %.3g | %s | %s | %s | none | |\n", $3, $4, $5, $6, $7, ok
+                pl = ($3 in pilot) ? sprintf("%.3g", pilot[$3]) : ""
+                printf "| E = %s | %.3g | %.3g | %s | %s | %s | %s ", $3, $4, $5, $6, $7, pl, ok
+                if (best > 0) printf "| %s, %.3g s | %.2f ", us[best], ut[best], $4 / ut[best]
+                else printf "| none | "
+                if (two > 0) printf "| %s, %.3g s | %.2f |\n", us[two], ut[two], $4 / ut[two]
+                else printf "| none | |\n"
             }
             $2 == "seed" {
                 ok = ($5 - floor <= $3) ? "yes" : "**no**"
-                printf "| E = %s, %s | %.3g | %.3g | %s | | %s | | |\n", $3, $7, $4, $5, $6, ok
+                printf "| E = %s, %s | %.3g | %.3g | %s | | | %s | | | | |\n", $3, $7, $4, $5, $6, ok
             }
             END { print "" }' "$RESULTS/target.tsv"
     done

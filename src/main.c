@@ -312,6 +312,7 @@ static double resident_memory_mib(void)
 /* When each phase of a render began (hz_clock_seconds), for --stats. */
 typedef struct {
     double start, parse, build, render, write, end;
+    double pilot_seconds; /* --target-error's step pilot, part of the render */
 } phase_times;
 
 /* --stats: one 'stat NAME VALUE' line per figure (docs/performance.md). */
@@ -339,6 +340,7 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
     printf("stat time_parse_s %.4f\n", ph->build - ph->parse);
     printf("stat time_build_s %.4f\n", ph->render - ph->build);
     printf("stat time_render_s %.4f\n", ph->write - ph->render);
+    printf("stat time_pilot_s %.4f\n", ph->pilot_seconds);
     printf("stat time_write_s %.4f\n", ph->end - ph->write);
     printf("stat memory_peak_mib %.2f\n", peak_memory_mib());
     printf("stat memory_baseline_mib %.2f\n", baseline_mib);
@@ -450,6 +452,7 @@ static int run_render(const cli *c, distributed *dist)
     ph.render = hz_clock_seconds();
     if (adaptive) { /* the marching step's bias, before the passes measure the noise */
         step_pilot_choose(rs, c->target_error, c->threads, &steps);
+        ph.pilot_seconds = hz_clock_seconds() - ph.render;
         if (steps.applies && rank0 && !c->quiet) {
             char cache[64] = "";
             if (steps.shadow_cache > 0.0)
