@@ -309,6 +309,27 @@ static double resident_memory_mib(void)
     return n == 2 ? resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0) : 0.0;
 }
 
+/* --target-error E that the render did not reach says so, and why: the
+ * image's `estimate` (noise and the step's `bias`; < 0: none) is above E
+ * because the passes stopped at the --spp cap or the time limit, or because
+ * the step's bias is more than the half of E the pilot could give it. */
+static void warn_target_missed(double target, double estimate, double bias, int spp, int cap)
+{
+    if (estimate < 0.0) {
+        fprintf(stderr, "haze: warning: --target-error %g: no error estimate, which needs two "
+                        "samples a pixel (--spp %d)\n", target, cap);
+        return;
+    }
+    if (!(estimate > target * (1.0 + 1e-9))) /* noise <= E - bias, rounded */
+        return;
+    const char *why = spp >= cap                ? "the --spp cap stopped the passes"
+                      : bias > 0.5 * target ? "the finest marching step's estimated bias is "
+                                              "more than half of it"
+                                            : "the time limit stopped the passes";
+    fprintf(stderr, "haze: warning: --target-error %g not reached: estimated relMSE %.3g at %d "
+                    "samples a pixel at most (%s)\n", target, estimate, spp, why);
+}
+
 /* When each phase of a render began (hz_clock_seconds), for --stats. */
 typedef struct {
     double start, parse, build, render, write, end;
@@ -479,7 +500,7 @@ static int run_render(const cli *c, distributed *dist)
         exit_code = write_partial(&outs, f, ratio, &stats);
         goto done;
     }
-    char spp[32], passes[32], limit[32], target[32], mean_spp[32];
+    char spp[32], passes[32], limit[32], target[32], mean_spp[32], estimated[32];
     format_count(spp, sizeof spp, stats.spp);
     format_count(passes, sizeof passes, stats.passes);
     snprintf(limit, sizeof limit, "%g", c->time_limit);
@@ -489,7 +510,10 @@ static int run_render(const cli *c, distributed *dist)
     if (stats.spp != render_scene_sampler(rs)->spp) /* the id names the samples taken */
         snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
                  (unsigned long long)outputs_render_id(inputs_hash, rs, stats.spp, no_jitter));
-    film_attribute attrs[7] = {{"haze:render", outs.render_id}};
+    /* The image's estimated relMSE: its noise and the step's bias. */
+    double estimate = stats.estimate >= 0.0 ? stats.estimate + goal.bias : -1.0;
+    snprintf(estimated, sizeof estimated, "%.3g", estimate);
+    film_attribute attrs[8] = {{"haze:render", outs.render_id}};
     int nattrs = 1;
     if (progressive) {
         attrs[nattrs++] = (film_attribute){"haze:spp", spp};
@@ -505,6 +529,8 @@ static int run_render(const cli *c, distributed *dist)
     if (adaptive) {
         attrs[nattrs++] = (film_attribute){"haze:target_error", target};
         attrs[nattrs++] = (film_attribute){"haze:spp_mean", mean_spp};
+        if (estimate >= 0.0)
+            attrs[nattrs++] = (film_attribute){"haze:estimated_error", estimated};
         if (steps.applies)
             attrs[nattrs++] = (film_attribute){"haze:stepsize", stepsize};
     }
@@ -520,6 +546,9 @@ static int run_render(const cli *c, distributed *dist)
      * usual, but the run still reports the interruption. */
     if (interrupted)
         exit_code = EXIT_INTERRUPTED;
+    if (adaptive)
+        warn_target_missed(c->target_error, estimate, goal.bias, stats.spp,
+                           render_scene_sampler(rs)->spp);
     long bad = film_nonfinite_count(f);
     if (bad > 0)
         fprintf(stderr, "haze: warning: %ld non-finite sample values were dropped\n", bad);

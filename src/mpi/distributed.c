@@ -335,8 +335,12 @@ static hz_status later_passes(const haze_mpi_api *mpi, render_scene *rs,
     po.progress = NULL;
     po.active = active;
     hz_status st = HZ_OK;
-    if (active && done >= PROGRESSIVE_MIN_SPP) /* the first pass took every pixel to `done` */
+    if (active)
+        mine->estimate = -1.0; /* until the first measure */
+    if (active && done >= PROGRESSIVE_MIN_SPP) { /* the first pass took every pixel to `done` */
         left = measure_ranks(mpi, &pe, f, NULL, active, 0, done, ratio, po.threads, goal);
+        mine->estimate = pe.estimate;
+    }
     while (done < spp) {
         int end = active ? progressive_error_next_end(&pe, done, spp, goal)
                          : progressive_pass_end(done, spp);
@@ -364,9 +368,11 @@ static hz_status later_passes(const haze_mpi_api *mpi, render_scene *rs,
         done = end;
         mine->spp = done;
         mine->passes++;
-        if (active && done >= PROGRESSIVE_MIN_SPP)
+        if (active && done >= PROGRESSIVE_MIN_SPP) {
             left = measure_ranks(mpi, &pe, f, snap, active, po.sample_begin, done, ratio,
                                  po.threads, goal);
+            mine->estimate = pe.estimate; /* the same on every rank */
+        }
         if (o->progress)
             fprintf(o->progress, "pass %d: %d of %d spp\n", mine->passes, done, spp);
     }

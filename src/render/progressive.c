@@ -83,6 +83,8 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
     double last_samples = 0.0;
     long left = (long)npix;
     hz_status st = HZ_OK;
+    if (active)
+        total.estimate = -1.0; /* until the first measure */
     while (done < spp && left > 0) {
         int end = active ? progressive_error_next_end(&pe, done, spp, goal)
                          : progressive_pass_end(done, spp);
@@ -132,6 +134,7 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
         if (active && done >= PROGRESSIVE_MIN_SPP) {
             progressive_error_measure(&pe, f, snap, active, o.sample_begin, done, ratio, opt->threads);
             left = progressive_error_select(&pe, f, goal, active, &estimate);
+            total.estimate = estimate;
         }
         if (opt->progress) {
             char el[32], px[96] = "";

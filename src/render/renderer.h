@@ -70,6 +70,10 @@ typedef struct {
     /* Thread seconds: busy (all work of the render threads), and within it
      * media walks and film updates (only with renderer_options.timing). */
     double time_busy_s, time_media_s, time_film_s;
+    /* --target-error: the image's estimated relMSE (its noise, the step's
+     * bias not included) after the last pass; < 0 when none was measured
+     * (fewer than two samples a pixel); 0 without a target. */
+    double estimate;
 } render_stats;
 
 /* Renders every tile of the film (or, once *opt->cancel is set, the tiles

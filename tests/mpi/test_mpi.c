@@ -207,6 +207,7 @@ static void test_target_error_ranks(void **state)
         fail_msg("summary: %s", text);
     snprintf(out, sizeof out, "%s/te2.exr", dir);
     assert_true(exr_pixels_equal(out, single));
+    assert_true(exr_attributes_equal(out, single, "haze:estimated_error"));
 }
 
 /* The summary on rank 0 counts every rank's rays and says how many ranks. */

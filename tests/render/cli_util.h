@@ -132,4 +132,32 @@ static inline bool exr_pixels_equal(const char *a, const char *b)
     return same;
 }
 
+/* The value of header attribute `name`, or NULL. */
+static inline const char *exr_attribute(const exr_image *img, const char *name)
+{
+    for (int a = 0; a < img->attribute_count; a++)
+        if (strcmp(img->attribute_names[a], name) == 0)
+            return img->attribute_values[a];
+    return NULL;
+}
+
+/* Whether EXRs a and b have the same value of attribute `name` (both
+ * present). */
+static inline bool exr_attributes_equal(const char *a, const char *b, const char *name)
+{
+    exr_image ia, ib;
+    hz_error err;
+    if (exr_read(a, &ia, &err) != HZ_OK)
+        return false;
+    if (exr_read(b, &ib, &err) != HZ_OK) {
+        exr_image_free(&ia);
+        return false;
+    }
+    const char *va = exr_attribute(&ia, name), *vb = exr_attribute(&ib, name);
+    bool same = va && vb && strcmp(va, vb) == 0;
+    exr_image_free(&ia);
+    exr_image_free(&ib);
+    return same;
+}
+
 #endif

@@ -137,14 +137,6 @@ static int count_temporaries(void)
     return n;
 }
 
-static const char *attribute(const exr_image *img, const char *name)
-{
-    for (int a = 0; a < img->attribute_count; a++)
-        if (strcmp(img->attribute_names[a], name) == 0)
-            return img->attribute_values[a];
-    return NULL;
-}
-
 static int setup(void **state)
 {
     (void)state;
@@ -202,14 +194,14 @@ static void check_partial(const char *partial, const char *scene_dir_name, int s
     hz_error err = {0};
     exr_image img;
     assert_int_equal(exr_read(partial, &img, &err), HZ_OK);
-    assert_string_equal(attribute(&img, "haze:partial"), "true");
-    assert_int_equal(atoi(attribute(&img, "haze:tile_size")), TILE);
-    assert_int_equal(atoi(attribute(&img, "haze:spp")), spp);
+    assert_string_equal(exr_attribute(&img, "haze:partial"), "true");
+    assert_int_equal(atoi(exr_attribute(&img, "haze:tile_size")), TILE);
+    assert_int_equal(atoi(exr_attribute(&img, "haze:spp")), spp);
     int tiles_x = W / TILE, count = tiles_x * (H / TILE);
-    int done = atoi(attribute(&img, "haze:tiles_done"));
-    assert_int_equal(atoi(attribute(&img, "haze:tile_count")), count);
+    int done = atoi(exr_attribute(&img, "haze:tiles_done"));
+    assert_int_equal(atoi(exr_attribute(&img, "haze:tile_count")), count);
     assert_true(done >= 1 && done < count);
-    assert_int_equal(atol(attribute(&img, "haze:pixels_done")), (long)done * TILE * TILE);
+    assert_int_equal(atol(exr_attribute(&img, "haze:pixels_done")), (long)done * TILE * TILE);
     assert_int_equal(img.width, W);
     assert_int_equal(img.height, H);
 
@@ -322,7 +314,7 @@ static void test_partial_does_not_replace_existing(void **state)
     hz_error err = {0};
     exr_image img;
     assert_int_equal(exr_read(pout, &img, &err), HZ_OK);
-    assert_string_equal(attribute(&img, "haze:partial"), "true");
+    assert_string_equal(exr_attribute(&img, "haze:partial"), "true");
     exr_image_free(&img);
     unsigned char *p = read_whole_file(ppng, &n);
     assert_non_null(p);

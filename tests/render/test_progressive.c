@@ -999,14 +999,6 @@ static void test_step_pilot(void **state)
 
 static char dir[1024];
 
-static const char *exr_attribute(const exr_image *img, const char *name)
-{
-    for (int i = 0; i < img->attribute_count; ++i)
-        if (!strcmp(img->attribute_names[i], name))
-            return img->attribute_values[i];
-    return NULL;
-}
-
 /* The command line: a limit no render reaches gives the full render's pixels
  * and says so in the header; a short one still writes a whole image (the
  * first pass at least) within about the limit; bad values are usage errors. */
@@ -1071,10 +1063,34 @@ static void test_command_line(void **state)
     assert_int_equal(exr_read(quick, &img, &err), HZ_OK);
     assert_non_null(exr_attribute(&img, "haze:target_error"));
     assert_non_null(exr_attribute(&img, "haze:spp_mean"));
+    const char *estimated = exr_attribute(&img, "haze:estimated_error");
+    assert_non_null(estimated);
+    assert_true(atof(estimated) > 0.0 && atof(estimated) <= 1e-2);
+    assert_null(strstr(out, "not reached"));
     bool has_count = false;
     for (int c = 0; c < img.channel_count; ++c)
         has_count |= !strcmp(img.channels[c].name, "SampleCount.Y");
     assert_true(has_count);
+    exr_image_free(&img);
+    /* A target the --spp cap keeps the passes from: the render says so, and
+     * the header has the estimate it stopped at; one sample a pixel gives
+     * no estimate, and says that. */
+    snprintf(args, sizeof args, "render '%s' -o '%s' --target-error 1e-8 --spp 4 --quiet", scene,
+             quick);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "--target-error 1e-08 not reached: estimated relMSE "));
+    assert_non_null(strstr(out, "(the --spp cap stopped the passes)"));
+    assert_int_equal(exr_read(quick, &img, &err), HZ_OK);
+    estimated = exr_attribute(&img, "haze:estimated_error");
+    assert_non_null(estimated);
+    assert_true(atof(estimated) > 1e-8);
+    exr_image_free(&img);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --target-error 1e-2 --spp 1 --quiet", scene,
+             quick);
+    assert_int_equal(run_haze(args, out, sizeof out), 0);
+    assert_non_null(strstr(out, "no error estimate, which needs two samples a pixel"));
+    assert_int_equal(exr_read(quick, &img, &err), HZ_OK);
+    assert_null(exr_attribute(&img, "haze:estimated_error"));
     exr_image_free(&img);
     unlink(scene);
     unlink(full);
