@@ -45,8 +45,9 @@ target_scene() {
     variant "$v" "$1" "$(integrator jittered 1)"
     for te in $5; do
         # The pilot's own time (stat time_pilot_s), in a run of its own:
-        # --stats reads clocks in the render loop, so the timed run has none.
-        p=$("$HAZE" render "$v" --target-error "$te" --spp 1 --threads "$THREADS" --seed 1 -o "$out" --quiet --stats |
+        # --stats reads clocks in the render loop, so the timed run has none
+        # (one sample a pixel: it warns that it has no estimate).
+        p=$("$HAZE" render "$v" --target-error "$te" --spp 1 --threads "$THREADS" --seed 1 -o "$out" --quiet --stats 2>/dev/null |
             awk '$1 == "stat" && $2 == "time_pilot_s" { print $3 }')
         printf '%s\tpilot\t%s\t%s\t-\t-\t-\n' "$2" "$te" "${p:-0}" >>"$RESULTS/target.tsv"
         target_render "$te" 1
