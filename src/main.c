@@ -507,7 +507,9 @@ static int run_render(const cli *c, distributed *dist)
     snprintf(target, sizeof target, "%g", c->target_error);
     double spp_mean = stats.pixels > 0 ? stats.samples / (double)stats.pixels : 0.0;
     snprintf(mean_spp, sizeof mean_spp, "%.3f", spp_mean);
-    if (stats.spp != render_scene_sampler(rs)->spp) /* the id names the samples taken */
+    /* The id names the samples taken; a --target-error render's, the cap (its
+     * regions take samples of their own, and merge). */
+    if (!adaptive && stats.spp != render_scene_sampler(rs)->spp)
         snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
                  (unsigned long long)outputs_render_id(inputs_hash, rs, stats.spp, no_jitter));
     /* The image's estimated relMSE: its noise and the step's bias. */

@@ -17,7 +17,11 @@ static const char merge_usage[] =
     "their half/float types) and the header attributes, lie inside the display\n"
     "window, not overlap, and together cover it; interrupted (haze:partial)\n"
     "renders are refused. The result is byte-identical to a full render of the\n"
-    "same scene, seed and spp. Exit 0 merged, 1 refused or unwritable, 2 usage.\n";
+    "same scene, seed and spp. Parts of a --target-error render may differ in\n"
+    "the samples they took and the marching step their pilot chose; the whole\n"
+    "image's haze:spp, haze:passes (the most), haze:spp_mean, haze:estimated_error\n"
+    "(means over its pixels) and haze:stepsize (each part's, when they differ)\n"
+    "are written. Exit 0 merged, 1 refused or unwritable, 2 usage.\n";
 
 hz_status merge_parse_args(int argc, char **argv, merge_options *opt, bool *help, hz_error *err)
 {
@@ -99,6 +103,62 @@ static const char *find_attribute(const exr_image *img, const char *name)
     return NULL;
 }
 
+/* The attributes in which the regions of one --target-error render
+ * (haze:target_error) differ: each region stops on its own estimate, and its
+ * pilot picks the step for its own pixels (docs/regions.md). */
+static const char *const per_region_names[] = {"haze:spp", "haze:passes", "haze:spp_mean",
+                                               "haze:estimated_error", "haze:stepsize"};
+enum { PER_REGION_COUNT = sizeof per_region_names / sizeof per_region_names[0] };
+
+static bool adaptive_part(const exr_image *img)
+{
+    return find_attribute(img, "haze:target_error") != NULL;
+}
+
+static bool per_region_attribute(const char *name)
+{
+    for (int i = 0; i < PER_REGION_COUNT; ++i)
+        if (!strcmp(name, per_region_names[i]))
+            return true;
+    return false;
+}
+
+/* The whole image's value of per-region attribute `name` (every part has
+ * it): the most samples and passes, the means over the pixels of the mean
+ * samples and of the estimated relMSE (a mean over pixels itself), and the
+ * parts' distinct steps in part order, "; " between them. */
+static void merged_attribute(const exr_image *parts, int n, const char *name, char *buf,
+                             size_t size)
+{
+    if (!strcmp(name, "haze:stepsize")) {
+        size_t len = 0;
+        buf[0] = '\0';
+        for (int i = 0; i < n; ++i) {
+            const char *v = find_attribute(&parts[i], name);
+            bool seen = false;
+            for (int j = 0; j < i && !seen; ++j)
+                seen = !strcmp(v, find_attribute(&parts[j], name));
+            if (!seen && len < size)
+                len += (size_t)snprintf(buf + len, size - len, "%s%s", len ? "; " : "", v);
+        }
+        return;
+    }
+    bool most = !strcmp(name, "haze:spp") || !strcmp(name, "haze:passes");
+    double sum = 0.0, pixels = 0.0, top = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double v = strtod(find_attribute(&parts[i], name), NULL),
+               w = (double)parts[i].width * (double)parts[i].height;
+        top = i == 0 || v > top ? v : top;
+        sum += v * w;
+        pixels += w;
+    }
+    if (most)
+        snprintf(buf, size, "%.0f", top);
+    else
+        snprintf(buf, size, strcmp(name, "haze:spp_mean") ? "%.3g" : "%.3f",
+                 pixels > 0.0 ? sum / pixels : 0.0);
+}
+
 /* The part `p` (file `pf`) against the first part `r` (file `rf`). */
 static hz_status check_like_first(const exr_image *r, const char *rf, const exr_image *p,
                                   const char *pf, hz_error *err)
@@ -139,7 +199,8 @@ static hz_status check_like_first(const exr_image *r, const char *rf, const exr_
             if (!v)
                 return hz_fail(err, "merge: %s has header attribute \"%s\" but %s does not", xf,
                                x->attribute_names[a], yf);
-            if (strcmp(v, x->attribute_values[a]) != 0)
+            if (strcmp(v, x->attribute_values[a]) != 0 &&
+                !(adaptive_part(x) && adaptive_part(y) && per_region_attribute(x->attribute_names[a])))
                 return hz_fail(err, "merge: header attribute \"%s\" is \"%s\" in %s but \"%s\" in %s",
                                x->attribute_names[a], x->attribute_values[a], xf, v, yf);
         }
@@ -259,8 +320,15 @@ hz_status merge_run(const merge_options *opt, hz_error *err)
             memcpy(full.channels[c].name, r->channels[c].name, sizeof full.channels[c].name);
             full.channels[c].half = r->channels[c].half;
         }
-        for (int a = 0; st == HZ_OK && a < r->attribute_count; ++a)
-            st = exr_image_add_attribute(&full, r->attribute_names[a], r->attribute_values[a], err);
+        for (int a = 0; st == HZ_OK && a < r->attribute_count; ++a) {
+            const char *name = r->attribute_names[a], *value = r->attribute_values[a];
+            char merged[4096];
+            if (adaptive_part(r) && per_region_attribute(name)) {
+                merged_attribute(parts, n, name, merged, sizeof merged);
+                value = merged;
+            }
+            st = exr_image_add_attribute(&full, name, value, err);
+        }
     }
     /* Copy each part into place (channel order is the same in every part). */
     for (int i = 0; st == HZ_OK && i < n; ++i) {

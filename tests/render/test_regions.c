@@ -3,7 +3,9 @@
  * renders a region to an EXR whose data window is that region, and haze merge
  * assembles regions into a file byte-identical to the full render (fog with
  * every AOV in float, the same in savefp16, the VDB smoke scene; quadrants of
- * uneven size and a 3x2 crop window split, rendered with 1 and 2 threads).
+ * uneven size and a 3x2 crop window split, rendered with 1 and 2 threads);
+ * the regions of a --target-error render merge, with the whole image's
+ * samples, estimate and steps in the header.
  * Refused merges (gap, overlap, display window, channels, pixel types,
  * attributes, partial render, part outside its display window, missing file)
  * exit 1 with a message naming the files and regions and leave an existing
@@ -14,6 +16,7 @@
 #include <setjmp.h>
 #include <cmocka.h>
 
+#include <math.h>
 #include <sys/stat.h>
 
 #include "cli_util.h"
@@ -225,6 +228,55 @@ static void test_quadrants_smoke(void **state)
     if (merge("sm00.exr sm01.exr sm10.exr sm11.exr", "smmerged.exr", msg, sizeof msg) != 0)
         fail_msg("merge: %s", msg);
     assert_same_bytes("smmerged.exr", "smfull.exr");
+}
+
+/* The regions of a --target-error render of the smoke scene (each stops on
+ * its own estimate; each part's pilot picks its step) merge: the pixels are
+ * the parts', the header has the most samples and passes, the means over the
+ * pixels of the mean samples and of the estimate, and the parts' steps. A
+ * fixed-spp part does not mix with them. */
+static void test_target_error_parts(void **state)
+{
+    (void)state;
+    const char *scene = HAZE_TESTS "/regression/scenes/smoke.pbrt";
+    render(scene, "te0.exr", "--target-error 3e-2 --spp 64 --pixelbounds 0,40,0,12");
+    render(scene, "te1.exr", "--target-error 3e-2 --spp 64 --pixelbounds 0,40,12,50 --threads 1");
+    render(scene, "fixed1.exr", "--spp 4 --pixelbounds 0,40,12,50");
+    char msg[4096];
+    if (merge("te0.exr te1.exr", "temerged.exr", msg, sizeof msg) != 0)
+        fail_msg("merge: %s", msg);
+    exr_image a, b, m;
+    read_exr("te0.exr", &a);
+    read_exr("te1.exr", &b);
+    read_exr("temerged.exr", &m);
+    for (int c = 0; c < m.channel_count; ++c)
+        for (int y = 0; y < m.height; ++y) {
+            const exr_image *p = y < 12 ? &a : &b;
+            assert_memory_equal(m.channels[c].pixels + (size_t)y * 40,
+                                p->channels[c].pixels + (size_t)(y - p->data_y0) * 40,
+                                40 * sizeof(float));
+        }
+    double wa = 40.0 * 12.0, wb = 40.0 * 38.0;
+    const char *sa = exr_attribute(&a, "haze:spp"), *sb = exr_attribute(&b, "haze:spp");
+    assert_int_equal(atoi(exr_attribute(&m, "haze:spp")), atoi(sa) > atoi(sb) ? atoi(sa) : atoi(sb));
+    const char *names[] = {"haze:spp_mean", "haze:estimated_error"};
+    for (int i = 0; i < 2; ++i) {
+        double va = atof(exr_attribute(&a, names[i])), vb = atof(exr_attribute(&b, names[i]));
+        double want = (va * wa + vb * wb) / (wa + wb), got = atof(exr_attribute(&m, names[i]));
+        if (fabs(got - want) > 2e-3 * want)
+            fail_msg("%s: %g, want %g (%g and %g)", names[i], got, want, va, vb);
+    }
+    assert_true(atof(exr_attribute(&m, "haze:estimated_error")) <= 3e-2);
+    const char *ta = exr_attribute(&a, "haze:stepsize"), *tb = exr_attribute(&b, "haze:stepsize");
+    char steps[256];
+    snprintf(steps, sizeof steps, strcmp(ta, tb) ? "%s; %s" : "%s", ta, tb);
+    assert_string_equal(exr_attribute(&m, "haze:stepsize"), steps);
+    assert_string_equal(exr_attribute(&m, "haze:render"), exr_attribute(&a, "haze:render"));
+    exr_image_free(&a);
+    exr_image_free(&b);
+    exr_image_free(&m);
+    assert_int_equal(merge("te0.exr fixed1.exr", "temixed.exr", msg, sizeof msg), 1);
+    assert_non_null(strstr(msg, "merge: "));
 }
 
 /* --cropwindow thirds by halves: pbrt-v4's ceil rule gives columns [0,13),
@@ -448,7 +500,8 @@ int main(void)
     /* In order: later tests use the files of earlier ones. */
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_quadrants_float), cmocka_unit_test(test_quadrants_fp16),
-        cmocka_unit_test(test_quadrants_smoke), cmocka_unit_test(test_cropwindow),
+        cmocka_unit_test(test_quadrants_smoke), cmocka_unit_test(test_target_error_parts),
+        cmocka_unit_test(test_cropwindow),
         cmocka_unit_test(test_overrides_film),  cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_cli_errors),
     };
