@@ -154,6 +154,13 @@ long progressive_error_select(progressive_error *pe, const film *f,
                               const progressive_goal *goal, unsigned char *active,
                               double *estimate);
 
+/* The factor x = V(n/2) / V(n) (2 to 4) read from the squared changes of
+ * the last three doubling passes over the image, c0 = H(n), c1 = H(n/2),
+ * c2 = H(n/4) (c2 <= 0: no third pass): the slower of the alternating and
+ * the mixed model (progressive_error.c; the mixed one only where it can
+ * hold, 2 <= c1 / c0 <= 4); 2 without two passes' changes. */
+double progressive_read_convergence(double c0, double c1, double c2);
+
 /* The end of the next pass of a render with a target error: the first
  * (done = 0) as progressive_first_end; from PROGRESSIVE_TRUST_SPP samples
  * on, unless the passes converge at PROGRESSIVE_DOUBLING_CONVERGENCE or
