@@ -311,9 +311,12 @@ static double resident_memory_mib(void)
 
 /* --target-error E that the render did not reach says so, and why: the
  * image's `estimate` (noise and the step's `bias`; < 0: none) is above E
- * because the passes stopped at the --spp cap or the time limit, or because
- * the step's bias is more than the half of E the pilot could give it. */
-static void warn_target_missed(double target, double estimate, double bias, int spp, int cap)
+ * because the passes stopped at the --spp cap or the time limit
+ * (`deadline`), or because the step's bias is more than the half of E the
+ * pilot could give it, or else every pixel had the samples its share asked
+ * for. */
+static void warn_target_missed(double target, double estimate, double bias, int spp, int cap,
+                               bool deadline)
 {
     if (estimate < 0.0) {
         fprintf(stderr, "haze: warning: --target-error %g: no error estimate, which needs two "
@@ -322,10 +325,11 @@ static void warn_target_missed(double target, double estimate, double bias, int 
     }
     if (!(estimate > target * (1.0 + 1e-9))) /* noise <= E - bias, rounded */
         return;
-    const char *why = spp >= cap                ? "the --spp cap stopped the passes"
+    const char *why = spp >= cap               ? "the --spp cap stopped the passes"
+                      : deadline             ? "the time limit stopped the passes"
                       : bias > 0.5 * target ? "the finest marching step's estimated bias is "
                                               "more than half of it"
-                                            : "the time limit stopped the passes";
+                                            : "every pixel took the samples of its share";
     fprintf(stderr, "haze: warning: --target-error %g not reached: estimated relMSE %.3g at %d "
                     "samples a pixel at most (%s)\n", target, estimate, spp, why);
 }
@@ -550,7 +554,7 @@ static int run_render(const cli *c, distributed *dist)
         exit_code = EXIT_INTERRUPTED;
     if (adaptive)
         warn_target_missed(c->target_error, estimate, goal.bias, stats.spp,
-                           render_scene_sampler(rs)->spp);
+                           render_scene_sampler(rs)->spp, deadline > 0);
     long bad = film_nonfinite_count(f);
     if (bad > 0)
         fprintf(stderr, "haze: warning: %ld non-finite sample values were dropped\n", bad);
