@@ -46,10 +46,15 @@ target_scene() {
     for te in $5; do
         # The pilot's own time (stat time_pilot_s), in a run of its own:
         # --stats reads clocks in the render loop, so the timed run has none
-        # (one sample a pixel: it warns that it has no estimate).
-        p=$("$HAZE" render "$v" --target-error "$te" --spp 1 --threads "$THREADS" --seed 1 -o "$out" --quiet --stats 2>/dev/null |
+        # (one sample a pixel: it warns, in its log, that it has no estimate).
+        p=$("$HAZE" render "$v" --target-error "$te" --spp 1 --threads "$THREADS" --seed 1 -o "$out" --quiet --stats 2>"$CACHE/pilot-probe.log" |
             awk '$1 == "stat" && $2 == "time_pilot_s" { print $3 }')
-        printf '%s\tpilot\t%s\t%s\t-\t-\t-\n' "$2" "$te" "${p:-0}" >>"$RESULTS/target.tsv"
+        if [ -z "$p" ]; then
+            echo "bench: the pilot probe of $2 at E = $te failed:" >&2
+            cat "$CACHE/pilot-probe.log" >&2
+            exit 1
+        fi
+        printf '%s\tpilot\t%s\t%s\t-\t-\t-\n' "$2" "$te" "$p" >>"$RESULTS/target.tsv"
         target_render "$te" 1
         st=$("$HAZE" info "$out" | awk '$1 == "haze:stepsize" { $1 = $2 = ""; gsub(/"/, ""); sub(/^ +/, ""); print }')
         printf '%s\ttarget\t%s\t%s\t%s\t%s\t%s\n' "$2" "$te" "$t" "$e" "$m" "${st:--}" >>"$RESULTS/target.tsv"
