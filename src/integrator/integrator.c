@@ -25,7 +25,7 @@ integrator_kind integrator_default_kind(const scene_desc *sd, const char **why, 
         }
     for (size_t i = 0; i < sd->medium_count; ++i) {
         const char *type = sd->media[i].entity.type;
-        if (type && (strcmp(type, "cloud") == 0 || strcmp(type, "rgbgrid") == 0)) {
+        if (medium_type_volpath_only(type)) {
             *why = type;
             *what = "medium";
             return INTEGRATOR_VOLPATH;

@@ -42,7 +42,6 @@ typedef struct {
  * records it at the nodes. */
 typedef struct {
     const build_job *job;
-    medium_accessor *acc; /* one per medium */
     double h;
     int nz, next; /* nodes; the next to record, at t = (next + 1) h */
     double tau[3];
@@ -52,11 +51,8 @@ typedef struct {
 /* The density integral of a grid segment, fed piece by piece in order:
  * only cells of the majorant grid that are not empty cost lookups. */
 typedef struct {
-    const medium *m;
-    medium_accessor *acc;
-    medium_grid_ray r;
+    medium_ray r;
     double ca, cb; /* where the density can be non-zero */
-    majorant_walk mw;
     majorant_segment seg;
     bool more; /* seg is a cell not yet passed */
 } grid_pieces;
@@ -70,7 +66,7 @@ static double march(grid_pieces *g, double a, double b, double h)
     double dt = (b - a) / n, sum = 0.0;
     uint64_t lookups = 0;
     for (int s = 0; s < (int)n; ++s)
-        sum += medium_density_at(g->m, g->acc, &g->r, a + (s + 0.5) * dt, &lookups);
+        sum += medium_ray_density(&g->r, a + (s + 0.5) * dt, &lookups);
     return sum * dt;
 }
 
@@ -84,7 +80,8 @@ static double grid_piece(grid_pieces *g, double p, double q, double h)
             integral += march(g, a, b, h);
         if (g->seg.t1 > hi)
             break;
-        g->more = majorant_walk_next(&g->mw, &g->seg);
+        uint64_t steps = 0;
+        g->more = medium_ray_next(&g->r, &g->seg, &steps);
     }
     return integral;
 }
@@ -102,15 +99,16 @@ static void add_tau(column_walk *cw, const medium *m, double integral)
 static void accumulate(column_walk *cw, int mi, vec3 o, vec3 w, double a, double b)
 {
     const medium *m = mi >= 0 ? &cw->job->in->media[mi] : NULL;
-    grid_pieces g = {.m = m, .ca = a, .cb = b};
-    bool grid = m && m->kind == MEDIUM_GRID && medium_grid_ray_make(m, o, w, 0.0, &g.r) &&
-                medium_grid_ray_clip(m, &g.r, &g.ca, &g.cb) &&
-                majorant_walk_start(&g.mw, &m->grid.majorant, g.r.o, g.r.d, g.ca, g.cb);
+    grid_pieces g;
+    g.ca = a;
+    g.cb = b;
+    bool grid = m && medium_is_density_grid(m) &&
+                medium_ray_start(m, o, w, 0.0, &g.ca, &g.cb, &g.r);
     if (grid) {
-        g.acc = &cw->acc[mi];
-        g.more = majorant_walk_next(&g.mw, &g.seg);
+        uint64_t steps = 0;
+        g.more = medium_ray_next(&g.r, &g.seg, &steps);
     }
-    bool homogeneous = m && m->kind == MEDIUM_HOMOGENEOUS;
+    bool homogeneous = m && medium_is_homogeneous(m);
     for (double p = a;;) {
         double tk = cw->next < cw->nz ? (cw->next + 1) * cw->h : INFINITY;
         double q = fmin(tk, b);
@@ -124,11 +122,11 @@ static void accumulate(column_walk *cw, int mi, vec3 o, vec3 w, double a, double
     }
 }
 
-static void build_column(const build_job *job, int column, medium_accessor *acc, double *cum)
+static void build_column(const build_job *job, int column, double *cum)
 {
     const shadow_cache *c = job->c;
     int i = column / c->n[1], j = column % c->n[1];
-    column_walk cw = {.job = job, .acc = acc, .h = c->h, .nz = c->n[2], .cum = cum};
+    column_walk cw = {.job = job, .h = c->h, .nz = c->n[2], .cum = cum};
     /* From one spacing below node (i, j, 0) toward the light: node k at
      * t = (k + 1) h. */
     vec3 w = c->ez;
@@ -174,28 +172,15 @@ static void build_column(const build_job *job, int column, medium_accessor *acc,
 static void *build_worker(void *arg)
 {
     build_job *job = arg;
-    const integrator_inputs *in = job->in;
-    medium_accessor *acc = calloc(in->medium_count, sizeof *acc);
     double *cum = malloc((size_t)job->c->n[2] * 3 * sizeof *cum);
-    if (acc && cum) {
-        for (size_t m = 0; m < in->medium_count; ++m)
-            if (in->media[m].kind == MEDIUM_GRID)
-                medium_accessor_init(&in->media[m], &acc[m]);
+    if (cum) {
         int columns = job->c->n[0] * job->c->n[1];
         for (int col; (col = atomic_fetch_add(&job->next_column, 1)) < columns;)
-            build_column(job, col, acc, cum);
+            build_column(job, col, cum);
     }
-    bool failed = !acc || !cum; /* the others build every column; the cache fails */
-    free(acc);
+    bool failed = !cum; /* the others build every column; the cache fails */
     free(cum);
     return failed ? (void *)1 : NULL;
-}
-
-/* The geometric mean of the render-space lengths of a voxel's edges. */
-static double voxel_length(const medium *m)
-{
-    transform render_from_index = transform_inverse(m->grid.index_from_render);
-    return cbrt(fabs(transform_det3(&render_from_index)));
 }
 
 static void cache_destroy(shadow_cache *c)
@@ -213,8 +198,9 @@ static hz_status cache_create(const integrator_inputs *in, int mi, size_t li, do
 {
     *out = NULL;
     const medium *m = &in->media[mi];
-    vec3 lo = m->grid.support_lo, hi = m->grid.support_hi;
-    if (m->grid.background != 0.0 || !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z))
+    vec3 corners[8];
+    double voxel;
+    if (!medium_support(m, corners, &voxel))
         return HZ_OK;
     shadow_cache *c = calloc(1, sizeof *c);
     if (!c)
@@ -222,18 +208,16 @@ static hz_status cache_create(const integrator_inputs *in, int mi, size_t li, do
     c->ez = in->lights[li].distant.w;
     v3_basis(c->ez, &c->ex, &c->ey);
     /* The support box's corners in the light's frame. */
-    transform render_from_index = transform_inverse(m->grid.index_from_render);
     double bmin[3] = {INFINITY, INFINITY, INFINITY}, bmax[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int k = 0; k < 8; ++k) {
-        vec3 q = transform_point(&render_from_index, v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y,
-                                                        k & 4 ? hi.z : lo.z));
+        vec3 q = corners[k];
         double x[3] = {v3_dot(q, c->ex), v3_dot(q, c->ey), v3_dot(q, c->ez)};
         for (int a = 0; a < 3; ++a) {
             bmin[a] = fmin(bmin[a], x[a]);
             bmax[a] = fmax(bmax[a], x[a]);
         }
     }
-    double voxel = voxel_length(m), h = spacing * voxel, nodes = 0.0;
+    double h = spacing * voxel, nodes = 0.0;
     for (int tries = 0; tries < 64; ++tries) {
         nodes = 1.0;
         for (int a = 0; a < 3; ++a)
@@ -289,7 +273,7 @@ hz_status shadow_caches_create(const integrator_inputs *in, double spacing, int 
     cs->medium_count = in->medium_count;
     cs->light_count = in->light_count;
     for (size_t mi = 0; mi < in->medium_count; ++mi) {
-        if (in->media[mi].kind != MEDIUM_GRID)
+        if (!medium_is_density_grid(&in->media[mi]))
             continue;
         for (size_t li = 0; li < in->light_count; ++li) {
             if (in->lights[li].kind != LIGHT_DISTANT)

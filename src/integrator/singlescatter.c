@@ -80,7 +80,7 @@ singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
 {
     bool stochastic = false;
     for (size_t i = 0; i < in->medium_count; ++i)
-        stochastic |= in->media[i].kind == MEDIUM_GRID && settings.mode != TRANSMITTANCE_RAYMARCH;
+        stochastic |= medium_is_density_grid(&in->media[i]) && settings.mode != TRANSMITTANCE_RAYMARCH;
     return (singlescatter_scene){*in, settings, stochastic, NULL};
 }
 

@@ -20,40 +20,15 @@
 
 #include "integrator/singlescatter_internal.h"
 
-typedef struct {
-    const medium *m;
-    medium_accessor acc;
-    medium_grid_ray r;   /* index-space ray at the walk's time: p(t) = o + t d */
-    double voxels_per_t; /* |d| */
-} grid_ray;
-
-/* The ray o + t w at the walk's time in grid medium m, with [*t0, *t1] clipped
- * to where the density can be non-zero then; `mw` starts its walk through the
- * majorant grid. False when nothing is left. */
-static bool grid_ray_init(grid_ray *gr, majorant_walk *mw, const medium *m, vec3 o, vec3 w,
-                          double time, double *t0, double *t1)
-{
-    if (!medium_grid_ray_make(m, o, w, time, &gr->r) || !medium_grid_ray_clip(m, &gr->r, t0, t1) ||
-        !majorant_walk_start(mw, &m->grid.majorant, gr->r.o, gr->r.d, *t0, *t1))
-        return false;
-    gr->m = m;
-    medium_accessor_init(m, &gr->acc);
-    gr->voxels_per_t = v3_length(gr->r.d);
-    return true;
-}
-
 /* Counts density and velocity lookups alike (media_walk.lookups). */
-static inline double grid_ray_density(grid_ray *gr, double t, media_walk *walk)
+static inline double grid_ray_density(medium_ray *gr, double t, media_walk *walk)
 {
-    return medium_density_at(gr->m, &gr->acc, &gr->r, t, &walk->lookups);
+    return medium_ray_density(gr, t, &walk->lookups);
 }
 
-static inline bool next_cell(majorant_walk *mw, majorant_segment *seg, media_walk *walk)
+static inline bool next_cell(medium_ray *gr, majorant_segment *seg, media_walk *walk)
 {
-    if (!majorant_walk_next(mw, seg))
-        return false;
-    walk->majorant_steps++;
-    return true;
+    return medium_ray_next(gr, seg, &walk->majorant_steps);
 }
 
 /* ---- strata: sample points t0 + (i + offset) dt, i < n ---- */
@@ -80,7 +55,7 @@ static void strata_load(strata *s)
 }
 
 /* Strata of about `step` voxels over [t0, t1], positioned at stratum 0. */
-static void strata_make(strata *s, const grid_ray *gr, double t0, double t1, double step,
+static void strata_make(strata *s, const medium_ray *gr, double t0, double t1, double step,
                         double offset, rng *r)
 {
     double n = ceil((t1 - t0) * gr->voxels_per_t / step);
@@ -151,7 +126,7 @@ static inline double exp1(rng *r) { return -log1p(-rng_uniform(r)); }
 
 /* Jittered marching of the density integral over [a, b] (a cell that ratio
  * tracking would need too many collisions for). */
-static double march_tau(grid_ray *gr, double a, double b, double step, media_walk *walk)
+static double march_tau(medium_ray *gr, double a, double b, double step, media_walk *walk)
 {
     strata s;
     strata_make(&s, gr, a, b, step, rng_uniform(&walk->r), &walk->r);
@@ -166,9 +141,8 @@ static double march_tau(grid_ray *gr, double a, double b, double step, media_wal
 rgb singlescatter_grid_transmittance(const singlescatter_scene *vs, const medium *m, vec3 o, vec3 w,
                                      double t0, double t1, media_walk *walk)
 {
-    grid_ray gr;
-    majorant_walk mw;
-    if (!grid_ray_init(&gr, &mw, m, o, w, walk->time, &t0, &t1))
+    medium_ray gr;
+    if (!medium_ray_start(m, o, w, walk->time, &t0, &t1, &gr))
         return rgb_grey(1.0);
     const singlescatter_settings *set = &vs->settings;
     rgb sigma_t = medium_sigma_t(m);
@@ -182,7 +156,7 @@ rgb singlescatter_grid_transmittance(const singlescatter_scene *vs, const medium
         strata_make(&s, &gr, t0, t1, set->shadow_step, offset, &walk->r);
         double tau = 0.0;
         bool skip = false; /* strata to skip up to seg.t0 (empty cells before it) */
-        while (next_cell(&mw, &seg, walk)) {
+        while (next_cell(&gr, &seg, walk)) {
             if (!(seg.max > 0.0)) {
                 skip = true;
                 continue;
@@ -200,7 +174,7 @@ rgb singlescatter_grid_transmittance(const singlescatter_scene *vs, const medium
         double sigma_max = rgb_max(sigma_t);
         rgb T = rgb_grey(1.0);
         double tau = exp1(&walk->r);
-        while (next_cell(&mw, &seg, walk)) {
+        while (next_cell(&gr, &seg, walk)) {
             if (!(seg.max > 0.0))
                 continue;
             cell_rates c = cell_rates_make(set, set->shadow_mode, &seg, sigma_max);
@@ -242,7 +216,7 @@ typedef struct {
     rgb sigma_t;
     bool scatters, emissive;
     bool free_emission, coloured; /* haze's emission and colour grids */
-    grid_ray gr;
+    medium_ray gr;
     strata s;
     rgb T, Lseg;
     double tau; /* optical distance left to the next tentative collision */
@@ -260,28 +234,12 @@ static inline rgb inscattered_at(segment_walk *sw, double t)
                                      sw->u, sw->walk);
 }
 
-/* What a camera-ray sample of a medium with emission or colour grids sees:
- * the density, and where they apply the absorbing emission's Le, the free
- * emission eps (per unit length) and the albedo scale C. */
-typedef struct {
-    double density;
-    rgb Le, eps, C;
-} grid_sample;
-
-static grid_sample sample_at(segment_walk *sw, double t)
+/* What a camera-ray sample of a medium with emission or colour grids sees
+ * (medium_density_point). */
+static inline medium_density_point sample_at(segment_walk *sw, double t)
 {
-    grid_sample g = {0.0, rgb_grey(0.0), rgb_grey(0.0), rgb_grey(1.0)};
-    grid_ray *gr = &sw->gr;
-    uint64_t *lookups = &sw->walk->lookups;
-    vec3 p = medium_point_at(gr->m, &gr->acc, &gr->r, t, lookups);
-    ++*lookups;
-    g.density = grid_density_index(gr->m->grid.grid, &gr->acc.density, p);
-    if (sw->free_emission)
-        g.eps = medium_grid_emission(gr->m, &gr->acc, p, lookups);
-    if (g.density > 0.0 && sw->emissive)
-        g.Le = medium_grid_Le(gr->m, &gr->acc, p, lookups);
-    if (g.density > 0.0 && sw->coloured)
-        g.C = medium_grid_color(gr->m, &gr->acc, p, lookups);
+    medium_density_point g;
+    medium_ray_density_point(&sw->gr, t, &g, &sw->walk->lookups);
     return g;
 }
 
@@ -322,7 +280,7 @@ static bool march_strata(segment_walk *sw, double b)
     const medium *m = sw->m;
     rgb sigma_t = sw->sigma_t;
     for (; strata_before(s, b); strata_next(s)) {
-        grid_sample g = sample_at(sw, s->t);
+        medium_density_point g = sample_at(sw, s->t);
         if (g.density <= 0.0) {
             if (sw->free_emission) /* a glow where there is no density */
                 sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, rgb_scale(g.eps, s->dt)));
@@ -396,7 +354,7 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
              * not depend on the sample. (Emission is gathered here rather
              * than at the collisions: a residual-tracking cell of constant
              * density has none.) */
-            grid_sample g = sample_at(sw, s->t);
+            medium_density_point g = sample_at(sw, s->t);
             if (sw->free_emission)
                 sw->Lseg = rgb_add(sw->Lseg, rgb_mul(sw->T, rgb_scale(g.eps, s->dt)));
             if (g.density > 0.0 && sw->scatters)
@@ -417,7 +375,7 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
                                 double t1, rgb *beta, rgb *L, sampler_state *u, media_walk *walk)
 {
     /* Field by field: an initialiser would zero the accessors too (~2 KB
-     * per segment), which grid_ray_init sets up as the medium needs. */
+     * per segment), which medium_ray_start sets up as the medium needs. */
     segment_walk sw;
     sw.vs = vs;
     sw.mi = mi;
@@ -431,8 +389,7 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     sw.cutoff = 0.0;
     sw.u = u;
     sw.walk = walk;
-    majorant_walk mw;
-    if (!grid_ray_init(&sw.gr, &mw, sw.m, o, w, walk->time, &t0, &t1))
+    if (!medium_ray_start(sw.m, o, w, walk->time, &t0, &t1, &sw.gr))
         return;
     sw.sigma_t = medium_sigma_t(sw.m);
     sw.scatters = !rgb_is_black(sw.m->sigma_s);
@@ -453,7 +410,7 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     double sigma_max = rgb_max(sw.sigma_t);
     bool alive = true, skip = false; /* skip: strata up to seg.t0 lie in empty cells */
     majorant_segment seg;
-    while (alive && next_cell(&mw, &seg, walk)) {
+    while (alive && next_cell(&sw.gr, &seg, walk)) {
         /* No density and no free emission: nothing to sample (the strata are
          * skipped when the next interval that has something begins). */
         if (!(seg.max > 0.0) && !(sw.free_emission && seg.emit > 0.0)) {

@@ -25,16 +25,10 @@ bool singlescatter_roulette(rgb *beta, rng *r)
 static rgb segment_transmittance(const singlescatter_scene *vs, const medium *m, vec3 o, vec3 w,
                                  double t0, double t1, media_walk *walk)
 {
-    switch (m->kind) {
-    case MEDIUM_HOMOGENEOUS:
+    /* The scene build refused media that are neither (volpath's only). */
+    if (medium_is_homogeneous(m))
         return rgb_exp_neg(medium_sigma_t(m), t1 - t0);
-    case MEDIUM_GRID:
-        return singlescatter_grid_transmittance(vs, m, o, w, t0, t1, walk);
-    case MEDIUM_CLOUD: /* refused by the scene build under singlescatter */
-    case MEDIUM_RGBGRID:
-        break;
-    }
-    return rgb_grey(1.0);
+    return singlescatter_grid_transmittance(vs, m, o, w, t0, t1, walk);
 }
 
 /* Transmittance of the media along o + t w over [t_fill, tmax]; surfaces are
@@ -408,15 +402,9 @@ void singlescatter_segment(const singlescatter_scene *vs, int m, vec3 o, vec3 w,
 {
     if (!(t1 > t0))
         return;
-    switch (vs->in.media[m].kind) {
-    case MEDIUM_HOMOGENEOUS:
+    /* The scene build refused media that are neither (volpath's only). */
+    if (medium_is_homogeneous(&vs->in.media[m]))
         homogeneous_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
-        break;
-    case MEDIUM_GRID:
+    else
         singlescatter_grid_segment(vs, m, o, w, t0, t1, beta, L, u, walk);
-        break;
-    case MEDIUM_CLOUD: /* refused by the scene build under singlescatter */
-    case MEDIUM_RGBGRID:
-        break;
-    }
 }

@@ -196,7 +196,7 @@ static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_
     for (size_t i = 0; i < sd->medium_count; ++i) {
         /* A refused medium keeps its slot (shapes refer to media by index),
          * empty. */
-        if (medium_from_entity(&sd->media[i], render_from_world, &times, &rs->media[i], err) !=
+        if (medium_create(&sd->media[i], render_from_world, &times, &rs->media[i], err) !=
             HZ_OK) {
             if (collect(errs, err) != HZ_OK)
                 return HZ_ERROR;
@@ -266,7 +266,7 @@ static const char *shadow_cache_obstacle(const render_scene *rs, const integrato
                                 : "tabulates shadows once, for a static scene: here surfaces move";
     bool grid = false, distant = false;
     for (size_t i = 0; i < in->medium_count; ++i)
-        grid |= in->media[i].kind == MEDIUM_GRID;
+        grid |= medium_is_density_grid(&in->media[i]);
     for (size_t i = 0; i < in->light_count; ++i)
         distant |= in->lights[i].kind == LIGHT_DISTANT;
     return !grid      ? "caches distant lights' shadows in grid media: this scene has no grid "
@@ -369,15 +369,16 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         build_media(rs, sd, render_from_world, errs, err) != HZ_OK)
         return HZ_ERROR;
 #undef CHECK
-    /* pbrt-v4's procedural cloud is rendered by volpath's tracking only. */
+    /* pbrt-v4's procedural cloud and rgbgrid are rendered by volpath's
+     * tracking only. */
     for (size_t i = 0; ip.kind == INTEGRATOR_SINGLESCATTER && i < rs->medium_count; ++i)
-        if ((rs->media[i].kind == MEDIUM_CLOUD || rs->media[i].kind == MEDIUM_RGBGRID) &&
+        if (medium_type_volpath_only(sd->media[i].entity.type) &&
             collect(errs, (hz_fail_at(err, sd->media[i].entity.loc,
                                       "MakeNamedMedium \"%s\": a \"%s\" medium needs "
                                       "Integrator \"volpath\" (singlescatter renders nanovdb, "
                                       "uniformgrid and homogeneous media)",
                                       rs->media[i].name ? rs->media[i].name : "",
-                                      rs->media[i].kind == MEDIUM_CLOUD ? "cloud" : "rgbgrid"),
+                                      sd->media[i].entity.type),
                            err)) != HZ_OK)
             return HZ_ERROR;
     if (errs->count || errs->dropped)
@@ -476,7 +477,7 @@ void render_scene_destroy(render_scene *rs)
         light_free(&rs->lights[i]);
     free(rs->lights);
     for (size_t i = 0; i < rs->medium_count; ++i)
-        medium_free(&rs->media[i]);
+        medium_destroy(&rs->media[i]);
     free(rs->media);
     geometry_destroy(rs->geom);
     free(rs->materials);
@@ -517,18 +518,8 @@ const light *render_scene_lights(const render_scene *rs) { return rs->lights; }
 render_motion render_scene_motion(const render_scene *rs)
 {
     render_motion m = {rs->cam.motion, geometry_has_motion(rs->geom), 0};
-    for (size_t i = 0; i < rs->medium_count; ++i) {
-        const medium *md = &rs->media[i];
-        switch (md->kind) {
-        case MEDIUM_HOMOGENEOUS:
-        case MEDIUM_CLOUD:
-            break;
-        case MEDIUM_GRID:
-        case MEDIUM_RGBGRID:
-            m.media += md->grid.moving || md->grid.velocity != NULL;
-            break;
-        }
-    }
+    for (size_t i = 0; i < rs->medium_count; ++i)
+        m.media += medium_moves(&rs->media[i]);
     return m;
 }
 
@@ -538,26 +529,9 @@ render_memory render_scene_memory(const render_scene *rs)
                          (double)geometry_embree_peak_bytes(rs->geom),
                          (double)shadow_caches_bytes(render_scene_shadow_caches(rs))};
     for (size_t i = 0; i < rs->medium_count; ++i) {
-        const medium *md = &rs->media[i];
-        switch (md->kind) {
-        case MEDIUM_HOMOGENEOUS:
-        case MEDIUM_CLOUD:
-            break;
-        case MEDIUM_RGBGRID:
-            for (int c = 0; c < 3; ++c) {
-                const grid *g[3] = {md->rgbg.sigma_a[c], md->rgbg.sigma_s[c], md->rgbg.Le[c]};
-                for (int k = 0; k < 3; ++k)
-                    mem.grids += g[k] ? (double)grid_buffer_bytes(g[k]) : 0.0;
-            }
-            /* and the majorant's source grid, below */
-            /* fall through */
-        case MEDIUM_GRID:
-            mem.grids += (double)grid_buffer_bytes(md->grid.grid);
-            if (md->grid.velocity)
-                mem.grids += (double)grid_buffer_bytes(md->grid.velocity);
-            mem.majorants += (double)majorant_grid_bytes(&md->grid.majorant);
-            break;
-        }
+        medium_memory mm = medium_bytes(&rs->media[i]);
+        mem.grids += mm.grids;
+        mem.majorants += mm.majorants;
     }
     return mem;
 }
@@ -606,7 +580,7 @@ bool render_scene_marching(const render_scene *rs, render_marching *m)
     const singlescatter_scene *sc = &rs->integ.singlescatter;
     bool grids = false;
     for (size_t i = 0; i < sc->in.medium_count; ++i)
-        grids |= sc->in.media[i].kind == MEDIUM_GRID;
+        grids |= medium_is_density_grid(&sc->in.media[i]);
     const singlescatter_settings *set = &sc->settings;
     if (!grids || !(marches(set->mode) || marches(set->shadow_mode)))
         return false;

@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "media/grid_medium.h"
 #include "media/medium.h"
 #include "media/presets.h"
 #include "scene/scene_desc.h"
@@ -33,13 +34,21 @@ static hz_status build_named(const char *src, const char *name, transform render
     assert_int_equal(sd->medium_count, 1);
     medium_times times = {sd->transform_start_time, sd->transform_end_time,
                           sd->transform_start_time, sd->transform_end_time};
-    hz_status st = medium_from_entity(&sd->media[0], render_from_world, &times, m, err);
+    hz_status st = medium_create(&sd->media[0], render_from_world, &times, m, err);
     if (st != HZ_OK) {
-        /* A failed build leaves a medium that medium_free accepts. */
-        medium_free(m);
+        /* A failed build leaves a medium that medium_destroy accepts. */
+        medium_destroy(m);
         scene_desc_free(sd);
     }
     return st;
+}
+
+/* The density at o + t d of a grid ray made by grid_medium_ray_make. */
+static double density_at(const medium *m, medium_ray *r, double t, uint64_t *lookups)
+{
+    r->m = m;
+    grid_medium_accessors_init(m, r);
+    return grid_medium_density(r, t, lookups);
 }
 
 static void build_ok_at(const char *src, const char *name, transform render_from_world,
@@ -61,7 +70,7 @@ static void build_err_at(const char *src, const char *name, const char *want1, c
     medium m;
     hz_error err;
     if (build_named(src, name, transform_identity(), &sd, &m, &err) == HZ_OK) {
-        medium_free(&m);
+        medium_destroy(&m);
         scene_desc_free(&sd);
         fail_msg("expected an error containing \"%s\"", want1);
     }
@@ -79,7 +88,7 @@ static void build_err(const char *src, const char *want1, const char *want2)
 
 static void free_all(scene_desc *sd, medium *m)
 {
-    medium_free(m);
+    medium_destroy(m);
     scene_desc_free(sd);
 }
 
@@ -107,7 +116,7 @@ static void homogeneous_defaults(void **state)
     scene_desc sd;
     medium m;
     build_ok(homog(""), &sd, &m);
-    assert_int_equal(m.kind, MEDIUM_HOMOGENEOUS);
+    assert_true(medium_is_homogeneous(&m));
     assert_ptr_equal(m.name, sd.media[0].name);
     assert_string_equal(m.name, "fog");
     assert_rgb_near(m.sigma_a, rgb_grey(1.0), 0);
@@ -242,12 +251,12 @@ static const char *nanovdb(const char *filename, const char *params)
 
 static void check_box(const medium *m)
 {
-    assert_int_equal(m->kind, MEDIUM_GRID);
-    assert_non_null(m->grid.grid);
-    assert_near(m->grid.density_max, 1.0, 0);
-    assert_near(m->grid.background, 0.0, 0);
-    assert_v3_near(m->grid.support_lo, v3(-1, -1, -1), 0);
-    assert_v3_near(m->grid.support_hi, v3(32, 32, 32), 0);
+    assert_true(medium_is_density_grid(m));
+    assert_non_null(grid_medium_of(m)->grid);
+    assert_near(grid_medium_of(m)->density_max, 1.0, 0);
+    assert_near(grid_medium_of(m)->background, 0.0, 0);
+    assert_v3_near(grid_medium_of(m)->support_lo, v3(-1, -1, -1), 0);
+    assert_v3_near(grid_medium_of(m)->support_hi, v3(32, 32, 32), 0);
 }
 
 static void nanovdb_absolute_path(void **state)
@@ -265,12 +274,12 @@ static void nanovdb_absolute_path(void **state)
     assert_rgb_near(m.sigma_s, rgb_grey(0.5), 0);
     assert_near(m.g, 0.8, 0);
     /* Voxel size 1/32, no offset. */
-    assert_v3_near(transform_point(&m.grid.index_from_render, v3(0.5, 0.25, 1)), v3(16, 8, 32),
+    assert_v3_near(transform_point(&grid_medium_of(&m)->index_from_render, v3(0.5, 0.25, 1)), v3(16, 8, 32),
                    1e-12);
     grid_accessor a;
-    grid_accessor_init(m.grid.grid, &a);
-    vec3 p = transform_point(&m.grid.index_from_render, v3(0.5, 0.5, 0.5));
-    assert_near(medium_density_index(&m, &a, p), 1.0, 0);
+    grid_accessor_init(grid_medium_of(&m)->grid, &a);
+    vec3 p = transform_point(&grid_medium_of(&m)->index_from_render, v3(0.5, 0.5, 0.5));
+    assert_near(grid_density_index(grid_medium_of(&m)->grid, &a, p), 1.0, 0);
     free_all(&sd, &m);
 
     /* The same volume as NanoVDB, and the grid named explicitly. */
@@ -281,9 +290,9 @@ static void nanovdb_absolute_path(void **state)
 
     /* fog_sphere: index bounds [9, 55], index 32 at the world origin. */
     build_ok(nanovdb(VOLUMES "fog_sphere.vdb", ""), &sd, &m);
-    assert_near(m.grid.density_max, 1.0, 0);
-    assert_v3_near(m.grid.support_lo, v3(8, 8, 8), 0);
-    assert_v3_near(m.grid.support_hi, v3(56, 56, 56), 0);
+    assert_near(grid_medium_of(&m)->density_max, 1.0, 0);
+    assert_v3_near(grid_medium_of(&m)->support_lo, v3(8, 8, 8), 0);
+    assert_v3_near(grid_medium_of(&m)->support_hi, v3(56, 56, 56), 0);
     double t0 = 0, t1 = INFINITY;
     assert_true(medium_clip(&m, v3(-5, 0, 0), v3(1, 0, 0), 0.0, &t0, &t1));
     assert_near(t0, 4.25, 1e-12);
@@ -300,7 +309,7 @@ static void nanovdb_temperature_params(void **state)
     scene_desc sd;
     medium m;
     build_ok(nanovdb(VOLUMES "box.vdb", ""), &sd, &m);
-    assert_null(m.grid.temperature);
+    assert_null(grid_medium_of(&m)->temperature);
     assert_false(m.emissive);
     check_box(&m);
     free_all(&sd, &m);
@@ -325,7 +334,7 @@ static void nanovdb_relative_path(void **state)
     free_all(&sd, &m);
     build_ok_at(nanovdb("../volumes/fog_sphere.vdb", ""), VOLUMES "x.pbrt", transform_identity(),
                 &sd, &m);
-    assert_v3_near(m.grid.support_lo, v3(8, 8, 8), 0);
+    assert_v3_near(grid_medium_of(&m)->support_lo, v3(8, 8, 8), 0);
     free_all(&sd, &m);
     /* Absolute names ignore the scene's directory. */
     build_ok_at(nanovdb(VOLUMES "box.vdb", ""), "/nonexistent/dir/x.pbrt", transform_identity(),
@@ -428,7 +437,7 @@ static void clip_follows_medium_transform(void **state)
     scene_desc sd;
     medium m;
     build_ok(nanovdb_at("Translate 10 0 0\n", VOLUMES "box.vdb", ""), &sd, &m);
-    assert_v3_near(transform_point(&m.grid.index_from_render, v3(10.5, 0.5, 0.5)),
+    assert_v3_near(transform_point(&grid_medium_of(&m)->index_from_render, v3(10.5, 0.5, 0.5)),
                    v3(16, 16, 16), 1e-12);
     clip_expect(&m, v3(5, 0.5, 0.5), v3(1, 0, 0), 0, INFINITY, 5 - 1.0 / 32, 6);
     clip_expect_miss(&m, v3(-5, 0.5, 0.5), v3(0, 0, 1), 0, INFINITY);
@@ -455,7 +464,7 @@ static void clip_in_camera_render_space(void **state)
     transform render_from_world = transform_translate(v3(-3, -1, 0));
     build_ok_at(nanovdb_at("Translate 10 0 0\n", VOLUMES "box.vdb", ""), "t.pbrt",
                 render_from_world, &sd, &m);
-    assert_v3_near(transform_point(&m.grid.index_from_render, v3(10.5 - 3, 0.5 - 1, 0.5)),
+    assert_v3_near(transform_point(&grid_medium_of(&m)->index_from_render, v3(10.5 - 3, 0.5 - 1, 0.5)),
                    v3(16, 16, 16), 1e-12);
     /* The world ray (5, 0.5, 0.5) + t x is (2, -0.5, 0.5) + t x in render space. */
     clip_expect(&m, v3(2, -0.5, 0.5), v3(1, 0, 0), 0, INFINITY, 5 - 1.0 / 32, 6);
@@ -470,17 +479,18 @@ static void clip_special_grids(void **state)
     (void)state;
     medium m;
     memset(&m, 0, sizeof m);
-    m.kind = MEDIUM_GRID;
-    m.grid.index_from_render = transform_identity();
-    m.grid.support_lo = v3(1, 1, 1);
-    m.grid.support_hi = v3(-1, -1, -1);
+    m.ops = medium_kind("nanovdb");
+    assert_true(grid_medium_alloc(&m));
+    grid_medium_of(&m)->index_from_render = transform_identity();
+    grid_medium_of(&m)->support_lo = v3(1, 1, 1);
+    grid_medium_of(&m)->support_hi = v3(-1, -1, -1);
     clip_expect_miss(&m, v3(-5, 0, 0), v3(1, 0, 0), 0, INFINITY);
     clip_expect_miss(&m, v3(0, 0, 0), v3(0, 0, 0), 0, INFINITY);
     /* A non-zero background fills all space: the interval is kept. */
-    m.grid.background = 0.25;
+    grid_medium_of(&m)->background = 0.25;
     clip_expect(&m, v3(-5, 0, 0), v3(1, 0, 0), 0, INFINITY, 0, INFINITY);
     clip_expect_miss(&m, v3(-5, 0, 0), v3(1, 0, 0), 2, 1);
-    medium_free(&m); /* no grid: nothing to release */
+    medium_destroy(&m); /* no grid: nothing to release */
 }
 
 static void homogeneous_clip(void **state)
@@ -488,11 +498,11 @@ static void homogeneous_clip(void **state)
     (void)state;
     medium m;
     memset(&m, 0, sizeof m);
-    m.kind = MEDIUM_HOMOGENEOUS;
+    m.ops = medium_kind("homogeneous");
     clip_expect(&m, v3(1e9, -3, 2), v3(0, 1, 0), 0.25, INFINITY, 0.25, INFINITY);
     clip_expect(&m, v3(0, 0, 0), v3(1, 0, 0), 3, 3, 3, 3);
     clip_expect_miss(&m, v3(0, 0, 0), v3(1, 0, 0), 3, 2);
-    medium_free(&m);
+    medium_destroy(&m);
 }
 
 static void free_is_safe(void **state)
@@ -500,13 +510,13 @@ static void free_is_safe(void **state)
     (void)state;
     medium m;
     memset(&m, 0, sizeof m);
-    medium_free(&m);
-    medium_free(&m);
-    medium_free(NULL);
+    medium_destroy(&m);
+    medium_destroy(&m);
+    medium_destroy(NULL);
     scene_desc sd;
     build_ok(nanovdb(VOLUMES "box.vdb", ""), &sd, &m);
-    medium_free(&m);
-    medium_free(&m); /* the grid pointer was cleared */
+    medium_destroy(&m);
+    medium_destroy(&m); /* the grid pointer was cleared */
     scene_desc_free(&sd);
 }
 
@@ -515,9 +525,9 @@ static void free_is_safe(void **state)
 /* A ray's index-space origin at `time` (the grid ray of o + t d). */
 static vec3 index_origin(const medium *m, vec3 o, double time)
 {
-    medium_grid_ray r;
-    assert_true(medium_grid_ray_make(m, o, v3(1, 0, 0), time, &r));
-    return r.o;
+    medium_ray r;
+    assert_true(grid_medium_ray_make(m, o, v3(1, 0, 0), time, &r));
+    return r.at.grid.o;
 }
 
 static void clip_expect_at(const medium *m, vec3 o, vec3 d, double time, double want0,
@@ -540,7 +550,7 @@ static void moving_translation(void **state)
     build_ok(nanovdb_at("ActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n",
                         VOLUMES "box.vdb", ""),
              &sd, &m);
-    assert_true(m.grid.moving);
+    assert_true(grid_medium_of(&m)->moving);
     vec3 o = v3(-5, 0.5, 0.5);
     for (double t = 0; t <= 1.0; t += 0.25) {
         assert_v3_near(index_origin(&m, o, t), v3(32 * (-5 - t), 16, 16), 1e-12);
@@ -592,18 +602,18 @@ static void moving_equal_keyframes_are_static(void **state)
                         "ActiveTransform All\n",
                         VOLUMES "box.vdb", ""),
              &sd, &m);
-    assert_false(m.grid.moving);
+    assert_false(grid_medium_of(&m)->moving);
     scene_desc sd2;
     build_ok(nanovdb_at("Translate 0.25 0 0\n", VOLUMES "box.vdb", ""), &sd2, &still);
-    assert_memory_equal(&m.grid.index_from_render, &still.grid.index_from_render,
-                        sizeof still.grid.index_from_render);
+    assert_memory_equal(&grid_medium_of(&m)->index_from_render, &grid_medium_of(&still)->index_from_render,
+                        sizeof grid_medium_of(&still)->index_from_render);
     free_all(&sd, &m);
     free_all(&sd2, &still);
     /* A homogeneous medium accepts an animated transform (its shapes place it). */
     build_ok("WorldBegin\nActiveTransform EndTime\nTranslate 1 0 0\nActiveTransform All\n"
              "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n",
              &sd, &m);
-    assert_int_equal(m.kind, MEDIUM_HOMOGENEOUS);
+    assert_true(medium_is_homogeneous(&m));
     free_all(&sd, &m);
 }
 
@@ -618,37 +628,35 @@ static void velocity_box(void **state)
                      "\"string velocityname\" \"v\" \"float velocityscale\" 0.5"),
              &sd, &m);
     check_box(&m);
-    assert_non_null(m.grid.velocity);
-    assert_true(m.grid.velocity_aligned);
-    assert_false(m.grid.moving);
-    assert_near(m.grid.velocity_scale, 0.5, 0);
-    assert_near(m.grid.velocity_time, 0.0, 0); /* TransformTimes start */
+    assert_non_null(grid_medium_of(&m)->velocity);
+    assert_true(grid_medium_of(&m)->velocity_aligned);
+    assert_false(grid_medium_of(&m)->moving);
+    assert_near(grid_medium_of(&m)->velocity_scale, 0.5, 0);
+    assert_near(grid_medium_of(&m)->velocity_time, 0.0, 0); /* TransformTimes start */
     /* |v| times 32 index units per world unit, on every axis. */
     double grow = 32 * sqrt(1.0625);
-    assert_v3_near(m.grid.dilation, v3(grow, grow, grow), 1e-5);
+    assert_v3_near(grid_medium_of(&m)->dilation, v3(grow, grow, grow), 1e-5);
 
-    medium_accessor a;
-    medium_accessor_init(&m, &a);
     /* At time 1 the density has moved by 0.5 v = 16 and 4 voxels. */
     vec3 o = v3(40.0 / 32, 18.0 / 32, 0.5); /* index (40, 18, 16) */
-    medium_grid_ray r;
+    medium_ray r;
     uint64_t lookups = 0;
-    assert_true(medium_grid_ray_make(&m, o, v3(0, 0, 1), 1.0, &r));
-    assert_near(r.shift, 0.5, 0);
-    assert_near(medium_density_at(&m, &a, &r, 0.0, &lookups), 1.0, 0);
+    assert_true(grid_medium_ray_make(&m, o, v3(0, 0, 1), 1.0, &r));
+    assert_near(r.at.grid.shift, 0.5, 0);
+    assert_near(density_at(&m, &r, 0.0, &lookups), 1.0, 0);
     assert_int_equal(lookups, 2); /* velocity, then density */
-    assert_near(medium_density_at(&m, &a, &r, 15.5 / 32, &lookups), 0.5, 1e-12); /* z = 31.5 */
+    assert_near(density_at(&m, &r, 15.5 / 32, &lookups), 0.5, 1e-12); /* z = 31.5 */
     /* At time 0 (velocitytime): no velocity lookup, the static box. */
-    assert_true(medium_grid_ray_make(&m, o, v3(0, 0, 1), 0.0, &r));
-    assert_near(r.shift, 0.0, 0);
+    assert_true(grid_medium_ray_make(&m, o, v3(0, 0, 1), 0.0, &r));
+    assert_near(r.at.grid.shift, 0.0, 0);
     lookups = 0;
-    assert_near(medium_density_at(&m, &a, &r, 0.0, &lookups), 0.0, 0);
+    assert_near(density_at(&m, &r, 0.0, &lookups), 0.0, 0);
     assert_int_equal(lookups, 1);
     /* The support grows by |shift| times the dilation, both ways. */
-    assert_true(medium_grid_ray_make(&m, o, v3(0, 0, 1), 1.0, &r));
-    assert_v3_near(r.lo, v3_sub(m.grid.support_lo, v3_scale(m.grid.dilation, 0.5)), 1e-12);
-    assert_v3_near(r.hi, v3_add(m.grid.support_hi, v3_scale(m.grid.dilation, 0.5)), 1e-12);
-    grow = m.grid.dilation.x;
+    assert_true(grid_medium_ray_make(&m, o, v3(0, 0, 1), 1.0, &r));
+    assert_v3_near(r.at.grid.lo, v3_sub(grid_medium_of(&m)->support_lo, v3_scale(grid_medium_of(&m)->dilation, 0.5)), 1e-12);
+    assert_v3_near(r.at.grid.hi, v3_add(grid_medium_of(&m)->support_hi, v3_scale(grid_medium_of(&m)->dilation, 0.5)), 1e-12);
+    grow = grid_medium_of(&m)->dilation.x;
     clip_expect_at(&m, v3(-5, 0.5, 0.5), v3(1, 0, 0), 1.0, 5 + (-1 - 0.5 * grow) / 32,
                    5 + (32 + 0.5 * grow) / 32);
     free_all(&sd, &m);
@@ -659,12 +667,11 @@ static void velocity_box(void **state)
                      "\"string velocityname\" \"v\" \"float velocityscale\" 0.5 "
                      "\"float velocitytime\" 0.5"),
              &sd, &m);
-    medium_accessor_init(&m, &a);
-    assert_true(medium_grid_ray_make(&m, v3(-2.0 / 32, 0.5, 0.5), v3(1, 0, 0), 0.0, &r));
-    assert_near(r.shift, -0.25, 0);
-    assert_near(medium_density_at(&m, &a, &r, 0.0, &lookups), 1.0, 0);          /* x = -2 */
-    assert_near(medium_density_at(&m, &a, &r, -7.0 / 32, &lookups), 0.0, 0);    /* x = -9 */
-    assert_near(medium_density_at(&m, &a, &r, 25.5 / 32, &lookups), 0.5, 1e-12); /* x = 23.5 */
+    assert_true(grid_medium_ray_make(&m, v3(-2.0 / 32, 0.5, 0.5), v3(1, 0, 0), 0.0, &r));
+    assert_near(r.at.grid.shift, -0.25, 0);
+    assert_near(density_at(&m, &r, 0.0, &lookups), 1.0, 0);          /* x = -2 */
+    assert_near(density_at(&m, &r, -7.0 / 32, &lookups), 0.0, 0);    /* x = -9 */
+    assert_near(density_at(&m, &r, 25.5 / 32, &lookups), 0.5, 1e-12); /* x = 23.5 */
     free_all(&sd, &m);
 }
 
@@ -679,10 +686,8 @@ static void velocity_unaligned_grids(void **state)
                      "\"string velocityname\" \"v\" \"float velocityscale\" 0.2 "
                      "\"float velocitytime\" 0.5"),
              &sd, &m);
-    assert_false(m.grid.velocity_aligned);
-    const grid *d = m.grid.grid, *v = m.grid.velocity;
-    medium_accessor a;
-    medium_accessor_init(&m, &a);
+    assert_false(grid_medium_of(&m)->velocity_aligned);
+    const grid *d = grid_medium_of(&m)->grid, *v = grid_medium_of(&m)->velocity;
     grid_accessor va, da;
     grid_accessor_init(v, &va);
     grid_accessor_init(d, &da);
@@ -691,9 +696,9 @@ static void velocity_unaligned_grids(void **state)
     for (int n = 0; n < 300; ++n) {
         vec3 o = v3(rng_next(&seed) - 0.5, 2 * rng_next(&seed), rng_next(&seed) - 0.5);
         double time = rng_next(&seed);
-        medium_grid_ray r;
-        assert_true(medium_grid_ray_make(&m, o, v3(0, 1, 0), time, &r));
-        double got = medium_density_at(&m, &a, &r, 0.0, &lookups);
+        medium_ray r;
+        assert_true(grid_medium_ray_make(&m, o, v3(0, 1, 0), time, &r));
+        double got = density_at(&m, &r, 0.0, &lookups);
         vec3 vel = grid_vec3_index(v, &va, grid_index_from_world(v, o));
         vec3 moved = v3_sub(o, v3_scale(vel, 0.2 * (time - 0.5)));
         double want = grid_density_index(d, &da, grid_index_from_world(d, moved));
@@ -759,12 +764,12 @@ static void velocity_errors(void **state)
             pl->items[i].nums[0] = NAN;
     medium m;
     medium_times times = {0, 1, 0, 1};
-    assert_int_equal(medium_from_entity(&sd.media[0], transform_identity(), &times, &m, &err),
+    assert_int_equal(medium_create(&sd.media[0], transform_identity(), &times, &m, &err),
                      HZ_ERROR);
     snprintf(want, sizeof want, "t.pbrt:2:%d:", column_of(src, "\"float velocityscale\""));
     assert_non_null(strstr(err.message, want));
     assert_non_null(strstr(err.message, "\"velocityscale\" must be finite"));
-    medium_free(&m);
+    medium_destroy(&m);
     scene_desc_free(&sd);
 }
 

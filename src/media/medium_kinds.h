@@ -1,0 +1,14 @@
+/* The kinds of media, one file each: the rows of medium.c's table. Private
+ * to src/media. */
+#ifndef HAZE_MEDIA_MEDIUM_KINDS_H
+#define HAZE_MEDIA_MEDIUM_KINDS_H
+
+#include "media/medium.h"
+
+extern const medium_ops medium_homogeneous_ops;  /* homogeneous.c */
+extern const medium_ops medium_nanovdb_ops;      /* nanovdb_medium.c */
+extern const medium_ops medium_uniformgrid_ops;  /* uniformgrid_medium.c */
+extern const medium_ops medium_rgbgrid_ops;      /* rgbgrid.c */
+extern const medium_ops medium_cloud_ops;        /* cloud_medium.c */
+
+#endif
