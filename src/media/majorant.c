@@ -225,6 +225,68 @@ static bool bound_cells(const source *src, majorant_grid *mg, const int32_t bric
     return differ;
 }
 
+/* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose varied
+ * bricks fit MAJORANT_MAX_STORED_CELLS: lays out out's bricks and bounds
+ * them. *varied: the bricks whose cells differ. */
+static hz_status choose_layout(const source *src, const double l3[3], const double h3[3],
+                               majorant_grid *out, size_t *varied, hz_error *err)
+{
+    for (;;) {
+        int64_t first[3], res[3];
+        uint64_t count = layout(l3, h3, out->cell, first, res);
+        if (count > MAJORANT_MAX_BRICKS && out->cell < MAX_CELL) {
+            out->cell *= 2;
+            continue;
+        }
+        for (int a = 0; a < 3; ++a) {
+            out->res[a] = (int32_t)res[a];
+            out->origin[a] = (int32_t)(first[a] * out->cell * B);
+        }
+        out->bricks = malloc((size_t)count * sizeof *out->bricks);
+        if (!out->bricks) {
+            majorant_grid_free(out);
+            return hz_fail(err, "out of memory for a majorant grid of %zu bricks", (size_t)count);
+        }
+        *varied = bound_bricks(src, out);
+        if (*varied <= MAJORANT_MAX_STORED_CELLS / CELLS_PER_BRICK || out->cell >= MAX_CELL)
+            return HZ_OK;
+        free(out->bricks);
+        out->bricks = NULL;
+        out->cell *= 2;
+    }
+}
+
+/* Bounds the cells of every brick that is not uniform, keeping those whose
+ * cells differ. */
+static void store_cells(const source *src, majorant_grid *out)
+{
+    size_t i = 0;
+    for (int32_t z = 0; z < out->res[2]; ++z)
+        for (int32_t y = 0; y < out->res[1]; ++y)
+            for (int32_t x = 0; x < out->res[0]; ++x, ++i) {
+                majorant_brick *br = &out->bricks[i];
+                if (uniform_bounds(br->bounds))
+                    continue;
+                const int32_t b3[3] = {x, y, z};
+                size_t at = out->stored_bricks * CELLS_PER_BRICK;
+                if (bound_cells(src, out, b3, out->cells + at, out->boxes ? out->boxes + at : NULL,
+                                &br->bounds))
+                    br->cells = (int32_t)out->stored_bricks++;
+            }
+}
+
+/* p shrunk to `bytes` (freed for 0); p itself when realloc fails. */
+static void *shrink_to(void *p, size_t bytes)
+{
+    void *kept = bytes ? realloc(p, bytes) : NULL;
+    if (kept || !bytes) {
+        if (!kept)
+            free(p);
+        return kept;
+    }
+    return p;
+}
+
 hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
                               const int32_t pad[3], majorant_grid *out, hz_error *err)
 {
@@ -244,36 +306,13 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
         if (!em->aligned)
             src.index_from_eindex = transform_inverse(em->eindex_from_index);
     }
-    /* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose
-     * varied bricks fit MAJORANT_MAX_STORED_CELLS. */
-    size_t varied;
-    for (;;) {
-        int64_t first[3], res[3];
-        uint64_t count = layout(l3, h3, out->cell, first, res);
-        if (count > MAJORANT_MAX_BRICKS && out->cell < MAX_CELL) {
-            out->cell *= 2;
-            continue;
-        }
-        for (int a = 0; a < 3; ++a) {
-            out->res[a] = (int32_t)res[a];
-            out->origin[a] = (int32_t)(first[a] * out->cell * B);
-        }
-        out->bricks = malloc((size_t)count * sizeof *out->bricks);
-        if (!out->bricks) {
-            majorant_grid_free(out);
-            return hz_fail(err, "out of memory for a majorant grid of %zu bricks", (size_t)count);
-        }
-        varied = bound_bricks(&src, out);
-        if (varied <= MAJORANT_MAX_STORED_CELLS / CELLS_PER_BRICK || out->cell >= MAX_CELL)
-            break;
-        free(out->bricks);
-        out->bricks = NULL;
-        out->cell *= 2;
-    }
+    size_t varied = 0;
+    if (choose_layout(&src, l3, h3, out, &varied, err) != HZ_OK)
+        return HZ_ERROR;
     if (varied == 0)
         return HZ_OK;
     out->cells = malloc(varied * CELLS_PER_BRICK * sizeof *out->cells);
-    /* Boxes need zero backgrounds (an emission grid's always is, medium.c). */
+    /* Boxes need zero backgrounds (an emission grid's always is). */
     bool boxes = grid_background(g) == 0.0f && (!em || grid_background(em->grid) == 0.0f);
     if (boxes)
         out->boxes = malloc(varied * CELLS_PER_BRICK * sizeof *out->boxes);
@@ -282,39 +321,12 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
         return hz_fail(err, "out of memory for a majorant grid of %zu cells",
                        varied * CELLS_PER_BRICK);
     }
-    size_t i = 0;
-    for (int32_t z = 0; z < out->res[2]; ++z)
-        for (int32_t y = 0; y < out->res[1]; ++y)
-            for (int32_t x = 0; x < out->res[0]; ++x, ++i) {
-                majorant_brick *br = &out->bricks[i];
-                if (uniform_bounds(br->bounds))
-                    continue;
-                const int32_t b3[3] = {x, y, z};
-                size_t at = out->stored_bricks * CELLS_PER_BRICK;
-                if (bound_cells(&src, out, b3, out->cells + at, out->boxes ? out->boxes + at : NULL,
-                                &br->bounds))
-                    br->cells = (int32_t)out->stored_bricks++;
-            }
+    store_cells(&src, out);
     if (out->stored_bricks < varied) { /* give back what uniform bricks did not keep */
-        void *kept = out->stored_bricks
-                         ? realloc(out->cells,
-                                   out->stored_bricks * CELLS_PER_BRICK * sizeof *out->cells)
-                         : NULL;
-        if (kept || !out->stored_bricks) {
-            if (!kept)
-                free(out->cells);
-            out->cells = kept;
-        }
-        if (out->boxes) {
-            kept = out->stored_bricks
-                       ? realloc(out->boxes, out->stored_bricks * CELLS_PER_BRICK * sizeof *out->boxes)
-                       : NULL;
-            if (kept || !out->stored_bricks) {
-                if (!kept)
-                    free(out->boxes);
-                out->boxes = kept;
-            }
-        }
+        size_t kept = out->stored_bricks * CELLS_PER_BRICK;
+        out->cells = shrink_to(out->cells, kept * sizeof *out->cells);
+        if (out->boxes)
+            out->boxes = shrink_to(out->boxes, kept * sizeof *out->boxes);
     }
     return HZ_OK;
 }

@@ -198,106 +198,123 @@ static hz_status adopt_color(medium_entity *e, const char *path, const extra_par
     return HZ_OK;
 }
 
-/* Loads the grid and places it. Densities must be finite and >= 0: the
- * majorant-based trackers treat sigma_t(p) / sigma_t_max as a probability,
- * which a negative density breaks (and pbrt-v4 has no meaning for it either),
- * so grid_check_density refuses such values (the voxels themselves, not the
- * stored statistics) rather than clamping them. */
-static hz_status load_grid(medium_entity *e, transform render_from_world, const char *filename,
-                           const char *gridname, const grid_motion_params *mp,
-                           const temperature_params *tp, const extra_params *xp, medium *out,
-                           hz_error *err)
+/* Every grid the medium needs, read from its file at once. */
+typedef struct {
+    grid *grids[5]; /* density, velocity, temperature, emission, colour (as requested) */
+    size_t at[5];   /* at[k]: where grid kind k is in grids, 0: absent */
+    size_t count;
+} grid_set;
+
+/* Reads every grid the medium needs in one read of the file (one OpenVDB
+ * reader process for a .vdb file): density, velocity, temperature (of the
+ * file, as pbrt-v4, unless a free emission grid is named: then only when
+ * named), emission, colour. */
+static hz_status read_grids(medium_entity *e, const char *path, const char *gridname,
+                            const grid_motion_params *mp, const temperature_params *tp,
+                            const extra_params *xp, grid_set *set, hz_error *err)
 {
-    grid_medium *gm = grid_medium_of(out);
-    file_loc loc = e->entity.loc;
-    const char *name = e->name ? e->name : "";
-    char *path = path_of_scene_file(loc, filename);
-    if (!path)
-        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": out of memory", name);
-    /* Every grid the medium needs, in one read of the file (one OpenVDB
-     * reader process for a .vdb file): density, velocity, temperature (of
-     * the file, as pbrt-v4, unless a free emission grid is named: then only
-     * when named), emission, colour. Index 0 (the density) marks the absent. */
+    const char *name = medium_entity_name(e);
     grid_request req[5] = {{gridname, GRID_FLOAT, false}};
     const char *what[5] = {"grid", "velocity grid", "temperature grid", "emission grid",
                            "colour grid"};
     const char *param[5] = {NULL, "velocityname", "temperaturename", "emissionname",
                             "colorname"};
-    size_t nreq = 1, at[5] = {0}; /* at[k]: where grid kind k is in req, 0: absent */
+    *set = (grid_set){{NULL, NULL, NULL, NULL, NULL}, {0}, 1};
     if (mp->velocityname) {
-        at[1] = nreq;
-        req[nreq++] = (grid_request){mp->velocityname, GRID_VEC3, false};
+        set->at[1] = set->count;
+        req[set->count++] = (grid_request){mp->velocityname, GRID_VEC3, false};
     }
     if (!xp->emissionname || tp->named) {
-        at[2] = nreq;
-        req[nreq++] = (grid_request){tp->name, GRID_FLOAT, !tp->named};
+        set->at[2] = set->count;
+        req[set->count++] = (grid_request){tp->name, GRID_FLOAT, !tp->named};
     }
     if (xp->emissionname) {
-        at[3] = nreq;
-        req[nreq++] = (grid_request){xp->emissionname, GRID_FLOAT, false};
+        set->at[3] = set->count;
+        req[set->count++] = (grid_request){xp->emissionname, GRID_FLOAT, false};
     }
     if (xp->colorname) {
-        at[4] = nreq;
-        req[nreq++] = (grid_request){xp->colorname, GRID_VEC3, false};
+        set->at[4] = set->count;
+        req[set->count++] = (grid_request){xp->colorname, GRID_VEC3, false};
     }
-    grid *grids[5] = {NULL, NULL, NULL, NULL, NULL};
     size_t failed = 0;
     hz_error inner;
-    hz_status st = grid_load_set(path, req, nreq, grids, &failed, &inner);
-    if (st != HZ_OK) {
-        free(path);
-        if (failed == 0)
-            return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
-        size_t k = 1;
-        while (k < 4 && at[k] != failed)
-            ++k;
-        file_loc where = params_has(&e->entity.params, param[k])
-                             ? params_loc(&e->entity.params, param[k])
-                             : e->entity.loc;
-        return hz_fail_at(err, where, "MakeNamedMedium \"%s\": %s: %s", name, what[k],
-                          inner.message);
-    }
-    grid *g = grids[0];
+    if (grid_load_set(path, req, set->count, set->grids, &failed, &inner) == HZ_OK)
+        return HZ_OK;
+    if (failed == 0)
+        return hz_fail_at(err, e->entity.loc, "MakeNamedMedium \"%s\": %s", name, inner.message);
+    size_t k = 1;
+    while (k < 4 && set->at[k] != failed)
+        ++k;
+    file_loc where = params_has(&e->entity.params, param[k])
+                         ? params_loc(&e->entity.params, param[k])
+                         : e->entity.loc;
+    return hz_fail_at(err, where, "MakeNamedMedium \"%s\": %s: %s", name, what[k],
+                      inner.message);
+}
 
-    if (grid_check_density(g, &inner) != HZ_OK) {
-        st = hz_fail_at(err, loc, "MakeNamedMedium \"%s\": grid \"%s\" in %s: %s", name,
-                        gridname, path, inner.message);
-        grid_destroy(g);
-        free(path);
-        return st;
-    }
+/* Checks and places the density grid g and adopts it with its support.
+ * Densities must be finite and >= 0: the majorant-based trackers treat
+ * sigma_t(p) / sigma_t_max as a probability, which a negative density breaks
+ * (and pbrt-v4 has no meaning for it either), so grid_check_density refuses
+ * such values (the voxels themselves, not the stored statistics) rather than
+ * clamping them. On failure g is not adopted. */
+static hz_status adopt_density(medium_entity *e, transform render_from_world, const char *path,
+                               const char *gridname, const grid_motion_params *mp, grid *g,
+                               grid_medium *gm, hz_error *err)
+{
+    file_loc loc = e->entity.loc;
+    const char *name = medium_entity_name(e);
+    hz_error inner;
+    if (grid_check_density(g, &inner) != HZ_OK)
+        return hz_fail_at(err, loc, "MakeNamedMedium \"%s\": grid \"%s\" in %s: %s", name,
+                          gridname, path, inner.message);
     vec3 lo, hi;
     bool nonempty = grid_support_bounds(g, &lo, &hi);
     /* grid_check_density refused non-finite and negative values (and
      * background): only a non-zero background is left to refuse. */
     double background = grid_background(g);
     if (background != 0.0)
-        st = hz_fail_at(err, loc,
-                        "MakeNamedMedium \"%s\": grid \"%s\" in %s has background %g; haze "
-                        "needs a fog volume with background 0 (the medium would otherwise fill "
-                        "all space)",
-                        name, gridname, path, background);
-    if (st == HZ_OK)
-        st = grid_medium_place(e, render_from_world, g, mp, gm, err);
-    if (st != HZ_OK) {
-        free(path);
-        for (size_t i = 0; i < nreq; ++i)
-            grid_destroy(grids[i]);
+        return hz_fail_at(err, loc,
+                          "MakeNamedMedium \"%s\": grid \"%s\" in %s has background %g; haze "
+                          "needs a fog volume with background 0 (the medium would otherwise "
+                          "fill all space)",
+                          name, gridname, path, background);
+    if (grid_medium_place(e, render_from_world, g, mp, gm, err) != HZ_OK)
         return HZ_ERROR;
-    }
-
     gm->grid = g;
-    if (nonempty) {
-        gm->support_lo = lo;
-        gm->support_hi = hi;
-    } else {
-        gm->support_lo = v3(1, 1, 1);
-        gm->support_hi = v3(-1, -1, -1);
-    }
+    gm->support_lo = nonempty ? lo : v3(1, 1, 1);
+    gm->support_hi = nonempty ? hi : v3(-1, -1, -1);
     gm->background = background;
     gm->density_max = nonempty ? grid_max_value(g) : 0.0; /* values >= 0 = background */
+    return HZ_OK;
+}
+
+/* Loads the grid and places it, with its velocity, temperature, emission
+ * and colour grids. */
+static hz_status load_grid(medium_entity *e, transform render_from_world, const char *filename,
+                           const char *gridname, const grid_motion_params *mp,
+                           const temperature_params *tp, const extra_params *xp, medium *out,
+                           hz_error *err)
+{
+    char *path = path_of_scene_file(e->entity.loc, filename);
+    if (!path)
+        return hz_fail_at(err, e->entity.loc, "MakeNamedMedium \"%s\": out of memory",
+                          medium_entity_name(e));
+    grid_set set;
+    hz_status st = read_grids(e, path, gridname, mp, tp, xp, &set, err);
+    if (st == HZ_OK)
+        st = adopt_density(e, render_from_world, path, gridname, mp, set.grids[0],
+                           grid_medium_of(out), err);
+    if (st != HZ_OK) {
+        for (size_t i = 0; i < set.count; ++i)
+            grid_destroy(set.grids[i]);
+        free(path);
+        return HZ_ERROR;
+    }
     /* Each step takes its grid (adopts it, or destroys it); after a failure
      * the rest are destroyed. The caller frees what was adopted. */
+    const size_t *at = set.at;
+    grid **grids = set.grids;
     if (at[1])
         st = load_velocity(e, path, mp, grids[at[1]], out, err);
     bool colour_only = xp->emissionname != NULL;

@@ -287,6 +287,131 @@ static hz_status check_shadow_cache(const render_scene *rs, scene_desc *sd,
                : HZ_OK;
 }
 
+/* The Film's parameters with the command line's overrides. False (and
+ * *err set) when the Film was refused. */
+static bool read_film(scene_desc *sd, const render_options *opt, film_params *fp, hz_error *err)
+{
+    if (film_params_from_entity_region(&sd->film, opt ? &opt->region : NULL, fp, NULL, err) !=
+        HZ_OK)
+        return false;
+    film_params_set_color_space(fp, sd->film_color_space);
+    if (opt && opt->statistics)
+        fp->write_variance = fp->write_sample_count = true;
+    if (opt && opt->output) {
+        if (strlen(opt->output) >= sizeof fp->filename) {
+            hz_fail(err, "output file name too long: %s", opt->output);
+            return false;
+        }
+        snprintf(fp->filename, sizeof fp->filename, "%s", opt->output);
+    }
+    return true;
+}
+
+/* The film of the built camera. */
+static hz_status build_film(render_scene *rs, scene_desc *sd, const film_params *fp, FILE *warn,
+                            hz_error *err)
+{
+    rs->film = film_create(fp, err);
+    if (!rs->film) {
+        /* The film's own failures (its size) name the Film. */
+        char msg[sizeof err->message];
+        memcpy(msg, err->message, sizeof msg);
+        return hz_fail_at(err, sd->film.loc, "%s", msg);
+    }
+    if (params_has(&sd->film.params, "scale"))
+        hz_warn_at(warn, params_loc(&sd->film.params, "scale"),
+                   "Film \"scale\" was removed from pbrt-v4 in 2020 (\"iso\" replaces it) "
+                   "and today's pbrt-v4 refuses it; haze multiplies the image by it, as "
+                   "pbrt-v4 did");
+    /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
+    film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, fp));
+    /* A gbuffer's positions and normals: camera space (at the shutter's
+     * open) or world space. */
+    film_set_output_from_render(rs->film, fp->gbuffer_world
+                                              ? rs->cam.world_from_render
+                                              : transform_inverse(rs->cam.render_from_camera));
+    return HZ_OK;
+}
+
+/* The sampler, with --spp. */
+static hz_status build_sampler(render_scene *rs, scene_desc *sd, const render_options *opt,
+                               uint64_t seed, FILE *warn, hz_error *err)
+{
+    if (sampler_from_entity(&sd->sampler, seed, &rs->smp, err) != HZ_OK)
+        return HZ_ERROR;
+    if (opt && opt->spp > 0)
+        sampler_set_spp(&rs->smp, opt->spp);
+    if (rs->smp.warning[0])
+        hz_warn_at(warn, sd->sampler.loc, "%s", rs->smp.warning);
+    return HZ_OK;
+}
+
+/* Media that only volpath renders, under singlescatter: refused. */
+static hz_status check_media_integrator(const render_scene *rs, scene_desc *sd,
+                                        const integrator_params *ip, hz_errors *errs,
+                                        hz_error *err)
+{
+    for (size_t i = 0; ip->kind == INTEGRATOR_SINGLESCATTER && i < rs->medium_count; ++i)
+        if (medium_type_volpath_only(sd->media[i].entity.type) &&
+            collect(errs, (hz_fail_at(err, sd->media[i].entity.loc,
+                                      "MakeNamedMedium \"%s\": a \"%s\" medium needs "
+                                      "Integrator \"volpath\" (singlescatter renders nanovdb, "
+                                      "uniformgrid and homogeneous media)",
+                                      rs->media[i].name ? rs->media[i].name : "",
+                                      sd->media[i].entity.type),
+                           err)) != HZ_OK)
+            return HZ_ERROR;
+    return HZ_OK;
+}
+
+/* pbrt-v4 renders a scene with no Integrator with "volpath" (maxdepth 5):
+ * say once which haze renders. */
+static void warn_default_integrator(const render_scene *rs, scene_desc *sd, FILE *warn)
+{
+    const char *why, *what;
+    bool forced = integrator_default_kind(sd, &why, &what) == INTEGRATOR_VOLPATH;
+    if (!warn || sd->integrator.loc.line != 0 || !(rs->medium_count > 0 || forced))
+        return;
+    const char *file = sd->file_count ? sd->files[0] : "<input>";
+    if (forced)
+        fprintf(warn,
+                "%s: warning: the scene names no Integrator and has a \"%s\" %s, which "
+                "only \"volpath\" renders: haze renders pbrt-v4's default, \"volpath\" "
+                "with maxdepth 5\n",
+                file, why, what);
+    else
+        fprintf(warn,
+                "%s: warning: the scene names no Integrator: haze renders single scattering "
+                "(\"singlescatter\", its default), pbrt-v4 multiple scattering (\"volpath\", "
+                "maxdepth 5); name Integrator \"volpath\" for pbrt-v4's image\n",
+                file);
+}
+
+/* The integrator over what was built, and the shadow caches it asks for. */
+static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integrator_params *ip,
+                                  FILE *warn, hz_error *err)
+{
+    /* Media that no ray can enter (no shape names one, the camera sits in
+     * none) cost nothing: the integrators see a scene without media, so its
+     * shadow rays stay occlusion tests and the image is the one without
+     * them, byte for byte. */
+    bool media_used = rs->cam.medium >= 0 || geometry_references_media(rs->geom);
+    integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media,
+                            media_used ? rs->medium_count : 0};
+    bool cached = ip->kind == INTEGRATOR_SINGLESCATTER && ip->singlescatter.shadow_cache > 0.0;
+    if (cached && check_shadow_cache(rs, sd, &in, err) != HZ_OK)
+        return HZ_ERROR;
+    if (integrator_init(&rs->integ, ip, &in, err) != HZ_OK)
+        return HZ_ERROR;
+    if (!cached)
+        return HZ_OK;
+    rs->cache_spacing[0] = ip->singlescatter.shadow_cache;
+    if (shadow_caches_create(&in, rs->cache_spacing[0], 0, warn, &rs->caches[0], err) != HZ_OK)
+        return HZ_ERROR;
+    rs->integ.singlescatter.caches = rs->caches[0];
+    return HZ_OK;
+}
+
 /* Builds what it can; see collect(). */
 static hz_status build_all(render_scene *rs, scene_desc *sd, const render_options *opt,
                            FILE *warn, hz_errors *errs, hz_error *err)
@@ -297,59 +422,22 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     uint64_t seed = opt ? opt->seed : 0;
     CHECK(read_options(&sd->options, opt, &seed, &rs->options, err));
     film_params fp;
-    bool have_film =
-        film_params_from_entity_region(&sd->film, opt ? &opt->region : NULL, &fp, NULL, err) ==
-        HZ_OK;
+    bool have_film = read_film(sd, opt, &fp, err);
     if (!have_film && collect(errs, err) != HZ_OK)
         return HZ_ERROR;
-    if (have_film)
-        film_params_set_color_space(&fp, sd->film_color_space);
-    if (have_film && opt && opt->statistics)
-        fp.write_variance = fp.write_sample_count = true;
-    if (have_film && opt && opt->output) {
-        if (strlen(opt->output) >= sizeof fp.filename)
-            return hz_fail(err, "output file name too long: %s", opt->output);
-        snprintf(fp.filename, sizeof fp.filename, "%s", opt->output);
-    }
     CHECK(read_accelerator(&sd->accelerator, warn, err));
     rs->filt = filter_create(&sd->filter, err);
     if (!rs->filt && collect(errs, err) != HZ_OK)
         return HZ_ERROR;
-    if (sampler_from_entity(&sd->sampler, seed, &rs->smp, err) == HZ_OK) {
-        if (opt && opt->spp > 0)
-            sampler_set_spp(&rs->smp, opt->spp);
-        if (rs->smp.warning[0])
-            hz_warn_at(warn, sd->sampler.loc, "%s", rs->smp.warning);
-    } else if (collect(errs, err) != HZ_OK) {
-        return HZ_ERROR;
-    }
+    CHECK(build_sampler(rs, sd, opt, seed, warn, err));
     bool have_camera = false;
     if (have_film) {
         have_camera = camera_create(&sd->camera, &fp, &rs->cam, err) == HZ_OK;
         if (!have_camera && collect(errs, err) != HZ_OK)
             return HZ_ERROR;
     }
-    if (have_camera) {
-        rs->film = film_create(&fp, err);
-        if (!rs->film) {
-            /* The film's own failures (its size) name the Film. */
-            char msg[sizeof err->message];
-            memcpy(msg, err->message, sizeof msg);
-            return hz_fail_at(err, sd->film.loc, "%s", msg);
-        }
-        if (params_has(&sd->film.params, "scale"))
-            hz_warn_at(warn, params_loc(&sd->film.params, "scale"),
-                       "Film \"scale\" was removed from pbrt-v4 in 2020 (\"iso\" replaces it) "
-                       "and today's pbrt-v4 refuses it; haze multiplies the image by it, as "
-                       "pbrt-v4 did");
-        /* maxcomponentvalue clamps L * imaging ratio, as pbrt-v4 does. */
-        film_set_imaging_ratio(rs->film, camera_imaging_ratio(&rs->cam, &fp));
-        /* A gbuffer's positions and normals: camera space (at the shutter's
-         * open) or world space. */
-        film_set_output_from_render(rs->film, fp.gbuffer_world
-                                                  ? rs->cam.world_from_render
-                                                  : transform_inverse(rs->cam.render_from_camera));
-    }
+    if (have_camera && build_film(rs, sd, &fp, warn, err) != HZ_OK)
+        return HZ_ERROR;
     integrator_params ip = {.kind = INTEGRATOR_SINGLESCATTER};
     CHECK(integrator_params_from_scene(sd, warn, &ip, err));
     if (ip.kind == INTEGRATOR_VOLPATH)
@@ -366,61 +454,14 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (rs->geom && rs->film && film_wants_surface(rs->film))
         geometry_require_uv(rs->geom);
     if (build_lights(rs, sd, render_from_world, warn, errs, err) != HZ_OK ||
-        build_media(rs, sd, render_from_world, errs, err) != HZ_OK)
+        build_media(rs, sd, render_from_world, errs, err) != HZ_OK ||
+        check_media_integrator(rs, sd, &ip, errs, err) != HZ_OK)
         return HZ_ERROR;
 #undef CHECK
-    /* pbrt-v4's procedural cloud and rgbgrid are rendered by volpath's
-     * tracking only. */
-    for (size_t i = 0; ip.kind == INTEGRATOR_SINGLESCATTER && i < rs->medium_count; ++i)
-        if (medium_type_volpath_only(sd->media[i].entity.type) &&
-            collect(errs, (hz_fail_at(err, sd->media[i].entity.loc,
-                                      "MakeNamedMedium \"%s\": a \"%s\" medium needs "
-                                      "Integrator \"volpath\" (singlescatter renders nanovdb, "
-                                      "uniformgrid and homogeneous media)",
-                                      rs->media[i].name ? rs->media[i].name : "",
-                                      sd->media[i].entity.type),
-                           err)) != HZ_OK)
-            return HZ_ERROR;
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
-    /* pbrt-v4 renders such a scene with "volpath" (maxdepth 5): say once
-     * which haze renders. */
-    const char *why, *what;
-    bool forced = integrator_default_kind(sd, &why, &what) == INTEGRATOR_VOLPATH;
-    if (warn && sd->integrator.loc.line == 0 && (rs->medium_count > 0 || forced)) {
-        const char *file = sd->file_count ? sd->files[0] : "<input>";
-        if (forced)
-            fprintf(warn,
-                    "%s: warning: the scene names no Integrator and has a \"%s\" %s, which "
-                    "only \"volpath\" renders: haze renders pbrt-v4's default, \"volpath\" "
-                    "with maxdepth 5\n",
-                    file, why, what);
-        else
-            fprintf(warn,
-                    "%s: warning: the scene names no Integrator: haze renders single scattering "
-                    "(\"singlescatter\", its default), pbrt-v4 multiple scattering (\"volpath\", "
-                    "maxdepth 5); name Integrator \"volpath\" for pbrt-v4's image\n",
-                    file);
-    }
-    /* Media that no ray can enter (no shape names one, the camera sits in
-     * none) cost nothing: the integrators see a scene without media, so its
-     * shadow rays stay occlusion tests and the image is the one without
-     * them, byte for byte. */
-    bool media_used = rs->cam.medium >= 0 || geometry_references_media(rs->geom);
-    integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media,
-                            media_used ? rs->medium_count : 0};
-    bool cached = ip.kind == INTEGRATOR_SINGLESCATTER && ip.singlescatter.shadow_cache > 0.0;
-    if (cached && check_shadow_cache(rs, sd, &in, err) != HZ_OK)
-        return HZ_ERROR;
-    if (integrator_init(&rs->integ, &ip, &in, err) != HZ_OK)
-        return HZ_ERROR;
-    if (!cached)
-        return HZ_OK;
-    rs->cache_spacing[0] = ip.singlescatter.shadow_cache;
-    if (shadow_caches_create(&in, rs->cache_spacing[0], 0, warn, &rs->caches[0], err) != HZ_OK)
-        return HZ_ERROR;
-    rs->integ.singlescatter.caches = rs->caches[0];
-    return HZ_OK;
+    warn_default_integrator(rs, sd, warn);
+    return build_integrator(rs, sd, &ip, warn, err);
 }
 
 /* Every error with a place in one run (sorted in file order, at most
