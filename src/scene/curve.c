@@ -4,7 +4,7 @@
  * (n + degree points) become one Bezier segment per span by blossoming, as
  * pbrt-v4 converts them. The width runs linearly from width0 to width1 over
  * the whole curve; a ribbon's normals "N" are given at the segment ends. */
-#include "scene/shape.h"
+#include "scene/curve.h"
 
 #include <math.h>
 #include <stdio.h>
