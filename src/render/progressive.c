@@ -8,28 +8,7 @@
 
 #include "core/clock.h"
 #include "render/progress.h"
-
-int progressive_pass_end(int begin, int spp)
-{
-    if (begin <= 0)
-        return spp < 1 ? spp : 1;
-    return begin <= spp / 2 ? 2 * begin : spp;
-}
-
-int progressive_first_end(const progressive_goal *goal, int spp)
-{
-    if (goal && goal->target_error > 0 && spp >= PROGRESSIVE_MIN_SPP)
-        return PROGRESSIVE_MIN_SPP;
-    return progressive_pass_end(0, spp);
-}
-
-bool progressive_pass_fits(double now, double deadline, double last_seconds, double last_work,
-                           double work)
-{
-    if (!(last_work > 0.0))
-        return now < deadline;
-    return now + last_seconds * (work / last_work) <= deadline;
-}
+#include "render/progressive_error.h"
 
 void render_stats_add_work(render_stats *total, const render_stats *pass)
 {

@@ -1,5 +1,5 @@
 /* The error estimate and sample allocation of --target-error
- * (progressive_error in progressive.h). */
+ * (progressive_error.h). */
 #include <assert.h>
 #include <math.h>
 #include <stdatomic.h>
@@ -8,7 +8,8 @@
 
 #include "core/big_alloc.h"
 #include "core/parallel.h"
-#include "render/progressive.h"
+#include "render/progressive_error.h"
+#include "render/renderer.h"
 
 enum { T = RENDERER_TILE_SIZE };
 
@@ -252,12 +253,6 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
      * in tile_own. */
     memcpy(pe->tile_sums, pe->tile_own,
            PROGRESSIVE_TILE_SUMS * (size_t)pe->tile_count * sizeof(double));
-}
-
-double progressive_noise_target(const progressive_goal *goal)
-{
-    double left = goal->target_error - goal->bias, least = 0.5 * goal->target_error;
-    return left > least ? left : least; /* a NaN bias: the least */
 }
 
 /* Whether the pass `p` (0: the last) doubled its pixels' samples. */
