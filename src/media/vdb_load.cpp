@@ -8,6 +8,7 @@
 
 #include "media/vdb_bridge.hpp"
 #include "media/vdb_cache.h"
+#include "media/vdb_isolated.h"
 #include "media/vdb_module.h"
 #include "media/nvdb_check.h"
 
@@ -380,27 +381,6 @@ const haze_openvdb_api &openvdb_module(const char *path)
         throw load_error(std::string(path) + ": " + msg);
     return *api;
 }
-
-} // namespace
-
-extern "C" void vdb_buffer_free(vdb_buffer *b)
-{
-    if (!b)
-        return;
-    std::free(b->data);
-    b->data = nullptr;
-    b->size = 0;
-}
-
-extern "C" int vdb_error_is_missing_grid(const char *message)
-{
-    // Both readers (load_nvdb here, the OpenVDB module) say this, and only
-    // this, for a file that holds no grid of the name asked for.
-    return std::strstr(message, ": no grid named \"") != nullptr;
-}
-
-namespace
-{
 
 // The converted grids of a .vdb file from the cache (vdb_cache.h): true when
 // every request is served (a grid, or the marker of an optional grid the file
