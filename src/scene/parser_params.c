@@ -11,7 +11,9 @@
 #include "core/path.h"
 #include "scene/mem.h"
 #include "scene/named_spectra.h"
-#include "scene/parser.h"
+#include "scene/parser_params.h"
+#include "scene/parser_state.h"
+#include "scene/parser_tokens.h"
 #include "scene/spectrum.h"
 
 static const struct {
