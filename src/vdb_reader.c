@@ -1,13 +1,13 @@
 /* haze_vdb_reader MODULE FILE FILE_SIZE N (GRID TYPE)...: reads N grids of an
  * OpenVDB file with haze's OpenVDB module and writes them, as NanoVDB buffers,
  * to stdout; TYPE is two digits, the value type and whether the grid is
- * optional (see src/media/vdb_module.h, vdb_module_load_grid_isolated). Run
+ * optional (see src/media/vdb_isolated.h, vdb_module_load_grid_isolated). Run
  * by haze, not by users. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
-#include "media/vdb_module.h"
+#include "media/vdb_isolated.h"
 
 int main(int argc, char **argv)
 {

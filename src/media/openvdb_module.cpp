@@ -92,6 +92,35 @@ class layout_reader
     std::uintmax_t size_, pos_ = 0;
 };
 
+void skip_file_metadata(layout_reader &r)
+{
+    for (uint32_t i = 0, n = r.u32("metadata count"); i < n; ++i) {
+        r.string("metadata name");
+        r.string("metadata type");
+        r.skip(r.u32("metadata size"), "metadata value");
+    }
+}
+
+// A descriptor's recorded end is where the next one starts, so it must lie within
+// the file.
+void check_grid_descriptors(layout_reader &r)
+{
+    uint32_t grids = r.u32("grid count");
+    for (uint32_t g = 0; g < grids; ++g) {
+        r.string("grid name");
+        r.string("grid type");
+        r.string("grid instance parent");
+        r.u64("grid position");
+        r.u64("grid block position");
+        uint64_t end = r.u64("grid end");
+        if (end > r.size())
+            throw load_error("file is truncated (grid " + std::to_string(g + 1) + " of " +
+                             std::to_string(grids) + " ends at byte " + std::to_string(end) +
+                             ", file has " + std::to_string(r.size()) + ")");
+        r.seek_to(end, "grid end"); // where the next descriptor starts
+    }
+}
+
 void check_vdb_layout(const std::string &path, std::uintmax_t size)
 {
     try {
@@ -103,25 +132,8 @@ void check_vdb_layout(const std::string &path, std::uintmax_t size)
         r.skip(8, "library version");
         r.skip(1, "grid offsets flag");
         r.skip(36, "UUID");
-        for (uint32_t i = 0, n = r.u32("metadata count"); i < n; ++i) {
-            r.string("metadata name");
-            r.string("metadata type");
-            r.skip(r.u32("metadata size"), "metadata value");
-        }
-        uint32_t grids = r.u32("grid count");
-        for (uint32_t g = 0; g < grids; ++g) {
-            r.string("grid name");
-            r.string("grid type");
-            r.string("grid instance parent");
-            r.u64("grid position");
-            r.u64("grid block position");
-            uint64_t end = r.u64("grid end");
-            if (end > r.size())
-                throw load_error("file is truncated (grid " + std::to_string(g + 1) + " of " +
-                                 std::to_string(grids) + " ends at byte " + std::to_string(end) +
-                                 ", file has " + std::to_string(r.size()) + ")");
-            r.seek_to(end, "grid end"); // where the next descriptor starts
-        }
+        skip_file_metadata(r);
+        check_grid_descriptors(r);
     } catch (const load_error &e) {
         throw load_error(path + ": " + e.what());
     }

@@ -7,7 +7,8 @@
 #ifndef HAZE_MEDIA_VDB_BRIDGE_HPP
 #define HAZE_MEDIA_VDB_BRIDGE_HPP
 
-#include "media/vdb_load.h"
+#include "core/error.h"
+#include "media/vdb_grid.h"
 
 #include <algorithm>
 #include <cstdio>

@@ -18,7 +18,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "media/vdb_load.h"
+#include "media/vdb_grid.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -1,7 +1,7 @@
-/* Reading a .vdb grid in a separate process (see vdb_module.h): the
+/* Reading a .vdb grid in a separate process (see vdb_isolated.h): the
  * renderer's side (posix_spawn, the pipe, the reply) and the reader's. */
 #define _POSIX_C_SOURCE 200809L
-#include "media/vdb_module.h"
+#include "media/vdb_isolated.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -16,6 +16,8 @@
 #include <sys/types.h>
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include "media/vdb_module.h"
 
 extern char **environ;
 

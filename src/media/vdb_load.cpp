@@ -8,6 +8,7 @@
 
 #include "media/vdb_bridge.hpp"
 #include "media/vdb_cache.h"
+#include "media/vdb_isolated.h"
 #include "media/vdb_module.h"
 #include "media/nvdb_check.h"
 
@@ -101,20 +102,7 @@ class c_buffer
     ~c_buffer() { clear(); }
 
     // What nanovdb::io::readGrid calls (the second argument is its context).
-    static c_buffer create(uint64_t size, const c_buffer * = nullptr)
-    {
-        // aligned_alloc needs a multiple of the alignment; the tail is zeroed.
-        const uint64_t alloc = std::max<uint64_t>(32, (size + 31) / 32 * 32);
-        if (size > std::numeric_limits<size_t>::max() - 32)
-            throw std::bad_alloc();
-        c_buffer b;
-        b.data_ = static_cast<uint8_t *>(std::aligned_alloc(32, size_t(alloc)));
-        if (!b.data_)
-            throw std::bad_alloc();
-        std::memset(b.data_ + size, 0, size_t(alloc - size));
-        b.size_ = size;
-        return b;
-    }
+    static c_buffer create(uint64_t size, const c_buffer * = nullptr);
     uint8_t *data() { return data_; }
     const uint8_t *data() const { return data_; }
     uint64_t size() const { return size_; }
@@ -137,6 +125,21 @@ class c_buffer
     uint8_t *data_ = nullptr;
     uint64_t size_ = 0;
 };
+
+c_buffer c_buffer::create(uint64_t size, const c_buffer *)
+{
+    // aligned_alloc needs a multiple of the alignment; the tail is zeroed.
+    const uint64_t alloc = std::max<uint64_t>(32, (size + 31) / 32 * 32);
+    if (size > std::numeric_limits<size_t>::max() - 32)
+        throw std::bad_alloc();
+    c_buffer b;
+    b.data_ = static_cast<uint8_t *>(std::aligned_alloc(32, size_t(alloc)));
+    if (!b.data_)
+        throw std::bad_alloc();
+    std::memset(b.data_ + size, 0, size_t(alloc - size));
+    b.size_ = size;
+    return b;
+}
 
 // The .nvdb file format read with every size checked against the file before
 // it is used: NanoVDB's own reader trusts the name length (and reads past a
@@ -380,27 +383,6 @@ const haze_openvdb_api &openvdb_module(const char *path)
         throw load_error(std::string(path) + ": " + msg);
     return *api;
 }
-
-} // namespace
-
-extern "C" void vdb_buffer_free(vdb_buffer *b)
-{
-    if (!b)
-        return;
-    std::free(b->data);
-    b->data = nullptr;
-    b->size = 0;
-}
-
-extern "C" int vdb_error_is_missing_grid(const char *message)
-{
-    // Both readers (load_nvdb here, the OpenVDB module) say this, and only
-    // this, for a file that holds no grid of the name asked for.
-    return std::strstr(message, ": no grid named \"") != nullptr;
-}
-
-namespace
-{
 
 // The converted grids of a .vdb file from the cache (vdb_cache.h): true when
 // every request is served (a grid, or the marker of an optional grid the file

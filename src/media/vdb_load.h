@@ -10,24 +10,11 @@
 #include <stdint.h>
 
 #include "core/error.h"
+#include "media/vdb_grid.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* One NanoVDB grid (header, tree, nodes, statistics) in a single allocation.
- * `data` is 32-byte aligned (as NanoVDB requires) and must be released with
- * vdb_buffer_free. `size` is the grid's size in bytes. */
-typedef struct {
-    void *data;
-    size_t size;
-} vdb_buffer;
-
-void vdb_buffer_free(vdb_buffer *b);
-
-/* The value types haze reads: float (density) and 3-vectors of floats (velocity;
- * OpenVDB's Vec3SGrid, NanoVDB's Vec3f). */
-typedef enum { VDB_FLOAT, VDB_VEC3 } vdb_value_type;
 
 /* Loads the grid called `gridname` from `path` (a .vdb or .nvdb file, told apart
  * by its magic number, not its extension). Only grids of value type `type` load;
@@ -39,40 +26,12 @@ hz_status vdb_load_typed_grid(const char *path, const char *gridname, vdb_value_
  * reader process): outs[i] for req[i]; an optional grid the file lacks leaves
  * outs[i] empty and present[i] 0. On failure every buffer is freed, *failed
  * names the request that failed and err its message. */
-typedef struct {
-    const char *name;
-    vdb_value_type type;
-    int optional;
-} vdb_grid_request;
-/* At most this many grids in one set (a medium needs three). */
-enum { VDB_MAX_GRID_REQUESTS = 8 };
 hz_status vdb_load_grid_set(const char *path, const vdb_grid_request *req, size_t n,
                             vdb_buffer *outs, int *present, size_t *failed, char *err,
                             size_t err_size);
-/* True for the message of a file that holds no grid of the name asked for. */
-int vdb_error_is_missing_grid(const char *message);
 /* vdb_load_typed_grid of a float grid. */
 hz_status vdb_load_grid(const char *path, const char *gridname, vdb_buffer *out, char *err,
                         size_t err_size);
-
-/* What `haze info` shows about one grid. Strings are valid during the callback only.
- * index_min/max is the active voxel bounding box (inclusive); world_min/max bounds
- * the world-space cells of those voxels ([min - 1/2, max + 1/2] in index space,
- * mapped through the grid's transform). min/max_value are over active values:
- * the values themselves for scalar grids, vector lengths for vector grids, absent
- * (has_range = 0) for other types. */
-typedef struct {
-    const char *name;
-    const char *type; /* OpenVDB's value type name: "float", "vec3s", ... */
-    uint64_t active_voxels;
-    int32_t index_min[3], index_max[3];
-    double world_min[3], world_max[3];
-    double voxel_size[3];
-    int has_range;
-    double min_value, max_value;
-} vdb_grid_info;
-
-typedef void (*vdb_grid_callback)(const vdb_grid_info *info, void *user);
 
 /* A NanoVDB float grid (with min/max statistics) from nx*ny*nz dense values,
  * x fastest: voxel (i, j, k) holds values[(k ny + j) nx + i]; zeros are left

@@ -21,7 +21,7 @@
 #include <stdint.h>
 
 #include "core/error.h"
-#include "media/vdb_load.h"
+#include "media/vdb_grid.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -56,28 +56,9 @@ hz_status vdb_module_get(const haze_openvdb_api **api, char *err, size_t err_siz
  * exists. On failure err names every place tried. */
 hz_status vdb_module_locate(char *path, size_t path_size, char *err, size_t err_size);
 
-/* Reads a grid of a .vdb file with the module in a separate process, the
- * reader (haze_vdb_reader, src/media/vdb_reader_main.c), which sends the
- * NanoVDB buffer back through a pipe: whatever OpenVDB and its libraries do
- * when memory runs out or a file is hostile (Blosc writes through a failed
- * allocation), the renderer survives and reports one line, and OpenVDB's
- * working memory is the reader's. The reader is a fresh program (started with
- * posix_spawn), so the renderer's threads (Embree's, MPI's) and their locks
- * do not follow it. */
-hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
-                                        const vdb_grid_request *req, size_t n, vdb_buffer *outs,
-                                        int *present, size_t *failed, char *err,
-                                        size_t err_size);
-
 /* Where the reader is: $HAZE_VDB_READER if set, else next to the executable,
  * else the build tree's (baked in at compile time, for the test programs). */
 void vdb_reader_path(char *out, size_t size);
-
-/* The reader's side: loads each requested grid with the module at `module`
- * and writes one reply per request (a header, then the buffer or the
- * message) to fd, stopping after the first failure. Returns the exit status. */
-int vdb_reader_run(const char *module, const char *path, uint64_t file_size,
-                   const vdb_grid_request *req, size_t n, int fd);
 
 #ifdef __cplusplus
 }

@@ -18,6 +18,7 @@
 #include "mpi/mpi_module.h"
 #include "mpi/tile_service.h"
 #include "render/progressive.h"
+#include "render/progressive_error.h"
 
 /* Set by the build: the module's file name and its absolute path in the build tree. */
 #ifndef HAZE_MPI_MODULE_NAME

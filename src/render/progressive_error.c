@@ -1,5 +1,5 @@
 /* The error estimate and sample allocation of --target-error
- * (progressive_error in progressive.h). */
+ * (progressive_error.h). */
 #include <assert.h>
 #include <math.h>
 #include <stdatomic.h>
@@ -8,7 +8,8 @@
 
 #include "core/big_alloc.h"
 #include "core/parallel.h"
-#include "render/progressive.h"
+#include "render/progressive_error.h"
+#include "render/renderer.h"
 
 enum { T = RENDERER_TILE_SIZE };
 
@@ -132,6 +133,34 @@ static bool tile_rendered(const progressive_error *pe, const unsigned char *acti
     return false;
 }
 
+/* The e_i of a tile's pixels, each the larger of its own relative error
+ * (`own`) and the mean of its 3x3 neighbours' within the tile, and the
+ * tile's sums over its pixels with samples. */
+static void tile_errors(progressive_error *pe, const double *own, const long *counts, int tx,
+                        int ty, int tw, int th, double *sums)
+{
+    for (int y = 0; y < th; ++y)
+        for (int x = 0; x < tw; ++x) {
+            double sum = 0.0;
+            int k = 0;
+            for (int yy = y - 1; yy <= y + 1; ++yy)
+                for (int xx = x - 1; xx <= x + 1; ++xx)
+                    if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
+                        sum += own[yy * T + xx];
+                        ++k;
+                    }
+            double self = own[y * T + x], e = sum / k > self ? sum / k : self;
+            size_t i = (size_t)(ty + y) * pe->w + tx + x;
+            pe->e[i] = e;
+            long samples = counts[y * T + x];
+            if (samples > 0) {
+                sums[0] += pe->halves[i];
+                sums[1] += sqrt(e * (double)samples);
+                sums[2] += 1.0;
+            }
+        }
+}
+
 /* One tile: its pixels' e_i and halves estimates, and its sums. A tile that
  * the last pass did not render keeps them: they depend on its own pixels
  * only, which have not changed. */
@@ -195,26 +224,7 @@ static void measure_tile(const measure_job *job, int t)
         }
     for (int k = 0; k < PROGRESSIVE_TILE_SUMS; ++k)
         sums[k] = pass[k];
-    for (int y = 0; y < th; ++y)
-        for (int x = 0; x < tw; ++x) {
-            double sum = 0.0;
-            int k = 0;
-            for (int yy = y - 1; yy <= y + 1; ++yy)
-                for (int xx = x - 1; xx <= x + 1; ++xx)
-                    if (yy >= 0 && yy < th && xx >= 0 && xx < tw) {
-                        sum += own[yy * T + xx];
-                        ++k;
-                    }
-            double self = own[y * T + x], e = sum / k > self ? sum / k : self;
-            size_t i = (size_t)(ty + y) * w + tx + x;
-            pe->e[i] = e;
-            long samples = counts[y * T + x];
-            if (samples > 0) {
-                sums[0] += pe->halves[i];
-                sums[1] += sqrt(e * (double)samples);
-                sums[2] += 1.0;
-            }
-        }
+    tile_errors(pe, own, counts, tx, ty, tw, th, sums);
 }
 
 static void *measure_worker(void *arg)
@@ -252,12 +262,6 @@ void progressive_error_measure(progressive_error *pe, const film *f, const film_
      * in tile_own. */
     memcpy(pe->tile_sums, pe->tile_own,
            PROGRESSIVE_TILE_SUMS * (size_t)pe->tile_count * sizeof(double));
-}
-
-double progressive_noise_target(const progressive_goal *goal)
-{
-    double left = goal->target_error - goal->bias, least = 0.5 * goal->target_error;
-    return left > least ? left : least; /* a NaN bias: the least */
 }
 
 /* Whether the pass `p` (0: the last) doubled its pixels' samples. */

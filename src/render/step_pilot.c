@@ -115,6 +115,73 @@ static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k)
     return n > 0 ? sum / (3.0 * n) : 0.0;
 }
 
+/* What the pilot renders of one choice share. */
+typedef struct {
+    render_scene *rs;
+    const render_marching *base;
+    double shadow_ratio, cache_ratio; /* of the shadow step and cache to the step */
+    const pilot_grid *g;
+    const sampler *smp;
+    int n, k, threads; /* pixels, samples of each, threads */
+    int renders;       /* made so far */
+} pilot;
+
+static void pilot_at(pilot *p, double step, rgb *out)
+{
+    pilot_render(p->rs, p->base, step, p->shadow_ratio, p->cache_ratio, p->g, p->smp, p->k,
+                 p->threads, out);
+    ++p->renders;
+}
+
+/* The bias of the step of `coarse`, from its relMSE against the half step's
+ * `fine` (midpoint marching: halving the step at least halves the error). */
+static double pilot_bias(const pilot *p, const rgb *coarse, const rgb *fine)
+{
+    return 2.0 * bias_rel_mse(coarse, fine, p->n, p->k);
+}
+
+static void swap_images(rgb **a, rgb **b)
+{
+    rgb *t = *a;
+    *a = *b;
+    *b = t;
+}
+
+/* From x (rendered in img[0]), x doubles while twice it has a bias of at
+ * most `goal` (rendered in img[2], kept in img[0] when it does): whether x
+ * doubled, and *bias, that of the last x. */
+static bool go_coarser(pilot *p, rgb **img, double goal, double *x, double *bias)
+{
+    bool coarser = false;
+    while (2.0 * *x <= STEP_PILOT_MAX_STEP) {
+        pilot_at(p, 2.0 * *x, img[2]);
+        double coarse = pilot_bias(p, img[2], img[0]);
+        if (!(coarse <= goal))
+            break;
+        coarser = true;
+        *x *= 2.0;
+        *bias = coarse;
+        swap_images(&img[0], &img[2]);
+    }
+    return coarser;
+}
+
+/* From h (rendered in img[0]), h halves until its bias (against h / 2 in
+ * img[1]) meets `goal` or h / 2 would be finer than STEP_PILOT_MIN_STEP:
+ * the bias of the last h. */
+static double go_finer(pilot *p, rgb **img, double goal, double *h)
+{
+    pilot_at(p, *h / 2.0, img[1]);
+    double bias = pilot_bias(p, img[0], img[1]);
+    while (!(bias <= goal) && *h / 2.0 >= STEP_PILOT_MIN_STEP) {
+        *h /= 2.0;
+        swap_images(&img[0], &img[1]);
+        pilot_at(p, *h / 2.0, img[1]);
+        bias = pilot_bias(p, img[0], img[1]);
+    }
+    return bias;
+}
+
 void step_pilot_choose(render_scene *rs, double target_error, int threads, step_choice *out)
 {
     *out = (step_choice){0};
@@ -149,61 +216,30 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads, step_
             free(img[q]);
         return;
     }
+    pilot p = {rs, &base, ratio, cache_ratio, &g, &smp, n, k, threads, 0};
     /* Coarser first, and cheapest first: the bias of 2x is estimated from x
      * and 2x (img[0]: at x, img[2]: at 2x), starting at x = 2h, so a scene
      * whose step goes coarser never renders its own; only when twice its step
      * fails is h rendered (img[1]), for the bias of 2h. Nothing finer than h
      * is rendered unless h fails. */
-    int renders = 0;
     double bias = INFINITY, x = 4.0 * h <= STEP_PILOT_MAX_STEP ? 2.0 * h : h;
-    pilot_render(rs, &base, x, ratio, cache_ratio, &g, &smp, k, threads, img[0]);
-    ++renders;
-    bool coarser = false;
-    while (2.0 * x <= STEP_PILOT_MAX_STEP) {
-        pilot_render(rs, &base, 2.0 * x, ratio, cache_ratio, &g, &smp, k, threads, img[2]);
-        ++renders;
-        double coarse = 2.0 * bias_rel_mse(img[2], img[0], n, k);
-        if (!(coarse <= goal))
-            break;
-        coarser = true;
-        x *= 2.0;
-        bias = coarse;
-        rgb *t = img[0];
-        img[0] = img[2];
-        img[2] = t;
-    }
+    pilot_at(&p, x, img[0]);
+    bool coarser = go_coarser(&p, img, goal, &x, &bias);
     if (coarser) {
         h = x;
     } else if (x > h) {
-        pilot_render(rs, &base, h, ratio, cache_ratio, &g, &smp, k, threads, img[1]);
-        ++renders;
-        double coarse = 2.0 * bias_rel_mse(img[0], img[1], n, k);
+        pilot_at(&p, h, img[1]);
+        double coarse = pilot_bias(&p, img[0], img[1]);
         if (coarse <= goal) {
             coarser = true;
             h = x;
             bias = coarse;
         } else { /* img[0]: at h */
-            rgb *t = img[0];
-            img[0] = img[1];
-            img[1] = t;
+            swap_images(&img[0], &img[1]);
         }
     }
-    if (!coarser) {
-        /* h itself: finer until its bias (against h / 2 in img[1]) meets
-         * the goal. */
-        pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, &smp, k, threads, img[1]);
-        ++renders;
-        bias = 2.0 * bias_rel_mse(img[0], img[1], n, k);
-        while (!(bias <= goal) && h / 2.0 >= STEP_PILOT_MIN_STEP) {
-            h /= 2.0;
-            rgb *t = img[0];
-            img[0] = img[1];
-            img[1] = t;
-            pilot_render(rs, &base, h / 2.0, ratio, cache_ratio, &g, &smp, k, threads, img[1]);
-            ++renders;
-            bias = 2.0 * bias_rel_mse(img[0], img[1], n, k);
-        }
-    }
+    if (!coarser) /* h itself, or finer */
+        bias = go_finer(&p, img, goal, &h);
     render_marching m = base;
     m.step = h;
     m.shadow_step = h * ratio;
@@ -212,7 +248,7 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads, step_
     render_scene_keep_current_cache(rs);
     render_marching set;
     render_scene_marching(rs, &set); /* 0 if the cache could not be built */
-    *out = (step_choice){true, m.step, m.shadow_step, set.shadow_cache, bias, n, renders};
+    *out = (step_choice){true, m.step, m.shadow_step, set.shadow_cache, bias, n, p.renders};
     for (int q = 0; q < 3; ++q)
         free(img[q]);
 }

@@ -4,7 +4,7 @@
  * (n + degree points) become one Bezier segment per span by blossoming, as
  * pbrt-v4 converts them. The width runs linearly from width0 to width1 over
  * the whole curve; a ribbon's normals "N" are given at the segment ends. */
-#include "scene/shape.h"
+#include "scene/curve.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -56,50 +56,69 @@ static void segment_points(const double *P, size_t seg, int degree, bool bspline
     out[3] = mix(0.5, p233, p334);
 }
 
-hz_status shape_curve_create(shape_entity *se, shape_geometry *g, hz_error *err)
+/* A "curve" Shape's parameters, as read (curve_read). */
+typedef struct {
+    const double *P, *N;
+    size_t np, nn;
+    double w0, w1;
+    int degree, split;
+    bool bspline;
+    curve_type type;
+} curve_params;
+
+/* Reads the parameters; a bad value is rejected (params_reject), to be
+ * reported by params_finish. */
+static void curve_read(param_list *pl, curve_params *c)
 {
-    param_list *pl = &se->entity.params;
-    size_t np = 0, nn = 0;
-    const double *P = params_point3s(pl, "P", &np);
-    const double *N = params_normals(pl, "N", &nn);
+    c->np = c->nn = 0;
+    c->P = params_point3s(pl, "P", &c->np);
+    c->N = params_normals(pl, "N", &c->nn);
     double width = params_float(pl, "width", 1.0);
-    double w0 = params_float(pl, "width0", width), w1 = params_float(pl, "width1", width);
-    int degree = params_int(pl, "degree", 3);
+    c->w0 = params_float(pl, "width0", width);
+    c->w1 = params_float(pl, "width1", width);
+    c->degree = params_int(pl, "degree", 3);
     const char *basis = params_string(pl, "basis", "bezier");
     const char *type = params_string(pl, "type", "flat");
     /* pbrt-v4 cuts each segment into 2^splitdepth pieces (its BVH's
      * primitives), each refined by its own flatness: as haze does. */
-    int split = params_int(pl, "splitdepth", 3);
-    if (split < 0 || split > 8)
-        params_reject(pl, "splitdepth", "curve \"splitdepth\" must be in [0, 8], got %d", split);
+    c->split = params_int(pl, "splitdepth", 3);
+    if (c->split < 0 || c->split > 8)
+        params_reject(pl, "splitdepth", "curve \"splitdepth\" must be in [0, 8], got %d", c->split);
+    double w0 = c->w0, w1 = c->w1;
     if (!(isfinite(w0) && isfinite(w1) && w0 >= 0.0 && w1 >= 0.0 && (w0 > 0.0 || w1 > 0.0)))
         params_reject(pl, params_has(pl, "width0") ? "width0" : "width",
                       "curve widths must be finite and >= 0, not both 0 (got %g, %g)", w0, w1);
-    if (degree != 2 && degree != 3)
-        params_reject(pl, "degree", "curve \"degree\" must be 2 or 3, got %d", degree);
-    bool bspline = strcmp(basis, "bspline") == 0;
-    if (!bspline && strcmp(basis, "bezier") != 0)
+    if (c->degree != 2 && c->degree != 3)
+        params_reject(pl, "degree", "curve \"degree\" must be 2 or 3, got %d", c->degree);
+    c->bspline = strcmp(basis, "bspline") == 0;
+    if (!c->bspline && strcmp(basis, "bezier") != 0)
         params_reject(pl, "basis", "curve \"basis\" must be \"bezier\" or \"bspline\", got \"%s\"",
                       basis);
-    curve_type ct = CURVE_FLAT;
+    c->type = CURVE_FLAT;
     if (strcmp(type, "cylinder") == 0)
-        ct = CURVE_CYLINDER;
+        c->type = CURVE_CYLINDER;
     else if (strcmp(type, "ribbon") == 0)
-        ct = CURVE_RIBBON;
+        c->type = CURVE_RIBBON;
     else if (strcmp(type, "flat") != 0)
         params_reject(pl, "type",
                       "curve \"type\" must be \"flat\", \"cylinder\" or \"ribbon\", got \"%s\"",
                       type);
-    if (N && ct != CURVE_RIBBON)
+    if (c->N && c->type != CURVE_RIBBON)
         params_reject(pl, "N",
                       "curve \"N\" is used by \"ribbon\" curves only (pbrt-v4 ignores it here "
                       "with a warning)");
-    if (params_finish(pl, "Shape \"curve\"", err) != HZ_OK)
-        return HZ_ERROR;
-    if (!P)
-        return hz_fail_at(err, se->entity.loc, "curve needs \"point3 P\"");
+}
+
+/* The number of segments of the control points, and the check of the
+ * normals against it. */
+static hz_status curve_segments(const shape_entity *se, param_list *pl, const curve_params *c,
+                                size_t *out, hz_error *err)
+{
+    size_t np = c->np, nn = c->nn;
+    int degree = c->degree;
+    const double *N = c->N;
     size_t segs;
-    if (!bspline) {
+    if (!c->bspline) {
         if (np < (size_t)degree + 1 || (np - 1) % (size_t)degree != 0)
             return hz_fail_at(err, params_loc(pl, "P"),
                               "curve: a degree %d Bezier curve needs %d + %d n control points "
@@ -114,7 +133,7 @@ hz_status shape_curve_create(shape_entity *se, shape_geometry *g, hz_error *err)
                               degree, degree + 1, np);
         segs = np - (size_t)degree;
     }
-    if (ct == CURVE_RIBBON && !N)
+    if (c->type == CURVE_RIBBON && !N)
         return hz_fail_at(err, se->entity.loc,
                           "a \"ribbon\" curve needs \"normal N\" at its segment ends");
     if (N && nn != segs + 1)
@@ -125,22 +144,22 @@ hz_status shape_curve_create(shape_entity *se, shape_geometry *g, hz_error *err)
         if (!(v3_length_sq(point_at(N, i)) > 0.0) || !v3_is_finite(point_at(N, i)))
             return hz_fail_at(err, params_loc(pl, "N"),
                               "curve normal %zu must be finite and non-zero", i);
-    g->kind = GEOMETRY_CURVES;
-    g->curve = ct;
-    g->split = split;
-    g->segment_count = segs;
-    g->cp = scene_array(segs, 12 * sizeof *g->cp);
-    g->width = scene_array(segs, 2 * sizeof *g->width);
-    g->normals = N ? scene_array(segs, 6 * sizeof *g->normals) : NULL;
-    if (!g->cp || !g->width || (N && !g->normals)) /* g freed by the caller */
-        return hz_fail_at(err, se->entity.loc, "curve: out of memory for %zu segments", segs);
+    *out = segs;
+    return HZ_OK;
+}
+
+/* Each segment's control points, end widths and (ribbon) end normals. */
+static void curve_fill(shape_geometry *g, const curve_params *c, size_t segs)
+{
+    const double *P = c->P, *N = c->N;
+    double w0 = c->w0, w1 = c->w1;
     for (size_t s = 0; s < segs; ++s) {
-        vec3 c[4];
-        segment_points(P, s, degree, bspline, c);
+        vec3 cp[4];
+        segment_points(P, s, c->degree, c->bspline, cp);
         for (int i = 0; i < 4; ++i) {
-            g->cp[12 * s + 3 * (size_t)i] = c[i].x;
-            g->cp[12 * s + 3 * (size_t)i + 1] = c[i].y;
-            g->cp[12 * s + 3 * (size_t)i + 2] = c[i].z;
+            g->cp[12 * s + 3 * (size_t)i] = cp[i].x;
+            g->cp[12 * s + 3 * (size_t)i + 1] = cp[i].y;
+            g->cp[12 * s + 3 * (size_t)i + 2] = cp[i].z;
         }
         g->width[2 * s] = w0 + (w1 - w0) * (double)s / (double)segs;
         g->width[2 * s + 1] = w0 + (w1 - w0) * (double)(s + 1) / (double)segs;
@@ -151,5 +170,29 @@ hz_status shape_curve_create(shape_entity *se, shape_geometry *g, hz_error *err)
             g->normals[6 * s + 3 * (size_t)e + 2] = n.z;
         }
     }
+}
+
+hz_status shape_curve_create(shape_entity *se, shape_geometry *g, hz_error *err)
+{
+    param_list *pl = &se->entity.params;
+    curve_params c;
+    curve_read(pl, &c);
+    if (params_finish(pl, "Shape \"curve\"", err) != HZ_OK)
+        return HZ_ERROR;
+    if (!c.P)
+        return hz_fail_at(err, se->entity.loc, "curve needs \"point3 P\"");
+    size_t segs = 0;
+    if (curve_segments(se, pl, &c, &segs, err) != HZ_OK)
+        return HZ_ERROR;
+    g->kind = GEOMETRY_CURVES;
+    g->curve = c.type;
+    g->split = c.split;
+    g->segment_count = segs;
+    g->cp = scene_array(segs, 12 * sizeof *g->cp);
+    g->width = scene_array(segs, 2 * sizeof *g->width);
+    g->normals = c.N ? scene_array(segs, 6 * sizeof *g->normals) : NULL;
+    if (!g->cp || !g->width || (c.N && !g->normals)) /* g freed by the caller */
+        return hz_fail_at(err, se->entity.loc, "curve: out of memory for %zu segments", segs);
+    curve_fill(g, &c, segs);
     return HZ_OK;
 }

@@ -2,7 +2,7 @@
  * their sizes come from the file, so any of these can fail: they return NULL
  * (never print, never exit; a library must not end its caller's process) and
  * the caller reports "out of memory" at its place in the scene. The parser
- * then stops (parser.h, out_of_memory). Like realloc, a failed (re)allocation
+ * then stops (parser_state.h, out_of_memory). Like realloc, a failed (re)allocation
  * leaves the old block as it was, still owned by the caller, who assigns the
  * result only on success (no T** to void** casts). */
 #ifndef HAZE_SCENE_MEM_H

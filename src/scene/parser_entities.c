@@ -6,7 +6,10 @@
 #include <string.h>
 
 #include "scene/mem.h"
-#include "scene/parser.h"
+#include "scene/parser_entities.h"
+#include "scene/parser_params.h"
+#include "scene/parser_state.h"
+#include "scene/parser_tokens.h"
 
 #define ATTR_NONE (-1)
 

@@ -11,7 +11,9 @@
 #include "core/path.h"
 #include "scene/mem.h"
 #include "scene/named_spectra.h"
-#include "scene/parser.h"
+#include "scene/parser_params.h"
+#include "scene/parser_state.h"
+#include "scene/parser_tokens.h"
 #include "scene/spectrum.h"
 
 static const struct {
@@ -319,83 +321,73 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
     return set_rgb(ps, p, c, err);
 }
 
-/* The values as p's type; on error p may own arrays (param_free). */
-static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_error *err)
+/* "string" and "texture" values; on error p may own strings (param_free). */
+static hz_status convert_strings(parser *ps, param *p, const token *vals, size_t n,
+                                 hz_error *err)
 {
-    if (n == 0)
-        return hz_fail_at(err, p->loc, "parameter \"%s %s\" has no values",
-                          param_type_name(p->type), p->name);
-    size_t tuple = 1;
-    switch (p->type) {
-    case PARAM_STRING:
-    case PARAM_TEXTURE:
-        p->strs = scene_array(n, sizeof *p->strs);
-        if (!p->strs)
-            return parser_oom(ps, p->loc, err);
-        for (size_t i = 0; i < n; ++i)
-            p->strs[i] = NULL;
-        p->count = n;
-        for (size_t i = 0; i < n; ++i) {
-            if (vals[i].kind != TOK_STRING) {
-                char got[48];
-                token_describe(&vals[i], got, sizeof got);
-                return hz_fail_at(err, vals[i].loc, "parameter \"%s %s\" expects strings, got %s",
-                                  param_type_name(p->type), p->name, got);
-            }
-            p->strs[i] = token_string_dup(&vals[i]);
-            if (!p->strs[i])
-                return parser_oom(ps, vals[i].loc, err);
+    p->strs = scene_array(n, sizeof *p->strs);
+    if (!p->strs)
+        return parser_oom(ps, p->loc, err);
+    for (size_t i = 0; i < n; ++i)
+        p->strs[i] = NULL;
+    p->count = n;
+    for (size_t i = 0; i < n; ++i) {
+        if (vals[i].kind != TOK_STRING) {
+            char got[48];
+            token_describe(&vals[i], got, sizeof got);
+            return hz_fail_at(err, vals[i].loc, "parameter \"%s %s\" expects strings, got %s",
+                              param_type_name(p->type), p->name, got);
         }
-        return HZ_OK;
-    case PARAM_BOOL:
-        p->bools = scene_array(n, sizeof *p->bools);
-        if (!p->bools)
-            return parser_oom(ps, p->loc, err);
-        p->count = n;
-        for (size_t i = 0; i < n; ++i) {
-            /* pbrt-v4 takes true/false bare or quoted. */
-            const token *v = &vals[i];
-            bool bare = v->kind == TOK_IDENT;
-            bool quoted_t = v->kind == TOK_STRING && v->len == 4 && !memcmp(v->text, "true", 4);
-            bool quoted_f = v->kind == TOK_STRING && v->len == 5 && !memcmp(v->text, "false", 5);
-            if (!bare && !quoted_t && !quoted_f) {
-                char got[48];
-                token_describe(v, got, sizeof got);
-                return hz_fail_at(err, v->loc, "parameter \"bool %s\" expects true or false, got %s",
-                                  p->name, got);
-            }
-            p->bools[i] = quoted_t || token_is(v, "true");
-        }
-        return HZ_OK;
-    case PARAM_SPECTRUM:
-        return convert_spectrum(ps, p, vals, n, err);
-    case PARAM_BLACKBODY:
-        if (want_numbers(p, vals, n, err) != HZ_OK)
-            return HZ_ERROR;
-        if (n != 1)
-            return hz_fail_at(err, p->loc, "parameter \"blackbody %s\" takes 1 value (kelvin), got %zu",
-                              p->name, n);
-        if (!(vals[0].num > 0.0))
-            return hz_fail_at(err, vals[0].loc, "parameter \"blackbody %s\": temperature must be > 0",
-                              p->name);
-        p->luminance = spectrum_blackbody_luminance(vals[0].num);
-        return set_rgb(ps, p, spectrum_blackbody_to_rgb(vals[0].num), err);
-    case PARAM_POINT2:
-    case PARAM_VECTOR2:
-        tuple = 2;
-        break;
-    case PARAM_POINT3:
-    case PARAM_VECTOR3:
-    case PARAM_NORMAL:
-        tuple = 3;
-        break;
-    case PARAM_RGB: /* one triple, or an array of them (rgbgrid) */
-        tuple = 3;
-        break;
-    case PARAM_INTEGER:
-    case PARAM_FLOAT:
-        break;
+        p->strs[i] = token_string_dup(&vals[i]);
+        if (!p->strs[i])
+            return parser_oom(ps, vals[i].loc, err);
     }
+    return HZ_OK;
+}
+
+static hz_status convert_bools(parser *ps, param *p, const token *vals, size_t n, hz_error *err)
+{
+    p->bools = scene_array(n, sizeof *p->bools);
+    if (!p->bools)
+        return parser_oom(ps, p->loc, err);
+    p->count = n;
+    for (size_t i = 0; i < n; ++i) {
+        /* pbrt-v4 takes true/false bare or quoted. */
+        const token *v = &vals[i];
+        bool bare = v->kind == TOK_IDENT;
+        bool quoted_t = v->kind == TOK_STRING && v->len == 4 && !memcmp(v->text, "true", 4);
+        bool quoted_f = v->kind == TOK_STRING && v->len == 5 && !memcmp(v->text, "false", 5);
+        if (!bare && !quoted_t && !quoted_f) {
+            char got[48];
+            token_describe(v, got, sizeof got);
+            return hz_fail_at(err, v->loc, "parameter \"bool %s\" expects true or false, got %s",
+                              p->name, got);
+        }
+        p->bools[i] = quoted_t || token_is(v, "true");
+    }
+    return HZ_OK;
+}
+
+static hz_status convert_blackbody(parser *ps, param *p, const token *vals, size_t n,
+                                   hz_error *err)
+{
+    if (want_numbers(p, vals, n, err) != HZ_OK)
+        return HZ_ERROR;
+    if (n != 1)
+        return hz_fail_at(err, p->loc, "parameter \"blackbody %s\" takes 1 value (kelvin), got %zu",
+                          p->name, n);
+    if (!(vals[0].num > 0.0))
+        return hz_fail_at(err, vals[0].loc, "parameter \"blackbody %s\": temperature must be > 0",
+                          p->name);
+    p->luminance = spectrum_blackbody_luminance(vals[0].num);
+    return set_rgb(ps, p, spectrum_blackbody_to_rgb(vals[0].num), err);
+}
+
+/* Numeric values, `tuple` numbers each; "rgb" ones from the current color
+ * space to sRGB. On error p may own its numbers (param_free). */
+static hz_status convert_numbers(parser *ps, param *p, const token *vals, size_t n, size_t tuple,
+                                 hz_error *err)
+{
     if (want_numbers(p, vals, n, err) != HZ_OK)
         return HZ_ERROR;
     if (n % tuple != 0)
@@ -423,6 +415,38 @@ static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_e
         }
     }
     return HZ_OK;
+}
+
+/* The values as p's type; on error p may own arrays (param_free). */
+static hz_status convert(parser *ps, param *p, const token *vals, size_t n, hz_error *err)
+{
+    if (n == 0)
+        return hz_fail_at(err, p->loc, "parameter \"%s %s\" has no values",
+                          param_type_name(p->type), p->name);
+    switch (p->type) {
+    case PARAM_STRING:
+    case PARAM_TEXTURE:
+        return convert_strings(ps, p, vals, n, err);
+    case PARAM_BOOL:
+        return convert_bools(ps, p, vals, n, err);
+    case PARAM_SPECTRUM:
+        return convert_spectrum(ps, p, vals, n, err);
+    case PARAM_BLACKBODY:
+        return convert_blackbody(ps, p, vals, n, err);
+    case PARAM_POINT2:
+    case PARAM_VECTOR2:
+        return convert_numbers(ps, p, vals, n, 2, err);
+    case PARAM_POINT3:
+    case PARAM_VECTOR3:
+    case PARAM_NORMAL:
+        return convert_numbers(ps, p, vals, n, 3, err);
+    case PARAM_RGB: /* one triple, or an array of them (rgbgrid) */
+        return convert_numbers(ps, p, vals, n, 3, err);
+    case PARAM_INTEGER:
+    case PARAM_FLOAT:
+        break;
+    }
+    return convert_numbers(ps, p, vals, n, 1, err);
 }
 
 /* The parameter of that name already given, or NULL. */

@@ -142,6 +142,69 @@ static hz_status read_value(ply_reader *r, ply_type t, double *out, hz_error *er
 
 /* ---- header ------------------------------------------------------------ */
 
+/* Copies the header line at r->pos into `line` (cut to its size, without
+ * the "\r" of a CRLF file) and moves past it. */
+static void header_line(ply_reader *r, char *line, size_t size)
+{
+    const unsigned char *nl = memchr(r->data + r->pos, '\n', r->len - r->pos);
+    size_t end = nl ? (size_t)(nl - r->data) : r->len;
+    size_t n = end - r->pos;
+    if (n >= size)
+        n = size - 1;
+    memcpy(line, r->data + r->pos, n);
+    line[n] = '\0';
+    line[strcspn(line, "\r")] = '\0';
+    r->pos = nl ? end + 1 : r->len;
+}
+
+/* "element NAME COUNT" (its words in w). */
+static hz_status header_element(const ply_reader *r, char (*w)[64], int line_no,
+                                ply_element *els, int *nel, hz_error *err)
+{
+    char *e;
+    errno = 0;
+    unsigned long long c = strtoull(w[2], &e, 10);
+    if (*e || errno || w[2][0] == '-')
+        return hz_fail(err, "%s: bad PLY header line %d: bad element count \"%s\"", r->path,
+                       line_no, w[2]);
+    if (*nel == MAX_ELEMENTS)
+        return hz_fail(err, "%s: bad PLY header: more than %d elements", r->path, MAX_ELEMENTS);
+    ply_element *el = &els[(*nel)++];
+    memset(el, 0, sizeof *el);
+    snprintf(el->name, sizeof el->name, "%s", w[1]);
+    el->count = (size_t)c;
+    if ((unsigned long long)el->count != c)
+        return hz_fail(err, "%s: element count too large", r->path);
+    return HZ_OK;
+}
+
+/* "property TYPE NAME" or "property list COUNT_TYPE TYPE NAME" (its k words
+ * in w) of the last element. */
+static hz_status header_property(const ply_reader *r, char (*w)[64], int k, int line_no,
+                                 const char *line, ply_element *els, int nel, hz_error *err)
+{
+    if (nel == 0)
+        return hz_fail(err, "%s: bad PLY header line %d: property before any element", r->path,
+                       line_no);
+    ply_element *el = &els[nel - 1];
+    if (el->prop_count == MAX_PROPS)
+        return hz_fail(err, "%s: bad PLY header: too many properties", r->path);
+    ply_prop *p = &el->props[el->prop_count++];
+    memset(p, 0, sizeof *p);
+    int ok;
+    if (k == 5 && strcmp(w[1], "list") == 0) {
+        p->is_list = 1;
+        ok = parse_type(w[2], &p->count_type) && parse_type(w[3], &p->type);
+        snprintf(p->name, sizeof p->name, "%s", w[4]);
+    } else {
+        ok = k == 3 && parse_type(w[1], &p->type);
+        snprintf(p->name, sizeof p->name, "%s", w[2]);
+    }
+    if (!ok)
+        return hz_fail(err, "%s: bad PLY header line %d: \"%.80s\"", r->path, line_no, line);
+    return HZ_OK;
+}
+
 static hz_status parse_header(ply_reader *r, ply_element *els, int *nel, hz_error *err)
 {
     *nel = 0;
@@ -149,16 +212,8 @@ static hz_status parse_header(ply_reader *r, ply_element *els, int *nel, hz_erro
     for (;;) {
         if (r->pos >= r->len)
             return hz_fail(err, "%s: bad PLY header: no end_header", r->path);
-        const unsigned char *nl = memchr(r->data + r->pos, '\n', r->len - r->pos);
-        size_t end = nl ? (size_t)(nl - r->data) : r->len;
         char line[256];
-        size_t n = end - r->pos;
-        if (n >= sizeof line)
-            n = sizeof line - 1;
-        memcpy(line, r->data + r->pos, n);
-        line[n] = '\0';
-        line[strcspn(line, "\r")] = '\0';
-        r->pos = nl ? end + 1 : r->len;
+        header_line(r, line, sizeof line);
         ++line_no;
         char w[5][64];
         int k = sscanf(line, "%63s %63s %63s %63s %63s", w[0], w[1], w[2], w[3], w[4]);
@@ -183,41 +238,11 @@ static hz_status parse_header(ply_reader *r, ply_element *els, int *nel, hz_erro
                                line_no, w[1]);
             saw_format = 1;
         } else if (strcmp(w[0], "element") == 0 && k == 3) {
-            char *e;
-            errno = 0;
-            unsigned long long c = strtoull(w[2], &e, 10);
-            if (*e || errno || w[2][0] == '-')
-                return hz_fail(err, "%s: bad PLY header line %d: bad element count \"%s\"", r->path,
-                               line_no, w[2]);
-            if (*nel == MAX_ELEMENTS)
-                return hz_fail(err, "%s: bad PLY header: more than %d elements", r->path,
-                               MAX_ELEMENTS);
-            ply_element *el = &els[(*nel)++];
-            memset(el, 0, sizeof *el);
-            snprintf(el->name, sizeof el->name, "%s", w[1]);
-            el->count = (size_t)c;
-            if ((unsigned long long)el->count != c)
-                return hz_fail(err, "%s: element count too large", r->path);
+            if (header_element(r, w, line_no, els, nel, err) != HZ_OK)
+                return HZ_ERROR;
         } else if (strcmp(w[0], "property") == 0 && (k == 3 || k == 5)) {
-            if (*nel == 0)
-                return hz_fail(err, "%s: bad PLY header line %d: property before any element",
-                               r->path, line_no);
-            ply_element *el = &els[*nel - 1];
-            if (el->prop_count == MAX_PROPS)
-                return hz_fail(err, "%s: bad PLY header: too many properties", r->path);
-            ply_prop *p = &el->props[el->prop_count++];
-            memset(p, 0, sizeof *p);
-            int ok;
-            if (k == 5 && strcmp(w[1], "list") == 0) {
-                p->is_list = 1;
-                ok = parse_type(w[2], &p->count_type) && parse_type(w[3], &p->type);
-                snprintf(p->name, sizeof p->name, "%s", w[4]);
-            } else {
-                ok = k == 3 && parse_type(w[1], &p->type);
-                snprintf(p->name, sizeof p->name, "%s", w[2]);
-            }
-            if (!ok)
-                return hz_fail(err, "%s: bad PLY header line %d: \"%.80s\"", r->path, line_no, line);
+            if (header_property(r, w, k, line_no, line, els, *nel, err) != HZ_OK)
+                return HZ_ERROR;
         } else {
             return hz_fail(err, "%s: bad PLY header line %d: \"%.80s\"", r->path, line_no, line);
         }

@@ -6,7 +6,7 @@
 #define HAZE_SCENE_PLY_H
 
 #include "core/error.h"
-#include "scene/shape.h"
+#include "scene/shape_geometry.h"
 
 /* Fills a GEOMETRY_TRIANGLES shape_geometry. Errors name the file and what is wrong. */
 hz_status ply_read(const char *path, shape_geometry *out, hz_error *err);

@@ -2,7 +2,7 @@
 #include <string.h>
 
 #include "scene/mem.h"
-#include "scene/parser.h"
+#include "scene/scene_desc.h"
 
 char *scene_desc_own(scene_desc *sd, const char *s)
 {

@@ -166,6 +166,14 @@ hz_status scene_parse_string_all(const char *text, const char *name, scene_desc 
                                  hz_errors *errs, hz_error *err);
 void scene_desc_free(scene_desc *sd);
 
+/* For the parser (parser*.c). Both return false when out of memory; sd can
+ * still be freed with scene_desc_free. */
+bool scene_desc_init(scene_desc *sd, const char *file);
+/* Records a file the parser read; `owned_name` must point into sd->strings. */
+bool scene_desc_add_file(scene_desc *sd, const char *owned_name);
+/* A copy of `s` owned by sd->strings (NULL when out of memory). */
+char *scene_desc_own(scene_desc *sd, const char *s);
+
 /* Every file a render of `sd` reads, as paths relative to the working
  * directory: sd->files (the scene and its includes), then the "filename" of
  * each plymesh, nanovdb medium, image light (infinite, goniometric,

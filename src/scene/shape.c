@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/path.h"
+#include "scene/curve.h"
 #include "scene/mem.h"
 #include "scene/ply.h"
 
@@ -15,18 +16,6 @@
  * error is r(1 - cos(pi/256)) < 8e-5 r, far below a pixel for any sensible
  * framing (shading normals of a cylinder are the exact ones). */
 #define DISK_SEGMENTS 256
-
-void shape_geometry_free(shape_geometry *g)
-{
-    free(g->p);
-    free(g->n);
-    free(g->uv);
-    free(g->indices);
-    free(g->cp);
-    free(g->width);
-    free(g->normals);
-    memset(g, 0, sizeof *g);
-}
 
 static hz_status finish(shape_entity *se, hz_error *err)
 {

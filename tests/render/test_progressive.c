@@ -20,6 +20,7 @@
 #include "core/clock.h"
 #include "film/exr.h"
 #include "render/progressive.h"
+#include "render/progressive_error.h"
 #include "render/step_pilot.h"
 #include "render_test_util.h"
 

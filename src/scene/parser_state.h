@@ -1,9 +1,11 @@
-/* Internals of the scene parser, shared by parser.c (files, tokens, Include),
- * parser_params.c (typed parameter lists) and parser_directives.c (what each
- * directive does to the graphics state and the scene_desc). The public entry
- * points are scene_parse_file/scene_parse_string in scene_desc.h. */
-#ifndef HAZE_SCENE_PARSER_H
-#define HAZE_SCENE_PARSER_H
+/* The scene parser's state, shared by its files: parser.c (the driver),
+ * parser_tokens.c (the token stream), parser_params.c (parameter lists),
+ * parser_directives.c and parser_entities.c (what directives do). Each of
+ * them includes this rather than another's header, so that they depend on
+ * each other one way. The public entry points are scene_parse_file/
+ * scene_parse_string in scene_desc.h. */
+#ifndef HAZE_SCENE_PARSER_STATE_H
+#define HAZE_SCENE_PARSER_STATE_H
 
 #include <stdbool.h>
 
@@ -79,7 +81,6 @@ typedef struct {
     size_t text_count, text_cap;
 } parser;
 
-/* parser.c */
 /* Out of memory at `loc`: fills err ("file:line:column: out of memory"),
  * ends the parse (ps->out_of_memory) and returns HZ_ERROR. */
 hz_status parser_oom(parser *ps, file_loc loc, hz_error *err);
@@ -88,22 +89,7 @@ const char *parser_intern(parser *ps, const char *s);
 /* Records "FILE:LINE:COL: warning: MESSAGE" in the scene's warnings (printed
  * when it is built). Fails only when out of memory. */
 hz_status parser_warn(parser *ps, file_loc at, hz_error *err, const char *fmt, ...) HZ_PRINTF(4, 5);
-hz_status parser_next(parser *ps, token *tok, hz_error *err);
-hz_status parser_peek(parser *ps, token *tok, hz_error *err);
-/* Next token must be a string: returns it decoded and interned. */
-hz_status parser_string_arg(parser *ps, const token *directive, const char **out, hz_error *err);
-/* Next n tokens must be numbers (optionally all inside one pair of brackets
- * when `brackets_ok`). */
-hz_status parser_numbers(parser *ps, const token *directive, double *out, int n, bool brackets_ok,
-                         hz_error *err);
-hz_status parser_include(parser *ps, const token *directive, const char *path, hz_error *err);
 
-/* parser_params.c: reads `"type name" value...` pairs until the next directive. */
-hz_status parser_params(parser *ps, param_list *out, file_loc directive, hz_error *err);
-
-/* parser_directives.c */
-hz_status parser_directive(parser *ps, const token *tok, hz_error *err);
-hz_status parser_finish(parser *ps, file_loc end, hz_error *err);
 hz_status parser_need_world(parser *ps, const token *d, const char *name, hz_error *err);
 /* `seen` (may be NULL) detects a second Camera, Film... */
 hz_status parser_need_options(parser *ps, const token *d, const char *name, file_loc *seen,
@@ -113,26 +99,9 @@ hz_status parser_push_state(parser *ps, char kind, file_loc at, hz_error *err);
 void parser_pop_state(parser *ps);
 hz_status parser_set_coordsys(parser *ps, const char *name, const transform ctm[2], file_loc loc,
                               hz_error *err);
-
-/* parser_entities.c: directives that create entities or change what later
- * entities get (materials, media, area lights, objects). *handled is false
- * when `d` is none of them. */
-hz_status parser_entity_directive(parser *ps, const token *d, bool *handled, hz_error *err);
-/* After a defining directive failed (ps->defining): an entity of that name
- * with no parameters (a constant texture, a diffuse material, a homogeneous
- * medium) unless one exists. Such a scene is reported, never rendered. */
-void parser_define_stand_in(parser *ps);
-/* After the parse: one error per NamedMaterial no MakeNamedMaterial defined. */
-void parser_report_pending_materials(const parser *ps, hz_errors *errs);
+/* The coordinate system called `name`, NULL when none is. */
+named_coordsys *parser_find_coordsys(parser *ps, const char *name);
 void parser_state_free(parser *ps);
 void gstate_free(gstate *g);
-
-/* scene_desc.c: both return false when out of memory; sd can still be
- * freed with scene_desc_free. */
-bool scene_desc_init(scene_desc *sd, const char *file);
-/* Records a file the parser read; `owned_name` must point into sd->strings. */
-bool scene_desc_add_file(scene_desc *sd, const char *owned_name);
-/* A copy of `s` owned by sd->strings (NULL when out of memory). */
-char *scene_desc_own(scene_desc *sd, const char *s);
 
 #endif
