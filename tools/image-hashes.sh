@@ -31,7 +31,9 @@ for f in "$TOP"/tests/regression/scenes/*.pbrt; do
 done
 
 # The bench scenes carry no Integrator: each variant is a wrapper that names
-# one and Includes the scene.
+# one and Includes the scene by a relative path (the EXR header's haze:render
+# id hashes the bytes of every file read, so an absolute path would make the
+# hashes depend on where the checkout lives).
 variants='default|Integrator "singlescatter"
 raymarch|Integrator "singlescatter" "string transmittance" "raymarch" "float stepsize" 2
 ratio|Integrator "singlescatter" "string transmittance" "ratio"
@@ -43,14 +45,14 @@ for f in "$TOP"/bench/scenes/*.pbrt; do
     base=$(basename "$f" .pbrt)
     echo "$variants" | while IFS='|' read -r v line; do
         w="$TOP/bench/cache/hash-$base-$v.pbrt"
-        printf '%s\nInclude "%s"\n' "$line" "$f" >"$w"
+        printf '%s\nInclude "../scenes/%s"\n' "$line" "$(basename "$f")" >"$w"
         render "bench-$base-$v" "$w" --spp "$SPP"
     done
 done
 # The step pilot and adaptive sampling.
 w="$TOP/bench/cache/hash-smoke-target.pbrt"
-printf 'Integrator "singlescatter"\nInclude "%s"\n' "$TOP/bench/scenes/smoke.pbrt" >"$w"
+printf 'Integrator "singlescatter"\nInclude "../scenes/smoke.pbrt"\n' >"$w"
 render bench-smoke-target "$w" --target-error 1e-2 --spp 8
 w="$TOP/bench/cache/hash-smoke-cache.pbrt"
-printf 'Integrator "singlescatter" "float shadowcache" 1\nInclude "%s"\n' "$TOP/bench/scenes/smoke.pbrt" >"$w"
+printf 'Integrator "singlescatter" "float shadowcache" 1\nInclude "../scenes/smoke.pbrt"\n' >"$w"
 render bench-smoke-cache "$w" --spp "$SPP"

@@ -8,7 +8,7 @@
 
 #include "core/box.h"
 #include "media/cloud.h"
-#include "media/medium_kinds.h"
+#include "media/medium.h"
 #include "media/medium_params.h"
 
 typedef struct {

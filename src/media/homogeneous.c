@@ -5,7 +5,7 @@
  * that RGB, "blackbody Le" has luminance 1) times Lescale (default 1).
  * Integrators use closed forms in it; its majorant is sigma_t over the whole
  * ray. */
-#include "media/medium_kinds.h"
+#include "media/medium.h"
 #include "media/medium_params.h"
 
 static hz_status create(medium_entity *e, const medium_build *b, medium *out, hz_error *err)

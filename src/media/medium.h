@@ -9,7 +9,7 @@
  * Estimators differ only in what they do at each tentative collision; none
  * sees a medium's kind.
  *
- * Kinds (one file each, a row each in medium.c's table; the
+ * Kinds (one file each, a row each in medium_kinds.c's table; the
  * parameters of each are in docs/scene-format.md and docs/media.md):
  *   homogeneous.c       "homogeneous": constant coefficients (closed forms)
  *   nanovdb_medium.c    "nanovdb": a NanoVDB/OpenVDB density grid, with

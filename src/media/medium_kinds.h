@@ -1,5 +1,6 @@
-/* The kinds of media, one file each: the rows of medium.c's table. Private
- * to src/media. */
+/* The kinds of media, one file each: the rows of medium_kinds.c's table.
+ * Private to src/media; the kinds' files do not include it, so the table
+ * depends on them and not the other way round. */
 #ifndef HAZE_MEDIA_MEDIUM_KINDS_H
 #define HAZE_MEDIA_MEDIUM_KINDS_H
 

@@ -22,7 +22,7 @@
 
 #include "core/path.h"
 #include "media/grid_medium.h"
-#include "media/medium_kinds.h"
+#include "media/medium.h"
 #include "media/medium_params.h"
 
 /* What MakeNamedMedium says about haze's own grids of a nanovdb medium. */

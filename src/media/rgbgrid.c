@@ -8,7 +8,7 @@
 #include <stdlib.h>
 
 #include "media/grid_medium.h"
-#include "media/medium_kinds.h"
+#include "media/medium.h"
 #include "media/medium_params.h"
 #include "media/uniformgrid.h"
 #include "scene/spectrum.h"

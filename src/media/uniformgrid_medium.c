@@ -7,7 +7,7 @@
 #include <math.h>
 
 #include "media/grid_medium.h"
-#include "media/medium_kinds.h"
+#include "media/medium.h"
 #include "media/medium_params.h"
 #include "media/uniformgrid.h"
 
