@@ -411,6 +411,271 @@ static int check_region(const cli *c, scene_desc *sd)
     return -1;
 }
 
+/* One render's scene and where its image goes, from the parse to the write. */
+typedef struct {
+    scene_desc sd;
+    bool read;             /* sd holds a scene to free */
+    render_scene *rs;      /* NULL until built */
+    film *f;
+    const film_params *fp;
+    render_outputs outs;   /* resolved on rank 0 only */
+    uint64_t inputs_hash;
+    bool no_jitter;        /* --disable-pixel-jitter or the scene's Option */
+} render_job;
+
+static render_options render_options_from_cli(const cli *c)
+{
+    bool adaptive = c->target_error > 0;
+    return (render_options){.seed = c->seed,
+                            .seed_given = c->seed_given != 0,
+                            .spp = c->spp > 0 ? c->spp : adaptive ? ADAPTIVE_MAX_SPP : 0,
+                            .output = c->output,
+                            .region = c->region,
+                            .statistics = adaptive,
+                            .portable_isa = c->portable_isa != 0};
+}
+
+/* The EXR's "haze:render" for an image of `spp` samples a pixel. */
+static void set_render_id(render_job *job, int spp)
+{
+    snprintf(job->outs.render_id, sizeof job->outs.render_id, "%016llx",
+             (unsigned long long)outputs_render_id(job->inputs_hash, job->rs, spp, job->no_jitter));
+}
+
+/* Parses and builds the scene and resolves its outputs and id; every rank
+ * then agrees it is ready (under mpirun one rank's failure stops them all).
+ * Returns 0 or the exit status. */
+static int load_scene(const cli *c, distributed *dist, render_job *job, phase_times *ph,
+                      hz_error *err)
+{
+    bool rank0 = distributed_rank(dist) == 0;
+    hz_errors parse_errs = {0};
+    job->read = scene_parse_file_all(c->scene, &job->sd, &parse_errs, err) == HZ_OK;
+    bool parsed = job->read && parse_errs.count == 0 && parse_errs.dropped == 0;
+    /* Every rank has the same arguments: under mpirun all of them stop here. */
+    if (parsed && check_region(c, &job->sd) != 0)
+        return EXIT_USAGE;
+    render_options ro = render_options_from_cli(c);
+    hz_status st = HZ_ERROR;
+    ph->build = hz_clock_seconds();
+    if (parsed)
+        st = render_scene_create(&job->sd, &ro, rank0 ? stderr : NULL, &job->rs, err);
+    else if (job->read) /* the scene's other problems too, in one report */
+        render_scene_check(&job->sd, &ro, &parse_errs, err);
+    job->f = st == HZ_OK ? render_scene_film(job->rs) : NULL;
+    job->fp = job->f ? film_get_params(job->f) : NULL;
+    if (st == HZ_OK && rank0 &&
+        outputs_resolve(&job->sd, job->fp->filename, c->preview, &job->outs, err) != HZ_OK)
+        st = HZ_ERROR;
+    if (st == HZ_OK && scene_inputs_hash(&job->sd, &job->inputs_hash, err) != HZ_OK)
+        st = HZ_ERROR;
+    job->no_jitter = c->disable_pixel_jitter ||
+                     (job->rs && render_scene_options(job->rs).disable_pixel_jitter);
+    if (st == HZ_OK)
+        set_render_id(job, render_scene_sampler(job->rs)->spp);
+    if (distributed_agree(dist, st, err,
+                          st == HZ_OK ? distributed_fingerprint(job->inputs_hash, job->rs) : 0,
+                          stderr) != HZ_OK)
+        return EXIT_SCENE;
+    return 0;
+}
+
+/* --target-error: the marching step's bias, chosen before the passes
+ * measure the noise; rank 0 says which step unless --quiet. */
+static void choose_step(const cli *c, render_scene *rs, bool rank0, step_choice *steps,
+                        phase_times *ph)
+{
+    step_pilot_choose(rs, c->target_error, c->threads, steps);
+    ph->pilot_seconds = hz_clock_seconds() - ph->render;
+    if (!steps->applies || !rank0 || c->quiet)
+        return;
+    char cache[64] = "";
+    if (steps->shadow_cache > 0.0)
+        snprintf(cache, sizeof cache, ", shadow cache %g", steps->shadow_cache);
+    fprintf(stderr,
+            "haze: --target-error %g: marching step %g voxels (shadow %g%s), estimated "
+            "bias relMSE %.2g (a pilot of %d pixels, %d renders)\n",
+            c->target_error, steps->step, steps->shadow_step, cache, steps->bias,
+            steps->pixels, steps->renders);
+}
+
+static double mean_spp(const render_stats *st)
+{
+    return st->pixels > 0 ? st->samples / (double)st->pixels : 0.0;
+}
+
+/* The image's estimated relMSE: its noise and the step's bias; -1: none. */
+static double image_estimate(const render_stats *st, double bias)
+{
+    return st->estimate >= 0.0 ? st->estimate + bias : -1.0;
+}
+
+/* The EXR header attributes of a complete render, and the text they point
+ * at (which must outlive the write). */
+typedef struct {
+    char spp[32], passes[32], limit[32], target[32], mean_spp[32], estimated[32];
+    char stepsize[64];
+    film_attribute items[8];
+    int count;
+} image_attributes;
+
+static void image_attributes_fill(image_attributes *a, const char *render_id, const cli *c,
+                                  const progressive_goal *goal, const render_stats *st,
+                                  const step_choice *steps)
+{
+    bool adaptive = goal->target_error > 0, progressive = goal->deadline > 0 || adaptive;
+    format_count(a->spp, sizeof a->spp, st->spp);
+    format_count(a->passes, sizeof a->passes, st->passes);
+    snprintf(a->limit, sizeof a->limit, "%g", c->time_limit);
+    snprintf(a->target, sizeof a->target, "%g", c->target_error);
+    snprintf(a->mean_spp, sizeof a->mean_spp, "%.3f", mean_spp(st));
+    double estimate = image_estimate(st, goal->bias);
+    snprintf(a->estimated, sizeof a->estimated, "%.3g", estimate);
+    snprintf(a->stepsize, sizeof a->stepsize, "%g %g", steps->step, steps->shadow_step);
+    if (steps->shadow_cache > 0.0) /* "step shadowstep shadowcache" */
+        snprintf(a->stepsize, sizeof a->stepsize, "%g %g %g", steps->step, steps->shadow_step,
+                 steps->shadow_cache);
+    a->count = 0;
+    a->items[a->count++] = (film_attribute){"haze:render", render_id};
+    if (progressive) {
+        a->items[a->count++] = (film_attribute){"haze:spp", a->spp};
+        a->items[a->count++] = (film_attribute){"haze:passes", a->passes};
+    }
+    if (goal->deadline > 0)
+        a->items[a->count++] = (film_attribute){"haze:time_limit_s", a->limit};
+    if (adaptive) {
+        a->items[a->count++] = (film_attribute){"haze:target_error", a->target};
+        a->items[a->count++] = (film_attribute){"haze:spp_mean", a->mean_spp};
+        if (estimate >= 0.0)
+            a->items[a->count++] = (film_attribute){"haze:estimated_error", a->estimated};
+        if (steps->applies)
+            a->items[a->count++] = (film_attribute){"haze:stepsize", a->stepsize};
+    }
+}
+
+/* Writes the EXR (and the PNG preview) of a complete render. Returns 0 or
+ * the exit status. */
+static int write_image(const cli *c, render_job *job, const render_stats *st,
+                       const progressive_goal *goal, const step_choice *steps, double ratio,
+                       phase_times *ph, hz_error *err)
+{
+    /* The id names the samples taken; a --target-error render's, the cap (its
+     * regions take samples of their own, and merge). */
+    if (!(goal->target_error > 0) && st->spp != render_scene_sampler(job->rs)->spp)
+        set_render_id(job, st->spp);
+    image_attributes attrs;
+    image_attributes_fill(&attrs, job->outs.render_id, c, goal, st, steps);
+    film_output out = {attrs.items, attrs.count, &output_note, st->threads};
+    ph->write = hz_clock_seconds();
+    if (film_write_exr_with(job->f, job->outs.exr, ratio, &out, err) != HZ_OK ||
+        (c->preview && film_write_png_with(job->f, job->outs.png, ratio, &out, err) != HZ_OK)) {
+        hz_error_print(stderr, err);
+        return EXIT_SCENE;
+    }
+    return 0;
+}
+
+/* After the image is written: a missed --target-error, and samples or rays
+ * the render dropped. */
+static void warn_after_render(const render_job *job, const render_stats *st,
+                              const progressive_goal *goal)
+{
+    if (goal->target_error > 0)
+        warn_target_missed(goal->target_error, image_estimate(st, goal->bias), goal->bias,
+                           st->spp, render_scene_sampler(job->rs)->spp, goal->deadline > 0);
+    long bad = film_nonfinite_count(job->f);
+    if (bad > 0)
+        fprintf(stderr, "haze: warning: %ld non-finite sample values were dropped\n", bad);
+    if (st->lost_paths > 0)
+        fprintf(stderr,
+                "haze: warning: %llu rays crossed more than %d interfaces and were dropped "
+                "(black)\n",
+                (unsigned long long)st->lost_paths, GEOMETRY_MAX_CROSSINGS);
+}
+
+/* The one line on stdout that sums up a complete render (not under --quiet). */
+static void print_summary(const render_job *job, const render_stats *st,
+                          const progressive_goal *goal, distributed *dist)
+{
+    const film_params *fp = job->fp;
+    bool adaptive = goal->target_error > 0, progressive = goal->deadline > 0 || adaptive;
+    char wall[32];
+    progress_format_duration(st->wall_seconds, wall, sizeof wall);
+    double rays = (double)(st->camera_rays + st->shadow_rays);
+    char lookups[64] = "";
+    if (st->density_lookups > 0)
+        snprintf(lookups, sizeof lookups, "%.1f density lookups/pixel", /* pixels > 0 here */
+                 (double)st->density_lookups / (double)st->pixels);
+    char motion[96], ranks[32] = "";
+    format_motion(render_scene_motion(job->rs), motion, sizeof motion);
+    if (distributed_size(dist) > 1)
+        snprintf(ranks, sizeof ranks, " on %d ranks", distributed_size(dist));
+    char pass_note[96] = "";
+    if (adaptive)
+        snprintf(pass_note, sizeof pass_note, " at most (%.2f spp mean)", mean_spp(st));
+    if (progressive)
+        snprintf(pass_note + strlen(pass_note), sizeof pass_note - strlen(pass_note),
+                 " in %d pass%s", st->passes, st->passes == 1 ? "" : "es");
+    printf("%s: %dx%d (%d x %d pixels rendered), %d spp%s, %d threads%s, %s, "
+           "%.2f Mrays/s (%llu camera + %llu shadow), %s%s%s, peak memory %.1f MiB\n",
+           fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,
+           fp->bounds.y1 - fp->bounds.y0, st->spp, pass_note, st->threads, ranks, wall,
+           st->wall_seconds > 0 ? rays / st->wall_seconds * 1e-6 : 0.0,
+           (unsigned long long)st->camera_rays, (unsigned long long)st->shadow_rays, lookups,
+           lookups[0] ? ", " : "", motion, peak_memory_mib());
+    distributed_print_report(dist, stdout);
+}
+
+/* Renders the loaded scene (after --target-error's step pilot) and, on rank
+ * 0, writes the image and reports. Returns 0 or the exit status. */
+static int render_loaded_scene(const cli *c, distributed *dist, render_job *job,
+                               phase_times *ph, double baseline_mib, hz_error *err)
+{
+    bool rank0 = distributed_rank(dist) == 0, mpi = distributed_size(dist) > 1;
+    if (!mpi) /* under mpirun a signal ends the job (docs/mpi.md) */
+        install_interrupt_handlers();
+    renderer_options opt = {.threads = c->threads,
+                            .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
+                            .cancel = mpi ? NULL : &interrupted,
+                            .disable_pixel_jitter = job->no_jitter,
+                            .timing = c->stats != 0};
+    render_stats stats;
+    double deadline = c->time_limit > 0 ? c->start_seconds + c->time_limit : 0.0;
+    progressive_goal goal = {deadline, c->target_error, 0.0};
+    bool adaptive = c->target_error > 0, progressive = deadline > 0 || adaptive;
+    step_choice steps = {0};
+    ph->render = hz_clock_seconds();
+    if (adaptive) {
+        choose_step(c, job->rs, rank0, &steps, ph);
+        if (steps.applies)
+            goal.bias = steps.bias;
+    }
+    if (distributed_render(dist, job->rs, &opt, progressive ? &goal : NULL, &stats, err) !=
+        HZ_OK) {
+        if (rank0)
+            hz_error_print(stderr, err);
+        return EXIT_SCENE;
+    }
+    if (!rank0)
+        return 0; /* rank 0 holds the whole film */
+    double ratio = camera_imaging_ratio(render_scene_camera(job->rs), job->fp);
+    if (stats.interrupted)
+        return write_partial(&job->outs, job->f, ratio, &stats);
+    int rc = write_image(c, job, &stats, &goal, &steps, ratio, ph, err);
+    if (rc != 0)
+        return rc;
+    /* A signal after the last tile: the image is complete and written as
+     * usual, but the run still reports the interruption. */
+    int exit_code = interrupted ? EXIT_INTERRUPTED : 0;
+    warn_after_render(job, &stats, &goal);
+    if (!c->quiet)
+        print_summary(job, &stats, &goal, dist);
+    ph->end = hz_clock_seconds();
+    if (c->stats)
+        print_stats(job->rs, &stats, baseline_mib, ph);
+    return exit_code;
+}
+
 /* Under mpirun every rank builds the scene; only rank 0 checks and writes the
  * output and prints (docs/mpi.md). */
 static int run_render(const cli *c, distributed *dist)
@@ -418,185 +683,13 @@ static int run_render(const cli *c, distributed *dist)
     hz_error err = {0};
     double baseline_mib = c->stats ? resident_memory_mib() : 0.0;
     phase_times ph = {.start = c->start_seconds, .parse = hz_clock_seconds()};
-    scene_desc sd;
-    bool rank0 = distributed_rank(dist) == 0, mpi = distributed_size(dist) > 1;
-    hz_errors parse_errs = {0};
-    bool read = scene_parse_file_all(c->scene, &sd, &parse_errs, &err) == HZ_OK;
-    bool parsed = read && parse_errs.count == 0 && parse_errs.dropped == 0;
-    /* Every rank has the same arguments: under mpirun all of them stop here. */
-    if (parsed && check_region(c, &sd) != 0) {
-        scene_desc_free(&sd);
-        return EXIT_USAGE;
-    }
-    bool adaptive = c->target_error > 0;
-    render_options ro = {.seed = c->seed,
-                         .seed_given = c->seed_given != 0,
-                         .spp = c->spp > 0 ? c->spp : adaptive ? ADAPTIVE_MAX_SPP : 0,
-                         .output = c->output,
-                         .region = c->region,
-                         .statistics = adaptive,
-                         .portable_isa = c->portable_isa != 0};
-    render_scene *rs = NULL;
-    hz_status st = HZ_ERROR;
-    ph.build = hz_clock_seconds();
-    if (parsed)
-        st = render_scene_create(&sd, &ro, rank0 ? stderr : NULL, &rs, &err);
-    else if (read) /* the scene's other problems too, in one report */
-        render_scene_check(&sd, &ro, &parse_errs, &err);
-    film *f = st == HZ_OK ? render_scene_film(rs) : NULL;
-    const film_params *fp = f ? film_get_params(f) : NULL;
-    int exit_code = 0;
-    render_outputs outs;
-    if (st == HZ_OK && rank0 && outputs_resolve(&sd, fp->filename, c->preview, &outs, &err) != HZ_OK)
-        st = HZ_ERROR;
-    uint64_t inputs_hash = 0;
-    if (st == HZ_OK && scene_inputs_hash(&sd, &inputs_hash, &err) != HZ_OK)
-        st = HZ_ERROR;
-    bool no_jitter = c->disable_pixel_jitter || (rs && render_scene_options(rs).disable_pixel_jitter);
-    snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
-             st == HZ_OK ? (unsigned long long)outputs_render_id(inputs_hash, rs, render_scene_sampler(rs)->spp, no_jitter) : 0ull);
-    if (distributed_agree(dist, st, &err,
-                          st == HZ_OK ? distributed_fingerprint(inputs_hash, rs) : 0,
-                          stderr) != HZ_OK) {
-        exit_code = EXIT_SCENE;
-        goto done;
-    }
-
-    if (!mpi) /* under mpirun a signal ends the job (docs/mpi.md) */
-        install_interrupt_handlers();
-    renderer_options opt = {.threads = c->threads,
-                            .progress = (!c->quiet && isatty(STDERR_FILENO)) ? stderr : NULL,
-                            .cancel = mpi ? NULL : &interrupted,
-                            .disable_pixel_jitter = no_jitter,
-                            .timing = c->stats != 0};
-    render_stats stats;
-    double deadline = c->time_limit > 0 ? c->start_seconds + c->time_limit : 0.0;
-    progressive_goal goal = {deadline, c->target_error, 0.0};
-    bool progressive = deadline > 0 || adaptive;
-    step_choice steps = {0};
-    ph.render = hz_clock_seconds();
-    if (adaptive) { /* the marching step's bias, before the passes measure the noise */
-        step_pilot_choose(rs, c->target_error, c->threads, &steps);
-        ph.pilot_seconds = hz_clock_seconds() - ph.render;
-        if (steps.applies && rank0 && !c->quiet) {
-            char cache[64] = "";
-            if (steps.shadow_cache > 0.0)
-                snprintf(cache, sizeof cache, ", shadow cache %g", steps.shadow_cache);
-            fprintf(stderr,
-                    "haze: --target-error %g: marching step %g voxels (shadow %g%s), estimated "
-                    "bias relMSE %.2g (a pilot of %d pixels, %d renders)\n",
-                    c->target_error, steps.step, steps.shadow_step, cache, steps.bias,
-                    steps.pixels, steps.renders);
-        }
-        if (steps.applies)
-            goal.bias = steps.bias;
-    }
-    if (distributed_render(dist, rs, &opt, progressive ? &goal : NULL, &stats, &err) != HZ_OK) {
-        if (rank0)
-            hz_error_print(stderr, &err);
-        exit_code = EXIT_SCENE;
-        goto done;
-    }
-    if (!rank0)
-        goto done; /* rank 0 holds the whole film */
-    double ratio = camera_imaging_ratio(render_scene_camera(rs), fp);
-    if (stats.interrupted) {
-        exit_code = write_partial(&outs, f, ratio, &stats);
-        goto done;
-    }
-    char spp[32], passes[32], limit[32], target[32], mean_spp[32], estimated[32];
-    format_count(spp, sizeof spp, stats.spp);
-    format_count(passes, sizeof passes, stats.passes);
-    snprintf(limit, sizeof limit, "%g", c->time_limit);
-    snprintf(target, sizeof target, "%g", c->target_error);
-    double spp_mean = stats.pixels > 0 ? stats.samples / (double)stats.pixels : 0.0;
-    snprintf(mean_spp, sizeof mean_spp, "%.3f", spp_mean);
-    /* The id names the samples taken; a --target-error render's, the cap (its
-     * regions take samples of their own, and merge). */
-    if (!adaptive && stats.spp != render_scene_sampler(rs)->spp)
-        snprintf(outs.render_id, sizeof outs.render_id, "%016llx",
-                 (unsigned long long)outputs_render_id(inputs_hash, rs, stats.spp, no_jitter));
-    /* The image's estimated relMSE: its noise and the step's bias. */
-    double estimate = stats.estimate >= 0.0 ? stats.estimate + goal.bias : -1.0;
-    snprintf(estimated, sizeof estimated, "%.3g", estimate);
-    film_attribute attrs[8] = {{"haze:render", outs.render_id}};
-    int nattrs = 1;
-    if (progressive) {
-        attrs[nattrs++] = (film_attribute){"haze:spp", spp};
-        attrs[nattrs++] = (film_attribute){"haze:passes", passes};
-    }
-    if (deadline > 0)
-        attrs[nattrs++] = (film_attribute){"haze:time_limit_s", limit};
-    char stepsize[64];
-    snprintf(stepsize, sizeof stepsize, "%g %g", steps.step, steps.shadow_step);
-    if (steps.shadow_cache > 0.0) /* "step shadowstep shadowcache" */
-        snprintf(stepsize, sizeof stepsize, "%g %g %g", steps.step, steps.shadow_step,
-                 steps.shadow_cache);
-    if (adaptive) {
-        attrs[nattrs++] = (film_attribute){"haze:target_error", target};
-        attrs[nattrs++] = (film_attribute){"haze:spp_mean", mean_spp};
-        if (estimate >= 0.0)
-            attrs[nattrs++] = (film_attribute){"haze:estimated_error", estimated};
-        if (steps.applies)
-            attrs[nattrs++] = (film_attribute){"haze:stepsize", stepsize};
-    }
-    film_output out = {attrs, nattrs, &output_note, stats.threads};
-    ph.write = hz_clock_seconds();
-    if (film_write_exr_with(f, outs.exr, ratio, &out, &err) != HZ_OK ||
-        (c->preview && film_write_png_with(f, outs.png, ratio, &out, &err) != HZ_OK)) {
-        hz_error_print(stderr, &err);
-        exit_code = EXIT_SCENE;
-        goto done;
-    }
-    /* A signal after the last tile: the image is complete and written as
-     * usual, but the run still reports the interruption. */
-    if (interrupted)
-        exit_code = EXIT_INTERRUPTED;
-    if (adaptive)
-        warn_target_missed(c->target_error, estimate, goal.bias, stats.spp,
-                           render_scene_sampler(rs)->spp, deadline > 0);
-    long bad = film_nonfinite_count(f);
-    if (bad > 0)
-        fprintf(stderr, "haze: warning: %ld non-finite sample values were dropped\n", bad);
-    if (stats.lost_paths > 0)
-        fprintf(stderr,
-                "haze: warning: %llu rays crossed more than %d interfaces and were dropped "
-                "(black)\n",
-                (unsigned long long)stats.lost_paths, GEOMETRY_MAX_CROSSINGS);
-    if (!c->quiet) {
-        char wall[32];
-        progress_format_duration(stats.wall_seconds, wall, sizeof wall);
-        double rays = (double)(stats.camera_rays + stats.shadow_rays);
-        char lookups[64] = "";
-        if (stats.density_lookups > 0)
-            snprintf(lookups, sizeof lookups, "%.1f density lookups/pixel", /* pixels > 0 here */
-                     (double)stats.density_lookups / (double)stats.pixels);
-        char motion[96], ranks[32] = "";
-        format_motion(render_scene_motion(rs), motion, sizeof motion);
-        if (mpi)
-            snprintf(ranks, sizeof ranks, " on %d ranks", distributed_size(dist));
-        char pass_note[96] = "";
-        if (adaptive)
-            snprintf(pass_note, sizeof pass_note, " at most (%.2f spp mean)", spp_mean);
-        if (progressive)
-            snprintf(pass_note + strlen(pass_note), sizeof pass_note - strlen(pass_note),
-                     " in %d pass%s", stats.passes, stats.passes == 1 ? "" : "es");
-        printf("%s: %dx%d (%d x %d pixels rendered), %d spp%s, %d threads%s, %s, "
-               "%.2f Mrays/s (%llu camera + %llu shadow), %s%s%s, peak memory %.1f MiB\n",
-               fp->filename, fp->xres, fp->yres, fp->bounds.x1 - fp->bounds.x0,
-               fp->bounds.y1 - fp->bounds.y0, stats.spp, pass_note, stats.threads, ranks, wall,
-               stats.wall_seconds > 0 ? rays / stats.wall_seconds * 1e-6 : 0.0,
-               (unsigned long long)stats.camera_rays, (unsigned long long)stats.shadow_rays,
-               lookups, lookups[0] ? ", " : "", motion, peak_memory_mib());
-        distributed_print_report(dist, stdout);
-    }
-    ph.end = hz_clock_seconds();
-    if (c->stats)
-        print_stats(rs, &stats, baseline_mib, &ph);
-done:
-    render_scene_destroy(rs);
-    if (read)
-        scene_desc_free(&sd);
+    render_job job = {.rs = NULL};
+    int exit_code = load_scene(c, dist, &job, &ph, &err);
+    if (exit_code == 0)
+        exit_code = render_loaded_scene(c, dist, &job, &ph, baseline_mib, &err);
+    render_scene_destroy(job.rs);
+    if (job.read)
+        scene_desc_free(&job.sd);
     return exit_code;
 }
 

@@ -62,7 +62,8 @@ static bool mat4_is_finite(const mat4 *m)
     return true;
 }
 
-const char *camera_config_check(const camera_config *c, hz_error *err)
+/* The kind, resolution and transforms: faults of no one parameter (""). */
+static const char *check_kind_and_transforms(const camera_config *c, hz_error *err)
 {
     if (c->kind != CAMERA_PERSPECTIVE && c->kind != CAMERA_ORTHOGRAPHIC &&
         c->kind != CAMERA_SPHERICAL) {
@@ -88,6 +89,11 @@ const char *camera_config_check(const camera_config *c, hz_error *err)
                 c->transform_end_time);
         return "";
     }
+    return NULL;
+}
+
+static const char *check_shutter(const camera_config *c, hz_error *err)
+{
     if (!isfinite(c->shutter_open)) {
         hz_fail(err, "\"shutteropen\" must be finite, got %g", c->shutter_open);
         return "shutteropen";
@@ -103,7 +109,11 @@ const char *camera_config_check(const camera_config *c, hz_error *err)
                 c->shutter_close);
         return "shutteropen";
     }
-    const double *w = c->screen_window;
+    return NULL;
+}
+
+static const char *check_screen_window(const double w[4], hz_error *err)
+{
     for (int i = 0; i < 4; ++i) {
         if (!isfinite(w[i])) {
             hz_fail(err, "\"screenwindow\" values must be finite");
@@ -117,6 +127,12 @@ const char *camera_config_check(const camera_config *c, hz_error *err)
                 w[0], w[1], w[2], w[3]);
         return "screenwindow";
     }
+    return NULL;
+}
+
+/* The lens, focus, field of view and aperture. */
+static const char *check_lens(const camera_config *c, hz_error *err)
+{
     if (c->kind == CAMERA_SPHERICAL && c->lens_radius != 0.0) {
         hz_fail(err, "the spherical camera has no lens (\"lensradius\" must be 0)");
         return "lensradius";
@@ -142,6 +158,18 @@ const char *camera_config_check(const camera_config *c, hz_error *err)
         return "bladerotation";
     }
     return NULL;
+}
+
+const char *camera_config_check(const camera_config *c, hz_error *err)
+{
+    const char *bad = check_kind_and_transforms(c, err);
+    if (!bad)
+        bad = check_shutter(c, err);
+    if (!bad)
+        bad = check_screen_window(c->screen_window, err);
+    if (!bad)
+        bad = check_lens(c, err);
+    return bad;
 }
 
 /* pbrt-v4 ProjectiveCamera: screen -> NDC ([0,1]^2, y flipped so raster y grows

@@ -92,47 +92,48 @@ static hz_status read_spherical(scene_entity *ent, camera_config *cfg, hz_error 
     return HZ_OK;
 }
 
-hz_status camera_create(camera_entity *e, const film_params *film, camera *out, hz_error *err)
+static hz_status read_kind(const scene_entity *ent, camera_kind *kind, hz_error *err)
 {
-    scene_entity *ent = &e->entity;
-    param_list *pl = &ent->params;
-    camera_kind kind;
     if (strcmp(ent->type, "perspective") == 0)
-        kind = CAMERA_PERSPECTIVE;
+        *kind = CAMERA_PERSPECTIVE;
     else if (strcmp(ent->type, "orthographic") == 0)
-        kind = CAMERA_ORTHOGRAPHIC;
+        *kind = CAMERA_ORTHOGRAPHIC;
     else if (strcmp(ent->type, "spherical") == 0)
-        kind = CAMERA_SPHERICAL;
+        *kind = CAMERA_SPHERICAL;
     else
         return hz_fail_at(err, ent->loc,
                           "camera type \"%s\" is not supported (haze supports \"perspective\", "
                           "\"orthographic\" and \"spherical\"; \"realistic\" is refused, see "
                           "docs/differences-from-pbrt.md)",
                           ent->type);
-    if (film->xres < 1 || film->yres < 1)
-        return hz_fail_at(err, ent->loc, "film resolution %dx%d must be at least 1x1",
-                          film->xres, film->yres);
+    return HZ_OK;
+}
 
+/* The CameraFromWorld transforms at the start and end of the shutter
+ * (moving when they differ). */
+static void set_camera_motion(const camera_entity *e, camera_config *cfg)
+{
+    cfg->camera_from_world = e->camera_from_world;
+    cfg->camera_from_world_end = e->camera_from_world_end;
+    cfg->motion = memcmp(&e->camera_from_world.m, &e->camera_from_world_end.m,
+                         sizeof e->camera_from_world.m) != 0;
+    cfg->transform_start_time = e->transform_start_time;
+    cfg->transform_end_time = e->transform_end_time;
+}
+
+/* "frameaspectratio" (default the film's; *frame) and the screen window
+ * it gives, unless "screenwindow" sets it. */
+static hz_status read_screen_window(scene_entity *ent, const film_params *film, double *frame,
+                                    camera_config *cfg, hz_error *err)
+{
+    param_list *pl = &ent->params;
     char msg[256];
-    camera_config cfg = camera_config_default(kind, film->xres, film->yres);
-    if (kind == CAMERA_SPHERICAL && read_spherical(ent, &cfg, err) != HZ_OK)
-        return HZ_ERROR;
-    cfg.camera_from_world = e->camera_from_world;
-    cfg.camera_from_world_end = e->camera_from_world_end;
-    cfg.motion = memcmp(&e->camera_from_world.m, &e->camera_from_world_end.m,
-                        sizeof e->camera_from_world.m) != 0;
-    cfg.transform_start_time = e->transform_start_time;
-    cfg.transform_end_time = e->transform_end_time;
-    cfg.shutter_open = params_float(pl, "shutteropen", cfg.shutter_open);
-    cfg.shutter_close = params_float(pl, "shutterclose", cfg.shutter_close);
-    cfg.lens_radius = params_float(pl, "lensradius", cfg.lens_radius);
-    cfg.focal_distance = params_float(pl, "focaldistance", cfg.focal_distance);
-    double frame = params_float(pl, "frameaspectratio", (double)film->xres / (double)film->yres);
-    if (!positive_finite(frame)) {
-        snprintf(msg, sizeof msg, "\"frameaspectratio\" must be finite and > 0, got %g", frame);
+    *frame = params_float(pl, "frameaspectratio", (double)film->xres / (double)film->yres);
+    if (!positive_finite(*frame)) {
+        snprintf(msg, sizeof msg, "\"frameaspectratio\" must be finite and > 0, got %g", *frame);
         return fail_param(err, ent, "frameaspectratio", msg);
     }
-    camera_screen_window_from_frame(frame, cfg.screen_window);
+    camera_screen_window_from_frame(*frame, cfg->screen_window);
     size_t n = 0;
     const double *sw = params_floats(pl, "screenwindow", &n);
     if (sw) {
@@ -141,20 +142,66 @@ hz_status camera_create(camera_entity *e, const film_params *film, camera *out, 
                      "\"screenwindow\" takes four values (xmin xmax ymin ymax), got %zu", n);
             return fail_param(err, ent, "screenwindow", msg);
         }
-        memcpy(cfg.screen_window, sw, sizeof cfg.screen_window);
+        memcpy(cfg->screen_window, sw, sizeof cfg->screen_window);
     }
+    return HZ_OK;
+}
 
+/* A perspective camera's field of view: "fov", or the physical lens's
+ * (read_physical_lens) when "focallength" is given. */
+static hz_status read_fov(scene_entity *ent, double frame, bool physical, camera_config *cfg,
+                          hz_error *err)
+{
+    param_list *pl = &ent->params;
+    if (physical)
+        return read_physical_lens(ent, frame, cfg, err);
+    if (params_has(pl, "fstop"))
+        return fail_param(err, ent, "fstop", "\"fstop\" needs \"focallength\"");
+    cfg->fov = params_float(pl, "fov", cfg->fov);
+    return HZ_OK;
+}
+
+/* camera_config_check's verdict, at the parameter to blame: values derived
+ * from the physical lens are blamed on what the user wrote. */
+static hz_status check_config(const scene_entity *ent, const camera_config *cfg, bool physical,
+                              hz_error *err)
+{
+    hz_error why;
+    const char *bad = camera_config_check(cfg, &why);
+    if (!bad)
+        return HZ_OK;
+    if (physical && strcmp(bad, "fov") == 0)
+        bad = "focallength";
+    if (physical && strcmp(bad, "lensradius") == 0 && params_has(&ent->params, "fstop"))
+        bad = "fstop";
+    return fail_param(err, ent, bad, why.message);
+}
+
+hz_status camera_create(camera_entity *e, const film_params *film, camera *out, hz_error *err)
+{
+    scene_entity *ent = &e->entity;
+    param_list *pl = &ent->params;
+    camera_kind kind = CAMERA_PERSPECTIVE;
+    if (read_kind(ent, &kind, err) != HZ_OK)
+        return HZ_ERROR;
+    if (film->xres < 1 || film->yres < 1)
+        return hz_fail_at(err, ent->loc, "film resolution %dx%d must be at least 1x1",
+                          film->xres, film->yres);
+
+    camera_config cfg = camera_config_default(kind, film->xres, film->yres);
+    if (kind == CAMERA_SPHERICAL && read_spherical(ent, &cfg, err) != HZ_OK)
+        return HZ_ERROR;
+    set_camera_motion(e, &cfg);
+    cfg.shutter_open = params_float(pl, "shutteropen", cfg.shutter_open);
+    cfg.shutter_close = params_float(pl, "shutterclose", cfg.shutter_close);
+    cfg.lens_radius = params_float(pl, "lensradius", cfg.lens_radius);
+    cfg.focal_distance = params_float(pl, "focaldistance", cfg.focal_distance);
+    double frame;
+    if (read_screen_window(ent, film, &frame, &cfg, err) != HZ_OK)
+        return HZ_ERROR;
     bool physical = kind == CAMERA_PERSPECTIVE && params_has(pl, "focallength");
-    if (kind == CAMERA_PERSPECTIVE) {
-        if (physical) {
-            if (read_physical_lens(ent, frame, &cfg, err))
-                return HZ_ERROR;
-        } else if (params_has(pl, "fstop")) {
-            return fail_param(err, ent, "fstop", "\"fstop\" needs \"focallength\"");
-        } else {
-            cfg.fov = params_float(pl, "fov", cfg.fov);
-        }
-    }
+    if (kind == CAMERA_PERSPECTIVE && read_fov(ent, frame, physical, &cfg, err) != HZ_OK)
+        return HZ_ERROR;
     cfg.blades = params_int(pl, "blades", cfg.blades);
     cfg.blade_rotation = params_float(pl, "bladerotation", cfg.blade_rotation);
 
@@ -162,17 +209,9 @@ hz_status camera_create(camera_entity *e, const film_params *film, camera *out, 
     snprintf(what, sizeof what, "Camera \"%s\"", ent->type);
     if (params_finish(pl, what, err))
         return HZ_ERROR;
-
+    if (check_config(ent, &cfg, physical, err) != HZ_OK)
+        return HZ_ERROR;
     hz_error why;
-    const char *bad = camera_config_check(&cfg, &why);
-    if (bad) {
-        /* Values derived from the physical lens are blamed on what the user wrote. */
-        if (physical && strcmp(bad, "fov") == 0)
-            bad = "focallength";
-        if (physical && strcmp(bad, "lensradius") == 0 && params_has(pl, "fstop"))
-            bad = "fstop";
-        return fail_param(err, ent, bad, why.message);
-    }
     if (camera_init(&cfg, out, &why))
         return hz_fail_at(err, ent->loc, "%s", why.message);
     return HZ_OK;

@@ -495,95 +495,116 @@ static hz_status zt_prepare(const diff_options *opt, const exr_image *a, const e
     return HZ_OK;
 }
 
+/* Sums of a - b and of the variances over a block or the image; bad: some
+ * pixel in it has no valid test. */
+typedef struct {
+    double d, var;
+    bool bad;
+} zt_sum;
+
+/* A's variance at pixel i: the reference's per-sample variance `vb` scaled
+ * to A's count (robust when A has few samples), or A's own variance when
+ * larger: a rare event that A caught and the reference's samples missed
+ * shows in A's own spread, not in B's. Sets *bad where A has no sample and
+ * B has. */
+static double zt_variance_a(const ztest *zt, const zt_channel *ch, size_t i, double vb,
+                            bool *bad)
+{
+    double va = 0.0;
+    if (zt->count_a) {
+        if (zt->count_b[i] == 0.0f) {
+            va = 0.0; /* B has no sample: its mean and variance are 0 */
+        } else if (zt->count_a[i] == 0.0f) {
+            va = NAN;
+            *bad = true; /* A has no sample where B has */
+        } else {
+            va = vb * (double)zt->count_b[i] / (double)zt->count_a[i];
+        }
+    }
+    if (ch->var_a && !*bad)
+        va = fmax(va, ch->var_a[i]);
+    return va;
+}
+
+/* The test of pixel (x, y) of channel c, recorded; heat[i] keeps the
+ * pixel's largest |z|. Returns what the pixel adds to its block's and the
+ * image's sums. */
+static zt_sum zt_pixel_test(const exr_image *a, ztest *zt, int c, int x, int y, float *heat)
+{
+    const zt_channel *ch = &zt->ch[c];
+    size_t i = (size_t)y * (size_t)a->width + (size_t)x;
+    double vb = ch->var_b[i], av = ch->a[i], b = ch->b[i];
+    bool bad = !isfinite(av);
+    double va = zt_variance_a(zt, ch, i, vb, &bad);
+    double d = av - b, floor_sd = 1e-5 * fmax(fabs(av), fabs(b));
+    double var = va + vb + floor_sd * floor_sd;
+    zt_test t = {0};
+    t.z = bad ? NAN : (d == 0.0 ? 0.0 : d / sqrt(var));
+    t.x0 = t.x1 = a->data_x0 + x;
+    t.y0 = t.y1 = a->data_y0 + y;
+    t.channel = c;
+    t.d = d;
+    t.sd = sqrt(var);
+    t.a = av;
+    t.b = b;
+    zt_record(&zt->scale[ZT_PIXEL], &t, zt->level);
+    float k = (float)zt_key(t.z);
+    if (k > heat[i])
+        heat[i] = k;
+    return (zt_sum){d, var, bad};
+}
+
+static void zt_sum_add(zt_sum *s, zt_sum p)
+{
+    s->d += p.d;
+    s->var += p.var;
+    s->bad |= p.bad;
+}
+
+/* Records the test of a block or the image of channel c, pixels (x0, y0) ..
+ * (x1, y1); returns its z. */
+static double zt_record_sum(ztest *zt, zt_scale_kind k, int c, zt_sum s, int x0, int y0, int x1,
+                            int y1)
+{
+    zt_test t = {0};
+    t.z = s.bad ? NAN : (s.d == 0.0 ? 0.0 : s.d / sqrt(s.var));
+    t.x0 = x0;
+    t.y0 = y0;
+    t.x1 = x1;
+    t.y1 = y1;
+    t.channel = c;
+    t.d = s.d;
+    t.sd = sqrt(s.var);
+    zt_record(&zt->scale[k], &t, zt->level);
+    return t.z;
+}
+
 /* The tests of one channel; heat[i] keeps the largest |z| of pixel i. */
 static hz_status zt_channel_tests(const exr_image *a, ztest *zt, int c, float *heat, hz_error *err)
 {
-    const zt_channel *ch = &zt->ch[c];
     int w = a->width, h = a->height;
     int bw = (w + ZT_BLOCK - 1) / ZT_BLOCK, bh = (h + ZT_BLOCK - 1) / ZT_BLOCK;
     size_t nblocks = (size_t)bw * (size_t)bh;
-    double *bd = calloc(nblocks, sizeof *bd), *bv = calloc(nblocks, sizeof *bv);
-    bool *bbad = calloc(nblocks, sizeof *bbad);
-    if (!bd || !bv || !bbad) {
-        free(bd);
-        free(bv);
-        free(bbad);
+    zt_sum *blocks = calloc(nblocks, sizeof *blocks);
+    if (!blocks)
         return hz_fail(err, "out of memory");
-    }
-    double sum_d = 0.0, sum_v = 0.0;
-    bool any_bad = false;
+    zt_sum image = {0.0, 0.0, false};
     for (int y = 0; y < h; y++)
         for (int x = 0; x < w; x++) {
-            size_t i = (size_t)y * (size_t)w + (size_t)x;
-            double va, vb = ch->var_b[i], av = ch->a[i], b = ch->b[i];
-            bool bad = !isfinite(av);
-            /* The reference's per-sample variance scaled to A's count (robust
-             * when A has few samples), or A's own variance when larger: a rare
-             * event that A caught and the reference's samples missed shows in
-             * A's own spread, not in B's. */
-            va = 0.0;
-            if (zt->count_a) {
-                if (zt->count_b[i] == 0.0f) {
-                    va = 0.0; /* B has no sample: its mean and variance are 0 */
-                } else if (zt->count_a[i] == 0.0f) {
-                    va = NAN;
-                    bad = true; /* A has no sample where B has */
-                } else {
-                    va = vb * (double)zt->count_b[i] / (double)zt->count_a[i];
-                }
-            }
-            if (ch->var_a && !bad)
-                va = fmax(va, ch->var_a[i]);
-            double d = av - b, floor_sd = 1e-5 * fmax(fabs(av), fabs(b));
-            double var = va + vb + floor_sd * floor_sd;
-            zt_test t = {0};
-            t.z = bad ? NAN : (d == 0.0 ? 0.0 : d / sqrt(var));
-            t.x0 = t.x1 = a->data_x0 + x;
-            t.y0 = t.y1 = a->data_y0 + y;
-            t.channel = c;
-            t.d = d;
-            t.sd = sqrt(var);
-            t.a = av;
-            t.b = b;
-            zt_record(&zt->scale[ZT_PIXEL], &t, zt->level);
-            float k = (float)zt_key(t.z);
-            if (k > heat[i])
-                heat[i] = k;
-            size_t bi = (size_t)(y / ZT_BLOCK) * (size_t)bw + (size_t)(x / ZT_BLOCK);
-            bd[bi] += d;
-            bv[bi] += var;
-            bbad[bi] |= bad;
-            sum_d += d;
-            sum_v += var;
-            any_bad |= bad;
+            zt_sum p = zt_pixel_test(a, zt, c, x, y, heat);
+            zt_sum_add(&blocks[(size_t)(y / ZT_BLOCK) * (size_t)bw + (size_t)(x / ZT_BLOCK)], p);
+            zt_sum_add(&image, p);
         }
     for (size_t bi = 0; bi < nblocks; bi++) {
         int bx = (int)(bi % (size_t)bw), by = (int)(bi / (size_t)bw);
-        zt_test t = {0};
-        t.z = bbad[bi] ? NAN : (bd[bi] == 0.0 ? 0.0 : bd[bi] / sqrt(bv[bi]));
-        t.x0 = a->data_x0 + bx * ZT_BLOCK;
-        t.y0 = a->data_y0 + by * ZT_BLOCK;
-        t.x1 = a->data_x0 + ((bx + 1) * ZT_BLOCK < w ? (bx + 1) * ZT_BLOCK : w) - 1;
-        t.y1 = a->data_y0 + ((by + 1) * ZT_BLOCK < h ? (by + 1) * ZT_BLOCK : h) - 1;
-        t.channel = c;
-        t.d = bd[bi];
-        t.sd = sqrt(bv[bi]);
-        zt_record(&zt->scale[ZT_BLOCKS], &t, zt->level);
+        zt_record_sum(zt, ZT_BLOCKS, c, blocks[bi], a->data_x0 + bx * ZT_BLOCK,
+                      a->data_y0 + by * ZT_BLOCK,
+                      a->data_x0 + ((bx + 1) * ZT_BLOCK < w ? (bx + 1) * ZT_BLOCK : w) - 1,
+                      a->data_y0 + ((by + 1) * ZT_BLOCK < h ? (by + 1) * ZT_BLOCK : h) - 1);
     }
-    zt_test t = {0};
-    t.z = any_bad ? NAN : (sum_d == 0.0 ? 0.0 : sum_d / sqrt(sum_v));
-    t.x0 = a->data_x0;
-    t.y0 = a->data_y0;
-    t.x1 = a->data_x0 + w - 1;
-    t.y1 = a->data_y0 + h - 1;
-    t.channel = c;
-    t.d = sum_d;
-    t.sd = sqrt(sum_v);
-    zt_record(&zt->scale[ZT_IMAGE], &t, zt->level);
-    zt->image_z[c] = t.z;
-    free(bd);
-    free(bv);
-    free(bbad);
+    zt->image_z[c] = zt_record_sum(zt, ZT_IMAGE, c, image, a->data_x0, a->data_y0,
+                                   a->data_x0 + w - 1, a->data_y0 + h - 1);
+    free(blocks);
     return HZ_OK;
 }
 
@@ -740,8 +761,9 @@ static hz_status choose_channels(const diff_options *opt, const exr_image *a, co
     return HZ_OK;
 }
 
-static hz_status compare(const diff_options *opt, const exr_image *a, const exr_image *b, FILE *out,
-                         bool *passed, hz_error *err)
+/* A and B must cover the same pixels. */
+static hz_status check_same_window(const diff_options *opt, const exr_image *a,
+                                   const exr_image *b, hz_error *err)
 {
     if (a->width != b->width || a->height != b->height)
         return hz_fail(err, "%s is %d x %d but %s is %d x %d: sizes differ", opt->a, a->width,
@@ -751,21 +773,14 @@ static hz_status compare(const diff_options *opt, const exr_image *a, const exr_
                        a->data_x0, a->data_y0, a->data_x0 + a->width - 1,
                        a->data_y0 + a->height - 1, opt->a, b->data_x0, b->data_y0,
                        b->data_x0 + b->width - 1, b->data_y0 + b->height - 1, opt->b);
-    diff_stats *st = calloc((size_t)(a->channel_count > 0 ? a->channel_count : 1), sizeof *st);
-    if (!st)
-        return hz_fail(err, "out of memory");
-    int nc = 0;
-    if (choose_channels(opt, a, b, st, &nc, err) != HZ_OK) {
-        free(st);
-        return HZ_ERROR;
-    }
-    diff_stats all;
-    stats_init(&all, "all");
-    for (int c = 0; c < nc; c++) {
-        accumulate(&st[c], a);
-        merge(&all, &st[c]);
-    }
+    return HZ_OK;
+}
 
+/* The table of the compared channels' figures, `all` their total, and
+ * where the largest error is. */
+static void print_figures(const diff_options *opt, const exr_image *a, const diff_stats *st,
+                          int nc, const diff_stats *all, FILE *out)
+{
     fprintf(out, "A: %s\nB: %s (reference)\n", opt->a, opt->b);
     fprintf(out, "%d x %d pixels, data window (%d, %d) .. (%d, %d), %d channel%s:", a->width,
             a->height, a->data_x0, a->data_y0, a->data_x0 + a->width - 1,
@@ -779,37 +794,47 @@ static hz_status compare(const diff_options *opt, const exr_image *a, const exr_
             "rel diff", "NaN/Inf A", "NaN/Inf B");
     for (int c = 0; c < nc; c++)
         print_row(out, &st[c], false);
-    print_row(out, &all, true);
+    print_row(out, all, true);
     fprintf(out, "\n");
 
     size_t total = (size_t)a->width * (size_t)a->height * (size_t)nc;
-    if (all.n < total)
-        fprintf(out, "%zu of %zu value pairs excluded (NaN/Inf in A or B)\n", total - all.n, total);
-    if (all.n)
-        fprintf(out, "max abs error %.9g at pixel (%d, %d) channel %s\n", all.max_abs, all.max_x,
-                all.max_y, all.max_channel);
+    if (all->n < total)
+        fprintf(out, "%zu of %zu value pairs excluded (NaN/Inf in A or B)\n", total - all->n, total);
+    if (all->n)
+        fprintf(out, "max abs error %.9g at pixel (%d, %d) channel %s\n", all->max_abs, all->max_x,
+                all->max_y, all->max_channel);
+}
 
-    *passed = true;
-    if (opt->metric != DIFF_METRIC_NONE) {
-        const char *name = metric_name(opt->metric);
-        if (all.n == 0) {
-            *passed = false;
-            fprintf(out, "FAIL: %s: no finite value pairs to compare\n", name);
-        } else if (all.bad_only_a > 0) {
-            /* Left out of the metric, a broken pixel would pass unseen. */
-            *passed = false;
-            fprintf(out, "FAIL: %s: %zu values are NaN/Inf in A where B is finite\n", name,
-                    all.bad_only_a);
-        } else {
-            diff_figures f = figures(&all);
-            double v = figure_of(&f, opt->metric);
-            bool psnr = opt->metric == DIFF_METRIC_PSNR;
-            *passed = psnr ? v >= opt->threshold : v <= opt->threshold;
-            fprintf(out, "%s: %s %.9g %s threshold %.9g\n", *passed ? "PASS" : "FAIL", name, v,
-                    *passed ? (psnr ? ">=" : "<=") : (psnr ? "<" : ">"), opt->threshold);
-        }
+/* --metric against --threshold over every compared value; prints the
+ * verdict and returns whether it passed. */
+static bool metric_passes(const diff_options *opt, const diff_stats *all, FILE *out)
+{
+    const char *name = metric_name(opt->metric);
+    if (all->n == 0) {
+        fprintf(out, "FAIL: %s: no finite value pairs to compare\n", name);
+        return false;
     }
+    if (all->bad_only_a > 0) {
+        /* Left out of the metric, a broken pixel would pass unseen. */
+        fprintf(out, "FAIL: %s: %zu values are NaN/Inf in A where B is finite\n", name,
+                all->bad_only_a);
+        return false;
+    }
+    diff_figures f = figures(all);
+    double v = figure_of(&f, opt->metric);
+    bool psnr = opt->metric == DIFF_METRIC_PSNR;
+    bool passed = psnr ? v >= opt->threshold : v <= opt->threshold;
+    fprintf(out, "%s: %s %.9g %s threshold %.9g\n", passed ? "PASS" : "FAIL", name, v,
+            passed ? (psnr ? ">=" : "<=") : (psnr ? "<" : ">"), opt->threshold);
+    return passed;
+}
 
+/* --ztest (which clears *passed when it fails) and --heatmap: the z-test's
+ * |z| when it ran, else the mean absolute difference. */
+static hz_status ztest_and_heatmap(const diff_options *opt, const exr_image *a,
+                                   const exr_image *b, const diff_stats *st, int nc, FILE *out,
+                                   bool *passed, hz_error *err)
+{
     hz_status rc = HZ_OK;
     float *heat = NULL;
     if (opt->ztest) {
@@ -825,6 +850,31 @@ static hz_status compare(const diff_options *opt, const exr_image *a, const exr_
             fprintf(out, "heatmap: %s\n", opt->heatmap);
     }
     free(heat);
+    return rc;
+}
+
+static hz_status compare(const diff_options *opt, const exr_image *a, const exr_image *b, FILE *out,
+                         bool *passed, hz_error *err)
+{
+    if (check_same_window(opt, a, b, err) != HZ_OK)
+        return HZ_ERROR;
+    diff_stats *st = calloc((size_t)(a->channel_count > 0 ? a->channel_count : 1), sizeof *st);
+    if (!st)
+        return hz_fail(err, "out of memory");
+    int nc = 0;
+    if (choose_channels(opt, a, b, st, &nc, err) != HZ_OK) {
+        free(st);
+        return HZ_ERROR;
+    }
+    diff_stats all;
+    stats_init(&all, "all");
+    for (int c = 0; c < nc; c++) {
+        accumulate(&st[c], a);
+        merge(&all, &st[c]);
+    }
+    print_figures(opt, a, st, nc, &all, out);
+    *passed = opt->metric == DIFF_METRIC_NONE || metric_passes(opt, &all, out);
+    hz_status rc = ztest_and_heatmap(opt, a, b, st, nc, out, passed, err);
     free(st);
     return rc;
 }

@@ -488,34 +488,18 @@ static exr_result_t exr_write_chunks(exr_context_t ctx, int part, const exr_imag
     return rv;
 }
 
-/* Writes the whole file into io->fd. `sorted` lists the channels in the order
- * OpenEXRCore keeps them; half channels are converted into `half_buf`. */
-static hz_status exr_write_context(const char *path, const char *tmp, const exr_image *img,
-                                   exr_io *io, hz_error *err)
+/* The file being written: its OpenEXRCore context and part, and what its
+ * messages name. */
+typedef struct {
+    exr_context_t ctx;
+    int part;
+    const char *path;
+    const exr_io *io;
+} exr_writer;
+
+/* One scanline part of the image's windows, ZIP compressed. */
+static hz_status exr_add_image_part(exr_writer *w, const exr_image *img, hz_error *err)
 {
-    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = exr_error_handler;
-    init.write_fn = exr_write_fd;
-    init.user_data = io;
-    exr_context_t ctx = NULL;
-    exr_result_t rv = exr_start_write(&ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
-    if (rv != EXR_ERR_SUCCESS)
-        return exr_fail_code(err, path, "start writing", rv, io);
-
-    int nc = img->channel_count;
-    size_t npix = (size_t)img->width * (size_t)img->height;
-    const exr_channel **sorted = calloc((size_t)nc, sizeof *sorted);
-    uint16_t **halfs = calloc((size_t)nc, sizeof *halfs);
-    hz_status st = HZ_ERROR;
-    if (!sorted || !halfs) {
-        hz_fail(err, "exr: out of memory");
-        goto done;
-    }
-    for (int c = 0; c < nc; c++)
-        sorted[c] = &img->channels[c];
-    qsort(sorted, (size_t)nc, sizeof *sorted, cmp_channel_name);
-
-    int part = 0;
     exr_attr_box2i_t dispw, dataw;
     exr_attr_v2f_t swc;
     dispw.min.x = 0;
@@ -528,61 +512,108 @@ static hz_status exr_write_context(const char *path, const char *tmp, const exr_
     dataw.max.y = img->data_y0 + img->height - 1;
     swc.x = 0.f;
     swc.y = 0.f;
-    if ((rv = exr_add_part(ctx, NULL, EXR_STORAGE_SCANLINE, &part)) ||
-        (rv = exr_initialize_required_attr(ctx, part, &dispw, &dataw, 1.f, &swc, 1.f,
-                                           EXR_LINEORDER_INCREASING_Y, EXR_COMPRESSION_ZIP))) {
-        exr_fail_code(err, path, "set up", rv, io);
-        goto done;
-    }
-    for (int c = 0; c < nc; c++) {
-        rv = exr_add_channel(ctx, part, sorted[c]->name,
-                             sorted[c]->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
-                             EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
-        if (rv) {
-            exr_fail_code(err, path, "add a channel to", rv, io);
-            goto done;
-        }
+    exr_result_t rv;
+    if ((rv = exr_add_part(w->ctx, NULL, EXR_STORAGE_SCANLINE, &w->part)) ||
+        (rv = exr_initialize_required_attr(w->ctx, w->part, &dispw, &dataw, 1.f, &swc, 1.f,
+                                           EXR_LINEORDER_INCREASING_Y, EXR_COMPRESSION_ZIP)))
+        return exr_fail_code(err, w->path, "set up", rv, w->io);
+    return HZ_OK;
+}
+
+/* The channels in `sorted` order. Without img->fill, half channels are
+ * converted up front into halfs[c] (img->fill converts them a chunk at a
+ * time). */
+static hz_status exr_add_channels(const exr_writer *w, const exr_image *img,
+                                  const exr_channel **sorted, uint16_t **halfs, hz_error *err)
+{
+    size_t npix = (size_t)img->width * (size_t)img->height;
+    for (int c = 0; c < img->channel_count; c++) {
+        exr_result_t rv = exr_add_channel(w->ctx, w->part, sorted[c]->name,
+                                          sorted[c]->half ? EXR_PIXEL_HALF : EXR_PIXEL_FLOAT,
+                                          EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1);
+        if (rv)
+            return exr_fail_code(err, w->path, "add a channel to", rv, w->io);
         if (sorted[c]->half && !img->fill) {
             halfs[c] = malloc(npix * sizeof(uint16_t));
-            if (!halfs[c]) {
-                hz_fail(err, "exr: out of memory");
-                goto done;
-            }
+            if (!halfs[c])
+                return hz_fail(err, "exr: out of memory");
             for (size_t i = 0; i < npix; i++)
                 halfs[c][i] = exr_half_from_float(sorted[c]->pixels[i]);
         }
     }
+    return HZ_OK;
+}
+
+/* The image's string attributes, then its chromaticities if it has them. */
+static hz_status exr_add_attributes(const exr_writer *w, const exr_image *img, hz_error *err)
+{
+    exr_result_t rv;
     for (int a = 0; a < img->attribute_count; a++) {
-        if ((rv = exr_attr_set_string(ctx, part, img->attribute_names[a], img->attribute_values[a]))) {
-            exr_fail_code(err, path, "set an attribute of", rv, io);
-            goto done;
-        }
+        if ((rv = exr_attr_set_string(w->ctx, w->part, img->attribute_names[a],
+                                      img->attribute_values[a])))
+            return exr_fail_code(err, w->path, "set an attribute of", rv, w->io);
     }
     if (img->has_chromaticities) {
         const float *c = img->chromaticities;
         exr_attr_chromaticities_t ch = {c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]};
-        if ((rv = exr_attr_set_chromaticities(ctx, part, "chromaticities", &ch))) {
-            exr_fail_code(err, path, "set the chromaticities of", rv, io);
-            goto done;
-        }
+        if ((rv = exr_attr_set_chromaticities(w->ctx, w->part, "chromaticities", &ch)))
+            return exr_fail_code(err, w->path, "set the chromaticities of", rv, w->io);
     }
-    if ((rv = exr_write_header(ctx))) {
-        exr_fail_code(err, path, "write the header of", rv, io);
-        goto done;
-    }
+    return HZ_OK;
+}
+
+/* The header, then every chunk of pixels. */
+static hz_status exr_write_header_and_pixels(const exr_writer *w, const exr_image *img,
+                                             const exr_channel **sorted, uint16_t **halfs,
+                                             hz_error *err)
+{
+    exr_result_t rv;
+    if ((rv = exr_write_header(w->ctx)))
+        return exr_fail_code(err, w->path, "write the header of", rv, w->io);
     int32_t lines = 1;
-    if ((rv = exr_get_scanlines_per_chunk(ctx, part, &lines)) || lines < 1) {
-        exr_fail_code(err, path, "write", rv, io);
-        goto done;
-    }
-    rv = exr_write_chunks(ctx, part, img, sorted, halfs, lines);
-    if (rv) {
-        exr_fail_code(err, path, "write pixels of", rv, io);
-        goto done;
-    }
-    st = HZ_OK;
-done:
-    rv = exr_finish(&ctx); /* writes the chunk offset table */
+    if ((rv = exr_get_scanlines_per_chunk(w->ctx, w->part, &lines)) || lines < 1)
+        return exr_fail_code(err, w->path, "write", rv, w->io);
+    rv = exr_write_chunks(w->ctx, w->part, img, sorted, halfs, lines);
+    if (rv)
+        return exr_fail_code(err, w->path, "write pixels of", rv, w->io);
+    return HZ_OK;
+}
+
+/* Everything of the file but the chunk offset table (exr_finish's). */
+static hz_status exr_write_parts(exr_writer *w, const exr_image *img, const exr_channel **sorted,
+                                 uint16_t **halfs, hz_error *err)
+{
+    for (int c = 0; c < img->channel_count; c++)
+        sorted[c] = &img->channels[c];
+    qsort(sorted, (size_t)img->channel_count, sizeof *sorted, cmp_channel_name);
+    if (exr_add_image_part(w, img, err) != HZ_OK ||
+        exr_add_channels(w, img, sorted, halfs, err) != HZ_OK ||
+        exr_add_attributes(w, img, err) != HZ_OK)
+        return HZ_ERROR;
+    return exr_write_header_and_pixels(w, img, sorted, halfs, err);
+}
+
+/* Writes the whole file into io->fd. The channels are written in the order
+ * OpenEXRCore keeps them (by name); half channels are converted into
+ * buffers of their own. */
+static hz_status exr_write_context(const char *path, const char *tmp, const exr_image *img,
+                                   exr_io *io, hz_error *err)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = exr_error_handler;
+    init.write_fn = exr_write_fd;
+    init.user_data = io;
+    exr_writer w = {.ctx = NULL, .part = 0, .path = path, .io = io};
+    exr_result_t rv = exr_start_write(&w.ctx, tmp, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (rv != EXR_ERR_SUCCESS)
+        return exr_fail_code(err, path, "start writing", rv, io);
+
+    int nc = img->channel_count;
+    const exr_channel **sorted = calloc((size_t)nc, sizeof *sorted);
+    uint16_t **halfs = calloc((size_t)nc, sizeof *halfs);
+    hz_status st = !sorted || !halfs ? hz_fail(err, "exr: out of memory")
+                                     : exr_write_parts(&w, img, sorted, halfs, err);
+    rv = exr_finish(&w.ctx); /* writes the chunk offset table */
     if (st == HZ_OK && rv != EXR_ERR_SUCCESS)
         st = exr_fail_code(err, path, "finish", rv, io);
     if (halfs)

@@ -159,29 +159,21 @@ hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *e
     return film_params_from_entity_region(e, NULL, out, NULL, err);
 }
 
-hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, film_params *out,
-                                         bool *bad_region, hz_error *err)
+/* A gbuffer's "coordinatesystem": "camera" (the default) or "world". */
+static void film_read_gbuffer(param_list *pl, film_params *p)
 {
-    if (bad_region)
-        *bad_region = false;
-    film_params_default(out);
-    const char *type = e->type ? e->type : "";
-    bool gbuffer = strcmp(type, "gbuffer") == 0;
-    if (strcmp(type, "rgb") != 0 && !gbuffer)
-        return hz_fail_at(err, e->loc,
-                          "Film \"%s\" is not supported (supported: \"rgb\", \"gbuffer\")",
-                          type);
-    param_list *pl = &e->params;
-    film_params *p = out;
-    if (gbuffer) {
-        const char *cs = params_string(pl, "coordinatesystem", "camera");
-        p->gbuffer = true;
-        p->gbuffer_world = strcmp(cs, "world") == 0;
-        if (!p->gbuffer_world && strcmp(cs, "camera") != 0)
-            params_reject(pl, "coordinatesystem",
-                          "Film \"gbuffer\" \"string coordinatesystem\" must be \"camera\" or "
-                          "\"world\", got \"%s\"", cs);
-    }
+    const char *cs = params_string(pl, "coordinatesystem", "camera");
+    p->gbuffer = true;
+    p->gbuffer_world = strcmp(cs, "world") == 0;
+    if (!p->gbuffer_world && strcmp(cs, "camera") != 0)
+        params_reject(pl, "coordinatesystem",
+                      "Film \"gbuffer\" \"string coordinatesystem\" must be \"camera\" or "
+                      "\"world\", got \"%s\"", cs);
+}
+
+/* The resolution, then (when it is valid) the bounds within it. */
+static void film_read_resolution(param_list *pl, film_params *p)
+{
     p->xres = params_int(pl, "xresolution", 1280);
     p->yres = params_int(pl, "yresolution", 720);
     bool res_ok = true;
@@ -195,6 +187,10 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
     }
     if (res_ok)
         film_read_bounds(pl, p);
+}
+
+static void film_read_filename(param_list *pl, film_params *p)
+{
     const char *name = params_string(pl, "filename", "pbrt.exr");
     if (!ends_with_exr(name))
         params_reject(pl, "filename", "Film \"string filename\" \"%s\" must end in .exr", name);
@@ -202,11 +198,20 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
         params_reject(pl, "filename", "Film \"string filename\" is too long");
     else
         snprintf(p->filename, sizeof p->filename, "%s", name);
+}
+
+/* Which channels the EXR gets besides the colour, and at what precision. */
+static void film_read_channels(param_list *pl, film_params *p)
+{
     p->savefp16 = params_bool(pl, "savefp16", false);
     p->write_z = params_bool(pl, "writedepth", false);
     /* A gbuffer's variance channels come from the same moments. */
     p->write_variance = params_bool(pl, "writevariance", false) || p->gbuffer;
     p->write_sample_count = params_bool(pl, "writesamplecount", false);
+}
+
+static void film_read_exposure(param_list *pl, film_params *p)
+{
     p->iso = params_float(pl, "iso", 100.0);
     if (!(p->iso > 0.0 && isfinite(p->iso)))
         params_reject(pl, "iso", "\"float iso\" must be positive, got %g", p->iso);
@@ -220,6 +225,10 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
     p->diagonal = params_float(pl, "diagonal", 35.0);
     if (!(p->diagonal > 0.0 && isfinite(p->diagonal)))
         params_reject(pl, "diagonal", "\"float diagonal\" must be positive, got %g", p->diagonal);
+}
+
+static void film_read_sensor(param_list *pl, film_params *p)
+{
     const char *sensor = params_string(pl, "sensor", "cie1931");
     double wb = params_float(pl, "whitebalance", 0.0);
     if (wb != 0.0 && !(wb >= SENSOR_MIN_KELVIN && wb <= SENSOR_MAX_KELVIN))
@@ -229,19 +238,47 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
     else if (!sensor_lookup(sensor, wb, &p->sensor))
         params_reject(pl, "sensor", "Film \"string sensor\" \"%s\" is unknown (known: %s)", sensor,
                       sensor_names());
-    if (params_finish(pl, gbuffer ? "Film \"gbuffer\"" : "Film \"rgb\"", err) != HZ_OK)
-        return HZ_ERROR;
-    if (r && film_params_set_region(p, r, err) != HZ_OK) {
-        if (bad_region)
-            *bad_region = true;
-        return HZ_ERROR;
-    }
+}
+
+/* A film whose buffers would need more than FILM_MAX_BYTES is refused. */
+static hz_status film_check_memory(const scene_entity *e, const film_params *p, hz_error *err)
+{
     double bytes = film_bytes(p);
     if (bytes > FILM_MAX_BYTES)
         return hz_fail_at(err, e->loc, "Film of %dx%d pixels would need %.1f GiB of memory (limit %.0f GiB)",
                           p->bounds.x1 - p->bounds.x0, p->bounds.y1 - p->bounds.y0,
                           bytes / (1024.0 * 1024 * 1024), FILM_MAX_BYTES / (1024.0 * 1024 * 1024));
     return HZ_OK;
+}
+
+hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, film_params *out,
+                                         bool *bad_region, hz_error *err)
+{
+    if (bad_region)
+        *bad_region = false;
+    film_params_default(out);
+    const char *type = e->type ? e->type : "";
+    bool gbuffer = strcmp(type, "gbuffer") == 0;
+    if (strcmp(type, "rgb") != 0 && !gbuffer)
+        return hz_fail_at(err, e->loc,
+                          "Film \"%s\" is not supported (supported: \"rgb\", \"gbuffer\")",
+                          type);
+    param_list *pl = &e->params;
+    if (gbuffer)
+        film_read_gbuffer(pl, out);
+    film_read_resolution(pl, out);
+    film_read_filename(pl, out);
+    film_read_channels(pl, out);
+    film_read_exposure(pl, out);
+    film_read_sensor(pl, out);
+    if (params_finish(pl, gbuffer ? "Film \"gbuffer\"" : "Film \"rgb\"", err) != HZ_OK)
+        return HZ_ERROR;
+    if (r && film_params_set_region(out, r, err) != HZ_OK) {
+        if (bad_region)
+            *bad_region = true;
+        return HZ_ERROR;
+    }
+    return film_check_memory(e, out, err);
 }
 
 void film_params_set_color_space(film_params *p, color_space cs)

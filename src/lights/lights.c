@@ -39,15 +39,80 @@ static hz_status load_image(param_list *pl, const char *filename, bool square,
     return st;
 }
 
+/* What each kind's factory reads: the LightSource's parameters and place,
+ * and its frames. */
+typedef struct {
+    param_list *pl;
+    file_loc loc;
+    transform render_from_world, render_from_light;
+} light_source;
+
+/* The "I", "scale" and "power" of the lights that have an intensity. */
+typedef struct {
+    rgb I;
+    double scale, power;
+} light_intensity;
+
+static light_intensity read_intensity(param_list *pl)
+{
+    light_intensity in;
+    in.I = params_illuminant(pl, "I", rgb_grey(1.0));
+    in.scale = params_float(pl, "scale", 1.0);
+    in.power = params_float(pl, "power", -1.0);
+    return in;
+}
+
+static hz_status point_from_params(const light_source *src, light *out, hz_error *err)
+{
+    (void)err;
+    param_list *pl = src->pl;
+    light_intensity in = read_intensity(pl);
+    vec3 from = params_point3(pl, "from", v3(0, 0, 0));
+    out->kind = LIGHT_POINT;
+    out->emit = apply_power(in.I, in.scale, in.power, 4.0 * HZ_PI);
+    out->point.p = transform_point(&src->render_from_light, from);
+    return HZ_OK;
+}
+
+/* pbrt-v4's GoniometricLight: a point light at the light space's origin
+ * whose intensity toward w is I scale times the image's channel average at
+ * the equal-area point of w, with y and z swapped. */
+static hz_status goniometric_from_params(const light_source *src, light *out, hz_error *err)
+{
+    param_list *pl = src->pl;
+    light_intensity in = read_intensity(pl);
+    const char *filename = params_string(pl, "filename", NULL);
+    if (!filename)
+        return hz_fail_at(err, src->loc,
+                          "goniometric light needs \"string filename\" (pbrt-v4 renders "
+                          "it black without one)");
+    if (load_image(pl, filename, true, &out->point.image, err) != HZ_OK)
+        return HZ_ERROR;
+    out->kind = LIGHT_POINT;
+    double mean = light_image_mean(out->point.image);
+    double scale = in.scale;
+    if (in.power > 0.0 && mean > 0.0)
+        scale *= in.power / (4.0 * HZ_PI * mean);
+    out->emit = rgb_scale(in.I, scale);
+    out->point.p = transform_point(&src->render_from_light, v3(0, 0, 0));
+    /* its own inverse */
+    const mat4 swap = {{{1, 0, 0, 0}, {0, 0, 1, 0}, {0, 1, 0, 0}, {0, 0, 0, 1}}};
+    const transform swap_yz = {swap, swap};
+    out->point.light_from_render =
+        transform_compose(swap_yz, transform_inverse(src->render_from_light));
+    return HZ_OK;
+}
+
 /* pbrt-v4's ProjectionLight: a point light at the light space's origin
  * (y flipped) that projects its image through a perspective window of `fov`
  * (the image's aspect ratio; the shorter side spans [-1, 1]) along +z; the
  * intensity toward w is scale times the nearest texel, no cosine falloff.
  * "power": scale *= power / (A mean(luminance cos^3)), A the window's area
  * at unit distance. */
-static hz_status projection_from_params(param_list *pl, file_loc loc, transform render_from_light,
-                                        light *out, hz_error *err)
+static hz_status projection_from_params(const light_source *src, light *out, hz_error *err)
 {
+    param_list *pl = src->pl;
+    transform render_from_light = src->render_from_light;
     double scale = params_float(pl, "scale", 1.0);
     double power = params_float(pl, "power", -1.0);
     double fov = params_float(pl, "fov", 90.0);
@@ -55,7 +120,7 @@ static hz_status projection_from_params(param_list *pl, file_loc loc, transform 
         params_reject(pl, "fov", "projection light \"fov\" must be in (0, 180), got %g", fov);
     const char *filename = params_string(pl, "filename", NULL);
     if (!filename)
-        return hz_fail_at(err, loc, "projection light needs \"string filename\"");
+        return hz_fail_at(err, src->loc, "projection light needs \"string filename\"");
     if (pl->failed)
         return HZ_OK; /* params_finish reports it */
     if (load_image(pl, filename, false, &out->point.image, err) != HZ_OK)
@@ -92,6 +157,74 @@ static hz_status projection_from_params(param_list *pl, file_loc loc, transform 
     const mat4 flip = {{{1, 0, 0, 0}, {0, -1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
     const transform flip_y = {flip, flip}; /* its own inverse */
     out->point.light_from_render = transform_compose(flip_y, transform_inverse(render_from_light));
+    return HZ_OK;
+}
+
+/* A spot light's frame: pbrt-v4's renderFromLight * Translate(from) *
+ * Inverse(Frame::FromZ(dir)), its cone along +z. */
+static transform spot_render_from_cone(transform render_from_light, vec3 from, vec3 to)
+{
+    vec3 z = v3_sub(to, from);
+    z = v3_length(z) > 0.0 ? v3_normalize(z) : v3(0, 0, 1);
+    vec3 x, y;
+    v3_basis(z, &x, &y);
+    mat4 world_from_frame = mat4_identity();
+    vec3 cols[3] = {x, y, z};
+    for (int c = 0; c < 3; ++c) {
+        world_from_frame.m[0][c] = cols[c].x;
+        world_from_frame.m[1][c] = cols[c].y;
+        world_from_frame.m[2][c] = cols[c].z;
+    }
+    transform frame = {world_from_frame, mat4_transpose(world_from_frame)};
+    return transform_compose(render_from_light,
+                             transform_compose(transform_translate(from), frame));
+}
+
+static hz_status spot_from_params(const light_source *src, light *out, hz_error *err)
+{
+    (void)err;
+    param_list *pl = src->pl;
+    light_intensity in = read_intensity(pl);
+    double cone = params_float(pl, "coneangle", 30.0);
+    double delta = params_float(pl, "conedeltaangle", 5.0);
+    vec3 from = params_point3(pl, "from", v3(0, 0, 0));
+    vec3 to = params_point3(pl, "to", v3(0, 0, 1));
+    if (v3_length(v3_sub(to, from)) == 0.0)
+        params_reject(pl, "to", "spot light \"from\" and \"to\" coincide");
+    if (delta < 0.0 || delta > cone)
+        params_reject(pl, "conedeltaangle", "must be within [0, coneangle]");
+    out->kind = LIGHT_SPOT;
+    out->spot.cos_falloff_end = cos(hz_radians(cone));
+    out->spot.cos_falloff_start = cos(hz_radians(cone - delta));
+    double k_e = 2.0 * HZ_PI *
+                 ((1.0 - out->spot.cos_falloff_start) +
+                  (out->spot.cos_falloff_start - out->spot.cos_falloff_end) / 2.0);
+    out->emit = apply_power(in.I, in.scale, in.power, k_e);
+    transform final = spot_render_from_cone(src->render_from_light, from, to);
+    out->spot.p = transform_point(&final, v3(0, 0, 0));
+    out->spot.light_from_render = transform_inverse(final);
+    return HZ_OK;
+}
+
+static hz_status distant_from_params(const light_source *src, light *out, hz_error *err)
+{
+    (void)err;
+    param_list *pl = src->pl;
+    rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
+    double scale = params_float(pl, "scale", 1.0);
+    vec3 from = params_point3(pl, "from", v3(0, 0, 0));
+    vec3 to = params_point3(pl, "to", v3(0, 0, 1));
+    /* pbrt-v4's distant light takes "illuminance" (not "power"): the
+     * illuminance on a patch facing the light, so L *= E_v. */
+    double illum = params_float(pl, "illuminance", -1.0);
+    if (v3_length(v3_sub(from, to)) == 0.0)
+        params_reject(pl, "to", "distant light \"from\" and \"to\" coincide");
+    if (illum > 0.0)
+        scale *= illum;
+    out->kind = LIGHT_DISTANT;
+    out->emit = rgb_scale(L, scale);
+    vec3 w = transform_vector(&src->render_from_light, v3_sub(from, to));
+    out->distant.w = v3_length(w) > 0.0 ? v3_normalize(w) : v3(0, 0, 1);
     return HZ_OK;
 }
 
@@ -138,142 +271,61 @@ static hz_status read_portal(param_list *pl, transform render_from_world,
     return HZ_OK;
 }
 
-hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
-                            hz_error *err)
+static hz_status infinite_from_params(const light_source *src, light *out, hz_error *err)
 {
-    memset(out, 0, sizeof *out);
-    param_list *pl = &e->entity.params;
-    const char *type = e->entity.type ? e->entity.type : "";
-    transform render_from_light = transform_compose(render_from_world, e->world_from_light);
-
-    if (strcmp(type, "point") == 0) {
-        rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        double power = params_float(pl, "power", -1.0);
-        vec3 from = params_point3(pl, "from", v3(0, 0, 0));
-        out->kind = LIGHT_POINT;
-        out->emit = apply_power(I, scale, power, 4.0 * HZ_PI);
-        out->point.p = transform_point(&render_from_light, from);
-    } else if (strcmp(type, "goniometric") == 0) {
-        /* pbrt-v4's GoniometricLight: a point light at the light space's
-         * origin whose intensity toward w is I scale times the image's channel
-         * average at the equal-area point of w, with y and z swapped. */
-        rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        double power = params_float(pl, "power", -1.0);
-        const char *filename = params_string(pl, "filename", NULL);
-        if (!filename)
-            return hz_fail_at(err, e->entity.loc,
-                              "goniometric light needs \"string filename\" (pbrt-v4 renders "
-                              "it black without one)");
-        if (load_image(pl, filename, true, &out->point.image, err) != HZ_OK)
+    param_list *pl = src->pl;
+    const char *filename = params_string(pl, "filename", NULL);
+    if (filename && params_has(pl, "L"))
+        return hz_fail_at(err, params_loc(pl, "L"),
+                          "infinite light: \"L\" and \"filename\" cannot both be given");
+    rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
+    double scale = params_float(pl, "scale", 1.0);
+    double illum = params_float(pl, "illuminance", -1.0);
+    out->kind = LIGHT_INFINITE;
+    if (filename) {
+        if (load_image(pl, filename, true, &out->infinite.image, err) != HZ_OK)
             return HZ_ERROR;
-        out->kind = LIGHT_POINT;
-        double mean = light_image_mean(out->point.image);
-        if (power > 0.0 && mean > 0.0)
-            scale *= power / (4.0 * HZ_PI * mean);
-        out->emit = rgb_scale(I, scale);
-        out->point.p = transform_point(&render_from_light, v3(0, 0, 0));
-        /* its own inverse */
-        const mat4 swap = {{{1, 0, 0, 0}, {0, 0, 1, 0}, {0, 1, 0, 0}, {0, 0, 0, 1}}};
-        const transform swap_yz = {swap, swap};
-        out->point.light_from_render =
-            transform_compose(swap_yz, transform_inverse(render_from_light));
-    } else if (strcmp(type, "projection") == 0) {
-        if (projection_from_params(pl, e->entity.loc, render_from_light, out, err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(type, "spot") == 0) {
-        rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        double power = params_float(pl, "power", -1.0);
-        double cone = params_float(pl, "coneangle", 30.0);
-        double delta = params_float(pl, "conedeltaangle", 5.0);
-        vec3 from = params_point3(pl, "from", v3(0, 0, 0));
-        vec3 to = params_point3(pl, "to", v3(0, 0, 1));
-        if (v3_length(v3_sub(to, from)) == 0.0)
-            params_reject(pl, "to", "spot light \"from\" and \"to\" coincide");
-        if (delta < 0.0 || delta > cone)
-            params_reject(pl, "conedeltaangle", "must be within [0, coneangle]");
-        out->kind = LIGHT_SPOT;
-        out->spot.cos_falloff_end = cos(hz_radians(cone));
-        out->spot.cos_falloff_start = cos(hz_radians(cone - delta));
-        double k_e = 2.0 * HZ_PI *
-                     ((1.0 - out->spot.cos_falloff_start) +
-                      (out->spot.cos_falloff_start - out->spot.cos_falloff_end) / 2.0);
-        out->emit = apply_power(I, scale, power, k_e);
-        /* pbrt-v4: renderFromLight * Translate(from) * Inverse(Frame::FromZ(dir)). */
-        vec3 z = v3_sub(to, from);
-        z = v3_length(z) > 0.0 ? v3_normalize(z) : v3(0, 0, 1);
-        vec3 x, y;
-        v3_basis(z, &x, &y);
-        mat4 world_from_frame = mat4_identity();
-        vec3 cols[3] = {x, y, z};
-        for (int c = 0; c < 3; ++c) {
-            world_from_frame.m[0][c] = cols[c].x;
-            world_from_frame.m[1][c] = cols[c].y;
-            world_from_frame.m[2][c] = cols[c].z;
-        }
-        transform frame = {world_from_frame, mat4_transpose(world_from_frame)};
-        transform final = transform_compose(render_from_light,
-                                            transform_compose(transform_translate(from), frame));
-        out->spot.p = transform_point(&final, v3(0, 0, 0));
-        out->spot.light_from_render = transform_inverse(final);
-    } else if (strcmp(type, "distant") == 0) {
-        rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        vec3 from = params_point3(pl, "from", v3(0, 0, 0));
-        vec3 to = params_point3(pl, "to", v3(0, 0, 1));
-        /* pbrt-v4's distant light takes "illuminance" (not "power"): the
-         * illuminance on a patch facing the light, so L *= E_v. */
-        double illum = params_float(pl, "illuminance", -1.0);
-        if (v3_length(v3_sub(from, to)) == 0.0)
-            params_reject(pl, "to", "distant light \"from\" and \"to\" coincide");
-        if (illum > 0.0)
-            scale *= illum;
-        out->kind = LIGHT_DISTANT;
-        out->emit = rgb_scale(L, scale);
-        vec3 w = transform_vector(&render_from_light, v3_sub(from, to));
-        out->distant.w = v3_length(w) > 0.0 ? v3_normalize(w) : v3(0, 0, 1);
-    } else if (strcmp(type, "infinite") == 0) {
-        const char *filename = params_string(pl, "filename", NULL);
-        if (filename && params_has(pl, "L"))
-            return hz_fail_at(err, params_loc(pl, "L"),
-                              "infinite light: \"L\" and \"filename\" cannot both be given");
-        rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
-        double scale = params_float(pl, "scale", 1.0);
-        double illum = params_float(pl, "illuminance", -1.0);
-        out->kind = LIGHT_INFINITE;
-        if (filename) {
-            if (load_image(pl, filename, true, &out->infinite.image, err) != HZ_OK)
-                return HZ_ERROR;
-            L = rgb_grey(1.0);
-            /* pbrt-v4 scales the map to the asked illuminance on an upward
-             * patch (light_image_illuminance). */
-            double k_e = illum > 0.0 ? light_image_illuminance(out->infinite.image) : 0.0;
-            if (illum > 0.0 && k_e > 0.0)
-                scale *= illum / k_e;
-            out->infinite.render_from_light = render_from_light;
-            out->infinite.light_from_render = transform_inverse(render_from_light);
-        } else if (illum > 0.0) {
-            /* pbrt-v4: illuminance of a uniform sky on an upward patch is π L. */
-            scale *= illum / HZ_PI;
-        }
-        /* pbrt-v4 makes an "L" with a portal a 1x1 image of the spectrum's
-         * RGB as it holds it, without the division by its luminance that
-         * its other lights make: a blackbody's luminance at peak 1, a
-         * sampled spectrum's own. */
-        if (!filename && params_has(pl, "portal"))
-            L = rgb_scale(L, params_illuminant_luminance(pl, "L"));
-        out->emit = rgb_scale(L, scale);
-        if (params_has(pl, "portal") &&
-            read_portal(pl, render_from_world, render_from_light, out, err) != HZ_OK)
-            return HZ_ERROR;
-    } else {
-        return hz_fail_at(err, e->entity.loc,
-                          "LightSource \"%s\" is not supported (supported: \"point\", \"spot\", "
-                          "\"goniometric\", \"projection\", \"distant\", \"infinite\")",
-                          type);
+        L = rgb_grey(1.0);
+        /* pbrt-v4 scales the map to the asked illuminance on an upward
+         * patch (light_image_illuminance). */
+        double k_e = illum > 0.0 ? light_image_illuminance(out->infinite.image) : 0.0;
+        if (illum > 0.0 && k_e > 0.0)
+            scale *= illum / k_e;
+        out->infinite.render_from_light = src->render_from_light;
+        out->infinite.light_from_render = transform_inverse(src->render_from_light);
+    } else if (illum > 0.0) {
+        /* pbrt-v4: illuminance of a uniform sky on an upward patch is π L. */
+        scale *= illum / HZ_PI;
     }
+    /* pbrt-v4 makes an "L" with a portal a 1x1 image of the spectrum's
+     * RGB as it holds it, without the division by its luminance that
+     * its other lights make: a blackbody's luminance at peak 1, a
+     * sampled spectrum's own. */
+    if (!filename && params_has(pl, "portal"))
+        L = rgb_scale(L, params_illuminant_luminance(pl, "L"));
+    out->emit = rgb_scale(L, scale);
+    if (params_has(pl, "portal") &&
+        read_portal(pl, src->render_from_world, src->render_from_light, out, err) != HZ_OK)
+        return HZ_ERROR;
+    return HZ_OK;
+}
+
+static const struct {
+    const char *type;
+    hz_status (*make)(const light_source *src, light *out, hz_error *err);
+} light_kinds[] = {
+    {"point", point_from_params},
+    {"goniometric", goniometric_from_params},
+    {"projection", projection_from_params},
+    {"spot", spot_from_params},
+    {"distant", distant_from_params},
+    {"infinite", infinite_from_params},
+};
+
+/* A light haze can trace (its position within HZ_MAX_COORD) whose every
+ * parameter was used; on failure frees what `out` holds (an image). */
+static hz_status light_finish(param_list *pl, const char *type, light *out, hz_error *err)
+{
     vec3 p = out->kind == LIGHT_POINT  ? out->point.p
              : out->kind == LIGHT_SPOT ? out->spot.p
                                        : v3(0, 0, 0);
@@ -285,10 +337,29 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
     char what[128];
     snprintf(what, sizeof what, "LightSource \"%s\"", type);
     if (params_finish(pl, what, err) != HZ_OK) {
-        light_free(out); /* what it holds (an image) */
+        light_free(out);
         return HZ_ERROR;
     }
     return HZ_OK;
+}
+
+hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
+                            hz_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const char *type = e->entity.type ? e->entity.type : "";
+    light_source src = {&e->entity.params, e->entity.loc, render_from_world,
+                        transform_compose(render_from_world, e->world_from_light)};
+    for (size_t i = 0; i < sizeof light_kinds / sizeof light_kinds[0]; ++i)
+        if (strcmp(type, light_kinds[i].type) == 0) {
+            if (light_kinds[i].make(&src, out, err) != HZ_OK)
+                return HZ_ERROR;
+            return light_finish(src.pl, type, out, err);
+        }
+    return hz_fail_at(err, e->entity.loc,
+                      "LightSource \"%s\" is not supported (supported: \"point\", \"spot\", "
+                      "\"goniometric\", \"projection\", \"distant\", \"infinite\")",
+                      type);
 }
 
 static double triangle_area(const geom_shape *s, size_t t)

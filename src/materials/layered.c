@@ -87,6 +87,149 @@ bool layered_is_non_specular(const layered *l)
 
 /* ---- f: random walks from wo into the layers, joined to wi ---- */
 
+/* The state of layered_f's walks: the fixed ends, the estimate they add
+ * to, and the walk under way. */
+typedef struct {
+    const layered *l;
+    vec3 wi;
+    iface exit_if, non_exit; /* the exit is the top for reflection */
+    double exit_z;
+    rng r;
+    rgb f;           /* the sum over the walks */
+    bsdf_sample wis; /* wi's transmission through the exit, presampled per walk */
+    rgb beta;        /* the walk's throughput */
+    double z;        /* its height, in [0, thickness] */
+    vec3 w;          /* its direction */
+} f_walk;
+
+/* Russian roulette from the fifth vertex on; false: the walk ends. */
+static inline bool f_survives_roulette(f_walk *fw, int depth)
+{
+    if (depth > 3 && rgb_max(fw->beta) < 0.25) {
+        double q = fmax(0.0, 1.0 - rgb_max(fw->beta));
+        if (rng_uniform(&fw->r) < q)
+            return false;
+        fw->beta = rgb_scale(fw->beta, 1.0 / (1.0 - q));
+    }
+    return true;
+}
+
+/* A scattering event in the medium at zp: toward wi through the exit, then
+ * a phase-function sample, joined to wi when it heads for the exit. */
+static inline void f_scatter_in_medium(f_walk *fw, double zp)
+{
+    const layered *l = fw->l;
+    const bsdf_sample *wis = &fw->wis;
+    double ph = hg_phase(v3_dot(v3_neg(fw->w), v3_neg(wis->wi)), l->g);
+    double wt = if_specular(l, fw->exit_if) ? 1.0 : power_heuristic(wis->pdf, ph);
+    fw->f = rgb_add(fw->f, rgb_scale(rgb_mul(rgb_mul(fw->beta, l->albedo), wis->f),
+                                     ph * wt * tr(zp - fw->exit_z, wis->wi) / wis->pdf));
+    double ppdf;
+    vec3 pw = hg_sample(v3_neg(fw->w), l->g, r2(&fw->r), &ppdf);
+    if (!(ppdf > 0.0) || pw.z == 0.0)
+        return;
+    fw->beta = rgb_mul(fw->beta, l->albedo); /* p / pdf = 1: exact HG sampling */
+    fw->w = pw;
+    fw->z = zp;
+    if (((fw->z < fw->exit_z && fw->w.z > 0.0) || (fw->z > fw->exit_z && fw->w.z < 0.0)) &&
+        !if_specular(l, fw->exit_if)) {
+        rgb fe = if_f(l, fw->exit_if, v3_neg(fw->w), fw->wi, true);
+        if (!rgb_is_black(fe)) {
+            double epdf = if_pdf(l, fw->exit_if, v3_neg(fw->w), fw->wi, BXDF_TRANSMISSION);
+            fw->f = rgb_add(fw->f, rgb_scale(rgb_mul(fw->beta, fe),
+                                             tr(zp - fw->exit_z, pw) *
+                                                 power_heuristic(ppdf, epdf)));
+        }
+    }
+}
+
+/* A reflection at interface `at` back into the layers; false: none was
+ * sampled, the walk ends. */
+static inline bool f_reflect_at(f_walk *fw, iface at, bsdf_sample *bs)
+{
+    double uc = rng_uniform(&fw->r);
+    if (!if_sample(fw->l, at, v3_neg(fw->w), uc, r2(&fw->r), BXDF_REFLECTION, true, bs))
+        return false;
+    fw->beta = rgb_mul(fw->beta, rgb_scale(bs->f, fabs(bs->wi.z) / bs->pdf));
+    fw->w = bs->wi;
+    return true;
+}
+
+/* Light from wi through the exit (along the presampled wis), scattered at
+ * the other interface toward -w. */
+static inline void f_add_non_exit_light(f_walk *fw)
+{
+    const layered *l = fw->l;
+    const bsdf_sample *wis = &fw->wis;
+    double wt = if_specular(l, fw->exit_if)
+                    ? 1.0
+                    : power_heuristic(wis->pdf, if_pdf(l, fw->non_exit, v3_neg(fw->w),
+                                                       v3_neg(wis->wi), BXDF_ALL));
+    rgb fn = if_f(l, fw->non_exit, v3_neg(fw->w), v3_neg(wis->wi), true);
+    fw->f = rgb_add(fw->f, rgb_scale(rgb_mul(rgb_mul(fw->beta, fn), wis->f),
+                                     fabs(wis->wi.z) * wt * tr(l->thickness, wis->wi) /
+                                         wis->pdf));
+}
+
+/* The walk's new direction w, just reflected at the other interface (`bs`),
+ * joined to wi through a rough exit. */
+static inline void f_add_exit_light(f_walk *fw, const bsdf_sample *bs)
+{
+    const layered *l = fw->l;
+    rgb fe = if_f(l, fw->exit_if, v3_neg(fw->w), fw->wi, true);
+    if (rgb_is_black(fe))
+        return;
+    /* pbrt-v4 weighs this against the exit's pdf of wi from -w, not of -w
+     * from wi (the density the wis strategy has): with a rough coating its
+     * f is then up to ~10% above what its sampling reflects. Kept for
+     * pbrt-v4's images (docs/differences-from-pbrt.md). */
+    double wt = 1.0;
+    if (!if_specular(l, fw->non_exit))
+        wt = power_heuristic(bs->pdf, if_pdf(l, fw->exit_if, v3_neg(fw->w), fw->wi,
+                                             BXDF_TRANSMISSION));
+    fw->f = rgb_add(fw->f, rgb_scale(rgb_mul(fw->beta, fe), tr(l->thickness, bs->wi) * wt));
+}
+
+/* One walk between the interfaces from the top (fw->beta, z, w set),
+ * adding what reaches wi at each vertex to fw->f. */
+static inline void f_walk_layers(f_walk *fw)
+{
+    const layered *l = fw->l;
+    bool scatters = !rgb_is_black(l->albedo);
+    for (int depth = 0; depth < l->max_depth; ++depth) {
+        if (!f_survives_roulette(fw, depth))
+            break;
+        if (!scatters) {
+            fw->z = fw->z == l->thickness ? 0.0 : l->thickness;
+            fw->beta = rgb_scale(fw->beta, tr(l->thickness, fw->w));
+        } else {
+            double dz = -log1p(-rng_uniform(&fw->r)) * fabs(fw->w.z);
+            double zp = fw->w.z > 0.0 ? fw->z + dz : fw->z - dz;
+            if (zp == fw->z)
+                continue;
+            if (0.0 < zp && zp < l->thickness) {
+                f_scatter_in_medium(fw, zp);
+                continue;
+            }
+            fw->z = zp < 0.0 ? 0.0 : zp > l->thickness ? l->thickness : zp;
+        }
+        bsdf_sample bs;
+        if (fw->z == fw->exit_z) {
+            if (!f_reflect_at(fw, fw->exit_if, &bs))
+                break;
+            continue;
+        }
+        /* Scattering at the other interface: light from wi through the
+         * exit, then a new direction. */
+        if (!if_specular(l, fw->non_exit))
+            f_add_non_exit_light(fw);
+        if (!f_reflect_at(fw, fw->non_exit, &bs))
+            break;
+        if (!if_specular(l, fw->exit_if))
+            f_add_exit_light(fw, &bs);
+    }
+}
+
 rgb layered_f(const layered *l, vec3 wo, vec3 wi)
 {
     if (wo.z < 0.0) { /* two-sided */
@@ -95,113 +238,30 @@ rgb layered_f(const layered *l, vec3 wo, vec3 wi)
     }
     /* Entered at the top; the exit is the top for reflection. */
     bool reflect = same_hemisphere(wo, wi);
-    iface exit_if = reflect ? TOP : BOTTOM, non_exit = reflect ? BOTTOM : TOP;
-    double exit_z = reflect ? l->thickness : 0.0;
-    rgb f = rgb_grey(0.0);
+    f_walk fw;
+    fw.l = l;
+    fw.wi = wi;
+    fw.exit_if = reflect ? TOP : BOTTOM;
+    fw.non_exit = reflect ? BOTTOM : TOP;
+    fw.exit_z = reflect ? l->thickness : 0.0;
+    fw.f = rgb_grey(0.0);
     if (reflect)
-        f = rgb_scale(if_f(l, TOP, wo, wi, true), l->n_samples);
-    rng r = stream(wo, wi, 0.0);
-    bool scatters = !rgb_is_black(l->albedo);
+        fw.f = rgb_scale(if_f(l, TOP, wo, wi, true), l->n_samples);
+    fw.r = stream(wo, wi, 0.0);
     for (int s = 0; s < l->n_samples; ++s) {
-        bsdf_sample wos, wis;
-        double uc = rng_uniform(&r);
-        if (!if_sample(l, TOP, wo, uc, r2(&r), BXDF_TRANSMISSION, true, &wos))
+        bsdf_sample wos;
+        double uc = rng_uniform(&fw.r);
+        if (!if_sample(l, TOP, wo, uc, r2(&fw.r), BXDF_TRANSMISSION, true, &wos))
             continue;
-        uc = rng_uniform(&r);
-        if (!if_sample(l, exit_if, wi, uc, r2(&r), BXDF_TRANSMISSION, false, &wis))
+        uc = rng_uniform(&fw.r);
+        if (!if_sample(l, fw.exit_if, wi, uc, r2(&fw.r), BXDF_TRANSMISSION, false, &fw.wis))
             continue;
-        rgb beta = rgb_scale(wos.f, fabs(wos.wi.z) / wos.pdf);
-        double z = l->thickness;
-        vec3 w = wos.wi;
-        for (int depth = 0; depth < l->max_depth; ++depth) {
-            if (depth > 3 && rgb_max(beta) < 0.25) {
-                double q = fmax(0.0, 1.0 - rgb_max(beta));
-                if (rng_uniform(&r) < q)
-                    break;
-                beta = rgb_scale(beta, 1.0 / (1.0 - q));
-            }
-            if (!scatters) {
-                z = z == l->thickness ? 0.0 : l->thickness;
-                beta = rgb_scale(beta, tr(l->thickness, w));
-            } else {
-                double dz = -log1p(-rng_uniform(&r)) * fabs(w.z);
-                double zp = w.z > 0.0 ? z + dz : z - dz;
-                if (zp == z)
-                    continue;
-                if (0.0 < zp && zp < l->thickness) {
-                    /* A scattering event in the medium: toward wi through
-                     * the exit, then a phase-function sample. */
-                    double ph = hg_phase(v3_dot(v3_neg(w), v3_neg(wis.wi)), l->g);
-                    double wt = if_specular(l, exit_if) ? 1.0 : power_heuristic(wis.pdf, ph);
-                    f = rgb_add(f, rgb_scale(rgb_mul(rgb_mul(beta, l->albedo), wis.f),
-                                             ph * wt * tr(zp - exit_z, wis.wi) / wis.pdf));
-                    double ppdf;
-                    vec3 pw = hg_sample(v3_neg(w), l->g, r2(&r), &ppdf);
-                    if (!(ppdf > 0.0) || pw.z == 0.0)
-                        continue;
-                    beta = rgb_mul(beta, l->albedo); /* p / pdf = 1: exact HG sampling */
-                    w = pw;
-                    z = zp;
-                    if (((z < exit_z && w.z > 0.0) || (z > exit_z && w.z < 0.0)) &&
-                        !if_specular(l, exit_if)) {
-                        rgb fe = if_f(l, exit_if, v3_neg(w), wi, true);
-                        if (!rgb_is_black(fe)) {
-                            double epdf = if_pdf(l, exit_if, v3_neg(w), wi, BXDF_TRANSMISSION);
-                            f = rgb_add(f, rgb_scale(rgb_mul(beta, fe),
-                                                     tr(zp - exit_z, pw) *
-                                                         power_heuristic(ppdf, epdf)));
-                        }
-                    }
-                    continue;
-                }
-                z = zp < 0.0 ? 0.0 : zp > l->thickness ? l->thickness : zp;
-            }
-            if (z == exit_z) {
-                /* Reflection at the exit interface back into the layers. */
-                bsdf_sample bs;
-                uc = rng_uniform(&r);
-                if (!if_sample(l, exit_if, v3_neg(w), uc, r2(&r), BXDF_REFLECTION, true, &bs))
-                    break;
-                beta = rgb_mul(beta, rgb_scale(bs.f, fabs(bs.wi.z) / bs.pdf));
-                w = bs.wi;
-                continue;
-            }
-            /* Scattering at the other interface: light from wi through the
-             * exit (along the presampled wis), then a new direction. */
-            if (!if_specular(l, non_exit)) {
-                double wt = if_specular(l, exit_if)
-                                ? 1.0
-                                : power_heuristic(wis.pdf, if_pdf(l, non_exit, v3_neg(w),
-                                                                  v3_neg(wis.wi), BXDF_ALL));
-                rgb fn = if_f(l, non_exit, v3_neg(w), v3_neg(wis.wi), true);
-                f = rgb_add(f, rgb_scale(rgb_mul(rgb_mul(beta, fn), wis.f),
-                                         fabs(wis.wi.z) * wt * tr(l->thickness, wis.wi) /
-                                             wis.pdf));
-            }
-            bsdf_sample bs;
-            uc = rng_uniform(&r);
-            if (!if_sample(l, non_exit, v3_neg(w), uc, r2(&r), BXDF_REFLECTION, true, &bs))
-                break;
-            beta = rgb_mul(beta, rgb_scale(bs.f, fabs(bs.wi.z) / bs.pdf));
-            w = bs.wi;
-            if (!if_specular(l, exit_if)) {
-                rgb fe = if_f(l, exit_if, v3_neg(w), wi, true);
-                if (!rgb_is_black(fe)) {
-                    /* pbrt-v4 weighs this against the exit's pdf of wi
-                     * from -w, not of -w from wi (the density the wis
-                     * strategy has): with a rough coating its f is then
-                     * up to ~10% above what its sampling reflects. Kept
-                     * for pbrt-v4's images (docs/differences-from-pbrt.md). */
-                    double wt = 1.0;
-                    if (!if_specular(l, non_exit))
-                        wt = power_heuristic(bs.pdf,
-                                             if_pdf(l, exit_if, v3_neg(w), wi, BXDF_TRANSMISSION));
-                    f = rgb_add(f, rgb_scale(rgb_mul(beta, fe), tr(l->thickness, bs.wi) * wt));
-                }
-            }
-        }
+        fw.beta = rgb_scale(wos.f, fabs(wos.wi.z) / wos.pdf);
+        fw.z = l->thickness;
+        fw.w = wos.wi;
+        f_walk_layers(&fw);
     }
-    return rgb_scale(f, 1.0 / l->n_samples);
+    return rgb_scale(fw.f, 1.0 / l->n_samples);
 }
 
 /* ---- sampling: one random walk from wo until it leaves ---- */

@@ -231,8 +231,10 @@ static void read_layers(param_list *pl, const texture_set *ts, material *out)
                       l->n_samples);
 }
 
-static void read_coated_diffuse(param_list *pl, const texture_set *ts, material *out)
+static hz_status read_coated_diffuse(param_list *pl, const texture_set *ts, material *out,
+                                     hz_error *err)
 {
+    (void)err;
     out->kind = MATERIAL_COATED_DIFFUSE;
     layered *l = &out->coat;
     out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
@@ -241,6 +243,7 @@ static void read_coated_diffuse(param_list *pl, const texture_set *ts, material 
     l->top = read_roughness_of(pl, "", ts, out->rough);
     l->eta = read_eta(pl, "eta");
     read_layers(pl, ts, out);
+    return HZ_OK;
 }
 
 static hz_status read_coated_conductor(param_list *pl, const texture_set *ts, material *out,
@@ -272,12 +275,24 @@ static hz_status read_conductor(param_list *pl, const texture_set *ts, material 
     return HZ_OK;
 }
 
-static void read_dielectric(param_list *pl, const texture_set *ts, bool thin, material *out)
+static hz_status read_dielectric(param_list *pl, const texture_set *ts, material *out,
+                                 hz_error *err)
 {
-    out->kind = thin ? MATERIAL_THIN_DIELECTRIC : MATERIAL_DIELECTRIC;
+    (void)err;
+    out->kind = MATERIAL_DIELECTRIC;
     out->eta = read_eta(pl, "eta");
-    if (!thin)
-        read_roughness(pl, ts, out);
+    read_roughness(pl, ts, out);
+    return HZ_OK;
+}
+
+static hz_status read_thin_dielectric(param_list *pl, const texture_set *ts, material *out,
+                                      hz_error *err)
+{
+    (void)ts;
+    (void)err;
+    out->kind = MATERIAL_THIN_DIELECTRIC;
+    out->eta = read_eta(pl, "eta");
+    return HZ_OK;
 }
 
 /* pbrt-v4's HairMaterial: the absorption from exactly one of "sigma_a",
@@ -285,8 +300,9 @@ static void read_dielectric(param_list *pl, const texture_set *ts, bool thin, ma
  * eumelanin 1.3, brown); pbrt-v4 warns and takes the first when several are
  * given, haze refuses that. eta 1.55, beta_m 0.3, beta_n 0.3 (clamped to
  * [0.01, 1]), alpha 2 degrees. */
-static void read_hair(param_list *pl, const texture_set *ts, material *out)
+static hz_status read_hair(param_list *pl, const texture_set *ts, material *out, hz_error *err)
 {
+    (void)err;
     out->kind = MATERIAL_HAIR;
     out->eta = params_float(pl, "eta", 1.55);
     out->beta_m = params_float(pl, "beta_m", 0.3);
@@ -322,6 +338,7 @@ static void read_hair(param_list *pl, const texture_set *ts, material *out)
     } else {
         out->sigma_a = hair_sigma_a_from_concentration(1.3, 0.0);
     }
+    return HZ_OK;
 }
 
 static rgb clamp01(rgb c)
@@ -432,6 +449,129 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
     return o;
 }
 
+static hz_status read_diffuse(param_list *pl, const texture_set *ts, material *out,
+                              hz_error *err)
+{
+    (void)err;
+    out->kind = MATERIAL_DIFFUSE;
+    out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
+    out->reflectance = out->reflectance_tex ? rgb_grey(0.5)
+                                            : params_rgb(pl, "reflectance", rgb_grey(0.5));
+    rgb r = out->reflectance;
+    if (r.r < 0 || r.g < 0 || r.b < 0 || r.r > 1 || r.g > 1 || r.b > 1)
+        params_reject(pl, "reflectance", "diffuse reflectance must be within [0, 1]");
+    return HZ_OK;
+}
+
+/* pbrt-v4: reflectance and transmittance 0.25, times "scale", clamped to
+ * [0, 1]. */
+static hz_status read_diffuse_transmission(param_list *pl, const texture_set *ts, material *out,
+                                           hz_error *err)
+{
+    (void)err;
+    out->kind = MATERIAL_DIFFUSE_TRANSMISSION;
+    double scale = params_float(pl, "scale", 1.0);
+    out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
+    out->transmittance_tex = texture_param(pl, ts, "transmittance", true);
+    rgb r = out->reflectance_tex ? rgb_grey(0.25) : params_rgb(pl, "reflectance", rgb_grey(0.25));
+    rgb t = out->transmittance_tex ? rgb_grey(0.25)
+                                   : params_rgb(pl, "transmittance", rgb_grey(0.25));
+    if (!(isfinite(scale) && scale >= 0.0))
+        params_reject(pl, "scale", "\"scale\" must be finite and >= 0, got %g", scale);
+    out->reflectance = rgb_make(hz_clamp(scale * r.r, 0, 1), hz_clamp(scale * r.g, 0, 1),
+                                hz_clamp(scale * r.b, 0, 1));
+    out->transmittance = rgb_make(hz_clamp(scale * t.r, 0, 1), hz_clamp(scale * t.g, 0, 1),
+                                  hz_clamp(scale * t.b, 0, 1));
+    out->amount = scale; /* the textures' scale */
+    return HZ_OK;
+}
+
+/* The two materials are named here and found by material_resolve_mixes. */
+static hz_status read_mix(param_list *pl, const texture_set *ts, material *out, hz_error *err)
+{
+    out->kind = MATERIAL_MIX;
+    out->amount_tex = texture_param(pl, ts, "amount", false);
+    out->amount = out->amount_tex ? 0.5 : params_float(pl, "amount", 0.5);
+    if (!isfinite(out->amount))
+        params_reject(pl, "amount", "\"amount\" must be finite, got %g", out->amount);
+    size_t n = 0;
+    char *const *names = params_strings(pl, "materials", &n);
+    if (n != 2)
+        return hz_fail_at(err, params_loc(pl, "materials"),
+                          "Material \"mix\" needs \"string materials\" naming two "
+                          "materials, got %zu",
+                          n);
+    out->mix_names[0] = names[0];
+    out->mix_names[1] = names[1];
+    return HZ_OK;
+}
+
+/* pbrt-v4 makes no material for "interface", "" and "none": rays pass the
+ * surface, which only bounds media. */
+static hz_status read_interface(param_list *pl, const texture_set *ts, material *out,
+                                hz_error *err)
+{
+    (void)pl;
+    (void)ts;
+    (void)err;
+    out->kind = MATERIAL_INTERFACE;
+    return HZ_OK;
+}
+
+static const struct {
+    const char *type;
+    hz_status (*read)(param_list *pl, const texture_set *ts, material *out, hz_error *err);
+} material_kinds[] = {
+    {"diffuse", read_diffuse},
+    {"diffusetransmission", read_diffuse_transmission},
+    {"mix", read_mix},
+    {"coateddiffuse", read_coated_diffuse},
+    {"coatedconductor", read_coated_conductor},
+    {"conductor", read_conductor},
+    {"dielectric", read_dielectric},
+    {"thindielectric", read_thin_dielectric},
+    {"hair", read_hair},
+    {"interface", read_interface},
+    {"", read_interface},
+    {"none", read_interface},
+};
+
+/* Every material with a surface takes pbrt-v4's "displacement" and
+ * "normalmap"; mixes, interfaces and hair leave them unused (pbrt-v4's hair
+ * has neither). */
+static void read_surface_maps(param_list *pl, const texture_set *ts, material *out)
+{
+    if (out->kind == MATERIAL_MIX || out->kind == MATERIAL_INTERFACE ||
+        out->kind == MATERIAL_HAIR)
+        return;
+    /* A float texture bumps the shading normal; a constant one changes
+     * nothing (its gradient is 0, as in pbrt-v4). */
+    out->displacement = texture_param(pl, ts, "displacement", false);
+    if (!out->displacement && params_has(pl, "displacement"))
+        params_float(pl, "displacement", 0.0);
+    /* The image was read with the scene's textures; one that could not be
+     * read was reported there (at this parameter): the material goes on
+     * without it. */
+    const char *nm = params_string(pl, "normalmap", NULL);
+    if (nm)
+        out->normal_map = texture_set_normal_map(ts, nm);
+}
+
+/* Whether the material's look varies over the surface (material_textured),
+ * and every parameter used. */
+static hz_status finish_material(param_list *pl, const char *type, material *out, hz_error *err)
+{
+    bool rough_tex = out->rough[0] || out->rough[1] || out->rough[2] || out->rough[3];
+    /* Read already by the roughness, when there is one. */
+    out->remap_roughness = rough_tex ? params_bool(pl, "remaproughness", true) : true;
+    out->textured = out->reflectance_tex || out->transmittance_tex || out->eta_tex ||
+                    out->k_tex || out->metal_r_tex || rough_tex || out->displacement ||
+                    out->normal_map || out->thickness_tex || out->albedo_tex || out->g_tex;
+    char what[128];
+    snprintf(what, sizeof what, "Material \"%s\"", type);
+    return params_finish(pl, what, err);
+}
+
 hz_status material_from_entity(material_entity *e, const texture_set *ts, material *out,
                                hz_error *err)
 {
@@ -442,99 +582,17 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
     if (params_has(pl, "type"))
         type = params_string(pl, "type", type);
     *out = (material){.kind = MATERIAL_INTERFACE};
-
-    if (strcmp(type, "diffuse") == 0) {
-        out->kind = MATERIAL_DIFFUSE;
-        out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
-        out->reflectance = out->reflectance_tex ? rgb_grey(0.5)
-                                                : params_rgb(pl, "reflectance", rgb_grey(0.5));
-        rgb r = out->reflectance;
-        if (r.r < 0 || r.g < 0 || r.b < 0 || r.r > 1 || r.g > 1 || r.b > 1)
-            params_reject(pl, "reflectance", "diffuse reflectance must be within [0, 1]");
-    } else if (strcmp(type, "diffusetransmission") == 0) {
-        /* pbrt-v4: reflectance and transmittance 0.25, times "scale",
-         * clamped to [0, 1]. */
-        out->kind = MATERIAL_DIFFUSE_TRANSMISSION;
-        double scale = params_float(pl, "scale", 1.0);
-        out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
-        out->transmittance_tex = texture_param(pl, ts, "transmittance", true);
-        rgb r = out->reflectance_tex ? rgb_grey(0.25)
-                                     : params_rgb(pl, "reflectance", rgb_grey(0.25));
-        rgb t = out->transmittance_tex ? rgb_grey(0.25)
-                                       : params_rgb(pl, "transmittance", rgb_grey(0.25));
-        if (!(isfinite(scale) && scale >= 0.0))
-            params_reject(pl, "scale", "\"scale\" must be finite and >= 0, got %g", scale);
-        out->reflectance = rgb_make(hz_clamp(scale * r.r, 0, 1), hz_clamp(scale * r.g, 0, 1),
-                                    hz_clamp(scale * r.b, 0, 1));
-        out->transmittance = rgb_make(hz_clamp(scale * t.r, 0, 1), hz_clamp(scale * t.g, 0, 1),
-                                      hz_clamp(scale * t.b, 0, 1));
-        out->amount = scale; /* the textures' scale */
-    } else if (strcmp(type, "mix") == 0) {
-        out->kind = MATERIAL_MIX;
-        out->amount_tex = texture_param(pl, ts, "amount", false);
-        out->amount = out->amount_tex ? 0.5 : params_float(pl, "amount", 0.5);
-        if (!isfinite(out->amount))
-            params_reject(pl, "amount", "\"amount\" must be finite, got %g", out->amount);
-        size_t n = 0;
-        char *const *names = params_strings(pl, "materials", &n);
-        if (n != 2)
-            return hz_fail_at(err, params_loc(pl, "materials"),
-                              "Material \"mix\" needs \"string materials\" naming two "
-                              "materials, got %zu",
-                              n);
-        out->mix_names[0] = names[0];
-        out->mix_names[1] = names[1];
-    } else if (strcmp(type, "coateddiffuse") == 0) {
-        read_coated_diffuse(pl, ts, out);
-    } else if (strcmp(type, "coatedconductor") == 0) {
-        if (read_coated_conductor(pl, ts, out, err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(type, "conductor") == 0) {
-        if (read_conductor(pl, ts, out, err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(type, "dielectric") == 0 || strcmp(type, "thindielectric") == 0) {
-        read_dielectric(pl, ts, strcmp(type, "thindielectric") == 0, out);
-    } else if (strcmp(type, "hair") == 0) {
-        read_hair(pl, ts, out);
-    } else if (strcmp(type, "interface") == 0 || strcmp(type, "") == 0 ||
-               strcmp(type, "none") == 0) {
-        /* pbrt-v4 makes no material for all three: rays pass the surface,
-         * which only bounds media. */
-        out->kind = MATERIAL_INTERFACE;
-    } else {
-        return hz_fail_at(err, e->entity.loc,
-                          "Material \"%s\" is not supported (supported: \"diffuse\", "
-                          "\"conductor\", \"dielectric\", \"thindielectric\", "
-                          "\"diffusetransmission\", \"coateddiffuse\", \"coatedconductor\", "
-                          "\"hair\", \"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
-                          type);
-    }
-    /* Every material with a surface takes pbrt-v4's "displacement": a float
-     * texture bumps the shading normal; a constant one changes nothing (its
-     * gradient is 0, as in pbrt-v4). Mixes, interfaces and hair leave it unused. */
-    if (out->kind != MATERIAL_MIX && out->kind != MATERIAL_INTERFACE &&
-        out->kind != MATERIAL_HAIR) { /* pbrt-v4's hair has no displacement */
-        out->displacement = texture_param(pl, ts, "displacement", false);
-        if (!out->displacement && params_has(pl, "displacement"))
-            params_float(pl, "displacement", 0.0);
-    }
-    /* pbrt-v4 reads "normalmap" for every material but hair, mix and the
-     * interfaces; the image was read with the scene's textures. */
-    if (out->kind != MATERIAL_MIX && out->kind != MATERIAL_INTERFACE &&
-        out->kind != MATERIAL_HAIR) {
-        /* An image that could not be read was reported by the texture set
-         * (at this parameter): the material goes on without it. */
-        const char *nm = params_string(pl, "normalmap", NULL);
-        if (nm)
-            out->normal_map = texture_set_normal_map(ts, nm);
-    }
-    bool rough_tex = out->rough[0] || out->rough[1] || out->rough[2] || out->rough[3];
-    /* Read already by the roughness, when there is one. */
-    out->remap_roughness = rough_tex ? params_bool(pl, "remaproughness", true) : true;
-    out->textured = out->reflectance_tex || out->transmittance_tex || out->eta_tex ||
-                    out->k_tex || out->metal_r_tex || rough_tex || out->displacement ||
-                    out->normal_map || out->thickness_tex || out->albedo_tex || out->g_tex;
-    char what[128];
-    snprintf(what, sizeof what, "Material \"%s\"", type);
-    return params_finish(pl, what, err);
+    for (size_t i = 0; i < sizeof material_kinds / sizeof material_kinds[0]; ++i)
+        if (strcmp(type, material_kinds[i].type) == 0) {
+            if (material_kinds[i].read(pl, ts, out, err) != HZ_OK)
+                return HZ_ERROR;
+            read_surface_maps(pl, ts, out);
+            return finish_material(pl, type, out, err);
+        }
+    return hz_fail_at(err, e->entity.loc,
+                      "Material \"%s\" is not supported (supported: \"diffuse\", "
+                      "\"conductor\", \"dielectric\", \"thindielectric\", "
+                      "\"diffusetransmission\", \"coateddiffuse\", \"coatedconductor\", "
+                      "\"hair\", \"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
+                      type);
 }

@@ -383,63 +383,180 @@ static hz_status later_passes(const haze_mpi_api *mpi, render_scene *rs,
     return st;
 }
 
+/* This render's tile service. Without it (rank 0) or its requests (others)
+ * the run cannot go on, nor can the ranks agree on it: the job ends. */
+static tile_service *start_tile_service(distributed *d, const film_params *fp, hz_error *local)
+{
+    tile_service *ts = NULL;
+    if (tile_service_create(d->mpi, d->rank, d->size, tile_count_of(fp), &ts, local) != HZ_OK) {
+        fprintf(stderr, "haze: rank %d on host %s: %s\n", d->rank, d->host, local->message);
+        d->mpi->abort(1);
+    }
+    return ts;
+}
+
+/* The first pass's options: tiles from the service (a progressive render's
+ * first pass, progressive_first_end, with its tiles recorded in `log`),
+ * progress on rank 0 only, no cancel (under mpirun a signal ends the job). */
+static void first_pass_options(const distributed *d, render_scene *rs,
+                               const renderer_options *opt, const progressive_goal *goal,
+                               tile_log *log, renderer_options *o)
+{
+    *o = *opt;
+    o->cancel = NULL;
+    o->next_tile = tile_service_next;
+    o->tiles_shown = d->rank == 0 ? tile_service_shown : NULL;
+    o->tile_ctx = log->ts;
+    if (d->rank != 0)
+        o->progress = NULL;
+    if (goal) {
+        const film_params *fp = film_get_params(render_scene_film(rs));
+        log->tiles = malloc((size_t)tile_count_of(fp) * sizeof *log->tiles);
+        if (!log->tiles) {
+            fprintf(stderr, "haze: rank %d on host %s: out of memory\n", d->rank, d->host);
+            d->mpi->abort(1);
+        }
+        o->next_tile = tile_log_claim;
+        o->tile_ctx = log;
+        o->sample_end = progressive_first_end(goal, render_scene_sampler(rs)->spp);
+    }
+}
+
+/* Ends the tile hand-out (rank 0: once every rank is done). Tiles handed to
+ * this rank but not rendered fail it. */
+static hz_status finish_tile_service(distributed *d, tile_service *ts, hz_status st,
+                                     tile_claim_stats *claims, hz_error *local)
+{
+    int lost = tile_service_finish(ts);
+    if (lost > 0 && st == HZ_OK)
+        st = hz_fail(local, "%d tile%s handed to this rank were not rendered", lost,
+                     lost == 1 ? "" : "s");
+    *claims = tile_service_claims(ts);
+    d->service_cpu_seconds = claims->service_cpu_seconds;
+    tile_service_destroy(ts);
+    return st;
+}
+
+/* A progressive render's passes after the first, once every rank agrees the
+ * first went well (`st` is this rank's first pass). */
+static hz_status progressive_passes(distributed *d, render_scene *rs, const renderer_options *o,
+                                    tile_log *log, const progressive_goal *goal,
+                                    double first_seconds, hz_status st, render_stats *mine,
+                                    hz_error *local)
+{
+    int ok = st == HZ_OK;
+    d->mpi->allreduce(&ok, 1, HAZE_MPI_INT, HAZE_MPI_MIN);
+    if (ok && o->progress)
+        fprintf(o->progress, "pass 1: %d of %d spp\n", mine->spp, render_scene_sampler(rs)->spp);
+    if (ok && later_passes(d->mpi, rs, o, log, goal, first_seconds, mine, local) != HZ_OK)
+        st = HZ_ERROR; /* renderer_run fails only before any thread starts */
+    free(log->tiles);
+    return st;
+}
+
+/* Every rank's film summed onto rank 0's. */
+static void reduce_film(const haze_mpi_api *mpi, film *f)
+{
+    film_accumulators acc;
+    film_get_accumulators(f, &acc);
+    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
+        if (acc.doubles[i])
+            reduce_sum(mpi, acc.doubles[i], acc.double_count[i], HAZE_MPI_DOUBLE,
+                       sizeof(double));
+    if (acc.counts)
+        reduce_sum(mpi, acc.counts, acc.count_count, HAZE_MPI_UINT32, sizeof(uint32_t));
+}
+
+/* This rank's figures for distributed_print_report, gathered on rank 0. */
+static void gather_figures(distributed *d, const render_stats *mine,
+                           const tile_claim_stats *claims, double render_seconds)
+{
+    double fig[FIG_COUNT] = {0};
+    fig[FIG_TILES] = mine->tiles_done;
+    fig[FIG_THREADS] = mine->threads;
+    fig[FIG_CLAIMS] = (double)claims->claims;
+    fig[FIG_LATE] = (double)claims->late;
+    fig[FIG_CLAIM_SECONDS] = claims->wait_seconds;
+    fig[FIG_MAX_WAIT] = claims->max_wait;
+    fig[FIG_RENDER_SECONDS] = render_seconds;
+    free(d->figures);
+    d->figures = NULL;
+    if (d->rank == 0) {
+        d->figures = calloc((size_t)d->size * FIG_COUNT, sizeof *d->figures);
+        if (!d->figures)
+            d->mpi->abort(1);
+    }
+    d->mpi->gather(fig, FIG_COUNT, HAZE_MPI_DOUBLE, d->figures, 0);
+}
+
+/* Rank 0's stats of the whole image: the ranks' counts (`sums`, reduce_ranks'
+ * order) and times summed, their threads added, every tile rendered. */
+static void whole_image_stats(const distributed *d, film *f, const uint64_t sums[6],
+                              const double times[4], long own_nonfinite, double t0,
+                              render_stats *stats)
+{
+    film_add_nonfinite(f, (long)sums[3] - own_nonfinite);
+    stats->camera_rays = sums[0];
+    stats->shadow_rays = sums[1];
+    stats->density_lookups = sums[2];
+    stats->majorant_steps = sums[4];
+    stats->lost_paths = sums[5];
+    stats->time_busy_s = times[0];
+    stats->time_media_s = times[1];
+    stats->time_film_s = times[2];
+    stats->samples = times[3];
+    stats->threads = 0;
+    for (int r = 0; r < d->size; ++r)
+        stats->threads += (int)d->figures[r * FIG_COUNT + FIG_THREADS];
+    stats->tiles_done = stats->tile_count;
+    stats->pixels = stats->pixels_total;
+    /* spp and passes: every rank took the same (the decisions are collective) */
+    stats->interrupted = false;
+    stats->wall_seconds = now_seconds() - t0;
+}
+
+/* Sums the film, counts and times of every rank onto rank 0 and gathers the
+ * ranks' figures there; `stats` are then this rank's own, or on rank 0 the
+ * whole image's. */
+static void reduce_ranks(distributed *d, film *f, const render_stats *mine,
+                         const tile_claim_stats *claims, double render_seconds, double t0,
+                         render_stats *stats)
+{
+    double t_gather = now_seconds();
+    reduce_film(d->mpi, f);
+    long own_nonfinite = film_nonfinite_count(f);
+    uint64_t sums[6] = {mine->camera_rays, mine->shadow_rays, mine->density_lookups,
+                        (uint64_t)own_nonfinite, mine->majorant_steps, mine->lost_paths};
+    reduce_sum(d->mpi, sums, 6, HAZE_MPI_UINT64, sizeof(uint64_t));
+    double times[4] = {mine->time_busy_s, mine->time_media_s, mine->time_film_s, mine->samples};
+    reduce_sum(d->mpi, times, 4, HAZE_MPI_DOUBLE, sizeof(double));
+    gather_figures(d, mine, claims, render_seconds);
+    d->gather_seconds = now_seconds() - t_gather;
+    *stats = *mine;
+    if (d->rank == 0)
+        whole_image_stats(d, f, sums, times, own_nonfinite, t0, stats);
+}
+
 static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_options *opt,
                             const progressive_goal *goal, render_stats *stats, hz_error *err)
 {
     double t0 = now_seconds();
     film *f = render_scene_film(rs);
-    const film_params *fp = film_get_params(f);
     hz_error local = {0};
-    tile_service *ts = NULL;
-    if (tile_service_create(d->mpi, d->rank, d->size, tile_count_of(fp), &ts, &local) != HZ_OK) {
-        /* Without its service (rank 0) or its requests (others) the run
-         * cannot go on, nor can the ranks agree on it: end the job. */
-        fprintf(stderr, "haze: rank %d on host %s: %s\n", d->rank, d->host, local.message);
-        d->mpi->abort(1);
-    }
-    renderer_options o = *opt;
-    o.cancel = NULL;
-    o.next_tile = tile_service_next;
-    o.tiles_shown = d->rank == 0 ? tile_service_shown : NULL;
-    o.tile_ctx = ts;
-    if (d->rank != 0)
-        o.progress = NULL;
-    tile_log log = {.ts = ts};
+    tile_log log = {.ts = start_tile_service(d, film_get_params(f), &local)};
     atomic_init(&log.count, 0);
     atomic_init(&log.next, 0);
-    if (goal) { /* the first pass (progressive_first_end), its tiles recorded */
-        log.tiles = malloc((size_t)tile_count_of(fp) * sizeof *log.tiles);
-        if (!log.tiles) {
-            fprintf(stderr, "haze: rank %d on host %s: out of memory\n", d->rank, d->host);
-            d->mpi->abort(1);
-        }
-        o.next_tile = tile_log_claim;
-        o.tile_ctx = &log;
-        o.sample_end = progressive_first_end(goal, render_scene_sampler(rs)->spp);
-    }
+    renderer_options o;
+    first_pass_options(d, rs, opt, goal, &log, &o);
     render_stats mine;
     memset(&mine, 0, sizeof mine);
     hz_status st = renderer_run(rs, &o, &mine, &local);
     double render_seconds = now_seconds() - t0;
     double t_wait = now_seconds();
-    int lost = tile_service_finish(ts); /* rank 0: until every rank is done */
-    if (lost > 0 && st == HZ_OK)
-        st = hz_fail(&local, "%d tile%s handed to this rank were not rendered", lost,
-                     lost == 1 ? "" : "s");
-    tile_claim_stats claims = tile_service_claims(ts);
-    d->service_cpu_seconds = claims.service_cpu_seconds;
-    tile_service_destroy(ts);
+    tile_claim_stats claims;
+    st = finish_tile_service(d, log.ts, st, &claims, &local);
     if (goal) {
-        /* Every rank agrees the first pass went well before any starts the next. */
-        int ok = st == HZ_OK;
-        d->mpi->allreduce(&ok, 1, HAZE_MPI_INT, HAZE_MPI_MIN);
-        if (ok && o.progress)
-            fprintf(o.progress, "pass 1: %d of %d spp\n", mine.spp,
-                    render_scene_sampler(rs)->spp);
-        if (ok && later_passes(d->mpi, rs, &o, &log, goal, render_seconds, &mine, &local) !=
-                      HZ_OK)
-            st = HZ_ERROR; /* renderer_run fails only before any thread starts */
-        free(log.tiles);
+        st = progressive_passes(d, rs, &o, &log, goal, render_seconds, st, &mine, &local);
         render_seconds = now_seconds() - t0;
         t_wait = now_seconds();
     }
@@ -452,61 +569,7 @@ static hz_status render_mpi(distributed *d, render_scene *rs, const renderer_opt
             hz_fail(err, "%s", local.message[0] ? local.message : "another rank failed");
         return HZ_ERROR;
     }
-
-    double t_gather = now_seconds();
-    film_accumulators acc;
-    film_get_accumulators(f, &acc);
-    for (int i = 0; i < FILM_DOUBLE_ARRAYS; ++i)
-        if (acc.doubles[i])
-            reduce_sum(d->mpi, acc.doubles[i], acc.double_count[i], HAZE_MPI_DOUBLE,
-                       sizeof(double));
-    if (acc.counts)
-        reduce_sum(d->mpi, acc.counts, acc.count_count, HAZE_MPI_UINT32, sizeof(uint32_t));
-    long own_nonfinite = film_nonfinite_count(f);
-    uint64_t sums[6] = {mine.camera_rays, mine.shadow_rays, mine.density_lookups,
-                        (uint64_t)own_nonfinite, mine.majorant_steps, mine.lost_paths};
-    reduce_sum(d->mpi, sums, 6, HAZE_MPI_UINT64, sizeof(uint64_t));
-    double times[4] = {mine.time_busy_s, mine.time_media_s, mine.time_film_s, mine.samples};
-    reduce_sum(d->mpi, times, 4, HAZE_MPI_DOUBLE, sizeof(double));
-    double fig[FIG_COUNT] = {0};
-    fig[FIG_TILES] = mine.tiles_done;
-    fig[FIG_THREADS] = mine.threads;
-    fig[FIG_CLAIMS] = (double)claims.claims;
-    fig[FIG_LATE] = (double)claims.late;
-    fig[FIG_CLAIM_SECONDS] = claims.wait_seconds;
-    fig[FIG_MAX_WAIT] = claims.max_wait;
-    fig[FIG_RENDER_SECONDS] = render_seconds;
-    free(d->figures);
-    d->figures = NULL;
-    if (d->rank == 0) {
-        d->figures = calloc((size_t)d->size * FIG_COUNT, sizeof *d->figures);
-        if (!d->figures)
-            d->mpi->abort(1);
-    }
-    d->mpi->gather(fig, FIG_COUNT, HAZE_MPI_DOUBLE, d->figures, 0);
-    d->gather_seconds = now_seconds() - t_gather;
-
-    *stats = mine;
-    if (d->rank == 0) {
-        film_add_nonfinite(f, (long)sums[3] - own_nonfinite);
-        stats->camera_rays = sums[0];
-        stats->shadow_rays = sums[1];
-        stats->density_lookups = sums[2];
-        stats->majorant_steps = sums[4];
-        stats->lost_paths = sums[5];
-        stats->time_busy_s = times[0];
-        stats->time_media_s = times[1];
-        stats->time_film_s = times[2];
-        stats->samples = times[3];
-        stats->threads = 0;
-        for (int r = 0; r < d->size; ++r)
-            stats->threads += (int)d->figures[r * FIG_COUNT + FIG_THREADS];
-        stats->tiles_done = stats->tile_count;
-        stats->pixels = stats->pixels_total;
-        /* spp and passes: every rank took the same (the decisions are collective) */
-        stats->interrupted = false;
-        stats->wall_seconds = now_seconds() - t0;
-    }
+    reduce_ranks(d, f, &mine, &claims, render_seconds, t0, stats);
     return HZ_OK;
 }
 

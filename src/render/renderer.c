@@ -225,75 +225,108 @@ static void *worker_main(void *p)
 
 static double now_seconds(void) { return hz_clock_seconds(); }
 
-hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
-                       hz_error *err)
+/* The sync the workers and the calling thread share; the condition's clock
+ * is the monotonic one of the naps' deadlines (wait_for_workers). */
+static void job_init_sync(render_job *job)
 {
-    const film_params *fp = film_get_params(render_scene_film(rs));
-    render_job job;
-    memset(&job, 0, sizeof job);
-    job.rs = rs;
-    job.bounds = fp->bounds;
-    int w = fp->bounds.x1 - fp->bounds.x0, h = fp->bounds.y1 - fp->bounds.y0;
-    job.tiles_x = (w + TILE_SIZE - 1) / TILE_SIZE;
-    job.tile_count = job.tiles_x * ((h + TILE_SIZE - 1) / TILE_SIZE);
-    int spp = render_scene_sampler(rs)->spp;
-    job.sample_begin = opt->sample_begin;
-    job.sample_end = opt->sample_end > 0 ? opt->sample_end : spp;
-    assert(0 <= job.sample_begin && job.sample_begin <= job.sample_end && job.sample_end <= spp);
-    atomic_init(&job.next_tile, 0);
-    atomic_init(&job.tiles_done, 0);
-    atomic_init(&job.running, 0);
-    atomic_init(&job.stop, 0);
-    pthread_mutex_init(&job.lock, NULL);
+    atomic_init(&job->next_tile, 0);
+    atomic_init(&job->tiles_done, 0);
+    atomic_init(&job->running, 0);
+    atomic_init(&job->stop, 0);
+    pthread_mutex_init(&job->lock, NULL);
     pthread_condattr_t cattr;
     pthread_condattr_init(&cattr);
     pthread_condattr_setclock(&cattr, CLOCK_MONOTONIC);
-    pthread_cond_init(&job.wake, &cattr);
+    pthread_cond_init(&job->wake, &cattr);
     pthread_condattr_destroy(&cattr);
-    job.active = opt->active;
-    job.tile_source = opt->next_tile;
-    job.tile_ctx = opt->tile_ctx;
-    job.cancel = opt->cancel;
+}
+
+/* What camera rays need and carry, and where they bring black (tile_black). */
+static void job_init_camera_rays(render_job *job, const renderer_options *opt, int spp)
+{
+    render_scene *rs = job->rs;
     render_motion motion = render_scene_motion(rs);
-    job.surfaces = film_wants_surface(render_scene_film(rs));
+    job->surfaces = film_wants_surface(render_scene_film(rs));
     if (render_scene_has_textures(rs))
-        job.diff_scale = opt->disable_pixel_jitter ? 1.0 : fmax(0.125, 1.0 / sqrt(spp));
-    job.needs = (camera_sample_needs){!opt->disable_pixel_jitter,
-                                      motion.camera || motion.surfaces || motion.media > 0,
-                                      camera_has_lens(render_scene_camera(rs))};
-    job.black_outside = render_scene_black_outside(rs, job.raster_bounds);
-    if (job.black_outside) {
+        job->diff_scale = opt->disable_pixel_jitter ? 1.0 : fmax(0.125, 1.0 / sqrt(spp));
+    job->needs = (camera_sample_needs){!opt->disable_pixel_jitter,
+                                       motion.camera || motion.surfaces || motion.media > 0,
+                                       camera_has_lens(render_scene_camera(rs))};
+    job->black_outside = render_scene_black_outside(rs, job->raster_bounds);
+    if (job->black_outside) {
         /* A pixel's samples lie within the filter's radius of its centre
          * (at it without jitter): one pixel more for rounding. */
         vec2 r = opt->disable_pixel_jitter ? v2(0.0, 0.0)
                                            : filter_radius(render_scene_filter(rs));
-        job.raster_bounds[0] -= r.x + 1.0;
-        job.raster_bounds[1] += r.x + 1.0;
-        job.raster_bounds[2] -= r.y + 1.0;
-        job.raster_bounds[3] += r.y + 1.0;
+        job->raster_bounds[0] -= r.x + 1.0;
+        job->raster_bounds[1] += r.x + 1.0;
+        job->raster_bounds[2] -= r.y + 1.0;
+        job->raster_bounds[3] += r.y + 1.0;
     }
+}
 
-    int threads = opt->threads > 0 ? opt->threads : hz_core_count();
-    if (threads > job.tile_count)
-        threads = job.tile_count > 0 ? job.tile_count : 1;
-    job.counters = calloc((size_t)threads, sizeof *job.counters);
-    job.busy_ns = calloc((size_t)threads, sizeof *job.busy_ns);
-    job.rendered = calloc((size_t)threads, sizeof *job.rendered);
-    pthread_t *tids = calloc((size_t)threads, sizeof *tids);
-    worker_arg *args = calloc((size_t)threads, sizeof *args);
-    if (!job.counters || !job.busy_ns || !job.rendered || !tids || !args) {
-        free(job.counters);
-        free(job.rendered);
-        free(job.busy_ns);
-        free(tids);
-        free(args);
-        pthread_cond_destroy(&job.wake);
-        pthread_mutex_destroy(&job.lock);
-        return hz_fail(err, "out of memory starting %d render threads", threads);
-    }
+static void job_init(render_job *job, render_scene *rs, const renderer_options *opt)
+{
+    const film_params *fp = film_get_params(render_scene_film(rs));
+    memset(job, 0, sizeof *job);
+    job->rs = rs;
+    job->bounds = fp->bounds;
+    int w = fp->bounds.x1 - fp->bounds.x0, h = fp->bounds.y1 - fp->bounds.y0;
+    job->tiles_x = (w + TILE_SIZE - 1) / TILE_SIZE;
+    job->tile_count = job->tiles_x * ((h + TILE_SIZE - 1) / TILE_SIZE);
+    int spp = render_scene_sampler(rs)->spp;
+    job->sample_begin = opt->sample_begin;
+    job->sample_end = opt->sample_end > 0 ? opt->sample_end : spp;
+    assert(0 <= job->sample_begin && job->sample_begin <= job->sample_end &&
+           job->sample_end <= spp);
+    job_init_sync(job);
+    job->active = opt->active;
+    job->tile_source = opt->next_tile;
+    job->tile_ctx = opt->tile_ctx;
+    job->cancel = opt->cancel;
+    job_init_camera_rays(job, opt, spp);
+}
+
+/* `threads` (<= 0: every core), but no more than there are tiles. */
+static int worker_count(int threads, int tile_count)
+{
+    if (threads <= 0)
+        threads = hz_core_count();
+    if (threads > tile_count)
+        threads = tile_count > 0 ? tile_count : 1;
+    return threads;
+}
+
+/* Each thread's counters, and the threads' ids and arguments. */
+static hz_status job_alloc_workers(render_job *job, int threads, bool timed, pthread_t **tids,
+                                   worker_arg **args)
+{
+    job->counters = calloc((size_t)threads, sizeof *job->counters);
+    job->busy_ns = calloc((size_t)threads, sizeof *job->busy_ns);
+    job->rendered = calloc((size_t)threads, sizeof *job->rendered);
+    *tids = calloc((size_t)threads, sizeof **tids);
+    *args = calloc((size_t)threads, sizeof **args);
+    if (!job->counters || !job->busy_ns || !job->rendered || !*tids || !*args)
+        return HZ_ERROR;
     for (int i = 0; i < threads; ++i)
-        job.counters[i].timed = opt->timing;
+        job->counters[i].timed = timed;
+    return HZ_OK;
+}
 
+static void job_free(render_job *job, pthread_t *tids, worker_arg *args)
+{
+    free(job->counters);
+    free(job->busy_ns);
+    free(job->rendered);
+    free(tids);
+    free(args);
+    pthread_cond_destroy(&job->wake);
+    pthread_mutex_destroy(&job->lock);
+}
+
+/* Returns how many of `threads` workers started. */
+static int start_workers(render_job *job, pthread_t *tids, worker_arg *args, int threads)
+{
     /* Workers inherit a mask without SIGINT/SIGTERM: a handler then runs on
      * this thread, whose nap it interrupts. */
     sigset_t block, old;
@@ -301,90 +334,127 @@ hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_sta
     sigaddset(&block, SIGINT);
     sigaddset(&block, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &block, &old);
-    double t0 = now_seconds();
     int started = 0;
     for (; started < threads; ++started) {
-        args[started] = (worker_arg){&job, started};
-        atomic_fetch_add(&job.running, 1);
+        args[started] = (worker_arg){job, started};
+        atomic_fetch_add(&job->running, 1);
         if (pthread_create(&tids[started], NULL, worker_main, &args[started]) != 0) {
-            atomic_fetch_sub(&job.running, 1);
+            atomic_fetch_sub(&job->running, 1);
             break;
         }
     }
     pthread_sigmask(SIG_SETMASK, &old, NULL);
+    return started;
+}
+
+/* The CLOCK_MONOTONIC time `seconds` from now. */
+static struct timespec monotonic_after(double seconds)
+{
+    struct timespec until;
+    clock_gettime(CLOCK_MONOTONIC, &until);
+    until.tv_nsec += (long)(seconds * 1e9);
+    while (until.tv_nsec >= 1000000000L) {
+        until.tv_sec += 1;
+        until.tv_nsec -= 1000000000L;
+    }
+    return until;
+}
+
+/* Shows progress until the workers finish, or tells them to stop on a
+ * cancel or at the deadline. */
+static void wait_for_workers(render_job *job, const renderer_options *opt, progress_bar *bar,
+                             double t0)
+{
+    progress_begin(bar, opt->progress, job->tile_count, t0);
+    pthread_mutex_lock(&job->lock);
+    while (atomic_load(&job->running) > 0) {
+        double now = now_seconds();
+        if ((job->cancel && *job->cancel) || (opt->deadline > 0 && now >= opt->deadline)) {
+            atomic_store(&job->stop, 1);
+            break;
+        }
+        progress_update(bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx)
+                                              : atomic_load(&job->tiles_done),
+                        now);
+        /* Up to 100 ms or to the deadline; the last worker's signal, or a
+         * cancel noticed then (workers stop claiming tiles on their own),
+         * ends it. */
+        double nap = 0.1;
+        if (opt->deadline > 0 && opt->deadline - now < nap)
+            nap = opt->deadline - now;
+        struct timespec until = monotonic_after(nap);
+        pthread_cond_timedwait(&job->wake, &job->lock, &until);
+    }
+    pthread_mutex_unlock(&job->lock);
+}
+
+/* The pixels of the first `done` tiles (row-major over a w x h image). */
+static long tiles_pixels(const render_job *job, int done, int w, int h)
+{
+    long pixels = 0;
+    for (int t = 0; t < done; ++t) {
+        int x0 = (t % job->tiles_x) * TILE_SIZE, y0 = (t / job->tiles_x) * TILE_SIZE;
+        pixels += (long)(w - x0 < TILE_SIZE ? w - x0 : TILE_SIZE) *
+                  (h - y0 < TILE_SIZE ? h - y0 : TILE_SIZE);
+    }
+    return pixels;
+}
+
+static void fill_stats(render_stats *stats, const render_job *job, int started, int threads,
+                       int done, double t0)
+{
+    int w = job->bounds.x1 - job->bounds.x0, h = job->bounds.y1 - job->bounds.y0;
+    memset(stats, 0, sizeof *stats);
+    stats->threads = started;
+    stats->spp = job->sample_end - job->sample_begin;
+    stats->passes = 1;
+    stats->pixels_total = (long)w * h;
+    stats->tile_count = job->tile_count;
+    stats->tiles_done = done;
+    stats->interrupted = done < job->tile_count;
+    stats->pixels = tiles_pixels(job, done, w, h);
+    stats->wall_seconds = now_seconds() - t0;
+    for (int i = 0; i < threads; ++i) {
+        stats->camera_rays += job->counters[i].camera_rays;
+        stats->shadow_rays += job->counters[i].shadow_rays;
+        stats->density_lookups += job->counters[i].density_lookups;
+        stats->majorant_steps += job->counters[i].majorant_steps;
+        stats->lost_paths += job->counters[i].lost_paths;
+        stats->time_busy_s += job->busy_ns[i] * 1e-9;
+        stats->samples += (double)job->rendered[i] * stats->spp;
+        stats->time_media_s += job->counters[i].media_ns * 1e-9;
+        stats->time_film_s += job->counters[i].film_ns * 1e-9;
+    }
+}
+
+hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
+                       hz_error *err)
+{
+    render_job job;
+    job_init(&job, rs, opt);
+    int threads = worker_count(opt->threads, job.tile_count);
+    pthread_t *tids = NULL;
+    worker_arg *args = NULL;
+    if (job_alloc_workers(&job, threads, opt->timing, &tids, &args) != HZ_OK) {
+        job_free(&job, tids, args);
+        return hz_fail(err, "out of memory starting %d render threads", threads);
+    }
+    double t0 = now_seconds();
+    int started = start_workers(&job, tids, args, threads);
     hz_status status = HZ_OK;
     progress_bar bar;
-    if (started == 0) {
+    if (started == 0)
         status = hz_fail(err, "could not start any render thread");
-    } else {
-        progress_begin(&bar, opt->progress, job.tile_count, t0);
-        pthread_mutex_lock(&job.lock);
-        while (atomic_load(&job.running) > 0) {
-            double now = now_seconds();
-            if ((job.cancel && *job.cancel) || (opt->deadline > 0 && now >= opt->deadline)) {
-                atomic_store(&job.stop, 1);
-                break;
-            }
-            progress_update(&bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx)
-                                                   : atomic_load(&job.tiles_done),
-                            now);
-            /* Up to 100 ms or to the deadline; the last worker's signal, or a
-             * cancel noticed then (workers stop claiming tiles on their own),
-             * ends it. */
-            double nap = 0.1;
-            if (opt->deadline > 0 && opt->deadline - now < nap)
-                nap = opt->deadline - now;
-            struct timespec until;
-            clock_gettime(CLOCK_MONOTONIC, &until);
-            until.tv_nsec += (long)(nap * 1e9);
-            while (until.tv_nsec >= 1000000000L) {
-                until.tv_sec += 1;
-                until.tv_nsec -= 1000000000L;
-            }
-            pthread_cond_timedwait(&job.wake, &job.lock, &until);
-        }
-        pthread_mutex_unlock(&job.lock);
-    }
+    else
+        wait_for_workers(&job, opt, &bar, t0);
     for (int i = 0; i < started; ++i)
         pthread_join(tids[i], NULL);
     int done = atomic_load(&job.tiles_done);
     if (started > 0)
         progress_end(&bar, opt->tiles_shown ? opt->tiles_shown(opt->tile_ctx) : done,
                      now_seconds());
-
-    if (stats) {
-        memset(stats, 0, sizeof *stats);
-        stats->threads = started;
-        stats->spp = job.sample_end - job.sample_begin;
-        stats->passes = 1;
-        stats->pixels_total = (long)w * h;
-        stats->tile_count = job.tile_count;
-        stats->tiles_done = done;
-        stats->interrupted = done < job.tile_count;
-        for (int t = 0; t < done; ++t) {
-            int x0 = (t % job.tiles_x) * TILE_SIZE, y0 = (t / job.tiles_x) * TILE_SIZE;
-            stats->pixels += (long)(w - x0 < TILE_SIZE ? w - x0 : TILE_SIZE) *
-                             (h - y0 < TILE_SIZE ? h - y0 : TILE_SIZE);
-        }
-        stats->wall_seconds = now_seconds() - t0;
-        for (int i = 0; i < threads; ++i) {
-            stats->camera_rays += job.counters[i].camera_rays;
-            stats->shadow_rays += job.counters[i].shadow_rays;
-            stats->density_lookups += job.counters[i].density_lookups;
-            stats->majorant_steps += job.counters[i].majorant_steps;
-            stats->lost_paths += job.counters[i].lost_paths;
-            stats->time_busy_s += job.busy_ns[i] * 1e-9;
-            stats->samples += (double)job.rendered[i] * stats->spp;
-            stats->time_media_s += job.counters[i].media_ns * 1e-9;
-            stats->time_film_s += job.counters[i].film_ns * 1e-9;
-        }
-    }
-    free(job.counters);
-    free(job.busy_ns);
-    free(job.rendered);
-    free(tids);
-    free(args);
-    pthread_cond_destroy(&job.wake);
-    pthread_mutex_destroy(&job.lock);
+    if (stats)
+        fill_stats(stats, &job, started, threads, done, t0);
+    job_free(&job, tids, args);
     return status;
 }

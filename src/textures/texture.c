@@ -707,116 +707,186 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
     return st == HZ_OK ? build_pyramid(t, err) : st;
 }
 
-static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+/* ---- one builder per texture class ---- */
+
+static hz_status build_constant(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    (void)s;
+    (void)err;
+    param_list *pl = &te->entity.params;
+    t->kind = TEX_CONSTANT;
+    t->in[0].v = t->spectrum ? params_rgb(pl, "value", rgb_grey(1.0))
+                             : rgb_grey(params_float(pl, "value", 1));
+    return HZ_OK;
+}
+
+static hz_status build_scale(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    rgb one = rgb_grey(1.0);
+    t->kind = TEX_SCALE;
+    if (read_input(s, pl, "tex", t->spectrum, one, &t->in[0], err) != HZ_OK ||
+        read_input(s, pl, "scale", false, one, &t->in[1], err) != HZ_OK)
+        return HZ_ERROR;
+    return HZ_OK;
+}
+
+static hz_status build_mix(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    bool sp = t->spectrum;
+    t->kind = TEX_MIX;
+    if (read_input(s, pl, "tex1", sp, rgb_grey(0.0), &t->in[0], err) != HZ_OK ||
+        read_input(s, pl, "tex2", sp, rgb_grey(1.0), &t->in[1], err) != HZ_OK ||
+        read_input(s, pl, "amount", false, rgb_grey(0.5), &t->in[2], err) != HZ_OK)
+        return HZ_ERROR;
+    return HZ_OK;
+}
+
+static hz_status build_checkerboard(texture_set *s, texture_entity *te, texture *t,
+                                    hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    bool sp = t->spectrum;
+    t->kind = TEX_CHECKERBOARD;
+    int dim = params_int(pl, "dimension", 2);
+    if (dim != 2 && dim != 3)
+        return hz_fail_at(err, params_loc(pl, "dimension"),
+                          "checkerboard \"dimension\" must be 2 or 3, got %d", dim);
+    t->checker3d = dim == 3;
+    if ((dim == 3 ? texture_space(s, te, t, err) : read_mapping(s, te, pl, t, err)) != HZ_OK ||
+        read_input(s, pl, "tex1", sp, rgb_grey(1.0), &t->in[0], err) != HZ_OK ||
+        read_input(s, pl, "tex2", sp, rgb_grey(0.0), &t->in[1], err) != HZ_OK)
+        return HZ_ERROR;
+    return HZ_OK;
+}
+
+static hz_status build_bilerp(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    t->kind = TEX_BILERP;
+    static const char *const v[4] = {"v00", "v01", "v10", "v11"};
+    if (read_mapping(s, te, pl, t, err) != HZ_OK)
+        return HZ_ERROR;
+    for (int i = 0; i < 4; ++i)
+        if (read_input(s, pl, v[i], t->spectrum, rgb_grey(i & 1 ? 1.0 : 0.0), &t->in[i], err) !=
+            HZ_OK)
+            return HZ_ERROR;
+    return HZ_OK;
+}
+
+static hz_status build_imagemap(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    if (read_mapping(s, te, pl, t, err) != HZ_OK)
+        return HZ_ERROR;
+    return read_imagemap(pl, te->entity.loc, t, err);
+}
+
+static hz_status build_directionmix(texture_set *s, texture_entity *te, texture *t,
+                                    hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    t->kind = TEX_DIRECTIONMIX;
+    transform render_from_texture = transform_compose(s->render_from_world,
+                                                      te->world_from_texture);
+    vec3 d = transform_vector(&render_from_texture, params_vector3(pl, "dir", v3(0, 1, 0)));
+    if (!(v3_length(d) > 0.0) || !v3_is_finite(d))
+        return hz_fail_at(err, params_loc(pl, "dir"),
+                          "directionmix \"dir\" must be a finite, non-zero vector");
+    t->dir = v3_normalize(d);
+    if (read_input(s, pl, "tex1", t->spectrum, rgb_grey(0.0), &t->in[0], err) != HZ_OK ||
+        read_input(s, pl, "tex2", t->spectrum, rgb_grey(1.0), &t->in[1], err) != HZ_OK)
+        return HZ_ERROR;
+    return HZ_OK;
+}
+
+/* As pbrt-v4 renders it: its DotsTexture constructors take (outside,
+ * inside) and Create passes ("inside", "outside"), so "inside" shows
+ * between the dots and "outside" in them. Scenes were made by looking at
+ * that image. */
+static hz_status build_dots(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    param_list *pl = &te->entity.params;
+    t->kind = TEX_DOTS;
+    if (read_mapping(s, te, pl, t, err) != HZ_OK ||
+        read_input(s, pl, "outside", t->spectrum, rgb_grey(0.0), &t->in[0], err) != HZ_OK ||
+        read_input(s, pl, "inside", t->spectrum, rgb_grey(1.0), &t->in[1], err) != HZ_OK)
+        return HZ_ERROR;
+    return HZ_OK;
+}
+
+/* fbm, wrinkled, windy (float) and marble (spectrum): noise in texture
+ * space. */
+static hz_status build_noise(texture_set *s, texture_entity *te, texture *t, hz_error *err)
 {
     param_list *pl = &te->entity.params;
     const char *cls = te->entity.type;
-    bool sp = te->spectrum;
-    rgb one = rgb_grey(1.0), zero = rgb_grey(0.0);
-    *t = (texture){.spectrum = sp, .su = 1.0, .sv = 1.0};
-    hz_status st = HZ_OK;
-    if (strcmp(cls, "constant") == 0) {
-        t->kind = TEX_CONSTANT;
-        t->in[0].v = sp ? params_rgb(pl, "value", one) : rgb_grey(params_float(pl, "value", 1));
-    } else if (strcmp(cls, "scale") == 0) {
-        t->kind = TEX_SCALE;
-        if (read_input(s, pl, "tex", sp, one, &t->in[0], err) != HZ_OK ||
-            read_input(s, pl, "scale", false, one, &t->in[1], err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(cls, "mix") == 0) {
-        t->kind = TEX_MIX;
-        if (read_input(s, pl, "tex1", sp, zero, &t->in[0], err) != HZ_OK ||
-            read_input(s, pl, "tex2", sp, one, &t->in[1], err) != HZ_OK ||
-            read_input(s, pl, "amount", false, rgb_grey(0.5), &t->in[2], err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(cls, "checkerboard") == 0) {
-        t->kind = TEX_CHECKERBOARD;
-        int dim = params_int(pl, "dimension", 2);
-        if (dim != 2 && dim != 3)
-            return hz_fail_at(err, params_loc(pl, "dimension"),
-                              "checkerboard \"dimension\" must be 2 or 3, got %d", dim);
-        t->checker3d = dim == 3;
-        if ((dim == 3 ? texture_space(s, te, t, err) : read_mapping(s, te, pl, t, err)) != HZ_OK ||
-            read_input(s, pl, "tex1", sp, one, &t->in[0], err) != HZ_OK ||
-            read_input(s, pl, "tex2", sp, zero, &t->in[1], err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(cls, "bilerp") == 0) {
-        t->kind = TEX_BILERP;
-        static const char *const v[4] = {"v00", "v01", "v10", "v11"};
-        if (read_mapping(s, te, pl, t, err) != HZ_OK)
-            return HZ_ERROR;
-        for (int i = 0; i < 4; ++i)
-            if (read_input(s, pl, v[i], sp, rgb_grey(i & 1 ? 1.0 : 0.0), &t->in[i], err) !=
-                HZ_OK)
-                return HZ_ERROR;
-    } else if (strcmp(cls, "imagemap") == 0) {
-        if (read_mapping(s, te, pl, t, err) != HZ_OK)
-            return HZ_ERROR;
-        st = read_imagemap(pl, te->entity.loc, t, err);
-    } else if (strcmp(cls, "directionmix") == 0) {
-        t->kind = TEX_DIRECTIONMIX;
-        transform render_from_texture = transform_compose(s->render_from_world,
-                                                          te->world_from_texture);
-        vec3 d = transform_vector(&render_from_texture, params_vector3(pl, "dir", v3(0, 1, 0)));
-        if (!(v3_length(d) > 0.0) || !v3_is_finite(d))
-            return hz_fail_at(err, params_loc(pl, "dir"),
-                              "directionmix \"dir\" must be a finite, non-zero vector");
-        t->dir = v3_normalize(d);
-        if (read_input(s, pl, "tex1", sp, zero, &t->in[0], err) != HZ_OK ||
-            read_input(s, pl, "tex2", sp, one, &t->in[1], err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(cls, "dots") == 0) {
-        /* As pbrt-v4 renders it: its DotsTexture constructors take (outside,
-         * inside) and Create passes ("inside", "outside"), so "inside" shows
-         * between the dots and "outside" in them. Scenes were made by
-         * looking at that image. */
-        t->kind = TEX_DOTS;
-        if (read_mapping(s, te, pl, t, err) != HZ_OK ||
-            read_input(s, pl, "outside", sp, zero, &t->in[0], err) != HZ_OK ||
-            read_input(s, pl, "inside", sp, one, &t->in[1], err) != HZ_OK)
-            return HZ_ERROR;
-    } else if (strcmp(cls, "fbm") == 0 || strcmp(cls, "wrinkled") == 0 ||
-               strcmp(cls, "windy") == 0 || strcmp(cls, "marble") == 0) {
-        bool is_marble = strcmp(cls, "marble") == 0;
-        if (sp != is_marble)
-            return hz_fail_at(err, te->entity.loc,
-                              "Texture class \"%s\" makes %s textures only (as in pbrt-v4)", cls,
-                              is_marble ? "spectrum" : "float");
-        t->kind = is_marble                   ? TEX_MARBLE
-                  : strcmp(cls, "fbm") == 0   ? TEX_FBM
-                  : strcmp(cls, "windy") == 0 ? TEX_WINDY
-                                              : TEX_WRINKLED;
-        if (texture_space(s, te, t, err) != HZ_OK)
-            return HZ_ERROR;
-        if (t->kind != TEX_WINDY) { /* windy's octaves and roughness are fixed */
-            t->octaves = params_int(pl, "octaves", 8);
-            t->omega = params_float(pl, "roughness", 0.5);
-            if (t->octaves < 0 || t->octaves > 64)
-                params_reject(pl, "octaves", "\"octaves\" must be in [0, 64], got %d",
-                              t->octaves);
-            if (!isfinite(t->omega))
-                params_reject(pl, "roughness", "\"roughness\" must be finite");
-        }
-        if (is_marble) {
-            t->scale = params_float(pl, "scale", 1.0);
-            t->variation = params_float(pl, "variation", 0.2);
-            if (!isfinite(t->scale) || !isfinite(t->variation))
-                params_reject(pl, "scale", "marble \"scale\" and \"variation\" must be finite");
-        }
-    } else {
+    bool is_marble = strcmp(cls, "marble") == 0;
+    if (t->spectrum != is_marble)
         return hz_fail_at(err, te->entity.loc,
-                          "Texture class \"%s\" is not supported (supported: \"constant\", "
-                          "\"scale\", \"mix\", \"directionmix\", \"checkerboard\", "
-                          "\"bilerp\", \"dots\", \"imagemap\", \"fbm\", \"wrinkled\", "
-                          "\"windy\", \"marble\"; \"ptex\" is refused: haze reads no Ptex "
-                          "files)",
-                          cls);
+                          "Texture class \"%s\" makes %s textures only (as in pbrt-v4)", cls,
+                          is_marble ? "spectrum" : "float");
+    t->kind = is_marble                   ? TEX_MARBLE
+              : strcmp(cls, "fbm") == 0   ? TEX_FBM
+              : strcmp(cls, "windy") == 0 ? TEX_WINDY
+                                          : TEX_WRINKLED;
+    if (texture_space(s, te, t, err) != HZ_OK)
+        return HZ_ERROR;
+    if (t->kind != TEX_WINDY) { /* windy's octaves and roughness are fixed */
+        t->octaves = params_int(pl, "octaves", 8);
+        t->omega = params_float(pl, "roughness", 0.5);
+        if (t->octaves < 0 || t->octaves > 64)
+            params_reject(pl, "octaves", "\"octaves\" must be in [0, 64], got %d", t->octaves);
+        if (!isfinite(t->omega))
+            params_reject(pl, "roughness", "\"roughness\" must be finite");
     }
-    if (st != HZ_OK)
-        return st;
-    char what[128];
-    snprintf(what, sizeof what, "Texture \"%s\" \"%s\"", te->name, cls);
-    return params_finish(pl, what, err);
+    if (is_marble) {
+        t->scale = params_float(pl, "scale", 1.0);
+        t->variation = params_float(pl, "variation", 0.2);
+        if (!isfinite(t->scale) || !isfinite(t->variation))
+            params_reject(pl, "scale", "marble \"scale\" and \"variation\" must be finite");
+    }
+    return HZ_OK;
+}
+
+static const struct {
+    const char *cls;
+    hz_status (*build)(texture_set *s, texture_entity *te, texture *t, hz_error *err);
+} texture_classes[] = {
+    {"constant", build_constant},
+    {"scale", build_scale},
+    {"mix", build_mix},
+    {"checkerboard", build_checkerboard},
+    {"bilerp", build_bilerp},
+    {"imagemap", build_imagemap},
+    {"directionmix", build_directionmix},
+    {"dots", build_dots},
+    {"fbm", build_noise},
+    {"wrinkled", build_noise},
+    {"windy", build_noise},
+    {"marble", build_noise},
+};
+
+static hz_status build_texture(texture_set *s, texture_entity *te, texture *t, hz_error *err)
+{
+    const char *cls = te->entity.type;
+    *t = (texture){.spectrum = te->spectrum, .su = 1.0, .sv = 1.0};
+    for (size_t i = 0; i < sizeof texture_classes / sizeof texture_classes[0]; ++i)
+        if (strcmp(cls, texture_classes[i].cls) == 0) {
+            if (texture_classes[i].build(s, te, t, err) != HZ_OK)
+                return HZ_ERROR;
+            char what[128];
+            snprintf(what, sizeof what, "Texture \"%s\" \"%s\"", te->name, cls);
+            return params_finish(&te->entity.params, what, err);
+        }
+    return hz_fail_at(err, te->entity.loc,
+                      "Texture class \"%s\" is not supported (supported: \"constant\", "
+                      "\"scale\", \"mix\", \"directionmix\", \"checkerboard\", "
+                      "\"bilerp\", \"dots\", \"imagemap\", \"fbm\", \"wrinkled\", "
+                      "\"windy\", \"marble\"; \"ptex\" is refused: haze reads no Ptex "
+                      "files)",
+                      cls);
 }
 
 static void free_images(texture *t)
