@@ -92,7 +92,7 @@ static const char usage_text[] =
     "                          across x86 machines (default: the CPU's widest ISA)\n"
     "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
     "                          count) and write the complete passes done when the time\n"
-    "                          since start runs out (docs/performance.md)\n"
+    "                          since start runs out (docs/progressive.md)\n"
     "  --target-error E        adaptive sampling: pixels take samples (0.2 / sqrt(E) at\n"
     "                          least, at most --spp, default 16384) until the image's\n"
     "                          estimated relMSE is E; marching estimators get a step\n"

@@ -146,7 +146,7 @@ static RTCDevice new_device(bool portable_isa, bool small)
 {
     /* Embree's choice is the widest ISA the CPU has (AVX-512 here: 12% faster
      * than SSE4.2 on bench/scenes/surfaces.pbrt). Hit points are recomputed
-     * in double (surface_at), so an ISA changes an image only where rays
+     * in double (geom_surface_at), so an ISA changes an image only where rays
      * graze a shared edge; pinning SSE4.2 removes even that across machines.
      * Fall back to Embree's choice on a CPU without SSE4.2. */
     RTCDevice d = NULL;

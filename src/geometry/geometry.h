@@ -53,7 +53,7 @@ typedef struct {
 
 /* A triangle of a convex mesh, for hits found from its planes: q's
  * barycentrics (Embree's u, v) are b1 . (q, 1) and b2 . (q, 1); p2 and
- * n = (p0 - p2) x (p1 - p2) are surface_at's, in double; ng its geometric
+ * n = (p0 - p2) x (p1 - p2) are geom_surface_at's, in double; ng its geometric
  * normal. */
 typedef struct {
     double b1[4], b2[4];

@@ -89,7 +89,7 @@ typedef struct {
  * neighbours, so a pixel's samples vary at least as much as their means do.
  * A floor under a pixel's own variance per sample: a few samples that agree
  * (all missing a partly covering edge, or a quantised path contribution) show
- * none (docs/performance.md). */
+ * none (docs/progressive.md). */
 static rgb spread_of_means(const rgb *means, int x, int y, int tw, int th)
 {
     rgb sum = rgb_grey(0.0), sq = rgb_grey(0.0);

@@ -13,7 +13,7 @@
  * double): 4, after the second pass, the first whose convergence is read
  * (with 8 the bench cloud at E = 1e-3 doubled from 4 to 8 samples where 5
  * met E). The tuning of the estimates, measured on the benchmark scenes
- * (docs/performance.md): the image stops at SAFETY * E; every pixel takes at
+ * (docs/progressive.md): the image stops at SAFETY * E; every pixel takes at
  * least MIN_SCALE / sqrt(E) samples; LOWER_BOUND_K, SINGLE_SAMPLE_SPP and
  * SINGLE_SAMPLE_SD: see progressive_error;
  * from a convergence of DOUBLING_CONVERGENCE (progressive_error) on, passes
@@ -37,7 +37,7 @@ enum {
  * a rare bright sample also raised its variance (with m itself the estimate
  * was 3x too low at 4 spp on smoke.pbrt; with K = 0.5, 0.82-0.86 of the
  * estimate over the converged value on cloud-volpath.pbrt, whose renders
- * then missed E = 1e-2 by 16-31%; docs/performance.md); from
+ * then missed E = 1e-2 by 16-31%); from
  * PROGRESSIVE_SINGLE_SAMPLE_SPP samples on, m_lo = 0 where the mean is one
  * sample's (sd(m) >= PROGRESSIVE_SINGLE_SAMPLE_SD m: a firefly; before, a
  * single bright sample is common in sparse pixels and the bound stays: at 8

@@ -28,7 +28,7 @@
 /* The share of --target-error the step's estimated bias may take; the
  * passes' noise gets what the chosen step leaves (progressive_goal.bias).
  * Half: on the bench cloud and smoke it gave the fastest renders in four of
- * five cases against a quarter (docs/performance.md). */
+ * five cases against a quarter (bench/results/notes.md). */
 #define STEP_PILOT_SHARE 0.5
 /* About this many pixels in the pilot grid; steps between these (voxels). */
 #define STEP_PILOT_PIXELS 2500

@@ -442,7 +442,7 @@ static void add_mixed_pass(film *f, int n0, int n, void *ctx)
  * says nothing of its value without it: from PROGRESSIVE_SINGLE_SAMPLE_SPP
  * samples on its relative error is taken over the least denominator,
  * Var / 0.01^2, not over m - 0.7 sd (fog-dof at E = 2e-3, seed 3, missed E
- * by 6% through one such pixel, docs/performance.md). With fewer samples the
+ * by 6% through one such pixel, docs/progressive.md). With fewer samples the
  * lower bound stays. */
 static void test_single_bright_sample(void **state)
 {
