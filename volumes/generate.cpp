@@ -35,6 +35,11 @@
 //   box_color.vdb      box.vdb's "density" and a vec3 "color" (0.2, 0.5, 1) on
 //                      voxels [-2,33]^3 of the same index space: constant
 //                      wherever the density's trilinear field is not 0
+//   box_inactive.vdb   box.vdb's "density" with the slab of voxels [0,31]^2 x
+//                      [12,19] made inactive and set to 50: inactive voxels
+//                      that do not hold the background (haze takes them as
+//                      the background; the box's optical depth along z is
+//                      24 voxels, 0.75 world units)
 //   explosion.vdb      a fireball rising on a stem of smoke (scenes/explosion.pbrt):
 //                      "density" in [0,1] on voxels of size 1/40 within
 //                      x, z in [-0.8, 0.8], y in [0, 2] (world units), a
@@ -530,6 +535,15 @@ int main(int argc, char **argv)
                     for (int k = -2; k <= 33; ++k)
                         acc.setValue(Coord(i, j, k), openvdb::Vec3s(0.2f, 0.5f, 1.0f));
             write_vdb(dir + "/box_color.vdb", {box(), c});
+        }
+        {
+            FloatGrid::Ptr b = box();
+            auto acc = b->getAccessor();
+            for (int i = 0; i <= 31; ++i)
+                for (int j = 0; j <= 31; ++j)
+                    for (int k = 12; k <= 19; ++k)
+                        acc.setValueOff(Coord(i, j, k), 50.0f);
+            write_vdb(dir + "/box_inactive.vdb", {b});
         }
         if (argc > 2 && std::string(argv[2]) == "--only-new")
             return 0;

@@ -22,6 +22,7 @@ struct grid {
     float background, min_value, max_value;
     vec3 background_vec;
     bool empty;
+    uint64_t inactive_folded; /* grid_inactive_folded */
     grid_ibox bounds;
     /* Trilinear lookups outside [min - 1, max + 1] are background: skip the tree. */
     vec3 support_lo, support_hi;
@@ -396,8 +397,8 @@ static hz_status check_values(grid *g, int nonnegative, hz_error *err)
 {
     float lo, hi;
     char why[512];
-    if (nvdb_check_float_values(g->owned.data, g->owned.size, nonnegative, &lo, &hi, why,
-                                sizeof why) != 0)
+    if (nvdb_check_float_values(g->owned.data, g->owned.size, nonnegative, &lo, &hi,
+                                &g->inactive_folded, why, sizeof why) != 0)
         return hz_fail(err, "%s", why);
     g->min_value = lo;
     g->max_value = hi;
@@ -408,6 +409,7 @@ hz_status grid_check_density(grid *g, hz_error *err) { return check_values(g, 1,
 hz_status grid_check_finite(grid *g, hz_error *err) { return check_values(g, 0, err); }
 float grid_background(const grid *g) { return g->background; }
 size_t grid_buffer_bytes(const grid *g) { return g->owned.size; }
+uint64_t grid_inactive_folded(const grid *g) { return g->inactive_folded; }
 
 const char *grid_name(const grid *g) { return g->name; }
 

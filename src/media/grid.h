@@ -66,7 +66,9 @@ void grid_destroy(grid *g);
 /* A float grid used as a density: checks the values themselves (every active
  * voxel and tile finite and >= 0, the background too, every node's stored
  * range bounding what lies under it) and sets grid_min_value/grid_max_value
- * to the true range. The message names the first bad value's place. */
+ * to the true range. Inactive voxels and tiles are made to hold the
+ * background (grid_inactive_folded counts those that did not). The message
+ * names the first bad value's place. */
 hz_status grid_check_density(grid *g, hz_error *err);
 /* The same for a float grid of any sign (a temperature): finite values. */
 hz_status grid_check_finite(grid *g, hz_error *err);
@@ -105,6 +107,9 @@ float grid_min_value(const grid *g);
 float grid_background(const grid *g);
 uint64_t grid_active_voxel_count(const grid *g);
 const char *grid_name(const grid *g);
+/* Voxels whose inactive value was not the background when the grid was
+ * checked (they hold it now). */
+uint64_t grid_inactive_folded(const grid *g);
 /* Size of the grid's NanoVDB buffer in bytes. */
 size_t grid_buffer_bytes(const grid *g);
 

@@ -31,6 +31,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "core/error.h"
 #include "core/transform.h"
@@ -55,6 +56,7 @@ typedef struct {
 typedef struct {
     transform render_from_world;
     const medium_times *times;
+    FILE *warn; /* warnings (NULL: none) */
 } medium_build;
 
 /* pbrt-v4's MediumProperties: the coefficients at a point (density applied)
@@ -154,9 +156,10 @@ struct medium_ray {
 
 /* Builds the medium of `e` in render space, by its type's row of the kinds'
  * table. Unknown types and the kind's parameter errors name the entity's
- * file:line:column; unused parameters too. */
+ * file:line:column; unused parameters too. Warnings go to `warn` (NULL:
+ * none). */
 hz_status medium_create(medium_entity *e, transform render_from_world, const medium_times *times,
-                        medium *out, hz_error *err);
+                        FILE *warn, medium *out, hz_error *err);
 void medium_destroy(medium *m);
 
 /* The kind named `type`, NULL when there is none. */

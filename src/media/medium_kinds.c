@@ -26,7 +26,7 @@ bool medium_type_volpath_only(const char *type)
 }
 
 hz_status medium_create(medium_entity *e, transform render_from_world, const medium_times *times,
-                        medium *out, hz_error *err)
+                        FILE *warn, medium *out, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     param_list *pl = &e->entity.params;
@@ -50,7 +50,7 @@ hz_status medium_create(medium_entity *e, transform render_from_world, const med
                           "(supported: %s)",
                           e->name ? e->name : "", type, names);
     }
-    medium_build b = {render_from_world, times};
+    medium_build b = {render_from_world, times, warn};
     out->ops = ops;
     if (ops->create(e, &b, out, err) != HZ_OK) {
         medium_destroy(out);

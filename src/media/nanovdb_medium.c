@@ -390,6 +390,21 @@ static void read_nanovdb(param_list *pl, const medium_common_params *c, nanovdb_
                       "blackbody colour) to colour the emission grid, not both");
 }
 
+/* Says when a grid's inactive voxels held values other than the
+ * background (grid_check_density and grid_check_finite made them hold it):
+ * pbrt-v4 would read them. */
+static void warn_folded(medium_entity *e, FILE *warn, const char *filename, const grid *g)
+{
+    uint64_t n = g ? grid_inactive_folded(g) : 0;
+    if (n)
+        hz_warn_at(warn, e->entity.loc,
+                   "MakeNamedMedium \"%s\": grid \"%s\" in %s: %llu inactive voxels hold "
+                   "values other than the background (%g); haze takes them as the background, "
+                   "as OpenVDB defines inactive voxels (pbrt-v4 reads their values)",
+                   medium_entity_name(e), grid_name(g), filename, (unsigned long long)n,
+                   (double)grid_background(g));
+}
+
 static hz_status create(medium_entity *e, const medium_build *b, medium *out, hz_error *err)
 {
     param_list *pl = &e->entity.params;
@@ -419,6 +434,10 @@ static hz_status create(medium_entity *e, const medium_build *b, medium *out, hz
     if (load_grid(e, b->render_from_world, np.filename, np.gridname, &np.mp, &np.tp, &np.xp, out,
                   err) != HZ_OK)
         return HZ_ERROR;
+    const grid_medium *gm = grid_medium_of(out);
+    const grid *checked[3] = {gm->grid, gm->temperature, gm->emission};
+    for (int k = 0; k < 3; ++k)
+        warn_folded(e, b->warn, np.filename, checked[k]);
     return grid_medium_build_majorants(out, b->times, err);
 }
 

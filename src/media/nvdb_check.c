@@ -4,6 +4,7 @@
 #include <stdarg.h>
 #include <stdbool.h>
 #include <stdio.h>
+#include <string.h>
 
 #define PNANOVDB_C
 #include <nanovdb/PNanoVDB.h>
@@ -171,7 +172,25 @@ typedef struct {
     bool any;          /* an active value met */
     float lo, hi;      /* of the active values met */
     bool signed_ok;    /* negative values allowed (not a density) */
+    uint8_t *data;     /* the buffer, written where inactive values fold */
+    float bg;          /* the background */
+    uint64_t folded;   /* voxels whose inactive value became the background */
 } values;
+
+/* An inactive value (a voxel, or a tile of `voxels` voxels) holds the
+ * background: lookups read stored values whatever their state, while the
+ * majorants, supports and empty-space boxes take inactive voxels to be the
+ * background (OpenVDB's meaning of inactive in a fog volume). Writing the
+ * background over any other value makes every estimator and the statistics
+ * agree on one field. */
+static void fold_inactive(values *v, pnanovdb_address_t at, uint64_t voxels)
+{
+    float x = pnanovdb_read_float(v->c.buf, at);
+    if (x == v->bg)
+        return;
+    memcpy(v->data + at.byte_offset, &v->bg, sizeof v->bg);
+    v->folded += voxels;
+}
 
 static int bad_value(values *v, float x, const pnanovdb_coord_t *at, const char *where)
 {
@@ -219,8 +238,10 @@ static int leaf_values(values *v, pnanovdb_leaf_handle_t leaf, float *lo, float 
     float l = 0, h = 0;
     bool a = false;
     for (uint32_t n = 0; n < 512; ++n) {
-        if (!pnanovdb_leaf_get_value_mask(v->c.buf, leaf, n))
+        if (!pnanovdb_leaf_get_value_mask(v->c.buf, leaf, n)) {
+            fold_inactive(v, pnanovdb_leaf_get_table_address(v->c.type, v->c.buf, leaf, n), 1);
             continue;
+        }
         pnanovdb_coord_t at = {origin.x + (int32_t)(n >> 6), origin.y + (int32_t)((n >> 3) & 7),
                                origin.z + (int32_t)(n & 7)};
         float x = pnanovdb_read_float(v->c.buf,
@@ -255,6 +276,9 @@ static int lower_values(values *v, pnanovdb_lower_handle_t lower, float *lo, flo
                 v->c.buf, pnanovdb_lower_get_table_address(v->c.type, v->c.buf, lower, n));
             if (take(v, x, &origin, "a tile value of the lower node at", &l, &h, &a) != 0)
                 return -1;
+        } else {
+            fold_inactive(v, pnanovdb_lower_get_table_address(v->c.type, v->c.buf, lower, n),
+                          8 * 8 * 8);
         }
     }
     if (stats_bound(v, pnanovdb_lower_get_min_address(v->c.type, v->c.buf, lower),
@@ -284,6 +308,9 @@ static int upper_values(values *v, pnanovdb_upper_handle_t upper, float *lo, flo
                 v->c.buf, pnanovdb_upper_get_table_address(v->c.type, v->c.buf, upper, n));
             if (take(v, x, &origin, "a tile value of the upper node at", &l, &h, &a) != 0)
                 return -1;
+        } else {
+            fold_inactive(v, pnanovdb_upper_get_table_address(v->c.type, v->c.buf, upper, n),
+                          128 * 128 * 128);
         }
     }
     if (stats_bound(v, pnanovdb_upper_get_min_address(v->c.type, v->c.buf, upper),
@@ -298,12 +325,12 @@ static int upper_values(values *v, pnanovdb_upper_handle_t upper, float *lo, flo
     return 0;
 }
 
-int nvdb_check_float_values(const void *data, uint64_t size, int nonnegative, float *vmin,
-                            float *vmax, char *why, size_t why_size)
+int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *vmin,
+                            float *vmax, uint64_t *folded, char *why, size_t why_size)
 {
     values v = {{pnanovdb_make_buf((pnanovdb_uint32_t *)data, size / 4), size,
                  PNANOVDB_GRID_TYPE_FLOAT, why, why_size, 0, 0, 0, 0, 0, 0},
-                false, 0.0f, 0.0f, !nonnegative};
+                false, 0.0f, 0.0f, !nonnegative, data, 0.0f, 0};
     pnanovdb_grid_handle_t grid = {addr(0)};
     if (pnanovdb_grid_get_grid_type(v.c.buf, grid) != PNANOVDB_GRID_TYPE_FLOAT)
         return fail(&v.c, "not a float grid");
@@ -316,6 +343,7 @@ int nvdb_check_float_values(const void *data, uint64_t size, int nonnegative, fl
     bool a = false;
     if (!isfinite(bg) || (nonnegative && !(bg >= 0.0f)))
         return bad_value(&v, bg, &nowhere, "the background, given at");
+    v.bg = bg;
     uint32_t tiles = pnanovdb_root_get_tile_count(v.c.buf, root);
     for (uint32_t t = 0; t < tiles; ++t) {
         pnanovdb_root_tile_handle_t tile = pnanovdb_root_get_tile(v.c.type, root, t);
@@ -328,6 +356,9 @@ int nvdb_check_float_values(const void *data, uint64_t size, int nonnegative, fl
                                           pnanovdb_root_tile_get_value_address(v.c.type, v.c.buf, tile));
             if (take(&v, x, &nowhere, "a root tile value, given at", &l, &h, &a) != 0)
                 return -1;
+        } else {
+            fold_inactive(&v, pnanovdb_root_tile_get_value_address(v.c.type, v.c.buf, tile),
+                          (uint64_t)4096 * 4096 * 4096);
         }
     }
     if (stats_bound(&v, pnanovdb_root_get_min_address(v.c.type, v.c.buf, root),
@@ -336,11 +367,6 @@ int nvdb_check_float_values(const void *data, uint64_t size, int nonnegative, fl
         return -1;
     *vmin = a ? l : 0.0f;
     *vmax = a ? h : 0.0f;
+    *folded = v.folded;
     return 0;
-}
-
-int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
-                              char *why, size_t why_size)
-{
-    return nvdb_check_float_values(data, size, 1, vmin, vmax, why, why_size);
 }

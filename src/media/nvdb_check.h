@@ -24,18 +24,18 @@ extern "C" {
  * number of nodes the buffer can hold. */
 int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size);
 
-/* For a float density grid whose buffer passed nvdb_check_tree (every grid
- * buffer does, in grid_create_from_buffer; this does not walk it again): every active value
- * (voxels, tile values at every level) and the background are finite and
- * >= 0, and every node's stored min/max bound the values under it (the
- * majorant grid is built from those statistics). Fills the true range of the
- * active values (0, 0 when there are none). Returns 0, or -1 with the first
- * bad value's place in why. One pass over the active values. */
-int nvdb_check_density_values(const void *data, uint64_t size, float *vmin, float *vmax,
-                              char *why, size_t why_size);
-/* The same for any float grid: finite values, and >= 0 when `nonnegative`. */
-int nvdb_check_float_values(const void *data, uint64_t size, int nonnegative, float *vmin,
-                            float *vmax, char *why, size_t why_size);
+/* For a float grid whose buffer passed nvdb_check_tree (every grid buffer
+ * does, in grid_create_from_buffer; this does not walk it again): every
+ * active value (voxels, tile values at every level) and the background are
+ * finite (and >= 0 when `nonnegative`: a density), and every node's stored
+ * min/max bound the values under it (the majorant grid is built from those
+ * statistics). Every inactive value (voxel or tile) that is not the
+ * background is overwritten with it, and *folded counts the voxels they
+ * cover: haze takes inactive voxels to hold the background. Fills the true
+ * range of the active values (0, 0 when there are none). Returns 0, or -1
+ * with the first bad value's place in why. One pass over the values. */
+int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *vmin,
+                            float *vmax, uint64_t *folded, char *why, size_t why_size);
 
 #ifdef __cplusplus
 }

@@ -183,7 +183,7 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
 /* Media in scene_desc order (shapes refer to them by that index); the camera's
  * medium is resolved by name now that the whole file is read. */
 static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_from_world,
-                             hz_errors *errs, hz_error *err)
+                             FILE *warn, hz_errors *errs, hz_error *err)
 {
     rs->media = calloc(sd->medium_count ? sd->medium_count : 1, sizeof *rs->media);
     if (!rs->media)
@@ -196,7 +196,7 @@ static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_
     for (size_t i = 0; i < sd->medium_count; ++i) {
         /* A refused medium keeps its slot (shapes refer to media by index),
          * empty. */
-        if (medium_create(&sd->media[i], render_from_world, &times, &rs->media[i], err) !=
+        if (medium_create(&sd->media[i], render_from_world, &times, warn, &rs->media[i], err) !=
             HZ_OK) {
             if (collect(errs, err) != HZ_OK)
                 return HZ_ERROR;
@@ -454,7 +454,7 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (rs->geom && rs->film && film_wants_surface(rs->film))
         geometry_require_uv(rs->geom);
     if (build_lights(rs, sd, render_from_world, warn, errs, err) != HZ_OK ||
-        build_media(rs, sd, render_from_world, errs, err) != HZ_OK ||
+        build_media(rs, sd, render_from_world, warn, errs, err) != HZ_OK ||
         check_media_integrator(rs, sd, &ip, errs, err) != HZ_OK)
         return HZ_ERROR;
 #undef CHECK

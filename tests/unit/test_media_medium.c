@@ -34,7 +34,7 @@ static hz_status build_named(const char *src, const char *name, transform render
     assert_int_equal(sd->medium_count, 1);
     medium_times times = {sd->transform_start_time, sd->transform_end_time,
                           sd->transform_start_time, sd->transform_end_time};
-    hz_status st = medium_create(&sd->media[0], render_from_world, &times, m, err);
+    hz_status st = medium_create(&sd->media[0], render_from_world, &times, NULL, m, err);
     if (st != HZ_OK) {
         /* A failed build leaves a medium that medium_destroy accepts. */
         medium_destroy(m);
@@ -473,6 +473,43 @@ static void clip_in_camera_render_space(void **state)
     free_all(&sd, &m);
 }
 
+/* Inactive voxels that do not hold the background are made to hold it at
+ * load, with a warning naming how many (box_inactive.vdb: a slab of 32 x 32
+ * x 8 voxels holding 50); the box's active voxels keep their density. */
+static void inactive_voxels_fold(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    medium m;
+    hz_error perr, err;
+    if (scene_parse_string(nanovdb(VOLUMES "box_inactive.vdb", ""), "t.pbrt", &sd, &perr) != HZ_OK)
+        fail_msg("parse error: %s", perr.message);
+    medium_times times = {0, 1, 0, 1};
+    FILE *warn = tmpfile();
+    assert_non_null(warn);
+    assert_int_equal(medium_create(&sd.media[0], transform_identity(), &times, warn, &m, &err),
+                     HZ_OK);
+    char text[1024] = "";
+    rewind(warn);
+    size_t n = fread(text, 1, sizeof text - 1, warn);
+    text[n] = 0;
+    fclose(warn);
+    assert_non_null(strstr(text, "t.pbrt:2:1"));
+    assert_non_null(strstr(text, "8192 inactive voxels hold values other than the background"));
+    const grid *g = grid_medium_of(&m)->grid;
+    assert_int_equal(grid_inactive_folded(g), 32 * 32 * 8);
+    grid_accessor a;
+    grid_accessor_init(g, &a);
+    assert_near(grid_voxel(g, &a, 5, 5, 15), 0.0, 0); /* the slab: the background */
+    assert_near(grid_voxel(g, &a, 5, 5, 11), 1.0, 0);
+    assert_near(grid_medium_of(&m)->density_max, 1.0, 0);
+    free_all(&sd, &m);
+    /* A grid whose inactive voxels hold the background says nothing. */
+    build_ok(nanovdb(VOLUMES "box.vdb", ""), &sd, &m);
+    assert_int_equal(grid_inactive_folded(grid_medium_of(&m)->grid), 0);
+    free_all(&sd, &m);
+}
+
 /* Hand-made grid media: empty support, non-zero background. */
 static void clip_special_grids(void **state)
 {
@@ -764,7 +801,7 @@ static void velocity_errors(void **state)
             pl->items[i].nums[0] = NAN;
     medium m;
     medium_times times = {0, 1, 0, 1};
-    assert_int_equal(medium_create(&sd.media[0], transform_identity(), &times, &m, &err),
+    assert_int_equal(medium_create(&sd.media[0], transform_identity(), &times, NULL, &m, &err),
                      HZ_ERROR);
     snprintf(want, sizeof want, "t.pbrt:2:%d:", column_of(src, "\"float velocityscale\""));
     assert_non_null(strstr(err.message, want));
@@ -782,6 +819,7 @@ int main(void)
         cmocka_unit_test(homogeneous_errors),
         cmocka_unit_test(homogeneous_presets),
         cmocka_unit_test(nanovdb_absolute_path),
+        cmocka_unit_test(inactive_voxels_fold),
         cmocka_unit_test(nanovdb_temperature_params),
         cmocka_unit_test(nanovdb_relative_path),
         cmocka_unit_test(nanovdb_errors),
