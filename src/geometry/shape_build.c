@@ -3,6 +3,7 @@
  * vertices Embree holds in float. Spheres and curves: user_shapes.c. */
 #include "geometry/alpha.h"
 #include "geometry/shape_build.h"
+#include "geometry/user_shapes.h"
 
 #include <stdlib.h>
 #include <string.h>
