@@ -1,6 +1,7 @@
 /* Private to src/geometry: one shape as Embree geometry (shape_build.c):
  * what every shape shares (material, media, alpha, the filters) and triangle
- * meshes; spheres and curves come from user_shapes.h. */
+ * meshes; spheres and curves come from user_shapes.h. A shape that fails
+ * with a place is left out. */
 #ifndef HAZE_GEOMETRY_SHAPE_BUILD_H
 #define HAZE_GEOMETRY_SHAPE_BUILD_H
 
@@ -16,5 +17,9 @@ hz_status geom_build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
                            const material *materials, size_t material_count,
                            const material *default_material, const texture_set *textures,
                            geom_shape *out, hz_error *err);
+
+/* A shape's own error (it has a place) goes to `errs` when there is one: the
+ * shape is left out and the build goes on. */
+hz_status geom_shape_failed(geom_shape *s, hz_errors *errs, hz_error *err);
 
 #endif
