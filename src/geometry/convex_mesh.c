@@ -2,6 +2,7 @@
  * their planes, faces and triangles' barycentric planes, and the next hit of
  * a ray that knows it is inside one or has left it (geom_past), found from
  * the planes without asking Embree (geometry_intersect_past). */
+#include "geometry/convex_mesh.h"
 #include "geometry/intersect.h"
 #include "geometry/medium_interface.h"
 #include "geometry/surface_hit.h"

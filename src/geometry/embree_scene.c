@@ -2,7 +2,10 @@
  * geometry_destroy, the top-level shapes (objects, instances and motion:
  * instances.c), the box around everything static, and what the rest of haze
  * asks of the geometry as a whole. */
-#include "geometry/embree_scene.h"
+#include "geometry/convex_mesh.h"
+#include "geometry/embree_device.h"
+#include "geometry/geometry_types.h"
+#include "geometry/instances.h"
 #include "geometry/medium_interface.h"
 #include "geometry/shape_build.h"
 
@@ -25,48 +28,6 @@ size_t geometry_embree_peak_bytes(const geometry *g)
 {
     long long p = atomic_load(&((geometry *)g)->embree_peak);
     return p > 0 ? (size_t)p : 0;
-}
-
-hz_status geom_check_device(RTCDevice device, hz_error *err)
-{
-    enum RTCError e = rtcGetDeviceError(device);
-    switch (e) {
-    case RTC_ERROR_NONE:
-        return HZ_OK;
-    case RTC_ERROR_OUT_OF_MEMORY:
-        return hz_fail(err, "out of memory building the Embree scene (acceleration structure)");
-    default:
-        return hz_fail(err, "Embree error %d while building the scene", (int)e);
-    }
-}
-
-hz_status geom_new_scene_failed(RTCDevice device, hz_error *err)
-{
-    if (geom_check_device(device, err) != HZ_OK)
-        return HZ_ERROR;
-    return hz_fail(err, "cannot create an Embree scene");
-}
-
-RTCScene geom_new_scene(RTCDevice device)
-{
-    RTCScene s = rtcNewScene(device);
-    if (!s)
-        return NULL;
-    /* Robust mode makes the triangle test watertight against edges and
-     * vertices; the cost is small and leaks between triangles are worse. */
-    rtcSetSceneFlags(s, RTC_SCENE_FLAG_ROBUST);
-    rtcSetSceneBuildQuality(s, RTC_BUILD_QUALITY_HIGH);
-    return s;
-}
-
-hz_status geom_shape_failed(geom_shape *s, hz_errors *errs, hz_error *err)
-{
-    if (!errs || !err->loc.file)
-        return HZ_ERROR;
-    hz_errors_add(errs, err);
-    s->left_out = true;
-    s->area_light = -1;
-    return HZ_OK;
 }
 
 static hz_status build_shapes(geometry *g, scene_desc *sd, transform render_from_world,

@@ -2,7 +2,9 @@
  * a prototype's scene (pbrt-v4's TransformedPrimitive) or, with Embree's
  * quaternion time steps, of a moving instance or of a moving shape's own
  * scene (pbrt-v4's AnimatedPrimitive). */
-#include "geometry/embree_scene.h"
+#include "geometry/embree_device.h"
+#include "geometry/geometry_types.h"
+#include "geometry/instances.h"
 #include "geometry/shape_build.h"
 
 #include <stdlib.h>

@@ -8,7 +8,7 @@
 #include <math.h>
 
 #include "core/ray.h"
-#include "geometry/embree_scene.h"
+#include "geometry/geometry_types.h"
 
 /* What Embree's ray validity check accepts (kernels/common/ray.h: |org| and
  * |dir| components at most FLT_LARGE = 1.844e18, tnear and tfar not NaN),

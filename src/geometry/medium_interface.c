@@ -4,7 +4,7 @@
  * parameter just past it, and the origin of a ray leaving a hit, which
  * geometry_step_past inlines (it runs at every interface crossing). */
 #include "core/box.h"
-#include "geometry/embree_scene.h"
+#include "geometry/geometry_types.h"
 #include "geometry/medium_interface.h"
 
 #include <math.h>

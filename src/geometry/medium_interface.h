@@ -1,6 +1,6 @@
-/* Private to src/geometry: the shapes that change the medium, found once the
- * scene is built: boxes around them (medium_interface.c) and the small convex
- * meshes among them (convex_mesh.c). */
+/* Private to src/geometry: the shapes that change the medium (also for the
+ * small convex meshes among them, convex_mesh.c) and the boxes around them,
+ * found once the scene is built (medium_interface.c). */
 #ifndef HAZE_GEOMETRY_MEDIUM_INTERFACE_H
 #define HAZE_GEOMETRY_MEDIUM_INTERFACE_H
 
@@ -18,10 +18,5 @@ void geom_shape_box(const geom_shape *s, vec3 *lo_out, vec3 *hi_out);
 
 /* Fills g's interface boxes (see struct geometry). */
 hz_status geom_find_interfaces(geometry *g, hz_error *err);
-
-/* geom_shape.planes and the boxes of the other shapes, for the small convex
- * meshes that change the medium, when nothing moves or is instanced; and
- * geometry_convex_around's table. */
-hz_status geom_find_convex_interfaces(geometry *g, size_t medium_count, hz_error *err);
 
 #endif

@@ -1,8 +1,10 @@
 /* One shape as Embree geometry: what every shape shares (its material, media
  * and alpha, and the filters that apply them) and triangle meshes, whose
- * vertices Embree holds in float. Spheres and curves: user_shapes.c. */
+ * vertices Embree holds in float. Spheres and curves: user_shapes.c. A shape
+ * whose error has a place is left out (geom_shape_failed). */
 #include "geometry/alpha.h"
 #include "geometry/shape_build.h"
+#include "geometry/user_shapes.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -186,5 +188,15 @@ hz_status geom_build_shape(RTCDevice device, RTCScene scene, unsigned geom_id,
         return st;
     if (geom) /* else an empty mesh: nothing to intersect */
         attach_shape(scene, geom, geom_id, out);
+    return HZ_OK;
+}
+
+hz_status geom_shape_failed(geom_shape *s, hz_errors *errs, hz_error *err)
+{
+    if (!errs || !err->loc.file)
+        return HZ_ERROR;
+    hz_errors_add(errs, err);
+    s->left_out = true;
+    s->area_light = -1;
     return HZ_OK;
 }

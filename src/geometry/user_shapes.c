@@ -2,8 +2,8 @@
  * that solve in double (a sphere in object space, a curve by pbrt-v4's
  * algorithm, curve.c) and apply the alpha test to each candidate hit. */
 #include "geometry/alpha.h"
-#include "geometry/shape_build.h"
 #include "geometry/surface_hit.h"
+#include "geometry/user_shapes.h"
 
 #include <math.h>
 #include <stdlib.h>

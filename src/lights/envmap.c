@@ -1,13 +1,15 @@
-/* Image infinite lights (pbrt-v4's ImageInfiniteLight): an equal-area
- * octahedral square map of the sphere of directions, looked up at the
- * nearest texel and importance sampled by the piecewise-constant density of
- * its texels' channel average. */
-#include "lights/lights.h"
+/* The images of lights (envmap.h): an image infinite light's equal-area
+ * octahedral square map of the sphere of directions (pbrt-v4's
+ * ImageInfiniteLight), looked up at the nearest texel and importance sampled
+ * by the piecewise-constant density of its texels' channel average; the same
+ * image serves goniometric, projection and image area lights. */
+#include "lights/envmap.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/sampling.h"
 #include "film/exr.h"
 
 struct light_image {
@@ -18,10 +20,6 @@ struct light_image {
     double *func;    /* w * h: the sampling function (channel average, >= 0) */
     double mean;     /* of func over the texels; 0: sampled uniformly */
 };
-
-/* ---- the mapping (Clarberg's equal-area square <-> sphere) ---- */
-
-/* ---- the image ---- */
 
 void light_image_destroy(light_image *m)
 {

@@ -8,6 +8,7 @@
 
 #include "core/ray.h"
 #include "core/sampling.h"
+#include "lights/envmap.h"
 
 /* Cosine-weighted direction around unit `n`. */
 static vec3 cosine_around(vec3 n, vec2 u, double *cos_theta)

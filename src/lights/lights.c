@@ -1,7 +1,12 @@
+/* Lights from the scene's LightSource and AreaLightSource entities (their
+ * parameters, images and power), and what the integrators ask of a light
+ * besides its samples (light_sample.c): emitted radiance, portals, the
+ * intensity of point lights with an image, delta lights, power. */
 #include "lights/lights.h"
 
 #include "core/path.h"
 #include "core/ray.h"
+#include "lights/envmap.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -1,11 +1,9 @@
 /* Private to src/geometry: struct geometry (the Embree device and scene, and
- * what the queries keep beside it) and the steps that build it, shared by
- * embree_scene.c (the device, the top-level scene, geometry_create) and
- * instances.c (objects, instances, motion). */
-#ifndef HAZE_GEOMETRY_EMBREE_SCENE_H
-#define HAZE_GEOMETRY_EMBREE_SCENE_H
-
-#include <string.h>
+ * what the queries keep beside it) with its prototypes and instances, for
+ * every file that builds or reads it. Includes no other geometry file but
+ * the public geometry.h, so each of them can include it. */
+#ifndef HAZE_GEOMETRY_GEOMETRY_TYPES_H
+#define HAZE_GEOMETRY_GEOMETRY_TYPES_H
 
 #include <embree3/rtcore.h>
 
@@ -63,35 +61,5 @@ struct geometry {
     /* Bytes Embree holds (its memory monitor): now and at most. */
     _Atomic long long embree_bytes, embree_peak;
 };
-
-/* A scene with haze's flags and build quality, or NULL. */
-RTCScene geom_new_scene(RTCDevice device);
-/* rtcNewScene failed: the device's error, or a generic message. */
-hz_status geom_new_scene_failed(RTCDevice device, hz_error *err);
-/* HZ_OK unless Embree reported an error (out of memory named as such). */
-hz_status geom_check_device(RTCDevice device, hz_error *err);
-/* A shape's own error (it has a place) goes to `errs` when there is one: the
- * shape is left out and the build goes on. */
-hz_status geom_shape_failed(geom_shape *s, hz_errors *errs, hz_error *err);
-
-/* Whether a transform differs at the two TransformTimes (only then is an
- * animated transform built: equal keyframes build exactly as without motion). */
-static inline bool geom_moves(const transform *start, const transform *end)
-{
-    return memcmp(&start->m, &end->m, sizeof start->m) != 0;
-}
-
-/* instances.c: the ObjectBegin prototypes, the ObjectInstances (after the
- * top-level shapes: their geomIDs follow), and a moving top-level shape i
- * (`a` its motion) in a scene of its own. */
-hz_status geom_build_objects(geometry *g, scene_desc *sd, const material *materials,
-                             size_t material_count, const material *default_material,
-                             hz_errors *errs, hz_error *err);
-hz_status geom_build_instances(geometry *g, scene_desc *sd, transform render_from_world,
-                               hz_error *err);
-hz_status geom_build_moving_shape(geometry *g, scene_desc *sd, size_t i,
-                                  const animated_transform *a, const material *materials,
-                                  size_t material_count, const material *default_material,
-                                  hz_error *err);
 
 #endif
