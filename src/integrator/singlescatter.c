@@ -78,9 +78,12 @@ hz_status singlescatter_settings_from_entity(scene_entity *e, singlescatter_sett
 singlescatter_scene singlescatter_scene_make(const integrator_inputs *in,
                                              singlescatter_settings settings)
 {
+    /* Shadow rays are stochastic (light samples of a delta light differ)
+     * when their own estimator draws random numbers in some grid. */
     bool stochastic = false;
     for (size_t i = 0; i < in->medium_count; ++i)
-        stochastic |= medium_is_density_grid(&in->media[i]) && settings.mode != TRANSMITTANCE_RAYMARCH;
+        stochastic |= medium_is_density_grid(&in->media[i]) &&
+                      settings.shadow_mode != TRANSMITTANCE_RAYMARCH;
     return (singlescatter_scene){*in, settings, stochastic, NULL};
 }
 

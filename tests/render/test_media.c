@@ -1205,9 +1205,62 @@ static void test_clear_shadow_rays(void **state)
     check_clear_shadow_rays("Integrator \"volpath\" \"integer maxdepth\" 1");
 }
 
+/* Shadow rays of one pixel's 16 samples of box.vdb lit by a point light,
+ * marched camera rays, ratio-tracked shadow rays, `n` light samples. */
+static uint64_t box_shadow_rays(int n)
+{
+    char *integrator = sfmt("Integrator \"singlescatter\" \"string transmittance\" \"raymarch\" "
+                            "\"string shadowtransmittance\" \"ratio\" \"integer lightsamples\" %d",
+                            n);
+    char *encl = box_mesh(v3(-0.1, -0.1, -0.1), v3(1.1, 1.1, 1.1));
+    char *text = sfmt("%s"
+                      "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                      "Sampler \"independent\" \"integer pixelsamples\" 16\n%s\n"
+                      "WorldBegin\n"
+                      "LightSource \"point\" \"point3 from\" [0.5 2 0.5] \"rgb I\" [1 1 1]\n"
+                      "MakeNamedMedium \"box\" \"string type\" \"nanovdb\" "
+                      "\"string filename\" \"%s/box.vdb\" "
+                      "\"rgb sigma_a\" [0.5 0.5 0.5] \"rgb sigma_s\" [1 1 1]\n"
+                      "AttributeBegin\nMediumInterface \"box\" \"\"\nMaterial \"interface\"\n%s"
+                      "AttributeEnd\n",
+                      box_axis_view, integrator, VOLUMES, encl);
+    render_scene *rs = build(text);
+    const camera *cam = render_scene_camera(rs);
+    camera_sample cs = {v2(4.5, 4.5), v2(0.5, 0.5), 0.5, 1.0};
+    ray_differential rd;
+    assert_true(camera_generate_ray_differential(cam, cs, &rd));
+    integrator_counters counters = {0};
+    for (int i = 0; i < 16; ++i) {
+        sampler_state st;
+        sampler_start(render_scene_sampler(rs), 4, 4, i, &st);
+        double depth;
+        (void)render_scene_li(rs, &rd, &st, &depth, &counters);
+    }
+    render_scene_destroy(rs);
+    free(text);
+    free(encl);
+    free(integrator);
+    return counters.shadow_rays;
+}
+
+/* "lightsamples" counts under marched camera rays with tracked shadow rays:
+ * the shadows are stochastic, so each in-scattering sample takes that many
+ * shadow rays of a point light too (issue 42: the test read the camera
+ * rays' estimator, and a point light got one shadow ray at any count). */
+static void test_lightsamples_with_tracked_shadows(void **state)
+{
+    (void)state;
+    uint64_t one = box_shadow_rays(1), four = box_shadow_rays(4);
+    print_message("shadow rays: %llu at 1 light sample, %llu at 4\n", (unsigned long long)one,
+                  (unsigned long long)four);
+    assert_true(one > 0);
+    assert_int_equal(four, 4 * one);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_lightsamples_with_tracked_shadows),
         cmocka_unit_test(test_beer_lambert_homogeneous),
         cmocka_unit_test(test_beer_lambert_box_vdb_ratio),
         cmocka_unit_test(test_beer_lambert_box_vdb_raymarch),
