@@ -237,8 +237,8 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
             break;
         }
         if (seg.opaque) {
-            *depth = v3_length(v3_sub(rw.h.p, r->o));
-            rgb Ls = surface_li(sc, rd, &rw.h, medium, st, &walk, vs, counters);
+            *depth = v3_length(v3_sub(seg.h.p, r->o));
+            rgb Ls = surface_li(sc, rd, &seg.h, medium, st, &walk, vs, counters);
             L = rgb_add(L, rgb_mul(beta, Ls));
             break;
         }

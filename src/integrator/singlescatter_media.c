@@ -54,7 +54,7 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
                WALK_EXACT_ENDS | WALK_CONVEX_START);
     for (walk_segment seg; walk_next(&rw, &seg);) {
         if (seg.opaque) {
-            if (rw.h.t >= t_fill)
+            if (seg.h.t >= t_fill)
                 return rgb_grey(0.0);
             walk_step_over(&rw);
             continue;

@@ -117,7 +117,7 @@ static void path_ray(path *pa, vec3 o, vec3 d, double tmin, double t_fill, int m
 /* Leaving surface hit h along w. With media, the medium also fills the bit
  * between the surface and the offset origin (as the single-scattering
  * integrator's shadow rays): the ray starts e behind the offset origin, where
- * its line crosses the tangent plane. h may be the hit pa->ray ended at. */
+ * its line crosses the tangent plane. */
 static void ray_from_surface(path *pa, const geom_hit *h, vec3 w)
 {
     vec3 o = geometry_leave_origin(h, w);
@@ -189,7 +189,7 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
                WALK_EXACT_ENDS | WALK_CONVEX_START);
     for (walk_segment seg; walk_next(&rw, &seg);) {
         if (seg.opaque) {
-            if (rw.h.t >= t_fill)
+            if (seg.h.t >= t_fill)
                 return false;
             walk_step_over(&rw);
             continue;
@@ -568,7 +568,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
         }
         if (!seg.opaque)
             continue;
-        geom_hit *h = &ray->h;
+        geom_hit *h = &seg.h;
         if (camera_ray) {
             *depth = v3_length(v3_sub(h->p, r->o));
             camera_ray = false;

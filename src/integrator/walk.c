@@ -11,12 +11,12 @@ bool walk_pass(ray_walk *w, bool cross)
         return false;
     }
     if (cross)
-        w->medium = geometry_medium_after(&w->h, w->d, w->medium);
+        w->medium = geometry_medium_after(w->hit, w->d, w->medium);
     /* The query goes on along the same line, from just past the surface:
      * what lies behind stays exactly where it would be without it. */
-    w->tmin = geometry_step_past(&w->h, w->o, w->d);
+    w->tmin = geometry_step_past(w->hit, w->o, w->d);
     /* A hit stepped over is no crossing: it tells nothing of the convex
      * meshes the ray is in or has left. */
-    w->past = cross ? geometry_past(&w->h, w->d) : (geom_past){NULL, NULL};
+    w->past = cross ? geometry_past(w->hit, w->d) : (geom_past){NULL, NULL};
     return true;
 }

@@ -57,19 +57,19 @@ typedef struct {
     int crossings;        /* hits stepped past */
     geom_past past;       /* what the last crossing tells (geometry_past) */
     walk_step next;
-    geom_hit h;           /* the hit the last segment ended at */
+    const geom_hit *hit;  /* the hit the last segment ended at, in that segment */
 } ray_walk;
 
 typedef struct {
     double t0, t1; /* along d */
     int medium;    /* -1: vacuum */
-    bool hit;      /* it ends at hit w->h; else the ray leaves the scene there */
+    bool hit;      /* it ends at hit h; else the ray leaves the scene there */
     bool opaque;   /* that hit is no interface */
+    geom_hit h;
 } walk_segment;
 
 /* Starts the walk of o + t d in `medium`: surfaces are searched in
- * (tmin, tmax), the first segment begins at t_fill. Leaves w->h as it is, so
- * that a path may start its next ray from the hit its last walk ended at. */
+ * (tmin, tmax), the first segment begins at t_fill. */
 static inline void walk_start(ray_walk *w, const geometry *geom, vec3 o, vec3 d, double tmin,
                               double t_fill, double tmax, double time, int medium, unsigned flags)
 {
@@ -80,7 +80,7 @@ static inline void walk_start(ray_walk *w, const geometry *geom, vec3 o, vec3 d,
     w->t_fill = t_fill;
     w->tmax = tmax;
     w->time = time;
-    w->t_start = t_fill;
+    w->t_start = w->t_end = t_fill;
     w->medium = medium;
     w->flags = flags;
     w->crossings = 0;
@@ -89,14 +89,16 @@ static inline void walk_start(ray_walk *w, const geometry *geom, vec3 o, vec3 d,
     w->next = WALK_QUERY;
 }
 
-/* Steps past hit w->h (`cross`: into the medium on its far side); false when
+/* Steps past hit w->hit (`cross`: into the medium on its far side); false when
  * that is one crossing too many (the walk is lost). For walk_next. */
 bool walk_pass(ray_walk *w, bool cross);
 
 /* The next segment, or false when the walk is over: after the segment that
  * left the scene, or lost (walk_lost). A segment that ends at a hit is
  * followed by the one past it, whatever the hit; walk_step_over changes that
- * for an opaque one. */
+ * for an opaque one. The next call steps past the hit where this one put it
+ * (seg->h, not copied: hot paths keep one segment), so *seg must live until
+ * then. */
 static inline bool walk_next(ray_walk *w, walk_segment *seg)
 {
     switch (w->next) {
@@ -115,11 +117,12 @@ static inline bool walk_next(ray_walk *w, walk_segment *seg)
     case WALK_LOST:
         return false;
     }
+    w->hit = &seg->h;
     for (;;) {
         bool hit = geometry_intersect_past(w->geom, w->past, w->o, w->d, w->tmin, w->tmax,
-                                           w->time, &w->h);
-        bool opaque = hit && w->h.shape->material->kind != MATERIAL_INTERFACE;
-        if (hit && (w->flags & WALK_PASS_BEHIND) && w->h.t < w->t_fill) {
+                                           w->time, &seg->h);
+        bool opaque = hit && seg->h.shape->material->kind != MATERIAL_INTERFACE;
+        if (hit && (w->flags & WALK_PASS_BEHIND) && seg->h.t < w->t_fill) {
             if (!walk_pass(w, !opaque))
                 return false;
             continue;
@@ -128,18 +131,22 @@ static inline bool walk_next(ray_walk *w, walk_segment *seg)
          * (core/ray.h): no medium point beyond it is traced. */
         double t_end = !hit ? (w->medium >= 0 ? hz_fmin(w->tmax, ray_far_t(w->o, w->d)) : w->tmax)
                        : w->flags & WALK_EXACT_ENDS
-                           ? hz_fmax(geometry_crossing_t(&w->h, w->o, w->d), w->t_start)
-                           : w->h.t;
+                           ? hz_fmax(geometry_crossing_t(&seg->h, w->o, w->d), w->t_start)
+                           : seg->h.t;
         w->t_end = t_end;
         w->next = hit ? WALK_CROSS : WALK_DONE;
-        *seg = (walk_segment){w->t_start, t_end, w->medium, hit, opaque};
+        seg->t0 = w->t_start;
+        seg->t1 = t_end;
+        seg->medium = w->medium;
+        seg->hit = hit;
+        seg->opaque = opaque;
         return true;
     }
 }
 
-/* The walk goes on past the opaque hit the last segment ended at as if it
- * were not there: same medium, and the next segment begins where that one
- * did (it lies behind the point a shadow ray starts from). */
+/* The walk goes on past the hit the last segment ended at (an opaque one
+ * behind the point a shadow ray starts from) as if it were not there: same
+ * medium, and the next segment begins where that one did. */
 static inline void walk_step_over(ray_walk *w) { w->next = WALK_STEP_OVER; }
 
 /* True when the walk ended at the crossing limit: the ray is dropped

@@ -128,7 +128,7 @@ static void test_opaque_hits(void **state)
     for (int i = 0; i < 5; ++i)
         assert_true(walk_next(&w, &s));
     expect_seg(&s, 7, 8, -1, true, true);
-    assert_true(fabs(w.h.p.x - 3.0) < 1e-6);
+    assert_true(fabs(s.h.p.x - 3.0) < 1e-6);
     /* Stepped over: the front face and the back face, one segment from 7. */
     walk_step_over(&w);
     assert_true(walk_next(&w, &s));
