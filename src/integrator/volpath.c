@@ -82,8 +82,6 @@ hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
 
 void volpath_scene_free(volpath_scene *sc) { light_sampler_free(&sc->sampler); }
 
-/* ---- rays ---- */
-
 /* ---- path state ---- */
 
 typedef struct {
@@ -103,6 +101,8 @@ typedef struct {
     ray_walk ray;
     bool scattered, terminated;
 } path;
+
+/* ---- rays ---- */
 
 /* Starts the path's next ray, o + t d: surfaces are searched from tmin on,
  * media fill it from t_fill on. */
