@@ -27,7 +27,7 @@ typedef struct {
     uint64_t camera_rays, shadow_rays;
     uint64_t density_lookups;
     uint64_t majorant_steps;   /* majorant-grid cells entered by media walks */
-    uint64_t lost_paths;       /* rays dropped (black) after GEOMETRY_MAX_CROSSINGS interfaces */
+    uint64_t lost_paths;       /* rays dropped (black) at the walk's crossing limit (walk.h) */
     /* With `timed` (haze render --stats), the nanoseconds spent in media walks
      * (camera segments and shadow rays through media) and in the film. */
     bool timed;
@@ -41,7 +41,7 @@ typedef struct {
     uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
     uint64_t shadow_rays;
     uint64_t majorant_steps; /* majorant-grid cells entered */
-    uint64_t lost;           /* shadow rays dropped after GEOMETRY_MAX_CROSSINGS interfaces */
+    uint64_t lost;           /* shadow rays dropped at the crossing limit */
 } media_walk;
 
 /* Shadow rays from scattering points search surfaces from this fraction of

@@ -8,6 +8,7 @@
 
 #include "core/parallel.h"
 #include "core/ray.h"
+#include "integrator/walk.h"
 
 /* A light-space grid: node (i, j, k) lies at origin + h (i ex + j ey + k ez),
  * ez toward the light; 4 floats a node (optical depth R, G, B above it, and
@@ -132,30 +133,20 @@ static void build_column(const build_job *job, int column, double *cum)
     vec3 w = c->ez;
     vec3 o = v3_add(c->origin, v3_add(v3_scale(c->ex, i * c->h),
                                       v3_sub(v3_scale(c->ey, j * c->h), v3_scale(w, c->h))));
-    const geometry *geom = job->in->geom;
-    int medium = job->medium;
-    double tmin = 0.0, t_start = 0.0, t_block = -INFINITY;
-    geom_past past = {NULL, NULL}; /* what the last crossing tells */
-    for (int crossing = 0;; ++crossing) {
-        geom_hit hit;
-        bool found = geometry_intersect_past(geom, past, o, w, tmin, INFINITY, 0.0, &hit);
-        double t_end = found          ? fmax(geometry_crossing_t(&hit, o, w), t_start)
-                       : medium >= 0 ? ray_far_t(o, w)
-                                     : INFINITY;
+    double t_block = -INFINITY;
+    /* Opaque surfaces are crossed as interfaces: the column's optical depth
+     * goes on past them, they only mark where the light is blocked. */
+    ray_walk rw;
+    walk_start(&rw, job->in->geom, o, w, 0.0, 0.0, INFINITY, 0.0, job->medium, WALK_EXACT_ENDS);
+    for (walk_segment seg; walk_next(&rw, &seg);) {
+        int medium = seg.medium;
+        double t_start = seg.t0, t_end = seg.t1;
         accumulate(&cw, medium, o, w, t_start, t_end);
-        if (!found)
-            break;
-        if (hit.shape->material->kind != MATERIAL_INTERFACE)
+        if (seg.opaque)
             t_block = fmax(t_block, t_end);
-        if (crossing == GEOMETRY_MAX_CROSSINGS) { /* as a shadow ray: lost, black */
-            t_block = INFINITY;
-            break;
-        }
-        medium = geometry_medium_after(&hit, w, medium);
-        t_start = t_end;
-        tmin = geometry_step_past(&hit, o, w);
-        past = geometry_past(&hit, w);
     }
+    if (walk_lost(&rw)) /* as a shadow ray: lost, black */
+        t_block = INFINITY;
     accumulate(&cw, -1, o, w, INFINITY, INFINITY); /* nodes a lost walk did not reach */
     float *node = c->nodes + (size_t)column * (size_t)c->n[2] * 4;
     for (int k = 0; k < c->n[2]; ++k, node += 4) {

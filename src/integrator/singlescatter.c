@@ -8,6 +8,7 @@
 
 #include "core/clock.h"
 #include "integrator/singlescatter_media.h"
+#include "integrator/walk.h"
 #include "materials/bsdf.h"
 
 singlescatter_settings singlescatter_settings_default(void)
@@ -169,71 +170,22 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
     return L;
 }
 
-rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
-                     double *depth, film_surface *vs, integrator_counters *counters)
+/* The light leaving the camera ray's opaque hit h toward the camera: its
+ * emission and the direct light its BSDF reflects. */
+static rgb surface_li(const singlescatter_scene *sc, const ray_differential *rd, geom_hit *h,
+                      int medium, sampler_state *st, media_walk *walk, film_surface *vs,
+                      integrator_counters *counters)
 {
-    const ray *r = &rd->r;
-    counters->camera_rays++;
-    *depth = INFINITY;
-    vec3 o = r->o, d = r->d;
-    int medium = r->medium;
-    media_walk walk = {.time = r->time};
-    /* The walk's rng is seeded once the ray meets something: a camera ray
-     * from vacuum that misses everything (most of a small subject's frame)
-     * skips the hashing. The dimension is taken now, as before. */
-    int seed_dim = sc->in.medium_count > 0 ? sampler_reserve_dim(st) : -1;
-    rgb beta = rgb_grey(1.0), L = rgb_grey(0.0);
-    geom_hit h;
-    /* Media fill the exact spans between crossings; only the next query
-     * starts past the surface (tmin). */
-    double tmin = 0.0, t_start = 0.0;
-    geom_past past = {NULL, NULL}; /* what the last crossing tells */
-    for (int crossing = 0;; ++crossing) {
-        bool hit = geometry_intersect_past(sc->in.geom, past, o, d, tmin, INFINITY, r->time, &h);
-        if (seed_dim >= 0 && (hit || medium >= 0)) {
-            walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
-            seed_dim = -1;
-        }
-        /* A ray that leaves the scene inside a medium ends at HZ_FAR_COORD
-         * (core/ray.h): no medium point beyond it is traced. */
-        double t_hit = !hit ? (medium >= 0 ? ray_far_t(o, d) : INFINITY)
-                       : sc->in.medium_count > 0 ? geometry_crossing_t(&h, o, d)
-                                              : h.t;
-        if (medium >= 0) {
-            uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
-            singlescatter_segment(sc, medium, o, d, t_start, t_hit, &beta, &L, st, &walk);
-            if (counters->timed)
-                counters->media_ns += hz_clock_ns() - t0;
-            if (rgb_is_black(beta))
-                goto done;
-        }
-        if (!hit) {
-            L = rgb_add(L, rgb_mul(beta, sky(sc, o, d)));
-            goto done;
-        }
-        if (h.shape->material->kind != MATERIAL_INTERFACE)
-            break;
-        if (crossing == GEOMETRY_MAX_CROSSINGS) {
-            walk.lost++;
-            goto done;
-        }
-        medium = geometry_medium_after(&h, d, medium);
-        t_start = hz_fmax(t_hit, t_start);
-        tmin = geometry_step_past(&h, o, d);
-        past = geometry_past(&h, d);
-    }
-    *depth = v3_length(v3_sub(h.p, r->o));
-
-    vec3 wo = v3_normalize(v3_neg(d));
+    vec3 wo = v3_normalize(v3_neg(rd->r.d));
     rgb Ls = rgb_grey(0.0);
-    if (h.shape->area_light >= 0)
-        Ls = light_area_le(&sc->in.lights[h.shape->area_light], h.ng, wo, v2(h.u, h.v), h.p);
+    if (h->shape->area_light >= 0)
+        Ls = light_area_le(&sc->in.lights[h->shape->area_light], h->ng, wo, v2(h->u, h->v), h->p);
     if (rd->has_differentials)
-        geometry_hit_footprint(&h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
+        geometry_hit_footprint(h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
     if (vs)
-        visible_surface_at(&h, rd, vs);
+        visible_surface_at(h, rd, vs);
     material scratch;
-    const material *mat = geometry_material_at(&h, wo, &scratch);
+    const material *mat = geometry_material_at(h, wo, &scratch);
     switch (mat->kind) {
     case MATERIAL_DIFFUSE:
     case MATERIAL_CONDUCTOR:
@@ -243,14 +195,58 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
     case MATERIAL_HAIR:
-        Ls = rgb_add(Ls, direct_bsdf(sc, &h, medium, wo, mat, st, &walk, counters));
+        Ls = rgb_add(Ls, direct_bsdf(sc, h, medium, wo, mat, st, walk, counters));
         break;
     case MATERIAL_MIX: /* material_at resolved it */
     case MATERIAL_INTERFACE:
         break;
     }
-    L = rgb_add(L, rgb_mul(beta, Ls));
-done:
+    return Ls;
+}
+
+rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
+                     double *depth, film_surface *vs, integrator_counters *counters)
+{
+    const ray *r = &rd->r;
+    counters->camera_rays++;
+    *depth = INFINITY;
+    vec3 o = r->o, d = r->d;
+    media_walk walk = {.time = r->time};
+    /* The walk's rng is seeded once the ray meets something: a camera ray
+     * from vacuum that misses everything (most of a small subject's frame)
+     * skips the hashing. The dimension is taken now, as before. */
+    int seed_dim = sc->in.medium_count > 0 ? sampler_reserve_dim(st) : -1;
+    rgb beta = rgb_grey(1.0), L = rgb_grey(0.0);
+    ray_walk rw;
+    walk_start(&rw, sc->in.geom, o, d, 0.0, 0.0, INFINITY, r->time, r->medium,
+               sc->in.medium_count > 0 ? WALK_EXACT_ENDS : 0u);
+    for (walk_segment seg; walk_next(&rw, &seg);) {
+        if (seed_dim >= 0 && (seg.hit || seg.medium >= 0)) {
+            walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
+            seed_dim = -1;
+        }
+        int medium = seg.medium;
+        double t_start = seg.t0, t_hit = seg.t1;
+        if (medium >= 0) {
+            uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
+            singlescatter_segment(sc, medium, o, d, t_start, t_hit, &beta, &L, st, &walk);
+            if (counters->timed)
+                counters->media_ns += hz_clock_ns() - t0;
+            if (rgb_is_black(beta))
+                break;
+        }
+        if (!seg.hit) {
+            L = rgb_add(L, rgb_mul(beta, sky(sc, o, d)));
+            break;
+        }
+        if (seg.opaque) {
+            *depth = v3_length(v3_sub(seg.h.p, r->o));
+            rgb Ls = surface_li(sc, rd, &seg.h, medium, st, &walk, vs, counters);
+            L = rgb_add(L, rgb_mul(beta, Ls));
+            break;
+        }
+    }
+    walk.lost += walk_lost(&rw);
     counters->shadow_rays += walk.shadow_rays;
     counters->density_lookups += walk.lookups;
     counters->majorant_steps += walk.majorant_steps;

@@ -5,6 +5,7 @@
 
 #include "core/ray.h"
 #include "core/phase.h"
+#include "integrator/walk.h"
 
 /* ---- per-channel helpers ---- */
 
@@ -42,45 +43,29 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
 {
     walk->shadow_rays++;
     rgb T = rgb_grey(1.0);
-    /* Media fill the exact spans between crossings; only the next query
-     * starts past the surface (tmin). */
-    double t_start = t_fill;
-    /* What the last crossing tells; at the start, the convex mesh the ray's
-     * medium most likely fills (checked). */
-    geom_past past = {NULL, geometry_convex_around(vs->in.geom, medium)};
-    for (int crossing = 0;; ++crossing) {
-        geom_hit h;
-        bool hit = geometry_intersect_past(vs->in.geom, past, o, w, tmin, tmax, walk->time, &h);
-        if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
-            if (h.t >= t_fill)
+    ray_walk rw;
+    walk_start(&rw, vs->in.geom, o, w, tmin, t_fill, tmax, walk->time, medium,
+               WALK_EXACT_ENDS | WALK_CONVEX_START);
+    for (walk_segment seg; walk_next(&rw, &seg);) {
+        if (seg.opaque) {
+            if (seg.h.t >= t_fill)
                 return rgb_grey(0.0);
-            if (crossing == GEOMETRY_MAX_CROSSINGS) {
-                walk->lost++;
-                return rgb_grey(0.0);
-            }
-            tmin = geometry_step_past(&h, o, w);
-            past = (geom_past){NULL, NULL};
+            walk_step_over(&rw);
             continue;
         }
-        double t_end = hit ? hz_fmax(geometry_crossing_t(&h, o, w), t_start)
-                     : medium >= 0 ? hz_fmin(tmax, ray_far_t(o, w)) : tmax;
+        medium = seg.medium;
+        double t_start = seg.t0, t_end = seg.t1;
         if (medium >= 0) {
             T = rgb_mul(T,
                         segment_transmittance(vs, &vs->in.media[medium], o, w, t_start, t_end, walk));
             if (rgb_is_black(T))
                 return T;
         }
-        if (!hit)
+        if (!seg.hit)
             return T;
-        if (crossing == GEOMETRY_MAX_CROSSINGS) {
-            walk->lost++;
-            return rgb_grey(0.0);
-        }
-        medium = geometry_medium_after(&h, w, medium);
-        t_start = t_end;
-        tmin = geometry_step_past(&h, o, w);
-        past = geometry_past(&h, w);
     }
+    walk->lost++; /* the walk ends early only at the crossing limit */
+    return rgb_grey(0.0);
 }
 
 rgb singlescatter_shadow_transmittance(const singlescatter_scene *vs, vec3 o, vec3 w, double tmin,

@@ -13,6 +13,7 @@
 #include "materials/bsdf.h"
 #include "integrator/volpath_media.h"
 #include "integrator/singlescatter_media.h"
+#include "integrator/walk.h"
 
 /* ---- settings and scene ---- */
 
@@ -81,46 +82,6 @@ hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
 
 void volpath_scene_free(volpath_scene *sc) { light_sampler_free(&sc->sampler); }
 
-/* ---- rays ---- */
-
-/* A ray of the path: surfaces are searched from tmin on, media fill it from
- * t_fill on; opaque surfaces before t_fill lie behind its start (and
- * interfaces there only switch the medium): see ray_from_medium. */
-typedef struct {
-    vec3 o, d; /* unit d */
-    double tmin, t_fill;
-    int medium;
-    geom_past past; /* what the last crossing tells (geometry_past) */
-} vp_ray;
-
-/* Leaving surface hit h along w. With media, the medium also fills the bit
- * between the surface and the offset origin (as the single-scattering
- * integrator's shadow rays): the ray starts e behind the offset origin, where
- * its line crosses the tangent plane. */
-static vp_ray ray_from_surface(const geom_hit *h, vec3 w, int medium, bool media)
-{
-    vec3 o = geometry_leave_origin(h, w);
-    int after = geometry_medium_after(h, w, medium);
-    if (!media)
-        return (vp_ray){o, w, 0.0, 0.0, after, {NULL, NULL}};
-    vec3 off = v3_sub(o, h->p);
-    double wn = fabs(v3_dot(w, h->ng));
-    double e = v3_length(off) * 16.0;
-    if (wn * e > fabs(v3_dot(off, h->ng)))
-        e = fabs(v3_dot(off, h->ng)) / wn;
-    return (vp_ray){v3_sub(o, v3_scale(w, e)), w, e, 0.0, after, {NULL, NULL}};
-}
-
-/* Leaving the medium point x along w: Embree sees x rounded to float, which
- * can put it past its medium's boundary; so surfaces are searched from e
- * behind x (integrator/path.h, PATH_SHADOW_BACKOFF) and the medium fills the
- * ray from x on. */
-static vp_ray ray_from_medium(vec3 x, vec3 w, int medium)
-{
-    double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
-    return (vp_ray){v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium, {NULL, NULL}};
-}
-
 /* ---- path state ---- */
 
 typedef struct {
@@ -134,10 +95,54 @@ typedef struct {
     bool specular, any_non_specular;
     vec3 prev_p, prev_n; /* the last scattering point and its shading normal
                           * (zero in a medium): light densities for MIS */
-    /* the medium segment being tracked */
-    vp_ray ray;
+    /* The ray being walked: its segment's medium is the one tracked. Hits
+     * before its t_fill lie behind the medium point it leaves (the walk
+     * steps over them; interfaces there only switch the medium). */
+    ray_walk ray;
     bool scattered, terminated;
 } path;
+
+/* ---- rays ---- */
+
+/* Starts the path's next ray, o + t d: surfaces are searched from tmin on,
+ * media fill it from t_fill on. */
+static void path_ray(path *pa, vec3 o, vec3 d, double tmin, double t_fill, int medium)
+{
+    const integrator_inputs *in = &pa->sc->in;
+    unsigned exact = in->medium_count > 0 ? WALK_EXACT_ENDS : 0u;
+    walk_start(&pa->ray, in->geom, o, d, tmin, t_fill, INFINITY, pa->walk.time, medium,
+               exact | WALK_PASS_BEHIND);
+}
+
+/* Leaving surface hit h along w. With media, the medium also fills the bit
+ * between the surface and the offset origin (as the single-scattering
+ * integrator's shadow rays): the ray starts e behind the offset origin, where
+ * its line crosses the tangent plane. */
+static void ray_from_surface(path *pa, const geom_hit *h, vec3 w)
+{
+    vec3 o = geometry_leave_origin(h, w);
+    int after = geometry_medium_after(h, w, pa->ray.medium);
+    if (pa->sc->in.medium_count == 0) {
+        path_ray(pa, o, w, 0.0, 0.0, after);
+        return;
+    }
+    vec3 off = v3_sub(o, h->p);
+    double wn = fabs(v3_dot(w, h->ng));
+    double e = v3_length(off) * 16.0;
+    if (wn * e > fabs(v3_dot(off, h->ng)))
+        e = fabs(v3_dot(off, h->ng)) / wn;
+    path_ray(pa, v3_sub(o, v3_scale(w, e)), w, e, 0.0, after);
+}
+
+/* Leaving the medium point x along w: Embree sees x rounded to float, which
+ * can put it past its medium's boundary; so surfaces are searched from e
+ * behind x (integrator/path.h, PATH_SHADOW_BACKOFF) and the medium fills the
+ * ray from x on. */
+static void ray_from_medium(path *pa, vec3 x, vec3 w, int medium)
+{
+    double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
+    path_ray(pa, v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium);
+}
 
 static inline rgb rgb_div(rgb a, double s) { return rgb_scale(a, 1.0 / s); }
 
@@ -179,27 +184,18 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
     path *pa = s->pa;
     const volpath_scene *sc = pa->sc;
     pa->walk.shadow_rays++;
-    double t_start = t_fill;
-    /* What the last crossing tells; at the start, the convex mesh the ray's
-     * medium most likely fills (checked). */
-    geom_past past = {NULL, geometry_convex_around(sc->in.geom, medium)};
-    for (int crossing = 0;; ++crossing) {
-        geom_hit h;
-        bool hit = geometry_intersect_past(sc->in.geom, past, o, w, tmin, tmax, pa->walk.time, &h);
-        if (hit && h.shape->material->kind != MATERIAL_INTERFACE) {
-            if (h.t >= t_fill)
+    ray_walk rw;
+    walk_start(&rw, sc->in.geom, o, w, tmin, t_fill, tmax, pa->walk.time, medium,
+               WALK_EXACT_ENDS | WALK_CONVEX_START);
+    for (walk_segment seg; walk_next(&rw, &seg);) {
+        if (seg.opaque) {
+            if (seg.h.t >= t_fill)
                 return false;
-            if (crossing == GEOMETRY_MAX_CROSSINGS) {
-                pa->walk.lost++;
-                return false;
-            }
-            tmin = geometry_step_past(&h, o, w);
-            past = (geom_past){NULL, NULL};
+            walk_step_over(&rw);
             continue;
         }
-        /* Unbounded media end at HZ_FAR_COORD (core/ray.h). */
-        double t_end = hit ? fmax(geometry_crossing_t(&h, o, w), t_start)
-                     : medium >= 0 ? fmin(tmax, ray_far_t(o, w)) : tmax;
+        medium = seg.medium;
+        double t_start = seg.t0, t_end = seg.t1;
         if (medium >= 0) {
             rgb T_maj = volpath_track(&sc->in.media[medium], o, w, t_start, t_end, pa->hero,
                                       false, &pa->walk, shadow_event, s);
@@ -210,17 +206,11 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
             s->r_u = rgb_mul(s->r_u, rgb_div(T_maj, th));
             s->r_l = rgb_mul(s->r_l, rgb_div(T_maj, th));
         }
-        if (!hit)
+        if (!seg.hit)
             return true;
-        if (crossing == GEOMETRY_MAX_CROSSINGS) {
-            pa->walk.lost++;
-            return false;
-        }
-        medium = geometry_medium_after(&h, w, medium);
-        t_start = t_end;
-        tmin = geometry_step_past(&h, o, w);
-        past = geometry_past(&h, w);
     }
+    pa->walk.lost++; /* the walk ends early only at the crossing limit */
+    return false;
 }
 
 /* A scattering point for light sampling: a surface hit with its BSDF, or a
@@ -335,7 +325,7 @@ static void scatter(path *pa, const volpath_event *ev)
     pa->prev_p = x;
     pa->prev_n = v3(0.0, 0.0, 0.0);
     pa->scattered = true;
-    pa->ray = ray_from_medium(x, wi, pa->ray.medium);
+    ray_from_medium(pa, x, wi, pa->ray.medium);
     pa->specular = false;
     pa->any_non_specular = true;
 }
@@ -482,7 +472,7 @@ static bool bounce(path *pa, const geom_hit *h)
     pa->r_l = rgb_div(pa->r_u, bs.pdf_proportional ? bsdf_pdf(&b, wo, bs.wi) : bs.pdf);
     pa->specular = bs.specular;
     pa->any_non_specular |= !bs.specular;
-    pa->ray = ray_from_surface(h, bs.wi, pa->ray.medium, sc->in.medium_count > 0);
+    ray_from_surface(pa, h, bs.wi);
     if (rgb_is_black(pa->beta))
         return false;
     rgb rr = rgb_div(pa->beta, rgb_avg(pa->r_u));
@@ -523,6 +513,17 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
     return true;
 }
 
+/* A path that leaves the scene: the infinite lights it sees. */
+static void add_escaped(path *pa)
+{
+    const volpath_scene *sc = pa->sc;
+    /* A constant sky is never light-sampled (light_sampler.h): full weight. */
+    if (!rgb_is_black(sc->sky))
+        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, sc->sky), rgb_avg(pa->r_u)));
+    if (sc->image_lights)
+        add_image_lights(pa, pa->ray.o, pa->ray.d);
+}
+
 rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_state *st,
                double *depth, film_surface *vs, integrator_counters *counters)
 {
@@ -532,7 +533,8 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
     bool media = sc->in.medium_count > 0;
     path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
-               .r_l = rgb_grey(1.0), .ray = {r->o, r->d, 0.0, 0.0, r->medium, {NULL, NULL}}};
+               .r_l = rgb_grey(1.0)};
+    path_ray(&pa, r->o, r->d, 0.0, 0.0, r->medium);
     /* As singlescatter_li: the rng is seeded once the ray meets something. */
     int seed_dim = -1;
     if (media) {
@@ -540,76 +542,45 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
         pa.hero = (int)fmin(2.0, floor(3.0 * sampler_1d(st)));
     }
     bool camera_ray = true;
-    double t_start = 0.0;
-    int crossing = 0;
-    for (;;) {
-        vp_ray *ray = &pa.ray;
-        geom_hit h;
-        bool hit = geometry_intersect_past(sc->in.geom, ray->past, ray->o, ray->d, ray->tmin,
-                                           INFINITY, r->time, &h);
-        if (seed_dim >= 0 && (hit || ray->medium >= 0)) {
+    /* Every scattering and bounce starts a new walk (its crossings anew). */
+    for (walk_segment seg;;) {
+        ray_walk *ray = &pa.ray;
+        if (!walk_next(ray, &seg)) { /* lost: the walk that leaves the scene ends the path */
+            pa.walk.lost++;
+            break;
+        }
+        if (seed_dim >= 0 && (seg.hit || seg.medium >= 0)) {
             pa.walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
             seed_dim = -1;
         }
-        bool opaque = hit && h.shape->material->kind != MATERIAL_INTERFACE;
-        if (hit && h.t < ray->t_fill) { /* behind a medium point the ray leaves */
-            if (++crossing > GEOMETRY_MAX_CROSSINGS) {
-                pa.walk.lost++;
-                break;
-            }
-            if (!opaque)
-                ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
-            ray->tmin = geometry_step_past(&h, ray->o, ray->d);
-            ray->past = opaque ? (geom_past){NULL, NULL} : geometry_past(&h, ray->d);
-            continue;
-        }
-        /* A path leaving the scene inside a medium ends at HZ_FAR_COORD. */
-        double t_hit = !hit    ? (ray->medium >= 0 ? ray_far_t(ray->o, ray->d) : INFINITY)
-                       : media ? fmax(geometry_crossing_t(&h, ray->o, ray->d), t_start)
-                               : h.t;
+        double t_start = seg.t0, t_hit = seg.t1;
         if (ray->medium >= 0) {
             if (!cross_medium(&pa, t_start, t_hit))
                 break;
             if (pa.scattered) {
                 camera_ray = false;
-                t_start = pa.ray.t_fill;
-                crossing = 0;
                 continue;
             }
         }
-        if (!hit) {
-            /* A constant sky is never light-sampled (light_sampler.h): full weight. */
-            if (!rgb_is_black(sc->sky))
-                pa.L = rgb_add(pa.L, rgb_div(rgb_mul(pa.beta, sc->sky), rgb_avg(pa.r_u)));
-            if (sc->image_lights)
-                add_image_lights(&pa, ray->o, ray->d);
+        if (!seg.hit) {
+            add_escaped(&pa);
             break;
         }
-        if (!opaque) {
-            if (++crossing > GEOMETRY_MAX_CROSSINGS) {
-                pa.walk.lost++;
-                break;
-            }
-            ray->medium = geometry_medium_after(&h, ray->d, ray->medium);
-            t_start = t_hit;
-            ray->tmin = geometry_step_past(&h, ray->o, ray->d);
-            ray->past = geometry_past(&h, ray->d);
+        if (!seg.opaque)
             continue;
-        }
+        geom_hit *h = &seg.h;
         if (camera_ray) {
-            *depth = v3_length(v3_sub(h.p, r->o));
+            *depth = v3_length(v3_sub(h->p, r->o));
             camera_ray = false;
             /* Textures are filtered over the camera ray's footprint only
              * (later bounces: no filtering; docs/differences-from-pbrt.md). */
             if (rd->has_differentials)
-                geometry_hit_footprint(&h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
+                geometry_hit_footprint(h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
             if (vs && pa.depth == 0)
-                visible_surface_at(&h, rd, vs);
+                visible_surface_at(h, rd, vs);
         }
-        if (!bounce(&pa, &h))
+        if (!bounce(&pa, h))
             break;
-        t_start = pa.ray.t_fill;
-        crossing = 0;
     }
     counters->shadow_rays += pa.walk.shadow_rays;
     counters->density_lookups += pa.walk.lookups;
