@@ -17,6 +17,7 @@
 #include "cli/merge.h"
 #include "cli/outputs.h"
 #include "core/clock.h"
+#include "integrator/walk.h"
 #include "mpi/distributed.h"
 #include "render/progress.h"
 #include "render/progressive.h"
@@ -590,7 +591,7 @@ static void warn_after_render(const render_job *job, const render_stats *st,
         fprintf(stderr,
                 "haze: warning: %llu rays crossed more than %d interfaces and were dropped "
                 "(black)\n",
-                (unsigned long long)st->lost_paths, GEOMETRY_MAX_CROSSINGS);
+                (unsigned long long)st->lost_paths, WALK_MAX_CROSSINGS);
 }
 
 /* The one line on stdout that sums up a complete render (not under --quiet). */

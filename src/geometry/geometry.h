@@ -243,11 +243,6 @@ bool geometry_static_box(const geometry *g, vec3 *lo, vec3 *hi);
 size_t geometry_shape_count(const geometry *g);
 geom_shape *geometry_shape(geometry *g, size_t i);
 
-/* Interfaces one ray may cross before it is dropped (black, and counted in
- * render_stats.lost_paths: haze warns): bounds the work of pathological nested
- * boundaries. */
-#define GEOMETRY_MAX_CROSSINGS 64
-
 /* Where the double-precision ray o + t w crosses the surface of hit `h` (found
  * by Embree from o rounded to float, and h->t rounded to float): h->t moved
  * along w onto the tangent plane at h->p, which lies on the surface. Media

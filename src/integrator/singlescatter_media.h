@@ -26,23 +26,8 @@
 
 #include "core/vec.h"
 #include "integrator/path.h"
-#include "integrator/singlescatter.h"
+#include "integrator/singlescatter_scene.h"
 #include "sampler/sampler.h"
-
-/* Below this largest transmittance component a walk plays Russian roulette. */
-#define SINGLESCATTER_RR_THRESHOLD 1e-2
-/* `raymarch` camera rays end where their transmittance falls below this
- * fraction of their throughput at entry (what is left behind is at most that
- * fraction of the light beyond): deterministic, unlike roulette. */
-#define SINGLESCATTER_MARCH_CUTOFF 1e-4
-
-/* Transmittance from `o` along unit `w` to distance `tmax` (INFINITY: to the end
- * of the scene), starting in `medium` (-1 vacuum): every medium segment
- * attenuates, interfaces switch the medium, any other surface blocks (black).
- * Surfaces are searched from `tmin` on (past the surface `o` lies on, if any);
- * media fill the whole span from 0. */
-rgb singlescatter_shadow_transmittance(const singlescatter_scene *vs, vec3 o, vec3 w, double tmin,
-                                       double tmax, int medium, media_walk *walk);
 
 /* The segment [t0, t1] (t1 may be INFINITY) of the unit-direction ray o + t w in
  * medium `m`: adds beta × (in-scattered radiance) to *L and multiplies beta by

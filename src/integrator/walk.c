@@ -6,7 +6,7 @@ bool walk_pass(ray_walk *w, bool cross)
 {
     /* Bounds the work of pathological nested boundaries; the ray is dropped,
      * not cut short, so that the loss is counted and reported. */
-    if (++w->crossings > GEOMETRY_MAX_CROSSINGS) {
+    if (++w->crossings > WALK_MAX_CROSSINGS) {
         w->next = WALK_LOST;
         return false;
     }

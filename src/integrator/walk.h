@@ -16,6 +16,11 @@
 #include "core/vec.h"
 #include "geometry/geometry.h"
 
+/* Interfaces one ray may cross before it is dropped (black, and counted in
+ * render_stats.lost_paths: haze warns): bounds the work of pathological nested
+ * boundaries. walk_pass is the only place that applies it. */
+#define WALK_MAX_CROSSINGS 64
+
 /* Options of walk_start: each walk's rules, reproduced exactly. */
 enum {
     /* Segments end where the ray's line crosses the hit surface

@@ -147,7 +147,7 @@ static void test_unrepresentable_positions_refused(void **state)
 }
 
 /* 40 nested interface spheres: a camera ray crosses 80 interfaces, more than
- * GEOMETRY_MAX_CROSSINGS. It is dropped (black) and haze says so. */
+ * WALK_MAX_CROSSINGS. It is dropped (black) and haze says so. */
 static void test_too_many_crossings_warns(void **state)
 {
     (void)state;

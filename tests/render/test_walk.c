@@ -202,13 +202,13 @@ static render_scene *box_row(int boxes)
     return rs;
 }
 
-/* GEOMETRY_MAX_CROSSINGS interfaces are crossed; the next one loses the ray
+/* WALK_MAX_CROSSINGS interfaces are crossed; the next one loses the ray
  * after the segment that ends at it. */
 static void test_crossing_limit(void **state)
 {
     (void)state;
-    assert_int_equal(GEOMETRY_MAX_CROSSINGS % 2, 0);
-    int boxes = GEOMETRY_MAX_CROSSINGS / 2;
+    assert_int_equal(WALK_MAX_CROSSINGS % 2, 0);
+    int boxes = WALK_MAX_CROSSINGS / 2;
     for (int extra = 0; extra < 2; ++extra) {
         render_scene *rs = box_row(boxes + extra);
         ray_walk w;
@@ -216,16 +216,16 @@ static void test_crossing_limit(void **state)
                    INFINITY, 0.0, -1, WALK_EXACT_ENDS);
         walked r = walk_all(&w);
         /* A segment before each crossing, and one after the last. */
-        assert_int_equal(r.n, GEOMETRY_MAX_CROSSINGS + 1);
-        for (int i = 0; i < GEOMETRY_MAX_CROSSINGS; ++i)
+        assert_int_equal(r.n, WALK_MAX_CROSSINGS + 1);
+        for (int i = 0; i < WALK_MAX_CROSSINGS; ++i)
             expect_seg(&r.seg[i], i, i + 1, i % 2 ? 0 : -1, true, false);
         if (extra) { /* the last yielded ends at the 65th face: no step past it */
             assert_true(r.lost);
-            expect_seg(&r.seg[GEOMETRY_MAX_CROSSINGS], GEOMETRY_MAX_CROSSINGS,
-                       GEOMETRY_MAX_CROSSINGS + 1, -1, true, false);
+            expect_seg(&r.seg[WALK_MAX_CROSSINGS], WALK_MAX_CROSSINGS,
+                       WALK_MAX_CROSSINGS + 1, -1, true, false);
         } else {
             assert_false(r.lost);
-            expect_seg(&r.seg[GEOMETRY_MAX_CROSSINGS], GEOMETRY_MAX_CROSSINGS, INFINITY, -1,
+            expect_seg(&r.seg[WALK_MAX_CROSSINGS], WALK_MAX_CROSSINGS, INFINITY, -1,
                        false, false);
         }
         render_scene_destroy(rs);
@@ -239,7 +239,7 @@ static void test_crossing_limit_stepping_over(void **state)
 {
     (void)state;
     for (int extra = 0; extra < 2; ++extra) {
-        render_scene *rs = box_row(GEOMETRY_MAX_CROSSINGS / 2 + extra);
+        render_scene *rs = box_row(WALK_MAX_CROSSINGS / 2 + extra);
         ray_walk w;
         walk_segment s;
         walk_start(&w, render_scene_geometry(rs), v3(-1, 0.1, 0.3), v3(1, 0, 0), 0.0, 0.0,
@@ -255,7 +255,7 @@ static void test_crossing_limit_stepping_over(void **state)
             }
             walk_step_over(&w);
         }
-        assert_int_equal(n, GEOMETRY_MAX_CROSSINGS + 1);
+        assert_int_equal(n, WALK_MAX_CROSSINGS + 1);
         assert_int_equal(left, !extra);
         assert_int_equal(walk_lost(&w), extra);
         render_scene_destroy(rs);
