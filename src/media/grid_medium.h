@@ -232,6 +232,12 @@ static inline rgb grid_medium_color(const grid_medium *gm, medium_ray *r, vec3 p
 
 /* The density kinds' (nanovdb, uniformgrid) lookups: medium_ops' sample,
  * density and density_point. */
+#define GRID_MEDIUM_DENSITY_OPS                                                                    \
+    .density_grid = true, .destroy = grid_medium_destroy, .clip = grid_medium_clip,               \
+    .ray_start = grid_medium_ray_start, .sample = grid_medium_sample,                              \
+    .density = grid_medium_density, .density_point = grid_medium_density_point,                    \
+    .support = grid_medium_support, .clear_along = grid_medium_clear_along,                        \
+    .memory = grid_medium_memory, .moves = grid_medium_moves
 void grid_medium_sample(medium_ray *r, double t, bool emission, medium_props *p,
                         uint64_t *lookups);
 double grid_medium_density(medium_ray *r, double t, uint64_t *lookups);

@@ -443,16 +443,6 @@ static hz_status create(medium_entity *e, const medium_build *b, medium *out, hz
 
 const medium_ops medium_nanovdb_ops = {
     .name = "nanovdb",
-    .density_grid = true,
     .create = create,
-    .destroy = grid_medium_destroy,
-    .clip = grid_medium_clip,
-    .ray_start = grid_medium_ray_start,
-    .sample = grid_medium_sample,
-    .density = grid_medium_density,
-    .density_point = grid_medium_density_point,
-    .support = grid_medium_support,
-    .clear_along = grid_medium_clear_along,
-    .memory = grid_medium_memory,
-    .moves = grid_medium_moves,
+    GRID_MEDIUM_DENSITY_OPS,
 };

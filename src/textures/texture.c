@@ -8,8 +8,7 @@
 
 #include "core/noise.h"
 #include "core/path.h"
-#include "film/exr.h"
-#include "film/png.h"
+#include "textures/texture_image.h"
 
 typedef enum {
     TEX_CONSTANT,
@@ -43,15 +42,6 @@ typedef struct {
     rgb v;
 } tex_input;
 
-/* pbrt-v4 reads a float image texture from an RGB(A) image in two ways: a
- * texel lookup (point filter, ewa, the coarsest level) takes its first
- * channel, a bilinear one the mean of R, G and B, or A when the image has an
- * alpha channel that is not all one. A float texture's image holds R in
- * channel 0 and that second value in channels 1 and 2. */
-typedef struct {
-    int width, height;
-    float *rgb; /* 3 per texel, linear, top row first */
-} tex_image;
 
 enum { TEX_MAX_LEVELS = 32 };
 typedef enum { FILTER_POINT, FILTER_BILINEAR, FILTER_TRILINEAR } tex_filter;
@@ -513,139 +503,6 @@ static hz_status read_mapping(const texture_set *s, const texture_entity *te, pa
     return texture_space(s, te, t, err);
 }
 
-static double srgb_to_linear(double v)
-{
-    return v <= 0.04045 ? v / 12.92 : pow((v + 0.055) / 1.055, 2.4);
-}
-
-/* A PNG as rgb in [0, 1], its samples as stored (8 or 16 bits; no gAMA or
- * sRGB chunk applied, as pbrt-v4) decoded by `encoding` (sRGB, linear or
- * gamma g), and *alpha (decoded alike, as pbrt-v4) when it is an RGBA image;
- * as pbrt-v4, grey and palette images have none. */
-static hz_status read_png(const char *path, file_loc loc, int enc, double gamma, tex_image *out,
-                          float **alpha, hz_error *err)
-{
-    *alpha = NULL;
-    png_samples ps;
-    hz_error e;
-    if (png_read_samples(path, &ps, &e) != HZ_OK)
-        return hz_fail_at(err, loc, "cannot read PNG \"%s\": %s", path, e.message);
-    size_t n = (size_t)ps.width * (size_t)ps.height;
-    out->rgb = malloc((n ? 3 * n : 1) * sizeof *out->rgb);
-    *alpha = ps.rgba ? malloc((n ? n : 1) * sizeof **alpha) : NULL;
-    if (!out->rgb || (ps.rgba && !*alpha)) {
-        free(out->rgb);
-        free(*alpha);
-        out->rgb = NULL;
-        *alpha = NULL;
-        png_samples_free(&ps);
-        return hz_fail(err, "out of memory");
-    }
-    out->width = ps.width;
-    out->height = ps.height;
-    for (size_t i = 0; i < n; ++i)
-        for (int c = 0; c < (ps.rgba ? 4 : 3); ++c) {
-            double v = ps.samples[4 * i + (size_t)c] / (double)ps.max;
-            float f = (float)(enc == 0 ? srgb_to_linear(v) : enc == 1 ? v : pow(v, gamma));
-            if (c < 3)
-                out->rgb[3 * i + (size_t)c] = f;
-            else
-                (*alpha)[i] = f;
-        }
-    png_samples_free(&ps);
-    return HZ_OK;
-}
-
-/* An EXR's R, G, B (or Y, or its one channel) as linear rgb, and its A as
- * *alpha when it has R, G, B and A. */
-static hz_status read_exr(const char *path, file_loc loc, tex_image *out, float **alpha,
-                          hz_error *err)
-{
-    *alpha = NULL;
-    exr_image img;
-    memset(&img, 0, sizeof img);
-    hz_error e;
-    if (exr_read(path, &img, &e) != HZ_OK)
-        return hz_fail_at(err, loc, "cannot read EXR \"%s\": %s", path, e.message);
-    const exr_channel *ch[3] = {exr_find_channel(&img, "R"), exr_find_channel(&img, "G"),
-                                exr_find_channel(&img, "B")};
-    if (!ch[0] || !ch[1] || !ch[2]) {
-        const exr_channel *y = exr_find_channel(&img, "Y");
-        if (!y && img.channel_count == 1)
-            y = &img.channels[0];
-        ch[0] = ch[1] = ch[2] = y;
-    }
-    const exr_channel *a = ch[0] != ch[1] ? exr_find_channel(&img, "A") : NULL;
-    if (!ch[0]) {
-        exr_image_free(&img);
-        return hz_fail_at(err, loc, "EXR \"%s\" has no R, G, B or Y channel", path);
-    }
-    size_t n = (size_t)img.width * (size_t)img.height;
-    out->rgb = malloc((n ? n : 1) * 3 * sizeof *out->rgb);
-    *alpha = a ? malloc((n ? n : 1) * sizeof **alpha) : NULL;
-    if (!out->rgb || (a && !*alpha)) {
-        free(out->rgb);
-        out->rgb = NULL;
-        free(*alpha);
-        *alpha = NULL;
-        exr_image_free(&img);
-        return hz_fail(err, "out of memory");
-    }
-    for (size_t i = 0; i < n; ++i) {
-        for (int k = 0; k < 3; ++k)
-            out->rgb[3 * i + (size_t)k] = ch[k]->pixels[i];
-        if (a)
-            (*alpha)[i] = a->pixels[i];
-    }
-    out->width = img.width;
-    out->height = img.height;
-    exr_image_free(&img);
-    return HZ_OK;
-}
-
-static bool has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    if (n < m)
-        return false;
-    for (size_t i = 0; i < m; ++i)
-        if (tolower((unsigned char)s[n - m + i]) != tolower((unsigned char)suffix[i]))
-            return false;
-    return true;
-}
-
-static hz_status read_encoding(param_list *pl, bool png, int *enc, double *gamma, hz_error *err)
-{
-    const char *e = params_string(pl, "encoding", png ? "sRGB" : "linear");
-    *gamma = 1.0;
-    if (strcmp(e, "sRGB") == 0)
-        *enc = 0;
-    else if (strcmp(e, "linear") == 0)
-        *enc = 1;
-    else if (sscanf(e, "gamma %lf", gamma) == 1 && isfinite(*gamma) && *gamma > 0.0)
-        *enc = 2;
-    else
-        return hz_fail_at(err, params_loc(pl, "encoding"),
-                          "\"encoding\" \"%s\" must be \"sRGB\", \"linear\" or \"gamma G\"", e);
-    return HZ_OK;
-}
-
-/* A float texture's image (see tex_image): R, then the mean of R, G and B,
- * or alpha when there is one that is not all one (pbrt-v4 drops an all-one
- * alpha). */
-static void float_channels(tex_image *im, const float *alpha)
-{
-    size_t n = (size_t)im->width * (size_t)im->height;
-    bool use_alpha = false;
-    for (size_t i = 0; alpha && i < n && !use_alpha; ++i)
-        use_alpha = alpha[i] != 1.0f;
-    for (size_t i = 0; i < n; ++i) {
-        float *p = &im->rgb[3 * i];
-        float v = use_alpha ? alpha[i] : (p[0] + p[1] + p[2]) / 3.0f;
-        p[1] = p[2] = v;
-    }
-}
-
 static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_error *err)
 {
     t->kind = TEX_IMAGEMAP;
@@ -682,24 +539,24 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
     const char *name = params_string(pl, "filename", NULL);
     if (!name)
         return hz_fail_at(err, loc, "Texture \"imagemap\" needs \"string filename\"");
-    bool png = has_suffix(name, ".png");
+    bool png = tex_image_has_suffix(name, ".png");
     int enc;
     double gamma;
-    if (read_encoding(pl, png, &enc, &gamma, err) != HZ_OK)
+    if (tex_image_read_encoding(pl, png, &enc, &gamma, err) != HZ_OK)
         return HZ_ERROR;
-    if (!png && !has_suffix(name, ".exr"))
+    if (!png && !tex_image_has_suffix(name, ".exr"))
         return hz_fail_at(err, params_loc(pl, "filename"),
                           "image texture \"%s\": haze reads .png and .exr", name);
     char *path = path_of_scene_file(loc, name);
     if (!path)
         return hz_fail(err, "out of memory");
     float *alpha = NULL;
-    hz_status st = png ? read_png(path, params_loc(pl, "filename"), enc, gamma, &t->img, &alpha,
-                                  err)
-                       : read_exr(path, params_loc(pl, "filename"), &t->img, &alpha, err);
+    hz_status st = png ? tex_image_read_png(path, params_loc(pl, "filename"), enc, gamma, &t->img,
+                                            &alpha, err)
+                       : tex_image_read_exr(path, params_loc(pl, "filename"), &t->img, &alpha, err);
     free(path);
     if (st == HZ_OK && !t->spectrum)
-        float_channels(&t->img, alpha);
+        tex_image_float_channels(&t->img, alpha);
     free(alpha);
     if (st == HZ_OK && (t->img.width <= 0 || t->img.height <= 0))
         return hz_fail_at(err, params_loc(pl, "filename"), "image texture \"%s\" is empty",
@@ -962,15 +819,15 @@ static hz_status read_normal_map(const char *name, file_loc loc, texture *t, hz_
 {
     *t = (texture){.kind = TEX_IMAGEMAP, .spectrum = true, .su = 1.0, .sv = 1.0,
                    .filter = FILTER_BILINEAR, .scale = 1.0};
-    bool png = has_suffix(name, ".png");
-    if (!png && !has_suffix(name, ".exr"))
+    bool png = tex_image_has_suffix(name, ".png");
+    if (!png && !tex_image_has_suffix(name, ".exr"))
         return hz_fail_at(err, loc, "normal map \"%s\": haze reads .png and .exr", name);
     char *path = path_of_scene_file(loc, name);
     if (!path)
         return hz_fail(err, "out of memory");
     float *alpha = NULL;
-    hz_status st = png ? read_png(path, loc, 1, 1.0, &t->img, &alpha, err)
-                       : read_exr(path, loc, &t->img, &alpha, err);
+    hz_status st = png ? tex_image_read_png(path, loc, 1, 1.0, &t->img, &alpha, err)
+                       : tex_image_read_exr(path, loc, &t->img, &alpha, err);
     free(alpha);
     free(path);
     if (st == HZ_OK && (t->img.width <= 0 || t->img.height <= 0))
