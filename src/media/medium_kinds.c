@@ -1,10 +1,15 @@
 /* The kinds' table: name -> operations, and medium_create, which picks the
- * row of an entity's type. */
-#include "media/medium_kinds.h"
+ * row of an entity's type. A kind is its own file (media/medium.h lists
+ * them), its extern here and its row in the table; the kinds' files do not
+ * include this one, so the table depends on them and not the other way. */
+#include "media/medium.h"
 
 #include <string.h>
 
-/* Name -> operations: a new kind is its file and one row here. */
+extern const medium_ops medium_homogeneous_ops, medium_nanovdb_ops, medium_uniformgrid_ops,
+    medium_cloud_ops, medium_rgbgrid_ops;
+
+/* Name -> operations. */
 static const medium_ops *const kinds[] = {
     &medium_homogeneous_ops, &medium_nanovdb_ops, &medium_uniformgrid_ops,
     &medium_cloud_ops,       &medium_rgbgrid_ops,
