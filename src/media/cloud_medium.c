@@ -84,6 +84,7 @@ static bool ray_start(const medium *m, vec3 o, vec3 d, double time, double *t0, 
     if (!box_clip_ray(om, dm, cm->p0, cm->p1, t0, t1))
         return false;
     r->m = m;
+    r->lookup = NULL;
     r->voxels_per_t = 0.0;
     r->dda = false;
     r->single_left = true;

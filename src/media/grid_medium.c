@@ -152,6 +152,8 @@ void grid_medium_accessors_init(const medium *m, medium_ray *r)
         grid_accessor_init(gm->emission, &r->acc.emission);
     if (gm->color)
         grid_accessor_init(gm->color, &r->acc.color);
+    if (!gm->rgb_channels)
+        return;
     grid *const *g[3] = {gm->rgb_sigma_a, gm->rgb_sigma_s, gm->rgb_Le};
     for (int k = 0; k < 3; ++k)
         for (int c = 0; c < 3; ++c)
@@ -176,6 +178,7 @@ bool grid_medium_ray_start(const medium *m, vec3 o, vec3 d, double time, double 
     r->dda = true;
     grid_medium_accessors_init(m, r);
     r->voxels_per_t = v3_length(r->at.grid.d);
+    r->lookup = m->ops->density && r->at.grid.shift == 0.0 ? grid_medium_of(m)->grid : NULL;
     return true;
 }
 

@@ -95,6 +95,7 @@ typedef struct {
 
     /* rgbgrid: the channels (same index space; NULL: 1 everywhere in the box
      * for sigma_a/sigma_s, no emission for Le). */
+    bool rgb_channels; /* an rgbgrid: the channels below are its coefficients */
     grid *rgb_sigma_a[3], *rgb_sigma_s[3], *rgb_Le[3];
     double rgb_scale, rgb_Le_scale;
 } grid_medium;

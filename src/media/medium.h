@@ -134,6 +134,11 @@ struct medium {
 struct medium_ray {
     const medium *m;
     double voxels_per_t; /* density grids: voxels per unit t (the step sizes' unit) */
+    /* Non-NULL when the density at o + t d is this grid's trilinear value at
+     * at.grid.o + t at.grid.d (a density grid that does not move along the
+     * ray): medium_ray_density looks it up inline, without a call through
+     * the kind's ops. */
+    const grid *lookup;
     bool dda, single_left;
     majorant_segment single;
     majorant_walk mw;
@@ -215,6 +220,11 @@ static inline void medium_ray_sample(medium_ray *r, double t, bool emission, med
 /* Density grids: the density at o + t d, and the point taken apart. */
 static inline double medium_ray_density(medium_ray *r, double t, uint64_t *lookups)
 {
+    if (r->lookup) {
+        ++*lookups;
+        return grid_density_index(r->lookup, &r->acc.density,
+                                  v3_add(r->at.grid.o, v3_scale(r->at.grid.d, t)));
+    }
     return r->m->ops->density(r, t, lookups);
 }
 static inline void medium_ray_density_point(medium_ray *r, double t, medium_density_point *p,

@@ -25,6 +25,7 @@ static hz_status build_rgbgrid(medium_entity *e, transform render_from_world,
     const uniformgrid_params *u = &r->box;
     size_t count = (size_t)u->n[0] * (size_t)u->n[1] * (size_t)u->n[2];
     grid_medium *gm = grid_medium_of(out);
+    gm->rgb_channels = true;
     /* sigma_t = 1 per unit of grid.grid: the majorant is the grid's bound. */
     out->sigma_a = rgb_grey(0.0);
     out->sigma_s = rgb_grey(1.0);
