@@ -85,6 +85,7 @@ static bool ray_start(const medium *m, vec3 o, vec3 d, double time, double *t0, 
         return false;
     r->m = m;
     r->lookup = NULL;
+    r->plain = false;
     r->voxels_per_t = 0.0;
     r->dda = false;
     r->single_left = true;

@@ -179,6 +179,7 @@ bool grid_medium_ray_start(const medium *m, vec3 o, vec3 d, double time, double 
     grid_medium_accessors_init(m, r);
     r->voxels_per_t = v3_length(r->at.grid.d);
     r->lookup = m->ops->density && r->at.grid.shift == 0.0 ? grid_medium_of(m)->grid : NULL;
+    r->plain = r->lookup && !m->coloured && !m->emissive && !m->free_emission;
     return true;
 }
 

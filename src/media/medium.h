@@ -137,8 +137,11 @@ struct medium_ray {
     /* Non-NULL when the density at o + t d is this grid's trilinear value at
      * at.grid.o + t at.grid.d (a density grid that does not move along the
      * ray): medium_ray_density looks it up inline, without a call through
-     * the kind's ops. */
+     * the kind's ops. `plain`: and its coefficients are that density times
+     * sigma_a and sigma_s, with no emission (no colour or emission grids),
+     * so medium_ray_sample is inline too. */
     const grid *lookup;
+    bool plain;
     bool dda, single_left;
     majorant_segment single;
     majorant_walk mw;
@@ -214,6 +217,15 @@ static inline bool medium_ray_next(medium_ray *r, majorant_segment *seg, uint64_
 static inline void medium_ray_sample(medium_ray *r, double t, bool emission, medium_props *p,
                                      uint64_t *lookups)
 {
+    if (r->plain) {
+        ++*lookups;
+        double d = grid_density_index(r->lookup, &r->acc.density,
+                                      v3_add(r->at.grid.o, v3_scale(r->at.grid.d, t)));
+        p->sigma_a = rgb_scale(r->m->sigma_a, d);
+        p->sigma_s = rgb_scale(r->m->sigma_s, d);
+        p->emission = rgb_grey(0.0);
+        return;
+    }
     r->m->ops->sample(r, t, emission, p, lookups);
 }
 
