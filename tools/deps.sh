@@ -20,6 +20,7 @@ packages=(
   libopenmpi-dev openmpi-bin  # MPI: one image across ranks (mpirun), on when found
   gnuplot-nox        # make bench: bench/results/trade.png
   time               # make bench: GNU time's peak memory of haze and its .vdb reader
+  python3            # the include_cycles test (tools/include-cycles.py)
 )
 
 missing=()
