@@ -10,9 +10,11 @@
  * the display window (no gap). The output has data window = display window,
  * the parts' channels and attributes, and is written by the same EXR writer
  * as the film (exr_write: scanline, ZIP, increasing Y), atomically (temporary
- * file + rename): a refused or failed merge writes nothing. Half values
- * survive the read/write round trip exactly, so the merged file is
- * byte-identical to a full render of the same scene, seed and spp
+ * file + rename): a refused or failed merge writes nothing. The output is
+ * checked first as haze render's (cli/outputs.h): it must end in .exr and may
+ * not be an existing non-regular file or one of the parts (device and inode).
+ * Half values survive the read/write round trip exactly, so the merged file
+ * is byte-identical to a full render of the same scene, seed and spp
  * (docs/regions.md). */
 #ifndef HAZE_CLI_MERGE_H
 #define HAZE_CLI_MERGE_H
