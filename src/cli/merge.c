@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "cli/outputs.h"
+#include "core/file.h"
 #include "film/exr.h"
 
 static const char merge_usage[] =
@@ -293,13 +294,17 @@ static hz_status check_tiling(const exr_image *parts, const char *const *files, 
 
 /* ---- the merge ------------------------------------------------------- */
 
-/* Checked as haze render checks its -o, before any part is read: a device
- * such as /dev/null, a FIFO, a part (by device and inode: "./a.exr", a link)
- * or a name not ending in .exr is never replaced. `target` gets the file to
- * write: the output, or a symlink's target. */
-static hz_status check_output(const merge_options *opt, char *target, size_t n, hz_error *err)
+/* Before any part is read: every part is a regular file (a FIFO would block
+ * the read for ever), and the output is checked as haze render checks its -o:
+ * a device such as /dev/null, a FIFO, a part (by device and inode: "./a.exr",
+ * a link) or a name not ending in .exr is never replaced. `target` gets the
+ * file to write: the output, or a symlink's target. */
+static hz_status check_files(const merge_options *opt, char *target, size_t n, hz_error *err)
 {
     hz_error e;
+    for (int i = 0; i < opt->part_count; ++i)
+        if (file_check_regular(opt->parts[i], &e) != HZ_OK)
+            return hz_fail(err, "merge: %s", e.message);
     if (outputs_check_path(opt->output, ".exr", "output", target, n, &e) != HZ_OK ||
         outputs_refuse_inputs("output", opt->output, target, opt->parts,
                               (size_t)opt->part_count, "the merge", &e) != HZ_OK)
@@ -310,7 +315,7 @@ static hz_status check_output(const merge_options *opt, char *target, size_t n, 
 hz_status merge_run(const merge_options *opt, hz_error *err)
 {
     char target[PATH_MAX];
-    if (check_output(opt, target, sizeof target, err) != HZ_OK)
+    if (check_files(opt, target, sizeof target, err) != HZ_OK)
         return HZ_ERROR;
     int n = opt->part_count;
     exr_image *parts = calloc((size_t)n, sizeof *parts);

@@ -2,8 +2,9 @@
  * --pixelbounds / --cropwindow) into the full image.
  *
  * Every part is read whole (all channels, half or float as stored). The merge
- * is refused, naming the offending file(s) and region(s), unless: no part is
- * a partial (interrupted) render (header attribute haze:partial); all parts
+ * is refused, naming the offending file(s) and region(s), unless: every part
+ * is a regular file (a FIFO is refused, not waited on); no part is a partial
+ * (interrupted) render (header attribute haze:partial); all parts
  * have the same display window, the same channel list with the same pixel
  * types, and the same header string attributes; every data window lies inside
  * the display window; no two data windows overlap; and together they cover
