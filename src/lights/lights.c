@@ -23,9 +23,11 @@ static rgb apply_power(rgb I, double scale, double power, double k_e)
     return rgb_scale(I, scale);
 }
 
-/* The image of an infinite light, named relative to the scene file that names it. */
+/* The image of a light, named relative to the scene file that names it.
+ * Negative texels are read as 0, as pbrt-v4 clamps the RGB it looks up, but
+ * with a warning: they are most likely an error in the file. */
 static hz_status load_image(param_list *pl, const char *filename, bool square,
-                            light_image **out, hz_error *err)
+                            light_image **out, FILE *warn, hz_error *err)
 {
     file_loc at = params_loc(pl, "filename");
     char *path = path_of_scene_file(at, filename);
@@ -35,6 +37,14 @@ static hz_status load_image(param_list *pl, const char *filename, bool square,
     hz_status st = light_image_from_exr(path, square, out, &e);
     if (st != HZ_OK)
         hz_fail_at(err, at, "light \"filename\": %s", e.message);
+    size_t negative = st == HZ_OK ? light_image_negative_texels(*out) : 0;
+    if (negative > 0) {
+        int w, h;
+        light_image_size(*out, &w, &h);
+        hz_warn_at(warn, at,
+                   "light \"filename\": %s: %zu of %zu texels have a negative value; read as 0",
+                   path, negative, (size_t)w * (size_t)h);
+    }
     free(path);
     return st;
 }
@@ -46,7 +56,7 @@ static hz_status load_image(param_list *pl, const char *filename, bool square,
  * "power": scale *= power / (A mean(luminance cos^3)), A the window's area
  * at unit distance. */
 static hz_status projection_from_params(param_list *pl, file_loc loc, transform render_from_light,
-                                        light *out, hz_error *err)
+                                        light *out, FILE *warn, hz_error *err)
 {
     double scale = params_float(pl, "scale", 1.0);
     double power = params_float(pl, "power", -1.0);
@@ -58,7 +68,7 @@ static hz_status projection_from_params(param_list *pl, file_loc loc, transform 
         return hz_fail_at(err, loc, "projection light needs \"string filename\"");
     if (pl->failed)
         return HZ_OK; /* params_finish reports it */
-    if (load_image(pl, filename, false, &out->point.image, err) != HZ_OK)
+    if (load_image(pl, filename, false, &out->point.image, warn, err) != HZ_OK)
         return HZ_ERROR;
     int w, h;
     light_image_size(out->point.image, &w, &h);
@@ -139,7 +149,7 @@ static hz_status read_portal(param_list *pl, transform render_from_world,
 }
 
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
-                            hz_error *err)
+                            FILE *warn, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     param_list *pl = &e->entity.params;
@@ -166,7 +176,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
             return hz_fail_at(err, e->entity.loc,
                               "goniometric light needs \"string filename\" (pbrt-v4 renders "
                               "it black without one)");
-        if (load_image(pl, filename, true, &out->point.image, err) != HZ_OK)
+        if (load_image(pl, filename, true, &out->point.image, warn, err) != HZ_OK)
             return HZ_ERROR;
         out->kind = LIGHT_POINT;
         double mean = light_image_mean(out->point.image);
@@ -180,7 +190,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         out->point.light_from_render =
             transform_compose(swap_yz, transform_inverse(render_from_light));
     } else if (strcmp(type, "projection") == 0) {
-        if (projection_from_params(pl, e->entity.loc, render_from_light, out, err) != HZ_OK)
+        if (projection_from_params(pl, e->entity.loc, render_from_light, out, warn, err) != HZ_OK)
             return HZ_ERROR;
     } else if (strcmp(type, "spot") == 0) {
         rgb I = params_illuminant(pl, "I", rgb_grey(1.0));
@@ -244,7 +254,7 @@ hz_status light_from_entity(light_entity *e, transform render_from_world, light 
         double illum = params_float(pl, "illuminance", -1.0);
         out->kind = LIGHT_INFINITE;
         if (filename) {
-            if (load_image(pl, filename, true, &out->infinite.image, err) != HZ_OK)
+            if (load_image(pl, filename, true, &out->infinite.image, warn, err) != HZ_OK)
                 return HZ_ERROR;
             L = rgb_grey(1.0);
             /* pbrt-v4 scales the map to the asked illuminance on an upward
@@ -351,12 +361,12 @@ static double area_power_scale(param_list *pl, const geom_shape *shape, double p
 }
 
 static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                  hz_error *err);
+                                  FILE *warn, hz_error *err);
 
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                 hz_error *err)
+                                 FILE *warn, hz_error *err)
 {
-    hz_status st = area_from_entity(e, shape, out, err);
+    hz_status st = area_from_entity(e, shape, out, warn, err);
     if (st != HZ_OK) { /* what it allocated before the error */
         out->kind = LIGHT_AREA;
         light_free(out);
@@ -365,7 +375,7 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
 }
 
 static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                  hz_error *err)
+                                  FILE *warn, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     param_list *pl = &e->params;
@@ -382,7 +392,7 @@ static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, ligh
     if (filename && params_has(pl, "L"))
         return hz_fail_at(err, params_loc(pl, "L"),
                           "AreaLightSource: \"L\" and \"filename\" cannot both be given");
-    if (filename && load_image(pl, filename, false, &out->area.image, err) != HZ_OK)
+    if (filename && load_image(pl, filename, false, &out->area.image, warn, err) != HZ_OK)
         return HZ_ERROR;
     rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
     double scale = params_float(pl, "scale", 1.0);

@@ -23,8 +23,10 @@ typedef enum { LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_INFINITE, LIGHT_ARE
  * channel average. */
 typedef struct light_image light_image;
 /* An EXR with R, G, B (or only Y) channels, square when `square`; non-finite
- * texels refused, negative ones read as 0. */
+ * texels refused, negative ones read as 0 (light_image_negative_texels counts
+ * the texels that had a negative channel, for a warning). */
 hz_status light_image_from_exr(const char *path, bool square, light_image **out, hz_error *err);
+size_t light_image_negative_texels(const light_image *m);
 /* A 1x1 map of 1: a constant sky as an image light (for a portal). */
 hz_status light_image_white(light_image **out, hz_error *err);
 void light_image_destroy(light_image *m);
@@ -114,13 +116,14 @@ typedef struct {
 
 /* LightSource "point", "spot", "goniometric" and "projection" (point lights
  * with an image), "distant", "infinite" (constant "L" or an image
- * "filename"). */
+ * "filename"). Warnings (an image with negative texels) go to `warn` (NULL:
+ * none). */
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
-                            hz_error *err);
+                            FILE *warn, hz_error *err);
 /* AreaLightSource "diffuse" on a top-level shape (in render space, or in
- * object space with its motion). */
+ * object space with its motion); warnings as light_from_entity. */
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                 hz_error *err);
+                                 FILE *warn, hz_error *err);
 void light_free(light *l);
 
 /* Relative tolerance of light_uniform_scale, on the entries of the Gram matrix
