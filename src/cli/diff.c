@@ -9,6 +9,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "core/file.h"
 #include "film/exr.h"
 #include "film/png.h"
 
@@ -883,6 +884,9 @@ hz_status diff_run(const diff_options *opt, FILE *out, bool *passed, hz_error *e
 {
     exr_image a, b;
     *passed = false;
+    /* OpenEXR would wait for ever on a FIFO's open. */
+    if (file_check_regular(opt->a, err) != HZ_OK || file_check_regular(opt->b, err) != HZ_OK)
+        return HZ_ERROR;
     if (exr_read(opt->a, &a, err) != HZ_OK)
         return HZ_ERROR;
     if (exr_read(opt->b, &b, err) != HZ_OK) {

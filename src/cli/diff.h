@@ -66,7 +66,8 @@ hz_status diff_parse_args(int argc, char **argv, diff_options *opt, bool *help, 
 
 /* Compares, prints the report to `out` and writes the heatmap. *passed is
  * false only when a --metric check or the --ztest failed. Fails (one line in
- * `err`) on unreadable files, mismatched windows, missing or no shared
+ * `err`) on unreadable files, files that are not regular files (a FIFO is
+ * refused, not waited on), mismatched windows, missing or no shared
  * channels, missing or invalid statistics for --ztest, and heatmap write
  * errors. */
 hz_status diff_run(const diff_options *opt, FILE *out, bool *passed, hz_error *err);

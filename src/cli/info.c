@@ -25,6 +25,42 @@
 
 typedef enum { KIND_VDB, KIND_NVDB, KIND_EXR, KIND_TEXT, KIND_UNKNOWN } file_kind;
 
+static bool is_text(const unsigned char *buf, size_t n)
+{
+    /* No NUL and no control characters but whitespace (UTF-8 passes). */
+    for (size_t i = 0; i < n; i++)
+        if (buf[i] < 0x20 && buf[i] != '\t' && buf[i] != '\n' && buf[i] != '\r' &&
+            buf[i] != '\f' && buf[i] != '\v')
+            return false;
+    return true;
+}
+
+/* Text is taken for a scene when it is named *.pbrt, or when its first word
+ * (after blank space and # comments) is shaped like a pbrt directive: every
+ * one is a capitalised word of letters (LookAt, Camera, WorldBegin). Other
+ * text, down to a single stray byte, is then "not a scene" rather than a
+ * parse error about its first word. */
+static bool looks_like_scene(const char *path, const unsigned char *buf, size_t n)
+{
+    size_t len = strlen(path);
+    if (len > 5 && strcmp(path + len - 5, ".pbrt") == 0)
+        return true;
+    size_t i = 0;
+    for (;;) {
+        while (i < n && (buf[i] == ' ' || (buf[i] >= '\t' && buf[i] <= '\r')))
+            i++;
+        if (i == n || buf[i] != '#')
+            break;
+        while (i < n && buf[i] != '\n')
+            i++;
+    }
+    if (i == n || buf[i] < 'A' || buf[i] > 'Z')
+        return false;
+    while (i < n && ((buf[i] >= 'A' && buf[i] <= 'Z') || (buf[i] >= 'a' && buf[i] <= 'z')))
+        i++;
+    return i == n || buf[i] <= ' ' || buf[i] == '"' || buf[i] == '[' || buf[i] == '#';
+}
+
 /* Reads the first bytes of the file and tells the format from them. */
 static hz_status sniff(const char *path, file_kind *kind, hz_error *err)
 {
@@ -57,15 +93,7 @@ static hz_status sniff(const char *path, file_kind *kind, hz_error *err)
     } else if (n >= 4 && !memcmp(buf, exr_magic, 4)) {
         *kind = KIND_EXR;
     } else {
-        /* Text: no NUL and no control characters but whitespace (UTF-8 passes). */
-        *kind = KIND_TEXT;
-        for (size_t i = 0; i < n; i++) {
-            unsigned char c = buf[i];
-            if (c < 0x20 && c != '\t' && c != '\n' && c != '\r' && c != '\f' && c != '\v') {
-                *kind = KIND_UNKNOWN;
-                break;
-            }
-        }
+        *kind = is_text(buf, n) && looks_like_scene(path, buf, n) ? KIND_TEXT : KIND_UNKNOWN;
     }
     return HZ_OK;
 }
@@ -411,8 +439,8 @@ hz_status info_describe(const char *path, FILE *out, hz_error *err)
         return HZ_ERROR;
     if (kind == KIND_UNKNOWN)
         return hz_fail(err,
-                       "%s: unrecognised file format (not an OpenVDB, NanoVDB, OpenEXR or pbrt "
-                       "scene file)",
+                       "%s: unrecognised file format: not a .vdb, .nvdb, .exr or .pbrt file "
+                       "(OpenVDB, NanoVDB, OpenEXR or pbrt-v4 scene)",
                        path);
 
     char *text = NULL;

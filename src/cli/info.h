@@ -4,7 +4,10 @@
  *     index and world bounds, voxel size and value range;
  *   OpenEXR (.exr): size, windows, channels with pixel type, header attributes,
  *     per-channel min/max/mean and NaN/Inf counts;
- *   pbrt-v4 scene (text): camera, film resolution, sampler and entity counts. */
+ *   pbrt-v4 scene (text named *.pbrt, or whose first word after comments is
+ *     shaped like a directive): camera, film resolution, sampler and entity
+ *     counts.
+ * Anything else is "not a .vdb, .nvdb, .exr or .pbrt file". */
 #ifndef HAZE_CLI_INFO_H
 #define HAZE_CLI_INFO_H
 

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli/outputs.h"
+#include "core/file.h"
 #include "film/exr.h"
 
 static const char merge_usage[] =
@@ -21,7 +23,8 @@ static const char merge_usage[] =
     "the samples they took and the marching step their pilot chose; the whole\n"
     "image's haze:spp, haze:passes (the most), haze:spp_mean, haze:estimated_error\n"
     "(means over its pixels) and haze:stepsize (each part's, when they differ)\n"
-    "are written. Exit 0 merged, 1 refused or unwritable, 2 usage.\n";
+    "are written. The output must end in .exr and is never a part, a device, a\n"
+    "FIFO or a directory. Exit 0 merged, 1 refused or unwritable, 2 usage.\n";
 
 hz_status merge_parse_args(int argc, char **argv, merge_options *opt, bool *help, hz_error *err)
 {
@@ -291,8 +294,29 @@ static hz_status check_tiling(const exr_image *parts, const char *const *files, 
 
 /* ---- the merge ------------------------------------------------------- */
 
+/* Before any part is read: every part is a regular file (a FIFO would block
+ * the read for ever), and the output is checked as haze render checks its -o:
+ * a device such as /dev/null, a FIFO, a part (by device and inode: "./a.exr",
+ * a link) or a name not ending in .exr is never replaced. `target` gets the
+ * file to write: the output, or a symlink's target. */
+static hz_status check_files(const merge_options *opt, char *target, size_t n, hz_error *err)
+{
+    hz_error e;
+    for (int i = 0; i < opt->part_count; ++i)
+        if (file_check_regular(opt->parts[i], &e) != HZ_OK)
+            return hz_fail(err, "merge: %s", e.message);
+    if (outputs_check_path(opt->output, ".exr", "output", target, n, &e) != HZ_OK ||
+        outputs_refuse_inputs("output", opt->output, target, opt->parts,
+                              (size_t)opt->part_count, "the merge", &e) != HZ_OK)
+        return hz_fail(err, "merge: %s", e.message);
+    return HZ_OK;
+}
+
 hz_status merge_run(const merge_options *opt, hz_error *err)
 {
+    char target[PATH_MAX];
+    if (check_files(opt, target, sizeof target, err) != HZ_OK)
+        return HZ_ERROR;
     int n = opt->part_count;
     exr_image *parts = calloc((size_t)n, sizeof *parts);
     if (!parts)
@@ -342,7 +366,7 @@ hz_status merge_run(const merge_options *opt, hz_error *err)
         exr_image_free(&parts[i]);
     }
     if (st == HZ_OK)
-        st = exr_write(opt->output, &full, err);
+        st = exr_write(target, &full, err);
     exr_image_free(&full);
     for (int i = 0; i < n; ++i)
         exr_image_free(&parts[i]);

@@ -2,17 +2,20 @@
  * --pixelbounds / --cropwindow) into the full image.
  *
  * Every part is read whole (all channels, half or float as stored). The merge
- * is refused, naming the offending file(s) and region(s), unless: no part is
- * a partial (interrupted) render (header attribute haze:partial); all parts
+ * is refused, naming the offending file(s) and region(s), unless: every part
+ * is a regular file (a FIFO is refused, not waited on); no part is a partial
+ * (interrupted) render (header attribute haze:partial); all parts
  * have the same display window, the same channel list with the same pixel
  * types, and the same header string attributes; every data window lies inside
  * the display window; no two data windows overlap; and together they cover
  * the display window (no gap). The output has data window = display window,
  * the parts' channels and attributes, and is written by the same EXR writer
  * as the film (exr_write: scanline, ZIP, increasing Y), atomically (temporary
- * file + rename): a refused or failed merge writes nothing. Half values
- * survive the read/write round trip exactly, so the merged file is
- * byte-identical to a full render of the same scene, seed and spp
+ * file + rename): a refused or failed merge writes nothing. The output is
+ * checked first as haze render's (cli/outputs.h): it must end in .exr and may
+ * not be an existing non-regular file or one of the parts (device and inode).
+ * Half values survive the read/write round trip exactly, so the merged file
+ * is byte-identical to a full render of the same scene, seed and spp
  * (docs/regions.md). */
 #ifndef HAZE_CLI_MERGE_H
 #define HAZE_CLI_MERGE_H

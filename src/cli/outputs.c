@@ -48,9 +48,8 @@ static hz_status check_dir(const char *path, hz_error *err)
                    strerror(e));
 }
 
-/* `path` or, for a symlink, its target; then what may be replaced there. */
-static hz_status resolve(const char *path, const char *ext, const char *what, char *out,
-                         size_t n, hz_error *err)
+hz_status outputs_check_path(const char *path, const char *ext, const char *what, char *out,
+                             size_t n, hz_error *err)
 {
     if (!has_suffix(path, ext))
         return hz_fail(err, "%s '%s' must end in %s%s", what, path, ext,
@@ -88,13 +87,27 @@ static bool same_file(const char *a, const char *b)
     return strcmp(a, b) == 0;
 }
 
+hz_status outputs_refuse_inputs(const char *what, const char *path, const char *resolved,
+                                const char *const *inputs, size_t count, const char *reader,
+                                hz_error *err)
+{
+    struct stat so, si;
+    if (stat(resolved, &so) != 0) /* only an existing output can be an input */
+        return HZ_OK;
+    for (size_t i = 0; i < count; ++i)
+        if (stat(inputs[i], &si) == 0 && so.st_dev == si.st_dev && so.st_ino == si.st_ino)
+            return hz_fail(err, "%s '%s' is '%s', which %s reads; refusing to replace it", what,
+                           path, inputs[i], reader);
+    return HZ_OK;
+}
+
 hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png,
                           render_outputs *out, hz_error *err)
 {
     out->png[0] = '\0';
-    if (resolve(exr, ".exr", "output", out->exr, sizeof out->exr, err) != HZ_OK)
+    if (outputs_check_path(exr, ".exr", "output", out->exr, sizeof out->exr, err) != HZ_OK)
         return HZ_ERROR;
-    if (png && resolve(png, ".png", "preview", out->png, sizeof out->png, err) != HZ_OK)
+    if (png && outputs_check_path(png, ".png", "preview", out->png, sizeof out->png, err) != HZ_OK)
         return HZ_ERROR;
     if (png && same_file(out->exr, out->png))
         return hz_fail(err, "output '%s' and preview '%s' are the same file", exr, png);
@@ -102,19 +115,10 @@ hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png
     size_t count;
     if (scene_input_files(sd, &inputs, &count, err) != HZ_OK)
         return HZ_ERROR;
-    /* Outputs that exist yet: only those can be an input. */
-    struct stat so[2];
-    bool exists[2] = {stat(out->exr, &so[0]) == 0, out->png[0] && stat(out->png, &so[1]) == 0};
-    hz_status st = HZ_OK;
-    for (size_t i = 0; st == HZ_OK && i < count && (exists[0] || exists[1]); ++i) {
-        struct stat si;
-        if (stat(inputs[i], &si) != 0)
-            continue;
-        for (int k = 0; k < 2 && st == HZ_OK; ++k)
-            if (exists[k] && so[k].st_dev == si.st_dev && so[k].st_ino == si.st_ino)
-                st = hz_fail(err, "%s '%s' is '%s', which the render reads; refusing to replace it",
-                             k == 0 ? "output" : "preview", k == 0 ? exr : png, inputs[i]);
-    }
+    const char *const *names = (const char *const *)inputs;
+    hz_status st = outputs_refuse_inputs("output", exr, out->exr, names, count, "the render", err);
+    if (st == HZ_OK && png)
+        st = outputs_refuse_inputs("preview", png, out->png, names, count, "the render", err);
     scene_input_files_free(inputs, count);
     return st;
 }

@@ -1,4 +1,5 @@
-/* Where `haze render` may write its images, checked before rendering. */
+/* Where `haze render` and `haze merge` may write their images, checked
+ * before any work. */
 #ifndef HAZE_CLI_OUTPUTS_H
 #define HAZE_CLI_OUTPUTS_H
 
@@ -33,6 +34,22 @@ uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, int spp
  * A symlink is written through: its target is replaced atomically. */
 hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png,
                           render_outputs *out, hz_error *err);
+
+/* Resolves and checks one output, `path` (named `what` in messages: "output",
+ * "preview"), as outputs_resolve does: refused when its name does not end in
+ * `ext`, when it exists and is not a regular file, when it is a dangling
+ * symlink, or when its directory does not exist or cannot be written. `out`
+ * gets the file that will be replaced: `path`, or a symlink's target. */
+hz_status outputs_check_path(const char *path, const char *ext, const char *what, char *out,
+                             size_t n, hz_error *err);
+
+/* Refuses to replace `resolved` (from outputs_check_path of `path`) when it
+ * is one of the `count` files `inputs`, compared by device and inode, so that
+ * another name or a link for an input is caught too. `reader` says who reads
+ * them in the message ("the render", "the merge"). */
+hz_status outputs_refuse_inputs(const char *what, const char *path, const char *resolved,
+                                const char *const *inputs, size_t count, const char *reader,
+                                hz_error *err);
 
 /* Where an interrupted render's image goes: `path` when nothing is there yet,
  * else NAME.partial.EXT next to it. */

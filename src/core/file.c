@@ -31,6 +31,15 @@ const char *file_kind_name(mode_t mode)
     return "not a regular file";
 }
 
+hz_status file_check_regular(const char *path, hz_error *err)
+{
+    struct stat st;
+    if (stat(path, &st) != 0 || S_ISREG(st.st_mode))
+        return HZ_OK;
+    return hz_fail(err, "%s: cannot read: is %s; haze reads only regular files", path,
+                   file_kind_name(st.st_mode));
+}
+
 hz_status file_open_regular(const char *path, int *fd_out, off_t *size, hz_error *err)
 {
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);

@@ -23,6 +23,13 @@ const char *file_kind_name(mode_t mode);
  * is the reason only. */
 hz_status file_open_regular(const char *path, int *fd, off_t *size, hz_error *err);
 
+/* Fails when `path` exists and is not a regular file, told by stat() without
+ * opening it (a FIFO's open would wait for a writer; /dev/urandom never
+ * ends), for readers that open the file themselves (OpenEXR, OpenVDB). The
+ * message names the file: "PATH: cannot read: is a FIFO; haze reads only
+ * regular files". A missing file passes: its reader says so. */
+hz_status file_check_regular(const char *path, hz_error *err);
+
 /* Reads `path` whole into a malloc'ed buffer (*data, NUL-terminated; *len
  * excludes the NUL). Only regular files are read: a directory, device, FIFO or
  * socket is refused without blocking on it. A name ending in ".gz" is

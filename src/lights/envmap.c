@@ -19,6 +19,7 @@ struct light_image {
     double *cdf;     /* h rows of w + 1: the conditional cdf within each row */
     double *func;    /* w * h: the sampling function (channel average, >= 0) */
     double mean;     /* of func over the texels; 0: sampled uniformly */
+    size_t negative; /* texels that had a negative channel (read as 0) */
 };
 
 void light_image_destroy(light_image *m)
@@ -69,12 +70,15 @@ static hz_status image_build(int w, int h, const float *const ch[3], const char 
     }
     for (size_t i = 0; i < n; ++i) {
         double sum = 0.0;
+        bool negative = false;
         for (int c = 0; c < 3; ++c) { /* negative radiance is none (pbrt-v4 clamps) */
             float v = ch[c][i] > 0.0f ? ch[c][i] : 0.0f;
+            negative |= ch[c][i] < 0.0f;
             m->rgb[3 * i + (size_t)c] = v;
             sum += v;
         }
         m->func[i] = sum / 3.0;
+        m->negative += negative;
     }
     double total = 0.0;
     for (int y = 0; y < h; ++y) {
@@ -131,6 +135,8 @@ hz_status light_image_white(light_image **out, hz_error *err)
     const float *const planes[3] = {&one, &one, &one};
     return image_build(1, 1, planes, "a constant sky", out, err);
 }
+
+size_t light_image_negative_texels(const light_image *m) { return m->negative; }
 
 void light_image_size(const light_image *m, int *w, int *h)
 {

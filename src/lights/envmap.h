@@ -17,6 +17,8 @@ typedef struct light_image light_image;
 /* An EXR with R, G, B (or only Y) channels, square when `square`; non-finite
  * texels refused, negative ones read as 0. */
 hz_status light_image_from_exr(const char *path, bool square, light_image **out, hz_error *err);
+/* The texels that had a negative channel (read as 0), for a warning. */
+size_t light_image_negative_texels(const light_image *m);
 /* A 1x1 map of 1: a constant sky as an image light (for a portal). */
 hz_status light_image_white(light_image **out, hz_error *err);
 void light_image_destroy(light_image *m);

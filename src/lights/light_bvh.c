@@ -1,5 +1,6 @@
 #include "lights/light_bvh.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -206,7 +207,24 @@ static int bucket_of(const light_bounds *b, vec3 clo, vec3 chi, int dim)
     return k < 0 ? 0 : k >= BUCKETS ? BUCKETS - 1 : k;
 }
 
-/* Builds items [start, end) at depth; returns the node's index and bounds. */
+/* A light's trail (light_bvh.trail) has one bit per level: a leaf may lie at
+ * most this deep, so an interior node at most one level higher, where
+ * 1 << depth is still defined. */
+enum { TRAIL_BITS = 64 };
+
+/* Whether `count` items fit below a node at `depth`: a balanced split of
+ * them keeps every leaf within TRAIL_BITS levels. */
+static bool fits(size_t count, int depth)
+{
+    int levels = TRAIL_BITS - depth;
+    return levels >= (int)(sizeof(size_t) * CHAR_BIT) || count <= (size_t)1 << levels;
+}
+
+/* Builds items [start, end) at depth; returns the node's index and bounds.
+ * The items fit (fits(end - start, depth)), and so does each side of the
+ * split: where the bucketed split would leave too many items on a side (a
+ * chain that peels one light per level, at geometrically spaced positions)
+ * the midpoint split is taken, which halves them. */
 static size_t build(light_bvh *t, item *it, size_t start, size_t end, uint64_t trail, int depth,
                     light_bounds *out)
 {
@@ -227,7 +245,7 @@ static size_t build(light_bvh *t, item *it, size_t start, size_t end, uint64_t t
     }
     double best = INFINITY;
     int best_dim = -1, best_bucket = -1;
-    for (int dim = 0; dim < 3 && depth < 63; ++dim) {
+    for (int dim = 0; dim < 3; ++dim) {
         if (axis(chi, dim) == axis(clo, dim) || axis(v3_sub(all.hi, all.lo), dim) == 0.0)
             continue;
         light_bounds bk[BUCKETS];
@@ -260,7 +278,7 @@ static size_t build(light_bvh *t, item *it, size_t start, size_t end, uint64_t t
                 it[mid++] = tmp;
             }
     }
-    if (mid == start || mid == end)
+    if (mid == start || mid == end || !fits(mid - start, depth + 1) || !fits(end - mid, depth + 1))
         mid = start + (end - start) / 2;
     light_bounds b0, b1;
     build(t, it, start, mid, trail, depth + 1, &b0);

@@ -39,7 +39,8 @@ typedef struct {
     size_t node_count;
     size_t *unbounded;  /* scene indices */
     size_t unbounded_count;
-    uint64_t *trail;    /* per scene light: its path from the root (bit d: second child) */
+    uint64_t *trail;    /* per scene light: its path from the root (bit d: second child);
+                         * the tree is at most 64 levels deep for it */
     uint8_t *where;     /* per scene light: 0 never chosen, 1 unbounded, 2 in the tree */
 } light_bvh;
 

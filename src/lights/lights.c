@@ -28,9 +28,11 @@ static rgb apply_power(rgb I, double scale, double power, double k_e)
     return rgb_scale(I, scale);
 }
 
-/* The image of an infinite light, named relative to the scene file that names it. */
+/* The image of a light, named relative to the scene file that names it.
+ * Negative texels are read as 0, as pbrt-v4 clamps the RGB it looks up, but
+ * with a warning: they are most likely an error in the file. */
 static hz_status load_image(param_list *pl, const char *filename, bool square,
-                            light_image **out, hz_error *err)
+                            light_image **out, FILE *warn, hz_error *err)
 {
     file_loc at = params_loc(pl, "filename");
     char *path = path_of_scene_file(at, filename);
@@ -40,6 +42,14 @@ static hz_status load_image(param_list *pl, const char *filename, bool square,
     hz_status st = light_image_from_exr(path, square, out, &e);
     if (st != HZ_OK)
         hz_fail_at(err, at, "light \"filename\": %s", e.message);
+    size_t negative = st == HZ_OK ? light_image_negative_texels(*out) : 0;
+    if (negative > 0) {
+        int w, h;
+        light_image_size(*out, &w, &h);
+        hz_warn_at(warn, at,
+                   "light \"filename\": %s: %zu of %zu texels have a negative value; read as 0",
+                   path, negative, (size_t)w * (size_t)h);
+    }
     free(path);
     return st;
 }
@@ -50,6 +60,7 @@ typedef struct {
     param_list *pl;
     file_loc loc;
     transform render_from_world, render_from_light;
+    FILE *warn; /* warnings (NULL: none) */
 } light_source;
 
 /* The "I", "scale" and "power" of the lights that have an intensity. */
@@ -91,7 +102,7 @@ static hz_status goniometric_from_params(const light_source *src, light *out, hz
         return hz_fail_at(err, src->loc,
                           "goniometric light needs \"string filename\" (pbrt-v4 renders "
                           "it black without one)");
-    if (load_image(pl, filename, true, &out->point.image, err) != HZ_OK)
+    if (load_image(pl, filename, true, &out->point.image, src->warn, err) != HZ_OK)
         return HZ_ERROR;
     out->kind = LIGHT_POINT;
     double mean = light_image_mean(out->point.image);
@@ -128,7 +139,7 @@ static hz_status projection_from_params(const light_source *src, light *out, hz_
         return hz_fail_at(err, src->loc, "projection light needs \"string filename\"");
     if (pl->failed)
         return HZ_OK; /* params_finish reports it */
-    if (load_image(pl, filename, false, &out->point.image, err) != HZ_OK)
+    if (load_image(pl, filename, false, &out->point.image, src->warn, err) != HZ_OK)
         return HZ_ERROR;
     int w, h;
     light_image_size(out->point.image, &w, &h);
@@ -288,7 +299,7 @@ static hz_status infinite_from_params(const light_source *src, light *out, hz_er
     double illum = params_float(pl, "illuminance", -1.0);
     out->kind = LIGHT_INFINITE;
     if (filename) {
-        if (load_image(pl, filename, true, &out->infinite.image, err) != HZ_OK)
+        if (load_image(pl, filename, true, &out->infinite.image, src->warn, err) != HZ_OK)
             return HZ_ERROR;
         L = rgb_grey(1.0);
         /* pbrt-v4 scales the map to the asked illuminance on an upward
@@ -349,12 +360,12 @@ static hz_status light_finish(param_list *pl, const char *type, light *out, hz_e
 }
 
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
-                            hz_error *err)
+                            FILE *warn, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     const char *type = e->entity.type ? e->entity.type : "";
     light_source src = {&e->entity.params, e->entity.loc, render_from_world,
-                        transform_compose(render_from_world, e->world_from_light)};
+                        transform_compose(render_from_world, e->world_from_light), warn};
     for (size_t i = 0; i < sizeof light_kinds / sizeof light_kinds[0]; ++i)
         if (strcmp(type, light_kinds[i].type) == 0) {
             if (light_kinds[i].make(&src, out, err) != HZ_OK)
@@ -427,12 +438,12 @@ static double area_power_scale(param_list *pl, const geom_shape *shape, double p
 }
 
 static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                  hz_error *err);
+                                  FILE *warn, hz_error *err);
 
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                 hz_error *err)
+                                 FILE *warn, hz_error *err)
 {
-    hz_status st = area_from_entity(e, shape, out, err);
+    hz_status st = area_from_entity(e, shape, out, warn, err);
     if (st != HZ_OK) { /* what it allocated before the error */
         out->kind = LIGHT_AREA;
         light_free(out);
@@ -441,7 +452,7 @@ hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light
 }
 
 static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                  hz_error *err)
+                                  FILE *warn, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     param_list *pl = &e->params;
@@ -458,7 +469,7 @@ static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, ligh
     if (filename && params_has(pl, "L"))
         return hz_fail_at(err, params_loc(pl, "L"),
                           "AreaLightSource: \"L\" and \"filename\" cannot both be given");
-    if (filename && load_image(pl, filename, false, &out->area.image, err) != HZ_OK)
+    if (filename && load_image(pl, filename, false, &out->area.image, warn, err) != HZ_OK)
         return HZ_ERROR;
     rgb L = params_illuminant(pl, "L", rgb_grey(1.0));
     double scale = params_float(pl, "scale", 1.0);

@@ -85,13 +85,14 @@ typedef struct {
 
 /* LightSource "point", "spot", "goniometric" and "projection" (point lights
  * with an image), "distant", "infinite" (constant "L" or an image
- * "filename"). */
+ * "filename"). Warnings (an image with negative texels) go to `warn` (NULL:
+ * none). */
 hz_status light_from_entity(light_entity *e, transform render_from_world, light *out,
-                            hz_error *err);
+                            FILE *warn, hz_error *err);
 /* AreaLightSource "diffuse" on a top-level shape (in render space, or in
- * object space with its motion). */
+ * object space with its motion); warnings as light_from_entity. */
 hz_status light_area_from_entity(scene_entity *e, const geom_shape *shape, light *out,
-                                 hz_error *err);
+                                 FILE *warn, hz_error *err);
 void light_free(light *l);
 
 /* Relative tolerance of light_uniform_scale, on the entries of the Gram matrix

@@ -6,6 +6,10 @@
 // plain malloc'd, 32-byte aligned byte buffer.
 #include "media/vdb_load.h"
 
+extern "C" {
+#include "core/file.h"
+}
+
 #include "media/vdb_bridge.hpp"
 #include "media/vdb_cache.h"
 #include "media/vdb_isolated.h"
@@ -358,6 +362,10 @@ void list_nvdb(const std::string &path, std::uintmax_t size, vdb_grid_callback c
 
 std::uintmax_t check_file(const char *path, file_kind *kind)
 {
+    // A FIFO would block sniff's open for ever; /dev/urandom would look empty.
+    hz_error not_regular;
+    if (file_check_regular(path, &not_regular) != HZ_OK)
+        throw load_error(not_regular.message);
     std::uintmax_t size = 0;
     *kind = sniff(path, &size);
     switch (*kind) {

@@ -152,7 +152,7 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
         return hz_fail(err, "out of memory");
     for (size_t i = 0; i < sd->light_count; ++i) {
         if (light_from_entity(&sd->lights[i], render_from_world, &rs->lights[rs->light_count],
-                              err) == HZ_OK)
+                              warn, err) == HZ_OK)
             rs->light_count++;
         else if (collect(errs, err) != HZ_OK)
             return HZ_ERROR;
@@ -169,7 +169,7 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
             continue;
         }
         if (light_area_from_entity(&sd->shapes[i].area_light, gs, &rs->lights[rs->light_count],
-                                   err) == HZ_OK) {
+                                   warn, err) == HZ_OK) {
             /* An image emitter's radiance depends on the hit's (u, v). */
             gs->hit_uv |= rs->lights[rs->light_count].area.image != NULL;
             gs->area_light = (int)rs->light_count++;

@@ -25,12 +25,10 @@
 #define UNDER_ASAN 0
 #endif
 
-/* Runs `haze ARGS` (a shell fragment), captures stdout+stderr into out (if not
+/* Runs the shell command `cmd`, captures what it prints into out (if not
  * NULL) and returns the exit status (-1 if it did not exit normally). */
-static inline int run_haze(const char *args, char *out, size_t out_size)
+static inline int run_captured(const char *cmd, char *out, size_t out_size)
 {
-    char cmd[8192];
-    snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", HAZE_BIN, args);
     FILE *p = popen(cmd, "r");
     if (!p)
         return -1;
@@ -48,6 +46,24 @@ static inline int run_haze(const char *args, char *out, size_t out_size)
         out[n] = '\0';
     int status = pclose(p);
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/* Runs `haze ARGS` (a shell fragment), captures stdout+stderr into out (if not
+ * NULL) and returns the exit status (-1 if it did not exit normally). */
+static inline int run_haze(const char *args, char *out, size_t out_size)
+{
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "'%s' %s 2>&1", HAZE_BIN, args);
+    return run_captured(cmd, out, out_size);
+}
+
+/* run_haze for a command that might hang (reading a FIFO): killed after
+ * `seconds`, when the status is timeout(1)'s 124 (or 137). */
+static inline int run_haze_within(int seconds, const char *args, char *out, size_t out_size)
+{
+    char cmd[8192];
+    snprintf(cmd, sizeof cmd, "timeout -k 2 %d '%s' %s 2>&1", seconds, HAZE_BIN, args);
+    return run_captured(cmd, out, out_size);
 }
 
 static inline void write_text_file(const char *path, const char *text)

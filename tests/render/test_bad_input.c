@@ -10,6 +10,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmocka.h>
 
@@ -53,6 +55,17 @@ static void assert_lines(const char *out, const char *const *want, size_t n)
     }
     if (line && *line)
         fail_msg("more lines than the %zu expected: %s", n, out);
+}
+
+/* haze render SCENE -o GOOD over a good output file, killed after
+ * `seconds`: the exit status, its output in out. */
+static int render_over_good(const char *scene, int seconds, char *out, size_t n)
+{
+    char args[2048];
+    write_good_output(HAZE_TMP "/bad_input_good.exr");
+    snprintf(args, sizeof args, "render '%s' -o '" HAZE_TMP "/bad_input_good.exr' --quiet",
+             scene);
+    return run_haze_within(seconds, args, out, n);
 }
 
 static int compare_names(const void *a, const void *b)
@@ -127,10 +140,8 @@ static void test_all_errors_in_one_run(void **state)
                     "AttributeBegin\nAreaLightSource \"diffuse\" \"float what\" 3\n"
                     "Shape \"sphere\"\nAttributeEnd\n");
     const char *good = HAZE_TMP "/bad_input_good.exr";
-    write_good_output(good);
-    char args[2048], out[8192];
-    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet", scene, good);
-    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    char out[8192];
+    assert_int_equal(render_over_good(scene, 600, out, sizeof out), 1);
     static const char *want[] = {
         "bad_input_many.pbrt:1:37: unused parameter \"float bogus\"",
         "bad_input_many.pbrt:5:1: Material \"measured\" is not supported",
@@ -166,10 +177,8 @@ static void test_parse_and_build_errors_in_one_run(void **state)
                     "Frobnicate 3\n"
                     "LightSource \"laser\"\n");
     const char *good = HAZE_TMP "/bad_input_good.exr";
-    write_good_output(good);
-    char args[2048], out[8192];
-    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet", scene, good);
-    assert_int_equal(run_haze(args, out, sizeof out), 1);
+    char out[8192];
+    assert_int_equal(render_over_good(scene, 600, out, sizeof out), 1);
     static const char *want[] = {
         "bad_input_mixed.pbrt:1:34: parameter \"float fov\" expects numbers",
         "bad_input_mixed.pbrt:4:54: parameter \"float uscale\" expects numbers",
@@ -219,6 +228,31 @@ static void test_unwritable_output(void **state)
     }
 }
 
+/* A FIFO named as a volume is refused at once, at its scene place (its open
+ * would wait for a writer for ever); the good output stays. */
+static void test_fifo_volume(void **state)
+{
+    (void)state;
+    const char *fifo = HAZE_TMP "/bad_input_fifo.vdb";
+    const char *scene = HAZE_TMP "/bad_input_fifo.pbrt";
+    unlink(fifo);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    write_text_file(scene, "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                           "WorldBegin\n"
+                           "MakeNamedMedium \"m\" \"string type\" \"nanovdb\"\n"
+                           "  \"string filename\" \"bad_input_fifo.vdb\"\n");
+    const char *good = HAZE_TMP "/bad_input_good.exr";
+    char out[8192];
+    int status = render_over_good(scene, 60, out, sizeof out);
+    if (status != 1)
+        fail_msg("exit status %d, expected 1; output: %s", status, out);
+    static const char *want[] = {"bad_input_fifo.pbrt:3:1: MakeNamedMedium \"m\": " HAZE_TMP
+                                 "/bad_input_fifo.vdb: cannot read: is a FIFO; haze reads only "
+                                 "regular files"};
+    assert_lines(out, want, 1);
+    assert_good_output_kept(good);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -227,6 +261,7 @@ int main(void)
         cmocka_unit_test(test_parse_and_build_errors_in_one_run),
         cmocka_unit_test(test_corrupt_exr_diff),
         cmocka_unit_test(test_unwritable_output),
+        cmocka_unit_test(test_fifo_volume),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -16,6 +16,7 @@
 #include "cli_util.h"
 
 #include <math.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "film/exr.h"
@@ -388,11 +389,12 @@ static void test_heatmaps(void **state)
     assert_null(strchr(strchr(out, '\n') + 1, '\n'));
 }
 
-/* Exit 2 and exactly one line containing `want`. */
+/* Exit 2 and exactly one line containing `want` (within 30 s: a FIFO must
+ * not be waited on). */
 static void expect_exit2(const char *args, const char *want)
 {
     char out[8192];
-    int rc = run_haze(args, out, sizeof out);
+    int rc = run_haze_within(30, args, out, sizeof out);
     if (rc != 2 || !strstr(out, want))
         fail_msg("haze %s: exit %d, output:\n%s(expected exit 2 and '%s')", args, rc, out, want);
     const char *nl = strchr(out, '\n');
@@ -443,6 +445,17 @@ static void test_input_errors(void **state)
     expect_exit2(args, q);
     snprintf(args, sizeof args, "diff '%s' /nonexistent/b.exr", ref_exr);
     expect_exit2(args, "/nonexistent/b.exr");
+
+    /* A FIFO on either side: refused, not waited on for a writer. */
+    tmp_path(q, sizeof q, "fifo.exr");
+    unlink(q);
+    assert_int_equal(mkfifo(q, 0600), 0);
+    char want[1200];
+    snprintf(want, sizeof want, "%s: cannot read: is a FIFO; haze reads only regular files", q);
+    snprintf(args, sizeof args, "diff '%s' '%s'", q, ref_exr);
+    expect_exit2(args, want);
+    snprintf(args, sizeof args, "diff '%s' '%s'", ref_exr, q);
+    expect_exit2(args, want);
 }
 
 static void test_usage(void **state)

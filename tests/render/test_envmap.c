@@ -17,6 +17,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "cli_util.h"
 #include "core/rng.h"
 #include "film/exr.h"
 #include "lights/lights.h"
@@ -156,6 +157,66 @@ static void test_refusals(void **state)
              path);
     build_scene_expect_error(text, msg, sizeof msg);
     assert_non_null(strstr(msg, "cannot both"));
+}
+
+/* Writes dir/NAME: the uniform sky on 8x8 texels, with texels 3, 10 (two
+ * channels) and 50 negative, or those channels 0 (`zeroed`). */
+static void write_negative_map(const char *name, bool zeroed)
+{
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    write_map(path, 8, 8, uniform_sky);
+    exr_image img;
+    hz_error err = {0};
+    assert_int_equal(exr_read(path, &img, &err), HZ_OK);
+    const int texel[4] = {3, 10, 10, 50}, channel[4] = {0, 1, 2, 2};
+    for (int i = 0; i < 4; ++i)
+        img.channels[channel[i]].pixels[texel[i]] = zeroed ? 0.0f : -0.5f * (float)(i + 1);
+    if (exr_write(path, &img, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    exr_image_free(&img);
+}
+
+/* haze render of a plane under dir/NAME.exr, from dir/NAME.pbrt into
+ * dir/NAME-out.exr; its output in msg. */
+static int render_under(const char *name, char *msg, size_t n)
+{
+    char scene[1200], text[2048], args[4096];
+    snprintf(scene, sizeof scene, "%s/%s.pbrt", dir, name);
+    snprintf(text, sizeof text,
+             "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\n"
+             "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" 4\nWorldBegin\n"
+             "LightSource \"infinite\" \"string filename\" \"%s.exr\"\n"
+             "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+             "  \"point3 P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0]\n",
+             name);
+    write_text_file(scene, text);
+    snprintf(args, sizeof args, "render '%s' -o '%s/%s-out.exr' --quiet", scene, dir, name);
+    return run_haze(args, msg, n);
+}
+
+/* Negative texels are read as 0, as pbrt-v4 clamps a map's RGB, but not
+ * silently: one warning at the "filename" parameter names the file and how
+ * many texels had a negative channel. */
+static void test_negative_texels_warned(void **state)
+{
+    (void)state;
+    char msg[4096], want[4096];
+    write_negative_map("neg.exr", false);
+    write_negative_map("zeroed.exr", true);
+    assert_int_equal(render_under("neg", msg, sizeof msg), 0);
+    snprintf(want, sizeof want,
+             "%s/neg.pbrt:6:24: warning: light \"filename\": %s/neg.exr: 3 of 64 texels have "
+             "a negative value; read as 0\n",
+             dir, dir);
+    assert_string_equal(msg, want);
+    assert_int_equal(render_under("zeroed", msg, sizeof msg), 0);
+    assert_string_equal(msg, "");
+    char a[1200], b[1200];
+    snprintf(a, sizeof a, "%s/neg-out.exr", dir);
+    snprintf(b, sizeof b, "%s/zeroed-out.exr", dir);
+    assert_true(exr_pixels_equal(a, b));
 }
 
 /* A diffuse plane of albedo 0.5 seen from above (facing the sky) or a wall
@@ -457,6 +518,7 @@ int main(void)
         cmocka_unit_test(test_mapping),
         cmocka_unit_test(test_sampling_density),
         cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_negative_texels_warned),
         cmocka_unit_test(test_renders_against_closed_forms),
         cmocka_unit_test(test_fog_under_uniform_map),
         cmocka_unit_test(test_goniometric),

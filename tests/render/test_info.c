@@ -289,6 +289,43 @@ static void test_bad_files_exit_1(void **state)
     assert_non_null(strstr(out, expect));
 }
 
+/* Writes HAZE_TMP/NAME holding `text` (its path into path) and runs haze
+ * info on it: the exit status, its output in out. */
+static int info_on(const char *name, const char *text, char *path, char *out, size_t n)
+{
+    char args[2048];
+    snprintf(path, 1024, "%s/%s", HAZE_TMP, name);
+    write_text_file(path, text);
+    snprintf(args, sizeof args, "info '%s'", path);
+    return run_haze(args, out, n);
+}
+
+/* Only text that looks like a scene (its first word a directive, or a .pbrt
+ * name) is parsed as one: a stray byte or prose is "not a ... file". */
+static void test_scene_sniffed(void **state)
+{
+    (void)state;
+    static const char *const not_scenes[][2] = {
+        {"info_one_byte", "v"}, {"info_prose.txt", "hello, world\n"},
+        {"info_comment.txt", "# only a comment\n"}, {"info_word.txt", "Hello, world\n"}};
+    char path[1024], out[4096], want[1200];
+    for (size_t i = 0; i < sizeof not_scenes / sizeof not_scenes[0]; i++) {
+        assert_int_equal(info_on(not_scenes[i][0], not_scenes[i][1], path, out, sizeof out), 1);
+        snprintf(want, sizeof want, "%s: unrecognised file format: not a .vdb, .nvdb, .exr or "
+                                    ".pbrt file", path);
+        if (!strstr(out, want))
+            fail_msg("%s: got \"%s\", want \"%s\"", not_scenes[i][0], out, want);
+        assert_null(strchr(strchr(out, '\n') + 1, '\n'));
+    }
+    /* A scene under another name, after comments and blank lines. */
+    const char *scene = "# a scene\n\n  # indented\nFilm \"rgb\"\nWorldBegin\n";
+    assert_int_equal(info_on("info_scene.txt", scene, path, out, sizeof out), 0);
+    assert_non_null(strstr(out, "pbrt-v4 scene"));
+    /* Any text named .pbrt is parsed: its errors are scene errors. */
+    assert_int_equal(info_on("info_one_byte.pbrt", "v", path, out, sizeof out), 1);
+    assert_non_null(strstr(out, "info_one_byte.pbrt:1:1: unknown directive"));
+}
+
 static void test_usage_exit_2(void **state)
 {
     (void)state;
@@ -307,7 +344,8 @@ int main(void)
         cmocka_unit_test(test_vdb_smoke),       cmocka_unit_test(test_nvdb_box),
         cmocka_unit_test(test_exr_from_render), cmocka_unit_test(test_pbrt),
         cmocka_unit_test(test_exr_offset_windows), cmocka_unit_test(test_control_bytes_escaped),
-        cmocka_unit_test(test_bad_files_exit_1), cmocka_unit_test(test_usage_exit_2),
+        cmocka_unit_test(test_bad_files_exit_1), cmocka_unit_test(test_scene_sniffed),
+        cmocka_unit_test(test_usage_exit_2),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

@@ -172,6 +172,61 @@ static void test_merge_refuses_other_renders(void **state)
     }
 }
 
+static void expect_merge_refused(const char *output, const char *message)
+{
+    char args[2048], out[2048];
+    snprintf(args, sizeof args, "merge '" DIR "/l.exr' '" DIR "/r.exr' -o '%s'", output);
+    int rc = run_haze(args, out, sizeof out);
+    if (rc != 1 || !strstr(out, message))
+        fail_msg("haze %s: exit %d, got \"%s\", want exit 1 and \"%s\"", args, rc, out, message);
+    const char *nl = strchr(out, '\n');
+    assert_true(nl && nl[1] == '\0'); /* one line */
+}
+
+/* haze merge -o is checked as haze render -o: no FIFO, directory, part (by
+ * any name) or non-.exr name is replaced, and nothing is written. */
+static void test_merge_outputs(void **state)
+{
+    (void)state;
+    setup_dir();
+    char out[4096];
+    assert_int_equal(render_in_dir("-o '" DIR "/l.exr' --pixelbounds 0,4,0,8", out, sizeof out), 0);
+    assert_int_equal(render_in_dir("-o '" DIR "/r.exr' --pixelbounds 4,8,0,8", out, sizeof out), 0);
+    size_t n_l = 0, n = 0;
+    unsigned char *l = read_whole_file(DIR "/l.exr", &n_l);
+    assert_non_null(l);
+
+    unlink(DIR "/fifo.exr");
+    assert_int_equal(mkfifo(DIR "/fifo.exr", 0600), 0);
+    expect_merge_refused(DIR "/fifo.exr", "merge: output '" DIR "/fifo.exr' is a FIFO; haze "
+                                          "replaces only regular files");
+    struct stat st;
+    assert_int_equal(lstat(DIR "/fifo.exr", &st), 0);
+    assert_true(S_ISFIFO(st.st_mode));
+    mkdir(DIR "/dir.exr", 0755);
+    expect_merge_refused(DIR "/dir.exr", "is a directory; haze replaces only regular files");
+
+    unlink(DIR "/m.png");
+    expect_merge_refused(DIR "/m.png", "merge: output '" DIR "/m.png' must end in .exr");
+    assert_int_not_equal(lstat(DIR "/m.png", &st), 0);
+
+    /* A part under another name: a path spelled otherwise, a hard link, a
+     * symlink. */
+    unlink(DIR "/hard.exr");
+    unlink(DIR "/soft.exr");
+    assert_int_equal(link(DIR "/l.exr", DIR "/hard.exr"), 0);
+    assert_int_equal(symlink("l.exr", DIR "/soft.exr"), 0);
+    const char *aliases[] = {DIR "/./l.exr", DIR "/hard.exr", DIR "/soft.exr"};
+    for (int i = 0; i < 3; ++i)
+        expect_merge_refused(aliases[i], "which the merge reads; refusing to replace it");
+    unsigned char *kept = read_whole_file(DIR "/l.exr", &n);
+    assert_int_equal(n, n_l);
+    assert_memory_equal(kept, l, n);
+    free(kept);
+    free(l);
+    assert_int_equal(count_temporaries_in(DIR), 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -180,6 +235,7 @@ int main(void)
         cmocka_unit_test(test_inputs_are_not_outputs),
         cmocka_unit_test(test_symlink_written_through),
         cmocka_unit_test(test_merge_refuses_other_renders),
+        cmocka_unit_test(test_merge_outputs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -18,6 +18,7 @@
 
 #include <math.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "cli_util.h"
 #include "film/exr.h"
@@ -79,7 +80,8 @@ static void render(const char *scene, const char *out, const char *extra)
 }
 
 /* haze merge dir/PARTS... -o dir/OUT (names separated by spaces); returns the
- * exit status, output in msg. */
+ * exit status, output in msg. Killed after 60 s: a merge must never hang
+ * (on a FIFO part). */
 static int merge(const char *parts, const char *out, char *msg, size_t n)
 {
     char args[4096];
@@ -89,7 +91,7 @@ static int merge(const char *parts, const char *out, char *msg, size_t n)
     for (char *save = NULL, *p = strtok_r(copy, " ", &save); p; p = strtok_r(NULL, " ", &save))
         len += snprintf(args + len, sizeof args - (size_t)len, " '%s/%s'", dir, p);
     snprintf(args + len, sizeof args - (size_t)len, " -o '%s/%s'", dir, out);
-    return run_haze(args, msg, n);
+    return run_haze_within(60, args, msg, n);
 }
 
 static void assert_same_bytes(const char *a, const char *b)
@@ -418,6 +420,14 @@ static void test_refusals(void **state)
                    "/regions/out11.exr [19,38)x[14,29) is not inside its 37x29 display window");
     expect_refused("fog00.exr fog10.exr missing.exr fog11.exr",
                    "merge: " HAZE_TMP "/regions/missing.exr: cannot read EXR");
+    /* A FIFO part is refused, not waited on for a writer. */
+    char fifo[1200];
+    path_in(fifo, sizeof fifo, "fifo11.exr");
+    unlink(fifo);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    expect_refused("fog00.exr fog10.exr fog01.exr fifo11.exr",
+                   "merge: " HAZE_TMP "/regions/fifo11.exr: cannot read: is a FIFO; haze reads "
+                   "only regular files");
 }
 
 /* Usage errors of haze render dir/fog.pbrt OPTS: exit 2 with the message and

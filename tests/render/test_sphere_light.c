@@ -137,7 +137,8 @@ static void make_sphere_light(sphere_light *s, transform space_from_object, doub
     s->shape.space_from_object = space_from_object;
     s->shape.flip_normal = flip;
     s->shape.area_light = -1;
-    if (light_area_from_entity(&s->sd.shapes[0].area_light, &s->shape, &s->l, &err) != HZ_OK) {
+    if (light_area_from_entity(&s->sd.shapes[0].area_light, &s->shape, &s->l, NULL, &err) !=
+        HZ_OK) {
         print_error("light: %s\n", err.message);
         fail();
     }

@@ -1,6 +1,7 @@
 /* volpath's light samplers: the BVH sampler's probabilities (light_bvh.h)
  * sum to one, agree with what it samples, and follow pbrt-v4's split between
- * unbounded (distant) lights and the tree; power and uniform samplers. */
+ * unbounded (distant) lights and the tree, also in a tree as deep as the
+ * lights' bit trails allow; power and uniform samplers. */
 #include "media_test_util.h"
 #include "core/rng.h"
 #include "lights/light_sampler.h"
@@ -73,6 +74,80 @@ static void test_bvh_probabilities(void **state)
     render_scene_destroy(rs);
 }
 
+/* The probability of reaching each leaf from node i (probability `prob`),
+ * by the tree's own links (not the lights' bit trails): into ref. */
+static void leaf_probabilities(const light_bvh *b, size_t i, vec3 p, vec3 n, double prob,
+                               double *ref)
+{
+    const light_bvh_node *nd = &b->nodes[i];
+    if (nd->leaf) {
+        ref[nd->index] = prob;
+        return;
+    }
+    double c0 = light_bounds_importance(&b->nodes[i + 1].b, p, n);
+    double c1 = light_bounds_importance(&b->nodes[nd->index].b, p, n);
+    leaf_probabilities(b, i + 1, p, n, prob * c0 / (c0 + c1), ref);
+    leaf_probabilities(b, nd->index, p, n, prob * c1 / (c0 + c1), ref);
+}
+
+static int tree_depth(const light_bvh *b, size_t i)
+{
+    const light_bvh_node *nd = &b->nodes[i];
+    if (nd->leaf)
+        return 0;
+    int d0 = tree_depth(b, i + 1), d1 = tree_depth(b, nd->index);
+    return 1 + (d0 > d1 ? d0 : d1);
+}
+
+/* 80 sphere lights at x = 2^-k, each 1/8 of its distance from 0 in radius:
+ * the bucketed split peels one light per level, a chain deeper than the 64
+ * bits of a light's trail. The tree must stop at 64 levels (deeper, the trail
+ * shifted 1 << 64: undefined) and every light's pmf must follow its path. */
+static void test_bvh_deep_chain(void **state)
+{
+    (void)state;
+    enum { LIGHTS = 80 };
+    size_t cap = 1 << 16, len = 0;
+    char *text = malloc(cap);
+    assert_non_null(text);
+    len += (size_t)snprintf(text, cap, "Film \"rgb\" \"integer xresolution\" 4 "
+                                       "\"integer yresolution\" 4\nWorldBegin\n");
+    for (int k = 0; k < LIGHTS; ++k)
+        len += (size_t)snprintf(text + len, cap - len,
+                                "AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+                                "Translate %.17g 0 0\nShape \"sphere\" \"float radius\" %.17g\n"
+                                "AttributeEnd\n",
+                                ldexp(1.0, -k), ldexp(1.0, -k - 3));
+    assert_true(len < cap);
+    render_scene *rs = build(text);
+    free(text);
+    size_t n = render_scene_light_count(rs);
+    assert_int_equal(n, LIGHTS);
+    light_sampler ls;
+    hz_error err = {0};
+    assert_int_equal(light_sampler_create(LIGHT_SAMPLER_BVH, render_scene_lights(rs), n, 10.0,
+                                          &ls, &err),
+                     HZ_OK);
+    int depth = tree_depth(&ls.bvh, 0);
+    assert_true(depth >= 60 && depth <= 64);
+    const vec3 points[] = {v3(0.3, 1.0, 0.0), v3(1e-9, 0.5, 0.2), v3(2.0, -1.0, 1.0),
+                           v3(-0.5, 0.0, 0.001)};
+    for (size_t k = 0; k < sizeof points / sizeof points[0]; ++k) {
+        double ref[LIGHTS] = {0}, sum = 0.0;
+        leaf_probabilities(&ls.bvh, 0, points[k], v3(0, 0, 0), 1.0, ref);
+        for (size_t i = 0; i < n; ++i) {
+            double pmf = light_sampler_pmf(&ls, points[k], v3(0, 0, 0), i);
+            if (!(ref[i] > 0.0) || fabs(pmf - ref[i]) > 1e-12 * ref[i])
+                fail_msg("point %zu, light %zu: pmf %g, its path's probability %g", k, i, pmf,
+                         ref[i]);
+            sum += pmf;
+        }
+        assert_float_equal(sum, 1.0, 1e-12);
+    }
+    light_sampler_free(&ls);
+    render_scene_destroy(rs);
+}
+
 /* Importance: zero outside a spot light's cone (beyond its falloff), falling
  * as 1/d² with distance, and cut by a surface facing away. */
 static void test_bounds_importance(void **state)
@@ -119,6 +194,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_bvh_probabilities),
+        cmocka_unit_test(test_bvh_deep_chain),
         cmocka_unit_test(test_bounds_importance),
         cmocka_unit_test(test_power_and_uniform),
     };
