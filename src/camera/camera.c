@@ -66,9 +66,13 @@ static bool mat4_is_finite(const mat4 *m)
 static const char *check_kind_and_transforms(const camera_config *c, hz_error *err)
 {
     if (c->kind != CAMERA_PERSPECTIVE && c->kind != CAMERA_ORTHOGRAPHIC &&
-        c->kind != CAMERA_SPHERICAL) {
+        c->kind != CAMERA_SPHERICAL && c->kind != CAMERA_REALISTIC) {
         hz_fail(err, "unknown camera kind %d", (int)c->kind);
         return "";
+    }
+    if (c->kind == CAMERA_REALISTIC && (!c->realistic || c->realistic->count < 1)) {
+        hz_fail(err, "the realistic camera has no lens system");
+        return "lensfile";
     }
     if (c->xres < 1 || c->yres < 1) {
         hz_fail(err, "film resolution %dx%d must be at least 1x1", c->xres, c->yres);
@@ -133,8 +137,9 @@ static const char *check_screen_window(const double w[4], hz_error *err)
 /* The lens, focus, field of view and aperture. */
 static const char *check_lens(const camera_config *c, hz_error *err)
 {
-    if (c->kind == CAMERA_SPHERICAL && c->lens_radius != 0.0) {
-        hz_fail(err, "the spherical camera has no lens (\"lensradius\" must be 0)");
+    if ((c->kind == CAMERA_SPHERICAL || c->kind == CAMERA_REALISTIC) && c->lens_radius != 0.0) {
+        hz_fail(err, "the spherical and realistic cameras have no thin lens (\"lensradius\" "
+                     "must be 0)");
         return "lensradius";
     }
     if (!isfinite(c->lens_radius) || c->lens_radius < 0.0 || c->lens_radius > HZ_MAX_COORD) {
@@ -254,7 +259,11 @@ hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err)
     c.xres = cfg->xres;
     c.yres = cfg->yres;
     c.equirect = cfg->equirect;
-    if (cfg->kind == CAMERA_SPHERICAL) { /* no projection: directions from the film point */
+    if (cfg->kind == CAMERA_REALISTIC)
+        c.realistic = *cfg->realistic;
+    if (cfg->kind == CAMERA_SPHERICAL || cfg->kind == CAMERA_REALISTIC) {
+        /* no projection: directions from the film point (spherical) or
+         * through the lens system (realistic) */
         c.screen_from_camera = c.camera_from_raster = c.raster_from_camera = transform_identity();
         *out = c;
         return HZ_OK;
@@ -313,6 +322,7 @@ static void camera_space_ray(const camera *c, camera_sample s, vec3 *o, vec3 *d,
 {
     *p_camera = transform_point(&c->camera_from_raster, v3(s.p_film.x, s.p_film.y, 0.0));
     switch (c->kind) {
+    case CAMERA_REALISTIC: /* realistic_render_ray: never here */
     case CAMERA_SPHERICAL:
         *o = v3(0.0, 0.0, 0.0);
         *d = spherical_direction(c, s.p_film);
@@ -386,8 +396,68 @@ bool camera_raster_bounds(const camera *c, vec3 lo, vec3 hi, double out[4])
     return true;
 }
 
+/* The realistic camera's ray for s, in render space, and its weight (0: none). */
+static double realistic_render_ray(const camera *c, camera_sample s, ray *out)
+{
+    lens_ray r;
+    double w = realistic_generate(&c->realistic, s.p_film, s.p_lens, c->xres, c->yres, &r);
+    if (!(w > 0.0) || !isfinite(w))
+        return 0.0;
+    double time = hz_lerp(s.time, c->shutter_open, c->shutter_close);
+    transform moving;
+    const transform *rfc = render_from_camera_at(c, time, &moving);
+    *out = render_ray(c, rfc, r.o, r.d, time);
+    return w;
+}
+
+double camera_generate_ray_weighted(const camera *c, camera_sample s, ray *out)
+{
+    if (c->kind == CAMERA_REALISTIC)
+        return realistic_render_ray(c, s, out);
+    return camera_generate_ray(c, s, out) ? 1.0 : 0.0;
+}
+
+/* pbrt-v4's CameraBase::GenerateRayDifferential: the ray a twentieth of a
+ * pixel over (or back, if that one is blocked), its difference scaled up to
+ * a pixel. */
+static bool realistic_differential(const camera *c, camera_sample s, const ray *main, int axis,
+                                   vec3 *o, vec3 *d)
+{
+    const double eps[2] = {0.05, -0.05};
+    for (int k = 0; k < 2; ++k) {
+        camera_sample shifted = s;
+        if (axis == 0)
+            shifted.p_film.x += eps[k];
+        else
+            shifted.p_film.y += eps[k];
+        ray r;
+        if (realistic_render_ray(c, shifted, &r) > 0.0) {
+            *o = v3_add(main->o, v3_scale(v3_sub(r.o, main->o), 1.0 / eps[k]));
+            *d = v3_add(main->d, v3_scale(v3_sub(r.d, main->d), 1.0 / eps[k]));
+            return true;
+        }
+    }
+    return false;
+}
+
+double camera_generate_ray_differential_weighted(const camera *c, camera_sample s,
+                                                 ray_differential *out)
+{
+    if (c->kind != CAMERA_REALISTIC)
+        return camera_generate_ray_differential(c, s, out) ? 1.0 : 0.0;
+    double w = realistic_render_ray(c, s, &out->r);
+    if (w == 0.0)
+        return 0.0;
+    out->has_differentials =
+        realistic_differential(c, s, &out->r, 0, &out->rx_o, &out->rx_d) &&
+        realistic_differential(c, s, &out->r, 1, &out->ry_o, &out->ry_d);
+    return w;
+}
+
 bool camera_generate_ray(const camera *c, camera_sample s, ray *out)
 {
+    if (c->kind == CAMERA_REALISTIC)
+        return realistic_render_ray(c, s, out) > 0.0;
     if (c->pinhole) {
         const double(*a)[3] = c->pinhole_from_film;
         double x = s.p_film.x, y = s.p_film.y;
@@ -415,8 +485,9 @@ static void shifted_ray(const camera *c, vec3 p_camera, vec3 delta, vec2 p_lens,
 {
     vec3 p = v3_add(p_camera, delta);
     switch (c->kind) {
+    case CAMERA_REALISTIC:
     case CAMERA_SPHERICAL:
-        assert(!"spherical differentials are finite differences");
+        assert(!"spherical and realistic differentials are finite differences");
         break;
     case CAMERA_PERSPECTIVE:
         if (c->lens_radius > 0.0) {
@@ -444,6 +515,8 @@ static void shifted_ray(const camera *c, vec3 p_camera, vec3 delta, vec2 p_lens,
 
 bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_differential *out)
 {
+    if (c->kind == CAMERA_REALISTIC)
+        return camera_generate_ray_differential_weighted(c, s, out) > 0.0;
     if (c->pinhole) { /* the rays through the film points one pixel over */
         camera_sample sx = s, sy = s;
         sx.p_film.x += 1.0;

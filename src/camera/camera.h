@@ -12,13 +12,19 @@
 #include "core/error.h"
 #include "core/ray.h"
 #include "core/transform.h"
+#include "camera/realistic.h"
 #include "film/film.h"
 #include "scene/scene_desc.h"
 
 /* pbrt-v4's spherical camera: every direction around the camera, the film
  * mapped to the sphere by the equal-area octahedral map or latitude and
  * longitude (equirectangular). */
-typedef enum { CAMERA_PERSPECTIVE, CAMERA_ORTHOGRAPHIC, CAMERA_SPHERICAL } camera_kind;
+typedef enum {
+    CAMERA_PERSPECTIVE,
+    CAMERA_ORTHOGRAPHIC,
+    CAMERA_SPHERICAL,
+    CAMERA_REALISTIC /* pbrt-v4's lens system (camera/realistic.h) */
+} camera_kind;
 
 typedef struct {
     vec2 p_film;         /* raster position, continuous (pixel (x,y) covers [x,x+1)x[y,y+1)) */
@@ -54,6 +60,7 @@ typedef struct {
     bool pinhole;
     double pinhole_from_film[3][3];
     vec3 pinhole_o;
+    realistic_lens realistic;     /* CAMERA_REALISTIC: focused, exit pupil bounded */
 } camera;
 
 /* Everything camera_create reads from the scene, already interpreted: the
@@ -77,6 +84,7 @@ typedef struct {
     double blade_rotation;        /* degrees */
     int xres, yres;
     bool equirect;                /* spherical: "mapping" "equirectangular" */
+    const realistic_lens *realistic; /* CAMERA_REALISTIC: the lens system, copied */
 } camera_config;
 
 /* pbrt-v4's defaults for a film of xres x yres: identity transform, shutter
@@ -103,6 +111,12 @@ double camera_imaging_ratio(const camera *c, const film_params *film);
 
 /* Returns false when the sample makes no ray. Rays are normalised and in render space. */
 bool camera_generate_ray(const camera *c, camera_sample s, ray *out);
+/* The same with pbrt-v4's CameraRay weight, which scales the ray's radiance:
+ * 1 for every camera but the realistic one; 0 when the sample makes no ray
+ * (a realistic camera's vignetted sample: it adds black to its pixel). */
+double camera_generate_ray_weighted(const camera *c, camera_sample s, ray *out);
+double camera_generate_ray_differential_weighted(const camera *c, camera_sample s,
+                                                 ray_differential *out);
 /* For a static perspective or orthographic camera without a lens: a raster
  * rectangle out = {x0, x1, y0, y1} outside which no camera ray meets the
  * render-space box [lo, hi] (the bounds of its corners' images). False when
@@ -110,7 +124,10 @@ bool camera_generate_ray(const camera *c, camera_sample s, ray *out);
  * camera's eye plane. */
 bool camera_raster_bounds(const camera *c, vec3 lo, vec3 hi, double out[4]);
 /* Whether rays depend on camera_sample.p_lens (a thin lens). */
-static inline bool camera_has_lens(const camera *c) { return c->lens_radius > 0.0; }
+static inline bool camera_has_lens(const camera *c)
+{
+    return c->lens_radius > 0.0 || c->kind == CAMERA_REALISTIC;
+}
 bool camera_generate_ray_differential(const camera *c, camera_sample s, ray_differential *out);
 
 #endif

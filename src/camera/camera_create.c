@@ -3,10 +3,13 @@
  * physical-lens parameters) and reports every problem at its file:line:column. */
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "camera/camera.h"
 #include "camera/lens.h"
+#include "camera/lens_file.h"
+#include "core/path.h"
 #include "scene/params.h"
 
 /* Fails at the parameter's own place (the directive's when it is absent). */
@@ -100,12 +103,94 @@ static hz_status read_kind(const scene_entity *ent, camera_kind *kind, hz_error 
         *kind = CAMERA_ORTHOGRAPHIC;
     else if (strcmp(ent->type, "spherical") == 0)
         *kind = CAMERA_SPHERICAL;
+    else if (strcmp(ent->type, "realistic") == 0)
+        *kind = CAMERA_REALISTIC;
     else
         return hz_fail_at(err, ent->loc,
                           "camera type \"%s\" is not supported (haze supports \"perspective\", "
-                          "\"orthographic\" and \"spherical\"; \"realistic\" is refused, see "
-                          "docs/differences-from-pbrt.md)",
+                          "\"orthographic\", \"spherical\" and \"realistic\")",
                           ent->type);
+    return HZ_OK;
+}
+
+/* The realistic camera's "aperture": pbrt-v4's built-in shapes; an image
+ * file is refused. */
+static hz_status read_aperture_shape(scene_entity *ent, aperture_shape *shape, hz_error *err)
+{
+    static const char *const names[] = {"", "gaussian", "square", "pentagon", "star"};
+    static const aperture_shape shapes[] = {APERTURE_CIRCLE, APERTURE_GAUSSIAN, APERTURE_SQUARE,
+                                            APERTURE_PENTAGON, APERTURE_STAR};
+    const char *a = params_string(&ent->params, "aperture", "");
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i)
+        if (strcmp(a, names[i]) == 0) {
+            *shape = shapes[i];
+            return HZ_OK;
+        }
+    char msg[256];
+    snprintf(msg, sizeof msg,
+             "\"aperture\" \"%.60s\": haze has the built-in shapes \"gaussian\", \"square\", "
+             "\"pentagon\" and \"star\" (and the circle, without \"aperture\"); aperture "
+             "images are not supported",
+             a);
+    return fail_param(err, ent, "aperture", msg);
+}
+
+/* The lens table named by "lensfile", relative to the scene file. */
+static hz_status read_lens_table(scene_entity *ent, lens_table *t, hz_error *err)
+{
+    param_list *pl = &ent->params;
+    const char *name = params_string(pl, "lensfile", "");
+    if (!name[0])
+        return fail_param(err, ent, "lensfile",
+                          "the realistic camera needs \"string lensfile\" (a lens description "
+                          "file)");
+    char *path = path_of_scene_file(params_loc(pl, "lensfile"), name);
+    if (!path)
+        return fail_param(err, ent, "lensfile", "out of memory");
+    hz_error why;
+    hz_status st = lens_file_read(path, t, &why);
+    free(path);
+    if (st != HZ_OK)
+        return why.loc.file ? hz_fail(err, "%s", why.message)
+                            : fail_param(err, ent, "lensfile", why.message);
+    return HZ_OK;
+}
+
+/* pbrt-v4's RealisticCamera::Create: the lens system focused at
+ * "focusdistance", its exit pupil bounded. */
+static hz_status read_realistic(scene_entity *ent, const film_params *film, realistic_lens *l,
+                                hz_error *err)
+{
+    param_list *pl = &ent->params;
+    char msg[256];
+    double diameter = params_float(pl, "aperturediameter", 1.0);
+    double focus = params_float(pl, "focusdistance", 10.0);
+    aperture_shape shape = APERTURE_CIRCLE;
+    if (!positive_finite(diameter)) {
+        snprintf(msg, sizeof msg, "\"aperturediameter\" must be finite and > 0 (mm), got %g",
+                 diameter);
+        return fail_param(err, ent, "aperturediameter", msg);
+    }
+    if (!positive_finite(focus)) {
+        snprintf(msg, sizeof msg, "\"focusdistance\" must be finite and > 0, got %g", focus);
+        return fail_param(err, ent, "focusdistance", msg);
+    }
+    if (read_aperture_shape(ent, &shape, err) != HZ_OK)
+        return HZ_ERROR;
+    lens_table t;
+    if (read_lens_table(ent, &t, err) != HZ_OK)
+        return HZ_ERROR;
+    bool clamped;
+    realistic_elements(&t, diameter, shape, film->diagonal, film->xres, film->yres, l, &clamped);
+    if (clamped)
+        hz_warn_at(stderr, params_loc(pl, "aperturediameter"),
+                   "\"aperturediameter\" %g mm is larger than the lens's stop; using the "
+                   "stop's diameter (as pbrt-v4)",
+                   diameter);
+    hz_error why;
+    if (realistic_focus(l, focus, &why) != HZ_OK)
+        return fail_param(err, ent, "focusdistance", why.message);
+    realistic_bound_pupil(l, REALISTIC_PUPIL_SAMPLES);
     return HZ_OK;
 }
 
@@ -177,6 +262,29 @@ static hz_status check_config(const scene_entity *ent, const camera_config *cfg,
     return fail_param(err, ent, bad, why.message);
 }
 
+/* The realistic camera: only the shutter among the other cameras'
+ * parameters (pbrt-v4's CameraBaseParameters); the rest are unused, so
+ * params_finish refuses them. */
+static hz_status create_realistic(scene_entity *ent, const film_params *film, camera_config *cfg,
+                                  camera *out, hz_error *err)
+{
+    realistic_lens *lens = malloc(sizeof *lens);
+    if (!lens)
+        return hz_fail_at(err, ent->loc, "out of memory");
+    hz_status st = read_realistic(ent, film, lens, err);
+    cfg->realistic = lens;
+    if (st == HZ_OK && params_finish(&ent->params, "Camera \"realistic\"", err))
+        st = HZ_ERROR;
+    if (st == HZ_OK)
+        st = check_config(ent, cfg, false, err);
+    hz_error why;
+    if (st == HZ_OK && camera_init(cfg, out, &why))
+        st = hz_fail_at(err, ent->loc, "%s", why.message);
+    free(lens);
+    cfg->realistic = NULL;
+    return st;
+}
+
 hz_status camera_create(camera_entity *e, const film_params *film, camera *out, hz_error *err)
 {
     scene_entity *ent = &e->entity;
@@ -194,6 +302,8 @@ hz_status camera_create(camera_entity *e, const film_params *film, camera *out, 
     set_camera_motion(e, &cfg);
     cfg.shutter_open = params_float(pl, "shutteropen", cfg.shutter_open);
     cfg.shutter_close = params_float(pl, "shutterclose", cfg.shutter_close);
+    if (kind == CAMERA_REALISTIC)
+        return create_realistic(ent, film, &cfg, out, err);
     cfg.lens_radius = params_float(pl, "lensradius", cfg.lens_radius);
     cfg.focal_distance = params_float(pl, "focaldistance", cfg.focal_distance);
     double frame;

@@ -146,18 +146,20 @@ static void render_pixel(render_job *job, int px, int py, integrator_counters *c
          * for every sample cost 5% of a render with nothing to march. */
         ray_differential rd;
         rd.has_differentials = false;
-        if (job->diff_scale > 0.0) {
-            if (!camera_generate_ray_differential(cam, cs, &rd))
-                continue;
+        /* pbrt-v4's camera ray weight; 0: no ray (a realistic camera's
+         * vignetted sample), black at its filter weight as in pbrt-v4. */
+        double cw = job->diff_scale > 0.0 ? camera_generate_ray_differential_weighted(cam, cs, &rd)
+                                          : camera_generate_ray_weighted(cam, cs, &rd.r);
+        if (cw > 0.0 && rd.has_differentials)
             ray_scale_differentials(&rd, job->diff_scale);
-        } else if (!camera_generate_ray(cam, cs, &rd.r)) {
-            continue;
-        }
         double depth = INFINITY;
         film_surface vs; /* visible_surface_at sets every field of a hit */
         vs.hit = false;
-        rgb L = render_scene_li_surface(job->rs, &rd, &st, &depth, job->surfaces ? &vs : NULL,
-                                        counters);
+        rgb L = cw > 0.0 ? render_scene_li_surface(job->rs, &rd, &st, &depth,
+                                                   job->surfaces ? &vs : NULL, counters)
+                         : rgb_grey(0.0);
+        if (cw != 1.0)
+            L = rgb_scale(L, cw);
         uint64_t t0 = counters->timed ? hz_clock_ns() : 0;
         film_add_sample(f, px, py, L, cs.filter_weight, depth);
         if (job->surfaces)

@@ -255,11 +255,10 @@ static void test_unsupported_type(void **state)
 {
     (void)state;
     fixture f;
-    fixture_init(&f, "realistic");
+    fixture_init(&f, "fisheye");
     expect_error(&f, film_of(10, 10),
-                 "scene.pbrt:3:1: camera type \"realistic\" is not supported (haze supports "
-                 "\"perspective\", \"orthographic\" and \"spherical\"; \"realistic\" is "
-                 "refused, see docs/differences-from-pbrt.md)");
+                 "scene.pbrt:3:1: camera type \"fisheye\" is not supported (haze supports "
+                 "\"perspective\", \"orthographic\", \"spherical\" and \"realistic\")");
 }
 
 /* The spherical camera's directions (camera space, before the render
@@ -590,10 +589,7 @@ static void test_from_scene_text(void **state)
                                       "WorldBegin\n",
                                       10, 10, &c, &err),
                      HZ_ERROR);
-    assert_string_equal(err.message,
-                        "t.pbrt:1:1: camera type \"realistic\" is not supported (haze supports "
-                        "\"perspective\", \"orthographic\" and \"spherical\"; \"realistic\" "
-                        "is refused, see docs/differences-from-pbrt.md)");
+    assert_string_equal(err.message, "t.pbrt:1:20: x.dat: cannot open the lens file");
 
     assert_int_equal(create_from_text("Camera \"orthographic\" \"float lensradius\" 0.5\n"
                                       "    \"float focaldistance\" -1\nWorldBegin\n",
