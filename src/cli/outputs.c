@@ -54,7 +54,9 @@ static hz_status resolve(const char *path, const char *ext, const char *what, ch
 {
     if (!has_suffix(path, ext))
         return hz_fail(err, "%s '%s' must end in %s%s", what, path, ext,
-                       strcmp(ext, ".exr") == 0 ? " (haze writes OpenEXR; give -o NAME.exr)" : "");
+                       strcmp(ext, ".exr") == 0
+                           ? " (-o writes OpenEXR; give -o NAME.exr, and --preview NAME.png for a PNG)"
+                           : "");
     struct stat st;
     if (lstat(path, &st) != 0) {
         if (errno != ENOENT)
@@ -88,23 +90,26 @@ static bool same_file(const char *a, const char *b)
     return strcmp(a, b) == 0;
 }
 
-hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png,
-                          render_outputs *out, hz_error *err)
+hz_status outputs_resolve(const scene_desc *sd, const char *image, bool film_named,
+                          const char *png, render_outputs *out, hz_error *err)
 {
     out->png[0] = '\0';
-    if (resolve(exr, ".exr", "output", out->exr, sizeof out->exr, err) != HZ_OK)
+    /* -o writes EXR only: it is what haze merge and haze diff read back. */
+    out->image_png = film_named && has_suffix(image, ".png");
+    if (resolve(image, out->image_png ? ".png" : ".exr", "output", out->image,
+                sizeof out->image, err) != HZ_OK)
         return HZ_ERROR;
     if (png && resolve(png, ".png", "preview", out->png, sizeof out->png, err) != HZ_OK)
         return HZ_ERROR;
-    if (png && same_file(out->exr, out->png))
-        return hz_fail(err, "output '%s' and preview '%s' are the same file", exr, png);
+    if (png && same_file(out->image, out->png))
+        return hz_fail(err, "output '%s' and preview '%s' are the same file", image, png);
     char **inputs;
     size_t count;
     if (scene_input_files(sd, &inputs, &count, err) != HZ_OK)
         return HZ_ERROR;
     /* Outputs that exist yet: only those can be an input. */
     struct stat so[2];
-    bool exists[2] = {stat(out->exr, &so[0]) == 0, out->png[0] && stat(out->png, &so[1]) == 0};
+    bool exists[2] = {stat(out->image, &so[0]) == 0, out->png[0] && stat(out->png, &so[1]) == 0};
     hz_status st = HZ_OK;
     for (size_t i = 0; st == HZ_OK && i < count && (exists[0] || exists[1]); ++i) {
         struct stat si;
@@ -113,7 +118,7 @@ hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png
         for (int k = 0; k < 2 && st == HZ_OK; ++k)
             if (exists[k] && so[k].st_dev == si.st_dev && so[k].st_ino == si.st_ino)
                 st = hz_fail(err, "%s '%s' is '%s', which the render reads; refusing to replace it",
-                             k == 0 ? "output" : "preview", k == 0 ? exr : png, inputs[i]);
+                             k == 0 ? "output" : "preview", k == 0 ? image : png, inputs[i]);
     }
     scene_input_files_free(inputs, count);
     return st;
