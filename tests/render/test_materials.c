@@ -49,6 +49,53 @@ static void test_conductor_head_on(void **state)
     free(text);
 }
 
+/* A reflectance that is within [0, 1] but whose RGB is not, by rounding or
+ * through a spectrum's reduction to RGB (a flat [400 1 700 1] gives G =
+ * 1.0012), is clamped and renders; a value really above 1 is still refused. */
+static void test_reflectance_bounds(void **state)
+{
+    (void)state;
+    const char *ok[] = {
+        "Material \"diffuse\" \"spectrum reflectance\" [400 1 700 1]",
+        "Material \"conductor\" \"spectrum reflectance\" [400 1 700 1]",
+        "ColorSpace \"rec2020\" Material \"diffuse\" \"rgb reflectance\" [1 1 1]",
+        "ColorSpace \"dci-p3\" Material \"conductor\" \"rgb reflectance\" [1 1 1]",
+    };
+    for (size_t i = 0; i < sizeof ok / sizeof ok[0]; ++i) {
+        char *text = mirror_scene(ok[i]);
+        render_scene *rs = build(text);
+        pstat p = pixel_stats_raw(rs, 1, 2, 4);
+        for (int c = 0; c < 3; ++c)
+            if (!(ch(p.mean, c) <= 1.0))
+                fail_msg("%s: channel %d is %.17g", ok[i], c, ch(p.mean, c));
+        render_scene_destroy(rs);
+        free(text);
+    }
+    /* The white spectrum's conductor seen head-on reflects its RGB, G
+     * clamped to 1 (then to pbrt-v4's 0.9999 for a conductor's k). */
+    char *text = mirror_scene(ok[1]);
+    render_scene *rs = build(text);
+    pstat p = pixel_stats_raw(rs, 1, 2, 4);
+    expect_rgb_close(p.mean, rgb_make(0.99596872, 0.9999, 0.99434505), 1e-6, 1e-12,
+                     "white spectrum", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+    const char *refused[] = {
+        "Material \"diffuse\" \"rgb reflectance\" [1.01 1 1]",
+        "Material \"diffuse\" \"spectrum reflectance\" [400 1.01 700 1.01]",
+        "Material \"conductor\" \"rgb reflectance\" [0.5 1.01 0.5]",
+        "Material \"diffuse\" \"rgb reflectance\" [0.5 -0.001 0.5]",
+    };
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+        text = mirror_scene(refused[i]);
+        char msg[512];
+        build_scene_expect_error(text, msg, sizeof msg);
+        if (!strstr(msg, "reflectance must be within [0, 1]") || !strstr(msg, "test.pbrt:8:"))
+            fail_msg("%s: %s", refused[i], msg);
+        free(text);
+    }
+}
+
 /* A coating of index 1 and no thickness is invisible: coateddiffuse is its
  * base (reflectance r under a uniform sky returns r), coatedconductor its
  * metal; a real coating (eta 1.5) on a white base loses a little. */
@@ -514,6 +561,7 @@ int main(void)
         cmocka_unit_test(test_integrator_and_parameters),
         cmocka_unit_test(test_bump_ramp),
         cmocka_unit_test(test_mix_texture_amount),
+        cmocka_unit_test(test_reflectance_bounds),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
