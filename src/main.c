@@ -242,8 +242,16 @@ static int parse_render_args(int argc, char **argv, cli *c)
 
 static void format_count(char *buf, size_t n, long long v) { snprintf(buf, n, "%lld", v); }
 
-/* Writes the EXR (and the PNG preview) of an interrupted render: rendered
- * tiles only, with header attributes describing which. */
+/* The image (an EXR, or the PNG the Film names) at `path`. */
+static hz_status write_image_file(const render_outputs *outs, const film *f, const char *path,
+                                  double ratio, const film_output *out, hz_error *err)
+{
+    return outs->image_png ? film_write_png_with(f, path, ratio, out, err)
+                           : film_write_exr_with(f, path, ratio, out, err);
+}
+
+/* Writes the image (and the PNG preview) of an interrupted render: rendered
+ * tiles only, with EXR header attributes describing which. */
 static int write_partial(const render_outputs *outs, film *f, double ratio,
                          const render_stats *stats)
 {
@@ -270,10 +278,10 @@ static int write_partial(const render_outputs *outs, film *f, double ratio,
         {"haze:render", outs->render_id},
     };
     film_output out = {attrs, (int)(sizeof attrs / sizeof attrs[0]), &output_note, stats->threads};
-    char exr_path[PATH_MAX + 16], png_path[PATH_MAX + 16];
-    outputs_partial_path(outs->exr, exr_path, sizeof exr_path);
+    char image_path[PATH_MAX + 16], png_path[PATH_MAX + 16];
+    outputs_partial_path(outs->image, image_path, sizeof image_path);
     hz_error err = {0};
-    if (film_write_exr_with(f, exr_path, ratio, &out, &err) != HZ_OK) {
+    if (write_image_file(outs, f, image_path, ratio, &out, &err) != HZ_OK) {
         hz_error_print(stderr, &err);
         return EXIT_SCENE;
     }
@@ -286,7 +294,7 @@ static int write_partial(const render_outputs *outs, film *f, double ratio,
         }
     }
     fprintf(stderr, "haze: interrupted: wrote %d of %d tiles to %s%s%s\n", stats->tiles_done,
-            stats->tile_count, exr_path, preview ? " and " : "", preview ? png_path : "");
+            stats->tile_count, image_path, preview ? " and " : "", preview ? png_path : "");
     return EXIT_INTERRUPTED;
 }
 
@@ -466,7 +474,8 @@ static int load_scene(const cli *c, distributed *dist, render_job *job, phase_ti
     job->f = st == HZ_OK ? render_scene_film(job->rs) : NULL;
     job->fp = job->f ? film_get_params(job->f) : NULL;
     if (st == HZ_OK && rank0 &&
-        outputs_resolve(&job->sd, job->fp->filename, c->preview, &job->outs, err) != HZ_OK)
+        outputs_resolve(&job->sd, job->fp->filename, !c->output, c->preview, &job->outs, err) !=
+            HZ_OK)
         st = HZ_ERROR;
     if (st == HZ_OK && scene_inputs_hash(&job->sd, &job->inputs_hash, err) != HZ_OK)
         st = HZ_ERROR;
@@ -554,7 +563,7 @@ static void image_attributes_fill(image_attributes *a, const char *render_id, co
     }
 }
 
-/* Writes the EXR (and the PNG preview) of a complete render. Returns 0 or
+/* Writes the image (and the PNG preview) of a complete render. Returns 0 or
  * the exit status. */
 static int write_image(const cli *c, render_job *job, const render_stats *st,
                        const progressive_goal *goal, const step_choice *steps, double ratio,
@@ -568,7 +577,7 @@ static int write_image(const cli *c, render_job *job, const render_stats *st,
     image_attributes_fill(&attrs, job->outs.render_id, c, goal, st, steps);
     film_output out = {attrs.items, attrs.count, &output_note, st->threads};
     ph->write = hz_clock_seconds();
-    if (film_write_exr_with(job->f, job->outs.exr, ratio, &out, err) != HZ_OK ||
+    if (write_image_file(&job->outs, job->f, job->outs.image, ratio, &out, err) != HZ_OK ||
         (c->preview && film_write_png_with(job->f, job->outs.png, ratio, &out, err) != HZ_OK)) {
         hz_error_print(stderr, err);
         return EXIT_SCENE;

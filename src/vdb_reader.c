@@ -3,11 +3,30 @@
  * to stdout; TYPE is two digits, the value type and whether the grid is
  * optional (see src/media/vdb_isolated.h, vdb_module_load_grid_isolated). Run
  * by haze, not by users. */
+#define _POSIX_C_SOURCE 200809L
+#include <fcntl.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
 #include "media/vdb_isolated.h"
+
+/* The replies get stdout's pipe on a descriptor of their own, and stdout
+ * goes to /dev/null: the libraries print there (OpenVDB's log4cplus
+ * warnings, with their colour codes), which must not land among the replies'
+ * bytes. Returns the replies' descriptor, -1 on failure. */
+static int take_stdout(void)
+{
+    int replies = dup(STDOUT_FILENO);
+    int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+    bool ok = replies >= 0 && null >= 0 && dup2(null, STDOUT_FILENO) >= 0;
+    if (null >= 0)
+        close(null);
+    if (!ok && replies >= 0)
+        close(replies);
+    return ok ? replies : -1;
+}
 
 int main(int argc, char **argv)
 {
@@ -25,6 +44,11 @@ int main(int argc, char **argv)
         req[i].type = t[0] == '1' ? VDB_VEC3 : VDB_FLOAT;
         req[i].optional = t[0] && t[1] == '1';
     }
+    int replies = take_stdout();
+    if (replies < 0) {
+        perror("haze_vdb_reader: stdout");
+        return 1;
+    }
     return vdb_reader_run(argv[1], argv[2], strtoull(argv[3], NULL, 10), req, (size_t)n,
-                          STDOUT_FILENO);
+                          replies);
 }

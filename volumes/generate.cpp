@@ -51,6 +51,11 @@
 //                      "v" (world units per second: expanding from the
 //                      fireball's centre and rising) at half the resolution,
 //                      over the density's voxels dilated by 6
+//   dup_names.vdb      two float grids both named "density" (OpenVDB calls
+//                      them "density[0]" and "density[1]"): 1 and then 2 on
+//                      voxels [0,1]^3, voxel size 1/4. Only with `--only
+//                      dup_names.vdb`: the test build writes it (20 KB of
+//                      node masks, for a file that only shows a refusal)
 //   vec_ramp.vdb/.nvdb "v": the linear field v(i,j,k) = (0.5 i - 1, 0.25 j, 2 - k)
 //                      on voxels [0,7]^3 (voxel size 0.25, offset (1, 2, 3)), and
 //                      "density": 1 on the same voxels (for type checks); the
@@ -58,7 +63,7 @@
 //
 // Deterministic: fixed seeds and our own integer hash (OpenVDB still writes a
 // random file UUID into each header, so the bytes differ between runs).
-// Usage: haze_volumes OUTDIR
+// Usage: haze_volumes OUTDIR [--only-new | --only dup_names.vdb]
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
 #include <openvdb/tools/Morphology.h>
@@ -480,6 +485,18 @@ void write_vdb(const std::string &path, openvdb::GridPtrVec grids)
     std::printf("wrote %s\n", path.c_str());
 }
 
+// Grids that share a name, which haze refuses to choose between.
+openvdb::GridPtrVec dup_names()
+{
+    openvdb::GridPtrVec grids;
+    for (float value : {1.0f, 2.0f}) {
+        FloatGrid::Ptr g = constant_cube("density", 0.25, 0, 1, value);
+        g->setGridClass(openvdb::GRID_FOG_VOLUME);
+        grids.push_back(g);
+    }
+    return grids;
+}
+
 template <typename GridT>
 nanovdb::GridHandle<nanovdb::HostBuffer> to_nano(const GridT &grid)
 {
@@ -497,85 +514,102 @@ void write_nvdb(const std::string &path,
     std::printf("wrote %s\n", path.c_str());
 }
 
+// The volumes added last (what --only-new writes).
+void write_newer(const std::string &dir)
+{
+    {
+        FloatGrid::Ptr b = box();
+        FloatGrid::Ptr t = constant_cube("temperature", 1.0 / 32.0, 0, 31, 2500.0f);
+        FloatGrid::Ptr tc = constant_cube("temperature_coarse", 1.0 / 16.0, -2, 17, 2500.0f);
+        write_vdb(dir + "/box_fire.vdb", {b, t, tc});
+        std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
+        h.push_back(to_nano(*b));
+        h.push_back(to_nano(*t));
+        h.push_back(to_nano(*tc));
+        write_nvdb(dir + "/box_fire.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
+    }
+    {
+        FloatGrid::Ptr d, t, f;
+        Vec3SGrid::Ptr v, c;
+        explosion(d, t, v, f, c);
+        write_vdb(dir + "/explosion.vdb", {d, t, v, f, c});
+    }
+    {
+        Vec3SGrid::Ptr c = Vec3SGrid::create(openvdb::Vec3s(0.0f));
+        c->setName("color");
+        c->setTransform(openvdb::math::Transform::createLinearTransform(1.0 / 32.0));
+        auto acc = c->getAccessor();
+        for (int i = -2; i <= 33; ++i)
+            for (int j = -2; j <= 33; ++j)
+                for (int k = -2; k <= 33; ++k)
+                    acc.setValue(Coord(i, j, k), openvdb::Vec3s(0.2f, 0.5f, 1.0f));
+        write_vdb(dir + "/box_color.vdb", {box(), c});
+    }
+    {
+        FloatGrid::Ptr b = box();
+        auto acc = b->getAccessor();
+        for (int i = 0; i <= 31; ++i)
+            for (int j = 0; j <= 31; ++j)
+                for (int k = 12; k <= 19; ++k)
+                    acc.setValueOff(Coord(i, j, k), 50.0f);
+        write_vdb(dir + "/box_inactive.vdb", {b});
+    }
+}
+
+// The first volumes.
+void write_first(const std::string &dir)
+{
+    FloatGrid::Ptr b = box();
+    write_vdb(dir + "/box.vdb", {b});
+    {
+        std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
+        h.push_back(to_nano(*b));
+        write_nvdb(dir + "/box.nvdb", std::move(h));
+    }
+    write_vdb(dir + "/fog_sphere.vdb", {fog_sphere()});
+    write_vdb(dir + "/sheet.vdb", {sheet()});
+    write_vdb(dir + "/sparse.vdb", {sparse()});
+    FloatGrid::Ptr d;
+    Vec3SGrid::Ptr v;
+    smoke(d, v);
+    write_vdb(dir + "/smoke.vdb", {d, v});
+    plume(d, v);
+    write_vdb(dir + "/plume.vdb", {d, v});
+    write_vdb(dir + "/box_velocity.vdb",
+              {b, box_velocity(*b, "v", openvdb::Vec3s(1.0f, 0.25f, 0.0f)),
+               box_velocity(*b, "v0", openvdb::Vec3s(0.0f))});
+    vec_ramp(d, v);
+    write_vdb(dir + "/vec_ramp.vdb", {d, v});
+    {
+        std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
+        h.push_back(to_nano(*v));
+        h.push_back(to_nano(*d));
+        // ZIP: a NanoVDB vec3 grid is half a megabyte uncompressed (its upper
+        // internal node alone).
+        write_nvdb(dir + "/vec_ramp.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
+    }
+}
+
 } // namespace
 
 int main(int argc, char **argv)
 {
-    if (argc != 2 && argc != 3) {
-        std::fprintf(stderr, "usage: %s OUTDIR [--only-new]\n", argv[0]);
+    const bool only = argc == 4 && std::string(argv[2]) == "--only";
+    const bool only_new = argc == 3 && std::string(argv[2]) == "--only-new";
+    if ((argc != 2 && !only && !only_new) || (only && std::string(argv[3]) != "dup_names.vdb")) {
+        std::fprintf(stderr, "usage: %s OUTDIR [--only-new | --only dup_names.vdb]\n", argv[0]);
         return 2;
     }
     const std::string dir = argv[1];
     try {
         openvdb::initialize();
-        {
-            FloatGrid::Ptr b = box();
-            FloatGrid::Ptr t = constant_cube("temperature", 1.0 / 32.0, 0, 31, 2500.0f);
-            FloatGrid::Ptr tc = constant_cube("temperature_coarse", 1.0 / 16.0, -2, 17, 2500.0f);
-            write_vdb(dir + "/box_fire.vdb", {b, t, tc});
-            std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
-            h.push_back(to_nano(*b));
-            h.push_back(to_nano(*t));
-            h.push_back(to_nano(*tc));
-            write_nvdb(dir + "/box_fire.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
-        }
-        {
-            FloatGrid::Ptr d, t, f;
-            Vec3SGrid::Ptr v, c;
-            explosion(d, t, v, f, c);
-            write_vdb(dir + "/explosion.vdb", {d, t, v, f, c});
-        }
-        {
-            Vec3SGrid::Ptr c = Vec3SGrid::create(openvdb::Vec3s(0.0f));
-            c->setName("color");
-            c->setTransform(openvdb::math::Transform::createLinearTransform(1.0 / 32.0));
-            auto acc = c->getAccessor();
-            for (int i = -2; i <= 33; ++i)
-                for (int j = -2; j <= 33; ++j)
-                    for (int k = -2; k <= 33; ++k)
-                        acc.setValue(Coord(i, j, k), openvdb::Vec3s(0.2f, 0.5f, 1.0f));
-            write_vdb(dir + "/box_color.vdb", {box(), c});
-        }
-        {
-            FloatGrid::Ptr b = box();
-            auto acc = b->getAccessor();
-            for (int i = 0; i <= 31; ++i)
-                for (int j = 0; j <= 31; ++j)
-                    for (int k = 12; k <= 19; ++k)
-                        acc.setValueOff(Coord(i, j, k), 50.0f);
-            write_vdb(dir + "/box_inactive.vdb", {b});
-        }
-        if (argc > 2 && std::string(argv[2]) == "--only-new")
+        if (only) {
+            write_vdb(dir + "/dup_names.vdb", dup_names());
             return 0;
-        FloatGrid::Ptr b = box();
-        write_vdb(dir + "/box.vdb", {b});
-        {
-            std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
-            h.push_back(to_nano(*b));
-            write_nvdb(dir + "/box.nvdb", std::move(h));
         }
-        write_vdb(dir + "/fog_sphere.vdb", {fog_sphere()});
-        write_vdb(dir + "/sheet.vdb", {sheet()});
-        write_vdb(dir + "/sparse.vdb", {sparse()});
-        FloatGrid::Ptr d;
-        Vec3SGrid::Ptr v;
-        smoke(d, v);
-        write_vdb(dir + "/smoke.vdb", {d, v});
-        plume(d, v);
-        write_vdb(dir + "/plume.vdb", {d, v});
-        write_vdb(dir + "/box_velocity.vdb",
-                  {b, box_velocity(*b, "v", openvdb::Vec3s(1.0f, 0.25f, 0.0f)),
-                   box_velocity(*b, "v0", openvdb::Vec3s(0.0f))});
-        vec_ramp(d, v);
-        write_vdb(dir + "/vec_ramp.vdb", {d, v});
-        {
-            std::vector<nanovdb::GridHandle<nanovdb::HostBuffer>> h;
-            h.push_back(to_nano(*v));
-            h.push_back(to_nano(*d));
-            // ZIP: a NanoVDB vec3 grid is half a megabyte uncompressed (its upper
-            // internal node alone).
-            write_nvdb(dir + "/vec_ramp.nvdb", std::move(h), nanovdb::io::Codec::ZIP);
-        }
+        write_newer(dir);
+        if (!only_new)
+            write_first(dir);
     } catch (const std::exception &e) {
         std::fprintf(stderr, "haze_volumes: %s\n", e.what());
         return 1;

@@ -53,7 +53,9 @@ hz_status outputs_check_path(const char *path, const char *ext, const char *what
 {
     if (!has_suffix(path, ext))
         return hz_fail(err, "%s '%s' must end in %s%s", what, path, ext,
-                       strcmp(ext, ".exr") == 0 ? " (haze writes OpenEXR; give -o NAME.exr)" : "");
+                       strcmp(ext, ".exr") == 0
+                           ? " (-o writes OpenEXR; give -o NAME.exr, and --preview NAME.png for a PNG)"
+                           : "");
     struct stat st;
     if (lstat(path, &st) != 0) {
         if (errno != ENOENT)
@@ -101,22 +103,25 @@ hz_status outputs_refuse_inputs(const char *what, const char *path, const char *
     return HZ_OK;
 }
 
-hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png,
-                          render_outputs *out, hz_error *err)
+hz_status outputs_resolve(const scene_desc *sd, const char *image, bool film_named,
+                          const char *png, render_outputs *out, hz_error *err)
 {
     out->png[0] = '\0';
-    if (outputs_check_path(exr, ".exr", "output", out->exr, sizeof out->exr, err) != HZ_OK)
+    /* -o writes EXR only: it is what haze merge and haze diff read back. */
+    out->image_png = film_named && has_suffix(image, ".png");
+    if (outputs_check_path(image, out->image_png ? ".png" : ".exr", "output", out->image,
+                           sizeof out->image, err) != HZ_OK)
         return HZ_ERROR;
     if (png && outputs_check_path(png, ".png", "preview", out->png, sizeof out->png, err) != HZ_OK)
         return HZ_ERROR;
-    if (png && same_file(out->exr, out->png))
-        return hz_fail(err, "output '%s' and preview '%s' are the same file", exr, png);
+    if (png && same_file(out->image, out->png))
+        return hz_fail(err, "output '%s' and preview '%s' are the same file", image, png);
     char **inputs;
     size_t count;
     if (scene_input_files(sd, &inputs, &count, err) != HZ_OK)
         return HZ_ERROR;
     const char *const *names = (const char *const *)inputs;
-    hz_status st = outputs_refuse_inputs("output", exr, out->exr, names, count, "the render", err);
+    hz_status st = outputs_refuse_inputs("output", image, out->image, names, count, "the render", err);
     if (st == HZ_OK && png)
         st = outputs_refuse_inputs("preview", png, out->png, names, count, "the render", err);
     scene_input_files_free(inputs, count);

@@ -11,9 +11,10 @@
 #include "scene/scene_desc.h"
 
 typedef struct {
-    char exr[PATH_MAX]; /* the file the EXR replaces (a symlink's target) */
-    char png[PATH_MAX]; /* the same for the --preview PNG; "" without one */
-    char render_id[17]; /* outputs_render_id in hex: the EXR's "haze:render" */
+    char image[PATH_MAX]; /* the file the image replaces (a symlink's target) */
+    bool image_png;       /* the image is a PNG (the Film's filename), not an EXR */
+    char png[PATH_MAX];   /* the same for the --preview PNG; "" without one */
+    char render_id[17];   /* outputs_render_id in hex: the EXR's "haze:render" */
 } render_outputs;
 
 /* What identifies a render, written to every EXR as "haze:render" so that
@@ -24,16 +25,18 @@ typedef struct {
 uint64_t outputs_render_id(uint64_t inputs_hash, const render_scene *rs, int spp,
                            bool disable_pixel_jitter);
 
-/* Resolves and checks the EXR output `exr` and the optional PNG `png` (NULL:
- * none) of a render of `sd`. Refused, each with one line naming the file:
- * an EXR name not ending in ".exr" (a PNG not in ".png"); an existing file
+/* Resolves and checks the image `image` and the optional preview PNG `png`
+ * (NULL: none) of a render of `sd`. The image is an EXR, or a PNG when
+ * `film_named` (the Film's filename, not -o's) and it ends in ".png". Refused,
+ * each with one line naming the file: an image name not ending in ".exr" (or
+ * ".png" as above; a preview not in ".png"); an existing file
  * that is not a regular file (device, FIFO, socket, directory: never
  * replaced); a dangling symlink; a file the render reads (the scene, an
  * include, a mesh, a volume: compared by device and inode); the EXR and the
  * PNG being one file; a directory that does not exist or cannot be written.
  * A symlink is written through: its target is replaced atomically. */
-hz_status outputs_resolve(const scene_desc *sd, const char *exr, const char *png,
-                          render_outputs *out, hz_error *err);
+hz_status outputs_resolve(const scene_desc *sd, const char *image, bool film_named,
+                          const char *png, render_outputs *out, hz_error *err);
 
 /* Resolves and checks one output, `path` (named `what` in messages: "output",
  * "preview"), as outputs_resolve does: refused when its name does not end in

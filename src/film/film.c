@@ -92,11 +92,14 @@ static double film_bytes(const film_params *p)
 
 double film_memory_bytes(const film *f) { return film_bytes(&f->p); }
 
-static bool ends_with_exr(const char *s)
+/* `s` ends in `ext` (".exr", ".png"; any case) after at least one character. */
+static bool ends_with(const char *s, const char *ext)
 {
-    size_t n = strlen(s);
-    return n > 4 && strcasecmp(s + n - 4, ".exr") == 0;
+    size_t n = strlen(s), m = strlen(ext);
+    return n > m && strcasecmp(s + n - m, ext) == 0;
 }
+
+bool film_params_writes_png(const film_params *p) { return ends_with(p->filename, ".png"); }
 
 /* pbrt-v4's crop window rule: ceil(res * crop), crop = [x0 x1 y0 y1] in [0, 1]. */
 static pixel_bounds crop_bounds(int xres, int yres, const double crop[4])
@@ -192,8 +195,9 @@ static void film_read_resolution(param_list *pl, film_params *p)
 static void film_read_filename(param_list *pl, film_params *p)
 {
     const char *name = params_string(pl, "filename", "pbrt.exr");
-    if (!ends_with_exr(name))
-        params_reject(pl, "filename", "Film \"string filename\" \"%s\" must end in .exr", name);
+    if (!ends_with(name, ".exr") && !ends_with(name, ".png"))
+        params_reject(pl, "filename", "Film \"string filename\" \"%s\" must end in .exr or .png",
+                      name);
     else if (strlen(name) >= sizeof p->filename)
         params_reject(pl, "filename", "Film \"string filename\" is too long");
     else
@@ -279,6 +283,33 @@ hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, 
         return HZ_ERROR;
     }
     return film_check_memory(e, out, err);
+}
+
+/* A PNG holds 8-bit sRGB R, G, B and nothing else: the channels the Film
+ * asks for beside them are refused rather than silently dropped. pbrt-v4
+ * refuses a gbuffer film's PNG too ("EXR is the only format supported"). */
+hz_status film_params_check_format(const scene_entity *e, const film_params *p, hz_error *err)
+{
+    if (!film_params_writes_png(p))
+        return HZ_OK;
+    const param_list *pl = &e->params;
+    if (p->gbuffer)
+        return hz_fail_at(err, params_loc(pl, "filename"),
+                          "Film \"gbuffer\" writes only EXR (as pbrt-v4), not \"%s\"; give a "
+                          "\"string filename\" ending in .exr, or -o NAME.exr", p->filename);
+    const struct {
+        bool on;
+        const char *name;
+    } extra[] = {{p->write_z, "writedepth"},
+                 {p->write_variance, "writevariance"},
+                 {p->write_sample_count, "writesamplecount"}};
+    for (size_t i = 0; i < sizeof extra / sizeof extra[0]; ++i)
+        if (extra[i].on)
+            return hz_fail_at(err, params_loc(pl, extra[i].name),
+                              "Film \"bool %s\" needs an EXR: the PNG \"%s\" holds only R, G "
+                              "and B; give a \"string filename\" ending in .exr, or -o NAME.exr",
+                              extra[i].name, p->filename);
+    return HZ_OK;
 }
 
 void film_params_set_color_space(film_params *p, color_space cs)

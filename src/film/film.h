@@ -22,7 +22,7 @@ typedef struct {
 typedef struct {
     int xres, yres;            /* full resolution (display window) */
     pixel_bounds bounds;       /* pixels rendered (data window), from cropwindow/pixelbounds */
-    char filename[4096];       /* "pbrt.exr" by default; -o overrides */
+    char filename[4096];       /* "pbrt.exr" by default, or a .png; -o overrides */
     bool savefp16;
     double iso;                /* 100 by default; imaging ratio = exposure time * iso / 100 */
     double scale;              /* "scale" (1): pbrt-v4's before 2020, multiplying the image
@@ -74,7 +74,7 @@ hz_status film_params_set_region(film_params *p, const film_region *r, hz_error 
  * the EXR says so in its chromaticities, the PNG preview stays sRGB. */
 void film_params_set_color_space(film_params *p, color_space cs);
 
-/* Reads Film "rgb" (xresolution yresolution filename cropwindow pixelbounds
+/* Reads Film "rgb" (xresolution yresolution filename (.exr or .png) cropwindow pixelbounds
  * savefp16 iso maxcomponentvalue diagonal sensor whitebalance, and haze's
  * writedepth, writevariance and
  * writesamplecount); other types are errors. Bounds
@@ -88,6 +88,13 @@ hz_status film_params_from_entity(scene_entity *e, film_params *out, hz_error *e
  * *bad_region (may be NULL) to true, else to false. */
 hz_status film_params_from_entity_region(scene_entity *e, const film_region *r, film_params *out,
                                          bool *bad_region, hz_error *err);
+
+/* The image goes to a PNG (filename ends in .png), not an EXR. */
+bool film_params_writes_png(const film_params *p);
+/* For a Film (`e`, read into `p`) whose image goes to a PNG, refuses at
+ * `e`'s parameter what a PNG cannot hold: a gbuffer film, writedepth,
+ * writevariance, writesamplecount. */
+hz_status film_params_check_format(const scene_entity *e, const film_params *p, hz_error *err);
 
 typedef struct film film;
 

@@ -91,6 +91,12 @@ typedef struct {
     integrator_counters *counters;
     int hero;
     rgb L, beta, r_u, r_l;
+    /* pbrt-v4's etaScale: the squared relative indices the path crossed by
+     * transmission. Radiance through a dielectric is divided by eta^2 going
+     * in (beta ~ 1/2.25 inside glass of 1.5) and multiplied coming out; the
+     * roulette weighs beta times this, so paths inside glass are not cut for
+     * a loss they get back on leaving. */
+    double eta_scale;
     int depth;
     bool specular, any_non_specular;
     vec3 prev_p, prev_n; /* the last scattering point and its shading normal
@@ -472,10 +478,12 @@ static bool bounce(path *pa, const geom_hit *h)
     pa->r_l = rgb_div(pa->r_u, bs.pdf_proportional ? bsdf_pdf(&b, wo, bs.wi) : bs.pdf);
     pa->specular = bs.specular;
     pa->any_non_specular |= !bs.specular;
+    if (bs.transmission)
+        pa->eta_scale *= bs.eta * bs.eta;
     ray_from_surface(pa, h, bs.wi);
     if (rgb_is_black(pa->beta))
         return false;
-    rgb rr = rgb_div(pa->beta, rgb_avg(pa->r_u));
+    rgb rr = rgb_scale(rgb_div(pa->beta, rgb_avg(pa->r_u)), pa->eta_scale);
     double u_rr = sampler_1d(pa->st);
     if (rgb_max(rr) < 1.0 && pa->depth > 1) {
         double q = fmax(0.0, 1.0 - rgb_max(rr));
@@ -533,7 +541,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_stat
     bool media = sc->in.medium_count > 0;
     path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
-               .r_l = rgb_grey(1.0)};
+               .r_l = rgb_grey(1.0), .eta_scale = 1.0};
     path_ray(&pa, r->o, r->d, 0.0, 0.0, r->medium);
     /* As singlescatter_li: the rng is seeded once the ray meets something. */
     int seed_dim = -1;

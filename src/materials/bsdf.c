@@ -178,6 +178,7 @@ static bool diffuse_sample(const bsdf *b, vec3 wo, vec2 u, bsdf_sample *out)
     out->pdf = cosine_hemisphere_pdf(w.z);
     out->f = rgb_scale(b->reflectance, HZ_INV_PI);
     out->specular = out->transmission = out->pdf_proportional = false;
+    out->eta = 1.0;
     return out->pdf > 0.0;
 }
 

@@ -26,7 +26,7 @@ bool bxdf_diffuse_sample(rgb r, vec3 wo, vec2 u, bxdf_flags flags, bsdf_sample *
     if (wo.z < 0.0)
         wi.z = -wi.z;
     *out = (bsdf_sample){wi, rgb_scale(r, HZ_INV_PI), cosine_hemisphere_pdf(fabs(wi.z)), false,
-                         false, false};
+                         false, false, 1.0};
     return out->pdf > 0.0;
 }
 
@@ -72,7 +72,7 @@ bool bxdf_conductor_sample(tr_distribution d, rgb eta, rgb k, vec3 wo, vec2 u, b
         if (wi.z == 0.0)
             return false;
         *out = (bsdf_sample){wi, rgb_scale(fresnel_complex(fabs(wi.z), eta, k), 1.0 / fabs(wi.z)),
-                             1.0, true, false, false};
+                             1.0, true, false, false, 1.0};
         return true;
     }
     if (wo.z == 0.0)
@@ -87,7 +87,7 @@ bool bxdf_conductor_sample(tr_distribution d, rgb eta, rgb k, vec3 wo, vec2 u, b
         return false;
     rgb F = fresnel_complex(fabs(v3_dot(wo, wm)), eta, k);
     *out = (bsdf_sample){wi, rgb_scale(F, tr_d(d, wm) * tr_g(d, wo, wi) / (4.0 * ci * co)), pdf,
-                         false, false, false};
+                         false, false, false, 1.0};
     return true;
 }
 
@@ -179,7 +179,8 @@ bool bxdf_dielectric_sample(tr_distribution d, double eta, vec3 wo, double uc, v
             vec3 wi = v3(-wo.x, -wo.y, wo.z);
             if (wi.z == 0.0)
                 return false;
-            *out = (bsdf_sample){wi, rgb_grey(R / fabs(wi.z)), pr / (pr + pt), true, false, false};
+            *out = (bsdf_sample){wi, rgb_grey(R / fabs(wi.z)), pr / (pr + pt), true, false, false,
+                                 1.0};
             return true;
         }
         vec3 wi;
@@ -188,7 +189,7 @@ bool bxdf_dielectric_sample(tr_distribution d, double eta, vec3 wo, double uc, v
             return false;
         double ft = (1.0 - R) / fabs(wi.z);
         *out = (bsdf_sample){wi, rgb_grey(radiance ? ft / (etap * etap) : ft), pt / (pr + pt),
-                             true, true, false};
+                             true, true, false, etap};
         return true;
     }
     if (wo.z == 0.0)
@@ -206,7 +207,7 @@ bool bxdf_dielectric_sample(tr_distribution d, double eta, vec3 wo, double uc, v
         double f = tr_d(d, wm) * tr_g(d, wo, wi) * R / (4.0 * wi.z * wo.z);
         if (!(pdf > 0.0))
             return false;
-        *out = (bsdf_sample){wi, rgb_grey(f), pdf, false, false, false};
+        *out = (bsdf_sample){wi, rgb_grey(f), pdf, false, false, false, 1.0};
         return true;
     }
     vec3 wi;
@@ -222,7 +223,7 @@ bool bxdf_dielectric_sample(tr_distribution d, double eta, vec3 wo, double uc, v
     if (!(pdf > 0.0))
         return false;
     *out = (bsdf_sample){wi, rgb_grey(radiance ? ft / (etap * etap) : ft), pdf, false, true,
-                         false};
+                         false, etap};
     return true;
 }
 
@@ -240,13 +241,14 @@ bool bxdf_thin_sample(double eta, vec3 wo, double uc, bsdf_sample *out)
         vec3 wi = v3(-wo.x, -wo.y, wo.z);
         if (wi.z == 0.0)
             return false;
-        *out = (bsdf_sample){wi, rgb_grey(R / fabs(wi.z)), R / (R + T), true, false, false};
+        *out = (bsdf_sample){wi, rgb_grey(R / fabs(wi.z)), R / (R + T), true, false, false, 1.0};
         return true;
     }
     vec3 wi = v3_neg(wo);
     if (wi.z == 0.0)
         return false;
-    *out = (bsdf_sample){wi, rgb_grey(T / fabs(wi.z)), T / (R + T), true, true, false};
+    /* Straight through the sheet: no index crossed. */
+    *out = (bsdf_sample){wi, rgb_grey(T / fabs(wi.z)), T / (R + T), true, true, false, 1.0};
     return true;
 }
 
@@ -274,6 +276,6 @@ bool bxdf_dt_sample(rgb r, rgb t, vec3 wo, double uc, vec2 u, bsdf_sample *out)
     if (wi.z == 0.0)
         return false;
     *out = (bsdf_sample){wi, bxdf_dt_f(r, t, wo, wi), bxdf_dt_pdf(r, t, wo, wi), false, !reflect,
-                         false};
+                         false, 1.0};
     return out->pdf > 0.0;
 }

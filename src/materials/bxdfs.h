@@ -23,6 +23,11 @@ typedef struct {
     /* The pdf is only proportional to the density (a layered BxDF's random
      * walk): MIS uses bsdf_pdf instead (pbrt-v4's pdfIsProportional). */
     bool pdf_proportional;
+    /* The relative index of refraction the sample crossed (pbrt-v4's
+     * BSDFSample::eta): a dielectric's transmission, eta entering and 1 / eta
+     * leaving; 1 for every other sample. A radiance transmission is divided
+     * by its square, which volpath's roulette takes back out. */
+    double eta;
 } bsdf_sample;
 
 static inline bool same_hemisphere(vec3 a, vec3 b) { return a.z * b.z > 0.0; }

@@ -242,6 +242,7 @@ bool hair_sample(const hair_bxdf *b, vec3 wo, double uc, vec2 u, bsdf_sample *ou
     out->pdf = pdf_given(b, &w, apdf, sin_i, cos_i, dphi);
     out->f = hair_f(b, wo, out->wi);
     out->specular = out->transmission = out->pdf_proportional = false;
+    out->eta = 1.0;
     return out->pdf > 0.0;
 }
 

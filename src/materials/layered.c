@@ -329,8 +329,9 @@ bool layered_sample(const layered *l, vec3 wo, double uc, vec2 u, bsdf_sample *o
         specular = specular && bs.specular;
         w = bs.wi;
         if (bs.transmission) { /* left the layers */
+            /* pbrt-v4's LayeredBxDF: eta 1 (the layers' indices are inside). */
             *out = (bsdf_sample){flip ? v3_neg(w) : w, f, pdf, specular,
-                                 !same_hemisphere(wo, w), true};
+                                 !same_hemisphere(wo, w), true, 1.0};
             return true;
         }
         f = rgb_scale(f, fabs(bs.wi.z));

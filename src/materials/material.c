@@ -183,7 +183,8 @@ static hz_status read_metal(param_list *pl, const texture_set *ts, const char *n
                           "give \"reflectance\" or \"%s\" and \"%s\", not both (as pbrt-v4)",
                           name_eta, name_k);
     if (has_r) {
-        rgb r = out->metal_r_tex ? rgb_grey(0.0) : params_rgb(pl, "reflectance", rgb_grey(0.0));
+        rgb r = out->metal_r_tex ? rgb_grey(0.0)
+                                 : params_reflectance(pl, "reflectance", rgb_grey(0.0));
         if (!(r.r >= 0 && r.g >= 0 && r.b >= 0 && r.r <= 1 && r.g <= 1 && r.b <= 1))
             params_reject(pl, "reflectance", "conductor reflectance must be within [0, 1]");
         *eta = rgb_grey(1.0);
@@ -456,7 +457,7 @@ static hz_status read_diffuse(param_list *pl, const texture_set *ts, material *o
     out->kind = MATERIAL_DIFFUSE;
     out->reflectance_tex = texture_param(pl, ts, "reflectance", true);
     out->reflectance = out->reflectance_tex ? rgb_grey(0.5)
-                                            : params_rgb(pl, "reflectance", rgb_grey(0.5));
+                                            : params_reflectance(pl, "reflectance", rgb_grey(0.5));
     rgb r = out->reflectance;
     if (r.r < 0 || r.g < 0 || r.b < 0 || r.r > 1 || r.g > 1 || r.b > 1)
         params_reject(pl, "reflectance", "diffuse reflectance must be within [0, 1]");

@@ -11,6 +11,7 @@
 
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
+#include <openvdb/util/logging.h>
 #include <nanovdb/NanoVDB.h>
 #include <nanovdb/util/GridHandle.h>
 #include <nanovdb/util/OpenToNanoVDB.h>
@@ -29,10 +30,17 @@ using namespace haze_vdb;
 namespace
 {
 
+// OpenVDB built with log4cplus logs warnings (coloured, to stdout) that are
+// not haze's messages: quiet them where its logging header is the real one
+// (elsewhere setLevel is a stub, and the reader keeps stdout out of its
+// replies; vdb_reader.c).
 void init_openvdb()
 {
     static std::once_flag once;
-    std::call_once(once, [] { openvdb::initialize(); });
+    std::call_once(once, [] {
+        openvdb::initialize();
+        openvdb::logging::setLevel(openvdb::logging::Level::Fatal);
+    });
 }
 
 // OpenVDB trusts a file's structure: a truncated file makes it read lengths and
@@ -149,7 +157,7 @@ std::unique_ptr<openvdb::io::File> open_vdb(const std::string &path, std::uintma
         // Delayed loading would map the file lazily; the whole grid is converted.
         file->open(/*delayLoad=*/false);
     } catch (const std::exception &e) {
-        throw load_error(path + ": not a readable VDB file (" + e.what() + ")");
+        throw load_error(path + ": not a readable VDB file (" + plain_text(e.what()) + ")");
     }
     return file;
 }
@@ -160,6 +168,36 @@ std::vector<std::string> vdb_names(openvdb::io::File &file)
     for (auto it = file.beginName(); it != file.endName(); ++it)
         names.push_back(it.gridName());
     return names;
+}
+
+// `name` without OpenVDB's "[N]" suffix, which tells apart grids that share a
+// name ("density[0]", "density[1]").
+std::string base_name(const std::string &name)
+{
+    size_t open = name.rfind('[');
+    if (name.size() < 3 || name.back() != ']' || open == std::string::npos ||
+        open + 2 >= name.size())
+        return name;
+    for (size_t i = open + 1; i + 1 < name.size(); ++i)
+        if (name[i] < '0' || name[i] > '9')
+            return name;
+    return name.substr(0, open);
+}
+
+// OpenVDB reads the first of several grids called `name` (and logs a warning
+// about it); haze will not guess which one a scene means, and names them as
+// OpenVDB does so that "string gridname" can pick one.
+void refuse_ambiguous(const std::string &path, openvdb::io::File &file, const std::string &name)
+{
+    if (base_name(name) != name)
+        return; // an indexed name picks one grid
+    std::vector<std::string> same;
+    for (const std::string &n : vdb_names(file))
+        if (base_name(n) == name)
+            same.push_back(n);
+    if (same.size() > 1)
+        throw load_error(path + ": " + std::to_string(same.size()) + " grids are named \"" + name +
+                         "\"; name one of them as OpenVDB does: " + join(same));
 }
 
 // What each value type is called in messages, and its OpenVDB grid type.
@@ -187,6 +225,7 @@ vdb_buffer load_vdb(const std::string &path, const std::string &name, vdb_value_
 {
     auto file_ptr = open_vdb(path, size);
     openvdb::io::File &file = *file_ptr;
+    refuse_ambiguous(path, file, name);
     if (!file.hasGrid(name))
         throw load_error(path + ": no grid named \"" + name +
                          "\" (grids: " + join(vdb_names(file)) + ")");

@@ -41,6 +41,26 @@ inline void set_error(char *err, size_t err_size, const std::string &msg)
     std::snprintf(err, err_size, "%s", line.c_str());
 }
 
+// A library's message as plain text: without ANSI escape sequences (the
+// colours of OpenVDB's log lines) and with other control bytes as spaces.
+// Only for the libraries' own text: names from files keep their bytes, which
+// the error line shows escaped (core/text.h).
+inline std::string plain_text(const std::string &msg)
+{
+    std::string out;
+    for (size_t i = 0; i < msg.size(); ++i) {
+        unsigned char c = static_cast<unsigned char>(msg[i]);
+        if (c == 0x1b && i + 1 < msg.size() && msg[i + 1] == '[') {
+            // CSI: parameters and intermediates up to a final byte in @..~.
+            for (i += 2; i < msg.size() && !(msg[i] >= '@' && msg[i] <= '~'); ++i)
+                ;
+            continue;
+        }
+        out += c < 0x20 || c == 0x7f ? ' ' : msg[i];
+    }
+    return out;
+}
+
 inline std::string join(const std::vector<std::string> &names)
 {
     if (names.empty())
@@ -77,7 +97,7 @@ template <typename F> hz_status guarded(const char *path, char *err, size_t err_
         set_error(err, err_size,
                   std::string(path) + ": out of memory (file corrupt or truncated?)");
     } catch (const std::exception &e) {
-        set_error(err, err_size, std::string(path) + ": " + e.what());
+        set_error(err, err_size, std::string(path) + ": " + plain_text(e.what()));
     } catch (...) {
         set_error(err, err_size, std::string(path) + ": unknown error while reading");
     }

@@ -141,6 +141,11 @@ static bool read_reply(int fd, const char *path, vdb_buffer *out, int *present, 
         *ok = true;
         return true;
     }
+    if (h.ok != REPLY_ERROR) {
+        /* Not a reply: something else wrote into the pipe. */
+        snprintf(err, err_size, "%s: the OpenVDB reader's reply is garbled", path);
+        return true;
+    }
     char msg[1024];
     size_t n = h.length < sizeof msg - 1 ? (size_t)h.length : sizeof msg - 1;
     if (!read_all(fd, msg, n))

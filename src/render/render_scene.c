@@ -295,15 +295,20 @@ static bool read_film(scene_desc *sd, const render_options *opt, film_params *fp
         HZ_OK)
         return false;
     film_params_set_color_space(fp, sd->film_color_space);
-    if (opt && opt->statistics)
-        fp->write_variance = fp->write_sample_count = true;
     if (opt && opt->output) {
+        /* -o wins, and writes an EXR (cli/outputs.c refuses other names),
+         * which holds every channel. */
         if (strlen(opt->output) >= sizeof fp->filename) {
             hz_fail(err, "output file name too long: %s", opt->output);
             return false;
         }
         snprintf(fp->filename, sizeof fp->filename, "%s", opt->output);
+    } else if (film_params_check_format(&sd->film, fp, err) != HZ_OK) {
+        return false;
     }
+    /* Adaptive sampling needs the statistics, whatever the file keeps. */
+    if (opt && opt->statistics)
+        fp->write_variance = fp->write_sample_count = true;
     return true;
 }
 

@@ -1,6 +1,7 @@
 #include "scene/params.h"
 
 #include <limits.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -324,6 +325,32 @@ rgb params_rgb(param_list *pl, const char *name, rgb def)
         return def;
     }
     return rgb_make(p->nums[0], p->nums[1], p->nums[2]);
+}
+
+/* Rounding (a ColorSpace's matrix, a spectrum's integrals) is far below
+ * this; a value meant to be outside [0, 1] is far above it. */
+#define REFLECTANCE_ROUNDING 1e-6
+
+static double clamp_near_unit(double v, bool clamp_all)
+{
+    if (clamp_all || (v < 0.0 && v >= -REFLECTANCE_ROUNDING))
+        v = fmax(v, 0.0);
+    if (clamp_all || (v > 1.0 && v <= 1.0 + REFLECTANCE_ROUNDING))
+        v = fmin(v, 1.0);
+    return v;
+}
+
+rgb params_reflectance(param_list *pl, const char *name, rgb def)
+{
+    rgb c = params_rgb(pl, name, def);
+    bool unit = false;
+    for (size_t i = 0; i < pl->count; ++i)
+        if (strcmp(pl->items[i].name, name) == 0) { /* the first is the one read */
+            unit = pl->items[i].type == PARAM_SPECTRUM && pl->items[i].unit_values;
+            break;
+        }
+    return rgb_make(clamp_near_unit(c.r, unit), clamp_near_unit(c.g, unit),
+                    clamp_near_unit(c.b, unit));
 }
 
 rgb params_illuminant(param_list *pl, const char *name, rgb def)

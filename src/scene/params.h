@@ -47,6 +47,7 @@ typedef struct {
      * (spectrum_*_luminance); 0: none (rgb, named illuminants) */
     double luminance;
     double at_550;  /* spectrum: its value at 550 nm (an index that does not disperse) */
+    bool unit_values; /* spectrum: every value within [0, 1] (see params_reflectance) */
 } param;
 
 typedef struct {
@@ -101,6 +102,14 @@ vec3 params_point3(param_list *pl, const char *name, vec3 def);
 vec3 params_vector3(param_list *pl, const char *name, vec3 def);
 /* Accepts rgb, spectrum and blackbody parameters. */
 rgb params_rgb(param_list *pl, const char *name, rgb def);
+/* A reflectance: params_rgb, with what only rounding or a spectrum's
+ * reduction to RGB put outside [0, 1] clamped into it, silently: components
+ * within 1e-6 of it, and every component of a sampled spectrum whose values
+ * all lie in [0, 1] (pbrt-v4 clamps such a spectrum per wavelength, where it
+ * is within bounds; its RGB can step out through the XYZ-to-sRGB matrix:
+ * [400 1 700 1] gives G = 1.0012). Anything else is returned as given, for
+ * the caller to refuse. */
+rgb params_reflectance(param_list *pl, const char *name, rgb def);
 /* A light's (or an emitting medium's) radiance, normalised as pbrt-v4
  * normalises illuminant spectra: rgb values as given; blackbody and spectrum
  * values scaled to luminance 1 (pbrt-v4 divides them by their photometric

@@ -164,6 +164,9 @@ static hz_status set_sampled(parser *ps, param *p, const double *lambda, const d
                              size_t pairs, hz_error *err)
 {
     p->at_550 = value[pairs - 1];
+    p->unit_values = true;
+    for (size_t i = 0; i < pairs; ++i)
+        p->unit_values &= value[i] >= 0.0 && value[i] <= 1.0;
     for (size_t i = 0; i < pairs; ++i)
         if (lambda[i] >= 550.0) {
             double t = i == 0 ? 1.0 : (550.0 - lambda[i - 1]) / (lambda[i] - lambda[i - 1]);

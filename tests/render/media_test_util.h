@@ -99,6 +99,7 @@ typedef struct {
     bool finite; /* every sample finite */
     double min; /* smallest channel of any sample */
     uint64_t lookups; /* density lookups of all the samples */
+    double max; /* largest channel of any sample */
 } pstat;
 
 static inline double ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }
@@ -107,7 +108,7 @@ static inline double ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b
  * cmocka calls (used from worker threads). */
 static inline pstat pixel_stats_raw(const render_scene *rs, int px, int py, int spp)
 {
-    pstat out = {rgb_grey(0.0), rgb_grey(0.0), true, INFINITY, 0};
+    pstat out = {rgb_grey(0.0), rgb_grey(0.0), true, INFINITY, 0, -INFINITY};
     const camera *cam = render_scene_camera(rs);
     camera_sample cs = {v2(px + 0.5, py + 0.5), v2(0.5, 0.5), 0.5, 1.0};
     ray_differential rd;
@@ -131,6 +132,7 @@ static inline pstat pixel_stats_raw(const render_scene *rs, int px, int py, int 
             if (!isfinite(v))
                 out.finite = false;
             out.min = fmin(out.min, v);
+            out.max = fmax(out.max, v);
             s[c] += v;
             s2[c] += v * v;
         }

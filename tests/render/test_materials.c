@@ -49,6 +49,53 @@ static void test_conductor_head_on(void **state)
     free(text);
 }
 
+/* A reflectance that is within [0, 1] but whose RGB is not, by rounding or
+ * through a spectrum's reduction to RGB (a flat [400 1 700 1] gives G =
+ * 1.0012), is clamped and renders; a value really above 1 is still refused. */
+static void test_reflectance_bounds(void **state)
+{
+    (void)state;
+    const char *ok[] = {
+        "Material \"diffuse\" \"spectrum reflectance\" [400 1 700 1]",
+        "Material \"conductor\" \"spectrum reflectance\" [400 1 700 1]",
+        "ColorSpace \"rec2020\" Material \"diffuse\" \"rgb reflectance\" [1 1 1]",
+        "ColorSpace \"dci-p3\" Material \"conductor\" \"rgb reflectance\" [1 1 1]",
+    };
+    for (size_t i = 0; i < sizeof ok / sizeof ok[0]; ++i) {
+        char *text = mirror_scene(ok[i]);
+        render_scene *rs = build(text);
+        pstat p = pixel_stats_raw(rs, 1, 2, 4);
+        for (int c = 0; c < 3; ++c)
+            if (!(ch(p.mean, c) <= 1.0))
+                fail_msg("%s: channel %d is %.17g", ok[i], c, ch(p.mean, c));
+        render_scene_destroy(rs);
+        free(text);
+    }
+    /* The white spectrum's conductor seen head-on reflects its RGB, G
+     * clamped to 1 (then to pbrt-v4's 0.9999 for a conductor's k). */
+    char *text = mirror_scene(ok[1]);
+    render_scene *rs = build(text);
+    pstat p = pixel_stats_raw(rs, 1, 2, 4);
+    expect_rgb_close(p.mean, rgb_make(0.99596872, 0.9999, 0.99434505), 1e-6, 1e-12,
+                     "white spectrum", 0, 0);
+    render_scene_destroy(rs);
+    free(text);
+    const char *refused[] = {
+        "Material \"diffuse\" \"rgb reflectance\" [1.01 1 1]",
+        "Material \"diffuse\" \"spectrum reflectance\" [400 1.01 700 1.01]",
+        "Material \"conductor\" \"rgb reflectance\" [0.5 1.01 0.5]",
+        "Material \"diffuse\" \"rgb reflectance\" [0.5 -0.001 0.5]",
+    };
+    for (size_t i = 0; i < sizeof refused / sizeof refused[0]; ++i) {
+        text = mirror_scene(refused[i]);
+        char msg[512];
+        build_scene_expect_error(text, msg, sizeof msg);
+        if (!strstr(msg, "reflectance must be within [0, 1]") || !strstr(msg, "test.pbrt:8:"))
+            fail_msg("%s: %s", refused[i], msg);
+        free(text);
+    }
+}
+
 /* A coating of index 1 and no thickness is invisible: coateddiffuse is its
  * base (reflectance r under a uniform sky returns r), coatedconductor its
  * metal; a real coating (eta 1.5) on a white base loses a little. */
@@ -346,6 +393,52 @@ static void test_glass_slab(void **state)
                         1.5, "thin sheet");
 }
 
+/* Russian roulette weighs beta times pbrt-v4's etaScale: inside glass of
+ * eta 1.5 beta is 1 / 2.25 of what it is outside, a loss the path gets back
+ * when it leaves, so it is no reason to end the path (the roulette on beta
+ * alone ended up to 56% of the paths inside the glass per bounce). Two glass
+ * slabs, smooth, seen head-on, maxdepth 100. */
+static void test_glass_roulette(void **state)
+{
+    (void)state;
+    char *a = box_mesh(v3(-10, -10, 0), v3(10, 10, 1));
+    char *b = box_mesh(v3(-10, -10, 1.5), v3(10, 10, 2.5));
+    /* Under a uniform sky of 1 (white furnace): every sample of every path,
+     * reflected or transmitted any number of times, is exactly 1: no path
+     * is cut, none is weighted up. */
+    char *text = sfmt("LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"orthographic\"\n"
+                      "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                      "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+                      "Integrator \"volpath\" \"integer maxdepth\" 100\nWorldBegin\n"
+                      "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                      "Material \"dielectric\" \"float eta\" 1.5\n%s%s",
+                      a, b);
+    render_scene *rs = build(text);
+    pstat p = pixel_stats_raw(rs, 1, 2, 4096);
+    print_message("furnace: samples in [%.17g, %.17g]\n", p.min, p.max);
+    assert_true(fabs(p.min - 1.0) < 1e-9 && fabs(p.max - 1.0) < 1e-9);
+    render_scene_destroy(rs);
+    free(text);
+    /* In front of an emitter of 1, nothing else: the mean is the stack's
+     * transmission (1 - R) / (1 + 3R) (four faces, their interreflections
+     * summed), and each sample is 0 or 1 (a survivor of the roulette on
+     * beta alone came back as 1 / (1 - q) > 1). */
+    char *glass = sfmt("Material \"dielectric\" \"float eta\" 1.5\n%s%s", a, b);
+    text = slab_scene(glass);
+    rs = build(text);
+    p = pixel_stats_raw(rs, 1, 2, 16384);
+    double R = fresnel_dielectric(1.0, 1.5), want = (1.0 - R) / (1.0 + 3.0 * R);
+    print_message("emitter: %.5f +- %.5f, want %.5f; samples in [%g, %.17g]\n", p.mean.g,
+                  p.se.g, want, p.min, p.max);
+    assert_true(p.max <= 1.0 + 1e-9);
+    assert_true(p.se.g < 0.004 && fabs(p.mean.g - want) < 4.0 * p.se.g);
+    render_scene_destroy(rs);
+    free(text);
+    free(glass);
+    free(a);
+    free(b);
+}
+
 /* A scene naming no Integrator with metal or glass renders pbrt-v4's
  * default (volpath, maxdepth 5) and says so.
  * Parameters are pbrt-v4's and checked. */
@@ -514,6 +607,8 @@ int main(void)
         cmocka_unit_test(test_integrator_and_parameters),
         cmocka_unit_test(test_bump_ramp),
         cmocka_unit_test(test_mix_texture_amount),
+        cmocka_unit_test(test_reflectance_bounds),
+        cmocka_unit_test(test_glass_roulette),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -183,6 +183,85 @@ static void expect_merge_refused(const char *output, const char *message)
     assert_true(nl && nl[1] == '\0'); /* one line */
 }
 
+/* A scene DIR/film.pbrt whose Film line (line 3) is `film`. */
+static void write_film_scene(const char *film)
+{
+    char text[2048];
+    snprintf(text, sizeof text,
+             "LookAt 0 0 -5  0 0 0  0 1 0\nCamera \"perspective\"\n%s\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" 1\nWorldBegin\n"
+             "LightSource \"infinite\" \"rgb L\" [1 1 1]\nShape \"sphere\"\n",
+             film);
+    write_text_file(DIR "/film.pbrt", text);
+}
+
+static int render_film_scene(const char *args, char *out, size_t n)
+{
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "render '" DIR "/film.pbrt' %s --quiet", args);
+    return run_haze(cmd, out, n);
+}
+
+static bool is_png(const char *path)
+{
+    size_t n = 0;
+    unsigned char *b = read_whole_file(path, &n);
+    bool png = b && n > 8 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0;
+    free(b);
+    return png;
+}
+
+/* (Not opendir: DIR is this file's directory.) */
+static int entries_in(const char *dir)
+{
+    struct dirent **list;
+    int n = scandir(dir, &list, NULL, NULL);
+    for (int i = 0; i < n; ++i)
+        free(list[i]);
+    if (n >= 0)
+        free(list);
+    return n;
+}
+
+#define FILM_RES "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8 "
+
+/* A Film filename ending in .png writes that PNG (the --preview writer's
+ * bytes) and nothing else, as pbrt-v4; -o NAME.exr wins over it. */
+static void test_film_png(void **state)
+{
+    (void)state;
+    setup_dir();
+    mkdir(DIR "/png", 0755);
+    unlink(DIR "/png/film.png");
+    unlink(DIR "/png/preview.png");
+    unlink(DIR "/png/o.exr");
+    write_film_scene(FILM_RES "\"string filename\" \"" DIR "/png/film.png\"");
+    int before = entries_in(DIR "/png");
+    char out[2048];
+    if (render_film_scene("--preview '" DIR "/png/preview.png'", out, sizeof out) != 0)
+        fail_msg("%s", out);
+    assert_true(is_png(DIR "/png/film.png"));
+    assert_true(files_equal(DIR "/png/film.png", DIR "/png/preview.png"));
+    assert_int_equal(entries_in(DIR "/png"), before + 2); /* no EXR beside them */
+    unlink(DIR "/png/film.png");
+    if (render_film_scene("-o '" DIR "/png/o.exr'", out, sizeof out) != 0)
+        fail_msg("%s", out);
+    struct stat st;
+    assert_int_equal(stat(DIR "/png/o.exr", &st), 0);
+    assert_int_not_equal(stat(DIR "/png/film.png", &st), 0);
+    assert_int_equal(count_temporaries_in(DIR "/png"), 0);
+}
+
+static void expect_film_refused(const char *args, const char *message)
+{
+    char out[2048];
+    assert_int_equal(render_film_scene(args, out, sizeof out), 1);
+    if (!strstr(out, message))
+        fail_msg("haze render %s: got \"%s\", want \"%s\"", args, out, message);
+    const char *nl = strchr(out, '\n');
+    assert_true(nl && nl[1] == '\0'); /* one line */
+}
+
 /* haze merge -o is checked as haze render -o: no FIFO, directory, part (by
  * any name) or non-.exr name is replaced, and nothing is written. */
 static void test_merge_outputs(void **state)
@@ -227,6 +306,26 @@ static void test_merge_outputs(void **state)
     assert_int_equal(count_temporaries_in(DIR), 0);
 }
 
+/* Other extensions stay refused at the Film, -o or not; what a PNG cannot
+ * hold is refused rather than dropped, unless -o gives an EXR. */
+static void test_film_filename_refused(void **state)
+{
+    (void)state;
+    setup_dir();
+    write_film_scene(FILM_RES "\"string filename\" \"x.tif\"");
+    expect_film_refused("", "film.pbrt:3:");
+    expect_film_refused("-o '" DIR "/o.exr'", "\"x.tif\" must end in .exr or .png");
+    write_film_scene(FILM_RES "\"string filename\" \"" DIR "/d.png\" \"bool writedepth\" true");
+    expect_film_refused("", "film.pbrt:3:");
+    expect_film_refused("", "\"bool writedepth\" needs an EXR");
+    char out[2048];
+    if (render_film_scene("-o '" DIR "/d.exr'", out, sizeof out) != 0)
+        fail_msg("%s", out);
+    write_film_scene("Film \"gbuffer\" \"integer xresolution\" 8 \"integer yresolution\" 8 "
+                     "\"string filename\" \"" DIR "/g.png\"");
+    expect_film_refused("", "Film \"gbuffer\" writes only EXR");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -236,6 +335,8 @@ int main(void)
         cmocka_unit_test(test_symlink_written_through),
         cmocka_unit_test(test_merge_refuses_other_renders),
         cmocka_unit_test(test_merge_outputs),
+        cmocka_unit_test(test_film_png),
+        cmocka_unit_test(test_film_filename_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

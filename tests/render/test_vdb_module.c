@@ -146,6 +146,23 @@ static void crashing_reader_is_one_line(void **state)
     assert_null(f);
 }
 
+/* What the libraries print to stdout in the reader (OpenVDB's coloured
+ * log4cplus warnings) stays out of its replies: haze's error is the
+ * module's own line, with no escape sequence and no log text. */
+static void chatty_reader_is_one_line(void **state)
+{
+    (void)state;
+    const char *exr = HAZE_TMP "/vdb_module_chatty.exr";
+    char args[2048], out[8192];
+    snprintf(args, sizeof args, "render '%s/smoke.pbrt' --spp 1 --quiet -o '%s'", HAZE_SCENES,
+             exr);
+    assert_int_equal(run_with_module(CHATTY_MODULE, args, out, sizeof out), 1);
+    assert_one_line_with(out, "smoke.vdb: the chatty module reads no grid");
+    assert_null(strchr(out, 0x1b));
+    assert_null(strstr(out, "\\x1b"));
+    assert_null(strstr(out, "WARN"));
+}
+
 static void module_next_to_haze_loads(void **state)
 {
     (void)state;
@@ -162,6 +179,7 @@ int main(void)
         cmocka_unit_test(missing_module_is_one_line),
         cmocka_unit_test(wrong_abi_is_refused),
         cmocka_unit_test(crashing_reader_is_one_line),
+        cmocka_unit_test(chatty_reader_is_one_line),
         cmocka_unit_test(module_next_to_haze_loads),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -95,6 +95,14 @@ static void test_params_defaults(void **state)
     add_bool(&e, "writesamplecount", true);
     p = params_ok(&e);
     assert_true(p.write_variance && p.write_sample_count);
+    assert_false(film_params_writes_png(&p));
+
+    /* pbrt-v4 writes the format the name gives; haze, PNG too. */
+    entity_init(&e, "rgb");
+    add_string(&e, "filename", "out/fog.PNG");
+    p = params_ok(&e);
+    assert_string_equal(p.filename, "out/fog.PNG");
+    assert_true(film_params_writes_png(&p));
 }
 
 static void test_params_bounds(void **state)
@@ -149,8 +157,8 @@ static void test_params_errors(void **state)
     add_int(&e, "yresolution", 16000000);
     params_fail(&e, "GiB");
     entity_init(&e, "rgb");
-    add_string(&e, "filename", "out.png");
-    params_fail(&e, ".exr");
+    add_string(&e, "filename", "out.tif");
+    params_fail(&e, "must end in .exr or .png");
     entity_init(&e, "rgb");
     add_floats4(&e, "cropwindow", -0.1, 0.5, 0, 1);
     params_fail(&e, "cropwindow");

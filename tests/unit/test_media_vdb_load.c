@@ -153,6 +153,31 @@ static void truncated_files(void **state)
     remove(path);
 }
 
+/* Grids that share a name: haze refuses to guess, in one plain line (no
+ * OpenVDB log text, no escape sequence) naming them as OpenVDB does, and
+ * reads the one a scene names that way. */
+static void duplicate_grid_names(void **state)
+{
+    (void)state;
+    const char *dup = HAZE_TEST_VOLUMES "/dup_names.vdb";
+    const char *e = load_error(dup, "density");
+    assert_contains(e, "dup_names.vdb: 2 grids are named \"density\"");
+    assert_contains(e, "\"density[0]\", \"density[1]\"");
+    assert_null(strchr(e, 0x1b));
+    assert_null(strstr(e, "WARN"));
+    for (int i = 0; i < 2; ++i) {
+        hz_error err = {0};
+        grid *g = NULL;
+        if (grid_load(dup, i == 0 ? "density[0]" : "density[1]", &g, &err) != HZ_OK)
+            fail_msg("%s", err.message);
+        grid_accessor a;
+        grid_accessor_init(g, &a);
+        assert_true(grid_voxel(g, &a, 1, 0, 1) == (float)(i + 1));
+        grid_destroy(g);
+    }
+    assert_contains(load_error(dup, "density[2]"), "no grid named \"density[2]\"");
+}
+
 static void nvdb_matches_vdb(void **state)
 {
     (void)state;
@@ -254,6 +279,7 @@ int main(void)
         cmocka_unit_test(non_vdb_file),
         cmocka_unit_test(truncated_files),
         cmocka_unit_test(nvdb_matches_vdb),
+        cmocka_unit_test(duplicate_grid_names),
         cmocka_unit_test(lists_grids),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -137,6 +137,35 @@ static void test_spectrum_values(void **state)
     scene_desc_free(&sd);
 }
 
+/* Reflectances: a spectrum within [0, 1] and rgb values within rounding of
+ * [0, 1] come back inside it; what is really outside comes back as given. */
+static void test_reflectance_values(void **state)
+{
+    (void)state;
+    scene_desc sd;
+    param_list *pl = camera_params(
+        &sd, "\"spectrum w\" [400 1 700 1] \"spectrum x\" [400 1.01 700 1.01] "
+             "\"rgb y\" [1.0000001 1 -1e-9] \"rgb z\" [1.01 1 -0.001] \"spectrum g\" [500 0 550 1 600 0]");
+    rgb w = params_rgb(pl, "w", rgb_grey(-1));
+    assert_true(w.g > 1.001); /* the CIE-to-sRGB reduction, not the spectrum */
+    w = params_reflectance(pl, "w", rgb_grey(-1));
+    assert_true(w.g == 1.0);
+    assert_float_equal(w.r, 0.996, 1e-3);
+    rgb x = params_reflectance(pl, "x", rgb_grey(-1));
+    assert_true(x.g > 1.01);
+    rgb y = params_reflectance(pl, "y", rgb_grey(-1));
+    assert_true(y.r == 1.0 && y.g == 1.0 && y.b == 0.0);
+    rgb z = params_reflectance(pl, "z", rgb_grey(-1));
+    assert_true(z.r == 1.01 && z.b == -0.001);
+    /* A narrow green band lies outside sRGB (a negative channel): clamped. */
+    rgb g = params_rgb(pl, "g", rgb_grey(-1));
+    assert_true(g.r < 0.0 || g.b < 0.0);
+    g = params_reflectance(pl, "g", rgb_grey(-1));
+    assert_true(g.r >= 0.0 && g.b >= 0.0 && g.g <= 1.0);
+    assert_true(params_reflectance(pl, "absent", rgb_grey(0.5)).g == 0.5);
+    scene_desc_free(&sd);
+}
+
 /* Lights' spectra as pbrt-v4 normalises them: luminance 1 whatever the
  * spectrum's scale, its own chromaticity (an equal-energy spectrum is
  * pinkish beside sRGB's D65 white); rgb values untouched; blackbody as rgb. */
@@ -186,6 +215,7 @@ int main(void)
         cmocka_unit_test(test_type_mismatch),        cmocka_unit_test(test_reject_and_loc),
         cmocka_unit_test(test_copy_is_deep),         cmocka_unit_test(test_spectrum_values),
         cmocka_unit_test(test_cmf_fit),       cmocka_unit_test(test_illuminant_values),
+        cmocka_unit_test(test_reflectance_values),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
