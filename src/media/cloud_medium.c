@@ -83,13 +83,7 @@ static bool ray_start(const medium *m, vec3 o, vec3 d, double time, double *t0, 
     vec3 dm = transform_vector(&cm->medium_from_render, d);
     if (!box_clip_ray(om, dm, cm->p0, cm->p1, t0, t1))
         return false;
-    r->m = m;
-    r->lookup = NULL;
-    r->plain = false;
-    r->voxels_per_t = 0.0;
-    r->dda = false;
-    r->single_left = true;
-    r->single = (majorant_segment){*t0, *t1, 1.0, 0.0, 0.0};
+    medium_ray_single(r, m, *t0, *t1, 1.0, 0.0);
     r->at.cloud.o = om;
     r->at.cloud.d = dm;
     return true;
@@ -101,9 +95,7 @@ static void sample(medium_ray *r, double t, bool emission, medium_props *p, uint
     const cloud_medium *cm = m->state;
     double d = cloud_density(&cm->params, v3_add(r->at.cloud.o, v3_scale(r->at.cloud.d, t)));
     ++*lookups;
-    p->sigma_a = rgb_scale(m->sigma_a, d);
-    p->sigma_s = rgb_scale(m->sigma_s, d);
-    p->emission = emission ? rgb_mul(p->sigma_a, m->Le) : rgb_grey(0.0);
+    medium_props_scaled(m, d, emission, p);
 }
 
 const medium_ops medium_cloud_ops = {

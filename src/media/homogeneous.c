@@ -27,23 +27,14 @@ static bool ray_start(const medium *m, vec3 o, vec3 d, double time, double *t0, 
                       medium_ray *r)
 {
     (void)o, (void)d, (void)time;
-    r->m = m;
-    r->lookup = NULL;
-    r->plain = false;
-    r->voxels_per_t = 0.0;
-    r->dda = false;
-    r->single_left = true;
-    r->single = (majorant_segment){*t0, *t1, 1.0, 1.0, 0.0};
+    medium_ray_single(r, m, *t0, *t1, 1.0, 1.0);
     return true;
 }
 
 static void sample(medium_ray *r, double t, bool emission, medium_props *p, uint64_t *lookups)
 {
     (void)t, (void)lookups;
-    const medium *m = r->m;
-    p->sigma_a = rgb_scale(m->sigma_a, 1.0);
-    p->sigma_s = rgb_scale(m->sigma_s, 1.0);
-    p->emission = emission ? rgb_mul(p->sigma_a, m->Le) : rgb_grey(0.0);
+    medium_props_scaled(r->m, 1.0, emission, p);
 }
 
 const medium_ops medium_homogeneous_ops = {

@@ -245,6 +245,29 @@ static inline void medium_ray_density_point(medium_ray *r, double t, medium_dens
     r->m->ops->density_point(r, t, p, lookups);
 }
 
+/* For kinds without a majorant grid: r's iterator yields the one segment
+ * [t0, t1] with density bounds [min, max]. */
+static inline void medium_ray_single(medium_ray *r, const medium *m, double t0, double t1,
+                                     double max, double min)
+{
+    r->m = m;
+    r->lookup = NULL;
+    r->plain = false;
+    r->voxels_per_t = 0.0;
+    r->dda = false;
+    r->single_left = true;
+    r->single = (majorant_segment){t0, t1, max, min, 0.0};
+}
+
+/* The properties of m's coefficients scaled by density d, with absorbing
+ * emission sigma_a Le when `emission`. */
+static inline void medium_props_scaled(const medium *m, double d, bool emission, medium_props *p)
+{
+    p->sigma_a = rgb_scale(m->sigma_a, d);
+    p->sigma_s = rgb_scale(m->sigma_s, d);
+    p->emission = emission ? rgb_mul(p->sigma_a, m->Le) : rgb_grey(0.0);
+}
+
 /* Clips the render-space ray o + t d at scene `time`, t in [*t0, *t1], to where
  * the medium can attenuate or scatter. False when nothing is left. */
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1);
