@@ -155,22 +155,41 @@ hz_status exr_image_add_attribute(exr_image *img, const char *name, const char *
 
 /* ---- context plumbing ----------------------------------------------- */
 
-/* Per-call state reachable from OpenEXRCore callbacks through user_data, so
- * no message ever goes to stderr and nothing is global. */
+/* Per-call state: the temporary file a write goes to, and the first
+ * detailed message from the library (no message ever goes to stderr). */
 typedef struct {
     int fd;             /* write: the temporary file */
     char message[512];  /* first detailed message from the library */
 } exr_io;
 
+/* The exr_io of the context this thread is using, for the error handler.
+ * The handler must never call back into the context: OpenEXRCore reports the
+ * errors of a context in write mode (exr_write_header's failed write among
+ * them) with the context's mutex held, and exr_get_user_data takes that same
+ * non-recursive mutex, so a full disk hung haze forever (issue 42). A
+ * thread-local needs no lock and is seen only by the thread whose call
+ * failed, which is the thread OpenEXRCore reports on. The chunk workers set
+ * none: their failures come back as result codes. */
+static _Thread_local exr_io *exr_thread_io;
+
 static void exr_error_handler(exr_const_context_t ctxt, exr_result_t code, const char *msg)
 {
-    void *ud = NULL;
-    if (exr_get_user_data(ctxt, &ud) != EXR_ERR_SUCCESS || !ud)
-        return;
-    exr_io *io = ud;
-    if (!io->message[0])
+    (void)ctxt; /* see exr_thread_io */
+    exr_io *io = exr_thread_io;
+    if (io && !io->message[0])
         snprintf(io->message, sizeof io->message, "%s", msg ? msg : exr_get_default_error_message(code));
 }
+
+/* Makes `io` the handler's for this thread's calls until exr_io_leave,
+ * returning the one it replaces. */
+static exr_io *exr_io_enter(exr_io *io)
+{
+    exr_io *old = exr_thread_io;
+    exr_thread_io = io;
+    return old;
+}
+
+static void exr_io_leave(exr_io *old) { exr_thread_io = old; }
 
 static int64_t exr_write_fd(exr_const_context_t ctxt, void *userdata, const void *buffer, uint64_t sz,
                             uint64_t offset, exr_stream_error_func_ptr_t error_cb)
@@ -183,7 +202,12 @@ static int64_t exr_write_fd(exr_const_context_t ctxt, void *userdata, const void
         if (n < 0) {
             if (errno == EINTR)
                 continue;
-            error_cb(ctxt, EXR_ERR_WRITE_IO, "write failed: %s", strerror(errno));
+            /* Kept here first: the reason is errno's, whatever the library
+             * makes of the failure. */
+            const char *why = strerror(errno);
+            if (!io->message[0])
+                snprintf(io->message, sizeof io->message, "write failed: %s", why);
+            error_cb(ctxt, EXR_ERR_WRITE_IO, "write failed: %s", why);
             return -1;
         }
         done += (uint64_t)n;
@@ -673,8 +697,11 @@ hz_status exr_write_noted(const char *path, const exr_image *img, tmp_file_note 
     hz_status st = HZ_OK;
     if (fchmod(io.fd, mode) != 0)
         st = hz_fail(err, "%s: cannot set permissions: %s", path, strerror(errno));
-    if (st == HZ_OK)
+    if (st == HZ_OK) {
+        exr_io *outer = exr_io_enter(&io);
         st = exr_write_context(path, tmp, img, &io, err);
+        exr_io_leave(outer);
+    }
     if (st == HZ_OK && fsync(io.fd) != 0)
         st = hz_fail(err, "%s: cannot flush EXR to disk: %s", path, strerror(errno));
     if (close(io.fd) != 0 && st == HZ_OK)
@@ -865,11 +892,12 @@ hz_status exr_read(const char *path, exr_image *out, hz_error *err)
     exr_io io = {.fd = -1};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = exr_error_handler;
-    init.user_data = &io;
     exr_context_t ctx = NULL;
+    exr_io *outer = exr_io_enter(&io);
     exr_result_t rv = exr_start_read(&ctx, path, &init);
     if (rv != EXR_ERR_SUCCESS) {
         exr_finish(&ctx);
+        exr_io_leave(outer);
         return exr_fail_code(err, path, "read", rv, &io);
     }
     exr_storage_t storage = EXR_STORAGE_SCANLINE;
@@ -899,6 +927,7 @@ hz_status exr_read(const char *path, exr_image *out, hz_error *err)
             free(halfs[c]);
     free(halfs);
     exr_finish(&ctx);
+    exr_io_leave(outer);
     if (st != HZ_OK)
         exr_image_free(out);
     return st;

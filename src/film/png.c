@@ -115,8 +115,11 @@ hz_status png_out_write_rgb8_noted(const char *path, int width, int height, cons
         close(fd);
     } else {
         png_out_errors errs = {{0}};
+        errno = 0; /* libpng's "Write Error" does not say why; the failed write's errno does */
         if (png_out_encode(fp, width, height, rgb8, rows, &errs) != 0)
-            st = hz_fail(err, "%s: cannot write PNG: %s", path, errs.message);
+            st = errno ? hz_fail(err, "%s: cannot write PNG: %s (%s)", path, errs.message,
+                                 strerror(errno))
+                       : hz_fail(err, "%s: cannot write PNG: %s", path, errs.message);
         else if (fflush(fp) != 0 || fsync(fileno(fp)) != 0)
             st = hz_fail(err, "%s: cannot write PNG: %s", path, strerror(errno));
         if (fclose(fp) != 0 && st == HZ_OK)

@@ -66,11 +66,10 @@ typedef struct {
 
 typedef enum { LIMIT_NONE, LIMIT_FSIZE, LIMIT_AS } limit_kind;
 
-/* Starts `haze render SCENE -o OUT --threads 2 --quiet [--preview PNG]` with
- * an optional resource limit (haze ignores SIGXFSZ itself, so a write past
- * RLIMIT_FSIZE fails with EFBIG). */
-static child spawn(const char *scene, const char *out, const char *preview, limit_kind lk,
-                   rlim_t limit)
+/* Starts haze with `argv` (argv[0] is HAZE_BIN's name) and an optional
+ * resource limit (haze ignores SIGXFSZ itself, so a write past RLIMIT_FSIZE
+ * fails with EFBIG). */
+static child spawn_argv(char *const argv[], limit_kind lk, rlim_t limit)
 {
     int p[2];
     assert_int_equal(pipe(p), 0);
@@ -85,21 +84,28 @@ static child spawn(const char *scene, const char *out, const char *preview, limi
          * inherits SIGINT ignored, and haze keeps ignored signals ignored). */
         signal(SIGINT, SIG_DFL);
         signal(SIGTERM, SIG_DFL);
+        signal(SIGHUP, SIG_DFL);
         if (lk != LIMIT_NONE) {
             struct rlimit rl = {limit, limit};
             if (setrlimit(lk == LIMIT_FSIZE ? RLIMIT_FSIZE : RLIMIT_AS, &rl) != 0)
                 _exit(77);
         }
-        if (preview)
-            execl(HAZE_BIN, HAZE_BIN, "render", scene, "-o", out, "--threads", "2", "--quiet",
-                  "--preview", preview, (char *)NULL);
-        else
-            execl(HAZE_BIN, HAZE_BIN, "render", scene, "-o", out, "--threads", "2", "--quiet",
-                  (char *)NULL);
+        execv(HAZE_BIN, argv);
         _exit(127);
     }
     close(p[1]);
     return c;
+}
+
+/* `haze render SCENE -o OUT --threads 2 --quiet [--preview PNG]`. */
+static child spawn(const char *scene, const char *out, const char *preview, limit_kind lk,
+                   rlim_t limit)
+{
+    char *argv[] = {"haze", "render", (char *)scene, "-o", (char *)out, "--threads", "2",
+                    "--quiet", "--preview", (char *)preview, NULL};
+    if (!preview)
+        argv[8] = NULL;
+    return spawn_argv(argv, lk, limit);
 }
 
 /* Waits for the child (at most `timeout` s); returns its exit status, or -1
@@ -347,32 +353,118 @@ static void test_second_signal_exits_at_once(void **state)
     assert_int_equal(count_temporaries(), 0);
 }
 
-/* A write that fails part-way (file size limit): one line, exit 1, the
- * temporary file removed and the previous output byte for byte intact. */
-static void test_failed_exr_write_keeps_previous(void **state)
+/* Exactly one line of text, which names `path`. */
+static void assert_one_line_naming(const char *text, const char *path)
 {
-    (void)state;
+    assert_non_null(strstr(text, path));
+    assert_non_null(strchr(text, '\n'));
+    assert_null(strchr(strchr(text, '\n') + 1, '\n'));
+}
+
+/* Whether the file at `path` holds `n` bytes equal to `want`. */
+static bool file_is(const char *path, const unsigned char *want, size_t n)
+{
+    size_t got = 0;
+    unsigned char *now = read_whole_file(path, &got);
+    bool same = now && got == n && memcmp(now, want, n) == 0;
+    free(now);
+    return same;
+}
+
+/* A render whose EXR write fails after `limit` bytes (file size limit): one
+ * line, exit 1 within the deadline (a failure in the header hung in the
+ * error handler, issue 42), the temporary file removed and the previous
+ * output byte for byte intact. */
+static void failed_exr_write_keeps_previous(const char *name, rlim_t limit)
+{
     char scene[1200], out[1200], text[4096];
-    snprintf(scene, sizeof scene, "%s/fsize.pbrt", dir);
-    snprintf(out, sizeof out, "%s/fsize.exr", dir);
+    snprintf(scene, sizeof scene, "%s/%s.pbrt", dir, name);
+    snprintf(out, sizeof out, "%s/%s.exr", dir, name);
     write_scene(scene, 2, NULL);
     assert_int_equal(finish(spawn(scene, out, NULL, LIMIT_NONE, 0), 60.0, text, sizeof text), 0);
-    size_t n0, n1;
+    size_t n0;
     unsigned char *before = read_whole_file(out, &n0);
     assert_non_null(before);
     assert_true(n0 > 4096);
-    int rc = finish(spawn(scene, out, NULL, LIMIT_FSIZE, 4096), 60.0, text, sizeof text);
+    int rc = finish(spawn(scene, out, NULL, LIMIT_FSIZE, limit), 60.0, text, sizeof text);
+    print_message("%s: limit %lu bytes: exit %d: %s", name, (unsigned long)limit, rc, text);
     assert_int_equal(rc, 1);
-    assert_non_null(strstr(text, out));
-    assert_non_null(strchr(text, '\n'));
-    assert_null(strchr(strchr(text, '\n') + 1, '\n')); /* one line */
-    unsigned char *after = read_whole_file(out, &n1);
-    assert_non_null(after);
-    assert_int_equal(n1, n0);
-    assert_memory_equal(after, before, n0);
+    assert_one_line_naming(text, out);
+    assert_non_null(strstr(text, "File too large"));
+    assert_true(file_is(out, before, n0));
     assert_int_equal(count_temporaries(), 0);
     free(before);
-    free(after);
+}
+
+/* Past the header: the pixels' chunks fail. */
+static void test_failed_exr_write_keeps_previous(void **state)
+{
+    (void)state;
+    failed_exr_write_keeps_previous("fsize", 4096);
+}
+
+/* The header's first write fails (a disk full from the start). */
+static void test_failed_exr_header_write_exits(void **state)
+{
+    (void)state;
+    failed_exr_write_keeps_previous("fsize-header", 64);
+}
+
+/* Not a byte can be written: the temporary file stays empty. */
+static void test_failed_exr_empty_write_exits(void **state)
+{
+    (void)state;
+    failed_exr_write_keeps_previous("fsize-zero", 0);
+}
+
+/* haze merge whose output cannot be written: the same, for its writer. */
+static void test_failed_merge_write_keeps_previous(void **state)
+{
+    (void)state;
+    char scene[1200], part[1200], out[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/merge-fsize.pbrt", dir);
+    snprintf(part, sizeof part, "%s/merge-fsize-part.exr", dir);
+    snprintf(out, sizeof out, "%s/merge-fsize.exr", dir);
+    write_scene(scene, 2, NULL);
+    assert_int_equal(finish(spawn(scene, part, NULL, LIMIT_NONE, 0), 60.0, text, sizeof text), 0);
+    write_text_file(out, "a merged image\n");
+    const unsigned char kept[] = "a merged image\n";
+    for (int k = 0; k < 2; ++k) {
+        rlim_t limit = k == 0 ? 64 : 4096; /* in the header, in the pixels */
+        char *argv[] = {"haze", "merge", part, "-o", out, NULL};
+        int rc = finish(spawn_argv(argv, LIMIT_FSIZE, limit), 60.0, text, sizeof text);
+        print_message("merge, limit %lu bytes: exit %d: %s", (unsigned long)limit, rc, text);
+        assert_int_equal(rc, 1);
+        assert_one_line_naming(text, out);
+        assert_true(file_is(out, kept, sizeof kept - 1));
+        assert_int_equal(count_temporaries(), 0);
+    }
+}
+
+/* An interrupted render whose partial image cannot be written: one line,
+ * a non-zero exit, no partial image, no temporary file, and the existing
+ * output untouched. */
+static void test_failed_partial_write(void **state)
+{
+    (void)state;
+    char scene[1200], out[1200], pout[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/partial-fsize.pbrt", dir);
+    snprintf(out, sizeof out, "%s/partial-fsize.exr", dir);
+    snprintf(pout, sizeof pout, "%s/partial-fsize.partial.exr", dir);
+    unlink(pout);
+    write_text_file(out, "a complete image\n");
+    const unsigned char kept[] = "a complete image\n";
+    write_scene(scene, interrupt_spp, NULL);
+    child c = spawn(scene, out, NULL, LIMIT_FSIZE, 64);
+    wait_rendering(c.pid, 0.3);
+    kill(c.pid, SIGINT);
+    int rc = finish(c, 60.0, text, sizeof text);
+    print_message("partial under a 64-byte limit: exit %d: %s", rc, text);
+    assert_int_equal(rc, 1);
+    assert_one_line_naming(text, pout);
+    assert_false(file_exists(pout));
+    assert_true(file_is(out, kept, sizeof kept - 1));
+    assert_int_equal(count_temporaries(), 0);
 }
 
 /* The same for the PNG writer, in a child process with the limit. */
@@ -413,7 +505,9 @@ static void test_failed_png_write_keeps_previous(void **state)
     waitpid(pid, &status, 0);
     assert_true(WIFEXITED(status));
     assert_int_equal(WEXITSTATUS(status), 1);
+    print_message("PNG under an 8192-byte limit: %s\n", msg);
     assert_non_null(strstr(msg, "fsize.png"));
+    assert_non_null(strstr(msg, "File too large"));
     size_t n = 0;
     unsigned char *kept = read_whole_file(path, &n);
     assert_non_null(kept);
@@ -453,6 +547,10 @@ int main(void)
         cmocka_unit_test(test_partial_does_not_replace_existing),
         cmocka_unit_test(test_second_signal_exits_at_once),
         cmocka_unit_test(test_failed_exr_write_keeps_previous),
+        cmocka_unit_test(test_failed_exr_header_write_exits),
+        cmocka_unit_test(test_failed_exr_empty_write_exits),
+        cmocka_unit_test(test_failed_merge_write_keeps_previous),
+        cmocka_unit_test(test_failed_partial_write),
         cmocka_unit_test(test_failed_png_write_keeps_previous),
         cmocka_unit_test(test_out_of_memory_film),
     };
