@@ -9,6 +9,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "cli/outputs.h"
 #include "core/file.h"
 #include "film/exr.h"
 #include "film/png.h"
@@ -886,6 +887,15 @@ hz_status diff_run(const diff_options *opt, FILE *out, bool *passed, hz_error *e
     *passed = false;
     /* OpenEXR would wait for ever on a FIFO's open. */
     if (file_check_regular(opt->a, err) != HZ_OK || file_check_regular(opt->b, err) != HZ_OK)
+        return HZ_ERROR;
+    /* The heatmap replaces only a regular file, and never an input. */
+    char heatmap[PATH_MAX];
+    const char *inputs[2] = {opt->a, opt->b};
+    if (opt->heatmap &&
+        (outputs_check_path(opt->heatmap, ends_with_png(opt->heatmap) ? ".png" : ".exr",
+                            "heatmap", heatmap, sizeof heatmap, err) != HZ_OK ||
+         outputs_refuse_inputs("heatmap", opt->heatmap, heatmap, inputs, 2, "the diff", err) !=
+             HZ_OK))
         return HZ_ERROR;
     if (exr_read(opt->a, &a, err) != HZ_OK)
         return HZ_ERROR;

@@ -389,6 +389,37 @@ static void test_heatmaps(void **state)
     assert_null(strchr(strchr(out, '\n') + 1, '\n'));
 }
 
+/* --heatmap replaces only a regular file, and never one of the images it
+ * compares (by any name), as haze render -o and haze merge -o: exit 2, one
+ * line, the input byte for byte intact. */
+static void test_heatmap_guarded(void **state)
+{
+    (void)state;
+    char args[4096], out[8192], fifo[1024], alias[1024];
+    size_t n0 = 0, n1 = 0;
+    unsigned char *before = read_whole_file(ref_exr, &n0);
+    assert_non_null(before);
+    tmp_path(alias, sizeof alias, "ref-link.exr");
+    unlink(alias);
+    assert_int_equal(link(ref_exr, alias), 0);
+    snprintf(args, sizeof args, "diff '%s' '%s' --heatmap '%s'", spike_exr, ref_exr, alias);
+    assert_int_equal(run_haze(args, out, sizeof out), 2);
+    assert_non_null(strstr(out, "which the diff reads; refusing to replace it"));
+    unsigned char *after = read_whole_file(ref_exr, &n1);
+    assert_int_equal(n1, n0);
+    assert_memory_equal(after, before, n0);
+    free(after);
+    free(before);
+    unlink(alias);
+    tmp_path(fifo, sizeof fifo, "heat-fifo.exr");
+    unlink(fifo);
+    assert_int_equal(mkfifo(fifo, 0600), 0);
+    snprintf(args, sizeof args, "diff '%s' '%s' --heatmap '%s'", spike_exr, ref_exr, fifo);
+    assert_int_equal(run_haze_within(30, args, out, sizeof out), 2);
+    assert_non_null(strstr(out, "is a FIFO"));
+    unlink(fifo);
+}
+
 /* Exit 2 and exactly one line containing `want` (within 30 s: a FIFO must
  * not be waited on). */
 static void expect_exit2(const char *args, const char *want)
@@ -1073,6 +1104,7 @@ int main(void)
         cmocka_unit_test(test_identical),          cmocka_unit_test(test_constant_offset),
         cmocka_unit_test(test_max_location),       cmocka_unit_test(test_thresholds),
         cmocka_unit_test(test_nonfinite_excluded), cmocka_unit_test(test_heatmaps),
+        cmocka_unit_test(test_heatmap_guarded),
         cmocka_unit_test(test_input_errors),       cmocka_unit_test(test_usage),
         cmocka_unit_test(test_idiff_agrees),       cmocka_unit_test(test_ztest_false_failures),
         cmocka_unit_test(test_ztest_shift),        cmocka_unit_test(test_ztest_outlier),
