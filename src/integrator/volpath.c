@@ -12,7 +12,6 @@
 #include "core/phase.h"
 #include "materials/bsdf.h"
 #include "integrator/volpath_media.h"
-#include "integrator/singlescatter_media.h"
 #include "integrator/walk.h"
 
 /* ---- settings and scene ---- */
@@ -181,7 +180,7 @@ static bool shadow_event(void *ctx, const volpath_event *ev)
     return !rgb_is_black(s->T);
 }
 
-/* The walk of singlescatter_media.c's shadow rays (interfaces switch the medium,
+/* The walk of singlescatter_light.c's shadow rays (interfaces switch the medium,
  * opaque surfaces block unless they lie before t_fill), with tracking in
  * media. False when the ray is blocked or its estimate is 0. */
 static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_fill, double tmax,
