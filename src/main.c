@@ -1,6 +1,6 @@
 /* haze: command line. Exit status 0 on success, 1 on scene or render errors,
- * 2 on usage errors, 130 when a render was interrupted by SIGINT or SIGTERM
- * (docs/faults.md). */
+ * 2 on usage errors, 130 when a render was interrupted by SIGINT, SIGTERM or
+ * SIGHUP (docs/faults.md). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <limits.h>
@@ -47,9 +47,11 @@ static void on_interrupt(int sig)
     interrupted = 1;
 }
 
-/* First SIGINT/SIGTERM: finish the tiles under way and write what is done;
- * second: exit at once. A signal ignored when haze started (a background job
- * of a non-interactive shell ignores SIGINT) stays ignored. */
+/* First SIGINT/SIGTERM/SIGHUP (a closed terminal or ssh session is a render
+ * stopped like any other): give the tiles under way a second, write what is
+ * done; second: exit at once. A signal ignored when haze started (a
+ * background job of a non-interactive shell ignores SIGINT, nohup ignores
+ * SIGHUP) stays ignored. */
 static void install_interrupt_handlers(void)
 {
     struct sigaction sa;
@@ -58,9 +60,10 @@ static void install_interrupt_handlers(void)
     sigemptyset(&sa.sa_mask);
     sigaddset(&sa.sa_mask, SIGINT);
     sigaddset(&sa.sa_mask, SIGTERM);
+    sigaddset(&sa.sa_mask, SIGHUP);
     sa.sa_flags = SA_RESTART;
-    const int sigs[] = {SIGINT, SIGTERM};
-    for (int i = 0; i < 2; ++i) {
+    const int sigs[] = {SIGINT, SIGTERM, SIGHUP};
+    for (int i = 0; i < 3; ++i) {
         struct sigaction old;
         if (sigaction(sigs[i], NULL, &old) == 0 && old.sa_handler != SIG_IGN)
             sigaction(sigs[i], &sa, NULL);
@@ -250,6 +253,9 @@ static hz_status write_image_file(const render_outputs *outs, const film *f, con
                            : film_write_exr_with(f, path, ratio, out, err);
 }
 
+_Static_assert((int)RENDERER_TILE_RANGES <= (int)EXR_ATTRIBUTE_VALUE_SIZE,
+               "haze:tile_ranges fits in an EXR attribute");
+
 /* Writes the image (and the PNG preview) of an interrupted render: rendered
  * tiles only, with EXR header attributes describing which. */
 static int write_partial(const render_outputs *outs, film *f, double ratio,
@@ -271,7 +277,9 @@ static int write_partial(const render_outputs *outs, film *f, double ratio,
         {"haze:tiles_done", tiles_done},
         {"haze:tile_count", tile_count},
         {"haze:tile_size", tile_size},
-        {"haze:tile_order", "row-major over the data window; tiles >= tiles_done not rendered"},
+        {"haze:tile_order", "row-major over the data window; haze:tile_ranges lists the "
+                            "rendered tiles"},
+        {"haze:tile_ranges", stats->tile_ranges},
         {"haze:pixels_done", pixels_done},
         {"haze:pixels_total", pixels_total},
         {"haze:spp", spp},
@@ -430,6 +438,7 @@ typedef struct {
     render_outputs outs;   /* resolved on rank 0 only */
     uint64_t inputs_hash;
     bool no_jitter;        /* --disable-pixel-jitter or the scene's Option */
+    bool abandoned;        /* render threads still run: the scene must stay */
 } render_job;
 
 static render_options render_options_from_cli(const cli *c)
@@ -650,6 +659,7 @@ static int render_loaded_scene(const cli *c, distributed *dist, render_job *job,
                             .disable_pixel_jitter = job->no_jitter,
                             .timing = c->stats != 0};
     render_stats stats;
+    memset(&stats, 0, sizeof stats);
     double deadline = c->time_limit > 0 ? c->start_seconds + c->time_limit : 0.0;
     progressive_goal goal = {deadline, c->target_error, 0.0};
     bool adaptive = c->target_error > 0, progressive = deadline > 0 || adaptive;
@@ -660,8 +670,10 @@ static int render_loaded_scene(const cli *c, distributed *dist, render_job *job,
         if (steps.applies)
             goal.bias = steps.bias;
     }
-    if (distributed_render(dist, job->rs, &opt, progressive ? &goal : NULL, &stats, err) !=
-        HZ_OK) {
+    hz_status st =
+        distributed_render(dist, job->rs, &opt, progressive ? &goal : NULL, &stats, err);
+    job->abandoned = stats.abandoned > 0;
+    if (st != HZ_OK) {
         if (rank0)
             hz_error_print(stderr, err);
         return EXIT_SCENE;
@@ -697,6 +709,13 @@ static int run_render(const cli *c, distributed *dist)
     int exit_code = load_scene(c, dist, &job, &ph, &err);
     if (exit_code == 0)
         exit_code = render_loaded_scene(c, dist, &job, &ph, baseline_mib, &err);
+    if (job.abandoned) {
+        /* Abandoned render threads still read the scene: neither it nor the
+         * libraries (exit's destructors) may go away under them. */
+        fflush(stdout);
+        fflush(stderr);
+        _exit(exit_code);
+    }
     render_scene_destroy(job.rs);
     if (job.read)
         scene_desc_free(&job.sd);

@@ -143,7 +143,8 @@ hz_status exr_image_add_attribute(exr_image *img, const char *name, const char *
     if (!names)
         return hz_fail(err, "exr: out of memory");
     img->attribute_names = names;
-    char(*values)[256] = realloc(img->attribute_values, (size_t)n * sizeof *values);
+    char(*values)[EXR_ATTRIBUTE_VALUE_SIZE] =
+        realloc(img->attribute_values, (size_t)n * sizeof *values);
     if (!values)
         return hz_fail(err, "exr: out of memory");
     img->attribute_values = values;

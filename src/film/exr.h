@@ -8,6 +8,10 @@
 
 #include "core/error.h"
 
+/* Room for a string attribute's value, its NUL included: an interrupted
+ * render's haze:tile_ranges can be long. */
+enum { EXR_ATTRIBUTE_VALUE_SIZE = 1024 };
+
 typedef struct {
     char name[64];      /* "R", "G", "B", "A", "Z", "Variance.R", ... */
     bool half;          /* stored as half (read) / to store as half (write) */
@@ -26,7 +30,7 @@ typedef struct {
     /* Optional string attributes written to / read from the header. */
     int attribute_count;
     char (*attribute_names)[64];
-    char (*attribute_values)[256];
+    char (*attribute_values)[EXR_ATTRIBUTE_VALUE_SIZE];
     /* exr_write: a "chromaticities" attribute (red, green, blue, white x, y)
      * when has_chromaticities (the image is not in sRGB/Rec. 709). */
     bool has_chromaticities;
@@ -55,7 +59,7 @@ hz_status exr_image_alloc_lines(exr_image *img, int width, int height, int chann
 /* Frees the channels and the attribute arrays (which must be heap memory:
  * add attributes with exr_image_add_attribute). */
 void exr_image_free(exr_image *img);
-/* Appends a string attribute (name < 64 bytes, value < 256 bytes). */
+/* Appends a string attribute (name < 64 bytes, value < EXR_ATTRIBUTE_VALUE_SIZE bytes). */
 hz_status exr_image_add_attribute(exr_image *img, const char *name, const char *value, hz_error *err);
 const exr_channel *exr_find_channel(const exr_image *img, const char *name);
 

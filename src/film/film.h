@@ -196,8 +196,8 @@ rgb film_snapshot_pixel(const film_snapshot *s, const film *f, int px, int py,
                         double imaging_ratio);
 
 /* Extras for an output: EXR header string attributes (names < 64 bytes,
- * values < 256; ignored by the PNG writer) and where to publish the
- * temporary file's name while it exists (NULL: nowhere). */
+ * values < EXR_ATTRIBUTE_VALUE_SIZE; ignored by the PNG writer) and where to
+ * publish the temporary file's name while it exists (NULL: nowhere). */
 typedef struct {
     const char *name, *value;
 } film_attribute;

@@ -79,6 +79,7 @@ static void add_pass_work(render_stats *total, const render_stats *pass)
 static void keep_interrupted_first(render_stats *total, const render_stats *pass, int end)
 {
     total->tiles_done = pass->tiles_done;
+    memcpy(total->tile_ranges, pass->tile_ranges, sizeof total->tile_ranges);
     total->pixels = pass->pixels;
     total->interrupted = true;
     total->spp = end;
@@ -149,10 +150,11 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
         o.deadline = passes > 0 ? goal->deadline : 0.0; /* the first pass always ends */
         render_stats pass;
         st = renderer_run(rs, &o, &pass, err);
+        total.abandoned = pass.abandoned;
         if (st != HZ_OK)
             break;
         add_pass_work(&total, &pass);
-        if (pass.interrupted) {
+        if (pass.interrupted) { /* abandoned workers stay off the film: undone as usual */
             if (passes == 0) /* the rendered tiles of one pass, as renderer_run */
                 keep_interrupted_first(&total, &pass, end);
             else
@@ -174,7 +176,8 @@ hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt
             print_pass(opt->progress, t0, passes, done, spp, active != NULL, estimate, left);
     }
     film_snapshot_destroy(snap);
-    free(active);
+    if (total.abandoned == 0) /* else abandoned workers may still read it */
+        free(active);
     progressive_error_free(&pe);
     total.wall_seconds = hz_clock_seconds() - t0;
     if (stats)

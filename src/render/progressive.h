@@ -21,7 +21,9 @@
  * renderer_run's for the image left on the film (spp: the most samples a
  * pixel took, samples: all of them, passes: the passes), with the work of
  * every pass counted in the rays, lookups and times; interrupted only when
- * the first pass was. Progress: one line per completed pass to opt->progress. */
+ * the first pass was; abandoned as renderer_run's for the last pass (the
+ * pixel mask is then not freed: abandoned workers may read it). Progress:
+ * one line per completed pass to opt->progress. */
 hz_status renderer_run_progressive(render_scene *rs, const renderer_options *opt,
                                    const progressive_goal *goal, render_stats *stats,
                                    hz_error *err);

@@ -17,13 +17,29 @@
  * bottom edges), numbered row-major over the film's pixel bounds. */
 enum { RENDERER_TILE_SIZE = 16 };
 
+/* Seconds the tiles under way get to finish after a cancel before their
+ * workers are abandoned (renderer_options.cancel). */
+#define RENDERER_CANCEL_GRACE_S 1.0
+
+/* Room for render_stats.tile_ranges, its NUL included. */
+enum { RENDERER_TILE_RANGES = 1024 };
+
 typedef struct {
     int threads;         /* <= 0: all cores */
     FILE *progress;      /* progress bar destination, or NULL for none */
     /* When not NULL and *cancel becomes non-zero (a signal handler sets it),
-     * no further tile is started; tiles under way are finished. Because tiles
-     * are claimed in order, the rendered tiles are then exactly the first
-     * stats.tiles_done, each with all its samples. */
+     * no further tile is started, and the tiles under way get
+     * RENDERER_CANCEL_GRACE_S to finish. The workers still running then are
+     * abandoned: they add nothing more to the film, renderer_run returns
+     * without waiting for the sample each is computing, and
+     * stats.abandoned counts them. Such a worker goes on reading the scene
+     * and what these options point at (active, tile_ctx) until it ends, so
+     * the caller must keep them until the process exits (exit with _exit:
+     * library destructors would pull the scene from under it). The tile an
+     * abandoned worker was in is not done; the done tiles (all of them the
+     * first claimed unless some were abandoned) are listed in
+     * stats.tile_ranges, each with all its samples, and when sample_begin is
+     * 0 the film's other pixels are cleared, so it holds those tiles only. */
     const volatile sig_atomic_t *cancel;
     /* pbrt-v4's --disable-pixel-jitter: every camera ray through its pixel's
      * centre (filter offset 0, weight 1); the sample is still drawn, so the
@@ -45,8 +61,8 @@ typedef struct {
      * same samples in the same order as one render (src/render/progressive.h). */
     int sample_begin, sample_end;
     /* hz_clock_seconds() time after which no further tile is started (0:
-     * none); tiles under way are finished and stats.interrupted is set, as for
-     * *cancel. */
+     * none); tiles under way are finished however long they take (no worker
+     * is abandoned) and stats.interrupted is set. */
     double deadline;
     /* Pixels to render (0: skip), one byte per pixel of the film's bounds,
      * row-major; NULL: all (src/render/progressive.h, --target-error). */
@@ -62,6 +78,11 @@ typedef struct {
     long pixels_total;    /* pixels of the film's bounds */
     int tiles_done, tile_count;
     bool interrupted;     /* stopped by *cancel before every tile was rendered */
+    /* Interrupted: the done tiles as ranges of tile indices, "0-41,43-45,47"
+     * (each range first-last; a single tile alone), in increasing order.
+     * Tiles that would not fit in it are not counted done. */
+    char tile_ranges[RENDERER_TILE_RANGES];
+    int abandoned;        /* render threads left running after a cancel */
     double wall_seconds;
     uint64_t camera_rays, shadow_rays;
     uint64_t density_lookups; /* grid media */
@@ -77,8 +98,8 @@ typedef struct {
 } render_stats;
 
 /* Renders every tile of the film (or, once *opt->cancel is set, the tiles
- * already claimed). Worker threads block SIGINT and SIGTERM, so a handler runs
- * on the calling thread. */
+ * already claimed, abandoning the slow ones). Worker threads block SIGINT,
+ * SIGTERM and SIGHUP, so a handler runs on the calling thread. */
 hz_status renderer_run(render_scene *rs, const renderer_options *opt, render_stats *stats,
                        hz_error *err);
 
