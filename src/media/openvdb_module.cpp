@@ -278,14 +278,18 @@ void value_range(const GridT &grid, F &&f, vdb_grid_info &info)
     }
 }
 
+// One grid at a time, each released before the next is read: a file of
+// thousands of grids is described in the memory of its largest one (all of
+// them at once took 6 GiB for a 190 MiB file of 20,000 grids). Each grid is
+// listed by the name "gridname" accepts ("density[0]" and "density[1]"
+// for two grids named "density").
 void list_vdb(const std::string &path, std::uintmax_t size, vdb_grid_callback cb, void *user)
 {
     auto file = open_vdb(path, size);
-    openvdb::GridPtrVecPtr grids = file->getGrids();
-    file->close();
-    for (const openvdb::GridBase::Ptr &g : *grids) {
+    for (const std::string &name : vdb_names(*file)) {
+        openvdb::GridBase::ConstPtr g = file->readGrid(name);
         vdb_grid_info info{};
-        std::string name = g->getName(), type = g->valueType();
+        std::string type = g->valueType();
         info.name = name.c_str();
         info.type = type.c_str();
         info.active_voxels = g->activeVoxelCount();
@@ -311,6 +315,7 @@ void list_vdb(const std::string &path, std::uintmax_t size, vdb_grid_callback cb
                 *vg, [](const openvdb::Vec3s &v) { return double(v.length()); }, info);
         cb(&info, user);
     }
+    file->close();
 }
 
 
