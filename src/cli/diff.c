@@ -261,12 +261,6 @@ static void print_row(FILE *out, const diff_stats *s, bool overall)
 
 /* --------------------------------------------------------------- heatmap */
 
-static bool ends_with_png(const char *path)
-{
-    size_t n = strlen(path);
-    return n >= 4 && !strcasecmp(path + n - 4, ".png");
-}
-
 /* The per-pixel mean over the chosen channels of |a-b| (NaN where no pair is
  * finite); NULL when out of memory. */
 static float *mean_abs_heat(const exr_image *a, const diff_stats *st, int nc)
@@ -311,7 +305,7 @@ static hz_status write_heatmap(const char *path, const exr_image *a, const float
         if (isfinite(px[i]) && px[i] > peak)
             peak = px[i];
     hz_status rc;
-    if (!ends_with_png(path)) {
+    if (!file_has_suffix(path, ".png")) {
         rc = exr_write(path, &h, err);
     } else {
         uint8_t *rgb = malloc(npix * 3);
@@ -892,7 +886,7 @@ hz_status diff_run(const diff_options *opt, FILE *out, bool *passed, hz_error *e
     char heatmap[PATH_MAX];
     const char *inputs[2] = {opt->a, opt->b};
     if (opt->heatmap &&
-        (outputs_check_path(opt->heatmap, ends_with_png(opt->heatmap) ? ".png" : ".exr",
+        (outputs_check_path(opt->heatmap, file_has_suffix(opt->heatmap, ".png") ? ".png" : ".exr",
                             "heatmap", heatmap, sizeof heatmap, err) != HZ_OK ||
          outputs_refuse_inputs("heatmap", opt->heatmap, heatmap, inputs, 2, "the diff", err) !=
              HZ_OK))

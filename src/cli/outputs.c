@@ -12,10 +12,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+/* A file name with this extension (not the bare extension, nor a directory's). */
 static bool has_suffix(const char *s, const char *suffix)
 {
     size_t n = strlen(s), m = strlen(suffix);
-    return n > m && strcasecmp(s + n - m, suffix) == 0 && s[n - m - 1] != '/';
+    return n > m && file_has_suffix(s, suffix) && s[n - m - 1] != '/';
 }
 
 /* Creates (and removes) a probe file where the temporary file will go, which

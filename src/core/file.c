@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -164,4 +165,10 @@ hz_status file_read_all(const char *path, size_t limit, char **data, size_t *len
     hz_status st = read_plain(fd, size, limit, data, len, err);
     close(fd);
     return st;
+}
+
+bool file_has_suffix(const char *path, const char *suffix)
+{
+    size_t n = strlen(path), m = strlen(suffix);
+    return n >= m && strcasecmp(path + n - m, suffix) == 0;
 }

@@ -2,6 +2,7 @@
 #ifndef HAZE_CORE_FILE_H
 #define HAZE_CORE_FILE_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <sys/types.h>
 
@@ -29,6 +30,9 @@ hz_status file_open_regular(const char *path, int *fd, off_t *size, hz_error *er
  * message names the file: "PATH: cannot read: is a FIFO; haze reads only
  * regular files". A missing file passes: its reader says so. */
 hz_status file_check_regular(const char *path, hz_error *err);
+
+/* Whether `path` ends in `suffix` (".exr", ".png"), ignoring case. */
+bool file_has_suffix(const char *path, const char *suffix);
 
 /* Reads `path` whole into a malloc'ed buffer (*data, NUL-terminated; *len
  * excludes the NUL). Only regular files are read: a directory, device, FIFO or

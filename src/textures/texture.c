@@ -1,6 +1,5 @@
 #include "textures/texture.h"
 
-#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -8,6 +7,7 @@
 
 #include "core/noise.h"
 #include "core/path.h"
+#include "core/file.h"
 #include "textures/texture_image.h"
 
 typedef enum {
@@ -539,12 +539,12 @@ static hz_status read_imagemap(param_list *pl, file_loc loc, texture *t, hz_erro
     const char *name = params_string(pl, "filename", NULL);
     if (!name)
         return hz_fail_at(err, loc, "Texture \"imagemap\" needs \"string filename\"");
-    bool png = tex_image_has_suffix(name, ".png");
+    bool png = file_has_suffix(name, ".png");
     int enc;
     double gamma;
     if (tex_image_read_encoding(pl, png, &enc, &gamma, err) != HZ_OK)
         return HZ_ERROR;
-    if (!png && !tex_image_has_suffix(name, ".exr"))
+    if (!png && !file_has_suffix(name, ".exr"))
         return hz_fail_at(err, params_loc(pl, "filename"),
                           "image texture \"%s\": haze reads .png and .exr", name);
     char *path = path_of_scene_file(loc, name);
@@ -819,8 +819,8 @@ static hz_status read_normal_map(const char *name, file_loc loc, texture *t, hz_
 {
     *t = (texture){.kind = TEX_IMAGEMAP, .spectrum = true, .su = 1.0, .sv = 1.0,
                    .filter = FILTER_BILINEAR, .scale = 1.0};
-    bool png = tex_image_has_suffix(name, ".png");
-    if (!png && !tex_image_has_suffix(name, ".exr"))
+    bool png = file_has_suffix(name, ".png");
+    if (!png && !file_has_suffix(name, ".exr"))
         return hz_fail_at(err, loc, "normal map \"%s\": haze reads .png and .exr", name);
     char *path = path_of_scene_file(loc, name);
     if (!path)

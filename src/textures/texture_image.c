@@ -1,7 +1,6 @@
 /* Image textures' files (textures/texture_image.h). */
 #include "textures/texture_image.h"
 
-#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,16 +93,6 @@ hz_status tex_image_read_exr(const char *path, file_loc loc, tex_image *out, flo
     return HZ_OK;
 }
 
-bool tex_image_has_suffix(const char *s, const char *suffix)
-{
-    size_t n = strlen(s), m = strlen(suffix);
-    if (n < m)
-        return false;
-    for (size_t i = 0; i < m; ++i)
-        if (tolower((unsigned char)s[n - m + i]) != tolower((unsigned char)suffix[i]))
-            return false;
-    return true;
-}
 
 hz_status tex_image_read_encoding(param_list *pl, bool png, int *enc, double *gamma,
                                   hz_error *err)

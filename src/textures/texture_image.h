@@ -28,8 +28,6 @@ hz_status tex_image_read_png(const char *path, file_loc loc, int enc, double gam
  * *alpha when it has R, G, B and A. */
 hz_status tex_image_read_exr(const char *path, file_loc loc, tex_image *out, float **alpha,
                             hz_error *err);
-/* Whether s ends in suffix, ignoring case. */
-bool tex_image_has_suffix(const char *s, const char *suffix);
 /* "string encoding" (default sRGB for a PNG, linear otherwise) as `enc` and
  * `gamma` for tex_image_read_png. */
 hz_status tex_image_read_encoding(param_list *pl, bool png, int *enc, double *gamma,
