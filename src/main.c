@@ -374,6 +374,9 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
            st->wall_seconds > 0 ? (st->camera_rays + st->shadow_rays) / st->wall_seconds : 0.0);
     printf("stat density_lookups_per_pixel %.2f\n", st->density_lookups / px);
     printf("stat majorant_steps_per_pixel %.2f\n", st->majorant_steps / px);
+    render_marching m;
+    if (render_scene_marching(rs, &m) && m.auto_steps)
+        printf("stat auto_step_scale %g\n", m.auto_scale);
     printf("stat time_busy_s %.4f\n", st->time_busy_s);
     printf("stat time_surfaces_s %.4f\n", other > 0.0 ? other : 0.0);
     printf("stat time_media_s %.4f\n", st->time_media_s);
@@ -533,12 +536,13 @@ static double image_estimate(const render_stats *st, double bias)
  * at (which must outlive the write). */
 typedef struct {
     char spp[32], passes[32], limit[32], target[32], mean_spp[32], estimated[32];
-    char stepsize[64];
-    film_attribute items[8];
+    char stepsize[64], auto_steps[64];
+    film_attribute items[9];
     int count;
 } image_attributes;
 
-static void image_attributes_fill(image_attributes *a, const char *render_id, const cli *c,
+static void image_attributes_fill(image_attributes *a, const render_scene *rs,
+                                  const char *render_id, const cli *c,
                                   const progressive_goal *goal, const render_stats *st,
                                   const step_choice *steps)
 {
@@ -556,6 +560,12 @@ static void image_attributes_fill(image_attributes *a, const char *render_id, co
                  steps->shadow_cache);
     a->count = 0;
     a->items[a->count++] = (film_attribute){"haze:render", render_id};
+    render_marching m;
+    if (render_scene_marching(rs, &m) && m.auto_steps && m.auto_scale > 1.0) {
+        /* "auto" scaled the steps: its least factor (the pilot's step includes it) */
+        snprintf(a->auto_steps, sizeof a->auto_steps, "%g", m.auto_scale);
+        a->items[a->count++] = (film_attribute){"haze:auto_step_scale", a->auto_steps};
+    }
     if (progressive) {
         a->items[a->count++] = (film_attribute){"haze:spp", a->spp};
         a->items[a->count++] = (film_attribute){"haze:passes", a->passes};
@@ -583,7 +593,7 @@ static int write_image(const cli *c, render_job *job, const render_stats *st,
     if (!(goal->target_error > 0) && st->spp != render_scene_sampler(job->rs)->spp)
         set_render_id(job, st->spp);
     image_attributes attrs;
-    image_attributes_fill(&attrs, job->outs.render_id, c, goal, st, steps);
+    image_attributes_fill(&attrs, job->rs, job->outs.render_id, c, goal, st, steps);
     film_output out = {attrs.items, attrs.count, &output_note, st->threads};
     ph->write = hz_clock_seconds();
     if (write_image_file(&job->outs, job->f, job->outs.image, ratio, &out, err) != HZ_OK ||

@@ -201,11 +201,13 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     sw.coloured = sw.m->coloured;
     const singlescatter_settings *set = &vs->settings;
     transmittance_mode mode = set->mode;
+    double step = set->step * singlescatter_auto_step_scale(set, sw.m, sw.gr.voxels_per_t,
+                                                            (t1 - t0) * sw.gr.voxels_per_t);
     bool marching = mode == TRANSMITTANCE_RAYMARCH || mode == TRANSMITTANCE_JITTERED;
     double offset = mode == TRANSMITTANCE_JITTERED ? sampler_1d(u)
                     : mode == TRANSMITTANCE_RAYMARCH ? 0.5
                                                      : -1.0;
-    strata_make(&sw.s, &sw.gr, t0, t1, set->step, offset, &walk->r);
+    strata_make(&sw.s, &sw.gr, t0, t1, step, offset, &walk->r);
     if (mode == TRANSMITTANCE_RAYMARCH)
         sw.cutoff = SINGLESCATTER_MARCH_CUTOFF * rgb_max(*beta);
     if (!marching)

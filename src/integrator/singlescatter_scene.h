@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "integrator/path.h"
 #include "integrator/shadow_cache.h"
+#include "media/medium.h"
 #include "scene/scene_desc.h"
 
 typedef enum {
@@ -29,7 +30,27 @@ typedef struct {
                              lights: only with stochastic shadows, else 1) */
     double shadow_cache;  /* node spacing of the shadow cache, voxels
                              (integrator/shadow_cache.h); 0 = none */
+    /* Steps "auto" (the default when neither transmittance nor
+     * shadowtransmittance is given): the estimators are jittered marching,
+     * each medium's steps scaled by singlescatter_auto_step_scale. */
+    bool auto_steps;
 } singlescatter_settings;
+
+/* "auto": the optical depth of one marching step at the medium's largest
+ * density (camera rays; shadow rays keep their ratio of steps), and the
+ * fewest steps a ray's crossing of a medium gets. */
+#define SINGLESCATTER_AUTO_TAU 0.25
+#define SINGLESCATTER_AUTO_MIN_STEPS 16
+
+/* The factor (>= 1) by which "auto" scales set's steps in grid medium m:
+ * where a voxel holds less than SINGLESCATTER_AUTO_TAU / set->step of
+ * optical depth, the steps grow until one holds that much, so that the
+ * marching, and its cost, follow the optical depth and not the voxel
+ * count; but no step longer than `chord_voxels` (the ray's span in the
+ * medium) over SINGLESCATTER_AUTO_MIN_STEPS. `voxels_per_unit`: voxels per
+ * unit length along the ray. 1 without set->auto_steps. */
+double singlescatter_auto_step_scale(const singlescatter_settings *set, const medium *m,
+                                     double voxels_per_unit, double chord_voxels);
 
 /* Defaults, then `Integrator "singlescatter"` parameters ("float stepsize" 1,
  * "float shadowstepsize" 2, "string transmittance" "jittered", "integer

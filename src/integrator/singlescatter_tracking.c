@@ -35,13 +35,15 @@ static rgb grid_transmittance(const singlescatter_scene *vs, const medium *m, ve
     const singlescatter_settings *set = &vs->settings;
     rgb sigma_t = medium_sigma_t(m);
     majorant_segment seg;
-    switch (set->shadow_mode) {
+    transmittance_mode mode = set->shadow_mode;
+    double shadow_step = set->shadow_step * singlescatter_auto_step_scale(set, m, gr.voxels_per_t,
+                                                                          (t1 - t0) * gr.voxels_per_t);
+    switch (mode) {
     case TRANSMITTANCE_RAYMARCH:
     case TRANSMITTANCE_JITTERED: {
-        double offset =
-            set->shadow_mode == TRANSMITTANCE_JITTERED ? rng_uniform(&walk->r) : 0.5;
+        double offset = mode == TRANSMITTANCE_JITTERED ? rng_uniform(&walk->r) : 0.5;
         strata s;
-        strata_make(&s, &gr, t0, t1, set->shadow_step, offset, &walk->r);
+        strata_make(&s, &gr, t0, t1, shadow_step, offset, &walk->r);
         double tau = 0.0;
         bool skip = false; /* strata to skip up to seg.t0 (empty cells before it) */
         while (next_cell(&gr, &seg, walk)) {
@@ -65,10 +67,10 @@ static rgb grid_transmittance(const singlescatter_scene *vs, const medium *m, ve
         while (next_cell(&gr, &seg, walk)) {
             if (!(seg.max > 0.0))
                 continue;
-            cell_rates c = cell_rates_make(set, set->shadow_mode, &seg, sigma_max);
+            cell_rates c = cell_rates_make(set, mode, &seg, sigma_max);
             if (c.march) {
                 T = rgb_mul(T, rgb_exp_neg(sigma_t, march_tau(&gr, seg.t0, seg.t1,
-                                                              set->shadow_step, walk)));
+                                                              shadow_step, walk)));
             } else {
                 if (c.lo > 0.0)
                     T = rgb_mul(T, rgb_exp_neg(sigma_t, c.lo * (seg.t1 - seg.t0)));

@@ -205,6 +205,8 @@ bool grid_medium_clear_along(const medium *m, vec3 o, vec3 d, double t0, double 
     return true;
 }
 
+double grid_medium_density_max(const medium *m) { return grid_medium_of(m)->density_max; }
+
 bool grid_medium_support(const medium *m, vec3 corners[8], double *voxel)
 {
     const grid_medium *gm = grid_medium_of(m);

@@ -117,6 +117,7 @@ bool grid_medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, 
 bool grid_medium_ray_start(const medium *m, vec3 o, vec3 d, double time, double *t0,
                            double *t1, medium_ray *r);
 bool grid_medium_support(const medium *m, vec3 corners[8], double *voxel);
+double grid_medium_density_max(const medium *m);
 bool grid_medium_clear_along(const medium *m, vec3 o, vec3 d, double t0, double t1,
                              double time, uint64_t *cells);
 medium_memory grid_medium_memory(const medium *m);
@@ -237,7 +238,8 @@ static inline rgb grid_medium_color(const grid_medium *gm, medium_ray *r, vec3 p
     .density_grid = true, .destroy = grid_medium_destroy, .clip = grid_medium_clip,               \
     .ray_start = grid_medium_ray_start, .sample = grid_medium_sample,                              \
     .density = grid_medium_density, .density_point = grid_medium_density_point,                    \
-    .support = grid_medium_support, .clear_along = grid_medium_clear_along,                        \
+    .support = grid_medium_support, .density_max = grid_medium_density_max,                        \
+    .clear_along = grid_medium_clear_along,                                                        \
     .memory = grid_medium_memory, .moves = grid_medium_moves
 void grid_medium_sample(medium_ray *r, double t, bool emission, medium_props *p,
                         uint64_t *lookups);

@@ -29,6 +29,11 @@ bool medium_support(const medium *m, vec3 corners[8], double *voxel)
     return m->ops->support && m->ops->support(m, corners, voxel);
 }
 
+double medium_density_max(const medium *m)
+{
+    return m->ops->density_max ? m->ops->density_max(m) : 0.0;
+}
+
 bool media_clear_along(const medium *media, size_t n, vec3 o, vec3 d, double t0, double t1,
                        double time, uint64_t *cells)
 {

@@ -107,6 +107,8 @@ typedef struct {
     /* Where the density can be non-zero (render space box corners at time
      * 0) and a voxel's length; false when unbounded or empty. */
     bool (*support)(const medium *m, vec3 corners[8], double *voxel);
+    /* density_grid kinds: a bound >= every density value of the field. */
+    double (*density_max)(const medium *m);
     /* True when o + t d, t in [t0, t1], meets no density at `time`. */
     bool (*clear_along)(const medium *m, vec3 o, vec3 d, double t0, double t1, double time,
                         uint64_t *cells);
@@ -275,6 +277,9 @@ bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, doubl
 /* Density grids with a bounded support: its box's corners in render space
  * and the geometric mean of a voxel's edges; false otherwise. */
 bool medium_support(const medium *m, vec3 corners[8], double *voxel);
+/* Density grids: a bound >= every density value (sigma_t = density *
+ * medium_sigma_t at most this times it); 0 for other kinds. */
+double medium_density_max(const medium *m);
 
 /* Whether none of the n media has density anywhere along o + t d, t in
  * [t0, t1], at `time`: each is a grid with a zero background whose majorant

@@ -2,6 +2,7 @@
 #include "render/render_scene.h"
 
 #include <assert.h>
+#include <math.h>
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -630,8 +631,17 @@ bool render_scene_marching(const render_scene *rs, render_marching *m)
     const singlescatter_settings *set = &sc->settings;
     if (!grids || !(marches(set->mode) || marches(set->shadow_mode)))
         return false;
+    double scale = INFINITY;
+    for (size_t i = 0; i < sc->in.medium_count; ++i) {
+        const medium *md = &sc->in.media[i];
+        vec3 corners[8];
+        double voxel;
+        if (medium_is_density_grid(md) && medium_support(md, corners, &voxel))
+            scale = fmin(scale, singlescatter_auto_step_scale(set, md, 1.0 / voxel, INFINITY));
+    }
     *m = (render_marching){set->mode, set->shadow_mode, set->step, set->shadow_step,
-                           set->shadow_cache, !shadow_cache_obstacle(rs, &sc->in)};
+                           set->shadow_cache, !shadow_cache_obstacle(rs, &sc->in),
+                           set->auto_steps, isfinite(scale) ? scale : 1.0};
     return true;
 }
 

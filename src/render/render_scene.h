@@ -108,6 +108,11 @@ typedef struct {
     double step, shadow_step;
     double shadow_cache;       /* the shadow cache's spacing, voxels (0: none) */
     bool shadow_cache_possible; /* static, a grid medium rays enter, a distant light */
+    /* transmittance "auto" (the default): the least factor by which it
+     * scales the steps in the scene's grid media
+     * (singlescatter_auto_step_scale); 1 without */
+    bool auto_steps;
+    double auto_scale;
 } render_marching;
 bool render_scene_marching(const render_scene *rs, render_marching *m);
 /* Sets it (on a scene where render_scene_marching is true), building the

@@ -15,7 +15,12 @@ typedef struct {
 static pilot_grid pilot_grid_make(const film_params *fp)
 {
     int w = fp->bounds.x1 - fp->bounds.x0, h = fp->bounds.y1 - fp->bounds.y0;
-    int stride = (int)floor(sqrt((double)w * (double)h / STEP_PILOT_PIXELS));
+    /* STEP_PILOT_PIXELS, or on small images a 1/STEP_PILOT_SHARE_OF_IMAGE of
+     * theirs, so that a pilot of a few renders costs a small part of one
+     * sample per pixel; but at least STEP_PILOT_MIN_PIXELS, for an estimate. */
+    double n = fmin(STEP_PILOT_PIXELS, fmax(STEP_PILOT_MIN_PIXELS, (double)w * (double)h /
+                                                                       STEP_PILOT_SHARE_OF_IMAGE));
+    int stride = (int)ceil(sqrt((double)w * (double)h / n));
     if (stride < 1)
         stride = 1;
     pilot_grid g = {fp->bounds.x0 + stride / 2, fp->bounds.y0 + stride / 2, stride, 0, 0};
@@ -124,6 +129,7 @@ typedef struct {
     const sampler *smp;
     int n, k, threads; /* pixels, samples of each, threads */
     int renders;       /* made so far */
+    double max_step;   /* the coarsest step tried */
 } pilot;
 
 static void pilot_at(pilot *p, double step, rgb *out)
@@ -153,7 +159,7 @@ static void swap_images(rgb **a, rgb **b)
 static bool go_coarser(pilot *p, rgb **img, double goal, double *x, double *bias)
 {
     bool coarser = false;
-    while (2.0 * *x <= STEP_PILOT_MAX_STEP) {
+    while (2.0 * *x <= p->max_step) {
         pilot_at(p, 2.0 * *x, img[2]);
         double coarse = pilot_bias(p, img[2], img[0]);
         if (!(coarse <= goal))
@@ -205,7 +211,9 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads, step_
     size_t bytes = (size_t)n * (size_t)k * sizeof(rgb);
     rgb *img[3] = {malloc(bytes), malloc(bytes), malloc(bytes)};
     double goal = STEP_PILOT_SHARE * target_error;
-    double ratio = base.shadow_step / base.step, h = base.step;
+    /* Under "auto" the steps start where it puts them: finer ones march as
+     * coarsely as that. */
+    double ratio = base.shadow_step / base.step, h = base.step * base.auto_scale;
     /* The shadow cache keeps the scene's ratio to the step, or where the
      * scene has none but could, the step's own spacing. */
     double cache_ratio = base.shadow_cache > 0.0     ? base.shadow_cache / base.step
@@ -216,13 +224,14 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads, step_
             free(img[q]);
         return;
     }
-    pilot p = {rs, &base, ratio, cache_ratio, &g, &smp, n, k, threads, 0};
+    pilot p = {rs, &base, ratio, cache_ratio, &g, &smp, n, k, threads, 0,
+               STEP_PILOT_MAX_STEP * base.auto_scale};
     /* Coarser first, and cheapest first: the bias of 2x is estimated from x
      * and 2x (img[0]: at x, img[2]: at 2x), starting at x = 2h, so a scene
      * whose step goes coarser never renders its own; only when twice its step
      * fails is h rendered (img[1]), for the bias of 2h. Nothing finer than h
      * is rendered unless h fails. */
-    double bias = INFINITY, x = 4.0 * h <= STEP_PILOT_MAX_STEP ? 2.0 * h : h;
+    double bias = INFINITY, x = 4.0 * h <= p.max_step ? 2.0 * h : h;
     pilot_at(&p, x, img[0]);
     bool coarser = go_coarser(&p, img, goal, &x, &bias);
     if (coarser) {

@@ -32,9 +32,14 @@
 #define STEP_PILOT_SHARE 0.5
 /* About this many pixels in the pilot grid; steps between these (voxels). */
 #define STEP_PILOT_PIXELS 2500
+/* ... but at most 1/this of the image's pixels, and at least
+ * STEP_PILOT_MIN_PIXELS (all of a smaller image's). */
+#define STEP_PILOT_SHARE_OF_IMAGE 64
+#define STEP_PILOT_MIN_PIXELS 256
 /* Samples per pilot pixel of a random (jittered) estimator. */
 #define STEP_PILOT_SAMPLES 8
 #define STEP_PILOT_MIN_STEP (1.0 / 64.0)
+/* The coarsest step, voxels (under "auto": times its least scale). */
 #define STEP_PILOT_MAX_STEP 64.0
 
 typedef struct {

@@ -265,7 +265,7 @@ static void test_target_error_parts(void **state)
     for (int i = 0; i < 2; ++i) {
         double va = atof(exr_attribute(&a, names[i])), vb = atof(exr_attribute(&b, names[i]));
         double want = (va * wa + vb * wb) / (wa + wb), got = atof(exr_attribute(&m, names[i]));
-        if (fabs(got - want) > 2e-3 * want)
+        if (fabs(got - want) > 5e-3 * want) /* the header's values have 3 digits */
             fail_msg("%s: %g, want %g (%g and %g)", names[i], got, want, va, vb);
     }
     assert_true(atof(exr_attribute(&m, "haze:estimated_error")) <= 3e-2);
