@@ -118,8 +118,9 @@ hz_status warp2d_init(warp2d *w, float *data, size_t nx, size_t ny, int n_params
     }
     for (size_t s = 0; s < w->slices; ++s)
         if (!build_cdf(w, s)) {
+            size_t slices = w->slices;
             warp2d_free(w);
-            return hz_fail(err, "slice %zu of %zu integrates to 0", s + 1, w->slices);
+            return hz_fail(err, "slice %zu of %zu integrates to 0", s + 1, slices);
         }
     return HZ_OK;
 }
