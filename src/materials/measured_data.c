@@ -157,28 +157,33 @@ static hz_status table(warp2d *w, const tensor_field *f, int n_params, const flo
 static bool channel_weights(const tensor_field *lambda, rgb *w)
 {
     size_t n = lambda->count, m = 0;
-    double *l = malloc((n + 2) * sizeof *l), *v = malloc((n + 2) * sizeof *v);
-    bool ok = l && v;
-    for (size_t j = 0; ok && j < n; ++j) {
-        m = 0;
-        double first = tensor_field_f32(lambda, 0), last = tensor_field_f32(lambda, n - 1);
-        if (first > 360.0) {
-            l[m] = 360.0;
-            v[m++] = j == 0;
-        }
-        for (size_t k = 0; k < n; ++k) {
-            l[m] = tensor_field_f32(lambda, k);
-            v[m++] = k == j;
-        }
-        if (last < 830.0) {
-            l[m] = 830.0;
-            v[m++] = j == n - 1;
-        }
-        w[j] = spectrum_sampled_to_rgb(l, v, m);
+    double *l = malloc((n + 2) * sizeof *l);
+    rgb *ext = malloc((n + 2) * sizeof *ext);
+    if (!l || !ext) {
+        free(l);
+        free(ext);
+        return false;
     }
+    /* The end values held out to 360 and 830 nm: extra points whose weight
+     * goes to the end wavelengths. */
+    bool before = tensor_field_f32(lambda, 0) > 360.0;
+    bool after = tensor_field_f32(lambda, n - 1) < 830.0;
+    if (before)
+        l[m++] = 360.0;
+    for (size_t k = 0; k < n; ++k)
+        l[m++] = tensor_field_f32(lambda, k);
+    if (after)
+        l[m++] = 830.0;
+    spectrum_sampled_basis_to_rgb(l, m, ext);
+    for (size_t k = 0; k < n; ++k)
+        w[k] = ext[k + before];
+    if (before)
+        w[0] = rgb_add(w[0], ext[0]);
+    if (after)
+        w[n - 1] = rgb_add(w[n - 1], ext[m - 1]);
     free(l);
-    free(v);
-    return ok;
+    free(ext);
+    return true;
 }
 
 /* The spectra's tables reduced to three RGB tables. */

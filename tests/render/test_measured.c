@@ -108,6 +108,31 @@ static void test_named_and_shared(void **state)
     assert_true(fabs(m.g - 0.5) < 4.0 * se.g + 0.003);
 }
 
+/* A scene naming no Integrator renders pbrt-v4's default, volpath, and
+ * says so, as for the other glossy materials. */
+static void test_default_integrator(void **state)
+{
+    (void)state;
+    const char *text = "WorldBegin\nMaterial \"measured\" \"string filename\" \""
+                       BSDF("ggx.bsdf") "\"\nShape \"sphere\"\n";
+    scene_desc sd;
+    hz_error err = {0};
+    assert_int_equal(scene_parse_string(text, "test.pbrt", &sd, &err), HZ_OK);
+    FILE *warn = tmpfile();
+    assert_non_null(warn);
+    render_options def = {.seed = 0};
+    render_scene *rs = NULL;
+    assert_int_equal(render_scene_create(&sd, &def, warn, &rs, &err), HZ_OK);
+    rewind(warn);
+    char msg[1024];
+    size_t got = fread(msg, 1, sizeof msg - 1, warn);
+    msg[got] = '\0';
+    fclose(warn);
+    assert_non_null(strstr(msg, "has a \"measured\" material, which only \"volpath\" renders"));
+    render_scene_destroy(rs);
+    scene_desc_free(&sd);
+}
+
 static void expect_error(const char *material, const char *want)
 {
     char *text = plane_scene(false, integrators[0], sky, material);
@@ -136,6 +161,7 @@ int main(void)
         cmocka_unit_test(test_lambert_furnace),
         cmocka_unit_test(test_ggx_conductor),
         cmocka_unit_test(test_named_and_shared),
+        cmocka_unit_test(test_default_integrator),
         cmocka_unit_test(test_refused),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -96,6 +96,30 @@ static void lambert_closed_form(void **state)
     measured_brdf_destroy(m);
 }
 
+/* The per-wavelength weights the spectra are reduced with sum to the RGB
+ * of the spectrum itself (the reduction is linear). */
+static void spectrum_basis(void **state)
+{
+    (void)state;
+    const double sets[3][5] = {{360, 400, 555.5, 700, 830},
+                               {300, 450, 451, 452, 900},
+                               {380, 390, 400, 780, 800}};
+    rng r = rng_seeded(9);
+    for (int k = 0; k < 3; ++k)
+        for (int trial = 0; trial < 4; ++trial) {
+            double v[5];
+            rgb basis[5], sum = rgb_grey(0.0);
+            spectrum_sampled_basis_to_rgb(sets[k], 5, basis);
+            for (int j = 0; j < 5; ++j) {
+                v[j] = rng_uniform(&r) * 2.0 - 0.5;
+                sum = rgb_add(sum, rgb_scale(basis[j], v[j]));
+            }
+            rgb want = spectrum_sampled_to_rgb(sets[k], v, 5);
+            for (int c = 0; c < 3; ++c)
+                assert_true(fabs(rgb_ch(sum, c) - rgb_ch(want, c)) < 1e-12);
+        }
+}
+
 /* The directional albedo at wo by quadrature of f cos over the hemisphere
  * (cos theta x phi midpoints), and the integral of the pdf. */
 static void quadrature(const bsdf *b, vec3 wo, double *albedo, double *pdf_sum)
@@ -253,6 +277,7 @@ static void two_sided(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(spectrum_basis),
         cmocka_unit_test(lambert_closed_form),  cmocka_unit_test(lambert_furnace),
         cmocka_unit_test(chi2_measured),        cmocka_unit_test(ggx_matches_analytic),
         cmocka_unit_test(two_sided),
