@@ -68,7 +68,7 @@ static rgb reflectance(const measured_brdf *m, const lookup_at *g, vec2 u, doubl
         c[i] = fmax(warp2d_eval(&m->rgb[i], &g->slice, u), 0.0);
     double k = 1.0 / cos_i;
     if (m->jacobian) {
-        static const warp2d_slice none = {0};
+        const warp2d_slice none = warp2d_slice_none();
         double sigma = warp2d_eval(&m->sigma, &none, g->u_wo);
         if (!(sigma > 0.0))
             return rgb_grey(0.0);

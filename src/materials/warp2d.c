@@ -127,9 +127,8 @@ hz_status warp2d_init(warp2d *w, float *data, size_t nx, size_t ny, int n_params
 
 warp2d_slice warp2d_slice_at(const warp2d *w, const double *params)
 {
-    warp2d_slice s = {0};
+    warp2d_slice s = warp2d_slice_none();
     for (int d = 0; d < w->n_params; ++d) {
-        s.weight[2 * d] = 1.0;
         if (w->param_size[d] == 1)
             continue;
         /* The last value <= the parameter, among all but the last. */
@@ -143,31 +142,34 @@ warp2d_slice warp2d_slice_at(const warp2d *w, const double *params)
                 hi = mid - 1;
         }
         double t = clamp01((params[d] - v[lo]) / ((double)v[lo + 1] - v[lo]));
-        s.weight[2 * d] = 1.0 - t;
-        s.weight[2 * d + 1] = t;
-        s.offset += w->param_stride[d] * lo;
+        /* Each slice so far splits in two along this parameter. */
+        int n = s.n;
+        for (int k = 0; k < n; ++k) {
+            s.slice[k] += w->param_stride[d] * lo;
+            if (t > 0.0) {
+                s.slice[s.n] = s.slice[k] + w->param_stride[d];
+                s.weight[s.n++] = s.weight[k] * t;
+            }
+            s.weight[k] *= 1.0 - t;
+        }
+        if (t == 1.0) { /* the lower ones weigh nothing */
+            for (int k = 0; k < n; ++k) {
+                s.slice[k] = s.slice[k + n];
+                s.weight[k] = s.weight[k + n];
+            }
+            s.n = n;
+        }
     }
     return s;
 }
 
-/* arr[i] interpolated between the slices around s (i within the first
- * slice; slice_size entries per slice). */
-static double lookup(const warp2d *w, const float *arr, const warp2d_slice *s, size_t i,
-                     size_t slice_size)
+/* arr[i] interpolated between the slices of s (i within the first slice;
+ * slice_size entries per slice). */
+static inline double lookup(const float *arr, const warp2d_slice *s, size_t i, size_t slice_size)
 {
-    size_t base = s->offset * slice_size + i;
     double v = 0.0;
-    for (unsigned c = 0; c < (1u << w->n_params); ++c) {
-        double wt = 1.0;
-        size_t at = base;
-        for (int d = 0; d < w->n_params; ++d) {
-            unsigned bit = (c >> d) & 1u;
-            wt *= s->weight[2 * d + bit];
-            at += bit * w->param_stride[d] * slice_size;
-        }
-        if (wt != 0.0)
-            v += wt * (double)arr[at];
-    }
+    for (int k = 0; k < s->n; ++k)
+        v += s->weight[k] * (double)arr[s->slice[k] * slice_size + i];
     return v;
 }
 
@@ -179,9 +181,9 @@ double warp2d_eval(const warp2d *w, const warp2d_slice *s, vec2 p)
     iy = iy > w->ny - 2 ? w->ny - 2 : iy;
     double fx = px - (double)ix, fy = py - (double)iy;
     size_t n = w->nx * w->ny, i = iy * w->nx + ix;
-    double v00 = lookup(w, w->data, s, i, n), v10 = lookup(w, w->data, s, i + 1, n);
-    double v01 = lookup(w, w->data, s, i + w->nx, n);
-    double v11 = lookup(w, w->data, s, i + w->nx + 1, n);
+    double v00 = lookup(w->data, s, i, n), v10 = lookup(w->data, s, i + 1, n);
+    double v01 = lookup(w->data, s, i + w->nx, n);
+    double v11 = lookup(w->data, s, i + w->nx + 1, n);
     return ((1.0 - fy) * ((1.0 - fx) * v00 + fx * v10) + fy * ((1.0 - fx) * v01 + fx * v11)) *
            w->scale;
 }
@@ -200,7 +202,7 @@ static size_t find_row(const warp2d *w, const warp2d_slice *s, double u)
     size_t lo = 0, hi = w->ny - 2;
     while (lo < hi) {
         size_t mid = (lo + hi + 1) / 2;
-        if (lookup(w, w->marginal_cdf, s, mid, w->ny) < u)
+        if (lookup(w->marginal_cdf, s, mid, w->ny) < u)
             lo = mid;
         else
             hi = mid - 1;
@@ -212,8 +214,8 @@ static size_t find_row(const warp2d *w, const warp2d_slice *s, double u)
 static double cond_at(const warp2d *w, const warp2d_slice *s, size_t row, double t, size_t x)
 {
     size_t n = w->nx * w->ny, i = row * w->nx + x;
-    return (1.0 - t) * lookup(w, w->conditional_cdf, s, i, n) +
-           t * lookup(w, w->conditional_cdf, s, i + w->nx, n);
+    return (1.0 - t) * lookup(w->conditional_cdf, s, i, n) +
+           t * lookup(w->conditional_cdf, s, i + w->nx, n);
 }
 
 bool warp2d_sample(const warp2d *w, const warp2d_slice *s, vec2 u, vec2 *p, double *pdf)
@@ -221,9 +223,9 @@ bool warp2d_sample(const warp2d *w, const warp2d_slice *s, vec2 u, vec2 *p, doub
     double ux = hz_clamp(u.x, U_EPS, 1.0 - U_EPS), uy = hz_clamp(u.y, U_EPS, 1.0 - U_EPS);
     size_t nx = w->nx, n = nx * w->ny;
     size_t row = find_row(w, s, uy);
-    uy -= lookup(w, w->marginal_cdf, s, row, w->ny);
-    double r0 = lookup(w, w->conditional_cdf, s, row * nx + nx - 1, n);
-    double r1 = lookup(w, w->conditional_cdf, s, row * nx + 2 * nx - 1, n);
+    uy -= lookup(w->marginal_cdf, s, row, w->ny);
+    double r0 = lookup(w->conditional_cdf, s, row * nx + nx - 1, n);
+    double r1 = lookup(w->conditional_cdf, s, row * nx + 2 * nx - 1, n);
     double t = solve_linear(r0, r1, uy);
     ux *= (1.0 - t) * r0 + t * r1;
     size_t lo = 0, hi = nx - 2;
@@ -236,8 +238,8 @@ bool warp2d_sample(const warp2d *w, const warp2d_slice *s, vec2 u, vec2 *p, doub
     }
     ux -= cond_at(w, s, row, t, lo);
     size_t i = row * nx + lo;
-    double v00 = lookup(w, w->data, s, i, n), v10 = lookup(w, w->data, s, i + 1, n);
-    double v01 = lookup(w, w->data, s, i + nx, n), v11 = lookup(w, w->data, s, i + nx + 1, n);
+    double v00 = lookup(w->data, s, i, n), v10 = lookup(w->data, s, i + 1, n);
+    double v01 = lookup(w->data, s, i + nx, n), v11 = lookup(w->data, s, i + nx + 1, n);
     double c0 = (1.0 - t) * v00 + t * v01, c1 = (1.0 - t) * v10 + t * v11;
     double sx = solve_linear(c0, c1, ux);
     *p = v2(((double)lo + sx) / (double)(nx - 1), ((double)row + t) / (double)(w->ny - 1));
@@ -254,15 +256,15 @@ vec2 warp2d_invert(const warp2d *w, const warp2d_slice *s, vec2 p, double *pdf)
     iy = iy > w->ny - 2 ? w->ny - 2 : iy;
     double fx = px - (double)ix, fy = py - (double)iy;
     size_t i = iy * nx + ix;
-    double v00 = lookup(w, w->data, s, i, n), v10 = lookup(w, w->data, s, i + 1, n);
-    double v01 = lookup(w, w->data, s, i + nx, n), v11 = lookup(w, w->data, s, i + nx + 1, n);
+    double v00 = lookup(w->data, s, i, n), v10 = lookup(w->data, s, i + 1, n);
+    double v01 = lookup(w->data, s, i + nx, n), v11 = lookup(w->data, s, i + nx + 1, n);
     double c0 = (1.0 - fy) * v00 + fy * v01, c1 = (1.0 - fy) * v10 + fy * v11;
     *pdf = ((1.0 - fx) * c0 + fx * c1) * w->scale;
     double sx = fx * (c0 + 0.5 * fx * (c1 - c0)) + cond_at(w, s, iy, fy, ix);
-    double r0 = lookup(w, w->conditional_cdf, s, iy * nx + nx - 1, n);
-    double r1 = lookup(w, w->conditional_cdf, s, iy * nx + 2 * nx - 1, n);
+    double r0 = lookup(w->conditional_cdf, s, iy * nx + nx - 1, n);
+    double r1 = lookup(w->conditional_cdf, s, iy * nx + 2 * nx - 1, n);
     double row_total = (1.0 - fy) * r0 + fy * r1;
     sx = row_total > 0.0 ? sx / row_total : 0.0;
-    double sy = fy * (r0 + 0.5 * fy * (r1 - r0)) + lookup(w, w->marginal_cdf, s, iy, w->ny);
+    double sy = fy * (r0 + 0.5 * fy * (r1 - r0)) + lookup(w->marginal_cdf, s, iy, w->ny);
     return v2(clamp01(sx), clamp01(sy));
 }

@@ -38,13 +38,20 @@ typedef struct {
     double scale;           /* what a lookup of data is multiplied by */
 } warp2d;
 
-/* Where a lookup stands among the parameters' slices: the first slice and
- * the two weights of each parameter. Warps tabulated at the same parameter
- * values share it. */
+/* Where a lookup stands among the parameters' slices: the slices whose
+ * values it blends (those of non-zero weight) and their weights. Warps
+ * tabulated at the same parameter values share it. */
 typedef struct {
-    size_t offset;
-    double weight[2 * WARP2D_MAX_PARAMS];
+    int n;
+    size_t slice[1 << WARP2D_MAX_PARAMS];
+    double weight[1 << WARP2D_MAX_PARAMS];
 } warp2d_slice;
+
+/* The slice of a warp without parameters. */
+static inline warp2d_slice warp2d_slice_none(void)
+{
+    return (warp2d_slice){.n = 1, .weight = {1.0}};
+}
 
 /* Builds a warp of nx x ny values per slice from `data` (slices x ny x nx
  * floats, malloc'ed: the warp takes it over, and frees it on failure too)

@@ -207,7 +207,7 @@ static int sample_slice(const spec *s, vec3 wo, double phi_o, const float *vndf,
         fprintf(stderr, "haze_make_bsdf: vndf: %s\n", err.message);
         return 1;
     }
-    const warp2d_slice none = {0};
+    const warp2d_slice none = warp2d_slice_none();
     float r[64];
     for (int y = 0; y < n; ++y)
         for (int x = 0; x < n; ++x) {
