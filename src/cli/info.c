@@ -455,7 +455,8 @@ static hz_status describe_bsdf(const char *path, FILE *out, hz_error *err)
     measured_brdf *m = NULL;
     hz_error e;
     if (measured_brdf_from_tensor(t, &m, &e) == HZ_OK) {
-        const tensor_field *th = tensor_file_field(t, "theta_i"), *ph = tensor_file_field(t, "phi_i");
+        const tensor_field *th = tensor_file_field(t, "theta_i");
+        const tensor_field *ph = tensor_file_field(t, "phi_i");
         const tensor_field *l = tensor_file_field(t, "wavelengths");
         fprintf(out, "  measured BRDF: %s, %zu x %zu incident directions, %zu wavelengths "
                      "(%g..%g nm), jacobian %d\n",
