@@ -39,7 +39,7 @@ update-refs: all
 FUZZ_SECONDS ?= 60
 fuzz: deps
 	@test -f build-fuzz/CMakeCache.txt || CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHAZE_FUZZ=ON -DHAZE_TESTS=OFF
-	cmake --build build-fuzz -j $(JOBS) --target fuzz_scene fuzz_exr fuzz_nvdb
+	cmake --build build-fuzz -j $(JOBS) --target fuzz_scene fuzz_exr fuzz_nvdb fuzz_bsdf
 	sh fuzz/run.sh build-fuzz $(FUZZ_SECONDS)
 
 # Speed against accuracy (bench/README.md): the peer, target and yardstick parts

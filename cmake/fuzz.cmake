@@ -1,6 +1,7 @@
 # libFuzzer targets (HAZE_FUZZ=ON, clang only): fuzz_scene feeds bytes to the
 # scene parser (and the render-scene factories), fuzz_exr to the EXR reader,
-# fuzz_nvdb to the .nvdb loader, the majorant build and grid lookups.
+# fuzz_nvdb to the .nvdb loader, the majorant build and grid lookups,
+# fuzz_bsdf to the measured-BRDF (.bsdf) loader and the BRDF it builds.
 # Run them with `make fuzz`; see docs/fuzzing.md. Included from CMakeLists.txt.
 option(HAZE_FUZZ "Build the libFuzzer targets (needs clang)" OFF)
 if(NOT HAZE_FUZZ)
@@ -28,3 +29,4 @@ endfunction()
 haze_fuzzer(fuzz_scene haze_render)
 haze_fuzzer(fuzz_exr haze_film)
 haze_fuzzer(fuzz_nvdb haze_media)
+haze_fuzzer(fuzz_bsdf haze_materials)

@@ -8,7 +8,7 @@ build=$1
 seconds=$2
 root=$(cd "$(dirname "$0")" && pwd)
 scratch=$(mktemp -d "${TMPDIR:-/tmp}/haze-fuzz-XXXXXX")
-for target in scene exr nvdb; do
+for target in scene exr nvdb bsdf; do
   mkdir -p "$scratch/$target" "$scratch/artifacts"
   cp "$root/corpus/$target/"* "$scratch/$target/"
   dict=

@@ -72,7 +72,7 @@ static void install_interrupt_handlers(void)
 
 static const char usage_text[] =
     "usage: haze render SCENE.pbrt [options]\n"
-    "       haze info FILE          describe a .vdb, .nvdb, .exr or .pbrt file\n"
+    "       haze info FILE          describe a .vdb, .nvdb, .exr, .bsdf or .pbrt file\n"
     "       haze diff A.exr B.exr [--channels R,G,B] [--metric NAME --threshold X]\n"
     "                 [--ztest [--alpha A] [--accept F]]\n"
     "                 [--heatmap OUT.exr|OUT.png]   compare two images (haze diff --help)\n"

@@ -20,10 +20,11 @@
 
 #include "film/exr.h"
 #include "integrator/integrator.h"
+#include "materials/measured_data.h"
 #include "media/vdb_load.h"
 #include "scene/scene_desc.h"
 
-typedef enum { KIND_VDB, KIND_NVDB, KIND_EXR, KIND_TEXT, KIND_UNKNOWN } file_kind;
+typedef enum { KIND_VDB, KIND_NVDB, KIND_EXR, KIND_BSDF, KIND_TEXT, KIND_UNKNOWN } file_kind;
 
 static bool is_text(const unsigned char *buf, size_t n)
 {
@@ -92,6 +93,8 @@ static hz_status sniff(const char *path, file_kind *kind, hz_error *err)
         *kind = KIND_NVDB; /* "NanoVDB0" (grid), "NanoVDB1"/"NanoVDB2" (newer files) */
     } else if (n >= 4 && !memcmp(buf, exr_magic, 4)) {
         *kind = KIND_EXR;
+    } else if (n >= 12 && !memcmp(buf, "tensor_file", 12)) {
+        *kind = KIND_BSDF;
     } else {
         *kind = is_text(buf, n) && looks_like_scene(path, buf, n) ? KIND_TEXT : KIND_UNKNOWN;
     }
@@ -428,6 +431,46 @@ static void print_escaped(FILE *out, const char *text, size_t size)
     }
 }
 
+/* ----------------------------------------------------------------- BSDF */
+
+/* An RGL tensor file: its fields, then whether it is a measured BRDF haze
+ * renders (Material "measured") and what it holds, or why not. */
+static hz_status describe_bsdf(const char *path, FILE *out, hz_error *err)
+{
+    tensor_file *t = NULL;
+    if (tensor_file_read(path, &t, err) != HZ_OK)
+        return HZ_ERROR;
+    fprintf(out, "%s: tensor file, %zu fields\n", path, tensor_file_field_count(t));
+    for (size_t i = 0; i < tensor_file_field_count(t); ++i) {
+        const tensor_field *f = tensor_file_field_at(t, i);
+        fprintf(out, "  %-12s %-8s [", f->name, tensor_dtype_name(f->dtype));
+        for (int j = 0; j < f->ndim; ++j)
+            fprintf(out, "%s%llu", j ? ", " : "", (unsigned long long)f->shape[j]);
+        fprintf(out, "]\n");
+    }
+    const tensor_field *d = tensor_file_field(t, "description");
+    if (d && d->dtype == TENSOR_U8)
+        fprintf(out, "  description: %.*s\n", (int)(d->count < 400 ? d->count : 400),
+                (const char *)d->data);
+    measured_brdf *m = NULL;
+    hz_error e;
+    if (measured_brdf_from_tensor(t, &m, &e) == HZ_OK) {
+        const tensor_field *th = tensor_file_field(t, "theta_i");
+        const tensor_field *ph = tensor_file_field(t, "phi_i");
+        const tensor_field *l = tensor_file_field(t, "wavelengths");
+        fprintf(out, "  measured BRDF: %s, %zu x %zu incident directions, %zu wavelengths "
+                     "(%g..%g nm), jacobian %d\n",
+                m->isotropic ? "isotropic" : "anisotropic", th->count, ph->count, l->count,
+                (double)tensor_field_f32(l, 0), (double)tensor_field_f32(l, l->count - 1),
+                m->jacobian);
+        measured_brdf_destroy(m);
+    } else {
+        fprintf(out, "  not a measured BRDF haze renders: %s\n", e.message);
+    }
+    tensor_file_destroy(t);
+    return HZ_OK;
+}
+
 hz_status info_describe(const char *path, FILE *out, hz_error *err)
 {
     hz_error local;
@@ -439,8 +482,8 @@ hz_status info_describe(const char *path, FILE *out, hz_error *err)
         return HZ_ERROR;
     if (kind == KIND_UNKNOWN)
         return hz_fail(err,
-                       "%s: unrecognised file format: not a .vdb, .nvdb, .exr or .pbrt file "
-                       "(OpenVDB, NanoVDB, OpenEXR or pbrt-v4 scene)",
+                       "%s: unrecognised file format: not a .vdb, .nvdb, .exr, .bsdf or .pbrt "
+                       "file (OpenVDB, NanoVDB, OpenEXR, RGL measured BRDF or pbrt-v4 scene)",
                        path);
 
     char *text = NULL;
@@ -453,6 +496,7 @@ hz_status info_describe(const char *path, FILE *out, hz_error *err)
     case KIND_VDB:
     case KIND_NVDB: st = describe_vdb(path, kind, mem, err); break;
     case KIND_EXR: st = describe_exr(path, mem, err); break;
+    case KIND_BSDF: st = describe_bsdf(path, mem, err); break;
     default: st = describe_pbrt(path, mem, err); break;
     }
     if (fclose(mem) != 0 && st == HZ_OK)

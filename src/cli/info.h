@@ -4,10 +4,13 @@
  *     index and world bounds, voxel size and value range;
  *   OpenEXR (.exr): size, windows, channels with pixel type, header attributes,
  *     per-channel min/max/mean and NaN/Inf counts;
+ *   RGL measured BRDF (.bsdf, a "tensor_file"): its fields with type and
+ *     shape, its description, and what the BRDF holds or why haze cannot
+ *     render it;
  *   pbrt-v4 scene (text named *.pbrt, or whose first word after comments is
  *     shaped like a directive): camera, film resolution, sampler and entity
  *     counts.
- * Anything else is "not a .vdb, .nvdb, .exr or .pbrt file". */
+ * Anything else is "not a .vdb, .nvdb, .exr, .bsdf or .pbrt file". */
 #ifndef HAZE_CLI_INFO_H
 #define HAZE_CLI_INFO_H
 

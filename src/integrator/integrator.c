@@ -11,7 +11,7 @@ static bool volpath_material(const char *type)
                     strcmp(type, "thindielectric") == 0 ||
                     strcmp(type, "diffusetransmission") == 0 ||
                     strcmp(type, "coateddiffuse") == 0 || strcmp(type, "coatedconductor") == 0 ||
-                    strcmp(type, "mix") == 0);
+                    strcmp(type, "measured") == 0 || strcmp(type, "mix") == 0);
 }
 
 integrator_kind integrator_default_kind(const scene_desc *sd, const char **why, const char **what)

@@ -119,6 +119,7 @@ static rgb surface_li(const singlescatter_scene *sc, const ray_differential *rd,
     case MATERIAL_THIN_DIELECTRIC:
     case MATERIAL_DIFFUSE_TRANSMISSION:
     case MATERIAL_HAIR:
+    case MATERIAL_MEASURED:
         Ls = rgb_add(Ls, direct_bsdf(sc, h, medium, wo, mat, st, walk, counters));
         break;
     case MATERIAL_MIX: /* material_at resolved it */

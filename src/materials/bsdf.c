@@ -59,6 +59,10 @@ bool bsdf_from_material(const material *m, vec3 ns, vec3 dpdu, double v, bsdf *o
                               m->hair_alpha);
         return true;
     }
+    case MATERIAL_MEASURED:
+        out->kind = BSDF_MEASURED;
+        out->measured = m->measured;
+        return m->measured != NULL;
     case MATERIAL_MIX: /* resolved by material_at before */
     case MATERIAL_INTERFACE:
         return false;
@@ -91,6 +95,7 @@ bool bsdf_is_non_specular(const bsdf *b)
     case BSDF_COATED:
         return layered_is_non_specular(&b->coat);
     case BSDF_HAIR:
+    case BSDF_MEASURED:
         return true;
     }
     return false;
@@ -132,6 +137,8 @@ rgb bsdf_f(const bsdf *b, vec3 wo_r, vec3 wi_r)
         return layered_f(&b->coat, wo, wi);
     case BSDF_HAIR:
         return hair_f(&b->hair, wo, wi);
+    case BSDF_MEASURED:
+        return bxdf_measured_f(b->measured, wo, wi);
     }
     return rgb_grey(0.0);
 }
@@ -157,6 +164,8 @@ double bsdf_pdf(const bsdf *b, vec3 wo_r, vec3 wi_r)
         return layered_pdf(&b->coat, wo, wi);
     case BSDF_HAIR:
         return hair_pdf(&b->hair, wo, wi);
+    case BSDF_MEASURED:
+        return bxdf_measured_pdf(b->measured, wo, wi);
     }
     return 0.0;
 }
@@ -211,6 +220,9 @@ bool bsdf_sample_f(const bsdf *b, vec3 wo_r, double uc, vec2 u, bsdf_sample *out
     case BSDF_HAIR:
         ok = hair_sample(&b->hair, wo, uc, u, out);
         break;
+    case BSDF_MEASURED: /* flips a wo below the surface itself, as pbrt-v4 */
+        ok = bxdf_measured_sample(b->measured, wo, u, out);
+        break;
     }
     if (!ok)
         return false;
@@ -226,6 +238,7 @@ void bsdf_regularize(bsdf *b)
     case BSDF_THIN_DIELECTRIC:
     case BSDF_DIFFUSE_TRANSMISSION:
     case BSDF_HAIR: /* pbrt-v4's HairBxDF::Regularize does nothing */
+    case BSDF_MEASURED: /* nor does its MeasuredBxDF's */
         break;
     case BSDF_CONDUCTOR:
     case BSDF_DIELECTRIC:

@@ -1,8 +1,8 @@
 /* Surface scattering for path tracing: a BSDF at one hit, built from the hit's
  * material, evaluated and sampled in render space. A closed set of kinds
  * dispatched with a switch: diffuse, conductor, dielectric, thin dielectric,
- * diffuse transmission and the coated (layered) ones: pbrt-v4's BxDFs of the
- * same names (materials/bxdfs.h, materials/layered.h), with Trowbridge-Reitz
+ * diffuse transmission, the coated (layered) ones and measured ones: pbrt-v4's
+ * BxDFs of the same names (materials/bxdfs.h, materials/layered.h), with Trowbridge-Reitz
  * microfacets for the rough ones (materials/microfacet.h).
  *
  * Conventions as pbrt-v4: wo and wi point away from the surface; f excludes
@@ -21,6 +21,7 @@
 #include "materials/hair.h"
 #include "materials/layered.h"
 #include "materials/material.h"
+#include "materials/measured.h"
 
 typedef enum {
     BSDF_DIFFUSE,
@@ -30,6 +31,7 @@ typedef enum {
     BSDF_DIFFUSE_TRANSMISSION,
     BSDF_COATED, /* coateddiffuse, coatedconductor: a layered BxDF */
     BSDF_HAIR,   /* pbrt-v4's HairBxDF, in the frame of the hair's dp/du */
+    BSDF_MEASURED, /* pbrt-v4's MeasuredBxDF (materials/measured.h) */
 } bsdf_kind;
 
 typedef struct {
@@ -43,6 +45,7 @@ typedef struct {
     tr_distribution distrib; /* conductor, dielectric */
     layered coat;            /* coated */
     hair_bxdf hair;          /* hair */
+    const measured_brdf *measured; /* measured */
 } bsdf;
 
 /* The BSDF of a material at a hit with unit shading normal `ns`. False for a

@@ -1,10 +1,13 @@
 #include "materials/material.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "core/hash.h"
+#include "core/path.h"
 #include "core/rng.h"
 
 #include "materials/hair.h"
@@ -80,6 +83,7 @@ bool material_transmits(const material *m)
     case MATERIAL_CONDUCTOR:
     case MATERIAL_COATED_DIFFUSE:
     case MATERIAL_COATED_CONDUCTOR:
+    case MATERIAL_MEASURED:
     case MATERIAL_MIX:
     case MATERIAL_INTERFACE:
         return false;
@@ -443,6 +447,7 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
                                                        fmin(fmax(m->beta_n, 0.01), 1.0));
         break;
     case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_MEASURED:
     case MATERIAL_MIX:
     case MATERIAL_INTERFACE:
         break;
@@ -519,6 +524,30 @@ static hz_status read_interface(param_list *pl, const texture_set *ts, material 
     return HZ_OK;
 }
 
+/* pbrt-v4's MeasuredMaterial: "string filename" names an RGL .bsdf file,
+ * relative to the scene file's directory; each file is read once. */
+static hz_status read_measured(param_list *pl, file_loc loc, measured_cache *mc, material *out,
+                               hz_error *err)
+{
+    assert(mc);
+    out->kind = MATERIAL_MEASURED;
+    const char *name = params_string(pl, "filename", NULL);
+    if (!name || !*name)
+        return hz_fail_at(err, name ? params_loc(pl, "filename") : loc,
+                          "Material \"measured\" needs \"string filename\" (an RGL .bsdf "
+                          "file)");
+    file_loc at = params_loc(pl, "filename");
+    char *path = path_of_scene_file(at, name);
+    if (!path)
+        return hz_fail(err, "out of memory");
+    hz_error e;
+    hz_status st = measured_cache_get(mc, path, &out->measured, &e);
+    free(path);
+    if (st != HZ_OK)
+        return hz_fail_at(err, at, "Material \"measured\": %s", e.message);
+    return HZ_OK;
+}
+
 static const struct {
     const char *type;
     hz_status (*read)(param_list *pl, const texture_set *ts, material *out, hz_error *err);
@@ -573,8 +602,8 @@ static hz_status finish_material(param_list *pl, const char *type, material *out
     return params_finish(pl, what, err);
 }
 
-hz_status material_from_entity(material_entity *e, const texture_set *ts, material *out,
-                               hz_error *err)
+hz_status material_from_entity(material_entity *e, const texture_set *ts,
+                               measured_cache *measured, material *out, hz_error *err)
 {
     param_list *pl = &e->entity.params;
     const char *type = e->entity.type ? e->entity.type : "";
@@ -583,6 +612,12 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
     if (params_has(pl, "type"))
         type = params_string(pl, "type", type);
     *out = (material){.kind = MATERIAL_INTERFACE};
+    if (strcmp(type, "measured") == 0) {
+        if (read_measured(pl, e->entity.loc, measured, out, err) != HZ_OK)
+            return HZ_ERROR;
+        read_surface_maps(pl, ts, out);
+        return finish_material(pl, type, out, err);
+    }
     for (size_t i = 0; i < sizeof material_kinds / sizeof material_kinds[0]; ++i)
         if (strcmp(type, material_kinds[i].type) == 0) {
             if (material_kinds[i].read(pl, ts, out, err) != HZ_OK)
@@ -594,6 +629,7 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts, materi
                       "Material \"%s\" is not supported (supported: \"diffuse\", "
                       "\"conductor\", \"dielectric\", \"thindielectric\", "
                       "\"diffusetransmission\", \"coateddiffuse\", \"coatedconductor\", "
-                      "\"hair\", \"mix\", \"interface\", \"\" or \"none\" as \"interface\")",
+                      "\"hair\", \"measured\", \"mix\", \"interface\", \"\" or \"none\" as "
+                      "\"interface\")",
                       type);
 }

@@ -1,13 +1,14 @@
 /* Surface materials: a closed set, pbrt-v4's "diffuse", "conductor",
  * "dielectric", "thindielectric", "diffusetransmission", "coateddiffuse",
- * "coatedconductor" and "interface" (also "" and "none"), with constant
- * parameters. */
+ * "coatedconductor", "measured" and "interface" (also "" and "none"), with
+ * constant parameters. */
 #ifndef HAZE_MATERIALS_MATERIAL_H
 #define HAZE_MATERIALS_MATERIAL_H
 
 #include "core/error.h"
 #include "core/vec.h"
 #include "materials/layered.h"
+#include "materials/measured_data.h"
 #include "scene/scene_desc.h"
 #include "textures/texture.h"
 
@@ -21,6 +22,7 @@ typedef enum {
     MATERIAL_COATED_CONDUCTOR, /* varnish over a metal */
     MATERIAL_MIX,              /* one of two materials per hit, chosen at random */
     MATERIAL_HAIR,            /* pbrt-v4's hair: a rough absorbing dielectric cylinder */
+    MATERIAL_MEASURED,        /* a measured BRDF read from an RGL .bsdf file */
     MATERIAL_INTERFACE,       /* a medium boundary: not a surface, rays pass through */
 } material_kind;
 
@@ -37,6 +39,8 @@ typedef struct material_s {
      * and azimuthal roughnesses and the scale tilt in degrees; eta above */
     rgb sigma_a;
     double beta_m, beta_n, hair_alpha;
+    /* measured: the file's tables, owned by the scene's measured_cache */
+    const measured_brdf *measured;
     /* mix: the second material with probability `amount`, decided per hit
      * by a hash of the point and direction (pbrt-v4's MixMaterial); the
      * names until material_resolve_mixes points them at the materials. */
@@ -91,8 +95,9 @@ bool material_transmits(const material *m);
 
 /* The material of a Material or MakeNamedMaterial entity, with pbrt-v4's
  * parameters and defaults; other types and parameters are errors naming
- * their place. */
-hz_status material_from_entity(material_entity *e, const texture_set *textures, material *out,
-                               hz_error *err);
+ * their place. A "measured" material's file is read into `measured` (once
+ * per file; NULL: such materials are refused). */
+hz_status material_from_entity(material_entity *e, const texture_set *textures,
+                               measured_cache *measured, material *out, hz_error *err);
 
 #endif

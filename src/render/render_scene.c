@@ -19,6 +19,7 @@ struct render_scene {
     filter *filt;
     texture_set *textures;
     size_t texture_count;
+    measured_cache *measured; /* the measured materials' files */
     material *materials;
     size_t material_count;
     material default_material;
@@ -88,13 +89,15 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, transform ren
     if (texture_set_create(sd, render_from_world, errs, &rs->textures, err) != HZ_OK)
         return HZ_ERROR;
     rs->texture_count = sd->texture_count;
+    if (measured_cache_create(&rs->measured, err) != HZ_OK)
+        return HZ_ERROR;
     rs->materials = calloc(sd->material_count ? sd->material_count : 1, sizeof *rs->materials);
     if (!rs->materials)
         return hz_fail(err, "out of memory");
     rs->material_count = sd->material_count;
     for (size_t i = 0; i < sd->material_count; ++i)
-        if (material_from_entity(&sd->materials[i], rs->textures, &rs->materials[i], err) !=
-            HZ_OK) {
+        if (material_from_entity(&sd->materials[i], rs->textures, rs->measured, &rs->materials[i],
+                                 err) != HZ_OK) {
             if (collect(errs, err) != HZ_OK)
                 return HZ_ERROR;
             rs->materials[i] = material_default();
@@ -528,6 +531,7 @@ void render_scene_destroy(render_scene *rs)
     free(rs->media);
     geometry_destroy(rs->geom);
     free(rs->materials);
+    measured_cache_destroy(rs->measured);
     texture_set_destroy(rs->textures);
     if (rs->film)
         film_destroy(rs->film);

@@ -65,6 +65,31 @@ rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n)
     return rgb_make(c.r / white.r, c.g / white.g, c.b / white.b);
 }
 
+void spectrum_sampled_basis_to_rgb(const double *lambda, size_t n, rgb *out)
+{
+    vec3 white = integrate_xyz(NULL, NULL, 0);
+    rgb w = spectrum_srgb_from_xyz(white);
+    for (size_t j = 0; j < n; ++j)
+        out[j] = rgb_grey(0.0);
+    size_t i = 0;
+    for (double l = LAMBDA_MIN; l <= LAMBDA_MAX; l += 1.0) {
+        if (l < lambda[0] || l > lambda[n - 1])
+            continue;
+        rgb c = spectrum_srgb_from_xyz(spectrum_cie_xyz(l));
+        if (n == 1) {
+            out[0] = rgb_add(out[0], c);
+            continue;
+        }
+        while (i + 2 < n && l > lambda[i + 1])
+            ++i;
+        double t = (l - lambda[i]) / (lambda[i + 1] - lambda[i]);
+        out[i] = rgb_add(out[i], rgb_scale(c, 1.0 - t));
+        out[i + 1] = rgb_add(out[i + 1], rgb_scale(c, t));
+    }
+    for (size_t j = 0; j < n; ++j)
+        out[j] = rgb_make(out[j].r / w.r, out[j].g / w.g, out[j].b / w.b);
+}
+
 rgb spectrum_sampled_to_illuminant(const double *lambda, const double *value, size_t n)
 {
     vec3 xyz = n == 1 ? integrate_xyz(NULL, NULL, 0) : integrate_xyz(lambda, value, n);

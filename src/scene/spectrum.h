@@ -28,6 +28,11 @@
 
 /* Wavelengths must be strictly increasing (checked by the caller); n >= 1. */
 rgb spectrum_sampled_to_rgb(const double *lambda, const double *value, size_t n);
+/* The linear sRGB of each tabulated wavelength's hat (value 1 there, 0 at
+ * the others) under the same rules, so that spectrum_sampled_to_rgb of any
+ * values v is the sum of v[j] out[j]: one pass over the wavelengths, for
+ * tables of many spectra on one set of wavelengths (measured BRDFs). */
+void spectrum_sampled_basis_to_rgb(const double *lambda, size_t n, rgb *out);
 /* The same spectrum as an illuminant, as pbrt-v4 normalises a light's: its
  * XYZ to linear sRGB (no per-channel division by a constant spectrum's RGB),
  * scaled to luminance 1; n == 1 is a constant. Zero for a spectrum without

@@ -407,7 +407,7 @@ static void test_errors(void **state)
 {
     (void)state;
     char msg[1024];
-    build_scene_expect_error("WorldBegin\nMaterial \"measured\"\n"
+    build_scene_expect_error("WorldBegin\nMaterial \"subsurface\"\n"
                              "Shape \"sphere\"\n",
                              msg, sizeof msg);
     assert_non_null(strstr(msg, "test.pbrt:2:"));

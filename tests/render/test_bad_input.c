@@ -133,7 +133,7 @@ static void test_all_errors_in_one_run(void **state)
                     "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
                     "WorldBegin\n"
                     "Include \"bad_input_many.inc\"\n"
-                    "Material \"measured\"\n"
+                    "Material \"subsurface\"\n"
                     "Shape \"curve\" \"float width\" 1\n"
                     "LightSource \"laser\" \"float fov\" 30\n"
                     "MakeNamedMedium \"m\" \"string type\" \"fluffy\"\n"
@@ -144,7 +144,7 @@ static void test_all_errors_in_one_run(void **state)
     assert_int_equal(render_over_good(scene, 600, out, sizeof out), 1);
     static const char *want[] = {
         "bad_input_many.pbrt:1:37: unused parameter \"float bogus\"",
-        "bad_input_many.pbrt:5:1: Material \"measured\" is not supported",
+        "bad_input_many.pbrt:5:1: Material \"subsurface\" is not supported",
         "bad_input_many.pbrt:6:1: curve needs \"point3 P\"",
         "bad_input_many.pbrt:7:1: LightSource \"laser\" is not supported",
         "bad_input_many.pbrt:8:1: MakeNamedMedium \"m\": medium type \"fluffy\"",
@@ -168,7 +168,7 @@ static void test_parse_and_build_errors_in_one_run(void **state)
                     "WorldBegin\n"
                     "Texture \"t\" \"spectrum\" \"checkerboard\" \"float uscale\" \"q\"\n"
                     "Material \"diffuse\" \"texture reflectance\" \"t\"\n"
-                    "Material \"measured\"\n"
+                    "Material \"subsurface\"\n"
                     "MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1]\n"
                     "MakeNamedMaterial \"g\" \"string type\" \"diffuse\" \"rgb reflectance\" [1]\n"
                     "NamedMaterial \"g\"\n"
@@ -182,7 +182,7 @@ static void test_parse_and_build_errors_in_one_run(void **state)
     static const char *want[] = {
         "bad_input_mixed.pbrt:1:34: parameter \"float fov\" expects numbers",
         "bad_input_mixed.pbrt:4:54: parameter \"float uscale\" expects numbers",
-        "bad_input_mixed.pbrt:6:1: Material \"measured\" is not supported",
+        "bad_input_mixed.pbrt:6:1: Material \"subsurface\" is not supported",
         "bad_input_mixed.pbrt:7:49: parameter \"rgb sigma_a\" needs a multiple of 3",
         "bad_input_mixed.pbrt:8:47: parameter \"rgb reflectance\" needs a multiple of 3",
         "bad_input_mixed.pbrt:12:1: unknown directive",

@@ -327,8 +327,8 @@ static void test_scene_sniffed(void **state)
     char path[1024], out[4096], want[1200];
     for (size_t i = 0; i < sizeof not_scenes / sizeof not_scenes[0]; i++) {
         assert_int_equal(info_on(not_scenes[i][0], not_scenes[i][1], path, out, sizeof out), 1);
-        snprintf(want, sizeof want, "%s: unrecognised file format: not a .vdb, .nvdb, .exr or "
-                                    ".pbrt file", path);
+        snprintf(want, sizeof want, "%s: unrecognised file format: not a .vdb, .nvdb, .exr, "
+                                    ".bsdf or .pbrt file", path);
         if (!strstr(out, want))
             fail_msg("%s: got \"%s\", want \"%s\"", not_scenes[i][0], out, want);
         assert_null(strchr(strchr(out, '\n') + 1, '\n'));
@@ -340,6 +340,31 @@ static void test_scene_sniffed(void **state)
     /* Any text named .pbrt is parsed: its errors are scene errors. */
     assert_int_equal(info_on("info_one_byte.pbrt", "v", path, out, sizeof out), 1);
     assert_non_null(strstr(out, "info_one_byte.pbrt:1:1: unknown directive"));
+}
+
+/* An RGL .bsdf file: its fields and what the measured BRDF holds; a tensor
+ * file that is no BRDF is described with the reason; a truncated one is
+ * refused in one line. */
+static void test_bsdf(void **state)
+{
+    (void)state;
+    char out[8192];
+    assert_int_equal(run_haze("info '" HAZE_TEST_BSDF "/ggx-aniso.bsdf'", out, sizeof out), 0);
+    print_message("%s", out);
+    assert_non_null(strstr(out, "ggx-aniso.bsdf: tensor file, 10 fields"));
+    assert_non_null(strstr(out, "  spectra      float32  [13, 16, 2, 32, 32]\n"));
+    assert_non_null(strstr(out, "description: haze test BRDF"));
+    assert_non_null(strstr(out, "measured BRDF: anisotropic, 16 x 13 incident directions, 2 "
+                                "wavelengths (400..500 nm), jacobian 1"));
+    assert_int_equal(run_haze("info '" HAZE_TESTS "/bad-input/data/not-a-brdf.bsdf'", out,
+                              sizeof out),
+                     0);
+    assert_non_null(strstr(out, "not a measured BRDF haze renders: no field \"theta_i\""));
+    assert_int_equal(run_haze("info '" HAZE_TESTS "/bad-input/data/truncated.bsdf'", out,
+                              sizeof out),
+                     1);
+    assert_non_null(strstr(out, "truncated.bsdf: truncated: field \"spectra\""));
+    assert_null(strchr(strchr(out, '\n') + 1, '\n'));
 }
 
 static void test_usage_exit_2(void **state)
@@ -358,6 +383,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_vdb_smoke),       cmocka_unit_test(test_nvdb_box),
+        cmocka_unit_test(test_bsdf),
         cmocka_unit_test(test_vdb_duplicate_names),
         cmocka_unit_test(test_exr_from_render), cmocka_unit_test(test_pbrt),
         cmocka_unit_test(test_exr_offset_windows), cmocka_unit_test(test_control_bytes_escaped),

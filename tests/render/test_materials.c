@@ -489,7 +489,7 @@ static void test_integrator_and_parameters(void **state)
          "\"thickness\" must be finite and >= 0"},
         {"WorldBegin\nMaterial \"coatedconductor\" \"float roughness\" 0.1\n",
          "unused parameter \"float roughness\""},
-        {"WorldBegin\nMaterial \"measured\"\n", "\"measured\" is not supported"},
+        {"WorldBegin\nMaterial \"subsurface\"\n", "\"subsurface\" is not supported"},
         {"WorldBegin\nMaterial \"diffuse\" \"texture displacement\" \"nope\"\n",
          "test.pbrt:2:20: \"texture displacement\": no float texture named \"nope\""},
         {"WorldBegin\nMaterial \"interface\" \"float displacement\" 0.1\n",
