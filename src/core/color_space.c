@@ -68,10 +68,9 @@ static void multiply3(const double a[9], const double b[9], double out[9])
             out[r * 3 + c] = a[r * 3] * b[c] + a[r * 3 + 1] * b[3 + c] + a[r * 3 + 2] * b[6 + c];
 }
 
-/* XYZ from RGB: the primaries' XYZ (Y = 1) scaled so that RGB (1,1,1) is the
- * white point at Y = 1. */
-static void xyz_from_rgb(color_space cs, double m[9])
+void color_space_xyz_from_rgb_white(color_space cs, const double w[3], double m[9])
 {
+    assert(cs >= 0 && cs < COLOR_SPACE_COUNT);
     const double *xy = spaces[cs].xy;
     double p[9];
     for (int i = 0; i < 3; ++i) { /* column i: primary i at Y = 1 */
@@ -80,14 +79,28 @@ static void xyz_from_rgb(color_space cs, double m[9])
         p[3 + i] = 1.0;
         p[6 + i] = (1.0 - x - y) / y;
     }
-    double wx = xy[6], wy = xy[7];
-    double w[3] = {wx / wy, 1.0, (1.0 - wx - wy) / wy}, inv[9];
+    double inv[9];
     invert3(p, inv);
     for (int i = 0; i < 3; ++i) {
         double s = inv[i * 3] * w[0] + inv[i * 3 + 1] * w[1] + inv[i * 3 + 2] * w[2];
         for (int r = 0; r < 3; ++r)
             m[r * 3 + i] = p[r * 3 + i] * s;
     }
+}
+
+void color_space_rgb_from_xyz_white(color_space cs, const double w[3], double m[9])
+{
+    double a[9];
+    color_space_xyz_from_rgb_white(cs, w, a);
+    invert3(a, m);
+}
+
+/* XYZ from RGB with the space's white point at Y = 1. */
+static void xyz_from_rgb(color_space cs, double m[9])
+{
+    double wx = spaces[cs].xy[6], wy = spaces[cs].xy[7];
+    double w[3] = {wx / wy, 1.0, (1.0 - wx - wy) / wy};
+    color_space_xyz_from_rgb_white(cs, w, m);
 }
 
 void color_space_convert_matrix(color_space from, color_space to, double m[9])

@@ -23,6 +23,13 @@ const char *color_space_name(color_space cs);
 const char *color_space_names(void);
 /* Row-major 3x3: RGB in `to` from RGB in `from`. */
 void color_space_convert_matrix(color_space from, color_space to, double m[9]);
+/* Row-major 3x3: XYZ from RGB for the primaries of `cs` and the white `w`
+ * (XYZ): RGB (1,1,1) is w. color_space_convert_matrix uses the space's white
+ * point at Y = 1; a spectral film uses the XYZ of the space's illuminant
+ * spectrum (as pbrt-v4's RGBColorSpace). */
+void color_space_xyz_from_rgb_white(color_space cs, const double w[3], double m[9]);
+/* Its inverse. */
+void color_space_rgb_from_xyz_white(color_space cs, const double w[3], double m[9]);
 /* The primaries and white point as x, y pairs: red, green, blue, white
  * (OpenEXR's chromaticities). */
 void color_space_chromaticities(color_space cs, double xy[8]);
