@@ -6,6 +6,8 @@
 
 #include "film/exr.h"
 
+#include "core/file.h"
+
 #include <assert.h>
 #include <errno.h>
 #include <limits.h>
@@ -890,6 +892,9 @@ static hz_status exr_read_header(const char *path, exr_context_t ctx, exr_io *io
 hz_status exr_read(const char *path, exr_image *out, hz_error *err)
 {
     memset(out, 0, sizeof *out);
+    /* OpenEXR would wait for ever on a FIFO's open. */
+    if (file_check_regular(path, err) != HZ_OK)
+        return HZ_ERROR;
     exr_io io = {.fd = -1};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = exr_error_handler;

@@ -10,6 +10,9 @@
 #include <string.h>
 
 #include <png.h>
+#include <sys/stat.h>
+
+#include "core/file.h"
 
 typedef struct {
     char message[200];
@@ -106,6 +109,12 @@ hz_status png_read_samples(const char *path, png_samples *out, hz_error *err)
     png_reader *r = calloc(1, sizeof *r);
     if (!r)
         return hz_fail(err, "out of memory");
+    /* A FIFO's open would wait for a writer, a device never end. */
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        reader_close(r);
+        return hz_fail(err, "is %s; haze reads only regular files", file_kind_name(st.st_mode));
+    }
     r->f = fopen(path, "rb");
     if (!r->f) {
         reader_close(r);

@@ -253,6 +253,38 @@ static void test_fifo_volume(void **state)
     assert_good_output_kept(good);
 }
 
+/* FIFOs named as an image texture and an environment map: both refused at
+ * once at their scene places (the PNG and EXR readers' opens would wait for
+ * a writer for ever); the good output stays. */
+static void test_fifo_images(void **state)
+{
+    (void)state;
+    const char *png = HAZE_TMP "/bad_input_fifo.png", *exr = HAZE_TMP "/bad_input_fifo.exr";
+    const char *scene = HAZE_TMP "/bad_input_fifo_images.pbrt";
+    unlink(png);
+    unlink(exr);
+    assert_int_equal(mkfifo(png, 0600), 0);
+    assert_int_equal(mkfifo(exr, 0600), 0);
+    write_text_file(scene, "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                           "WorldBegin\n"
+                           "LightSource \"infinite\" \"string filename\" \"bad_input_fifo.exr\"\n"
+                           "Texture \"t\" \"spectrum\" \"imagemap\" "
+                           "\"string filename\" \"bad_input_fifo.png\"\n"
+                           "Material \"diffuse\" \"texture reflectance\" \"t\"\n"
+                           "Shape \"sphere\"\n");
+    const char *good = HAZE_TMP "/bad_input_good.exr";
+    char out[8192];
+    int status = render_over_good(scene, 60, out, sizeof out);
+    if (status != 1)
+        fail_msg("exit status %d, expected 1; output: %s", status, out);
+    assert_non_null(strstr(out, "bad_input_fifo_images.pbrt:3:24: light \"filename\": " HAZE_TMP
+                                "/bad_input_fifo.exr: cannot read: is a FIFO; haze reads only "
+                                "regular files"));
+    assert_non_null(strstr(out, "bad_input_fifo_images.pbrt:4:35: cannot read PNG \"" HAZE_TMP
+                                "/bad_input_fifo.png\": is a FIFO; haze reads only regular files"));
+    assert_good_output_kept(good);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -262,6 +294,7 @@ int main(void)
         cmocka_unit_test(test_corrupt_exr_diff),
         cmocka_unit_test(test_unwritable_output),
         cmocka_unit_test(test_fifo_volume),
+        cmocka_unit_test(test_fifo_images),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
