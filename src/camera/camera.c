@@ -293,6 +293,12 @@ hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err)
     return HZ_OK;
 }
 
+void camera_free(camera *c)
+{
+    if (c->kind == CAMERA_REALISTIC)
+        realistic_lens_free(&c->realistic);
+}
+
 double camera_imaging_ratio(const camera *c, const film_params *film)
 {
     return (c->shutter_close - c->shutter_open) * film->iso / 100.0;

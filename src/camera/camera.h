@@ -106,6 +106,10 @@ hz_status camera_init(const camera_config *cfg, camera *out, hz_error *err);
  * resolution for the screen window. */
 hz_status camera_create(camera_entity *e, const film_params *film, camera *out, hz_error *err);
 
+/* Frees what a camera from camera_create owns (a realistic camera's aperture
+ * image); a zeroed camera is fine too. */
+void camera_free(camera *c);
+
 /* pbrt-v4's imaging ratio: (shutterclose - shutteropen) * iso / 100. */
 double camera_imaging_ratio(const camera *c, const film_params *film);
 

@@ -9,8 +9,10 @@
 #include "camera/camera.h"
 #include "camera/lens.h"
 #include "camera/lens_file.h"
+#include "core/file.h"
 #include "core/path.h"
 #include "scene/params.h"
+#include "textures/texture_image.h"
 
 /* Fails at the parameter's own place (the directive's when it is absent). */
 static hz_status fail_param(hz_error *err, const scene_entity *ent, const char *name,
@@ -113,26 +115,62 @@ static hz_status read_kind(const scene_entity *ent, camera_kind *kind, hz_error 
     return HZ_OK;
 }
 
-/* The realistic camera's "aperture": pbrt-v4's built-in shapes; an image
- * file is refused. */
-static hz_status read_aperture_shape(scene_entity *ent, aperture_shape *shape, hz_error *err)
+/* The realistic camera's "aperture": pbrt-v4's built-in shapes, or else an
+ * image file (APERTURE_IMAGE; read by read_aperture_image). */
+static aperture_shape read_aperture_shape(scene_entity *ent)
 {
     static const char *const names[] = {"", "gaussian", "square", "pentagon", "star"};
     static const aperture_shape shapes[] = {APERTURE_CIRCLE, APERTURE_GAUSSIAN, APERTURE_SQUARE,
                                             APERTURE_PENTAGON, APERTURE_STAR};
     const char *a = params_string(&ent->params, "aperture", "");
     for (size_t i = 0; i < sizeof names / sizeof names[0]; ++i)
-        if (strcmp(a, names[i]) == 0) {
-            *shape = shapes[i];
-            return HZ_OK;
-        }
-    char msg[256];
-    snprintf(msg, sizeof msg,
-             "\"aperture\" \"%.60s\": haze has the built-in shapes \"gaussian\", \"square\", "
-             "\"pentagon\" and \"star\" (and the circle, without \"aperture\"); aperture "
-             "images are not supported",
-             a);
-    return fail_param(err, ent, "aperture", msg);
+        if (strcmp(a, names[i]) == 0)
+            return shapes[i];
+    return APERTURE_IMAGE;
+}
+
+/* An aperture image file (PNG as sRGB, EXR as linear, as pbrt-v4 reads them),
+ * relative to the scene file: the mean of its R, G and B becomes the stop. */
+static hz_status read_aperture_image(scene_entity *ent, realistic_lens *l, hz_error *err)
+{
+    param_list *pl = &ent->params;
+    const char *name = params_string(pl, "aperture", "");
+    file_loc loc = params_loc(pl, "aperture");
+    bool png = file_has_suffix(name, ".png");
+    if (!png && !file_has_suffix(name, ".exr"))
+        return hz_fail_at(err, loc,
+                          "\"aperture\" \"%.200s\" is not a built-in shape (\"gaussian\", "
+                          "\"square\", \"pentagon\", \"star\") nor a .png or .exr image",
+                          name);
+    char *path = path_of_scene_file(loc, name);
+    if (!path)
+        return hz_fail_at(err, loc, "out of memory");
+    tex_image im = {0, 0, NULL};
+    float *alpha = NULL;
+    hz_error why;
+    hz_status st = file_check_regular(path, &why);
+    if (st != HZ_OK)
+        hz_fail_at(err, loc, "\"aperture\": %s", why.message);
+    else if (png)
+        st = tex_image_read_png(path, loc, 0, 1.0, &im, &alpha, err);
+    else
+        st = tex_image_read_exr(path, loc, &im, &alpha, err);
+    free(path);
+    free(alpha);
+    if (st != HZ_OK)
+        return HZ_ERROR;
+    size_t n = (size_t)im.width * (size_t)im.height;
+    float *mono = malloc((n ? n : 1) * sizeof *mono);
+    if (!mono) {
+        free(im.rgb);
+        return hz_fail_at(err, loc, "out of memory");
+    }
+    for (size_t i = 0; i < n; ++i)
+        mono[i] = (im.rgb[3 * i] + im.rgb[3 * i + 1] + im.rgb[3 * i + 2]) / 3.0f;
+    free(im.rgb);
+    if (realistic_set_aperture_image(l, im.width, im.height, mono, &why) != HZ_OK)
+        return hz_fail_at(err, loc, "\"aperture\" \"%.200s\": %s", name, why.message);
+    return HZ_OK;
 }
 
 /* The lens table named by "lensfile", relative to the scene file. */
@@ -165,7 +203,7 @@ static hz_status read_realistic(scene_entity *ent, const film_params *film, real
     char msg[256];
     double diameter = params_float(pl, "aperturediameter", 1.0);
     double focus = params_float(pl, "focusdistance", 10.0);
-    aperture_shape shape = APERTURE_CIRCLE;
+    aperture_shape shape = read_aperture_shape(ent);
     if (!positive_finite(diameter)) {
         snprintf(msg, sizeof msg, "\"aperturediameter\" must be finite and > 0 (mm), got %g",
                  diameter);
@@ -175,13 +213,14 @@ static hz_status read_realistic(scene_entity *ent, const film_params *film, real
         snprintf(msg, sizeof msg, "\"focusdistance\" must be finite and > 0, got %g", focus);
         return fail_param(err, ent, "focusdistance", msg);
     }
-    if (read_aperture_shape(ent, &shape, err) != HZ_OK)
-        return HZ_ERROR;
     lens_table t;
     if (read_lens_table(ent, &t, err) != HZ_OK)
         return HZ_ERROR;
     bool clamped;
-    realistic_elements(&t, diameter, shape, film->diagonal, film->xres, film->yres, l, &clamped);
+    realistic_elements(&t, diameter, shape == APERTURE_IMAGE ? APERTURE_CIRCLE : shape,
+                       film->diagonal, film->xres, film->yres, l, &clamped);
+    if (shape == APERTURE_IMAGE && read_aperture_image(ent, l, err) != HZ_OK)
+        return HZ_ERROR;
     if (clamped)
         hz_warn_at(stderr, params_loc(pl, "aperturediameter"),
                    "\"aperturediameter\" %g mm is larger than the lens's stop; using the "
@@ -268,7 +307,7 @@ static hz_status check_config(const scene_entity *ent, const camera_config *cfg,
 static hz_status create_realistic(scene_entity *ent, const film_params *film, camera_config *cfg,
                                   camera *out, hz_error *err)
 {
-    realistic_lens *lens = malloc(sizeof *lens);
+    realistic_lens *lens = calloc(1, sizeof *lens);
     if (!lens)
         return hz_fail_at(err, ent->loc, "out of memory");
     hz_status st = read_realistic(ent, film, lens, err);
@@ -280,6 +319,8 @@ static hz_status create_realistic(scene_entity *ent, const film_params *film, ca
     hz_error why;
     if (st == HZ_OK && camera_init(cfg, out, &why))
         st = hz_fail_at(err, ent->loc, "%s", why.message);
+    if (st != HZ_OK)
+        realistic_lens_free(lens); /* else the camera owns its aperture image */
     free(lens);
     cfg->realistic = NULL;
     return st;

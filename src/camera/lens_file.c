@@ -11,6 +11,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/file.h"
+
 typedef struct {
     const char *name;
     int line;
@@ -121,34 +123,15 @@ hz_status lens_file_parse(const char *name, const char *text, lens_table *out, h
 
 hz_status lens_file_read(const char *path, lens_table *out, hz_error *err)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return hz_fail(err, "%s: cannot open the lens file", path);
+    /* Only a regular file: a FIFO or device is refused without waiting on it. */
     char *text = NULL;
-    size_t n = 0, cap = 0;
-    for (;;) {
-        if (n + 4096 + 1 > cap) {
-            cap = cap ? 2 * cap : 8192;
-            char *t = cap <= (1u << 24) ? realloc(text, cap) : NULL;
-            if (!t) {
-                free(text);
-                fclose(f);
-                return hz_fail(err, "%s: the lens file is too large or memory ran out", path);
-            }
-            text = t;
-        }
-        size_t got = fread(text + n, 1, 4096, f);
-        n += got;
-        if (got < 4096)
-            break;
-    }
-    bool bad = ferror(f) != 0;
-    fclose(f);
-    text[n] = '\0';
-    if (bad || memchr(text, '\0', n)) {
+    size_t n = 0;
+    hz_error why;
+    if (file_read_all(path, (size_t)1 << 24, &text, &n, &why) != HZ_OK)
+        return hz_fail(err, "%s: cannot read the lens file: %s", path, why.message);
+    if (memchr(text, '\0', n)) {
         free(text);
-        return hz_fail(err, "%s: cannot read the lens file (a read error or a binary file)",
-                       path);
+        return hz_fail(err, "%s: cannot read the lens file (a binary file)", path);
     }
     hz_status st = lens_file_parse(path, text, out, err);
     free(text);

@@ -4,6 +4,7 @@
 #include "camera/realistic.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 #include "core/vec.h"
 
@@ -47,6 +48,7 @@ static void aperture_outline(realistic_lens *l)
     case APERTURE_SQUARE: l->shape_scale = HZ_PI; break; /* side 1: area 1 */
     case APERTURE_PENTAGON:
     case APERTURE_STAR: l->shape_scale = HZ_PI / area; break;
+    case APERTURE_IMAGE: l->shape_scale = 1.0; break; /* the values are scaled */
     }
 }
 
@@ -58,6 +60,24 @@ static bool polygon_contains(const vec2 *v, int n, double x, double y)
             x < (v[j].x - v[i].x) * (y - v[i].y) / (v[j].y - v[i].y) + v[i].x)
             in = !in;
     return in;
+}
+
+/* pbrt-v4's bilinear lookup at uv in [0, 1]^2 (texel centres at half
+ * integers), black outside the image. */
+static double image_bilerp(const aperture_image *im, double u, double v)
+{
+    double x = u * im->width - 0.5, y = v * im->height - 0.5;
+    double fx = floor(x), fy = floor(y);
+    double dx = x - fx, dy = y - fy, sum = 0.0;
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+            double xi = fx + i, yi = fy + j;
+            if (xi < 0.0 || yi < 0.0 || xi >= im->width || yi >= im->height)
+                continue;
+            double w = (i ? dx : 1.0 - dx) * (j ? dy : 1.0 - dy);
+            sum += w * im->values[(size_t)yi * (size_t)im->width + (size_t)xi];
+        }
+    return sum;
 }
 
 /* The stop's transmission at (x, y) in units of its radius. */
@@ -72,6 +92,7 @@ static double aperture_weight(const realistic_lens *l, double x, double y)
     case APERTURE_PENTAGON:
     case APERTURE_STAR:
         return polygon_contains(l->poly, l->poly_count, x, y) ? l->shape_scale : 0.0;
+    case APERTURE_IMAGE: return image_bilerp(&l->image, (x + 1.0) / 2.0, (y + 1.0) / 2.0);
     }
     return 0.0;
 }
@@ -95,6 +116,7 @@ void realistic_elements(const lens_table *t, double aperture_diameter_mm, apertu
                                      diameter / 2000.0};
     }
     out->shape = shape;
+    out->image = (aperture_image){0, 0, NULL};
     aperture_outline(out);
     /* pbrt-v4's physical extent: the film's diagonal at its aspect ratio. */
     double aspect = (double)yres / (double)xres;
@@ -105,6 +127,52 @@ void realistic_elements(const lens_table *t, double aperture_diameter_mm, apertu
     for (int i = 0; i < REALISTIC_PUPIL_INTERVALS; ++i) {
         out->pupil[i][0] = out->pupil[i][2] = INFINITY;
         out->pupil[i][1] = out->pupil[i][3] = -INFINITY;
+    }
+}
+
+hz_status realistic_set_aperture_image(realistic_lens *l, int width, int height, float *values,
+                                       hz_error *err)
+{
+    size_t n = (size_t)width * (size_t)height;
+    double sum = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        if (!(values[i] >= 0.0f) || !isfinite(values[i])) {
+            free(values);
+            return hz_fail(err, "the aperture image has a negative or non-finite value at "
+                                "texel (%zu, %zu)",
+                           i % (size_t)width, i / (size_t)width);
+        }
+        sum += values[i];
+    }
+    if (!(n > 0 && sum > 0.0)) {
+        free(values);
+        return hz_fail(err, "the aperture image is black: no light passes the stop");
+    }
+    double scale = (HZ_PI / 4.0) / (sum / (double)n);
+    for (int y = 0; y < height / 2; ++y)
+        for (int x = 0; x < width; ++x) {
+            float *a = &values[(size_t)y * (size_t)width + (size_t)x];
+            float *b = &values[(size_t)(height - 1 - y) * (size_t)width + (size_t)x];
+            float t = *a;
+            *a = *b;
+            *b = t;
+        }
+    for (size_t i = 0; i < n; ++i)
+        values[i] = (float)(values[i] * scale);
+    realistic_lens_free(l);
+    l->image = (aperture_image){width, height, values};
+    l->shape = APERTURE_IMAGE;
+    aperture_outline(l);
+    return HZ_OK;
+}
+
+void realistic_lens_free(realistic_lens *l)
+{
+    free(l->image.values);
+    l->image = (aperture_image){0, 0, NULL};
+    if (l->shape == APERTURE_IMAGE) {
+        l->shape = APERTURE_CIRCLE;
+        aperture_outline(l);
     }
 }
 
@@ -285,21 +353,36 @@ static double radical_inverse(unsigned base, unsigned long long i)
     return r;
 }
 
-/* pbrt-v4's BoundExitPupil for film x in [x0, x1]. */
+/* The rear-element point (px, py) of the bounds' frame for a film point at
+ * radius r and angle phi: the frame in which that film point lies on +x, as
+ * realistic_generate rotates its samples. */
+static lens_ray pupil_ray(double r, double phi, double px, double py, double rz)
+{
+    double c = cos(phi), s = sin(phi);
+    vec3 p_film = v3(r * c, r * s, 0.0);
+    return (lens_ray){p_film, v3_sub(v3(c * px - s * py, s * px + c * py, rz), p_film)};
+}
+
+/* pbrt-v4's BoundExitPupil for film radii [x0, x1]. pbrt-v4 traces film
+ * points on +x only and rotates the bounds to each film point's angle, which
+ * holds for a round stop; a square, pentagon, star or image stop breaks the
+ * symmetry, so there the film points also take every angle (phi from a third
+ * Halton dimension) and the bounds hold the pupil at any angle. */
 static void bound_interval(const realistic_lens *l, double x0, double x1, int samples,
                            double b[4])
 {
     double rear = l->e[l->count - 1].aperture_radius, rz = realistic_rear_z(l);
+    bool any_angle = l->shape != APERTURE_CIRCLE && l->shape != APERTURE_GAUSSIAN;
     b[0] = b[2] = INFINITY;
     b[1] = b[3] = -INFINITY;
     for (int i = 0; i < samples; ++i) {
-        vec3 p_film = v3(hz_lerp((i + 0.5) / samples, x0, x1), 0.0, 0.0);
+        double r = hz_lerp((i + 0.5) / samples, x0, x1);
+        double phi = any_angle ? 2.0 * HZ_PI * radical_inverse(5, (unsigned long long)i) : 0.0;
         double px = hz_lerp(radical_inverse(2, (unsigned long long)i), -1.5 * rear, 1.5 * rear);
         double py = hz_lerp(radical_inverse(3, (unsigned long long)i), -1.5 * rear, 1.5 * rear);
         if (px >= b[0] && px <= b[1] && py >= b[2] && py <= b[3])
             continue;
-        lens_ray r = {p_film, v3_sub(v3(px, py, rz), p_film)};
-        if (realistic_trace_from_film(l, r, NULL) == 0.0)
+        if (realistic_trace_from_film(l, pupil_ray(r, phi, px, py, rz), NULL) == 0.0)
             continue;
         b[0] = fmin(b[0], px);
         b[1] = fmax(b[1], px);

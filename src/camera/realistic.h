@@ -19,15 +19,27 @@
  * by twice the sample spacing), so the estimate is the same in expectation. */
 #define REALISTIC_PUPIL_SAMPLES 65536
 
-/* The stop's shape: pbrt-v4's default circle and its built-in "aperture"
- * images, evaluated exactly rather than from a 256x256 raster. */
+/* The stop's shape: pbrt-v4's default circle, its built-in "aperture"
+ * images (evaluated exactly rather than from a 256x256 raster) and an image
+ * file. */
 typedef enum {
     APERTURE_CIRCLE,
     APERTURE_GAUSSIAN,
     APERTURE_SQUARE,
     APERTURE_PENTAGON,
-    APERTURE_STAR
+    APERTURE_STAR,
+    APERTURE_IMAGE
 } aperture_shape;
+
+/* An aperture image over the stop's square [-r, r]^2: texel (x, y) covers
+ * x in [-r + 2r x / width, ...] and y likewise from -r at row 0 (the file's
+ * bottom row: pbrt-v4 flips the image), scaled to a mean of pi/4 as pbrt-v4
+ * does, so a full disc transmits as the circle; read bilinearly, black
+ * outside. Owned by the realistic_lens (realistic_lens_free). */
+typedef struct {
+    int width, height;
+    float *values;
+} aperture_image;
 
 typedef struct {
     double radius;    /* curvature radius, 0 = aperture stop */
@@ -43,6 +55,7 @@ typedef struct {
     double shape_scale;          /* the shape's value inside: its mean over [-1,1]^2 is pi/4 */
     int poly_count;              /* pentagon, star: the outline in stop-radius units */
     vec2 poly[10];
+    aperture_image image;        /* APERTURE_IMAGE */
     double film_diagonal;        /* metres */
     double film_half[2];         /* half the film's physical width and height */
     /* Exit-pupil bounds on the rear element's plane for film radii
@@ -61,6 +74,14 @@ typedef struct {
 void realistic_elements(const lens_table *t, double aperture_diameter_mm, aperture_shape shape,
                         double film_diagonal_mm, int xres, int yres, realistic_lens *out,
                         bool *clamped);
+/* Makes the stop the image of `width` x `height` linear values, top row first
+ * (as a file stores them): flipped and scaled to a mean of pi/4. Takes
+ * ownership of `values` (freed on failure too). Refuses a negative or
+ * non-finite value and an image whose mean is not > 0. */
+hz_status realistic_set_aperture_image(realistic_lens *l, int width, int height, float *values,
+                                       hz_error *err);
+/* Frees what the lens owns (the aperture image) and makes the stop a circle. */
+void realistic_lens_free(realistic_lens *l);
 /* The z of the rear and front interfaces in camera space (both > 0). */
 double realistic_rear_z(const realistic_lens *l);
 double realistic_front_z(const realistic_lens *l);

@@ -537,6 +537,7 @@ void render_scene_destroy(render_scene *rs)
         film_destroy(rs->film);
     if (rs->filt)
         filter_destroy(rs->filt);
+    camera_free(&rs->cam);
     free(rs);
 }
 

@@ -78,6 +78,7 @@ static film_params film_of(int xres, int yres)
     fp.yres = yres;
     fp.bounds = (pixel_bounds){0, 0, xres, yres};
     fp.iso = 100;
+    fp.diagonal = 35.0; /* mm, pbrt-v4's default */
     return fp;
 }
 
@@ -589,7 +590,35 @@ static void test_from_scene_text(void **state)
                                       "WorldBegin\n",
                                       10, 10, &c, &err),
                      HZ_ERROR);
-    assert_string_equal(err.message, "t.pbrt:1:20: x.dat: cannot open the lens file");
+    assert_string_equal(err.message,
+                        "t.pbrt:1:20: x.dat: cannot read the lens file: No such file or directory");
+    /* An aperture that is no built-in shape is an image file, read relative
+     * to the scene file; a missing or unsupported one names its place. */
+    const char *lens = HAZE_TEST_DATA "/lenses/dgauss.50mm.dat";
+    char text[1024];
+    snprintf(text, sizeof text,
+             "Camera \"realistic\" \"string lensfile\" \"%s\"\n"
+             "  \"string aperture\" \"hexagon\"\nWorldBegin\n",
+             lens);
+    assert_int_equal(create_from_text(text, 10, 10, &c, &err), HZ_ERROR);
+    assert_string_equal(err.message,
+                        "t.pbrt:2:3: \"aperture\" \"hexagon\" is not a built-in shape "
+                        "(\"gaussian\", \"square\", \"pentagon\", \"star\") nor a .png or "
+                        ".exr image");
+    snprintf(text, sizeof text,
+             "Camera \"realistic\" \"string lensfile\" \"%s\"\n"
+             "  \"string aperture\" \"no-such-aperture.png\"\nWorldBegin\n",
+             lens);
+    assert_int_equal(create_from_text(text, 10, 10, &c, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "t.pbrt:2:3: cannot read PNG"));
+    snprintf(text, sizeof text,
+             "Camera \"realistic\" \"string lensfile\" \"%s\"\n"
+             "  \"string aperture\" \"star\" \"float aperturediameter\" 8\nWorldBegin\n",
+             lens);
+    if (create_from_text(text, 10, 10, &c, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    assert_int_equal(c.realistic.shape, APERTURE_STAR);
+    camera_free(&c);
 
     assert_int_equal(create_from_text("Camera \"orthographic\" \"float lensradius\" 0.5\n"
                                       "    \"float focaldistance\" -1\nWorldBegin\n",
