@@ -74,8 +74,8 @@ static hz_status validate(const vdb_buffer *b, const char *name, hz_error *err)
 {
     if (!b || !b->data || b->size < PNANOVDB_GRID_SIZE + PNANOVDB_TREE_SIZE)
         return hz_fail(err, "grid \"%s\": buffer too small to hold a NanoVDB grid", name);
-    if ((uintptr_t)b->data % 32 != 0)
-        return hz_fail(err, "grid \"%s\": NanoVDB buffer is not 32-byte aligned", name);
+    if ((uintptr_t)b->data % 8 != 0)
+        return hz_fail(err, "grid \"%s\": NanoVDB buffer is not 8-byte aligned", name);
     pnanovdb_buf_t buf = pnanovdb_make_buf((uint32_t *)b->data, b->size / 4);
     pnanovdb_grid_handle_t h = {pnanovdb_address_null()};
     if (pnanovdb_grid_get_magic(buf, h) != PNANOVDB_MAGIC_NUMBER)
@@ -158,7 +158,7 @@ hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out,
         g->support_hi = v3(hi.x + 1.0, hi.y + 1.0, hi.z + 1.0);
     }
     read_transforms(g);
-    *buf = (vdb_buffer){NULL, 0};
+    *buf = (vdb_buffer){NULL, 0, NULL, 0};
     *out = g;
     return HZ_OK;
 }

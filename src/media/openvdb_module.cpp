@@ -322,7 +322,7 @@ void list_vdb(const std::string &path, std::uintmax_t size, vdb_grid_callback cb
 hz_status module_load_grid(const char *path, uint64_t file_size, const char *gridname,
                            vdb_value_type type, vdb_buffer *out, char *err, size_t err_size)
 {
-    *out = vdb_buffer{nullptr, 0};
+    *out = vdb_buffer{nullptr, 0, nullptr, 0};
     return guarded(path, err, err_size, [&] { *out = load_vdb(path, gridname, type, file_size); });
 }
 
