@@ -520,10 +520,15 @@ typedef struct {
     int64_t covered;
 } region_range;
 
+/* fminf and fmaxf (a NaN operand gives the other), inline: the libm calls
+ * were a seventh of a majorant build of a sparse grid. */
+static float min_of(float a, float b) { return a < b || b != b ? a : b; }
+static float max_of(float a, float b) { return a > b || b != b ? a : b; }
+
 static void range_add(region_range *r, float lo, float hi)
 {
-    r->min = fminf(r->min, lo);
-    r->max = fmaxf(r->max, hi);
+    r->min = min_of(r->min, lo);
+    r->max = max_of(r->max, hi);
 }
 
 /* Voxels of `box` inside the node of edge `dim` at `origin`. */
@@ -572,7 +577,7 @@ static void lower_region_range(const grid *g, pnanovdb_lower_handle_t lower, con
                         g->buf, pnanovdb_leaf_get_max_address(FLOAT_GRID, g->buf, leaf));
                     /* Statistics cover active voxels; the others hold the background. */
                     if (!leaf_fully_active(g->buf, leaf))
-                        vmin = fminf(vmin, g->background);
+                        vmin = min_of(vmin, g->background);
                     range_add(r, vmin, vmax);
                 } else {
                     float v = pnanovdb_read_float(
