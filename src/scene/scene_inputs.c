@@ -97,7 +97,7 @@ static ssize_t read_full(int fd, unsigned char *buf, size_t n)
 
 /* A window of the file mapped at a time: mapped whole, a volume the render
  * has mapped too would count twice in the process's resident memory. */
-#define SCENE_INPUTS_WINDOW ((size_t)8 << 20)
+#define SCENE_INPUTS_WINDOW ((size_t)4 << 20)
 
 static bool hash_large(int fd, off_t size, unsigned char *buf, uint64_t *h)
 {
