@@ -234,7 +234,7 @@ report_run() {
         echo
         echo "Written by \`make bench\`$([ -n "$BENCH_QUICK" ] && echo " (BENCH_QUICK=1: the short smoke run, not the full ladder)") on $(date -u '+%Y-%m-%d %H:%M UTC'),"
         echo "$(nproc) CPUs ($(awk -F': ' '/model name/ { print $2; exit }' /proc/cpuinfo)), load average before the run $BENCH_LOAD,"
-        [ "$PARTS" = "ladder peer bounce target yardsticks" ] || echo "parts run this time: ${PARTS:-none} (the other tables are from the previous run),"
+        [ "$PARTS" = "ladder peer bounce target yardsticks scale" ] || echo "parts run this time: ${PARTS:-none} (the other tables are from the previous run),"
         echo "$(haze_id) (version and src/ tree). The plot is [trade.png](trade.png); bench/README.md says what"
         echo "each part measures."
         echo

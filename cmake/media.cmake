@@ -43,6 +43,10 @@ target_compile_options(haze_openvdb PRIVATE ${HAZE_WARNINGS})
 set_target_properties(haze_openvdb PROPERTIES
   CXX_STANDARD 17 CXX_STANDARD_REQUIRED ON CXX_EXTENSIONS OFF)
 target_link_libraries(haze_openvdb PRIVATE OpenVDB::openvdb OpenVDB::nanovdb)
+# The conversion to NanoVDB runs on TBB's threads (OpenVDB's own pool);
+# without it NanoVDB's fallback starts half the cores' worth of std::threads,
+# one on a two-core machine.
+target_compile_definitions(haze_openvdb PRIVATE NANOVDB_USE_TBB)
 # Only the entry table is exported: the module's own copies of OpenVDB's
 # templates bind at link time instead of by symbol lookup when it is loaded.
 target_link_options(haze_openvdb PRIVATE

@@ -74,8 +74,8 @@ static hz_status validate(const vdb_buffer *b, const char *name, hz_error *err)
 {
     if (!b || !b->data || b->size < PNANOVDB_GRID_SIZE + PNANOVDB_TREE_SIZE)
         return hz_fail(err, "grid \"%s\": buffer too small to hold a NanoVDB grid", name);
-    if ((uintptr_t)b->data % 32 != 0)
-        return hz_fail(err, "grid \"%s\": NanoVDB buffer is not 32-byte aligned", name);
+    if ((uintptr_t)b->data % 8 != 0)
+        return hz_fail(err, "grid \"%s\": NanoVDB buffer is not 8-byte aligned", name);
     pnanovdb_buf_t buf = pnanovdb_make_buf((uint32_t *)b->data, b->size / 4);
     pnanovdb_grid_handle_t h = {pnanovdb_address_null()};
     if (pnanovdb_grid_get_magic(buf, h) != PNANOVDB_MAGIC_NUMBER)
@@ -158,7 +158,7 @@ hz_status grid_create_from_buffer(vdb_buffer *buf, const char *name, grid **out,
         g->support_hi = v3(hi.x + 1.0, hi.y + 1.0, hi.z + 1.0);
     }
     read_transforms(g);
-    *buf = (vdb_buffer){NULL, 0};
+    *buf = (vdb_buffer){NULL, 0, NULL, 0};
     *out = g;
     return HZ_OK;
 }
@@ -520,10 +520,15 @@ typedef struct {
     int64_t covered;
 } region_range;
 
+/* fminf and fmaxf (a NaN operand gives the other), inline: the libm calls
+ * were a seventh of a majorant build of a sparse grid. */
+static float min_of(float a, float b) { return a < b || b != b ? a : b; }
+static float max_of(float a, float b) { return a > b || b != b ? a : b; }
+
 static void range_add(region_range *r, float lo, float hi)
 {
-    r->min = fminf(r->min, lo);
-    r->max = fmaxf(r->max, hi);
+    r->min = min_of(r->min, lo);
+    r->max = max_of(r->max, hi);
 }
 
 /* Voxels of `box` inside the node of edge `dim` at `origin`. */
@@ -572,7 +577,7 @@ static void lower_region_range(const grid *g, pnanovdb_lower_handle_t lower, con
                         g->buf, pnanovdb_leaf_get_max_address(FLOAT_GRID, g->buf, leaf));
                     /* Statistics cover active voxels; the others hold the background. */
                     if (!leaf_fully_active(g->buf, leaf))
-                        vmin = fminf(vmin, g->background);
+                        vmin = min_of(vmin, g->background);
                     range_add(r, vmin, vmax);
                 } else {
                     float v = pnanovdb_read_float(

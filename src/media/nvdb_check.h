@@ -14,7 +14,7 @@
 extern "C" {
 #endif
 
-/* Checks that the grid at the start of `data` (`size` bytes, 32-byte aligned)
+/* Checks that the grid at the start of `data` (`size` bytes, 8-byte aligned)
  * is a float or vec3f NanoVDB grid whose every offset haze or NanoVDB follows
  * stays inside the buffer: grid size, blind metadata, the tree's first-node
  * offsets and node counts, the root's tile table, and every child pointer of
@@ -23,6 +23,17 @@ extern "C" {
  * or -1 with a reason (no file name) in why. Work is proportional to the
  * number of nodes the buffer can hold. */
 int nvdb_check_tree(const void *data, uint64_t size, char *why, size_t why_size);
+
+/* nvdb_check_tree, then NanoVDB's checksum of the grid's header when the
+ * grid has one: the CRC-32 of the grid, tree and root records and the root's
+ * tiles (the "partial" checksum; a "full" one also covers every node, whose
+ * CRC is not checked: a second pass over the whole grid). */
+int nvdb_check_grid(const void *data, uint64_t size, char *why, size_t why_size);
+
+/* The root's statistics of a grid that passed nvdb_check_tree: the least
+ * and greatest active value of a float grid, the shortest and longest
+ * vector's length of a vec3f grid. */
+void nvdb_root_range(const void *data, uint64_t size, double *lo, double *hi);
 
 /* For a float grid whose buffer passed nvdb_check_tree (every grid buffer
  * does, in grid_create_from_buffer; this does not walk it again): every

@@ -212,12 +212,14 @@ vdb_buffer convert_vdb(const std::string &path, const std::string &name,
         throw load_error(path + ": grid \"" + name + "\" is " + base->valueType() +
                          ", expected " + openvdb::typeNameAsString<typename GridT::ValueType>());
     // Node min/max statistics are what empty-space skipping and the motion
-    // bounds use (for vectors: the values of least and greatest length).
-    auto handle =
-        nanovdb::openToNanoVDB(*grid, nanovdb::StatsMode::MinMax, nanovdb::ChecksumMode::Partial);
+    // bounds use (for vectors: the values of least and greatest length). The
+    // grid is built straight into the buffer haze receives: the reader's
+    // peak is OpenVDB's tree and the NanoVDB grid, not a third copy.
+    auto handle = nanovdb::openToNanoVDB<c_buffer>(*grid, nanovdb::StatsMode::MinMax,
+                                                   nanovdb::ChecksumMode::Partial);
     if (!handle)
         throw load_error(path + ": converting grid \"" + name + "\" to NanoVDB failed");
-    return to_buffer(handle);
+    return handle.buffer().release();
 }
 
 vdb_buffer load_vdb(const std::string &path, const std::string &name, vdb_value_type type,
@@ -322,7 +324,7 @@ void list_vdb(const std::string &path, std::uintmax_t size, vdb_grid_callback cb
 hz_status module_load_grid(const char *path, uint64_t file_size, const char *gridname,
                            vdb_value_type type, vdb_buffer *out, char *err, size_t err_size)
 {
-    *out = vdb_buffer{nullptr, 0};
+    *out = vdb_buffer{nullptr, 0, nullptr, 0};
     return guarded(path, err, err_size, [&] { *out = load_vdb(path, gridname, type, file_size); });
 }
 

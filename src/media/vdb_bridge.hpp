@@ -11,9 +11,11 @@
 #include "media/vdb_grid.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -71,18 +73,78 @@ inline std::string join(const std::vector<std::string> &names)
     return s;
 }
 
-// Copies the handle's bytes into memory that C owns and frees with free() (one
-// C library serves haze and the module, so either side may free it).
+// A NanoVDB buffer type (what GridHandle and the converters allocate through)
+// whose memory is the vdb_buffer C will own: 32-byte aligned, freed with
+// free() (one C library serves haze and the module, so either side may free
+// it). A grid built into it is handed over without a copy.
+class c_buffer
+{
+  public:
+    c_buffer() = default;
+    c_buffer(const c_buffer &) = delete;
+    c_buffer &operator=(const c_buffer &) = delete;
+    c_buffer(c_buffer &&o) noexcept : data_(o.data_), size_(o.size_)
+    {
+        o.data_ = nullptr;
+        o.size_ = 0;
+    }
+    c_buffer &operator=(c_buffer &&o) noexcept
+    {
+        if (this != &o) {
+            clear();
+            data_ = o.data_;
+            size_ = o.size_;
+            o.data_ = nullptr;
+            o.size_ = 0;
+        }
+        return *this;
+    }
+    ~c_buffer() { clear(); }
+
+    // What NanoVDB calls (the second argument is its context).
+    static c_buffer create(uint64_t size, const c_buffer * = nullptr)
+    {
+        // aligned_alloc needs a multiple of the alignment; the tail is zeroed.
+        if (size > std::numeric_limits<size_t>::max() - 32)
+            throw std::bad_alloc();
+        const uint64_t alloc = std::max<uint64_t>(32, (size + 31) / 32 * 32);
+        c_buffer b;
+        b.data_ = static_cast<uint8_t *>(std::aligned_alloc(32, size_t(alloc)));
+        if (!b.data_)
+            throw std::bad_alloc();
+        std::memset(b.data_ + size, 0, size_t(alloc - size));
+        b.size_ = size;
+        return b;
+    }
+    uint8_t *data() { return data_; }
+    const uint8_t *data() const { return data_; }
+    uint64_t size() const { return size_; }
+    void clear()
+    {
+        std::free(data_);
+        data_ = nullptr;
+        size_ = 0;
+    }
+    // Hands the memory to C (vdb_buffer_free releases it).
+    vdb_buffer release()
+    {
+        vdb_buffer b{data_, size_t(size_), nullptr, 0};
+        data_ = nullptr;
+        size_ = 0;
+        return b;
+    }
+
+  private:
+    uint8_t *data_ = nullptr;
+    uint64_t size_ = 0;
+};
+
+// Copies the handle's bytes into memory that C owns.
 template <typename HandleT> vdb_buffer to_buffer(const HandleT &handle)
 {
-    const size_t size = handle.size();
-    const size_t alloc = (size + 31) / 32 * 32; // aligned_alloc needs a multiple
-    void *data = std::aligned_alloc(32, alloc);
-    if (!data)
-        throw std::bad_alloc();
-    std::memcpy(data, handle.data(), size);
-    std::memset(static_cast<char *>(data) + size, 0, alloc - size);
-    return vdb_buffer{data, size};
+    c_buffer b = c_buffer::create(handle.size());
+    std::memcpy(b.data(), handle.data(), size_t(handle.size()));
+    return b.release();
 }
 
 // Runs `body`, turning every exception into an error message.

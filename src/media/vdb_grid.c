@@ -1,15 +1,19 @@
+#define _POSIX_C_SOURCE 200809L
 #include "media/vdb_grid.h"
 
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 
 void vdb_buffer_free(vdb_buffer *b)
 {
     if (!b)
         return;
-    free(b->data);
-    b->data = NULL;
-    b->size = 0;
+    if (b->mapping)
+        munmap(b->mapping, b->mapping_size);
+    else
+        free(b->data);
+    *b = (vdb_buffer){NULL, 0, NULL, 0};
 }
 
 int vdb_error_is_missing_grid(const char *message)

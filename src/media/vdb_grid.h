@@ -13,12 +13,18 @@
 extern "C" {
 #endif
 
-/* One NanoVDB grid (header, tree, nodes, statistics) in a single allocation.
- * `data` is 32-byte aligned (as NanoVDB requires) and must be released with
- * vdb_buffer_free. `size` is the grid's size in bytes. */
+/* One NanoVDB grid (header, tree, nodes, statistics) in one block of memory,
+ * released with vdb_buffer_free. `size` is the grid's size in bytes. `data`
+ * is 8-byte aligned (PNanoVDB reads 64-bit words; NanoVDB's C++ types want
+ * 32, so C++ code copies fields out rather than cast the buffer). Either
+ * malloc'd (`mapping` NULL) or inside a private mapping of a .nvdb file
+ * (`mapping`, `mapping_size`: the pages mmap gave, copied only where
+ * written). */
 typedef struct {
     void *data;
     size_t size;
+    void *mapping;
+    size_t mapping_size;
 } vdb_buffer;
 
 void vdb_buffer_free(vdb_buffer *b);

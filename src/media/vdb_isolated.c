@@ -70,7 +70,7 @@ int vdb_reader_run(const char *module, const char *path, uint64_t file_size,
     bool loaded = setenv("HAZE_OPENVDB_MODULE", module, 1) == 0 &&
                   vdb_module_get(&api, msg, sizeof msg) == HZ_OK;
     for (size_t i = 0; i < n; ++i) {
-        vdb_buffer b = {NULL, 0};
+        vdb_buffer b = {NULL, 0, NULL, 0};
         hz_status st = loaded ? api->load_grid(path, file_size, req[i].name, req[i].type, &b, msg,
                                                sizeof msg)
                               : HZ_ERROR;
@@ -136,7 +136,7 @@ static bool read_reply(int fd, const char *path, vdb_buffer *out, int *present, 
             free(data);
             return false;
         }
-        *out = (vdb_buffer){data, n};
+        *out = (vdb_buffer){data, n, NULL, 0};
         *present = 1;
         *ok = true;
         return true;
@@ -163,7 +163,7 @@ hz_status vdb_module_load_grid_isolated(const char *path, uint64_t file_size,
     enum { MAX_REQUESTS = VDB_MAX_GRID_REQUESTS };
     *failed = 0;
     for (size_t i = 0; i < n; ++i) {
-        outs[i] = (vdb_buffer){NULL, 0};
+        outs[i] = (vdb_buffer){NULL, 0, NULL, 0};
         present[i] = 0;
     }
     char module[4096];

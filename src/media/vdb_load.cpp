@@ -16,12 +16,12 @@ extern "C" {
 #include "media/vdb_module.h"
 #include "media/nvdb_check.h"
 
-#include <iostream> // before NanoVDB: GridValidator.h uses std::cerr without it
 #include <nanovdb/NanoVDB.h>
 #include <nanovdb/util/GridBuilder.h>
 #include <nanovdb/util/GridHandle.h>
-#include <nanovdb/util/GridValidator.h>
 #include <nanovdb/util/IO.h>
+#include <fcntl.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -78,71 +78,45 @@ file_kind sniff(const char *path, std::uintmax_t *size_out)
     return file_kind::unknown;
 }
 
-// A NanoVDB buffer type whose memory is the vdb_buffer that C will own
-// (32-byte aligned, freed with free()): nanovdb::io::readGrid reads the grid
-// straight into it, so loading a .nvdb grid holds one copy, not two.
-class c_buffer
+// A vdb_buffer this side still owns: freed when an exception passes.
+class owned_buffer
 {
   public:
-    c_buffer() = default;
-    c_buffer(const c_buffer &) = delete;
-    c_buffer &operator=(const c_buffer &) = delete;
-    c_buffer(c_buffer &&o) noexcept : data_(o.data_), size_(o.size_)
-    {
-        o.data_ = nullptr;
-        o.size_ = 0;
-    }
-    c_buffer &operator=(c_buffer &&o) noexcept
+    owned_buffer() = default;
+    explicit owned_buffer(vdb_buffer b) : b_(b) {}
+    owned_buffer(const owned_buffer &) = delete;
+    owned_buffer &operator=(const owned_buffer &) = delete;
+    owned_buffer(owned_buffer &&o) noexcept : b_(o.release()) {}
+    owned_buffer &operator=(owned_buffer &&o) noexcept
     {
         if (this != &o) {
-            clear();
-            data_ = o.data_;
-            size_ = o.size_;
-            o.data_ = nullptr;
-            o.size_ = 0;
+            vdb_buffer_free(&b_);
+            b_ = o.release();
         }
         return *this;
     }
-    ~c_buffer() { clear(); }
-
-    // What nanovdb::io::readGrid calls (the second argument is its context).
-    static c_buffer create(uint64_t size, const c_buffer * = nullptr);
-    uint8_t *data() { return data_; }
-    const uint8_t *data() const { return data_; }
-    uint64_t size() const { return size_; }
-    void clear()
-    {
-        std::free(data_);
-        data_ = nullptr;
-        size_ = 0;
-    }
+    ~owned_buffer() { vdb_buffer_free(&b_); }
+    uint8_t *data() const { return static_cast<uint8_t *>(b_.data); }
+    size_t size() const { return b_.size; }
     // Hands the memory to C (vdb_buffer_free releases it).
     vdb_buffer release()
     {
-        vdb_buffer b{data_, size_t(size_)};
-        data_ = nullptr;
-        size_ = 0;
+        vdb_buffer b = b_;
+        b_ = vdb_buffer{nullptr, 0, nullptr, 0};
         return b;
     }
 
   private:
-    uint8_t *data_ = nullptr;
-    uint64_t size_ = 0;
+    vdb_buffer b_{nullptr, 0, nullptr, 0};
 };
 
-c_buffer c_buffer::create(uint64_t size, const c_buffer *)
+// The grid's header copied out of a buffer (which may be only 8-byte
+// aligned: NanoVDB's types want 32).
+nanovdb::GridData grid_header(const owned_buffer &buf)
 {
-    // aligned_alloc needs a multiple of the alignment; the tail is zeroed.
-    const uint64_t alloc = std::max<uint64_t>(32, (size + 31) / 32 * 32);
-    if (size > std::numeric_limits<size_t>::max() - 32)
-        throw std::bad_alloc();
-    c_buffer b;
-    b.data_ = static_cast<uint8_t *>(std::aligned_alloc(32, size_t(alloc)));
-    if (!b.data_)
-        throw std::bad_alloc();
-    std::memset(b.data_ + size, 0, size_t(alloc - size));
-    b.size_ = size;
-    return b;
+    nanovdb::GridData gd;
+    std::memcpy(static_cast<void *>(&gd), buf.data(), sizeof gd);
+    return gd;
 }
 
 // The .nvdb file format read with every size checked against the file before
@@ -230,43 +204,84 @@ std::vector<nvdb_entry> nvdb_index(const std::string &path, uint64_t file_size)
     return out;
 }
 
-// The grid's bytes in a C-owned, 32-byte aligned buffer; for float and vec3f
-// grids, structurally checked (nvdb_check.h) before anything follows an offset.
-c_buffer nvdb_read(const std::string &path, const nvdb_entry &e)
+// An uncompressed grid that starts 8-byte aligned in the file (as NanoVDB
+// writes a grid named "density") is mapped rather than read: private,
+// copy-on-write pages of the page cache, so loading it copies nothing and
+// zeroes no memory, and a file in the page cache loads at the speed of its
+// page tables. Empty when the file cannot be mapped (the caller reads it).
+owned_buffer nvdb_map(const std::string &path, const nvdb_entry &e)
+{
+    const long page = sysconf(_SC_PAGESIZE);
+    if (e.codec != nanovdb::io::Codec::NONE || e.data_offset % 8 != 0 || page <= 0)
+        return owned_buffer();
+    const uint64_t start = e.data_offset / uint64_t(page) * uint64_t(page);
+    const uint64_t end = e.data_offset + e.meta.gridSize;
+    int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return owned_buffer();
+    struct stat st;
+    void *m = MAP_FAILED;
+    // Only while the file still holds the whole grid: a mapped page past
+    // its end would fault (SIGBUS) when read.
+    if (fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && uint64_t(st.st_size) >= end)
+        m = mmap(nullptr, size_t(end - start), PROT_READ | PROT_WRITE, MAP_PRIVATE, fd,
+                 off_t(start));
+    close(fd);
+    if (m == MAP_FAILED)
+        return owned_buffer();
+    madvise(m, size_t(end - start), MADV_WILLNEED); // read ahead a cold file
+    return owned_buffer(vdb_buffer{static_cast<uint8_t *>(m) + (e.data_offset - start),
+                                   size_t(e.meta.gridSize), m, size_t(end - start)});
+}
+
+// The grid's bytes read (or decompressed) into a C-owned, 32-byte aligned
+// buffer.
+owned_buffer nvdb_read_bytes(const std::string &path, const nvdb_entry &e)
 {
     const uint64_t grid_size = e.meta.gridSize, file_bytes = e.meta.fileSize;
+    std::ifstream is(path, std::ios::in | std::ios::binary);
+    if (!is)
+        throw load_error(path + ": cannot open file (" + std::strerror(errno) + ")");
+    if (e.codec == nanovdb::io::Codec::NONE) {
+        owned_buffer buf(c_buffer::create(grid_size).release());
+        read_at(is, path, e.data_offset, buf.data(), grid_size);
+        return buf;
+    }
+    uint64_t chunk = 0;
+    if (file_bytes < sizeof chunk)
+        throw corrupt(path, "grid \"" + e.name + "\" has no compressed data");
+    read_at(is, path, e.data_offset, &chunk, sizeof chunk);
+    // zlib expands at most ~1032:1.
+    if (chunk > file_bytes - sizeof chunk || grid_size > 1100 * chunk + 4096)
+        throw corrupt(path, "grid \"" + e.name + "\" compressed sizes are inconsistent");
+    std::vector<Bytef> packed(size_t(chunk) ? size_t(chunk) : 1);
+    read_at(is, path, e.data_offset + sizeof chunk, packed.data(), chunk);
+    owned_buffer buf(c_buffer::create(grid_size).release());
+    uLongf n = uLongf(grid_size);
+    if (uncompress(buf.data(), &n, packed.data(), uLong(chunk)) != Z_OK || n != grid_size)
+        throw corrupt(path, "grid \"" + e.name + "\" does not decompress");
+    return buf;
+}
+
+// The grid's bytes, mapped or read; float and vec3f grids are checked
+// (nvdb_check.h: the structure and the header's checksum) before anything
+// follows an offset in them.
+owned_buffer nvdb_read(const std::string &path, const nvdb_entry &e)
+{
+    const uint64_t grid_size = e.meta.gridSize;
     if (grid_size < sizeof(nanovdb::GridData) + sizeof(nanovdb::TreeData<3>))
         throw corrupt(path, "grid \"" + e.name + "\" of " + std::to_string(grid_size) + " bytes");
     if (grid_size > std::numeric_limits<uint32_t>::max())
         throw load_error(path + ": grid \"" + e.name + "\" is over 4 GiB (not supported)");
-    std::ifstream is(path, std::ios::in | std::ios::binary);
-    if (!is)
-        throw load_error(path + ": cannot open file (" + std::strerror(errno) + ")");
-    c_buffer buf;
-    if (e.codec == nanovdb::io::Codec::NONE) {
-        if (grid_size != file_bytes)
-            throw corrupt(path, "grid \"" + e.name + "\" size does not match its data");
-        buf = c_buffer::create(grid_size);
-        read_at(is, path, e.data_offset, buf.data(), grid_size);
-    } else {
-        uint64_t chunk = 0;
-        if (file_bytes < sizeof chunk)
-            throw corrupt(path, "grid \"" + e.name + "\" has no compressed data");
-        read_at(is, path, e.data_offset, &chunk, sizeof chunk);
-        // zlib expands at most ~1032:1.
-        if (chunk > file_bytes - sizeof chunk || grid_size > 1100 * chunk + 4096)
-            throw corrupt(path, "grid \"" + e.name + "\" compressed sizes are inconsistent");
-        std::vector<Bytef> packed(size_t(chunk) ? size_t(chunk) : 1);
-        read_at(is, path, e.data_offset + sizeof chunk, packed.data(), chunk);
-        buf = c_buffer::create(grid_size);
-        uLongf n = uLongf(grid_size);
-        if (uncompress(buf.data(), &n, packed.data(), uLong(chunk)) != Z_OK || n != grid_size)
-            throw corrupt(path, "grid \"" + e.name + "\" does not decompress");
-    }
-    const auto *gd = reinterpret_cast<const nanovdb::GridData *>(buf.data());
-    if (gd->mGridType == nanovdb::GridType::Float || gd->mGridType == nanovdb::GridType::Vec3f) {
+    if (e.codec == nanovdb::io::Codec::NONE && grid_size != e.meta.fileSize)
+        throw corrupt(path, "grid \"" + e.name + "\" size does not match its data");
+    owned_buffer buf = nvdb_map(path, e);
+    if (!buf.data())
+        buf = nvdb_read_bytes(path, e);
+    const nanovdb::GridType type = grid_header(buf).mGridType;
+    if (type == nanovdb::GridType::Float || type == nanovdb::GridType::Vec3f) {
         char why[256];
-        if (nvdb_check_tree(buf.data(), buf.size(), why, sizeof why) != 0)
+        if (nvdb_check_grid(buf.data(), buf.size(), why, sizeof why) != 0)
             throw load_error(path + ": grid \"" + e.name + "\" is corrupt (" + why + ")");
     }
     return buf;
@@ -295,18 +310,9 @@ vdb_buffer load_nvdb(const std::string &path, const std::string &name, vdb_value
     if (found->meta.gridType != want)
         throw load_error(path + ": grid \"" + name + "\" is " + type_name(found->meta.gridType) +
                          ", expected " + type_name(want));
-    c_buffer buf = nvdb_read(path, *found);
-    const auto *gd = reinterpret_cast<const nanovdb::GridData *>(buf.data());
-    if (gd->mGridType != want)
+    owned_buffer buf = nvdb_read(path, *found);
+    if (grid_header(buf).mGridType != want)
         throw corrupt(path, "grid \"" + name + "\" type differs from its record");
-    bool valid = type == VDB_VEC3
-                     ? nanovdb::isValid(*reinterpret_cast<const nanovdb::NanoGrid<nanovdb::Vec3f> *>(
-                                            buf.data()),
-                                        /*detailed=*/true)
-                     : nanovdb::isValid(*reinterpret_cast<const nanovdb::NanoGrid<float> *>(buf.data()),
-                                        /*detailed=*/true);
-    if (!valid)
-        throw load_error(path + ": grid \"" + name + "\" is corrupt (failed validation)");
     return buf.release();
 }
 
@@ -324,11 +330,10 @@ void list_nvdb(const std::string &path, std::uintmax_t size, vdb_grid_callback c
             info.index_max[a] = m.indexBBox[1][a];
             info.voxel_size[a] = m.voxelSize[a];
         }
-        c_buffer buf = nvdb_read(path, e);
+        owned_buffer buf = nvdb_read(path, e);
         // Same convention as for .vdb files (NanoVDB's own world bbox spans
         // [min, max + 1] instead).
-        const nanovdb::GridData *gd = reinterpret_cast<const nanovdb::GridData *>(buf.data());
-        const nanovdb::Map &map = gd->mMap;
+        const nanovdb::GridData gd = grid_header(buf);
         for (int a = 0; a < 3; ++a) {
             info.world_min[a] = std::numeric_limits<double>::infinity();
             info.world_max[a] = -std::numeric_limits<double>::infinity();
@@ -337,24 +342,17 @@ void list_nvdb(const std::string &path, std::uintmax_t size, vdb_grid_callback c
             nanovdb::Vec3d p(c & 1 ? m.indexBBox[1][0] + 0.5 : m.indexBBox[0][0] - 0.5,
                              c & 2 ? m.indexBBox[1][1] + 0.5 : m.indexBBox[0][1] - 0.5,
                              c & 4 ? m.indexBBox[1][2] + 0.5 : m.indexBBox[0][2] - 0.5);
-            nanovdb::Vec3d w = map.applyMap(p);
+            nanovdb::Vec3d w = gd.mMap.applyMap(p);
             for (int a = 0; a < 3; ++a) {
                 info.world_min[a] = std::min(info.world_min[a], w[a]);
                 info.world_max[a] = std::max(info.world_max[a], w[a]);
             }
         }
-        // Only grids nvdb_read checked structurally have their root read.
-        if (gd->mGridType == nanovdb::GridType::Float) {
-            const auto *grid = reinterpret_cast<const nanovdb::NanoGrid<float> *>(buf.data());
+        // Only grids nvdb_read checked have their root read (vectors: NanoVDB's
+        // statistics are the shortest and longest value).
+        if (gd.mGridType == nanovdb::GridType::Float || gd.mGridType == nanovdb::GridType::Vec3f) {
             info.has_range = 1;
-            info.min_value = grid->tree().root().minimum();
-            info.max_value = grid->tree().root().maximum();
-        } else if (gd->mGridType == nanovdb::GridType::Vec3f) {
-            const auto *vgrid = reinterpret_cast<const nanovdb::NanoGrid<nanovdb::Vec3f> *>(buf.data());
-            // NanoVDB's statistics of vectors: the shortest and longest value.
-            info.has_range = 1;
-            info.min_value = vgrid->tree().root().minimum().length();
-            info.max_value = vgrid->tree().root().maximum().length();
+            nvdb_root_range(buf.data(), buf.size(), &info.min_value, &info.max_value);
         }
         cb(&info, user);
     }
@@ -478,7 +476,7 @@ extern "C" hz_status vdb_load_grid_set(const char *path, const vdb_grid_request 
         err[0] = '\0';
     *failed = 0;
     for (size_t i = 0; i < n; ++i) {
-        outs[i] = vdb_buffer{nullptr, 0};
+        outs[i] = vdb_buffer{nullptr, 0, nullptr, 0};
         present[i] = 0;
     }
     file_kind kind = file_kind::unknown;
@@ -554,7 +552,7 @@ extern "C" hz_status vdb_grid_from_dense(const float *values, int nx, int ny, in
 {
     if (err && err_size)
         err[0] = '\0';
-    *out = vdb_buffer{nullptr, 0};
+    *out = vdb_buffer{nullptr, 0, nullptr, 0};
     return guarded(name, err, err_size, [&] {
         nanovdb::GridBuilder<float> builder(0.0f, nanovdb::GridClass::FogVolume);
         auto acc = builder.getAccessor();

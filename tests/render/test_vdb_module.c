@@ -35,7 +35,7 @@ static bool mapped(const char *needle)
 static vdb_buffer load(const char *path)
 {
     char err[1024] = "";
-    vdb_buffer buf = {NULL, 0};
+    vdb_buffer buf = {NULL, 0, NULL, 0};
     if (vdb_load_grid(path, "density", &buf, err, sizeof err) != HZ_OK)
         fail_msg("%s", err);
     return buf;

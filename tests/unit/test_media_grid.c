@@ -313,11 +313,11 @@ static void rejects_bad_buffers(void **state)
     (void)state;
     hz_error err = {0};
     grid *g = NULL;
-    vdb_buffer small = {aligned_alloc(32, 64), 64};
+    vdb_buffer small = {aligned_alloc(32, 64), 64, NULL, 0};
     assert_int_equal(grid_create_from_buffer(&small, "x", &g, &err), HZ_ERROR);
     assert_non_null(strstr(err.message, "too small"));
     vdb_buffer_free(&small);
-    vdb_buffer junk = {aligned_alloc(32, 4096), 4096};
+    vdb_buffer junk = {aligned_alloc(32, 4096), 4096, NULL, 0};
     memset(junk.data, 0xab, 4096);
     assert_int_equal(grid_create_from_buffer(&junk, "x", &g, &err), HZ_ERROR);
     assert_non_null(strstr(err.message, "not a NanoVDB grid"));

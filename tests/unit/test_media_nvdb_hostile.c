@@ -19,6 +19,7 @@
 
 #include "media/grid.h"
 #include "media/majorant.h"
+#include "media/vdb_load.h"
 
 #define VOLUMES HAZE_SCENES "/../volumes/"
 #define GRID_SIZE 672 /* NanoVDB 32.x GridData */
@@ -199,12 +200,77 @@ static void test_bad_values(void **state)
     free(orig);
 }
 
+/* NanoVDB's header checksum (the CRC-32 of the grid, tree and root records):
+ * a changed byte of the grid's own name, which nothing else reads, is
+ * refused while the file has its checksum and loads once it is marked
+ * absent. */
+static void test_header_checksum(void **state)
+{
+    (void)state;
+    size_t n;
+    unsigned char *b = file_bytes(VOLUMES "box.nvdb", &n);
+    size_t g = grid_offset(b, n);
+    uint64_t stored;
+    memcpy(&stored, b + g + 8, 8);
+    assert_true(stored != ~(uint64_t)0); /* box.nvdb has one */
+    char msg[sizeof(hz_error){0}.message];
+    assert_true(try_load(b, n, msg, sizeof msg));
+    b[g + 40 + 3] ^= 0x20; /* mGridName: "density" -> "denSity" */
+    assert_false(try_load(b, n, msg, sizeof msg));
+    assert_non_null(strstr(msg, "is corrupt (the header's checksum is 0x"));
+    put64(b + g + 8, ~(uint64_t)0);
+    assert_true(try_load(b, n, msg, sizeof msg));
+    free(b);
+}
+
+/* A grid of 4913 leaves (17^3: enough for the value check's pass over the
+ * leaf array to run on every core) with a NaN in two leaves: the message
+ * names the one a walk from the root meets first, the one in the lower
+ * node's earlier child (child index 256 x + 16 y + z of each 8^3 leaf),
+ * whichever thread met which. Without them the range is the values'. */
+static void test_many_leaves(void **state)
+{
+    (void)state;
+    enum { N = 136 };
+    float *values = malloc(sizeof(float) * N * N * N);
+    assert_non_null(values);
+    for (size_t i = 0; i < (size_t)N * N * N; ++i)
+        values[i] = 0.25f + (float)(i % 7) * 0.125f;
+    const double scale[3] = {1, 1, 1}, origin[3] = {0, 0, 0};
+    for (int bad = 0; bad < 2; ++bad) {
+        if (bad) {
+            values[((size_t)5 * N + 100) * N + 5] = NAN;  /* voxel (5, 100, 5): leaf (0, 12, 0) */
+            values[((size_t)5 * N + 5) * N + 100] = NAN;  /* voxel (100, 5, 5): leaf (12, 0, 0) */
+        }
+        vdb_buffer buf;
+        char why[256];
+        assert_int_equal(vdb_grid_from_dense(values, N, N, N, scale, origin, "density", &buf, why,
+                                             sizeof why),
+                         HZ_OK);
+        grid *gr = NULL;
+        hz_error err = {0};
+        assert_int_equal(grid_create_from_buffer(&buf, "density", &gr, &err), HZ_OK);
+        if (!bad) {
+            assert_int_equal(grid_check_density(gr, &err), HZ_OK);
+            assert_true(grid_min_value(gr) == 0.25f && grid_max_value(gr) == 1.0f);
+        } else {
+            assert_int_equal(grid_check_density(gr, &err), HZ_ERROR);
+            if (!strstr(err.message, "voxel (5, 100, 5) is NaN"))
+                fail_msg("got \"%s\"", err.message);
+        }
+        grid_destroy(gr);
+    }
+    free(values);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_offsets_outside),
         cmocka_unit_test(test_random_tree_bytes),
         cmocka_unit_test(test_bad_values),
+        cmocka_unit_test(test_header_checksum),
+        cmocka_unit_test(test_many_leaves),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -12,6 +12,7 @@
 
 #include <zlib.h>
 
+#include "core/hash.h"
 #include "scene/scene_desc.h"
 
 static void parse_ok(const char *src, scene_desc *sd)
@@ -803,6 +804,64 @@ static void test_input_files(void **state)
     assert_non_null(strstr(err.message, "nul.pbrt:2:11: NUL byte inside a string"));
 }
 
+/* scene_inputs_hash: the scene and the files it names. Up to 16 MiB a file
+ * counts byte by byte (FNV-1a: the render ids of every scene before large
+ * volumes did not change); a larger one in hash_block's blocks, whose every
+ * byte still counts. */
+static void test_inputs_hash(void **state)
+{
+    (void)state;
+    char dir[512], scene[700], vol[700];
+    snprintf(dir, sizeof dir, "%s/scene_inputs_hash", HAZE_TMP);
+    mkdir(dir, 0755);
+    snprintf(scene, sizeof scene, "%s/s.pbrt", dir);
+    snprintf(vol, sizeof vol, "%s/v.nvdb", dir);
+    const char *text = "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"nanovdb\" "
+                       "\"string filename\" \"v.nvdb\"\n";
+    write_file(scene, text);
+    for (int large = 0; large < 2; ++large) {
+        const size_t n = large ? ((size_t)16 << 20) + 4097 : (size_t)3 << 20;
+        char *bytes = malloc(n);
+        assert_non_null(bytes);
+        for (size_t i = 0; i < n; ++i)
+            bytes[i] = (char)(i * 2654435761u >> 13);
+        write_bytes(vol, bytes, n);
+        scene_desc sd;
+        hz_error err;
+        uint64_t h0, h1, h2;
+        if (scene_parse_file(scene, &sd, &err) != HZ_OK)
+            fail_msg("%s", err.message);
+        assert_int_equal(scene_inputs_hash(&sd, &h0, &err), HZ_OK);
+        if (!large) { /* FNV-1a of the count, then of each file's size and bytes */
+            uint64_t want = HZ_FNV_OFFSET;
+            size_t count = 2;
+            off_t scene_size = (off_t)strlen(text), vol_size = (off_t)n;
+            HASH_FIELD(want, count);
+            HASH_FIELD(want, scene_size);
+            want = fnv1a(want, text, strlen(text));
+            HASH_FIELD(want, vol_size);
+            want = fnv1a(want, bytes, n);
+            assert_true(h0 == want);
+        }
+        bytes[n - 1] ^= 1; /* the last byte, past the last whole block */
+        write_bytes(vol, bytes, n);
+        assert_int_equal(scene_inputs_hash(&sd, &h1, &err), HZ_OK);
+        bytes[n - 1] ^= 1;
+        bytes[n / 2] ^= 0x40;
+        write_bytes(vol, bytes, n);
+        assert_int_equal(scene_inputs_hash(&sd, &h2, &err), HZ_OK);
+        assert_true(h1 != h0 && h2 != h0 && h2 != h1);
+        bytes[n / 2] ^= 0x40;
+        write_bytes(vol, bytes, n);
+        assert_int_equal(scene_inputs_hash(&sd, &h1, &err), HZ_OK);
+        assert_true(h1 == h0);
+        scene_desc_free(&sd);
+        free(bytes);
+    }
+    remove(vol);
+    remove(scene);
+}
+
 /* Garbage must give an error or a scene, never a crash, hang or leak (run
  * under ASan): random bytes, and random mutations of a valid scene. */
 static void test_garbage(void **state)
@@ -876,6 +935,7 @@ int main(void)
         cmocka_unit_test(named_spectra),
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_input_files),
+        cmocka_unit_test(test_inputs_hash),
         cmocka_unit_test(test_look_at),
         cmocka_unit_test(test_transform_is_transposed),
         cmocka_unit_test(test_composition_order),
