@@ -140,7 +140,10 @@ scale_reference() {
     v=$SCALE_DIR/ref-$1.pbrt
     line='Integrator "volpath" "integer maxdepth" 1'
     scale_scene "$v" "$1" "$SCALE_DIR/$1.nvdb" "$line"
-    key=$(cache_key "$v" "$SCALE_DIR/$1.nvdb" -- "scale-ref $2")
+    # Keyed by the scene and the volume, not haze's version: volpath is
+    # unbiased, and the six references take about 20 minutes (remove
+    # $SCALE_DIR/ref-* to render them again).
+    key=$(content_key "$v" "$SCALE_DIR/$1.nvdb" -- "scale-ref $2 $("$HAZE" --version 2>&1)")
     ref=$SCALE_DIR/ref-$1-$key.exr
     if [ ! -f "$ref" ]; then
         echo "  reference $1: volpath maxdepth 1, $2 spp" >&2
@@ -192,7 +195,9 @@ scale_unbiased() {
         e=-
         [ "$(scale_field "$d/r" 3)" = ok ] && e=$(scale_net "$(errors "$d/u.exr" "$ref" | cut -d' ' -f2)")
     fi
-    scale_row "$v" "$run" "$te" "$d/r" "$e" "$n" "equal error: $target (1 spp: $(awk -v e="$e1" 'BEGIN { printf "%.3g", e }'))"
+    mean=-
+    [ "$e" != - ] && mean=$("$HAZE" diff "$d/u.exr" "$ref" --channels R,G,B | awk '$1 == "all" { printf "%+.2f%%", 100 * $(NF - 2) }')
+    scale_row "$v" "$run" "$te" "$d/r" "$e" "$n" "equal error: $target (1 spp: $(awk -v e="$e1" 'BEGIN { printf "%.3g", e }')), mean $mean"
 }
 
 # scale_volume_run NAME: loading, the reference, then every error.
@@ -260,9 +265,12 @@ scale_time() {
 
 scale_mib() { awk -v k="$1" 'BEGIN { if (k == "") print "-"; else printf "%.1f", k / 1024 }'; }
 
-# scale_ratio A B: A / B to 2 decimals, "-" unless both are numbers.
+# scale_ratio A B: A / B to 2 decimals ("> x" when A is "> a": timed out),
+# "-" unless both are numbers.
 scale_ratio() {
-    awk -v a="$1" -v b="$2" 'BEGIN { if (a ~ /^[0-9.]+$/ && b ~ /^[0-9.]+$/ && b > 0) printf "%.2f", a / b; else print "-" }'
+    awk -v a="$1" -v b="$2" 'BEGIN {
+        gt = a ~ /^>/; sub(/^> */, "", a)
+        if (a ~ /^[0-9.]+$/ && b ~ /^[0-9.]+$/ && b > 0) printf "%s%.2f", gt ? "> " : "", a / b; else print "-" }'
 }
 
 scale_report_loading() {
@@ -295,35 +303,80 @@ scale_report_error() {
     echo "## --target-error $te"
     echo
     echo "*default*: \`haze render --target-error $te\` with the scene's default integrator"
-    echo "(singlescatter); *− load* subtracts the one-pixel render above. *volpath*:"
-    echo "\`Integrator \"volpath\" \"integer maxdepth\" 1\`, and *pbrt-v4* the same in pbrt-v4, each"
-    echo "at the samples per pixel that reach the relMSE the default reached (E when it"
-    echo "timed out): $scale_pilot_spp samples give the error of one, and the run at that count is"
-    echo "timed and measured. relMSE is against the volume's reference, less the"
-    echo "reference's own error."
+    echo "(singlescatter); *− load* subtracts the one-pixel render of the loading table;"
+    echo "*pilot, steps*: the step pilot's own time (\`--stats\` time_pilot_s) and the steps it"
+    echo "chose. *volpath*: \`Integrator \"volpath\" \"integer maxdepth\" 1\`, and *pbrt-v4* the"
+    echo "same in pbrt-v4, each at the samples per pixel that reach the relMSE the default"
+    echo "reached (E when it timed out): $scale_pilot_spp samples give the error of one, the run at"
+    echo "that count is timed and measured, and run again once at a corrected count when it"
+    echo "missed by over 25%. relMSE is against the volume's reference, less the reference's"
+    echo "own error; *mean* is the image mean against the reference's."
     echo
-    echo "| volume | default s | − load s | peak MiB | relMSE | spp mean | pilot, steps | volpath spp | s | relMSE | pbrt-v4 spp | s | relMSE | default / pbrt-v4 |"
-    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    echo "| volume | default s | − load s | peak MiB | relMSE | spp mean | pilot, steps | volpath spp | s | relMSE | pbrt-v4 spp | s | relMSE | mean | default / pbrt-v4 |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     for v in $(awk -F'\t' -v e="$te" 'NR > 1 && $2 == "default" && $3 == e { print $1 }' "$RESULTS/scale.tsv"); do
         t=$(scale_time "$v" default "$te") ld=$(scale_get "$v" "load .nvdb" - 4)
         tl=$(awk -v t="$t" -v l="$ld" 'BEGIN { if (t ~ /^[0-9.]+$/) printf "%.2f", t - l; else print t }')
         tp=$(scale_time "$v" pbrt-v4 "$te")
-        printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$v" "$t" "$tl" \
+        printf '| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n' "$v" "$t" "$tl" \
             "$(scale_mib "$(scale_get "$v" default "$te" 5)")" "$(scale_get "$v" default "$te" 7)" \
-            "$(scale_get "$v" default "$te" 8)" "$(scale_get "$v" default "$te" 9)" \
+            "$(scale_get "$v" default "$te" 8)" "$(scale_get "$v" default "$te" 9 | sed 's/^$/-/')" \
             "$(scale_get "$v" volpath "$te" 8)" "$(scale_time "$v" volpath "$te")" "$(scale_get "$v" volpath "$te" 7)" \
             "$(scale_get "$v" pbrt-v4 "$te" 8 | sed 's/^$/-/')" "$tp" "$(scale_get "$v" pbrt-v4 "$te" 7 | sed 's/^$/-/')" \
-            "$(scale_ratio "$t" "$tp")"
+            "$(scale_get "$v" pbrt-v4 "$te" 9 | sed -n 's/.*mean //p' | sed 's/^$/-/')" "$(scale_ratio "$t" "$tp")"
     done
     echo
-    t25=$(scale_time sphere-25 default "$te") l25=$(scale_get sphere-25 "load .nvdb" - 4)
-    t400=$(scale_time sphere-400 default "$te") l400=$(scale_get sphere-400 "load .nvdb" - 4)
-    if [ "$t400" != - ]; then
-        r=$(awk -v a="$t400" -v la="$l400" -v b="$t25" -v lb="$l25" 'BEGIN {
-            if (a ~ /^>/) { sub(/^> */, "", a); printf "> %.1f", (a - la) / (b - lb) } else printf "%.1f", (a - la) / (b - lb) }')
-        echo "Target: default time(R=400) / time(R=25), loading excluded, ≤ 3: **$r**."
-        echo
+}
+
+# scale_ratio_400 E: the default's time(R=400) / time(R=25), loading
+# excluded ("> x" when R=400 timed out; "-" without both).
+scale_ratio_400() {
+    t25=$(scale_time sphere-25 default "$1") l25=$(scale_get sphere-25 "load .nvdb" - 4)
+    t400=$(scale_time sphere-400 default "$1") l400=$(scale_get sphere-400 "load .nvdb" - 4)
+    awk -v a="$t400" -v la="$l400" -v b="$t25" -v lb="$l25" 'BEGIN {
+        gt = a ~ /^>/; sub(/^> */, "", a)
+        if (a !~ /^[0-9.]+$/ || b !~ /^[0-9.]+$/ || b - lb <= 0) { print "-"; exit }
+        printf "%s%.1f", gt ? "> " : "", (a - la) / (b - lb) }'
+}
+
+# scale_verdict VALUE OP LIMIT: met, missed, or "-" when VALUE is not known.
+scale_verdict() {
+    awk -v v="$1" -v op="$2" -v l="$3" 'BEGIN {
+        gt = v ~ /^>/; sub(/^> */, "", v)
+        if (v !~ /^[0-9.]+$/) { print "-"; exit }
+        ok = op == "le" ? (v <= l && !gt) : v >= l
+        print ok ? "met" : "**missed**" }'
+}
+
+scale_report_targets() {
+    echo "## Targets (issue 43)"
+    echo
+    echo "| target | measured | |"
+    echo "|---|---|---|"
+    for te in $SCALE_ERRORS; do
+        r=$(scale_ratio_400 "$te")
+        echo "| default at E = $te: time(R=400) / time(R=25), loading excluded, ≤ 3 | $r | $(scale_verdict "$r" le 3) |"
+    done
+    for v in $(awk -F'\t' 'NR > 1 && $2 == "load .nvdb" { print $1 }' "$RESULTS/scale.tsv"); do
+        rd=$(scale_time "$v" "cat .nvdb" -) ld=$(scale_time "$v" "load .nvdb" -)
+        r=$(scale_ratio "$ld" "$rd")
+        mb=$(scale_get "$v" "cat .nvdb" - 9 | cut -d' ' -f1)
+        p=$(awk -v p="$(scale_mib "$(scale_get "$v" "load .nvdb" - 5)")" -v m="$mb" 'BEGIN { printf "%.2f", p / (m + 0.9) }')
+        awk -v m="$mb" 'BEGIN { exit !(m >= 100) }' || continue
+        echo "| $v: load ≤ 1.5x reading the file | $r ($ld s / $rd s) | $(scale_verdict "$r" le 1.5) |"
+        echo "| $v: peak ≤ 1.2x (file + film) | $p | $(scale_verdict "$p" le 1.2) |"
+    done
+    if [ -n "${PBRT:-}" ] || awk -F'\t' 'NR > 1 && $2 == "pbrt-v4" { f = 1 } END { exit !f }' "$RESULTS/scale.tsv"; then
+        for te in $SCALE_ERRORS; do
+            worst=$(for v in $(awk -F'\t' -v e="$te" 'NR > 1 && $2 == "default" && $3 == e { print $1 }' "$RESULTS/scale.tsv"); do
+                scale_ratio "$(scale_time "$v" default "$te")" "$(scale_time "$v" pbrt-v4 "$te")"; echo; done | grep -v '^-' | sort -g | tail -1)
+            echo "| default at E = $te ≤ 0.5x pbrt-v4's time at equal error, every volume (the worst) | ${worst:--} | $(scale_verdict "${worst:--}" le 0.5) |"
+        done
     fi
+    echo
+    echo "Loading targets are listed for files of 100 MiB and more (smaller ones load in"
+    echo "less time than the process takes to start)."
+    echo
 }
 
 scale_report() {
@@ -336,6 +389,7 @@ scale_report() {
         echo "Each time is one whole process (the median of three when under 2 s)."
         echo "bench/README.md describes the volumes and the scenes."
         echo
+        scale_report_targets
         scale_report_loading
         for te in $SCALE_ERRORS; do
             scale_report_error "$te"
