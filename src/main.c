@@ -504,10 +504,10 @@ static int load_scene(const cli *c, distributed *dist, render_job *job, phase_ti
 
 /* --target-error: the marching step's bias, chosen before the passes
  * measure the noise; rank 0 says which step unless --quiet. */
-static void choose_step(const cli *c, render_scene *rs, bool rank0, step_choice *steps,
-                        phase_times *ph)
+static void choose_step(const cli *c, render_scene *rs, bool rank0,
+                        const volatile sig_atomic_t *cancel, step_choice *steps, phase_times *ph)
 {
-    step_pilot_choose(rs, c->target_error, c->threads, steps);
+    step_pilot_choose(rs, c->target_error, c->threads, cancel, steps);
     ph->pilot_seconds = hz_clock_seconds() - ph->render;
     if (!steps->applies || !rank0 || c->quiet)
         return;
@@ -676,7 +676,7 @@ static int render_loaded_scene(const cli *c, distributed *dist, render_job *job,
     step_choice steps = {0};
     ph->render = hz_clock_seconds();
     if (adaptive) {
-        choose_step(c, job->rs, rank0, &steps, ph);
+        choose_step(c, job->rs, rank0, opt.cancel, &steps, ph);
         if (steps.applies)
             goal.bias = steps.bias;
     }

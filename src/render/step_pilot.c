@@ -35,6 +35,7 @@ typedef struct {
     const sampler *smp; /* the scene's, with at least k samples a pixel */
     int k;
     rgb *out;
+    const volatile sig_atomic_t *cancel; /* NULL, or a signal's flag: stop */
     atomic_int next; /* the next pixel of the grid to take */
 } pilot_job;
 
@@ -60,6 +61,8 @@ static void *pilot_worker(void *arg)
             bool ray = camera_generate_ray_differential(cam, cs, &rd);
             for (int s = 0; s < job->k; ++s) {
                 rgb L = rgb_grey(0.0);
+                if (job->cancel && *job->cancel) /* a signal: the image is dropped */
+                    return NULL;
                 if (ray) {
                     sampler_state st;
                     sampler_start(smp, x, y, s, &st);
@@ -78,14 +81,15 @@ static void *pilot_worker(void *arg)
  * (each value depends only on its pixel and sample). */
 static void pilot_render(render_scene *rs, const render_marching *base, double step,
                          double shadow_ratio, double cache_ratio, const pilot_grid *g,
-                         const sampler *smp, int k, int threads, rgb *out)
+                         const sampler *smp, int k, int threads,
+                         const volatile sig_atomic_t *cancel, rgb *out)
 {
     render_marching m = *base;
     m.step = step;
     m.shadow_step = step * shadow_ratio;
     m.shadow_cache = step * cache_ratio;
     render_scene_set_marching(rs, &m);
-    pilot_job job = {.rs = rs, .g = g, .smp = smp, .k = k, .out = out};
+    pilot_job job = {.rs = rs, .g = g, .smp = smp, .k = k, .out = out, .cancel = cancel};
     atomic_init(&job.next, 0);
     hz_parallel_run(threads, pilot_worker, &job);
 }
@@ -130,12 +134,15 @@ typedef struct {
     int n, k, threads; /* pixels, samples of each, threads */
     int renders;       /* made so far */
     double max_step;   /* the coarsest step tried */
+    const volatile sig_atomic_t *cancel;
 } pilot;
+
+static bool cancelled(const pilot *p) { return p->cancel && *p->cancel; }
 
 static void pilot_at(pilot *p, double step, rgb *out)
 {
     pilot_render(p->rs, p->base, step, p->shadow_ratio, p->cache_ratio, p->g, p->smp, p->k,
-                 p->threads, out);
+                 p->threads, p->cancel, out);
     ++p->renders;
 }
 
@@ -143,6 +150,8 @@ static void pilot_at(pilot *p, double step, rgb *out)
  * `fine` (midpoint marching: halving the step at least halves the error). */
 static double pilot_bias(const pilot *p, const rgb *coarse, const rgb *fine)
 {
+    if (cancelled(p)) /* the images are incomplete */
+        return INFINITY;
     return 2.0 * bias_rel_mse(coarse, fine, p->n, p->k);
 }
 
@@ -159,7 +168,7 @@ static void swap_images(rgb **a, rgb **b)
 static bool go_coarser(pilot *p, rgb **img, double goal, double *x, double *bias)
 {
     bool coarser = false;
-    while (2.0 * *x <= p->max_step) {
+    while (2.0 * *x <= p->max_step && !cancelled(p)) {
         pilot_at(p, 2.0 * *x, img[2]);
         double coarse = pilot_bias(p, img[2], img[0]);
         if (!(coarse <= goal))
@@ -179,7 +188,7 @@ static double go_finer(pilot *p, rgb **img, double goal, double *h)
 {
     pilot_at(p, *h / 2.0, img[1]);
     double bias = pilot_bias(p, img[0], img[1]);
-    while (!(bias <= goal) && *h / 2.0 >= STEP_PILOT_MIN_STEP) {
+    while (!(bias <= goal) && *h / 2.0 >= STEP_PILOT_MIN_STEP && !cancelled(p)) {
         *h /= 2.0;
         swap_images(&img[0], &img[1]);
         pilot_at(p, *h / 2.0, img[1]);
@@ -188,7 +197,8 @@ static double go_finer(pilot *p, rgb **img, double goal, double *h)
     return bias;
 }
 
-void step_pilot_choose(render_scene *rs, double target_error, int threads, step_choice *out)
+void step_pilot_choose(render_scene *rs, double target_error, int threads,
+                       const volatile sig_atomic_t *cancel, step_choice *out)
 {
     *out = (step_choice){0};
     render_marching base;
@@ -225,7 +235,7 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads, step_
         return;
     }
     pilot p = {rs, &base, ratio, cache_ratio, &g, &smp, n, k, threads, 0,
-               STEP_PILOT_MAX_STEP * base.auto_scale};
+               STEP_PILOT_MAX_STEP * base.auto_scale, cancel};
     /* Coarser first, and cheapest first: the bias of 2x is estimated from x
      * and 2x (img[0]: at x, img[2]: at 2x), starting at x = 2h, so a scene
      * whose step goes coarser never renders its own; only when twice its step
@@ -247,8 +257,14 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads, step_
             swap_images(&img[0], &img[1]);
         }
     }
-    if (!coarser) /* h itself, or finer */
+    if (!coarser && !cancelled(&p)) /* h itself, or finer */
         bias = go_finer(&p, img, goal, &h);
+    if (cancelled(&p)) { /* the scene's own steps; the render stops at once */
+        render_scene_set_marching(rs, &base);
+        for (int q = 0; q < 3; ++q)
+            free(img[q]);
+        return;
+    }
     render_marching m = base;
     m.step = h;
     m.shadow_step = h * ratio;

@@ -20,6 +20,7 @@
 #ifndef HAZE_RENDER_STEP_PILOT_H
 #define HAZE_RENDER_STEP_PILOT_H
 
+#include <signal.h>
 #include <stdbool.h>
 
 #include "core/error.h"
@@ -54,7 +55,10 @@ typedef struct {
 /* Chooses the step for `target_error` (> 0) and sets it on `rs`, rendering
  * the pilot on `threads` threads (<= 0: every core); nothing to do (applies
  * false) when render_scene_marching is false. The same choice for any thread
- * count and on every rank. */
-void step_pilot_choose(render_scene *rs, double target_error, int threads, step_choice *out);
+ * count and on every rank. When `cancel` (NULL: never) becomes non-zero (a
+ * signal) the pilot stops within a sample, leaves the scene's own
+ * steps and applies is false. */
+void step_pilot_choose(render_scene *rs, double target_error, int threads,
+                       const volatile sig_atomic_t *cancel, step_choice *out);
 
 #endif

@@ -467,6 +467,34 @@ static void test_sigint_before_any_slow_tile(void **state)
     assert_int_equal(count_temporaries(), 0);
 }
 
+/* --target-error's step pilot on the slow scene (every pilot render marches
+ * at its step of a millionth of a voxel): SIGINT stops the pilot too, within
+ * the sample under way, and the render writes nothing, at once. Before, the
+ * pilot ran its renders to their end first (minutes here). */
+static void test_sigint_during_step_pilot(void **state)
+{
+    (void)state;
+    char scene[1200], out[1200], text[4096];
+    snprintf(scene, sizeof scene, "%s/slow-pilot.pbrt", dir);
+    snprintf(out, sizeof out, "%s/slow-pilot.exr", dir);
+    unlink(out);
+    write_slow_scene(scene, NULL);
+    char *argv[] = {"haze", "render", scene, "-o", out, "--threads", "2", "--quiet",
+                    "--target-error", "1e-3", NULL};
+    child c = spawn_argv(argv, LIMIT_NONE, 0);
+    wait_rendering(c.pid, 1.5);
+    kill(c.pid, SIGINT);
+    double t0 = now();
+    int rc = finish(c, 60.0, text, sizeof text);
+    double secs = now() - t0;
+    print_message("slow-pilot: exit %d %.3f s after the signal: %s", rc, secs, text);
+    assert_int_equal(rc, 130);
+    assert_true(secs < 2.5);
+    assert_non_null(strstr(text, "interrupted before any tile was rendered: nothing written"));
+    assert_false(file_exists(out));
+    assert_int_equal(count_temporaries(), 0);
+}
+
 /* A partial image never replaces an existing file: it goes to NAME.partial.exr
  * (and the preview to NAME.partial.png), and the existing files stay as they were. */
 static void test_partial_does_not_replace_existing(void **state)
@@ -726,6 +754,7 @@ int main(void)
         cmocka_unit_test(test_sigterm_writes_partial_image),
         cmocka_unit_test(test_sigterm_inside_slow_tiles),
         cmocka_unit_test(test_sighup_inside_slow_tiles),
+        cmocka_unit_test(test_sigint_during_step_pilot),
         cmocka_unit_test(test_sigint_before_any_slow_tile),
         cmocka_unit_test(test_partial_does_not_replace_existing),
         cmocka_unit_test(test_second_signal_exits_at_once),

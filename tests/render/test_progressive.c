@@ -935,7 +935,7 @@ static double pilot_bias(const char *estimator, double step, double E, int spp, 
     char *text = pilot_scene(estimator, step);
     render_scene *rs = build_scene_or_fail(text, NULL);
     free(text);
-    step_pilot_choose(rs, E, 2, ch);
+    step_pilot_choose(rs, E, 2, NULL, ch);
     assert_true(ch->applies);
     text = pilot_scene("raymarch", ch->step / 16.0);
     render_scene *fine = build_scene_or_fail(text, NULL);
@@ -963,7 +963,7 @@ static void test_step_pilot(void **state)
     render_scene *rs = build_scene_or_fail(text, NULL);
     free(text);
     step_choice ch;
-    step_pilot_choose(rs, E, 2, &ch);
+    step_pilot_choose(rs, E, 2, NULL, &ch);
     print_message("pilot: step %g (shadow %g, cache %g), bias %.3g, %d pixels, %d renders\n",
                   ch.step, ch.shadow_step, ch.shadow_cache, ch.bias, ch.pixels, ch.renders);
     assert_true(ch.applies);
@@ -1004,7 +1004,7 @@ static void test_step_pilot(void **state)
     rs = build_scene_or_fail(text, NULL);
     free(text);
     step_choice one;
-    step_pilot_choose(rs, E, 1, &one);
+    step_pilot_choose(rs, E, 1, NULL, &one);
     render_scene_destroy(rs);
     assert_true(one.step == ch.step && one.bias == ch.bias && one.renders == ch.renders);
     /* The same with the render capped at 2 samples a pixel (--spp 2): the
@@ -1013,14 +1013,14 @@ static void test_step_pilot(void **state)
     rs = build_scene_or_fail(text, &(render_options){.spp = 2});
     free(text);
     step_choice capped;
-    step_pilot_choose(rs, E, 2, &capped);
+    step_pilot_choose(rs, E, 2, NULL, &capped);
     render_scene_destroy(rs);
     assert_true(capped.step == ch.step && capped.bias == ch.bias && capped.renders == ch.renders);
 
     text = pilot_scene("residual", 8.0);
     rs = build_scene_or_fail(text, NULL);
     free(text);
-    step_pilot_choose(rs, E, 2, &ch);
+    step_pilot_choose(rs, E, 2, NULL, &ch);
     assert_false(ch.applies);
     render_scene_destroy(rs);
 }
