@@ -680,8 +680,11 @@ static int render_loaded_scene(const cli *c, distributed *dist, render_job *job,
         if (steps.applies)
             goal.bias = steps.bias;
     }
-    hz_status st =
-        distributed_render(dist, job->rs, &opt, progressive ? &goal : NULL, &stats, err);
+    hz_status st = HZ_OK;
+    if (opt.cancel && *opt.cancel) /* a signal stopped the step pilot: no tile starts */
+        stats.interrupted = true;
+    else
+        st = distributed_render(dist, job->rs, &opt, progressive ? &goal : NULL, &stats, err);
     job->abandoned = stats.abandoned > 0;
     if (st != HZ_OK) {
         if (rank0)
