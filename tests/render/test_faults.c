@@ -489,7 +489,9 @@ static void test_sigint_during_step_pilot(void **state)
     double secs = now() - t0;
     print_message("slow-pilot: exit %d %.3f s after the signal: %s", rc, secs, text);
     assert_int_equal(rc, 130);
-    assert_true(secs < 2.5);
+    /* The pilot stops at its next sample: one sample of this scene takes
+     * about 0.3 s here, about 20 s under AddressSanitizer. */
+    assert_true(secs < (UNDER_ASAN ? 60.0 : 2.5));
     assert_non_null(strstr(text, "interrupted before any tile was rendered: nothing written"));
     assert_false(file_exists(out));
     assert_int_equal(count_temporaries(), 0);
