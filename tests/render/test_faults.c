@@ -443,28 +443,36 @@ static void test_sighup_inside_slow_tiles(void **state)
     slow_render_stopped_by(SIGHUP, "slow-sighup");
 }
 
+/* Sends SIGINT to `c` (rendering for `delay` s) and requires exit 130 within
+ * `bound` s with nothing written to `out` and no temporary left. */
+static void interrupt_expect_nothing(child c, double delay, const char *name, const char *out,
+                                     double bound)
+{
+    char text[4096];
+    wait_rendering(c.pid, delay);
+    kill(c.pid, SIGINT);
+    double t0 = now();
+    int rc = finish(c, 60.0, text, sizeof text);
+    double secs = now() - t0;
+    print_message("%s: exit %d %.3f s after the signal: %s", name, rc, secs, text);
+    assert_int_equal(rc, 130);
+    assert_true(secs < bound);
+    assert_non_null(strstr(text, "interrupted before any tile was rendered: nothing written"));
+    assert_false(file_exists(out));
+    assert_int_equal(count_temporaries(), 0);
+}
+
 /* Only slow tiles (one, on one thread): nothing is done within the second
  * the tiles get, so nothing is written, at once. */
 static void test_sigint_before_any_slow_tile(void **state)
 {
     (void)state;
-    char scene[1200], out[1200], text[4096];
+    char scene[1200], out[1200];
     snprintf(scene, sizeof scene, "%s/slow-none.pbrt", dir);
     snprintf(out, sizeof out, "%s/slow-none.exr", dir);
     unlink(out);
     write_slow_scene(scene, "\"integer pixelbounds\" [0 16 0 16]");
-    child c = spawn(scene, out, NULL, LIMIT_NONE, 0);
-    wait_rendering(c.pid, 1.5);
-    kill(c.pid, SIGINT);
-    double t0 = now();
-    int rc = finish(c, 30.0, text, sizeof text);
-    double secs = now() - t0;
-    print_message("slow-none: exit %d %.3f s after the signal: %s", rc, secs, text);
-    assert_int_equal(rc, 130);
-    assert_true(secs < 2.5);
-    assert_non_null(strstr(text, "interrupted before any tile was rendered: nothing written"));
-    assert_false(file_exists(out));
-    assert_int_equal(count_temporaries(), 0);
+    interrupt_expect_nothing(spawn(scene, out, NULL, LIMIT_NONE, 0), 1.5, "slow-none", out, 2.5);
 }
 
 /* --target-error's step pilot on the slow scene (every pilot render marches
@@ -474,27 +482,17 @@ static void test_sigint_before_any_slow_tile(void **state)
 static void test_sigint_during_step_pilot(void **state)
 {
     (void)state;
-    char scene[1200], out[1200], text[4096];
+    char scene[1200], out[1200];
     snprintf(scene, sizeof scene, "%s/slow-pilot.pbrt", dir);
     snprintf(out, sizeof out, "%s/slow-pilot.exr", dir);
     unlink(out);
     write_slow_scene(scene, NULL);
     char *argv[] = {"haze", "render", scene, "-o", out, "--threads", "2", "--quiet",
                     "--target-error", "1e-3", NULL};
-    child c = spawn_argv(argv, LIMIT_NONE, 0);
-    wait_rendering(c.pid, 1.5);
-    kill(c.pid, SIGINT);
-    double t0 = now();
-    int rc = finish(c, 60.0, text, sizeof text);
-    double secs = now() - t0;
-    print_message("slow-pilot: exit %d %.3f s after the signal: %s", rc, secs, text);
-    assert_int_equal(rc, 130);
     /* The pilot stops at its next sample: one sample of this scene takes
      * about 0.3 s here, about 20 s under AddressSanitizer. */
-    assert_true(secs < (UNDER_ASAN ? 60.0 : 2.5));
-    assert_non_null(strstr(text, "interrupted before any tile was rendered: nothing written"));
-    assert_false(file_exists(out));
-    assert_int_equal(count_temporaries(), 0);
+    interrupt_expect_nothing(spawn_argv(argv, LIMIT_NONE, 0), 1.5, "slow-pilot", out,
+                             UNDER_ASAN ? 60.0 : 2.5);
 }
 
 /* A partial image never replaces an existing file: it goes to NAME.partial.exr
