@@ -31,7 +31,7 @@ target_compile_definitions(haze_media PRIVATE NANOVDB_USE_ZIP
   HAZE_OPENVDB_MODULE_BUILD_PATH="$<TARGET_FILE:haze_openvdb>"
   HAZE_VDB_READER_BUILD_PATH="$<TARGET_FILE_DIR:haze_openvdb>/haze_vdb_reader")
 target_link_libraries(haze_media
-  PUBLIC haze_core haze_scene
+  PUBLIC haze_core haze_scene haze_color
   PRIVATE ZLIB::ZLIB Threads::Threads ${CMAKE_DL_LIBS})
 
 # Everything that needs OpenVDB (.vdb files) is a module that haze dlopens on

@@ -92,6 +92,8 @@ static const char usage_text[] =
     "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
     "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
     "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n"
+    "  --color rgb|spectral    carry colour along paths as RGB (default) or as three\n"
+    "                          wavelengths per sample, as pbrt-v4 (volpath; docs/spectral.md)\n"
     "  --portable-isa          Embree at SSE4.2 on every machine: byte-identical images\n"
     "                          across x86 machines (default: the CPU's widest ISA)\n"
     "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
@@ -113,6 +115,7 @@ typedef struct {
     int stats;                /* --stats */
     int disable_pixel_jitter; /* --disable-pixel-jitter */
     int portable_isa;         /* --portable-isa */
+    render_color color;       /* --color */
     film_region region;     /* --pixelbounds / --cropwindow */
     const char *region_opt; /* which of the two, and its text, for messages */
     const char *region_arg;
@@ -173,7 +176,8 @@ static int parse_render_args(int argc, char **argv, cli *c)
         if (!strcmp(a, "-o") || !strcmp(a, "--output") || !strcmp(a, "--spp") ||
             !strcmp(a, "--threads") || !strcmp(a, "--seed") || !strcmp(a, "--preview") ||
             !strcmp(a, "--pixelbounds") || !strcmp(a, "--cropwindow") ||
-            !strcmp(a, "--time-limit") || !strcmp(a, "--target-error")) {
+            !strcmp(a, "--time-limit") || !strcmp(a, "--target-error") ||
+            !strcmp(a, "--color")) {
             if (!val)
                 return usage_error("option %s needs a value", a);
             ++i;
@@ -192,7 +196,14 @@ static int parse_render_args(int argc, char **argv, cli *c)
                 c->region_opt = a;
                 c->region_arg = val;
             }
-            else if (!strcmp(a, "--target-error")) {
+            else if (!strcmp(a, "--color")) {
+                if (!strcmp(val, "rgb"))
+                    c->color = RENDER_COLOR_RGB;
+                else if (!strcmp(val, "spectral"))
+                    c->color = RENDER_COLOR_SPECTRAL;
+                else
+                    return usage_error("--color needs rgb or spectral, not '%s'", val);
+            } else if (!strcmp(a, "--target-error")) {
                 char *end;
                 errno = 0;
                 double e = strtod(val, &end);
@@ -453,7 +464,8 @@ static render_options render_options_from_cli(const cli *c)
                             .output = c->output,
                             .region = c->region,
                             .statistics = adaptive,
-                            .portable_isa = c->portable_isa != 0};
+                            .portable_isa = c->portable_isa != 0,
+                            .color = c->color};
 }
 
 /* The EXR's "haze:render" for an image of `spp` samples a pixel. */

@@ -1,5 +1,7 @@
 #include "integrator/integrator.h"
 
+#include <assert.h>
+
 #include <string.h>
 
 /* A scene with no Integrator directive (its default entity sits at line 0)
@@ -183,14 +185,16 @@ void integrator_free(integrator *it)
     }
 }
 
-rgb integrator_li(const integrator *it, const ray_differential *rd, sampler_state *st,
-                  double *depth, film_surface *vs, integrator_counters *counters)
+rgb integrator_li(const integrator *it, const ray_differential *rd, const spectral_ctx *sp,
+                  sampler_state *st, double *depth, film_surface *vs,
+                  integrator_counters *counters)
 {
     switch (it->kind) {
     case INTEGRATOR_SINGLESCATTER:
+        assert(!sp); /* refused by render_scene_create */
         return singlescatter_li(&it->singlescatter, rd, st, depth, vs, counters);
     case INTEGRATOR_VOLPATH:
-        return volpath_li(&it->volpath, rd, st, depth, vs, counters);
+        return volpath_li(&it->volpath, rd, sp, st, depth, vs, counters);
     }
     return rgb_grey(0.0);
 }

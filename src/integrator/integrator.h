@@ -52,12 +52,14 @@ hz_status integrator_init(integrator *out, const integrator_params *p,
                           const integrator_inputs *in, hz_error *err);
 void integrator_free(integrator *it);
 
-/* Radiance along the camera ray `r` (unit direction). `depth` receives the
+/* Radiance along the camera ray `r` (unit direction): RGB, or with `sp`
+ * (spectral rendering; volpath only) the lanes at its wavelengths. `depth` receives the
  * distance to the first opaque surface (INFINITY when none); `vs` (NULL when
  * not wanted: it costs an albedo estimate) what that surface is, when the
  * ray met it before any scattering (vs->hit). Thread-safe; allocates
  * nothing. */
-rgb integrator_li(const integrator *it, const ray_differential *rd, sampler_state *st,
-                  double *depth, film_surface *vs, integrator_counters *counters);
+rgb integrator_li(const integrator *it, const ray_differential *rd, const spectral_ctx *sp,
+                  sampler_state *st, double *depth, film_surface *vs,
+                  integrator_counters *counters);
 
 #endif

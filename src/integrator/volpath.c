@@ -69,11 +69,14 @@ static double scene_radius(const geometry *geom)
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
                              volpath_settings settings, hz_error *err)
 {
-    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0), false};
+    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0), false, -1, false};
     for (size_t i = 0; i < in->light_count; ++i)
-        if (in->lights[i].kind == LIGHT_INFINITE && !light_is_image(&in->lights[i]))
+        if (in->lights[i].kind == LIGHT_INFINITE && !light_is_image(&in->lights[i])) {
             out->sky = rgb_add(out->sky, in->lights[i].emit);
-        else if (light_is_image(&in->lights[i]))
+            out->sky_lights_many = out->sky_light >= 0;
+            if (out->sky_light < 0)
+                out->sky_light = (int)i;
+        } else if (light_is_image(&in->lights[i]))
             out->image_lights = true;
     return light_sampler_create(settings.light_sampler, in->lights, in->light_count,
                                 scene_radius(in->geom), &out->sampler, err);
@@ -83,8 +86,19 @@ void volpath_scene_free(volpath_scene *sc) { light_sampler_free(&sc->sampler); }
 
 /* ---- path state ---- */
 
+/* Spectral rendering: the media at the path's wavelengths, one copy for the
+ * path's rays and one for shadow rays (which start while the path's walk is
+ * under way); index -1 when not made yet. Kept out of `path`, whose
+ * initialiser would clear them for every camera ray in RGB too. */
+typedef struct {
+    medium ray, shadow;
+    int ray_index, shadow_index;
+} path_media;
+
 typedef struct {
     const volpath_scene *sc;
+    const spectral_ctx *sp; /* NULL: RGB */
+    path_media *media;      /* spectral only */
     sampler_state *st;
     media_walk walk;
     integrator_counters *counters;
@@ -106,6 +120,21 @@ typedef struct {
     ray_walk ray;
     bool scattered, terminated;
 } path;
+
+/* Medium i of the scene at the path's wavelengths (itself in RGB). */
+static const medium *path_medium(path *pa, int i, bool shadow)
+{
+    const medium *m = &pa->sc->in.media[i];
+    if (!pa->sp)
+        return m;
+    medium *copy = shadow ? &pa->media->shadow : &pa->media->ray;
+    int *index = shadow ? &pa->media->shadow_index : &pa->media->ray_index;
+    if (*index != i) {
+        medium_spectral(m, pa->sp, copy);
+        *index = i;
+    }
+    return copy;
+}
 
 /* ---- rays ---- */
 
@@ -202,8 +231,8 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         medium = seg.medium;
         double t_start = seg.t0, t_end = seg.t1;
         if (medium >= 0) {
-            rgb T_maj = volpath_track(&sc->in.media[medium], o, w, t_start, t_end, pa->hero,
-                                      false, &pa->walk, shadow_event, s);
+            rgb T_maj = volpath_track(path_medium(pa, medium, true), o, w, t_start, t_end,
+                                      pa->hero, false, &pa->walk, shadow_event, s);
             double th = rgb_ch(T_maj, pa->hero);
             if (rgb_is_black(s->T) || !(th > 0.0))
                 return false;
@@ -274,6 +303,7 @@ static rgb sample_ld(path *pa, const vertex *v)
     if (!light_sample_li(l, v->p, n, pa->walk.time, ul, &ls) || !(ls.pdf > 0.0) ||
         rgb_is_black(ls.L))
         return rgb_grey(0.0);
+    ls.L = light_spectral(l, ls.L, pa->sp);
     rgb f_hat;
     double scatter_pdf;
     if (v->b) {
@@ -392,7 +422,7 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
     const volpath_scene *sc = pa->sc;
     int li = h->shape->area_light;
     const light *l = &sc->in.lights[li];
-    rgb Le = light_area_le(l, h->ng, wo, v2(h->u, h->v), h->p);
+    rgb Le = light_spectral(l, light_area_le(l, h->ng, wo, v2(h->u, h->v), h->p), pa->sp);
     if (rgb_is_black(Le))
         return;
     if (pa->depth == 0 || pa->specular) {
@@ -414,7 +444,7 @@ static void add_image_lights(path *pa, vec3 o, vec3 w)
         const light *l = &sc->in.lights[i];
         if (!light_is_image(l))
             continue;
-        rgb Le = light_infinite_le(l, o, w);
+        rgb Le = light_spectral(l, light_infinite_le(l, o, w), pa->sp);
         if (rgb_is_black(Le))
             continue;
         rgb den = pa->r_u;
@@ -452,7 +482,9 @@ static bool bounce(path *pa, const geom_hit *h)
     bsdf b;
     material scratch;
     const material *mat = geometry_material_at(h, wo, &scratch);
-    if (!bsdf_from_material(mat, geometry_shading_normal(h, mat), h->dpdu, h->v, &b))
+    vec3 ns = geometry_shading_normal(h, mat);
+    mat = material_spectral(mat, pa->sp, &scratch);
+    if (!bsdf_from_material(mat, ns, h->dpdu, h->v, &b))
         return false;
     if (pa->depth++ >= sc->settings.max_depth)
         return false;
@@ -499,11 +531,10 @@ static bool bounce(path *pa, const geom_hit *h)
  * path ended there; pa->scattered when it scattered. */
 static bool cross_medium(path *pa, double t_start, double t_hit)
 {
-    const volpath_scene *sc = pa->sc;
     pa->scattered = pa->terminated = false;
     uint64_t t0 = pa->counters->timed ? hz_clock_ns() : 0;
-    rgb T_maj = volpath_track(&sc->in.media[pa->ray.medium], pa->ray.o, pa->ray.d, t_start, t_hit,
-                              pa->hero, true, &pa->walk, path_event, pa);
+    rgb T_maj = volpath_track(path_medium(pa, pa->ray.medium, false), pa->ray.o, pa->ray.d,
+                              t_start, t_hit, pa->hero, true, &pa->walk, path_event, pa);
     if (pa->counters->timed)
         pa->counters->media_ns += hz_clock_ns() - t0;
     if (pa->terminated || rgb_is_black(pa->beta) || rgb_is_black(pa->r_u))
@@ -520,27 +551,46 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
     return true;
 }
 
+/* The constant sky's radiance at the path's wavelengths. */
+static rgb sky_radiance(const path *pa)
+{
+    const volpath_scene *sc = pa->sc;
+    if (!pa->sp)
+        return sc->sky;
+    rgb L = light_emit_spectral(&sc->in.lights[sc->sky_light], pa->sp);
+    for (size_t i = (size_t)sc->sky_light + 1; sc->sky_lights_many && i < sc->in.light_count; ++i)
+        if (sc->in.lights[i].kind == LIGHT_INFINITE && !light_is_image(&sc->in.lights[i]))
+            L = rgb_add(L, light_emit_spectral(&sc->in.lights[i], pa->sp));
+    return L;
+}
+
 /* A path that leaves the scene: the infinite lights it sees. */
 static void add_escaped(path *pa)
 {
     const volpath_scene *sc = pa->sc;
     /* A constant sky is never light-sampled (light_sampler.h): full weight. */
     if (!rgb_is_black(sc->sky))
-        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, sc->sky), rgb_avg(pa->r_u)));
+        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, sky_radiance(pa)), rgb_avg(pa->r_u)));
     if (sc->image_lights)
         add_image_lights(pa, pa->ray.o, pa->ray.d);
 }
 
-rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_state *st,
+rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectral_ctx *sp,
+               sampler_state *st,
                double *depth, film_surface *vs, integrator_counters *counters)
 {
     const ray *r = &rd->r;
     counters->camera_rays++;
     *depth = INFINITY;
     bool media = sc->in.medium_count > 0;
-    path pa = {.sc = sc, .st = st, .walk = {.time = r->time}, .counters = counters,
+    path pa = {.sc = sc, .sp = sp, .st = st, .walk = {.time = r->time}, .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
                .r_l = rgb_grey(1.0), .eta_scale = 1.0};
+    path_media spectral_media;
+    if (sp) {
+        spectral_media.ray_index = spectral_media.shadow_index = -1;
+        pa.media = &spectral_media;
+    }
     path_ray(&pa, r->o, r->d, 0.0, 0.0, r->medium);
     /* As singlescatter_li: the rng is seeded once the ray meets something. */
     int seed_dim = -1;

@@ -55,6 +55,10 @@ typedef struct {
     light_sampler sampler;
     rgb sky; /* the sum of the constant infinite lights' radiance */
     bool image_lights; /* some infinite light has an image (light-sampled, MIS) */
+    /* The constant infinite lights (spectral rendering sums their spectra):
+     * the first, -1 for none; whether there are more. */
+    int sky_light;
+    bool sky_lights_many;
 } volpath_scene;
 
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
@@ -64,7 +68,8 @@ void volpath_scene_free(volpath_scene *sc);
 /* Radiance along the camera ray `r` (unit direction). `depth` receives the
  * distance to the first opaque surface on the camera ray before any scattering
  * (INFINITY when none). Thread-safe; allocates nothing. */
-rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, sampler_state *st,
+rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectral_ctx *sp,
+               sampler_state *st,
                double *depth, film_surface *vs, integrator_counters *counters);
 
 #endif

@@ -697,3 +697,39 @@ rgb light_phi(const light *l, double scene_radius)
     }
     return rgb_grey(0.0);
 }
+
+rgb light_emit_spectral(const light *l, const spectral_ctx *sp)
+{
+    return spectral_from_rgb(sp, l->emit, SPECTRAL_ILLUMINANT);
+}
+
+static bool light_has_image(const light *l)
+{
+    switch (l->kind) {
+    case LIGHT_POINT:
+        return l->point.image != NULL;
+    case LIGHT_INFINITE:
+        return l->infinite.image != NULL;
+    case LIGHT_AREA:
+        return l->area.image != NULL;
+    case LIGHT_SPOT:
+    case LIGHT_DISTANT:
+        break;
+    }
+    return false;
+}
+
+rgb light_spectral(const light *l, rgb L, const spectral_ctx *sp)
+{
+    if (!sp || rgb_is_black(L))
+        return L;
+    if (light_has_image(l))
+        return spectral_from_rgb(sp, L, SPECTRAL_ILLUMINANT);
+    /* L = emit * s: s from emit's largest channel. */
+    rgb e = l->emit;
+    double em = rgb_max(e);
+    if (!(em > 0.0))
+        return rgb_grey(0.0);
+    double s = em == e.r ? L.r / e.r : (em == e.g ? L.g / e.g : L.b / e.b);
+    return rgb_scale(light_emit_spectral(l, sp), s);
+}

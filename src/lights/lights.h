@@ -9,6 +9,7 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+#include "color/spectral.h"
 #include "core/error.h"
 #include "core/sampling.h"
 #include "core/transform.h"
@@ -160,6 +161,15 @@ static inline bool light_is_image(const light *l)
  * light there). 0 for lights other than area lights (delta lights cannot be
  * hit; the infinite light is not sampled by volpath) and degenerate points. */
 double light_pdf_li(const light *l, vec3 p, double time, vec3 pl, vec3 nl);
+
+/* Spectral rendering: the lanes (color/spectral.h) of radiance or intensity
+ * `L` that one of l's functions above returned in RGB. Every such value is
+ * l's emission times a scalar, unless l has an image: then it becomes an
+ * illuminant spectrum of its own (pbrt-v4's image lights' RGBIlluminantSpectrum).
+ * L itself when sp is NULL. */
+rgb light_spectral(const light *l, rgb L, const spectral_ctx *sp);
+/* The lanes of l's emission (`emit`) as an illuminant spectrum. */
+rgb light_emit_spectral(const light *l, const spectral_ctx *sp);
 
 /* Emitted power as pbrt-v4's Light::Phi in RGB terms (per channel), for
  * PowerLightSampler: point 4π I, spot 2π I (1 - (cos_start + cos_end) / 2),

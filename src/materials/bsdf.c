@@ -62,6 +62,7 @@ bool bsdf_from_material(const material *m, vec3 ns, vec3 dpdu, double v, bsdf *o
     case MATERIAL_MEASURED:
         out->kind = BSDF_MEASURED;
         out->measured = m->measured;
+        out->spectral = m->spectral;
         return m->measured != NULL;
     case MATERIAL_MIX: /* resolved by material_at before */
     case MATERIAL_INTERFACE:
@@ -115,6 +116,13 @@ static void to_wo_side(vec3 *wo, vec3 *wi)
  * only the normal matters). */
 static bool same_side(vec3 n, vec3 wo, vec3 wi) { return v3_dot(n, wo) * v3_dot(n, wi) > 0.0; }
 
+/* A measured BRDF's RGB value at the sample's wavelengths (spectral
+ * rendering), as an unbounded spectrum; itself in RGB rendering. */
+static rgb measured_lanes(const bsdf *b, rgb f)
+{
+    return b->spectral ? spectral_from_rgb(b->spectral, f, SPECTRAL_UNBOUNDED) : f;
+}
+
 rgb bsdf_f(const bsdf *b, vec3 wo_r, vec3 wi_r)
 {
     if (b->kind == BSDF_DIFFUSE)
@@ -138,7 +146,7 @@ rgb bsdf_f(const bsdf *b, vec3 wo_r, vec3 wi_r)
     case BSDF_HAIR:
         return hair_f(&b->hair, wo, wi);
     case BSDF_MEASURED:
-        return bxdf_measured_f(b->measured, wo, wi);
+        return measured_lanes(b, bxdf_measured_f(b->measured, wo, wi));
     }
     return rgb_grey(0.0);
 }
@@ -222,6 +230,8 @@ bool bsdf_sample_f(const bsdf *b, vec3 wo_r, double uc, vec2 u, bsdf_sample *out
         break;
     case BSDF_MEASURED: /* flips a wo below the surface itself, as pbrt-v4 */
         ok = bxdf_measured_sample(b->measured, wo, u, out);
+        if (ok)
+            out->f = measured_lanes(b, out->f);
         break;
     }
     if (!ok)

@@ -46,6 +46,9 @@ typedef struct {
     layered coat;            /* coated */
     hair_bxdf hair;          /* hair */
     const measured_brdf *measured; /* measured */
+    /* measured, spectral rendering: the wavelengths its RGB values are
+     * turned into (NULL: RGB; only measured BSDFs read it) */
+    const spectral_ctx *spectral;
 } bsdf;
 
 /* The BSDF of a material at a hit with unit shading normal `ns`. False for a

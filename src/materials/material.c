@@ -193,6 +193,8 @@ static hz_status read_metal(param_list *pl, const texture_set *ts, const char *n
             params_reject(pl, "reflectance", "conductor reflectance must be within [0, 1]");
         *eta = rgb_grey(1.0);
         *k = k_of_reflectance(r);
+        out->metal_by_reflectance = true;
+        out->metal_r = r;
         return HZ_OK;
     }
     *eta = out->eta_tex ? copper_eta : params_rgb(pl, name_eta, copper_eta);
@@ -361,11 +363,13 @@ static double alpha_at(const material *m, const texture *t, double constant,
 }
 
 /* The metal's eta and k at c (relative to `outside`, the coating's index). */
-static void metal_at(const material *m, const texture_ctx *c, double outside, rgb *eta, rgb *k)
+static void metal_at(const material *m, const texture_ctx *c, double outside, rgb *eta, rgb *k,
+                     rgb *r)
 {
     if (m->metal_r_tex) {
+        *r = texture_eval(m->metal_r_tex, c);
         *eta = rgb_grey(1.0 / outside);
-        *k = rgb_scale(k_of_reflectance(texture_eval(m->metal_r_tex, c)), 1.0 / outside);
+        *k = rgb_scale(k_of_reflectance(*r), 1.0 / outside);
         return;
     }
     if (m->eta_tex) {
@@ -414,7 +418,7 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
                 clamp01(rgb_scale(texture_eval(m->transmittance_tex, c), m->amount));
         break;
     case MATERIAL_CONDUCTOR:
-        metal_at(m, c, 1.0, &o->eta_rgb, &o->k);
+        metal_at(m, c, 1.0, &o->eta_rgb, &o->k, &o->metal_r);
         o->alpha_x = alpha_at(m, m->rough[0], m->alpha_x, c);
         o->alpha_y = alpha_at(m, m->rough[1], m->alpha_y, c);
         break;
@@ -427,7 +431,7 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
         if (m->reflectance_tex)
             o->coat.reflectance = clamp01(texture_eval(m->reflectance_tex, c));
         if (m->kind == MATERIAL_COATED_CONDUCTOR)
-            metal_at(m, c, m->coat.eta, &o->coat.eta_rgb, &o->coat.k);
+            metal_at(m, c, m->coat.eta, &o->coat.eta_rgb, &o->coat.k, &o->metal_r);
         o->coat.top.alpha_x = alpha_at(m, m->rough[0], m->coat.top.alpha_x, c);
         o->coat.top.alpha_y = alpha_at(m, m->rough[1], m->coat.top.alpha_y, c);
         o->coat.bottom.alpha_x = alpha_at(m, m->rough[2], m->coat.bottom.alpha_x, c);
@@ -632,4 +636,59 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts,
                       "\"hair\", \"measured\", \"mix\", \"interface\", \"\" or \"none\" as "
                       "\"interface\")",
                       type);
+}
+
+/* A metal's eta and k at the wavelengths: from its reflectance per
+ * wavelength when given so, else its (textured) indices as unbounded
+ * spectra; relative to `outside` (the coating's index) as they are. */
+static void metal_spectral(const material *m, const spectral_ctx *sp, double outside, rgb *eta,
+                           rgb *k)
+{
+    if (m->metal_by_reflectance) {
+        *eta = rgb_grey(1.0 / outside);
+        *k = rgb_scale(k_of_reflectance(spectral_from_rgb(sp, m->metal_r, SPECTRAL_ALBEDO)),
+                       1.0 / outside);
+        return;
+    }
+    *eta = spectral_from_rgb(sp, *eta, SPECTRAL_UNBOUNDED);
+    *k = spectral_from_rgb(sp, *k, SPECTRAL_UNBOUNDED);
+}
+
+const material *material_spectral(const material *m, const spectral_ctx *sp, material *scratch)
+{
+    if (!sp)
+        return m;
+    if (scratch != m)
+        *scratch = *m;
+    material *o = scratch;
+    o->spectral = sp;
+    switch (m->kind) {
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        o->transmittance = spectral_from_rgb(sp, m->transmittance, SPECTRAL_ALBEDO);
+        /* fall through */
+    case MATERIAL_DIFFUSE:
+        o->reflectance = spectral_from_rgb(sp, m->reflectance, SPECTRAL_ALBEDO);
+        break;
+    case MATERIAL_CONDUCTOR:
+        metal_spectral(m, sp, 1.0, &o->eta_rgb, &o->k);
+        break;
+    case MATERIAL_COATED_CONDUCTOR:
+        metal_spectral(m, sp, m->coat.eta, &o->coat.eta_rgb, &o->coat.k);
+        o->coat.albedo = spectral_from_rgb(sp, m->coat.albedo, SPECTRAL_ALBEDO);
+        break;
+    case MATERIAL_COATED_DIFFUSE:
+        o->coat.reflectance = spectral_from_rgb(sp, m->coat.reflectance, SPECTRAL_ALBEDO);
+        o->coat.albedo = spectral_from_rgb(sp, m->coat.albedo, SPECTRAL_ALBEDO);
+        break;
+    case MATERIAL_HAIR:
+        o->sigma_a = spectral_from_rgb(sp, m->sigma_a, SPECTRAL_UNBOUNDED);
+        break;
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_MEASURED:
+    case MATERIAL_MIX:
+    case MATERIAL_INTERFACE:
+        break;
+    }
+    return o;
 }

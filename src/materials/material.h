@@ -5,6 +5,7 @@
 #ifndef HAZE_MATERIALS_MATERIAL_H
 #define HAZE_MATERIALS_MATERIAL_H
 
+#include "color/spectral.h"
 #include "core/error.h"
 #include "core/vec.h"
 #include "materials/layered.h"
@@ -64,6 +65,13 @@ typedef struct material_s {
     /* "string normalmap": the image's tangent-space normals replace the
      * shading normal (pbrt-v4's NormalMap; it wins over displacement) */
     const texture *normal_map;
+    /* Conductors given by "reflectance": that reflectance (at the hit once
+     * textured), which spectral rendering turns into k per wavelength. */
+    bool metal_by_reflectance;
+    rgb metal_r;
+    /* Spectral rendering (material_spectral): the sample's wavelengths,
+     * which a measured BRDF's RGB values are turned into; NULL: RGB. */
+    const spectral_ctx *spectral;
 } material;
 
 /* m or (for a mix) any material it may pick has textures. */
@@ -74,6 +82,13 @@ bool material_needs_hair_frame(const material *m);
 /* m with its textures evaluated at c: m itself when it has none, otherwise
  * *scratch filled with the values there. */
 const material *material_textured(const material *m, const texture_ctx *c, material *scratch);
+
+/* m (as material_textured gave it) at the wavelengths of `sp`: its colours
+ * become the lanes of color/spectral.h (reflectances as albedo spectra,
+ * conductor indices and absorption as unbounded ones, a "reflectance"
+ * conductor's k from its reflectance per wavelength). m itself when sp is
+ * NULL; otherwise *scratch (which may be m) filled. */
+const material *material_spectral(const material *m, const spectral_ctx *sp, material *scratch);
 
 /* The material a hit at p seen from wo uses: m itself, or for a mix the
  * component its hash picks (mixes of mixes followed), with the amount its

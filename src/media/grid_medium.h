@@ -195,7 +195,10 @@ static inline rgb grid_medium_Le(const medium *m, const grid_medium *gm, medium_
     double T = (grid_density_index(gm->temperature, &r->acc.temperature, q) -
                 gm->temperature_offset) *
                gm->temperature_scale;
-    return rgb_scale(blackbody_table_at(&gm->blackbody, T), s);
+    rgb c = blackbody_table_at(&gm->blackbody, T);
+    if (m->spectral)
+        c = spectral_from_rgb(m->spectral, c, SPECTRAL_ILLUMINANT);
+    return rgb_scale(c, s);
 }
 
 /* Free emission at a density-index point p: the radiance emitted per unit
@@ -209,7 +212,9 @@ static inline rgb grid_medium_emission(const grid_medium *gm, medium_ray *r, vec
     if (!(e > 0.0))
         return rgb_grey(0.0);
     if (!gm->emission_by_temperature)
-        return rgb_scale(gm->emission_tint, e);
+        return r->m->spectral ? spectral_from_rgb(r->m->spectral, rgb_scale(gm->emission_tint, e),
+                                                  SPECTRAL_ILLUMINANT)
+                              : rgb_scale(gm->emission_tint, e);
     vec3 qt = gm->temperature_aligned ? p : transform_point(&gm->tindex_from_index, p);
     ++*lookups;
     double T = (grid_density_index(gm->temperature, &r->acc.temperature, qt) -
@@ -217,7 +222,10 @@ static inline rgb grid_medium_emission(const grid_medium *gm, medium_ray *r, vec
                gm->temperature_scale;
     rgb c = blackbody_table_at(&gm->blackbody, T);
     double y = rgb_luminance(c);
-    return y > 0.0 ? rgb_scale(c, e / y) : rgb_grey(0.0);
+    if (!(y > 0.0))
+        return rgb_grey(0.0);
+    c = rgb_scale(c, e / y);
+    return r->m->spectral ? spectral_from_rgb(r->m->spectral, c, SPECTRAL_ILLUMINANT) : c;
 }
 
 /* The colour grid's albedo scale at a density-index point p, each channel
@@ -228,8 +236,9 @@ static inline rgb grid_medium_color(const grid_medium *gm, medium_ray *r, vec3 p
     vec3 q = gm->color_aligned ? p : transform_point(&gm->cindex_from_index, p);
     ++*lookups;
     vec3 c = grid_vec3_index(gm->color, &r->acc.color, q);
-    return rgb_make(fmin(fmax(c.x, 0.0), 1.0), fmin(fmax(c.y, 0.0), 1.0),
-                    fmin(fmax(c.z, 0.0), 1.0));
+    rgb C = rgb_make(fmin(fmax(c.x, 0.0), 1.0), fmin(fmax(c.y, 0.0), 1.0),
+                     fmin(fmax(c.z, 0.0), 1.0));
+    return r->m->spectral ? spectral_from_rgb(r->m->spectral, C, SPECTRAL_ALBEDO) : C;
 }
 
 /* The density kinds' (nanovdb, uniformgrid) lookups: medium_ops' sample,

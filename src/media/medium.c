@@ -17,6 +17,22 @@ medium_memory medium_bytes(const medium *m)
     return m->ops && m->ops->memory ? m->ops->memory(m) : (medium_memory){0.0, 0.0};
 }
 
+const medium *medium_spectral(const medium *m, const spectral_ctx *sp, medium *copy)
+{
+    if (!sp || !m->ops)
+        return m;
+    *copy = *m;
+    copy->spectral = sp;
+    copy->sigma_a = spectral_from_rgb(sp, m->sigma_a, SPECTRAL_UNBOUNDED);
+    copy->sigma_s = spectral_from_rgb(sp, m->sigma_s, SPECTRAL_UNBOUNDED);
+    copy->Le = spectral_from_rgb(sp, m->Le, SPECTRAL_ILLUMINANT);
+    /* Coefficients looked up per voxel as RGB bound the majorant by their
+     * largest channel; as unbounded spectra they reach up to twice that. */
+    if (m->ops->rgb_coefficients)
+        copy->sigma_s = rgb_scale(copy->sigma_s, 2.0);
+    return copy;
+}
+
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1)
 {
     if (!(*t0 <= *t1)) /* also NaN */

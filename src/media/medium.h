@@ -33,6 +33,7 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "color/spectral.h"
 #include "core/error.h"
 #include "core/transform.h"
 #include "core/vec.h"
@@ -89,6 +90,9 @@ typedef struct {
 typedef struct {
     const char *name; /* the MakeNamedMedium type */
     bool homogeneous, density_grid;
+    /* sigma_a and sigma_s are RGB values looked up per point, whose
+     * majorant is their largest channel (rgbgrid) */
+    bool rgb_coefficients;
     /* Reads e's parameters (errors name their file:line:column) and builds
      * the medium into *out, whose common fields medium_create has zeroed. */
     hz_status (*create)(medium_entity *e, const medium_build *b, medium *out, hz_error *err);
@@ -127,6 +131,10 @@ struct medium {
     bool emissive;           /* absorbing emission (sigma_a Le): the integrators gather it */
     bool free_emission;      /* emission whatever the density (nanovdb's emission grid) */
     bool coloured;           /* a colour grid scales the scattering albedo */
+    /* Spectral rendering: a path's copy of the medium (medium_spectral)
+     * holds its coefficients at these wavelengths, and the kinds turn the
+     * colours they look up into them; NULL: RGB. */
+    const spectral_ctx *spectral;
     void *state;
 };
 
@@ -187,6 +195,12 @@ static inline bool medium_moves(const medium *m)
     return m->ops && m->ops->moves && m->ops->moves(m);
 }
 medium_memory medium_bytes(const medium *m);
+
+/* m at the wavelengths of `sp`, for one path: a copy whose sigma_a and
+ * sigma_s are unbounded spectra and whose Le is an illuminant spectrum
+ * there (color/spectral.h), with `spectral` set so the kinds convert what
+ * they look up; m itself when sp is NULL. */
+const medium *medium_spectral(const medium *m, const spectral_ctx *sp, medium *copy);
 
 /* Starts a ray in m: o + t d at scene `time`, t in [*t0, *t1] clipped to
  * where the medium can attenuate, scatter or emit. False when nothing is

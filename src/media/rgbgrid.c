@@ -99,10 +99,18 @@ static void sample(medium_ray *r, double t, bool emission, medium_props *p, uint
     p->sigma_a = rgb_make(s * v[0][0], s * v[0][1], s * v[0][2]);
     p->sigma_s = rgb_make(s * v[1][0], s * v[1][1], s * v[1][2]);
     rgb Le = rgb_make(e * v[2][0], e * v[2][1], e * v[2][2]);
+    const spectral_ctx *sp = r->m->spectral;
+    if (sp) {
+        p->sigma_a = spectral_from_rgb(sp, p->sigma_a, SPECTRAL_UNBOUNDED);
+        p->sigma_s = spectral_from_rgb(sp, p->sigma_s, SPECTRAL_UNBOUNDED);
+        if (emission)
+            Le = spectral_from_rgb(sp, Le, SPECTRAL_ILLUMINANT);
+    }
     p->emission = emission ? rgb_mul(p->sigma_a, Le) : rgb_grey(0.0);
 }
 
 const medium_ops medium_rgbgrid_ops = {
+    .rgb_coefficients = true,
     .name = "rgbgrid",
     .create = create,
     .destroy = grid_medium_destroy,

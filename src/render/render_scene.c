@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "color/rgb2spec_table.h"
 #include "geometry/geometry.h"
 #include "lights/lights.h"
 #include "materials/material.h"
@@ -29,6 +30,8 @@ struct render_scene {
     medium *media;
     size_t medium_count;
     integrator integ;
+    /* Spectral rendering: the RGB -> spectrum table of sRGB; NULL: RGB. */
+    const rgb2spec_table *spectral;
     scene_options options;
     /* singlescatter's shadow caches, each at its spacing (voxels): the
      * integrator reads the one of its settings; --target-error's pilot tries
@@ -470,6 +473,12 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
     warn_default_integrator(rs, sd, warn);
+    if (opt && opt->color == RENDER_COLOR_SPECTRAL) {
+        if (ip.kind != INTEGRATOR_VOLPATH)
+            return hz_fail_at(err, sd->integrator.loc,
+                              "spectral rendering (--color spectral) needs Integrator \"volpath\"");
+        rs->spectral = &rgb2spec_tables[COLOR_SPACE_SRGB];
+    }
     return build_integrator(rs, sd, &ip, warn, err);
 }
 
@@ -679,11 +688,16 @@ void render_scene_keep_current_cache(render_scene *rs)
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, integrator_counters *counters)
 {
-    return integrator_li(&rs->integ, r, s, depth, NULL, counters);
+    return render_scene_li_surface(rs, r, s, depth, NULL, counters);
 }
 
 rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, sampler_state *s,
                             double *depth, film_surface *vs, integrator_counters *counters)
 {
-    return integrator_li(&rs->integ, r, s, depth, vs, counters);
+    if (!rs->spectral)
+        return integrator_li(&rs->integ, r, NULL, s, depth, vs, counters);
+    spectral_ctx sp = {rs->spectral, wavelengths_sample_visible(sampler_wavelength_1d(s))};
+    return spectral_to_rgb(&sp, integrator_li(&rs->integ, r, &sp, s, depth, vs, counters));
 }
+
+bool render_scene_spectral(const render_scene *rs) { return rs->spectral != NULL; }

@@ -20,6 +20,11 @@
 #include "sampler/sampler.h"
 #include "scene/scene_desc.h"
 
+/* How colour is carried along paths (docs/spectral.md): in RGB, or
+ * spectrally (three wavelengths per camera sample, color/wavelengths.h;
+ * volpath only). */
+typedef enum { RENDER_COLOR_RGB = 0, RENDER_COLOR_SPECTRAL } render_color;
+
 typedef struct {
     uint64_t seed;             /* default for the Sampler's "integer seed" (--seed) */
     bool seed_given;           /* --seed was given: it wins over Option "seed" */
@@ -30,6 +35,7 @@ typedef struct {
     bool statistics;           /* the film keeps (and writes) variance and sample
                                 * counts whatever the Film says (--target-error) */
     bool portable_isa;         /* Embree at SSE4.2 on every machine (--portable-isa) */
+    render_color color;        /* --color: RGB or spectral rendering */
 } render_options;
 
 typedef struct render_scene render_scene;
@@ -124,12 +130,16 @@ void render_scene_set_marching(render_scene *rs, const render_marching *m);
 void render_scene_keep_current_cache(render_scene *rs);
 #define RENDER_SCENE_CACHES 4
 
-/* Radiance arriving along the camera ray `r`. `depth` receives the distance to the
- * first surface hit (INFINITY when none). Thread-safe; allocates nothing. */
+/* Radiance arriving along the camera ray `r`, as linear sRGB (spectral
+ * rendering draws the sample's wavelengths and turns their radiance into it).
+ * `depth` receives the distance to the first surface hit (INFINITY when
+ * none). Thread-safe; allocates nothing. */
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, integrator_counters *counters);
 /* The same, and what the ray saw first for a gbuffer film (integrator_li). */
 rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, sampler_state *s,
                             double *depth, film_surface *vs, integrator_counters *counters);
+/* Whether paths carry wavelengths (render_options.color). */
+bool render_scene_spectral(const render_scene *rs);
 
 #endif

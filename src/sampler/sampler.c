@@ -15,7 +15,7 @@
 
 /* Tags keep the streams of different uses apart even at equal dimensions. */
 enum { TAG_PIXEL = 0x70697865, TAG_1D = 0x31640000, TAG_2D = 0x32640000, TAG_JITTER = 0x6a697474,
-       TAG_STREAM = 0x73747265 };
+       TAG_STREAM = 0x73747265, TAG_WAVELENGTH = 0x77617665 };
 
 /* Largest spp: sample indices stay 32-bit for Sobol' (and stay far from overflow elsewhere). */
 #define SAMPLER_MAX_SPP (1 << 30)
@@ -240,9 +240,8 @@ static vec2 sobol_2d(const sampler_state *st, uint64_t h, bool shuffle)
     return v2(x * 0x1p-32, y * 0x1p-32);
 }
 
-double sampler_1d(sampler_state *st)
+static double sample_1d(const sampler_state *st, uint64_t h)
 {
-    uint64_t h = dim_hash(st, TAG_1D, (uint64_t)st->dim++);
     switch (st->s->kind) {
     case SAMPLER_INDEPENDENT:
         return smp_uniform(smp_hash2(h, (uint32_t)st->index));
@@ -252,6 +251,18 @@ double sampler_1d(sampler_state *st)
         return sobol_1d(st, h);
     }
     return 0.0;
+}
+
+double sampler_1d(sampler_state *st)
+{
+    return sample_1d(st, dim_hash(st, TAG_1D, (uint64_t)st->dim++));
+}
+
+/* Like the pixel dimension: its own tag, no dimension taken, so spectral
+ * rendering draws the same values as RGB rendering everywhere else. */
+double sampler_wavelength_1d(sampler_state *st)
+{
+    return sample_1d(st, dim_hash(st, TAG_WAVELENGTH, 0));
 }
 
 static vec2 sample_2d(sampler_state *st, uint64_t h, bool pixel)

@@ -45,6 +45,10 @@ vec2 sampler_2d(sampler_state *st);
 static inline void sampler_skip(sampler_state *st, int n) { st->dim += n; }
 /* The film position sample: the first 2D dimension, stratified across the pixel's samples. */
 vec2 sampler_pixel_2d(sampler_state *st);
+/* The wavelength sample of spectral rendering (color/wavelengths.h): a 1D
+ * dimension with its own tag, like the pixel's, so drawing it moves no other
+ * dimension. */
+double sampler_wavelength_1d(sampler_state *st);
 /* A seed for an rng stream (core/rng.h) of this pixel sample, for estimators that
  * use an unbounded number of random numbers, in two steps: its dimension is
  * taken when the sample's dimensions reach it (sampler_skip(st, 1) returning

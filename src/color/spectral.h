@@ -1,0 +1,33 @@
+/* Spectral rendering's per-sample view of colours: the camera sample's
+ * wavelengths and the RGB -> spectrum table of haze's working space (sRGB,
+ * where the parser puts every rgb value). An integrator carries a
+ * `const spectral_ctx *` (NULL: RGB rendering) and turns each colour it
+ * meets into the three lanes of color/wavelengths.h:
+ *   - reflectances (albedo), coefficients and indices (unbounded) and
+ *     emission (illuminant) given as RGB, as pbrt-v4's RGBAlbedoSpectrum,
+ *     RGBUnboundedSpectrum and RGBIlluminantSpectrum;
+ *   - spectra given as spectra (scene/spectrum_value.h: blackbodies, sampled
+ *     spectra, named metals and illuminants) at the wavelengths themselves.
+ * Plain value; the table is borrowed (the render's). */
+#ifndef HAZE_COLOR_SPECTRAL_H
+#define HAZE_COLOR_SPECTRAL_H
+
+#include "color/rgb2spec_table.h"
+#include "color/wavelengths.h"
+#include "core/vec.h"
+
+typedef enum { SPECTRAL_ALBEDO, SPECTRAL_UNBOUNDED, SPECTRAL_ILLUMINANT } spectral_use;
+
+typedef struct {
+    const rgb2spec_table *table; /* sRGB's */
+    wavelengths wl;
+} spectral_ctx;
+
+/* The lanes of RGB colour c (sRGB) used as `use`. */
+rgb spectral_from_rgb(const spectral_ctx *sp, rgb c, spectral_use use);
+/* The RGB (sRGB) the lanes L estimate: XYZ (wavelengths_xyz) through the
+ * table's matrix, whose white is its illuminant's (an illuminant spectrum
+ * of RGB (1, 1, 1) comes out (1, 1, 1) in expectation). */
+rgb spectral_to_rgb(const spectral_ctx *sp, rgb L);
+
+#endif

@@ -1,0 +1,222 @@
+/* Spectral rendering (--color spectral, docs/spectral.md) against closed
+ * forms: the wavelength density, a coloured reflectance under a white sky,
+ * a grey scene equal to its RGB image, a conductor of constant eta and k, a
+ * dielectric slab, and a chromatic absorbing medium's transmittance per
+ * wavelength integrated against the observer. */
+#include "render_test_util.h"
+
+#include "color/rgb_spectrum.h"
+#include "color/spectral.h"
+#include "color/wavelengths.h"
+#include "scene/spectrum.h"
+
+static const render_options spectral_opt = {.seed = 0, .color = RENDER_COLOR_SPECTRAL};
+
+/* The density integrates to 1, and sampling inverts its CDF. */
+static void test_wavelength_density(void **state)
+{
+    (void)state;
+    double sum = 0.0, h = 0.01;
+    for (double l = WAVELENGTH_MIN + h / 2; l < WAVELENGTH_MAX; l += h)
+        sum += wavelength_visible_pdf(l) * h;
+    expect_close(sum, 1.0, 1e-9, 0.0, "integral of the pdf", 0, 0);
+    assert_true(wavelength_visible_pdf(359.0) == 0.0 && wavelength_visible_pdf(831.0) == 0.0);
+    for (double u = 0.05; u < 1.0; u += 0.1) {
+        double lambda = wavelength_visible_sample(u), cdf = 0.0;
+        for (double l = WAVELENGTH_MIN + h / 2; l < lambda; l += h)
+            cdf += wavelength_visible_pdf(l) * h;
+        expect_close(cdf, u, 0.0, 1e-4, "CDF at the sample", u, 0);
+    }
+    /* Companions a third of the sample apart, at the same density. */
+    wavelengths w = wavelengths_sample_visible(0.9);
+    expect_close(w.lambda[0], wavelength_visible_sample(0.9), 1e-15, 0.0, "hero", 0, 0);
+    expect_close(w.lambda[1], wavelength_visible_sample(0.9 + 1.0 / 3.0 - 1.0), 1e-12, 0.0,
+                 "companion", 0, 0);
+    /* A constant spectrum 1, its lanes averaged over stratified samples,
+     * is equal-energy white: X = Y = Z = 1 within the CIE tables' sums. */
+    enum { N = 30000 };
+    vec3 xyz = v3(0, 0, 0);
+    for (int i = 0; i < N; ++i) {
+        wavelengths wi = wavelengths_sample_visible((i + 0.5) / N);
+        xyz = v3_add(xyz, wavelengths_xyz(&wi, rgb_grey(1.0)));
+    }
+    xyz = v3_scale(xyz, 1.0 / N);
+    expect_close(xyz.y, 1.0, 1e-4, 0.0, "Y of a constant 1", 0, 0);
+    expect_close(xyz.x, 1.0, 2e-3, 0.0, "X of a constant 1", 0, 0);
+    expect_close(xyz.z, 1.0, 2e-3, 0.0, "Z of a constant 1", 0, 0);
+}
+
+/* An orthographic camera looking down -z at the plane z = 0 under a white
+ * sky: the centre pixel's radiance, `spp` samples (zsobol). */
+static rgb plane_radiance(const char *material, const render_options *opt, int spp)
+{
+    char *text = cat("LookAt 0 0 5  0 0 0  0 1 0\n"
+                     "Camera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\n"
+                     "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                     "Sampler \"zsobol\" \"integer pixelsamples\" 16\n"
+                     "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+                     "WorldBegin\n"
+                     "LightSource \"infinite\" \"rgb L\" [1 1 1]\n",
+                     material,
+                     "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+                     "  \"point3 P\" [-2 -2 0 2 -2 0 2 2 0 -2 2 0]\n");
+    render_options o = *opt;
+    render_scene *rs = build_scene_or_fail(text, &o);
+    free(text);
+    assert_true(render_scene_spectral(rs) == (opt->color == RENDER_COLOR_SPECTRAL));
+    rgb L = eval_pixel(rs, 4.5, 4.5, spp).L;
+    render_scene_destroy(rs);
+    return L;
+}
+
+/* A diffuse reflectance under a white (D65, luminance 1) sky reflects its
+ * own RGB: the albedo spectrum of the RGB integrates back to it within the
+ * tables' 1e-3. A Lambertian plane under a constant sky gets radiance
+ * R * L exactly, so only the table and the wavelength noise remain. */
+static void test_coloured_reflectance(void **state)
+{
+    (void)state;
+    rgb L = plane_radiance("Material \"diffuse\" \"rgb reflectance\" [0.8 0.2 0.1]\n",
+                           &spectral_opt, 1024);
+    expect_rgb_close(L, rgb_make(0.8, 0.2, 0.1), 0.0, 3e-3, "coloured reflectance", 4.5, 4.5);
+}
+
+/* A grey scene: every lane carries the same value, so spectral rendering
+ * gives RGB rendering's radiance (the sky's D65 white through the film's
+ * matrix is 1, 1, 1). */
+static void test_grey_matches_rgb(void **state)
+{
+    (void)state;
+    const char *mat = "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n";
+    render_options rgb_opt = {.seed = 0};
+    rgb a = plane_radiance(mat, &rgb_opt, 64), b = plane_radiance(mat, &spectral_opt, 1024);
+    expect_rgb_close(a, rgb_grey(0.5), 1e-12, 0.0, "RGB", 4.5, 4.5);
+    expect_rgb_close(b, a, 0.0, 2e-3, "spectral against RGB", 4.5, 4.5);
+}
+
+/* A smooth conductor of constant eta and k seen straight on under a white
+ * sky reflects the normal-incidence Fresnel reflectance
+ * ((n - 1)^2 + k^2) / ((n + 1)^2 + k^2) at every wavelength. */
+static void test_conductor_constant(void **state)
+{
+    (void)state;
+    double n = 0.2, k = 3.0, R = ((n - 1) * (n - 1) + k * k) / ((n + 1) * (n + 1) + k * k);
+    rgb L = plane_radiance("Material \"conductor\" \"spectrum eta\" [0.2] \"spectrum k\" [3]\n"
+                           "  \"float roughness\" 0\n",
+                           &spectral_opt, 256);
+    expect_rgb_close(L, rgb_grey(R), 0.0, 2e-3, "conductor", 4.5, 4.5);
+}
+
+enum { SLAB_RES = 32 };
+
+/* A camera looking through a slab (thickness 1: an interface box or glass)
+ * toward a black area light of radiance 1: the mean of a SLAB_RES^2 image
+ * of `spp` samples a pixel (tracking through an absorber is a 0-or-1
+ * estimate per sample: many are needed). */
+static rgb through_slab(const char *slab_material, const char *medium, const render_options *opt,
+                        int spp, int maxdepth)
+{
+    char head[1024];
+    snprintf(head, sizeof head,
+             "LookAt 0 0 5  0 0 0  0 1 0\n"
+             "Camera \"orthographic\" \"float screenwindow\" [-0.5 0.5 -0.5 0.5]\n"
+             "Film \"rgb\" \"integer xresolution\" %d \"integer yresolution\" %d\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" %d\n"
+             "Integrator \"volpath\" \"integer maxdepth\" %d\n"
+             "WorldBegin\n",
+             SLAB_RES, SLAB_RES, spp, maxdepth);
+    char body[2048];
+    snprintf(body, sizeof body,
+             "%s"
+             "AttributeBegin\n"
+             "  %s\n"
+             "  Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3 4 6 5 4 7 6]\n"
+             "    \"point3 P\" [-2 -2 0.5 2 -2 0.5 2 2 0.5 -2 2 0.5\n"
+             "                 -2 -2 -0.5 2 -2 -0.5 2 2 -0.5 -2 2 -0.5]\n"
+             "AttributeEnd\n"
+             "AttributeBegin\n"
+             "  Material \"diffuse\" \"rgb reflectance\" [0 0 0]\n"
+             "  AreaLightSource \"diffuse\" \"rgb L\" [1 1 1]\n"
+             "  Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+             "    \"point3 P\" [-3 -3 -2 3 -3 -2 3 3 -2 -3 3 -2]\n"
+             "AttributeEnd\n",
+             medium, slab_material);
+    char *text = cat(head, body, "");
+    render_options o = *opt;
+    render_scene *rs = build_scene_or_fail(text, &o);
+    free(text);
+    render_expect_finite(rs);
+    rgb sum = rgb_grey(0.0);
+    for (int y = 0; y < SLAB_RES; ++y)
+        for (int x = 0; x < SLAB_RES; ++x)
+            sum = rgb_add(sum, film_get_pixel(render_scene_film(rs), x, y, 1.0));
+    render_scene_destroy(rs);
+    return rgb_scale(sum, 1.0 / (SLAB_RES * SLAB_RES));
+}
+
+/* The RGB (sRGB) of spectrum s(lambda) times the sRGB illuminant (D65 at
+ * luminance 1), integrated against the observer at 0.1 nm. */
+typedef double (*spectrum_fn)(double lambda, const void *ctx);
+static rgb rgb_of_illuminated(spectrum_fn s, const void *ctx)
+{
+    vec3 xyz = v3(0, 0, 0);
+    double h = 0.1;
+    for (double l = WAVELENGTH_MIN + h / 2; l < WAVELENGTH_MAX; l += h) {
+        double v = s(l, ctx) * rgb_spectrum_illuminant(COLOR_SPACE_SRGB, l) * h;
+        xyz = v3_add(xyz, v3_scale(spectrum_cie_xyz(l), v));
+    }
+    return rgb_spectrum_rgb_from_xyz(COLOR_SPACE_SRGB,
+                                     v3_scale(xyz, 1.0 / SPECTRUM_CIE_Y_INTEGRAL));
+}
+
+static double beer_lambert(double lambda, const void *ctx)
+{
+    const rgb_unbounded_spectrum *sigma = ctx;
+    return exp(-rgb_unbounded_spectrum_eval(*sigma, lambda) * 1.0);
+}
+
+/* A chromatic absorbing medium: per wavelength exp(-sigma_a(lambda) d),
+ * sigma_a the unbounded spectrum of its RGB. RGB rendering gives
+ * exp(-sigma_rgb d) per channel instead, which differs by far more than
+ * the noise. */
+static void test_chromatic_beer_lambert(void **state)
+{
+    (void)state;
+    const char *medium = "MakeNamedMedium \"ink\" \"string type\" \"homogeneous\"\n"
+                         "  \"rgb sigma_a\" [2 0.5 0.1] \"rgb sigma_s\" [0 0 0]\n";
+    const char *slab = "MediumInterface \"ink\" \"\"\n  Material \"interface\"";
+    rgb got = through_slab(slab, medium, &spectral_opt, 256, 5);
+    rgb_unbounded_spectrum sigma =
+        rgb_unbounded_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_make(2.0, 0.5, 0.1));
+    rgb want = rgb_of_illuminated(beer_lambert, &sigma);
+    expect_rgb_close(got, want, 0.0, 2e-3, "spectral transmittance", 2.5, 2.5);
+    render_options rgb_opt = {.seed = 0};
+    rgb in_rgb = through_slab(slab, medium, &rgb_opt, 64, 5);
+    expect_rgb_close(in_rgb, rgb_make(exp(-2.0), exp(-0.5), exp(-0.1)), 0.0, 2e-3,
+                     "RGB transmittance", 2.5, 2.5);
+    assert_true(fabs(want.r - in_rgb.r) > 0.02); /* the two modes differ here */
+}
+
+/* A smooth glass slab seen straight on, every interreflection followed:
+ * transmittance (1 - R) / (1 + R), R the normal-incidence reflectance. */
+static void test_dielectric_slab(void **state)
+{
+    (void)state;
+    double R = (0.5 / 2.5) * (0.5 / 2.5);
+    rgb got = through_slab("Material \"dielectric\" \"float eta\" 1.5", "", &spectral_opt, 16,
+                           100);
+    expect_rgb_close(got, rgb_grey((1 - R) / (1 + R)), 0.0, 3e-3, "glass slab", 2.5, 2.5);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_wavelength_density),
+        cmocka_unit_test(test_coloured_reflectance),
+        cmocka_unit_test(test_grey_matches_rgb),
+        cmocka_unit_test(test_conductor_constant),
+        cmocka_unit_test(test_chromatic_beer_lambert),
+        cmocka_unit_test(test_dielectric_slab),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
