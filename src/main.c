@@ -92,8 +92,10 @@ static const char usage_text[] =
     "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
     "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
     "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n"
-    "  --color rgb|spectral    carry colour along paths as RGB (default) or as three\n"
-    "                          wavelengths per sample, as pbrt-v4 (volpath; docs/spectral.md)\n"
+    "  --color auto|rgb|spectral  carry colour along paths as RGB or as three wavelengths\n"
+    "                          per sample, as pbrt-v4 (volpath only); auto (default):\n"
+    "                          spectral when volpath meets non-grey materials or media\n"
+    "                          (docs/spectral.md)\n"
     "  --portable-isa          Embree at SSE4.2 on every machine: byte-identical images\n"
     "                          across x86 machines (default: the CPU's widest ISA)\n"
     "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
@@ -197,12 +199,14 @@ static int parse_render_args(int argc, char **argv, cli *c)
                 c->region_arg = val;
             }
             else if (!strcmp(a, "--color")) {
-                if (!strcmp(val, "rgb"))
+                if (!strcmp(val, "auto"))
+                    c->color = RENDER_COLOR_AUTO;
+                else if (!strcmp(val, "rgb"))
                     c->color = RENDER_COLOR_RGB;
                 else if (!strcmp(val, "spectral"))
                     c->color = RENDER_COLOR_SPECTRAL;
                 else
-                    return usage_error("--color needs rgb or spectral, not '%s'", val);
+                    return usage_error("--color needs auto, rgb or spectral, not '%s'", val);
             } else if (!strcmp(a, "--target-error")) {
                 char *end;
                 errno = 0;
@@ -388,6 +392,7 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
     render_marching m;
     if (render_scene_marching(rs, &m) && m.auto_steps)
         printf("stat auto_step_scale %g\n", m.auto_scale);
+    printf("stat spectral %d\n", render_scene_spectral(rs) ? 1 : 0);
     printf("stat time_busy_s %.4f\n", st->time_busy_s);
     printf("stat time_surfaces_s %.4f\n", other > 0.0 ? other : 0.0);
     printf("stat time_media_s %.4f\n", st->time_media_s);
@@ -549,7 +554,7 @@ static double image_estimate(const render_stats *st, double bias)
 typedef struct {
     char spp[32], passes[32], limit[32], target[32], mean_spp[32], estimated[32];
     char stepsize[64], auto_steps[64];
-    film_attribute items[9];
+    film_attribute items[10];
     int count;
 } image_attributes;
 
@@ -578,6 +583,8 @@ static void image_attributes_fill(image_attributes *a, const render_scene *rs,
         snprintf(a->auto_steps, sizeof a->auto_steps, "%g", m.auto_scale);
         a->items[a->count++] = (film_attribute){"haze:auto_step_scale", a->auto_steps};
     }
+    if (render_scene_spectral(rs)) /* RGB images keep their bytes */
+        a->items[a->count++] = (film_attribute){"haze:color", "spectral"};
     if (progressive) {
         a->items[a->count++] = (film_attribute){"haze:spp", a->spp};
         a->items[a->count++] = (film_attribute){"haze:passes", a->passes};

@@ -692,3 +692,38 @@ const material *material_spectral(const material *m, const spectral_ctx *sp, mat
     }
     return o;
 }
+
+static bool grey(rgb c) { return c.r == c.g && c.g == c.b; }
+static bool tex_grey(const texture *t) { return !t || texture_is_grey(t); }
+
+bool material_is_spectrally_nonlinear(const material *m)
+{
+    switch (m->kind) {
+    case MATERIAL_CONDUCTOR:
+    case MATERIAL_COATED_CONDUCTOR: {
+        const layered *l = &m->coat;
+        bool coated = m->kind == MATERIAL_COATED_CONDUCTOR;
+        rgb eta = coated ? l->eta_rgb : m->eta_rgb, k = coated ? l->k : m->k;
+        return (m->metal_by_reflectance ? !grey(m->metal_r) : !grey(eta) || !grey(k)) ||
+               !tex_grey(m->metal_r_tex) || !tex_grey(m->eta_tex) || !tex_grey(m->k_tex) ||
+               (coated && (!grey(l->albedo) || !tex_grey(m->albedo_tex)));
+    }
+    case MATERIAL_COATED_DIFFUSE:
+        return !grey(m->coat.reflectance) || !grey(m->coat.albedo) ||
+               !tex_grey(m->reflectance_tex) || !tex_grey(m->albedo_tex);
+    case MATERIAL_HAIR:
+        return !grey(m->sigma_a) || !tex_grey(m->reflectance_tex);
+    case MATERIAL_MEASURED:
+        return true;
+    case MATERIAL_MIX:
+        return (m->mix[0] && material_is_spectrally_nonlinear(m->mix[0])) ||
+               (m->mix[1] && material_is_spectrally_nonlinear(m->mix[1]));
+    case MATERIAL_DIFFUSE: /* a colour that scales the BSDF */
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_INTERFACE:
+        break;
+    }
+    return false;
+}

@@ -90,6 +90,14 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
  * NULL; otherwise *scratch (which may be m) filled. */
 const material *material_spectral(const material *m, const spectral_ctx *sp, material *scratch);
 
+/* Whether m (or a material a mix may pick) has a colour that is not grey
+ * (constant or textured) and enters its BSDF other than as a factor: a
+ * metal's Fresnel term of coloured eta and k, the interreflections inside a
+ * coating, hair's absorption, a measured BRDF. There one scattering event
+ * already differs between spectral and RGB rendering (render_scene's
+ * automatic choice); a diffuse colour only scales it. */
+bool material_is_spectrally_nonlinear(const material *m);
+
 /* The material a hit at p seen from wo uses: m itself, or for a mix the
  * component its hash picks (mixes of mixes followed), with the amount its
  * texture gives at c (NULL: no textures at this hit). Deterministic. */

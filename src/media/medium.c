@@ -33,6 +33,14 @@ const medium *medium_spectral(const medium *m, const spectral_ctx *sp, medium *c
     return copy;
 }
 
+bool medium_is_chromatic(const medium *m)
+{
+    rgb a = m->sigma_a, s = m->sigma_s;
+    return m->ops &&
+           (m->ops->rgb_coefficients || m->coloured || a.r != a.g || a.g != a.b || s.r != s.g ||
+            s.g != s.b);
+}
+
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1)
 {
     if (!(*t0 <= *t1)) /* also NaN */

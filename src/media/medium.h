@@ -196,6 +196,11 @@ static inline bool medium_moves(const medium *m)
 }
 medium_memory medium_bytes(const medium *m);
 
+/* Whether m's coefficients differ between channels (constant ones not
+ * grey, per-point RGB coefficients, a colour grid): where spectral and RGB
+ * rendering differ. */
+bool medium_is_chromatic(const medium *m);
+
 /* m at the wavelengths of `sp`, for one path: a copy whose sigma_a and
  * sigma_s are unbounded spectra and whose Le is an illuminant spectrum
  * there (color/spectral.h), with `spectral` set so the kinds convert what

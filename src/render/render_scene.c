@@ -425,6 +425,26 @@ static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integr
 }
 
 /* Builds what it can; see collect(). */
+/* Where spectral and RGB rendering differ by more than a few tenths of a
+ * percent: a coloured medium (exp(-sigma(lambda) d) against exp(-sigma_rgb d))
+ * or a material whose colour enters nonlinearly (metals, coatings, hair).
+ * Coloured lights and diffuse colours scale every wavelength's radiance:
+ * only their products over several bounces differ (a room of saturated
+ * walls under coloured lights, volpath maxdepth 8: image means within 0.6%,
+ * docs/spectral.md), at 1.5 times the time and more colour noise. */
+static bool chromatic(const render_scene *rs)
+{
+    for (size_t i = 0; i < rs->material_count; ++i)
+        if (material_is_spectrally_nonlinear(&rs->materials[i]))
+            return true;
+    if (material_is_spectrally_nonlinear(&rs->default_material))
+        return true;
+    for (size_t i = 0; i < rs->medium_count; ++i)
+        if (medium_is_chromatic(&rs->media[i]))
+            return true;
+    return false;
+}
+
 static hz_status build_all(render_scene *rs, scene_desc *sd, const render_options *opt,
                            FILE *warn, hz_errors *errs, hz_error *err)
 {
@@ -473,12 +493,13 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
     warn_default_integrator(rs, sd, warn);
-    if (opt && opt->color == RENDER_COLOR_SPECTRAL) {
-        if (ip.kind != INTEGRATOR_VOLPATH)
-            return hz_fail_at(err, sd->integrator.loc,
-                              "spectral rendering (--color spectral) needs Integrator \"volpath\"");
+    render_color color = opt ? opt->color : RENDER_COLOR_AUTO;
+    if (color == RENDER_COLOR_SPECTRAL && ip.kind != INTEGRATOR_VOLPATH)
+        return hz_fail_at(err, sd->integrator.loc,
+                          "spectral rendering (--color spectral) needs Integrator \"volpath\"");
+    if (color == RENDER_COLOR_SPECTRAL ||
+        (color == RENDER_COLOR_AUTO && ip.kind == INTEGRATOR_VOLPATH && chromatic(rs)))
         rs->spectral = &rgb2spec_tables[COLOR_SPACE_SRGB];
-    }
     return build_integrator(rs, sd, &ip, warn, err);
 }
 

@@ -22,8 +22,10 @@
 
 /* How colour is carried along paths (docs/spectral.md): in RGB, or
  * spectrally (three wavelengths per camera sample, color/wavelengths.h;
- * volpath only). */
-typedef enum { RENDER_COLOR_RGB = 0, RENDER_COLOR_SPECTRAL } render_color;
+ * volpath only). AUTO: spectrally when volpath renders a scene with a
+ * colour that is not grey in a material or a medium (where the two differ),
+ * in RGB otherwise. */
+typedef enum { RENDER_COLOR_AUTO = 0, RENDER_COLOR_RGB, RENDER_COLOR_SPECTRAL } render_color;
 
 typedef struct {
     uint64_t seed;             /* default for the Sampler's "integer seed" (--seed) */

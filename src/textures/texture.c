@@ -866,3 +866,44 @@ static hz_status read_normal_maps(texture_set *s, scene_desc *sd, hz_errors *err
     }
     return HZ_OK;
 }
+
+static bool rgb_is_grey(rgb c) { return c.r == c.g && c.g == c.b; }
+
+static bool input_is_grey(const tex_input *in)
+{
+    return in->t ? texture_is_grey(in->t) : rgb_is_grey(in->v);
+}
+
+bool texture_is_grey(const texture *t)
+{
+    if (!t->spectrum)
+        return true;
+    switch (t->kind) {
+    case TEX_CONSTANT:
+        return input_is_grey(&t->in[0]);
+    case TEX_SCALE:
+    case TEX_CHECKERBOARD:
+    case TEX_DIRECTIONMIX:
+    case TEX_DOTS:
+        return input_is_grey(&t->in[0]) && input_is_grey(&t->in[1]);
+    case TEX_MIX: /* in[2] is the float amount */
+        return input_is_grey(&t->in[0]) && input_is_grey(&t->in[1]);
+    case TEX_BILERP:
+        return input_is_grey(&t->in[0]) && input_is_grey(&t->in[1]) &&
+               input_is_grey(&t->in[2]) && input_is_grey(&t->in[3]);
+    case TEX_IMAGEMAP: {
+        const float *p = t->img.rgb;
+        for (size_t i = 0, n = (size_t)t->img.width * t->img.height; i < n; ++i, p += 3)
+            if (p[0] != p[1] || p[1] != p[2])
+                return false;
+        return true;
+    }
+    case TEX_FBM:
+    case TEX_WRINKLED:
+    case TEX_WINDY:
+        return true;
+    case TEX_MARBLE:
+        return false;
+    }
+    return false;
+}

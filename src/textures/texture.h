@@ -47,5 +47,8 @@ const texture *texture_set_normal_map(const texture_set *s, const char *name);
 /* The value at c: rgb for spectrum textures, grey for float ones. */
 rgb texture_eval(const texture *t, const texture_ctx *c);
 double texture_eval_float(const texture *t, const texture_ctx *c);
+/* True when every value t gives is grey (r = g = b): float textures, and
+ * spectrum textures whose inputs and image are all grey. */
+bool texture_is_grey(const texture *t);
 
 #endif

@@ -36,7 +36,9 @@ static inline render_scene *build_scene_or_fail(const char *text, render_options
         print_error("parse: %s\n", err.message);
         fail();
     }
-    render_options def = {.seed = 0};
+    /* RGB unless asked: these tests check RGB's closed forms (test_spectral
+     * asks for the other modes). */
+    render_options def = {.seed = 0, .color = RENDER_COLOR_RGB};
     render_scene *rs = NULL;
     hz_status st = render_scene_create(&sd, opt ? opt : &def, NULL, &rs, &err);
     scene_desc_free(&sd);

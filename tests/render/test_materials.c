@@ -452,7 +452,7 @@ static void test_integrator_and_parameters(void **state)
     hz_error err = {0};
     assert_int_equal(scene_parse_string(text, "test.pbrt", &sd, &err), HZ_OK);
     FILE *warn = tmpfile();
-    render_options def = {.seed = 0};
+    render_options def = {.seed = 0, .color = RENDER_COLOR_RGB};
     render_scene *rs = NULL;
     assert_int_equal(render_scene_create(&sd, &def, warn, &rs, &err), HZ_OK);
     rewind(warn);

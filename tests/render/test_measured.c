@@ -120,7 +120,7 @@ static void test_default_integrator(void **state)
     assert_int_equal(scene_parse_string(text, "test.pbrt", &sd, &err), HZ_OK);
     FILE *warn = tmpfile();
     assert_non_null(warn);
-    render_options def = {.seed = 0};
+    render_options def = {.seed = 0, .color = RENDER_COLOR_RGB};
     render_scene *rs = NULL;
     assert_int_equal(render_scene_create(&sd, &def, warn, &rs, &err), HZ_OK);
     rewind(warn);

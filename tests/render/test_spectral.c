@@ -88,7 +88,7 @@ static void test_grey_matches_rgb(void **state)
 {
     (void)state;
     const char *mat = "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n";
-    render_options rgb_opt = {.seed = 0};
+    render_options rgb_opt = {.seed = 0, .color = RENDER_COLOR_RGB};
     rgb a = plane_radiance(mat, &rgb_opt, 64), b = plane_radiance(mat, &spectral_opt, 1024);
     expect_rgb_close(a, rgb_grey(0.5), 1e-12, 0.0, "RGB", 4.5, 4.5);
     expect_rgb_close(b, a, 0.0, 2e-3, "spectral against RGB", 4.5, 4.5);
@@ -190,7 +190,7 @@ static void test_chromatic_beer_lambert(void **state)
         rgb_unbounded_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_make(2.0, 0.5, 0.1));
     rgb want = rgb_of_illuminated(beer_lambert, &sigma);
     expect_rgb_close(got, want, 0.0, 2e-3, "spectral transmittance", 2.5, 2.5);
-    render_options rgb_opt = {.seed = 0};
+    render_options rgb_opt = {.seed = 0, .color = RENDER_COLOR_RGB};
     rgb in_rgb = through_slab(slab, medium, &rgb_opt, 64, 5);
     expect_rgb_close(in_rgb, rgb_make(exp(-2.0), exp(-0.5), exp(-0.1)), 0.0, 2e-3,
                      "RGB transmittance", 2.5, 2.5);
@@ -208,6 +208,102 @@ static void test_dielectric_slab(void **state)
     expect_rgb_close(got, rgb_grey((1 - R) / (1 + R)), 0.0, 3e-3, "glass slab", 2.5, 2.5);
 }
 
+/* A scene of `material` under a white sky with `integrator`, built with
+ * the default colour mode: whether it renders spectrally. */
+static bool auto_spectral(const char *integrator, const char *material)
+{
+    char text[2048];
+    snprintf(text, sizeof text,
+             "LookAt 0 0 5  0 0 0  0 1 0\n"
+             "Camera \"orthographic\"\n"
+             "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+             "Integrator \"%s\"\n"
+             "WorldBegin\n"
+             "LightSource \"infinite\" \"rgb L\" [1 0.5 0.2]\n"
+             "%s\n"
+             "Shape \"sphere\"\n",
+             integrator, material);
+    render_options opt = {.seed = 0}; /* RENDER_COLOR_AUTO */
+    render_scene *rs = build_scene_or_fail(text, &opt);
+    bool spectral = render_scene_spectral(rs);
+    render_scene_destroy(rs);
+    return spectral;
+}
+
+/* --color auto: spectral where volpath meets a colour that is not grey in a
+ * material or medium; RGB for grey ones (a coloured light alone changes
+ * nothing) and for singlescatter; --color spectral with singlescatter is
+ * refused at the Integrator. */
+static void test_auto_choice(void **state)
+{
+    (void)state;
+    assert_false(auto_spectral("volpath", "Material \"diffuse\" \"rgb reflectance\" [0.7 0.1 0.1]"));
+    assert_true(auto_spectral("volpath", "Material \"conductor\""));  /* copper */
+    assert_false(auto_spectral("volpath", "Material \"conductor\" \"spectrum eta\" [1.5]\n"
+                                          "  \"spectrum k\" [2]"));
+    assert_false(auto_spectral("volpath", "Material \"dielectric\""));
+    assert_true(auto_spectral("volpath", "Material \"coateddiffuse\" \"rgb reflectance\" [0.7 0.1 0.1]"));
+    assert_false(auto_spectral("volpath", "Material \"coateddiffuse\" \"rgb reflectance\" [0.4 0.4 0.4]"));
+    assert_true(auto_spectral("volpath", "Texture \"c\" \"spectrum\" \"checkerboard\"\n"
+                                         "  \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n"
+                                         "Material \"coateddiffuse\" \"texture reflectance\" \"c\""));
+    assert_false(auto_spectral("volpath", "Texture \"c\" \"spectrum\" \"checkerboard\"\n"
+                                          "  \"rgb tex1\" [1 1 1] \"rgb tex2\" [0 0 0]\n"
+                                          "Material \"coateddiffuse\" \"texture reflectance\" \"c\""));
+    assert_true(auto_spectral("volpath", "MakeNamedMedium \"m\" \"string type\" \"homogeneous\"\n"
+                                         "  \"rgb sigma_a\" [1 0.5 0.2]\n"
+                                         "MediumInterface \"m\" \"\"\nMaterial \"interface\""));
+    assert_false(auto_spectral("volpath", "MakeNamedMedium \"m\" \"string type\" \"homogeneous\"\n"
+                                          "  \"rgb sigma_a\" [1 1 1]\n"
+                                          "MediumInterface \"m\" \"\"\nMaterial \"interface\""));
+    assert_false(auto_spectral("singlescatter", "Material \"conductor\""));
+    const char *text = "Camera \"orthographic\"\n"
+                       "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                       "Integrator \"singlescatter\"\n"
+                       "WorldBegin\n"
+                       "Shape \"sphere\"\n";
+    scene_desc sd;
+    hz_error err = {0};
+    assert_int_equal(scene_parse_string(text, "s.pbrt", &sd, &err), HZ_OK);
+    render_scene *rs = NULL;
+    assert_int_equal(render_scene_create(&sd, &spectral_opt, NULL, &rs, &err), HZ_ERROR);
+    assert_non_null(strstr(err.message, "s.pbrt:3:1"));
+    assert_non_null(strstr(err.message, "volpath"));
+    scene_desc_free(&sd);
+}
+
+/* The same scene and seed give the same image on 1 and 2 threads. */
+static void test_thread_count_invariance(void **state)
+{
+    (void)state;
+    const char *text = "LookAt 0 0 5  0 0 0  0 1 0\n"
+                       "Camera \"perspective\" \"float fov\" 30\n"
+                       "Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 16\n"
+                       "Sampler \"zsobol\" \"integer pixelsamples\" 8\n"
+                       "Integrator \"volpath\"\n"
+                       "WorldBegin\n"
+                       "LightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                       "Material \"diffuse\" \"rgb reflectance\" [0.7 0.2 0.1]\n"
+                       "Shape \"sphere\"\n";
+    rgb px[2][24 * 16];
+    for (int t = 0; t < 2; ++t) {
+        render_options opt = spectral_opt;
+        render_scene *rs = build_scene_or_fail(text, &opt);
+        renderer_options ro = {.threads = t + 1, .progress = NULL};
+        render_stats stats;
+        hz_error err = {0};
+        assert_int_equal(renderer_run(rs, &ro, &stats, &err), HZ_OK);
+        for (int i = 0; i < 24 * 16; ++i)
+            px[t][i] = film_get_pixel(render_scene_film(rs), i % 24, i / 24, 1.0);
+        render_scene_destroy(rs);
+    }
+    assert_memory_equal(px[0], px[1], sizeof px[0]);
+    bool coloured = false;
+    for (int i = 0; i < 24 * 16; ++i)
+        coloured |= px[0][i].r > 2.0 * px[0][i].b && px[0][i].b > 0.0;
+    assert_true(coloured);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -217,6 +313,8 @@ int main(void)
         cmocka_unit_test(test_conductor_constant),
         cmocka_unit_test(test_chromatic_beer_lambert),
         cmocka_unit_test(test_dielectric_slab),
+        cmocka_unit_test(test_auto_choice),
+        cmocka_unit_test(test_thread_count_invariance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

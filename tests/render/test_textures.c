@@ -23,7 +23,7 @@ static void render_or_fail(const char *name, const char *text, exr_image *img)
     snprintf(scene, sizeof scene, "%s/%s.pbrt", HAZE_TMP, name);
     write_text_file(scene, text);
     snprintf(path, sizeof path, "%s/%s.exr", HAZE_TMP, name);
-    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet --threads 2", scene, path);
+    snprintf(args, sizeof args, "render '%s' -o '%s' --quiet --threads 2 --color rgb", scene, path);
     int rc = run_haze(args, out, sizeof out);
     if (rc != 0) {
         print_error("haze exited %d: %s\n", rc, out);
