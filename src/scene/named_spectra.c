@@ -57,3 +57,11 @@ bool named_spectrum_rgb(const char *name, rgb *out)
         }
     return false;
 }
+
+const named_spectrum_samples *named_spectrum_find(const char *name)
+{
+    for (size_t i = 0; i < named_spectra_table_count; ++i)
+        if (strcmp(named_spectra_table[i].name, name) == 0)
+            return &named_spectra_table[i];
+    return NULL;
+}

@@ -10,15 +10,38 @@
  *     spectrum is normalised.
  * Used as pairs (a metal's eta with its k), the reductions reproduce the
  * spectral normal-incidence reflectance exactly and grazing ones within a
- * few percent. */
+ * few percent.
+ *
+ * For spectral rendering the spectra themselves are kept too
+ * (named_spectra_table.c, written by tools/named_spectra_table.py from
+ * pbrt-v4's tables): as pbrt-v4 holds them once loaded, extended to 359 and
+ * 831 nm where a table stops short of 360..830 nm, illuminants scaled to
+ * luminance 1. */
 #ifndef HAZE_SCENE_NAMED_SPECTRA_H
 #define HAZE_SCENE_NAMED_SPECTRA_H
 
 #include <stdbool.h>
+#include <stddef.h>
 
 #include "core/vec.h"
 
 /* The RGB of pbrt-v4's named spectrum `name`; false when there is none. */
 bool named_spectrum_rgb(const char *name, rgb *out);
+
+/* A named spectrum as sampled: n (lambda nm, value) pairs, lambda
+ * increasing, piecewise linear and zero outside [lambda[0], lambda[n-1]]
+ * (pbrt-v4's PiecewiseLinearSpectrum). */
+typedef struct {
+    const char *name;
+    const double *lambda, *value;
+    size_t n;
+} named_spectrum_samples;
+
+extern const named_spectrum_samples named_spectra_table[];
+extern const size_t named_spectra_table_count;
+
+/* The samples of pbrt-v4's named spectrum `name`; NULL when there is none.
+ * Every name named_spectrum_rgb knows has them. */
+const named_spectrum_samples *named_spectrum_find(const char *name);
 
 #endif

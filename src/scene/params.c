@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "scene/mem.h"
+#include "scene/spectrum.h"
 
 const char *param_type_name(param_type t)
 {
@@ -42,6 +43,9 @@ void param_free(param *p)
     free(p->nums);
     free(p->bools);
     free(p->name);
+    free(p->samples);
+    p->samples = NULL;
+    p->lambda = p->value = NULL;
     p->strs = NULL;
     p->nums = NULL;
     p->bools = NULL;
@@ -67,8 +71,18 @@ static bool param_copy(param *d, const param *s)
     d->nums = NULL;
     d->strs = NULL;
     d->bools = NULL;
+    d->samples = NULL;
     d->name = scene_strdup(s->name);
     bool ok = d->name != NULL;
+    if (ok && s->samples) {
+        d->samples = scene_array(2 * s->pairs, sizeof *d->samples);
+        ok = d->samples != NULL;
+        if (ok) {
+            memcpy(d->samples, s->samples, 2 * s->pairs * sizeof *d->samples);
+            d->lambda = d->samples;
+            d->value = d->samples + s->pairs;
+        }
+    }
     if (ok && s->nums) {
         d->nums = scene_array(s->count, sizeof *d->nums);
         ok = d->nums != NULL;
@@ -360,6 +374,49 @@ rgb params_illuminant(param_list *pl, const char *name, rgb def)
         if (strcmp(pl->items[i].name, name) == 0 && pl->items[i].type == PARAM_SPECTRUM)
             return pl->items[i].illuminant;
     return c;
+}
+
+/* The first parameter called `name` if params_rgb read it as a spectrum
+ * or a blackbody (right type, three numbers), else NULL. */
+static const param *native_spectrum(const param_list *pl, const char *name)
+{
+    const param *p = find(pl, name);
+    if (!p || p->count != 3)
+        return NULL;
+    return p->type == PARAM_BLACKBODY || (p->type == PARAM_SPECTRUM && p->pairs > 0) ? p : NULL;
+}
+
+spectrum_value params_spectrum(param_list *pl, const char *name, spectrum_use use, rgb def)
+{
+    rgb c = use == SPECTRUM_USE_ALBEDO      ? params_reflectance(pl, name, def)
+            : use == SPECTRUM_USE_UNBOUNDED ? params_rgb(pl, name, def)
+                                            : params_illuminant(pl, name, def);
+    spectrum_value s = spectrum_value_rgb(c, use);
+    const param *p = native_spectrum(pl, name);
+    if (!p)
+        return s;
+    if (p->type == PARAM_BLACKBODY) {
+        s.kind = SPECTRUM_VALUE_BLACKBODY;
+        s.kelvin = p->kelvin;
+    } else {
+        s.kind = SPECTRUM_VALUE_SAMPLED;
+        s.lambda = p->lambda;
+        s.value = p->value;
+        s.n = p->pairs;
+    }
+    if (use != SPECTRUM_USE_ILLUMINANT)
+        return s;
+    /* What params_illuminant divides out (p->luminance): the same integral
+     * of the same samples for sampled spectra, which also covers named
+     * illuminants (their RGB is at luminance 1 already, and so are their
+     * tables, to within the CIE tables' differences) and constants (whose
+     * p->luminance is the value itself). */
+    double luminance = p->type == PARAM_BLACKBODY
+                           ? p->luminance
+                           : spectrum_sampled_luminance(s.lambda, s.value, s.n);
+    if (luminance > 0.0 && isfinite(1.0 / luminance))
+        s.scale = 1.0 / luminance;
+    return s;
 }
 
 double params_illuminant_luminance(const param_list *pl, const char *name)

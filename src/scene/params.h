@@ -13,6 +13,7 @@
 
 #include "core/error.h"
 #include "core/vec.h"
+#include "scene/spectrum_value.h"
 
 typedef enum {
     PARAM_INTEGER,
@@ -25,8 +26,8 @@ typedef enum {
     PARAM_VECTOR3,
     PARAM_NORMAL,
     PARAM_RGB,
-    PARAM_SPECTRUM, /* converted to rgb at parse time (see docs/scene-format.md) */
-    PARAM_BLACKBODY, /* converted to rgb at parse time */
+    PARAM_SPECTRUM, /* converted to rgb at parse time (see docs/scene-format.md), and kept */
+    PARAM_BLACKBODY, /* converted to rgb at parse time, and kept */
     PARAM_TEXTURE    /* the name of a Texture, in strs[0] */
 } param_type;
 
@@ -48,6 +49,14 @@ typedef struct {
     double luminance;
     double at_550;  /* spectrum: its value at 550 nm (an index that does not disperse) */
     bool unit_values; /* spectrum: every value within [0, 1] (see params_reflectance) */
+    /* The spectrum as given, for spectral rendering (params_spectrum). */
+    double kelvin;  /* blackbody: its temperature */
+    /* spectrum: `pairs` (lambda nm, value) samples, in `samples` (owned:
+     * the lambdas, then the values) for inline, constant and .spd spectra,
+     * in a static table for named ones (samples NULL). */
+    const double *lambda, *value;
+    size_t pairs;
+    double *samples;
 } param;
 
 typedef struct {
@@ -117,6 +126,14 @@ rgb params_reflectance(param_list *pl, const char *name, rgb def);
  * of a constant spectrum, which reflectances get): "spectrum I" [360 5 830 5]
  * is as bright as "rgb I" [1 1 1], slightly pink (equal-energy white). */
 rgb params_illuminant(param_list *pl, const char *name, rgb def);
+/* The parameter `name` as a spectrum_value for `use` (rgb, spectrum and
+ * blackbody parameters; the same type/count errors as params_rgb); `def` (an
+ * RGB) when absent. Its `rgb` equals what params_reflectance (ALBEDO),
+ * params_rgb (UNBOUNDED) or params_illuminant (ILLUMINANT) returns for the
+ * same parameter, and it marks the parameter used as they do. Arrays are
+ * borrowed from the scene_desc (they live as long as it) or from static
+ * tables. */
+spectrum_value params_spectrum(param_list *pl, const char *name, spectrum_use use, rgb def);
 /* What params_illuminant divided the spectrum by (1 when nothing: rgb values,
  * named illuminants, no such parameter). */
 double params_illuminant_luminance(const param_list *pl, const char *name);

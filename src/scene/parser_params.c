@@ -1,7 +1,7 @@
 /* Typed parameter lists: `"type name" value` or `"type name" [values]`, with
  * pbrt-v4's type names and aliases. Values are checked against the type here,
  * so factories only see well-formed lists; spectrum and blackbody values are
- * converted to rgb (rules in spectrum.h). */
+ * converted to rgb (rules in spectrum.h) and kept as given (params_spectrum). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -159,10 +159,15 @@ static hz_status set_rgb(parser *ps, param *p, rgb c, hz_error *err)
 
 /* A sampled spectrum (increasing wavelengths) as the param's RGB, its
  * illuminant RGB and its value at 550 nm (linear between samples, the end
- * values beyond them). */
-static hz_status set_sampled(parser *ps, param *p, const double *lambda, const double *value,
-                             size_t pairs, hz_error *err)
+ * values beyond them). Takes `samples` (2 * pairs numbers: the lambdas, then
+ * the values), freed with p. */
+static hz_status set_sampled(parser *ps, param *p, double *samples, size_t pairs, hz_error *err)
 {
+    const double *lambda = samples, *value = samples + pairs;
+    p->samples = samples;
+    p->lambda = lambda;
+    p->value = value;
+    p->pairs = pairs;
     p->at_550 = value[pairs - 1];
     p->unit_values = true;
     for (size_t i = 0; i < pairs; ++i)
@@ -231,13 +236,13 @@ static hz_status read_spd(parser *ps, param *p, const char *name, file_loc loc, 
     if (st == HZ_OK && (n % 2 != 0 || pairs == 0))
         st = hz_fail_at(err, loc, "spectrum file \"%.200s\" needs (wavelength, value) pairs, got "
                         "%zu values", full, n);
-    double *lambda = NULL, *value = NULL;
+    double *samples = NULL;
     if (st == HZ_OK) {
-        lambda = scene_array(pairs, sizeof *lambda);
-        value = scene_array(pairs, sizeof *value);
-        if (!lambda || !value)
+        samples = scene_array(pairs, 2 * sizeof *samples);
+        if (!samples)
             st = parser_oom(ps, loc, err);
     }
+    double *lambda = samples, *value = samples ? samples + pairs : NULL;
     for (size_t i = 0; st == HZ_OK && i < pairs; ++i) {
         lambda[i] = v[2 * i];
         value[i] = v[2 * i + 1];
@@ -246,18 +251,34 @@ static hz_status read_spd(parser *ps, param *p, const char *name, file_loc loc, 
                             full);
     }
     if (st == HZ_OK)
-        st = set_sampled(ps, p, lambda, value, pairs, err);
+        st = set_sampled(ps, p, samples, pairs, err); /* p owns samples now */
+    else
+        free(samples);
     if (st == HZ_OK) {
         const char *file = parser_intern(ps, full);
         if (!file || !scene_desc_add_file(ps->sd, file))
             st = parser_oom(ps, loc, err);
     }
-    free(lambda);
-    free(value);
     free(v);
     free(text);
     free(full);
     return st;
+}
+
+/* A constant spectrum kept as two equal samples just beyond 360..830 nm, the
+ * range wavelengths are drawn from (spectrum_value.h). */
+static hz_status keep_constant(parser *ps, param *p, double c, hz_error *err)
+{
+    p->samples = scene_array(4, sizeof *p->samples);
+    if (!p->samples)
+        return parser_oom(ps, p->loc, err);
+    p->samples[0] = 359.0;
+    p->samples[1] = 831.0;
+    p->samples[2] = p->samples[3] = c;
+    p->lambda = p->samples;
+    p->value = p->samples + 2;
+    p->pairs = 2;
+    return HZ_OK;
 }
 
 static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_t n,
@@ -278,7 +299,13 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
             free(name);
             return st;
         }
+        const named_spectrum_samples *table = named_spectrum_find(name);
         free(name);
+        if (table) { /* every name has one (test_scene_spectrum_value) */
+            p->lambda = table->lambda;
+            p->value = table->value;
+            p->pairs = table->n;
+        }
         p->illuminant = named;
         p->at_550 = named.g; /* a glass: its index at 550 nm */
         return set_rgb(ps, p, named, err);
@@ -292,6 +319,8 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
         p->illuminant = vals[0].num > 0.0 ? spectrum_sampled_to_illuminant(NULL, NULL, 1)
                                           : rgb_grey(0.0);
         p->luminance = vals[0].num;
+        if (keep_constant(ps, p, vals[0].num, err) != HZ_OK)
+            return HZ_ERROR;
     } else {
         if (n % 2 != 0)
             return hz_fail_at(err, p->loc,
@@ -299,27 +328,20 @@ static hz_status convert_spectrum(parser *ps, param *p, const token *vals, size_
                               "values",
                               p->name, n);
         size_t pairs = n / 2;
-        double *lambda = scene_array(pairs, sizeof *lambda);
-        double *value = scene_array(pairs, sizeof *value);
-        if (!lambda || !value) {
-            free(lambda);
-            free(value);
+        double *samples = scene_array(pairs, 2 * sizeof *samples);
+        if (!samples)
             return parser_oom(ps, p->loc, err);
-        }
+        double *lambda = samples, *value = samples + pairs;
         for (size_t i = 0; i < pairs; ++i) {
             lambda[i] = vals[2 * i].num;
             value[i] = vals[2 * i + 1].num;
             if (i > 0 && !(lambda[i] > lambda[i - 1])) {
-                free(lambda);
-                free(value);
+                free(samples);
                 return hz_fail_at(err, vals[2 * i].loc,
                                   "parameter \"spectrum %s\": wavelengths must increase", p->name);
             }
         }
-        hz_status st = set_sampled(ps, p, lambda, value, pairs, err);
-        free(lambda);
-        free(value);
-        return st;
+        return set_sampled(ps, p, samples, pairs, err); /* p owns samples now */
     }
     return set_rgb(ps, p, c, err);
 }
@@ -383,6 +405,7 @@ static hz_status convert_blackbody(parser *ps, param *p, const token *vals, size
         return hz_fail_at(err, vals[0].loc, "parameter \"blackbody %s\": temperature must be > 0",
                           p->name);
     p->luminance = spectrum_blackbody_luminance(vals[0].num);
+    p->kelvin = vals[0].num;
     return set_rgb(ps, p, spectrum_blackbody_to_rgb(vals[0].num), err);
 }
 

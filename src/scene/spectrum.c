@@ -142,6 +142,13 @@ void spectrum_blackbody_peak_to_rgb_n(const double *kelvin, rgb *out, size_t n)
     }
 }
 
+double spectrum_blackbody_at(double lambda, double kelvin)
+{
+    double peak = planck(2.8977721e6 / kelvin, kelvin);
+    double v = planck(lambda, kelvin) / peak;
+    return peak > 0.0 && isfinite(v) ? v : 0.0;
+}
+
 double spectrum_sampled_luminance(const double *lambda, const double *value, size_t n)
 {
     return integrate_xyz(lambda, value, n).y / SPECTRUM_CIE_Y_INTEGRAL;

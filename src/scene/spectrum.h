@@ -45,6 +45,9 @@ double spectrum_sampled_luminance(const double *lambda, const double *value, siz
 double spectrum_blackbody_luminance(double kelvin);
 /* T > 0. */
 rgb spectrum_blackbody_to_rgb(double kelvin);
+/* pbrt-v4's BlackbodySpectrum at lambda (nm): Planck's law over its value at
+ * the peak wavelength (Wien's displacement law), so 1 at the peak. T > 0. */
+double spectrum_blackbody_at(double lambda, double kelvin);
 /* pbrt-v4's BlackbodySpectrum (Planck's law divided by its value at the
  * peak wavelength, so at most 1) as pbrt-v4's film sees a radiance of that
  * spectrum: its XYZ integrals over 360..830 nm in nanometres, without the
