@@ -813,3 +813,155 @@ bool grid_region_support(const grid *g, grid_ibox box, grid_ibox *out)
     }
     return any;
 }
+
+/* ---- the tree per block of 8^3 voxels ---- */
+
+typedef struct {
+    grid_ibox blocks; /* the window, in blocks */
+    int64_t n[3];
+    grid_block *out;
+} block_window;
+
+static grid_block *window_at(const block_window *w, const int64_t b[3])
+{
+    return w->out + (((b[2] - w->blocks.min[2]) * w->n[1] + (b[1] - w->blocks.min[1])) * w->n[0] +
+                     (b[0] - w->blocks.min[0]));
+}
+
+/* The blocks of the node or tile of edge `dim` at `origin` that lie in the
+ * window, set to b. */
+static void fill_blocks(const block_window *w, const int32_t origin[3], int32_t dim, grid_block b)
+{
+    int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+        int64_t b0 = (int64_t)origin[a] / 8, b1 = b0 + dim / 8 - 1; /* origin: a multiple of 8 */
+        lo[a] = b0 > w->blocks.min[a] ? b0 : w->blocks.min[a];
+        hi[a] = b1 < w->blocks.max[a] ? b1 : w->blocks.max[a];
+        if (hi[a] < lo[a])
+            return;
+    }
+    for (int64_t z = lo[2]; z <= hi[2]; ++z)
+        for (int64_t y = lo[1]; y <= hi[1]; ++y) {
+            const int64_t first[3] = {lo[0], y, z};
+            grid_block *row = window_at(w, first);
+            for (int64_t x = 0; x <= hi[0] - lo[0]; ++x)
+                row[x] = b;
+        }
+}
+
+static grid_block tile_block(float v)
+{
+    return (grid_block){v, v, 0, v != 0.0f ? GRID_BLOCK_FULL : GRID_BLOCK_ZERO};
+}
+
+/* A leaf as lower_region_range and leaf_support see it. */
+static grid_block leaf_block(const grid *g, pnanovdb_leaf_handle_t leaf)
+{
+    uint32_t all = 0xFFFFFFFFu, some = 0;
+    for (uint32_t i = 0; i < 16; ++i) {
+        uint32_t m = pnanovdb_read_uint32(
+            g->buf, pnanovdb_address_offset(leaf.address, PNANOVDB_LEAF_OFF_VALUE_MASK + 4u * i));
+        all &= m;
+        some |= m;
+    }
+    float vmin = pnanovdb_read_float(g->buf, pnanovdb_leaf_get_min_address(FLOAT_GRID, g->buf, leaf));
+    float vmax = pnanovdb_read_float(g->buf, pnanovdb_leaf_get_max_address(FLOAT_GRID, g->buf, leaf));
+    if (all != 0xFFFFFFFFu) /* statistics cover active voxels; the others hold the background */
+        vmin = min_of(vmin, g->background);
+    return (grid_block){vmin, vmax, leaf.address.byte_offset,
+                        all == 0xFFFFFFFFu ? GRID_BLOCK_FULL
+                        : some             ? GRID_BLOCK_PARTIAL
+                                           : GRID_BLOCK_ZERO};
+}
+
+static void lower_blocks(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
+                         grid_ibox box, const block_window *w)
+{
+    int32_t lo[3], hi[3];
+    if (!child_range(origin, 128, 8, box, lo, hi))
+        return;
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+                uint32_t n = (uint32_t)((x << 8) | (y << 4) | z);
+                const int64_t b[3] = {(int64_t)origin[0] / 8 + x, (int64_t)origin[1] / 8 + y,
+                                      (int64_t)origin[2] / 8 + z};
+                *window_at(w, b) =
+                    pnanovdb_lower_get_child_mask(g->buf, lower, n)
+                        ? leaf_block(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n))
+                        : tile_block(pnanovdb_read_float(
+                              g->buf, pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, lower, n)));
+            }
+}
+
+static void upper_blocks(const grid *g, pnanovdb_upper_handle_t upper, const int32_t origin[3],
+                         grid_ibox box, const block_window *w)
+{
+    int32_t lo[3], hi[3];
+    if (!child_range(origin, 4096, 128, box, lo, hi))
+        return;
+    for (int32_t x = lo[0]; x <= hi[0]; ++x)
+        for (int32_t y = lo[1]; y <= hi[1]; ++y)
+            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
+                uint32_t n = (uint32_t)((x << 10) | (y << 5) | z);
+                int32_t child_origin[3] = {origin[0] + 128 * x, origin[1] + 128 * y,
+                                           origin[2] + 128 * z};
+                if (pnanovdb_upper_get_child_mask(g->buf, upper, n))
+                    lower_blocks(g, pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n),
+                                 child_origin, box, w);
+                else
+                    fill_blocks(w, child_origin, 128,
+                                tile_block(pnanovdb_read_float(
+                                    g->buf,
+                                    pnanovdb_upper_get_table_address(FLOAT_GRID, g->buf, upper, n))));
+            }
+}
+
+void grid_blocks(const grid *g, grid_ibox blocks, grid_block *out)
+{
+    assert(g->type == FLOAT_GRID);
+    block_window w = {blocks, {0, 0, 0}, out};
+    grid_ibox box; /* the window's voxels */
+    size_t total = 1;
+    for (int a = 0; a < 3; ++a) {
+        assert(blocks.min[a] <= blocks.max[a] && blocks.min[a] >= INT32_MIN / 8 &&
+               blocks.max[a] <= INT32_MAX / 8);
+        w.n[a] = (int64_t)blocks.max[a] - blocks.min[a] + 1;
+        total *= (size_t)w.n[a];
+        box.min[a] = blocks.min[a] * 8;
+        box.max[a] = blocks.max[a] * 8 + 7;
+    }
+    /* Where no root tile lies, every voxel reads the background. */
+    const grid_block none = {g->background, g->background, 0, GRID_BLOCK_ZERO};
+    for (size_t i = 0; i < total; ++i)
+        out[i] = none;
+    uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
+    for (uint32_t t = 0; t < count; ++t) {
+        pnanovdb_root_tile_handle_t tile;
+        int32_t origin[3];
+        if (!root_tile_overlaps(g, t, box, &tile, origin))
+            continue;
+        if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile)))
+            fill_blocks(&w, origin, 4096,
+                        tile_block(pnanovdb_read_float(
+                            g->buf, pnanovdb_root_tile_get_value_address(FLOAT_GRID, g->buf, tile))));
+        else
+            upper_blocks(g, pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile), origin, box,
+                         &w);
+    }
+}
+
+void grid_block_support_add(const grid *g, const grid_block *b, const int32_t origin[3],
+                            grid_ibox box, grid_ibox *acc, bool *any)
+{
+    switch (b->support) {
+    case GRID_BLOCK_ZERO:
+        return;
+    case GRID_BLOCK_FULL:
+        support_add_block(origin, 8, box, acc, any);
+        return;
+    case GRID_BLOCK_PARTIAL:
+        leaf_support(g, (pnanovdb_leaf_handle_t){{b->leaf}}, origin, box, acc, any);
+        return;
+    }
+}

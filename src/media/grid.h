@@ -158,4 +158,28 @@ void grid_region_range(const grid *g, grid_ibox box, float *min, float *max);
  * grid whose background is not 0 returns `box` itself. */
 bool grid_region_support(const grid *g, grid_ibox box, grid_ibox *out);
 
+/* The tree read once per 8^3 block of index space (the place of one leaf):
+ * what grid_region_range and grid_region_support would find there, so that
+ * many boxes over the same region cost one walk of the tree. */
+typedef enum {
+    GRID_BLOCK_ZERO,    /* no voxel may be non-zero (no active voxel, a 0 tile, no node) */
+    GRID_BLOCK_FULL,    /* every voxel may be (a fully active leaf, a non-zero tile) */
+    GRID_BLOCK_PARTIAL, /* a leaf's active voxels (its mask says which) */
+} grid_block_support;
+
+typedef struct {
+    float min, max;          /* as grid_region_range over the block's voxels */
+    uint32_t leaf;           /* GRID_BLOCK_PARTIAL: the leaf's byte offset in the buffer */
+    grid_block_support support; /* for a zero background (else see grid_region_support) */
+} grid_block;
+
+/* The blocks b (voxels 8 b .. 8 b + 7 per axis) of the inclusive box
+ * `blocks`, x fastest, into out (one per block). */
+void grid_blocks(const grid *g, grid_ibox blocks, grid_block *out);
+/* Adds to *acc (*any: whether it holds anything yet) the voxels of `box`
+ * where block b (first voxel `origin`) may be non-zero, as
+ * grid_region_support would find them. Zero background only. */
+void grid_block_support_add(const grid *g, const grid_block *b, const int32_t origin[3],
+                            grid_ibox box, grid_ibox *acc, bool *any);
+
 #endif

@@ -12,6 +12,10 @@
 /* A brick of the largest cells is 2^30 voxels: at most 5 per axis of the
  * int32 index space, so the layout always fits. */
 #define MAX_CELL (1 << 27)
+/* The most 8^3 blocks a worker reads a brick's box into (8 MiB): bricks of
+ * leaf-sized cells take 10^3, of 64-voxel cells 66^3; larger cells or pads
+ * ask the tree per cell instead. */
+#define WINDOW_MAX_BLOCKS ((size_t)1 << 19)
 
 /* floor(v / c) for a positive c, in 64 bits. */
 static int64_t floor_div(int64_t v, int64_t c) { return v >= 0 ? v / c : -((-v + c - 1) / c); }
@@ -27,20 +31,187 @@ typedef struct {
     grid_ibox em_active;
     bool em_empty;
     transform index_from_eindex; /* em not aligned: back from its index space */
+    bool boxes;                  /* cells get boxes (zero backgrounds) */
+    bool by_queries;             /* no windows: one tree query per box */
 } source;
 
+/* One grid's 8^3 blocks over a brick's box, read from the tree the first
+ * time a box of the brick asks (grid_blocks): every cell's bounds and box
+ * then take a few reads of it, and the tree is walked once per brick, not
+ * once per cell (a cell's box reads 27 leaves). Not filled (too large, no
+ * memory, or by_queries): boxes ask the tree. */
+typedef struct {
+    const grid *g;
+    grid_block *blocks;
+    size_t cap;
+    grid_ibox at; /* the window, in blocks */
+    int64_t n[3];
+    bool pending, filled;
+} window;
+
+/* A worker's view of the source: its windows over the current brick. */
+typedef struct {
+    const source *src;
+    window dens, emis; /* emis: an aligned emission grid's */
+} reader;
+
+static void window_free(window *w)
+{
+    free(w->blocks);
+    w->blocks = NULL;
+    w->cap = 0;
+}
+
+/* The window will cover voxel box `box`, once asked. */
+static void window_aim(window *w, grid_ibox box)
+{
+    for (int a = 0; a < 3; ++a) {
+        w->at.min[a] = (int32_t)floor_div(box.min[a], 8);
+        w->at.max[a] = (int32_t)floor_div(box.max[a], 8);
+        w->n[a] = (int64_t)w->at.max[a] - w->at.min[a] + 1;
+    }
+    w->pending = true;
+    w->filled = false;
+}
+
+/* The window ready for a box it was aimed at: false when it cannot be. */
+static bool window_ready(window *w)
+{
+    if (w->pending) {
+        w->pending = false;
+        size_t total = 1;
+        for (int a = 0; a < 3; ++a) {
+            if ((uint64_t)w->n[a] > WINDOW_MAX_BLOCKS || total * (size_t)w->n[a] > WINDOW_MAX_BLOCKS)
+                return false;
+            total *= (size_t)w->n[a];
+        }
+        if (total > w->cap) {
+            window_free(w);
+            w->blocks = malloc(total * sizeof *w->blocks);
+            if (!w->blocks)
+                return false;
+            w->cap = total;
+        }
+        grid_blocks(w->g, w->at, w->blocks);
+        w->filled = true;
+    }
+    return w->filled;
+}
+
+/* The blocks a voxel box touches, per axis, relative to the window. */
+static void window_span(const window *w, grid_ibox box, int64_t lo[3], int64_t hi[3])
+{
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = floor_div(box.min[a], 8) - w->at.min[a];
+        hi[a] = floor_div(box.max[a], 8) - w->at.min[a];
+    }
+}
+
+/* grid_region_range from the window: the blocks a box touches are the
+ * nodes and tiles it overlaps, and those no root tile covers hold the
+ * background. */
+static void window_range(const window *w, grid_ibox box, float *vmin, float *vmax)
+{
+    int64_t lo[3], hi[3];
+    window_span(w, box, lo, hi);
+    float l = INFINITY, h = -INFINITY;
+    for (int64_t z = lo[2]; z <= hi[2]; ++z)
+        for (int64_t y = lo[1]; y <= hi[1]; ++y) {
+            const grid_block *row = w->blocks + (size_t)((z * w->n[1] + y) * w->n[0]);
+            for (int64_t x = lo[0]; x <= hi[0]; ++x) {
+                l = row[x].min < l ? row[x].min : l;
+                h = row[x].max > h ? row[x].max : h;
+            }
+        }
+    *vmin = l;
+    *vmax = h;
+}
+
+/* Whether the support found so far reaches `enough` on every side (the
+ * cell's box is then whole whatever else the region holds: more support
+ * only widens it). */
+static bool saturated(bool any, const grid_ibox *acc, const grid_ibox *enough)
+{
+    if (!enough || !any)
+        return false;
+    for (int a = 0; a < 3; ++a)
+        if (acc->min[a] > enough->min[a] || acc->max[a] < enough->max[a])
+            return false;
+    return true;
+}
+
+/* Adds the support of the window's blocks in [lo, hi] (window-relative),
+ * skipping those in [skip_lo, skip_hi]; true once saturated. */
+static bool blocks_support(const window *w, grid_ibox box, const int64_t lo[3], const int64_t hi[3],
+                           const int64_t skip_lo[3], const int64_t skip_hi[3],
+                           const grid_ibox *enough, grid_ibox *out, bool *any)
+{
+    for (int64_t z = lo[2]; z <= hi[2]; ++z)
+        for (int64_t y = lo[1]; y <= hi[1]; ++y) {
+            const grid_block *row = w->blocks + (size_t)((z * w->n[1] + y) * w->n[0]);
+            bool skip_row = y >= skip_lo[1] && y <= skip_hi[1] && z >= skip_lo[2] && z <= skip_hi[2];
+            for (int64_t x = lo[0]; x <= hi[0]; ++x) {
+                if (row[x].support == GRID_BLOCK_ZERO ||
+                    (skip_row && x >= skip_lo[0] && x <= skip_hi[0]))
+                    continue;
+                const int32_t origin[3] = {(int32_t)((w->at.min[0] + x) * 8),
+                                           (int32_t)((w->at.min[1] + y) * 8),
+                                           (int32_t)((w->at.min[2] + z) * 8)};
+                grid_block_support_add(w->g, &row[x], origin, box, out, any);
+                if (saturated(*any, out, enough))
+                    return true;
+            }
+        }
+    return false;
+}
+
+/* grid_region_support from the window; or, once the support found reaches
+ * `enough` (NULL: never), that part of it: the blocks of `core` (inside
+ * `box`) first, where it most likely does. */
+static bool window_support(const window *w, grid_ibox box, const grid_ibox *core,
+                           const grid_ibox *enough, grid_ibox *out)
+{
+    if (grid_background(w->g) != 0.0f) {
+        *out = box;
+        return true;
+    }
+    int64_t lo[3], hi[3], clo[3], chi[3];
+    window_span(w, box, lo, hi);
+    window_span(w, *core, clo, chi);
+    const int64_t none[3] = {1, 1, 1}, nothing[3] = {0, 0, 0};
+    bool any = false;
+    if (!blocks_support(w, box, clo, chi, none, nothing, enough, out, &any))
+        blocks_support(w, box, lo, hi, clo, chi, enough, out, &any);
+    return any;
+}
+
 /* The range of `g` over `box` (its index space); the background alone when
- * the box misses the active voxels (no need to ask the tree). */
-static void range_over(const grid *g, const grid_ibox *active, bool empty, grid_ibox box,
-                       float *vmin, float *vmax)
+ * the box misses the active voxels (no need to ask the tree). `w`: its
+ * window, when the box lies in it (NULL: ask the tree). */
+static void range_over(const grid *g, const grid_ibox *active, bool empty, window *w,
+                       grid_ibox box, float *vmin, float *vmax)
 {
     bool apart = empty;
     for (int a = 0; a < 3; ++a)
         apart = apart || box.max[a] < active->min[a] || box.min[a] > active->max[a];
     if (apart)
         *vmin = *vmax = grid_background(g);
+    else if (w && window_ready(w))
+        window_range(w, box, vmin, vmax);
     else
         grid_region_range(g, box, vmin, vmax);
+}
+
+/* Where in `box` `g` may be non-zero (grid_region_support), from its window
+ * when it has one (and then only up to `enough`, see window_support). */
+static bool support_over(const grid *g, bool empty, window *w, grid_ibox box,
+                         const grid_ibox *core, const grid_ibox *enough, grid_ibox *out)
+{
+    if (empty)
+        return false;
+    if (w && window_ready(w))
+        return window_support(w, box, core, enough, out);
+    return grid_region_support(g, box, out);
 }
 
 static int32_t clamp_index(double v)
@@ -64,21 +235,27 @@ static grid_ibox map_box(const transform *t, grid_ibox box)
     return out;
 }
 
+/* A bound of at least 0: any zero (or NaN) is +0, so that bounds of the
+ * same values are the same bits in whatever order they were gathered. */
+static float nonnegative(float v) { return v > 0.0f ? v : 0.0f; }
+
 /* The emission grid's upper bound over a box of density voxels: the box's
  * corners mapped into its index space, rounded out by a voxel (its
  * trilinear lookups read the next one). */
-static float emission_bound(const source *src, grid_ibox box)
+static float emission_bound(reader *r, grid_ibox box)
 {
+    const source *src = r->src;
     const majorant_emission *em = src->em;
     grid_ibox ebox = em->aligned ? box : map_box(&em->eindex_from_index, box);
     float vmin, vmax;
-    range_over(em->grid, &src->em_active, src->em_empty, ebox, &vmin, &vmax);
-    return fmaxf(vmax, 0.0f);
+    range_over(em->grid, &src->em_active, src->em_empty, em->aligned ? &r->emis : NULL, ebox,
+               &vmin, &vmax);
+    return nonnegative(vmax);
 }
 
-/* The bounds of the trilinear density over `n` cells starting at voxel
- * `first` per axis: voxels first - 1 .. first + n + 1, widened by `pad`. */
-static majorant_bounds span_bounds(const source *src, const int64_t first[3], int64_t n)
+/* The voxels a span of `n` cells from voxel `first` reads, per axis:
+ * first - 1 .. first + n + 1, widened by `pad`. */
+static grid_ibox span_box(const source *src, const int64_t first[3], int64_t n)
 {
     grid_ibox box;
     for (int a = 0; a < 3; ++a) {
@@ -86,13 +263,66 @@ static majorant_bounds span_bounds(const source *src, const int64_t first[3], in
         box.min[a] = (int32_t)(v0 < INT32_MIN ? INT32_MIN : v0);
         box.max[a] = (int32_t)(v1 > INT32_MAX ? INT32_MAX : v1);
     }
+    return box;
+}
+
+/* The bounds of the trilinear density over `n` cells starting at voxel
+ * `first` per axis: over span_box's voxels. */
+static majorant_bounds span_bounds(reader *r, const int64_t first[3], int64_t n)
+{
+    const source *src = r->src;
+    grid_ibox box = span_box(src, first, n);
     float vmin, vmax;
-    range_over(src->g, &src->active, src->empty, box, &vmin, &vmax);
-    majorant_bounds b = {fmaxf(vmax, 0.0f), 0.0f, 0.0f};
-    b.min = fminf(fmaxf(vmin, 0.0f), b.max);
+    range_over(src->g, &src->active, src->empty, &r->dens, box, &vmin, &vmax);
+    majorant_bounds b = {nonnegative(vmax), 0.0f, 0.0f};
+    b.min = vmin > 0.0f ? fminf(vmin, b.max) : 0.0f;
     if (src->em)
-        b.emit = emission_bound(src, box);
+        b.emit = emission_bound(r, box);
     return b;
+}
+
+/* The next brick's box: the windows aim at it. */
+static void reader_aim(reader *r, const int64_t first[3], int64_t n)
+{
+    if (r->src->by_queries)
+        return;
+    grid_ibox box = span_box(r->src, first, n);
+    window_aim(&r->dens, box);
+    if (r->src->em && r->src->em->aligned)
+        window_aim(&r->emis, box);
+}
+
+static reader reader_start(const source *src)
+{
+    reader r = {src, {.g = src->g}, {.g = src->em ? src->em->grid : NULL}};
+    return r;
+}
+
+static void reader_end(reader *r)
+{
+    window_free(&r->dens);
+    window_free(&r->emis);
+}
+
+/* Where the emission grid may be non-zero in `region` of density voxels:
+ * its non-zero voxels, dilated by its own voxel of reach when its voxels
+ * are not the density's, mapped back. */
+static bool emission_support(reader *r, grid_ibox region, const grid_ibox *core,
+                             const grid_ibox *enough, grid_ibox *enz)
+{
+    const source *src = r->src;
+    const majorant_emission *em = src->em;
+    if (em->aligned)
+        return support_over(em->grid, src->em_empty, &r->emis, region, core, enough, enz);
+    if (!support_over(em->grid, src->em_empty, NULL, map_box(&em->eindex_from_index, region), NULL,
+                      NULL, enz))
+        return false;
+    for (int a = 0; a < 3; ++a) {
+        enz->min[a] = clamp_index((double)enz->min[a] - 1.0);
+        enz->max[a] = clamp_index((double)enz->max[a] + 1.0);
+    }
+    *enz = map_box(&src->index_from_eindex, *enz);
+    return true;
 }
 
 /* The box of a cell (voxels first .. first + cell - 1 per axis, bounds b)
@@ -100,37 +330,28 @@ static majorant_bounds span_bounds(const source *src, const int64_t first[3], in
  * a point p reads voxels floor(p) and floor(p) + 1, moved by up to `pad`, so
  * only points within 1 + pad voxels of a non-zero voxel can be non-zero; one
  * voxel more absorbs rounding, as in span_bounds. */
-static majorant_box cell_box(const source *src, const int64_t first[3], int32_t cell,
-                             majorant_bounds b)
+static majorant_box cell_box(reader *r, const int64_t first[3], int32_t cell, majorant_bounds b)
 {
+    const source *src = r->src;
     const majorant_box full = {{0, 0, 0},
                                {MAJORANT_BOX_UNITS, MAJORANT_BOX_UNITS, MAJORANT_BOX_UNITS}};
     majorant_box box = full;
     if (!(b.max > 0.0f))
         return full; /* walks take a cell without density whole */
-    grid_ibox region, nz;
-    int64_t reach[3];
+    grid_ibox region = span_box(src, first, cell), nz, enz;
+    /* The cell's own voxels, and how far the support must reach for the
+     * box below to come out whole (a support past `enough` on every side
+     * gives lo = 0 and hi = cell): the windows stop there. */
+    grid_ibox core, enough;
     for (int a = 0; a < 3; ++a) {
-        reach[a] = 1 + (int64_t)src->pad[a];
-        int64_t v0 = first[a] - reach[a], v1 = first[a] + cell + reach[a];
-        region.min[a] = (int32_t)(v0 < INT32_MIN ? INT32_MIN : v0);
-        region.max[a] = (int32_t)(v1 > INT32_MAX ? INT32_MAX : v1);
+        int64_t reach = 1 + (int64_t)src->pad[a];
+        core.min[a] = (int32_t)first[a];
+        core.max[a] = clamp_index((double)(first[a] + cell - 1));
+        enough.min[a] = clamp_index((double)(first[a] + reach + 1));
+        enough.max[a] = clamp_index((double)(first[a] + cell - reach - 1));
     }
-    bool any = !src->empty && grid_region_support(src->g, region, &nz);
-    /* and the emission grid, in its index space: its non-zero voxels,
-     * dilated by its own voxel of reach, mapped back */
-    const majorant_emission *em = src->em;
-    grid_ibox enz;
-    if (em && !src->em_empty &&
-        grid_region_support(em->grid, em->aligned ? region : map_box(&em->eindex_from_index, region),
-                            &enz)) {
-        if (!em->aligned) {
-            for (int a = 0; a < 3; ++a) {
-                enz.min[a] = clamp_index((double)enz.min[a] - 1.0);
-                enz.max[a] = clamp_index((double)enz.max[a] + 1.0);
-            }
-            enz = map_box(&src->index_from_eindex, enz);
-        }
+    bool any = support_over(src->g, src->empty, &r->dens, region, &core, &enough, &nz);
+    if (src->em && emission_support(r, region, &core, &enough, &enz)) {
         for (int a = 0; a < 3; ++a) {
             nz.min[a] = !any || enz.min[a] < nz.min[a] ? enz.min[a] : nz.min[a];
             nz.max[a] = !any || enz.max[a] > nz.max[a] ? enz.max[a] : nz.max[a];
@@ -143,8 +364,9 @@ static majorant_box cell_box(const source *src, const int64_t first[3], int32_t 
         return box;
     }
     for (int a = 0; a < 3; ++a) {
-        int64_t lo = (int64_t)nz.min[a] - reach[a] - 1 - first[a];
-        int64_t hi = (int64_t)nz.max[a] + reach[a] + 1 - first[a];
+        int64_t reach = 1 + (int64_t)src->pad[a];
+        int64_t lo = (int64_t)nz.min[a] - reach - 1 - first[a];
+        int64_t hi = (int64_t)nz.max[a] + reach + 1 - first[a];
         lo = lo < 0 ? 0 : lo > cell ? cell : lo;
         hi = hi < 0 ? 0 : hi > cell ? cell : hi;
         box.lo[a] = (uint8_t)(lo * MAJORANT_BOX_UNITS / cell); /* floor */
@@ -185,18 +407,26 @@ static uint64_t layout(const double l3[3], const double h3[3], int32_t cell, int
     return count;
 }
 
-/* The bricks' bounds and the non-uniform bricks' cells are independent
- * queries of the grid (a production grid's million cells took half a
- * second on one core): both run on every core, over chunks of bricks
- * handed out in order. */
+/* The cells of one brick that is not uniform, until they are stored. */
+typedef struct {
+    bool differ;            /* its cells differ: the brick keeps them */
+    majorant_bounds first;  /* its first cell's bounds */
+    majorant_bounds cells[CELLS_PER_BRICK];
+    majorant_box boxes[CELLS_PER_BRICK];
+} brick_cells;
+
+/* The bricks' bounds and the non-uniform bricks' cells are independent: both
+ * run on every core, over chunks of bricks handed out in order, each worker
+ * reading the tree through its own windows and writing only its bricks. */
 typedef struct {
     const source *src;
     majorant_grid *mg;
     size_t count;         /* bricks, or non-uniform bricks for the cells */
     atomic_size_t next;
     const size_t *brick;  /* the cells: the brick of each non-uniform one */
-    bool *differ;         /* ... whether its cells differ */
-    majorant_bounds *first; /* ... its first cell's bounds */
+    brick_cells **cells;  /* per brick: its cells once bounded (NULL: not yet) */
+    bool with_cells;      /* the bricks' pass bounds the cells too */
+    atomic_bool no_memory;
 } brick_job;
 
 enum { BRICK_CHUNK = 4 };
@@ -210,47 +440,16 @@ static void brick_xyz(const majorant_grid *mg, size_t i, int32_t b3[3])
     b3[2] = (int32_t)(i / ((size_t)mg->res[0] * (size_t)mg->res[1]));
 }
 
-static void *bound_bricks_worker(void *ctx)
+static void brick_first(const majorant_grid *mg, const int32_t b3[3], int64_t first[3])
 {
-    brick_job *job = ctx;
-    const majorant_grid *mg = job->mg;
-    int64_t edge = (int64_t)mg->cell * B;
-    for (;;) {
-        size_t i = atomic_fetch_add(&job->next, BRICK_CHUNK);
-        if (i >= job->count)
-            return NULL;
-        size_t end = i + BRICK_CHUNK < job->count ? i + BRICK_CHUNK : job->count;
-        for (; i < end; ++i) {
-            int32_t b3[3];
-            brick_xyz(mg, i, b3);
-            int64_t first[3];
-            for (int a = 0; a < 3; ++a)
-                first[a] = mg->origin[a] + b3[a] * edge;
-            majorant_brick *br = &job->mg->bricks[i];
-            br->bounds = span_bounds(job->src, first, edge);
-            br->cells = -1;
-        }
-    }
+    for (int a = 0; a < 3; ++a)
+        first[a] = mg->origin[a] + b3[a] * (int64_t)mg->cell * B;
 }
 
-/* Every brick's bounds; returns how many bricks are not uniform (their
- * cells may differ). */
-static size_t bound_bricks(const source *src, majorant_grid *mg)
-{
-    size_t count = (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2], varied = 0;
-    brick_job job = {.src = src, .mg = mg, .count = count};
-    atomic_init(&job.next, 0);
-    hz_parallel_run(threads_for(count), bound_bricks_worker, &job);
-    for (size_t i = 0; i < count; ++i)
-        varied += !uniform_bounds(mg->bricks[i].bounds);
-    return varied;
-}
-
-/* The cells of brick (x, y, z) into `cells`; true when they differ (the
- * brick must keep them), false when all are equal (their bounds are then the
- * brick's, tighter than the brick's own query). */
-static bool bound_cells(const source *src, majorant_grid *mg, const int32_t brick[3],
-                        majorant_bounds *cells, majorant_box *boxes, majorant_bounds *uniform)
+/* The cells of brick b3 into `out` (its windows aimed at the brick);
+ * differ: whether they differ (the brick must keep them), and when all are
+ * equal their bounds are the brick's, tighter than the brick's own query. */
+static void bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3], brick_cells *out)
 {
     size_t i = 0;
     bool differ = false;
@@ -260,21 +459,87 @@ static bool bound_cells(const source *src, majorant_grid *mg, const int32_t bric
                 const int32_t c3[3] = {x, y, z};
                 int64_t first[3];
                 for (int a = 0; a < 3; ++a)
-                    first[a] = mg->origin[a] + ((int64_t)brick[a] * B + c3[a]) * mg->cell;
-                cells[i] = span_bounds(src, first, mg->cell);
-                if (boxes)
-                    boxes[i] = cell_box(src, first, mg->cell, cells[i]);
-                differ = differ || !same_bounds(cells[i], cells[0]);
+                    first[a] = mg->origin[a] + ((int64_t)b3[a] * B + c3[a]) * mg->cell;
+                out->cells[i] = span_bounds(r, first, mg->cell);
+                if (r->src->boxes)
+                    out->boxes[i] = cell_box(r, first, mg->cell, out->cells[i]);
+                differ = differ || !same_bounds(out->cells[i], out->cells[0]);
             }
-    *uniform = cells[0];
-    return differ;
+    out->first = out->cells[0];
+    out->differ = differ;
+}
+
+/* The cells of brick i into job->cells[i]; false when out of memory. */
+static bool brick_cells_of(brick_job *job, reader *r, size_t i)
+{
+    int32_t b3[3];
+    int64_t first[3];
+    brick_xyz(job->mg, i, b3);
+    brick_first(job->mg, b3, first);
+    brick_cells *bc = malloc(sizeof *bc);
+    if (!bc)
+        return false;
+    reader_aim(r, first, (int64_t)job->mg->cell * B);
+    bound_cells(r, job->mg, b3, bc);
+    job->cells[i] = bc;
+    return true;
+}
+
+static void *bound_bricks_worker(void *ctx)
+{
+    brick_job *job = ctx;
+    majorant_grid *mg = job->mg;
+    reader r = reader_start(job->src);
+    for (;;) {
+        size_t i = atomic_fetch_add(&job->next, BRICK_CHUNK);
+        if (i >= job->count)
+            break;
+        size_t end = i + BRICK_CHUNK < job->count ? i + BRICK_CHUNK : job->count;
+        for (; i < end; ++i) {
+            int32_t b3[3];
+            int64_t first[3];
+            brick_xyz(mg, i, b3);
+            brick_first(mg, b3, first);
+            reader_aim(&r, first, (int64_t)mg->cell * B);
+            majorant_brick *br = &mg->bricks[i];
+            br->bounds = span_bounds(&r, first, (int64_t)mg->cell * B);
+            br->cells = -1;
+            /* the same windows: the brick's cells cost no second walk */
+            if (job->with_cells && !uniform_bounds(br->bounds)) {
+                brick_cells *bc = malloc(sizeof *bc);
+                if (bc)
+                    bound_cells(&r, mg, b3, bc);
+                job->cells[i] = bc; /* NULL: store_cells tries again */
+            }
+        }
+    }
+    reader_end(&r);
+    return NULL;
+}
+
+/* Every brick's bounds (and, with_cells, the cells of those not uniform);
+ * returns how many bricks are not uniform (their cells may differ). */
+static size_t bound_bricks(const source *src, majorant_grid *mg, brick_cells **cells)
+{
+    size_t count = (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2], varied = 0;
+    brick_job job = {.src = src, .mg = mg, .count = count, .cells = cells, .with_cells = cells != NULL};
+    atomic_init(&job.next, 0);
+    atomic_init(&job.no_memory, false);
+    hz_parallel_run(threads_for(count), bound_bricks_worker, &job);
+    for (size_t i = 0; i < count; ++i)
+        varied += !uniform_bounds(mg->bricks[i].bounds);
+    return varied;
 }
 
 /* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose varied
  * bricks fit MAJORANT_MAX_STORED_CELLS: lays out out's bricks and bounds
- * them. *varied: the bricks whose cells differ. */
+ * them. *varied: the bricks whose cells differ. When the layout is sure to
+ * be the last (too few bricks to vary beyond the limit), the same pass
+ * bounds the varied bricks' cells into *cells (one per brick, NULL where
+ * not), else *cells is NULL. */
 static hz_status choose_layout(const source *src, const double l3[3], const double h3[3],
-                               majorant_grid *out, size_t *varied, hz_error *err)
+                               majorant_grid *out, size_t *varied, brick_cells ***cells,
+                               hz_error *err)
 {
     for (;;) {
         int64_t first[3], res[3];
@@ -287,12 +552,15 @@ static hz_status choose_layout(const source *src, const double l3[3], const doub
             out->res[a] = (int32_t)res[a];
             out->origin[a] = (int32_t)(first[a] * out->cell * B);
         }
+        bool last = count <= MAJORANT_MAX_STORED_CELLS / CELLS_PER_BRICK || out->cell >= MAX_CELL;
         out->bricks = malloc((size_t)count * sizeof *out->bricks);
+        *cells = last && !src->by_queries ? calloc((size_t)count, sizeof **cells) : NULL;
         if (!out->bricks) {
+            free(*cells);
             majorant_grid_free(out);
             return hz_fail(err, "out of memory for a majorant grid of %zu bricks", (size_t)count);
         }
-        *varied = bound_bricks(src, out);
+        *varied = bound_bricks(src, out, *cells);
         if (*varied <= MAJORANT_MAX_STORED_CELLS / CELLS_PER_BRICK || out->cell >= MAX_CELL)
             return HZ_OK;
         free(out->bricks);
@@ -304,75 +572,72 @@ static hz_status choose_layout(const source *src, const double l3[3], const doub
 static void *store_cells_worker(void *ctx)
 {
     brick_job *job = ctx;
-    majorant_grid *mg = job->mg;
+    reader r = reader_start(job->src);
     for (;;) {
         size_t k = atomic_fetch_add(&job->next, 1);
         if (k >= job->count)
-            return NULL;
-        int32_t b3[3];
-        brick_xyz(mg, job->brick[k], b3);
-        size_t at = k * CELLS_PER_BRICK;
-        job->differ[k] = bound_cells(job->src, mg, b3, mg->cells + at,
-                                     mg->boxes ? mg->boxes + at : NULL, &job->first[k]);
+            break;
+        if (!job->cells[job->brick[k]] && !brick_cells_of(job, &r, job->brick[k]))
+            atomic_store(&job->no_memory, true);
     }
+    reader_end(&r);
+    return NULL;
 }
 
-/* Bounds the cells of every brick that is not uniform (`varied` of them),
- * keeping those whose cells differ, in brick order: each brick's cells
- * land in its own slot, then the kept ones move down over the dropped. */
-static hz_status store_cells(const source *src, majorant_grid *out, size_t varied, hz_error *err)
+/* Bounds the cells of every brick that is not uniform (`varied` of them)
+ * that the bricks' pass did not, then keeps those whose cells differ, in
+ * brick order. */
+static hz_status store_cells(const source *src, majorant_grid *out, size_t varied,
+                             brick_cells **cells, hz_error *err)
 {
     size_t count = (size_t)out->res[0] * (size_t)out->res[1] * (size_t)out->res[2];
-    brick_job job = {.src = src, .mg = out, .count = varied};
+    brick_job job = {.src = src, .mg = out, .count = varied, .cells = cells};
     atomic_init(&job.next, 0);
+    atomic_init(&job.no_memory, false);
     size_t *brick = malloc(varied * sizeof *brick);
-    job.differ = malloc(varied * sizeof *job.differ);
-    job.first = malloc(varied * sizeof *job.first);
-    if (!brick || !job.differ || !job.first) {
+    if (brick) {
+        for (size_t i = 0, k = 0; i < count; ++i)
+            if (!uniform_bounds(out->bricks[i].bounds))
+                brick[k++] = i;
+        job.brick = brick;
+        hz_parallel_run(threads_for(varied), store_cells_worker, &job);
+    }
+    size_t stored = 0;
+    for (size_t k = 0; brick && k < varied; ++k)
+        stored += cells[brick[k]] && cells[brick[k]]->differ;
+    out->cells = stored ? malloc(stored * CELLS_PER_BRICK * sizeof *out->cells) : NULL;
+    out->boxes = stored && src->boxes ? malloc(stored * CELLS_PER_BRICK * sizeof *out->boxes) : NULL;
+    if (!brick || atomic_load(&job.no_memory) || (stored && !out->cells) ||
+        (stored && src->boxes && !out->boxes)) {
         free(brick);
-        free(job.differ);
-        free(job.first);
         return hz_fail(err, "out of memory for a majorant grid of %zu cells",
                        varied * CELLS_PER_BRICK);
     }
-    for (size_t i = 0, k = 0; i < count; ++i)
-        if (!uniform_bounds(out->bricks[i].bounds))
-            brick[k++] = i;
-    job.brick = brick;
-    hz_parallel_run(threads_for(varied), store_cells_worker, &job);
     for (size_t k = 0; k < varied; ++k) {
+        const brick_cells *bc = cells[brick[k]];
         majorant_brick *br = &out->bricks[brick[k]];
-        br->bounds = job.first[k];
-        if (!job.differ[k])
+        br->bounds = bc->first;
+        if (!bc->differ)
             continue;
-        size_t from = k * CELLS_PER_BRICK, to = out->stored_bricks * CELLS_PER_BRICK;
-        if (from != to) {
-            memmove(out->cells + to, out->cells + from, CELLS_PER_BRICK * sizeof *out->cells);
-            if (out->boxes)
-                memmove(out->boxes + to, out->boxes + from, CELLS_PER_BRICK * sizeof *out->boxes);
-        }
+        size_t to = out->stored_bricks * CELLS_PER_BRICK;
+        memcpy(out->cells + to, bc->cells, sizeof bc->cells);
+        if (out->boxes)
+            memcpy(out->boxes + to, bc->boxes, sizeof bc->boxes);
         br->cells = (int32_t)out->stored_bricks++;
     }
     free(brick);
-    free(job.differ);
-    free(job.first);
     return HZ_OK;
 }
 
-/* p shrunk to `bytes` (freed for 0); p itself when realloc fails. */
-static void *shrink_to(void *p, size_t bytes)
+static void free_cells(brick_cells **cells, size_t count)
 {
-    void *kept = bytes ? realloc(p, bytes) : NULL;
-    if (kept || !bytes) {
-        if (!kept)
-            free(p);
-        return kept;
-    }
-    return p;
+    for (size_t i = 0; cells && i < count; ++i)
+        free(cells[i]);
+    free(cells);
 }
 
-hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
-                              const int32_t pad[3], majorant_grid *out, hz_error *err)
+static hz_status build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
+                       const int32_t pad[3], bool by_queries, majorant_grid *out, hz_error *err)
 {
     memset(out, 0, sizeof *out);
     out->cell = 8;
@@ -383,39 +648,46 @@ hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 l
         l3[a] = fmin(fmax(l3[a], (double)INT32_MIN), (double)INT32_MAX);
         h3[a] = fmin(fmax(h3[a], (double)INT32_MIN), (double)INT32_MAX);
     }
-    source src = {.g = g, .pad = pad, .em = em, .em_empty = true};
+    source src = {.g = g, .pad = pad, .em = em, .em_empty = true, .by_queries = by_queries};
     src.empty = !grid_index_bounds(g, &src.active);
     if (em) {
         src.em_empty = !grid_index_bounds(em->grid, &src.em_active);
         if (!em->aligned)
             src.index_from_eindex = transform_inverse(em->eindex_from_index);
     }
-    size_t varied = 0;
-    if (choose_layout(&src, l3, h3, out, &varied, err) != HZ_OK)
-        return HZ_ERROR;
-    if (varied == 0)
-        return HZ_OK;
-    out->cells = malloc(varied * CELLS_PER_BRICK * sizeof *out->cells);
     /* Boxes need zero backgrounds (an emission grid's always is). */
-    bool boxes = grid_background(g) == 0.0f && (!em || grid_background(em->grid) == 0.0f);
-    if (boxes)
-        out->boxes = malloc(varied * CELLS_PER_BRICK * sizeof *out->boxes);
-    if (!out->cells || (boxes && !out->boxes)) {
-        majorant_grid_free(out);
-        return hz_fail(err, "out of memory for a majorant grid of %zu cells",
-                       varied * CELLS_PER_BRICK);
-    }
-    if (store_cells(&src, out, varied, err) != HZ_OK) {
-        majorant_grid_free(out);
+    src.boxes = grid_background(g) == 0.0f && (!em || grid_background(em->grid) == 0.0f);
+    size_t varied = 0;
+    brick_cells **cells = NULL;
+    if (choose_layout(&src, l3, h3, out, &varied, &cells, err) != HZ_OK)
         return HZ_ERROR;
+    size_t count = (size_t)out->res[0] * (size_t)out->res[1] * (size_t)out->res[2];
+    if (varied == 0) {
+        free_cells(cells, count);
+        return HZ_OK;
     }
-    if (out->stored_bricks < varied) { /* give back what uniform bricks did not keep */
-        size_t kept = out->stored_bricks * CELLS_PER_BRICK;
-        out->cells = shrink_to(out->cells, kept * sizeof *out->cells);
-        if (out->boxes)
-            out->boxes = shrink_to(out->boxes, kept * sizeof *out->boxes);
-    }
-    return HZ_OK;
+    if (!cells)
+        cells = calloc(count, sizeof *cells);
+    hz_status st = cells ? store_cells(&src, out, varied, cells, err)
+                         : hz_fail(err, "out of memory for a majorant grid of %zu cells",
+                                   varied * CELLS_PER_BRICK);
+    free_cells(cells, count);
+    if (st != HZ_OK)
+        majorant_grid_free(out);
+    return st;
+}
+
+hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
+                              const int32_t pad[3], majorant_grid *out, hz_error *err)
+{
+    return build(g, em, lo, hi, pad, false, out, err);
+}
+
+hz_status majorant_grid_build_by_queries(const grid *g, const majorant_emission *em, vec3 lo,
+                                         vec3 hi, const int32_t pad[3], majorant_grid *out,
+                                         hz_error *err)
+{
+    return build(g, em, lo, hi, pad, true, out, err);
 }
 
 void majorant_grid_free(majorant_grid *mg)

@@ -1,8 +1,9 @@
 /* The majorant grid of a grid medium: a coarse grid over the density's
  * support, in the density grid's index space, holding per cell an upper and a
  * lower bound of the trilinear density anywhere in the cell. Built once from
- * the NanoVDB tree's node statistics (grid_region_range: leaf min/max, tile
- * values, the background), never from the voxels themselves.
+ * the NanoVDB tree's node statistics (leaf min/max, tile values, the
+ * background: grid_blocks, the tree walked once per brick), never from the
+ * voxels themselves.
  *
  * Two levels, so that memory follows the data and not its bounding box:
  * bricks of MAJORANT_BRICK^3 cells cover the support (at most
@@ -85,6 +86,13 @@ typedef struct {
  * out of memory. */
 hz_status majorant_grid_build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
                               const int32_t pad[3], majorant_grid *out, hz_error *err);
+/* The same grid, bit for bit, from one tree query per brick and per cell
+ * (grid_region_range, grid_region_support) instead of one walk of the tree
+ * per brick: many times slower, kept as the reference the tests compare
+ * majorant_grid_build with. */
+hz_status majorant_grid_build_by_queries(const grid *g, const majorant_emission *em, vec3 lo,
+                                         vec3 hi, const int32_t pad[3], majorant_grid *out,
+                                         hz_error *err);
 void majorant_grid_free(majorant_grid *mg);
 size_t majorant_grid_bytes(const majorant_grid *mg);
 /* The bounds of the cell holding the index-space point p; false outside the

@@ -9,6 +9,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <zlib.h>
+#ifdef __SSE__
+#include <xmmintrin.h>
+#endif
 
 #include "core/parallel.h"
 
@@ -318,6 +321,73 @@ static int leaf_bad_value(values *v, pnanovdb_leaf_handle_t leaf, const uint32_t
                 origin.z);
 }
 
+/* The first zero of x[0 .. n) (which of +0 and -0 a running minimum or
+ * maximum met first keeps). */
+static float first_zero(const float *x, uint32_t n)
+{
+    for (uint32_t i = 0; i < n; ++i)
+        if (x[i] == 0.0f)
+            return x[i];
+    return 0.0f;
+}
+
+enum { LANES = 8 };
+
+/* A fully active leaf's values: in range (*bad when not) and their range,
+ * in LANES running minima and maxima that the compiler keeps in vector
+ * registers; the same bits as one running minimum and maximum (a zero
+ * result is the first zero met, as that keeps it). A NaN or an infinity
+ * makes its lane's sum of v * 0 NaN. */
+static bool full_leaf_range(const float *x, float floor_value, float *lo, float *hi)
+{
+    float l[LANES], h[LANES], z[LANES];
+#ifdef __SSE__
+    /* minps(v, l) is v < l ? v : l, lane by lane (maxps likewise) */
+    __m128 l0 = _mm_set1_ps(INFINITY), l1 = l0, h0 = _mm_set1_ps(-INFINITY), h1 = h0;
+    __m128 z0 = _mm_setzero_ps(), z1 = z0;
+    const __m128 zero = _mm_setzero_ps();
+    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; n += LANES) {
+        __m128 v0 = _mm_loadu_ps(x + n), v1 = _mm_loadu_ps(x + n + 4);
+        l0 = _mm_min_ps(v0, l0);
+        l1 = _mm_min_ps(v1, l1);
+        h0 = _mm_max_ps(v0, h0);
+        h1 = _mm_max_ps(v1, h1);
+        z0 = _mm_add_ps(z0, _mm_mul_ps(v0, zero));
+        z1 = _mm_add_ps(z1, _mm_mul_ps(v1, zero));
+    }
+    _mm_storeu_ps(l, l0);
+    _mm_storeu_ps(l + 4, l1);
+    _mm_storeu_ps(h, h0);
+    _mm_storeu_ps(h + 4, h1);
+    _mm_storeu_ps(z, z0);
+    _mm_storeu_ps(z + 4, z1);
+#else
+    for (int k = 0; k < LANES; ++k) {
+        l[k] = INFINITY;
+        h[k] = -INFINITY;
+        z[k] = 0.0f;
+    }
+    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; n += LANES)
+        for (int k = 0; k < LANES; ++k) {
+            float v = x[n + (uint32_t)k];
+            l[k] = v < l[k] ? v : l[k];
+            h[k] = v > h[k] ? v : h[k];
+            z[k] += v * 0.0f;
+        }
+#endif
+    bool bad = false;
+    for (int k = 0; k < LANES; ++k) {
+        bad = bad || z[k] != 0.0f;
+        *lo = k == 0 || l[k] < *lo ? l[k] : *lo;
+        *hi = k == 0 || h[k] > *hi ? h[k] : *hi;
+    }
+    if (*lo == 0.0f)
+        *lo = first_zero(x, PNANOVDB_LEAF_TABLE_COUNT);
+    if (*hi == 0.0f)
+        *hi = first_zero(x, PNANOVDB_LEAF_TABLE_COUNT);
+    return bad || !(*lo >= floor_value);
+}
+
 /* One leaf: its mask and value table copied out in two moves (the per-voxel
  * accessors cost 5 ns a voxel), inactive values folded, active ones checked
  * without a branch per voxel. */
@@ -331,7 +401,14 @@ static int leaf_values(values *v, pnanovdb_leaf_handle_t leaf, float *lo, float 
     const float floor_value = v->signed_ok ? -FLT_MAX : 0.0f;
     float l = INFINITY, h = -INFINITY;
     bool bad = false, a = false;
-    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; ++n) {
+    uint32_t full = 0xFFFFFFFFu;
+    for (uint32_t w = 0; w < PNANOVDB_LEAF_TABLE_COUNT / 32; ++w)
+        full &= mask[w];
+    if (full == 0xFFFFFFFFu) { /* most leaves of a dense grid: no voxel to fold */
+        bad = full_leaf_range(x, floor_value, &l, &h);
+        a = true;
+    }
+    for (uint32_t n = 0; full != 0xFFFFFFFFu && n < PNANOVDB_LEAF_TABLE_COUNT; ++n) {
         if (!(mask[n >> 5] >> (n & 31) & 1)) {
             if (x[n] != v->bg) {
                 memcpy(v->data + table + 4 * (uint64_t)n, &v->bg, sizeof v->bg);

@@ -10,7 +10,9 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "core/rng.h"
 #include "core/transform.h"
@@ -459,6 +461,91 @@ static void memory_follows_active_data(void **state)
     destroy(&f);
 }
 
+/* majorant_grid_build (the tree walked once per brick) and
+ * majorant_grid_build_by_queries (one query per brick and cell) make the
+ * same grid, bit for bit: layout, bricks, cells and boxes. */
+static void same_as_by_queries(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
+                               int32_t pad, const char *what)
+{
+    majorant_grid a, b;
+    hz_error err = {0};
+    int32_t p[3] = {pad, pad + 1, 2 * pad}; /* unequal axes too */
+    assert_int_equal(majorant_grid_build(g, em, lo, hi, p, &a, &err), HZ_OK);
+    assert_int_equal(majorant_grid_build_by_queries(g, em, lo, hi, p, &b, &err), HZ_OK);
+    size_t bricks = (size_t)a.res[0] * (size_t)a.res[1] * (size_t)a.res[2];
+    size_t cells = a.stored_bricks * MAJORANT_BRICK * MAJORANT_BRICK * MAJORANT_BRICK;
+    if (memcmp(a.res, b.res, sizeof a.res) != 0 || memcmp(a.origin, b.origin, sizeof a.origin) != 0 ||
+        a.cell != b.cell || a.stored_bricks != b.stored_bricks || (a.boxes == NULL) != (b.boxes == NULL))
+        fail_msg("%s, pad %d: the layouts differ", what, pad);
+    if (bricks && memcmp(a.bricks, b.bricks, bricks * sizeof *a.bricks) != 0)
+        fail_msg("%s, pad %d: the bricks differ", what, pad);
+    if (cells && memcmp(a.cells, b.cells, cells * sizeof *a.cells) != 0)
+        fail_msg("%s, pad %d: the cells differ", what, pad);
+    if (cells && a.boxes && memcmp(a.boxes, b.boxes, cells * sizeof *a.boxes) != 0)
+        fail_msg("%s, pad %d: the boxes differ", what, pad);
+    majorant_grid_free(&a);
+    majorant_grid_free(&b);
+}
+
+static void bottom_up_is_by_queries(void **state)
+{
+    (void)state;
+    const char *files[] = {"box.vdb",  "box_inactive.vdb", "fog_sphere.vdb", "sheet.vdb",
+                           "smoke.vdb", "plume.vdb",       "sparse.vdb",     "explosion.vdb"};
+    int stored = 0, boxed = 0;
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        char path[512];
+        snprintf(path, sizeof path, "%s%s", VOLUMES, files[i]);
+        grid *g = NULL;
+        hz_error err = {0};
+        if (grid_load(path, "density", &g, &err) != HZ_OK || grid_check_density(g, &err) != HZ_OK)
+            fail_msg("%s", err.message);
+        vec3 lo, hi;
+        assert_true(grid_support_bounds(g, &lo, &hi));
+        for (int32_t pad = 0; pad <= 9; pad += 3)
+            same_as_by_queries(g, NULL, lo, hi, pad, files[i]);
+        /* a support wider than the data, off centre: empty bricks and
+         * windows past the tree's nodes */
+        same_as_by_queries(g, NULL, v3(lo.x - 300, lo.y - 40, lo.z), v3(hi.x + 90, hi.y, hi.z + 700),
+                           0, files[i]);
+        majorant_grid mg;
+        int32_t p0[3] = {0, 0, 0};
+        assert_int_equal(majorant_grid_build(g, NULL, lo, hi, p0, &mg, &err), HZ_OK);
+        stored += mg.stored_bricks > 0;
+        boxed += mg.boxes != NULL;
+        majorant_grid_free(&mg);
+        grid_destroy(g);
+    }
+    assert_true(stored >= 6); /* the comparisons saw cells, not only bricks */
+    assert_true(boxed >= 6);
+}
+
+/* ... and with an emission grid, in the density's index space or not. */
+static void bottom_up_is_by_queries_with_emission(void **state)
+{
+    (void)state;
+    grid *g = NULL, *e = NULL;
+    hz_error err = {0};
+    if (grid_load(VOLUMES "sparse.vdb", "density", &g, &err) != HZ_OK ||
+        grid_load(VOLUMES "smoke.vdb", "density", &e, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    vec3 lo, hi, elo, ehi;
+    assert_true(grid_support_bounds(g, &lo, &hi));
+    assert_true(grid_support_bounds(e, &elo, &ehi));
+    lo = v3(fmin(lo.x, elo.x), fmin(lo.y, elo.y), fmin(lo.z, elo.z));
+    hi = v3(fmax(hi.x, ehi.x), fmax(hi.y, ehi.y), fmax(hi.z, ehi.z));
+    majorant_emission aligned = {e, true, transform_identity()};
+    majorant_emission moved = {e, false,
+                               transform_compose(transform_translate(v3(3, -2, 5)),
+                                                 transform_scale(v3(0.5, 0.5, 0.5)))};
+    for (int32_t pad = 0; pad <= 2; pad += 2) {
+        same_as_by_queries(g, &aligned, lo, hi, pad, "sparse.vdb lit by smoke.vdb");
+        same_as_by_queries(g, &moved, lo, hi, pad, "sparse.vdb lit by smoke.vdb, moved");
+    }
+    grid_destroy(g);
+    grid_destroy(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -471,6 +558,8 @@ int main(void)
         cmocka_unit_test(empty_support_has_no_cells),
         cmocka_unit_test(huge_supports_stay_bounded),
         cmocka_unit_test(memory_follows_active_data),
+        cmocka_unit_test(bottom_up_is_by_queries),
+        cmocka_unit_test(bottom_up_is_by_queries_with_emission),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
