@@ -33,6 +33,19 @@ rgb spectral_from_rgb(const spectral_ctx *sp, rgb c, spectral_use use)
     return rgb_make(v[0], v[1], v[2]);
 }
 
+rgb spectral_from_value(const spectral_ctx *sp, const spectrum_value *s)
+{
+    if (s->kind == SPECTRUM_VALUE_RGB) {
+        spectral_use use = s->use == SPECTRUM_USE_ALBEDO      ? SPECTRAL_ALBEDO
+                           : s->use == SPECTRUM_USE_UNBOUNDED ? SPECTRAL_UNBOUNDED
+                                                              : SPECTRAL_ILLUMINANT;
+        return spectral_from_rgb(sp, s->rgb, use);
+    }
+    const double *l = sp->wl.lambda;
+    return rgb_make(spectrum_value_eval(s, l[0]), spectrum_value_eval(s, l[1]),
+                    spectrum_value_eval(s, l[2]));
+}
+
 rgb spectral_to_rgb(const spectral_ctx *sp, rgb L)
 {
     (void)sp;

@@ -15,6 +15,7 @@
 #include "color/rgb2spec_table.h"
 #include "color/wavelengths.h"
 #include "core/vec.h"
+#include "scene/spectrum_value.h"
 
 typedef enum { SPECTRAL_ALBEDO, SPECTRAL_UNBOUNDED, SPECTRAL_ILLUMINANT } spectral_use;
 
@@ -25,6 +26,9 @@ typedef struct {
 
 /* The lanes of RGB colour c (sRGB) used as `use`. */
 rgb spectral_from_rgb(const spectral_ctx *sp, rgb c, spectral_use use);
+/* The lanes of a scene spectrum: an RGB one as spectral_from_rgb for its
+ * use, a native one (blackbody, sampled) at the wavelengths themselves. */
+rgb spectral_from_value(const spectral_ctx *sp, const spectrum_value *s);
 /* The RGB (sRGB) the lanes L estimate: XYZ (wavelengths_xyz) through the
  * table's matrix, whose white is its illuminant's (an illuminant spectrum
  * of RGB (1, 1, 1) comes out (1, 1, 1) in expectation). */

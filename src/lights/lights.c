@@ -340,8 +340,18 @@ static const struct {
 
 /* A light haze can trace (its position within HZ_MAX_COORD) whose every
  * parameter was used; on failure frees what `out` holds (an image). */
+/* out->spectrum from parameter `name` ("I" or "L"), and the factor that
+ * makes emit of it. */
+static void light_keep_spectrum(param_list *pl, const char *name, light *out)
+{
+    out->spectrum = params_spectrum(pl, name, SPECTRUM_USE_ILLUMINANT, rgb_grey(1.0));
+    double m = rgb_max(out->spectrum.rgb);
+    out->spectrum_factor = m > 0.0 ? rgb_max(out->emit) / m : 0.0;
+}
+
 static hz_status light_finish(param_list *pl, const char *type, light *out, hz_error *err)
 {
+    light_keep_spectrum(pl, out->kind == LIGHT_POINT || out->kind == LIGHT_SPOT ? "I" : "L", out);
     vec3 p = out->kind == LIGHT_POINT  ? out->point.p
              : out->kind == LIGHT_SPOT ? out->spot.p
                                        : v3(0, 0, 0);
@@ -482,6 +492,7 @@ static hz_status area_from_entity(scene_entity *e, const geom_shape *shape, ligh
         scale *= area_power_scale(pl, shape, power, out->area.two_sided) /
                  (out->area.image ? light_image_luminance(out->area.image) : 1.0);
     out->emit = rgb_scale(L, scale);
+    light_keep_spectrum(pl, "L", out);
     if (params_finish(pl, "AreaLightSource \"diffuse\"", err) != HZ_OK)
         return HZ_ERROR;
 
@@ -700,7 +711,9 @@ rgb light_phi(const light *l, double scene_radius)
 
 rgb light_emit_spectral(const light *l, const spectral_ctx *sp)
 {
-    return spectral_from_rgb(sp, l->emit, SPECTRAL_ILLUMINANT);
+    if (l->spectrum.kind == SPECTRUM_VALUE_RGB)
+        return spectral_from_rgb(sp, l->emit, SPECTRAL_ILLUMINANT);
+    return rgb_scale(spectral_from_value(sp, &l->spectrum), l->spectrum_factor);
 }
 
 static bool light_has_image(const light *l)

@@ -16,12 +16,18 @@
 #include "geometry/geometry.h"
 #include "lights/envmap.h"
 #include "scene/scene_desc.h"
+#include "scene/spectrum_value.h"
 
 typedef enum { LIGHT_POINT, LIGHT_SPOT, LIGHT_DISTANT, LIGHT_INFINITE, LIGHT_AREA } light_kind;
 
 typedef struct {
     light_kind kind;
     rgb emit; /* I (point, spot) or L (distant, infinite, area), scale and power applied */
+    /* The "I" or "L" spectrum as given (an RGB, a blackbody, sampled
+     * values), as an illuminant: emit = spectrum_factor * spectrum.rgb.
+     * Spectral rendering emits spectrum_factor times this spectrum. */
+    spectrum_value spectrum;
+    double spectrum_factor;
     union {
         struct {
             vec3 p;
