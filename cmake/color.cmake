@@ -1,6 +1,8 @@
 # RGB -> spectrum tables (src/color, docs/spectral.md): tools/rgb2spec_opt.c
-# solves them at build time into the build tree, and haze_color compiles them
-# with the colour module. Included from the top-level CMakeLists.txt.
+# solves them at build time into the build tree, and they are built into a
+# data module, libhaze_rgb2spec.so next to haze, that haze_color loads when a
+# render needs them (src/color/rgb2spec_module.h). Included from the
+# top-level CMakeLists.txt.
 
 set(HAZE_RGB2SPEC_RES 64 CACHE STRING "Nodes per axis of the RGB -> spectrum tables")
 
@@ -34,6 +36,27 @@ add_custom_command(OUTPUT ${HAZE_RGB2SPEC_TABLES} ${HAZE_RGB2SPEC_BLOB}
   COMMENT "Solving the RGB -> spectrum tables (${HAZE_RGB2SPEC_RES}^3 per colour space)"
   VERBATIM)
 
+# The module: the generated source (included by the module's one source
+# file) and the entry table. It exports that table only: the blob's symbol and
+# the solutions stay local.
+add_library(haze_rgb2spec MODULE ${CMAKE_SOURCE_DIR}/src/color/module/rgb2spec_module.c)
+target_include_directories(haze_rgb2spec PRIVATE ${CMAKE_SOURCE_DIR}/src ${CMAKE_BINARY_DIR}/generated)
+target_compile_options(haze_rgb2spec PRIVATE ${HAZE_WARNINGS})
+set_target_properties(haze_rgb2spec PROPERTIES LIBRARY_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}
+  C_VISIBILITY_PRESET hidden)
+set_source_files_properties(${CMAKE_SOURCE_DIR}/src/color/module/rgb2spec_module.c
+  PROPERTIES OBJECT_DEPENDS "${HAZE_RGB2SPEC_TABLES};${HAZE_RGB2SPEC_BLOB}")
+target_link_options(haze_rgb2spec PRIVATE
+  -Wl,--version-script=${CMAKE_SOURCE_DIR}/src/color/module/rgb2spec_module.map)
+set_property(TARGET haze_rgb2spec APPEND PROPERTY LINK_DEPENDS
+  ${CMAKE_SOURCE_DIR}/src/color/module/rgb2spec_module.map)
+add_custom_target(haze_rgb2spec_tables DEPENDS ${HAZE_RGB2SPEC_TABLES} ${HAZE_RGB2SPEC_BLOB})
+add_dependencies(haze_rgb2spec haze_rgb2spec_tables)
+
+# haze_color finds the module next to the executable or in the build tree;
+# whatever links it gets the module built.
 haze_subsystem(color haze_scene)
-target_sources(haze_color PRIVATE ${HAZE_RGB2SPEC_TABLES})
-set_source_files_properties(${HAZE_RGB2SPEC_TABLES} PROPERTIES OBJECT_DEPENDS ${HAZE_RGB2SPEC_BLOB})
+target_compile_definitions(haze_color PRIVATE
+  HAZE_RGB2SPEC_MODULE_NAME="$<TARGET_FILE_NAME:haze_rgb2spec>"
+  HAZE_RGB2SPEC_MODULE_BUILD_PATH="$<TARGET_FILE:haze_rgb2spec>")
+add_dependencies(haze_color haze_rgb2spec)

@@ -1,13 +1,17 @@
 /* The RGB -> spectrum coefficient tables (Jakob and Hanika 2019, "A
  * Low-Dimensional Function Space for Efficient Spectral Upsampling"), one per
  * colour space, written at build time by tools/rgb2spec_opt.c into the build
- * tree (rgb2spec_tables.c). Read through color/rgb_spectrum.h; the layout is
- * pbrt-v4's RGBToSpectrumTable. */
+ * tree (rgb2spec_tables.{c,bin}) and built into a module that haze loads when
+ * a render needs them (color/rgb2spec_module.h). Read through
+ * color/rgb_spectrum.h; the layout is pbrt-v4's RGBToSpectrumTable. */
 #ifndef HAZE_COLOR_RGB2SPEC_TABLE_H
 #define HAZE_COLOR_RGB2SPEC_TABLE_H
 
 #include "core/color_space.h"
 
+/* One colour space's solution, as the generator writes it (in the generated
+ * source it is named rgb2spec_table: the module renames it, see
+ * color/module/rgb2spec_module.c). */
 typedef struct {
     int res; /* nodes along each axis */
     /* The largest component's nodes, z_nodes[k] = smoothstep(smoothstep(
@@ -28,8 +32,13 @@ typedef struct {
      * film sees it) and the matrices between XYZ and RGB with that white. */
     double white_xyz[3];
     double xyz_from_rgb[9], rgb_from_xyz[9];
-} rgb2spec_table;
+} rgb2spec_solution;
 
-extern const rgb2spec_table rgb2spec_tables[COLOR_SPACE_COUNT];
+/* The table of one colour space: the module holds one per color_space, in
+ * that order. */
+typedef struct {
+    color_space cs; /* whose illuminant the spectra are under */
+    const rgb2spec_solution *solution;
+} rgb2spec_table;
 
 #endif

@@ -1,16 +1,8 @@
 #include "color/rgb_spectrum.h"
 
-#include <assert.h>
 #include <math.h>
 
 #include "color/illuminant.h"
-#include "color/rgb2spec_table.h"
-
-static const rgb2spec_table *table_of(color_space cs)
-{
-    assert(cs >= 0 && cs < COLOR_SPACE_COUNT);
-    return &rgb2spec_tables[cs];
-}
 
 static double sigmoid(double x)
 {
@@ -51,12 +43,12 @@ static int cell(const float *nodes, int res, double v, double *frac)
     return lo;
 }
 
-sigmoid_poly sigmoid_poly_from_rgb(color_space cs, rgb c)
+sigmoid_poly sigmoid_poly_from_rgb(const rgb2spec_table *table, rgb c)
 {
     double v[3] = {unit(c.r), unit(c.g), unit(c.b)};
     if (v[0] == v[1] && v[1] == v[2]) /* grey: the sigmoid's inverse */
         return (sigmoid_poly){0.0, 0.0, (v[0] - 0.5) / sqrt(v[0] * (1.0 - v[0]))};
-    const rgb2spec_table *t = table_of(cs);
+    const rgb2spec_solution *t = table->solution;
     int res = t->res;
     int m = v[0] > v[1] ? (v[0] > v[2] ? 0 : 2) : (v[1] > v[2] ? 1 : 2);
     double z = v[m], dx, dy, dz;
@@ -76,9 +68,9 @@ sigmoid_poly sigmoid_poly_from_rgb(color_space cs, rgb c)
     return (sigmoid_poly){out[0], out[1], out[2]};
 }
 
-rgb_albedo_spectrum rgb_albedo_spectrum_from_rgb(color_space cs, rgb c)
+rgb_albedo_spectrum rgb_albedo_spectrum_from_rgb(const rgb2spec_table *t, rgb c)
 {
-    return (rgb_albedo_spectrum){sigmoid_poly_from_rgb(cs, c)};
+    return (rgb_albedo_spectrum){sigmoid_poly_from_rgb(t, c)};
 }
 
 double rgb_albedo_spectrum_eval(rgb_albedo_spectrum s, double lambda)
@@ -89,17 +81,17 @@ double rgb_albedo_spectrum_eval(rgb_albedo_spectrum s, double lambda)
 /* 2 max(c) and the polynomial of c / (2 max): pbrt-v4's split of an
  * unbounded RGB, which looks up a colour of largest component 1/2, away from
  * the top of the table where spectra saturate. */
-static void split_unbounded(color_space cs, rgb c, double *scale, sigmoid_poly *poly)
+static void split_unbounded(const rgb2spec_table *t, rgb c, double *scale, sigmoid_poly *poly)
 {
     rgb v = rgb_make(c.r > 0.0 ? c.r : 0.0, c.g > 0.0 ? c.g : 0.0, c.b > 0.0 ? c.b : 0.0);
     *scale = 2.0 * rgb_max(v);
-    *poly = sigmoid_poly_from_rgb(cs, *scale > 0.0 ? rgb_scale(v, 1.0 / *scale) : v);
+    *poly = sigmoid_poly_from_rgb(t, *scale > 0.0 ? rgb_scale(v, 1.0 / *scale) : v);
 }
 
-rgb_unbounded_spectrum rgb_unbounded_spectrum_from_rgb(color_space cs, rgb c)
+rgb_unbounded_spectrum rgb_unbounded_spectrum_from_rgb(const rgb2spec_table *t, rgb c)
 {
     rgb_unbounded_spectrum s;
-    split_unbounded(cs, c, &s.scale, &s.poly);
+    split_unbounded(t, c, &s.scale, &s.poly);
     return s;
 }
 
@@ -108,10 +100,10 @@ double rgb_unbounded_spectrum_eval(rgb_unbounded_spectrum s, double lambda)
     return s.scale * sigmoid_poly_eval(s.poly, lambda);
 }
 
-rgb_illuminant_spectrum rgb_illuminant_spectrum_from_rgb(color_space cs, rgb c)
+rgb_illuminant_spectrum rgb_illuminant_spectrum_from_rgb(const rgb2spec_table *t, rgb c)
 {
-    rgb_illuminant_spectrum s = {.cs = cs};
-    split_unbounded(cs, c, &s.scale, &s.poly);
+    rgb_illuminant_spectrum s = {.table = t};
+    split_unbounded(t, c, &s.scale, &s.poly);
     return s;
 }
 
@@ -119,31 +111,31 @@ double rgb_illuminant_spectrum_eval(rgb_illuminant_spectrum s, double lambda)
 {
     if (s.scale == 0.0)
         return 0.0;
-    return s.scale * sigmoid_poly_eval(s.poly, lambda) * rgb_spectrum_illuminant(s.cs, lambda);
+    return s.scale * sigmoid_poly_eval(s.poly, lambda) * rgb_spectrum_illuminant(s.table, lambda);
 }
 
-double rgb_spectrum_illuminant(color_space cs, double lambda)
+double rgb_spectrum_illuminant(const rgb2spec_table *t, double lambda)
 {
-    return table_of(cs)->illuminant_scale *
-           illuminant_raw(illuminant_of_color_space(cs), lambda);
+    return t->solution->illuminant_scale *
+           illuminant_raw(illuminant_of_color_space(t->cs), lambda);
 }
 
-vec3 rgb_spectrum_white_xyz(color_space cs)
+vec3 rgb_spectrum_white_xyz(const rgb2spec_table *t)
 {
-    const double *w = table_of(cs)->white_xyz;
+    const double *w = t->solution->white_xyz;
     return v3(w[0], w[1], w[2]);
 }
 
-rgb rgb_spectrum_rgb_from_xyz(color_space cs, vec3 v)
+rgb rgb_spectrum_rgb_from_xyz(const rgb2spec_table *t, vec3 v)
 {
-    const double *m = table_of(cs)->rgb_from_xyz;
+    const double *m = t->solution->rgb_from_xyz;
     return rgb_make(m[0] * v.x + m[1] * v.y + m[2] * v.z, m[3] * v.x + m[4] * v.y + m[5] * v.z,
                     m[6] * v.x + m[7] * v.y + m[8] * v.z);
 }
 
-vec3 rgb_spectrum_xyz_from_rgb(color_space cs, rgb c)
+vec3 rgb_spectrum_xyz_from_rgb(const rgb2spec_table *t, rgb c)
 {
-    const double *m = table_of(cs)->xyz_from_rgb;
+    const double *m = t->solution->xyz_from_rgb;
     return v3(m[0] * c.r + m[1] * c.g + m[2] * c.b, m[3] * c.r + m[4] * c.g + m[5] * c.b,
               m[6] * c.r + m[7] * c.g + m[8] * c.b);
 }

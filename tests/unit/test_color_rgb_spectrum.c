@@ -10,7 +10,7 @@
 #include <stdio.h>
 
 #include "color/illuminant.h"
-#include "color/rgb2spec_table.h"
+#include "color/rgb2spec_module.h"
 #include "color/rgb_spectrum.h"
 #include "scene/spectrum.h"
 
@@ -29,6 +29,11 @@ typedef struct {
 
 /* Simpson's rule at 0.25 nm, and at 1 nm for the scan of every cell. */
 static quad quads[COLOR_SPACE_COUNT], coarse_srgb;
+/* The module's tables, loaded once by setup. */
+static const rgb2spec_table *tables;
+
+static const rgb2spec_table *table(color_space cs) { return &tables[cs]; }
+static const rgb2spec_table *srgb(void) { return table(COLOR_SPACE_SRGB); }
 
 static void quad_init(color_space cs, double step, quad *q)
 {
@@ -41,7 +46,7 @@ static void quad_init(color_space cs, double step, quad *q)
         double qw = (n == 0 || n == q->n - 1 ? 1.0 : n % 2 ? 4.0 : 2.0) * step / 3.0;
         vec3 cmf = spectrum_cie_xyz(l);
         q->lambda[n] = l;
-        q->w[n] = v3_scale(cmf, qw * rgb_spectrum_illuminant(cs, l));
+        q->w[n] = v3_scale(cmf, qw * rgb_spectrum_illuminant(table(cs), l));
         y_bar += qw * cmf.y;
     }
     for (int n = 0; n < q->n; ++n) {
@@ -55,6 +60,11 @@ static void quad_init(color_space cs, double step, quad *q)
 static int setup(void **state)
 {
     (void)state;
+    hz_error err;
+    if (rgb2spec_tables_load(&tables, &err) != HZ_OK) {
+        print_error("%s\n", err.message);
+        return -1;
+    }
     for (int cs = 0; cs < COLOR_SPACE_COUNT; ++cs)
         quad_init((color_space)cs, 0.25, &quads[cs]);
     quad_init(COLOR_SPACE_SRGB, 1.0, &coarse_srgb);
@@ -89,7 +99,7 @@ static double rgb_error(rgb a, rgb b)
 
 static double round_trip_error(color_space cs, rgb c)
 {
-    return rgb_error(reflectance_rgb(cs, sigmoid_poly_from_rgb(cs, c)), c);
+    return rgb_error(reflectance_rgb(cs, sigmoid_poly_from_rgb(table(cs), c)), c);
 }
 
 /* Whether the sRGB of c (in cs) has every component in [lo, 1 - lo]. */
@@ -192,7 +202,7 @@ static void test_round_trip_other_spaces(void **state)
 static void test_round_trip_srgb_every_cell(void **state)
 {
     (void)state;
-    const rgb2spec_table *t = &rgb2spec_tables[COLOR_SPACE_SRGB];
+    const rgb2spec_solution *t = table(COLOR_SPACE_SRGB)->solution;
     int res = t->res;
     double worst = 0.0, worst_top = 0.0;
     rgb at = {0}, at_top = {0};
@@ -205,7 +215,7 @@ static void test_round_trip_srgb_every_cell(void **state)
                     v[(m + 1) % 3] = z * 0.5 * (t->xy_nodes[i] + t->xy_nodes[i + 1]);
                     v[(m + 2) % 3] = z * 0.5 * (t->xy_nodes[j] + t->xy_nodes[j + 1]);
                     rgb c = rgb_make(v[0], v[1], v[2]);
-                    sigmoid_poly p = sigmoid_poly_from_rgb(COLOR_SPACE_SRGB, c);
+                    sigmoid_poly p = sigmoid_poly_from_rgb(srgb(), c);
                     double e = rgb_error(reflectance_rgb_q(&coarse_srgb, p), c);
                     double *w = z <= 0.985 ? &worst : &worst_top;
                     if (e > *w) {
@@ -228,7 +238,7 @@ static vec3 emission_xyz(color_space cs, rgb_illuminant_spectrum s)
     const quad *q = &quads[cs];
     vec3 xyz = v3(0, 0, 0);
     for (int n = 0; n < q->n; ++n) {
-        double il = rgb_spectrum_illuminant(cs, q->lambda[n]);
+        double il = rgb_spectrum_illuminant(table(cs), q->lambda[n]);
         xyz = v3_add(xyz, v3_scale(q->w[n], rgb_illuminant_spectrum_eval(s, q->lambda[n]) / il));
     }
     return xyz;
@@ -249,16 +259,17 @@ static void test_illuminants(void **state)
                                                   [COLOR_SPACE_DCI_P3] = {0.3127, 0.3290},
                                                   [COLOR_SPACE_ACES2065_1] = {0.32168, 0.33767}};
     for (int cs = 0; cs < COLOR_SPACE_COUNT; ++cs) {
-        vec3 w = quads[cs].white, tw = rgb_spectrum_white_xyz((color_space)cs);
+        const rgb2spec_table *t = table((color_space)cs);
+        vec3 w = quads[cs].white, tw = rgb_spectrum_white_xyz(t);
         assert_near(w.y, 1.0, 1e-6); /* luminance 1 */
         assert_v3_near(tw, w, 1e-5); /* the generator's white, integrated apart */
         assert_near(w.x / (w.x + w.y + w.z), want_xy[cs][0], 2e-4);
         assert_near(w.y / (w.x + w.y + w.z), want_xy[cs][1], 2e-4);
-        rgb_illuminant_spectrum s = rgb_illuminant_spectrum_from_rgb((color_space)cs, rgb_grey(1));
+        rgb_illuminant_spectrum s = rgb_illuminant_spectrum_from_rgb(t, rgb_grey(1));
         for (double l = 360.0; l <= 830.0; l += 3.7)
-            assert_near(rgb_illuminant_spectrum_eval(s, l), rgb_spectrum_illuminant(cs, l),
-                        1e-12 * rgb_spectrum_illuminant(cs, l));
-        rgb back = rgb_spectrum_rgb_from_xyz((color_space)cs, emission_xyz(cs, s));
+            assert_near(rgb_illuminant_spectrum_eval(s, l), rgb_spectrum_illuminant(t, l),
+                        1e-12 * rgb_spectrum_illuminant(t, l));
+        rgb back = rgb_spectrum_rgb_from_xyz(t, emission_xyz(cs, s));
         assert_true(rgb_error(back, rgb_grey(1)) < 1e-5);
     }
 }
@@ -273,12 +284,12 @@ static void test_unbounded_and_emitters(void **state)
     for (size_t i = 0; i < sizeof cs_in / sizeof cs_in[0]; ++i) {
         rgb c = cs_in[i];
         double m = rgb_max(c);
-        rgb_unbounded_spectrum u = rgb_unbounded_spectrum_from_rgb(COLOR_SPACE_SRGB, c);
+        rgb_unbounded_spectrum u = rgb_unbounded_spectrum_from_rgb(srgb(), c);
         rgb_albedo_spectrum half =
-            rgb_albedo_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_scale(c, 0.5 / m));
+            rgb_albedo_spectrum_from_rgb(srgb(), rgb_scale(c, 0.5 / m));
         assert_near(u.scale, 2.0 * m, 1e-15 * m);
         rgb_unbounded_spectrum u2 =
-            rgb_unbounded_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_scale(c, 10.0));
+            rgb_unbounded_spectrum_from_rgb(srgb(), rgb_scale(c, 10.0));
         for (double l = 360.0; l <= 830.0; l += 5.3) {
             double v = rgb_unbounded_spectrum_eval(u, l);
             assert_near(v, 2.0 * m * rgb_albedo_spectrum_eval(half, l), 1e-12 * m);
@@ -288,13 +299,13 @@ static void test_unbounded_and_emitters(void **state)
          * times 2 max; as an emitter (times the illuminant) too. */
         rgb back = rgb_scale(reflectance_rgb(COLOR_SPACE_SRGB, u.poly), u.scale);
         assert_true(rgb_error(back, c) <= 2.0 * m * 1e-3);
-        rgb_illuminant_spectrum e = rgb_illuminant_spectrum_from_rgb(COLOR_SPACE_SRGB, c);
-        rgb lit = rgb_spectrum_rgb_from_xyz(COLOR_SPACE_SRGB, emission_xyz(COLOR_SPACE_SRGB, e));
+        rgb_illuminant_spectrum e = rgb_illuminant_spectrum_from_rgb(srgb(), c);
+        rgb lit = rgb_spectrum_rgb_from_xyz(srgb(), emission_xyz(COLOR_SPACE_SRGB, e));
         assert_true(rgb_error(lit, c) <= 2.0 * m * 1e-3);
     }
-    rgb_unbounded_spectrum zero = rgb_unbounded_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_grey(0));
+    rgb_unbounded_spectrum zero = rgb_unbounded_spectrum_from_rgb(srgb(), rgb_grey(0));
     rgb_illuminant_spectrum dark =
-        rgb_illuminant_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_make(-1.0, 0.0, NAN));
+        rgb_illuminant_spectrum_from_rgb(srgb(), rgb_make(-1.0, 0.0, NAN));
     assert_near(rgb_unbounded_spectrum_eval(zero, 500.0), 0.0, 0.0);
     assert_near(rgb_illuminant_spectrum_eval(dark, 500.0), 0.0, 0.0);
 }
@@ -306,13 +317,13 @@ static void test_greys_clamping_and_max(void **state)
     (void)state;
     const double greys[] = {0.0, 1e-6, 0.18, 0.5, 0.9, 1.0};
     for (size_t i = 0; i < sizeof greys / sizeof greys[0]; ++i) {
-        rgb_albedo_spectrum s = rgb_albedo_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_grey(greys[i]));
+        rgb_albedo_spectrum s = rgb_albedo_spectrum_from_rgb(srgb(), rgb_grey(greys[i]));
         for (double l = 360.0; l <= 830.0; l += 47.0)
             assert_near(rgb_albedo_spectrum_eval(s, l), greys[i], 1e-15);
     }
-    rgb_albedo_spectrum hi = rgb_albedo_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_make(2, 1, 0.5));
-    rgb_albedo_spectrum in = rgb_albedo_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_make(1, 1, 0.5));
-    rgb_albedo_spectrum bad = rgb_albedo_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_make(NAN, -1, 0.3));
+    rgb_albedo_spectrum hi = rgb_albedo_spectrum_from_rgb(srgb(), rgb_make(2, 1, 0.5));
+    rgb_albedo_spectrum in = rgb_albedo_spectrum_from_rgb(srgb(), rgb_make(1, 1, 0.5));
+    rgb_albedo_spectrum bad = rgb_albedo_spectrum_from_rgb(srgb(), rgb_make(NAN, -1, 0.3));
     for (double l = 360.0; l <= 830.0; l += 10.0) {
         assert_near(rgb_albedo_spectrum_eval(hi, l), rgb_albedo_spectrum_eval(in, l), 0.0);
         double v = rgb_albedo_spectrum_eval(bad, l);
@@ -321,7 +332,7 @@ static void test_greys_clamping_and_max(void **state)
     uint64_t seed = 7;
     for (int n = 0; n < 2000; ++n) {
         rgb c = rgb_make(rng_next(&seed), rng_next(&seed), rng_next(&seed));
-        sigmoid_poly p = sigmoid_poly_from_rgb(COLOR_SPACE_SRGB, c);
+        sigmoid_poly p = sigmoid_poly_from_rgb(srgb(), c);
         double m = sigmoid_poly_max(p), seen = 0.0;
         for (double l = 360.0; l <= 830.0; l += 0.5)
             seen = hz_fmax(seen, sigmoid_poly_eval(p, l));
@@ -343,8 +354,8 @@ static double change_across(double z, double x, double y, double h, bool along_x
 {
     rgb a = along_x ? rgb_make(z, z * (x - h), 0.3 * z) : rgb_scale(rgb_make(1, 0.5, y), z - h);
     rgb b = along_x ? rgb_make(z, z * (x + h), 0.3 * z) : rgb_scale(rgb_make(1, 0.5, y), z + h);
-    return spectrum_distance(sigmoid_poly_from_rgb(COLOR_SPACE_SRGB, a),
-                             sigmoid_poly_from_rgb(COLOR_SPACE_SRGB, b));
+    return spectrum_distance(sigmoid_poly_from_rgb(srgb(), a),
+                             sigmoid_poly_from_rgb(srgb(), b));
 }
 
 /* The lookup is continuous across the nodes of the largest component and of
@@ -355,7 +366,7 @@ static double change_across(double z, double x, double y, double h, bool along_x
 static void test_lookup_continuity(void **state)
 {
     (void)state;
-    const rgb2spec_table *t = &rgb2spec_tables[COLOR_SPACE_SRGB];
+    const rgb2spec_solution *t = table(COLOR_SPACE_SRGB)->solution;
     uint64_t seed = 11;
     double worst = 0.0, worst_ratio = 0.0;
     for (int n = 0; n < 3000; ++n) {
@@ -380,8 +391,8 @@ static void test_lookup_continuity(void **state)
     for (int n = 0; n < 500; ++n) {
         double a = 0.05 + 0.9 * rng_next(&seed), b = a * rng_next(&seed);
         rgb c = rgb_make(a * (1 + 1e-9), a, b), d = rgb_make(a, a * (1 + 1e-9), b);
-        across = hz_fmax(across, spectrum_distance(sigmoid_poly_from_rgb(COLOR_SPACE_SRGB, c),
-                                                   sigmoid_poly_from_rgb(COLOR_SPACE_SRGB, d)));
+        across = hz_fmax(across, spectrum_distance(sigmoid_poly_from_rgb(srgb(), c),
+                                                   sigmoid_poly_from_rgb(srgb(), d)));
     }
     /* The two tables were solved apart: they agree to the solver's precision
      * at their shared nodes and to the interpolation error between them. */
