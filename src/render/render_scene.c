@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "color/rgb2spec_table.h"
+#include "color/rgb2spec_module.h"
 #include "geometry/geometry.h"
 #include "lights/lights.h"
 #include "materials/material.h"
@@ -498,8 +498,12 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         return hz_fail_at(err, sd->integrator.loc,
                           "spectral rendering (--color spectral) needs Integrator \"volpath\"");
     if (color == RENDER_COLOR_SPECTRAL ||
-        (color == RENDER_COLOR_AUTO && ip.kind == INTEGRATOR_VOLPATH && chromatic(rs)))
-        rs->spectral = &rgb2spec_tables[COLOR_SPACE_SRGB];
+        (color == RENDER_COLOR_AUTO && ip.kind == INTEGRATOR_VOLPATH && chromatic(rs))) {
+        const rgb2spec_table *tables;
+        if (rgb2spec_tables_load(&tables, err) != HZ_OK)
+            return HZ_ERROR;
+        rs->spectral = &tables[COLOR_SPACE_SRGB];
+    }
     return build_integrator(rs, sd, &ip, warn, err);
 }
 

@@ -5,10 +5,21 @@
  * wavelength integrated against the observer. */
 #include "render_test_util.h"
 
+#include "color/rgb2spec_module.h"
 #include "color/rgb_spectrum.h"
 #include "color/spectral.h"
 #include "color/wavelengths.h"
 #include "scene/spectrum.h"
+
+/* The sRGB table of the module (loaded once; the same pointer after). */
+static const rgb2spec_table *srgb_table(void)
+{
+    const rgb2spec_table *t = NULL;
+    hz_error err = {0};
+    if (rgb2spec_tables_load(&t, &err) != HZ_OK)
+        fail_msg("%s", err.message);
+    return &t[COLOR_SPACE_SRGB];
+}
 
 static const render_options spectral_opt = {.seed = 0, .color = RENDER_COLOR_SPECTRAL};
 
@@ -162,11 +173,10 @@ static rgb rgb_of_illuminated(spectrum_fn s, const void *ctx)
     vec3 xyz = v3(0, 0, 0);
     double h = 0.1;
     for (double l = WAVELENGTH_MIN + h / 2; l < WAVELENGTH_MAX; l += h) {
-        double v = s(l, ctx) * rgb_spectrum_illuminant(COLOR_SPACE_SRGB, l) * h;
+        double v = s(l, ctx) * rgb_spectrum_illuminant(srgb_table(), l) * h;
         xyz = v3_add(xyz, v3_scale(spectrum_cie_xyz(l), v));
     }
-    return rgb_spectrum_rgb_from_xyz(COLOR_SPACE_SRGB,
-                                     v3_scale(xyz, 1.0 / SPECTRUM_CIE_Y_INTEGRAL));
+    return rgb_spectrum_rgb_from_xyz(srgb_table(), v3_scale(xyz, 1.0 / SPECTRUM_CIE_Y_INTEGRAL));
 }
 
 static double beer_lambert(double lambda, const void *ctx)
@@ -187,7 +197,7 @@ static void test_chromatic_beer_lambert(void **state)
     const char *slab = "MediumInterface \"ink\" \"\"\n  Material \"interface\"";
     rgb got = through_slab(slab, medium, &spectral_opt, 256, 5);
     rgb_unbounded_spectrum sigma =
-        rgb_unbounded_spectrum_from_rgb(COLOR_SPACE_SRGB, rgb_make(2.0, 0.5, 0.1));
+        rgb_unbounded_spectrum_from_rgb(srgb_table(), rgb_make(2.0, 0.5, 0.1));
     rgb want = rgb_of_illuminated(beer_lambert, &sigma);
     expect_rgb_close(got, want, 0.0, 2e-3, "spectral transmittance", 2.5, 2.5);
     render_options rgb_opt = {.seed = 0, .color = RENDER_COLOR_RGB};
@@ -206,6 +216,32 @@ static void test_dielectric_slab(void **state)
     rgb got = through_slab("Material \"dielectric\" \"float eta\" 1.5", "", &spectral_opt, 16,
                            100);
     expect_rgb_close(got, rgb_grey((1 - R) / (1 + R)), 0.0, 3e-3, "glass slab", 2.5, 2.5);
+}
+
+/* A blackbody emitter of 2856 K seen directly: the chromaticity of CIE
+ * illuminant A (x 0.44757, y 0.40745), from the wavelengths themselves;
+ * its luminance 1 as an RGB light's (pbrt-v4's normalisation). */
+static void test_blackbody_chromaticity(void **state)
+{
+    (void)state;
+    const char *text = "LookAt 0 0 5  0 0 0  0 1 0\n"
+                       "Camera \"orthographic\" \"float screenwindow\" [-0.5 0.5 -0.5 0.5]\n"
+                       "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                       "Sampler \"zsobol\" \"integer pixelsamples\" 16\n"
+                       "Integrator \"volpath\"\n"
+                       "WorldBegin\n"
+                       "AreaLightSource \"diffuse\" \"blackbody L\" [2856]\n"
+                       "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+                       "  \"point3 P\" [-2 -2 0 2 -2 0 2 2 0 -2 2 0]\n";
+    render_options opt = spectral_opt;
+    render_scene *rs = build_scene_or_fail(text, &opt);
+    rgb L = eval_pixel(rs, 2.5, 2.5, 4096).L;
+    render_scene_destroy(rs);
+    vec3 xyz = rgb_spectrum_xyz_from_rgb(srgb_table(), L);
+    double sum = xyz.x + xyz.y + xyz.z;
+    expect_close(xyz.x / sum, 0.44757, 0.0, 1e-3, "x of 2856 K", 2.5, 2.5);
+    expect_close(xyz.y / sum, 0.40745, 0.0, 1e-3, "y of 2856 K", 2.5, 2.5);
+    expect_close(xyz.y, 1.0, 0.0, 3e-3, "luminance", 2.5, 2.5);
 }
 
 /* A scene of `material` under a white sky with `integrator`, built with
@@ -313,6 +349,7 @@ int main(void)
         cmocka_unit_test(test_conductor_constant),
         cmocka_unit_test(test_chromatic_beer_lambert),
         cmocka_unit_test(test_dielectric_slab),
+        cmocka_unit_test(test_blackbody_chromaticity),
         cmocka_unit_test(test_auto_choice),
         cmocka_unit_test(test_thread_count_invariance),
     };
