@@ -1,5 +1,7 @@
 #include "materials/material.h"
 
+#include "scene/named_spectra.h"
+
 #include <assert.h>
 #include <math.h>
 #include <stdio.h>
@@ -172,6 +174,27 @@ static rgb k_of_reflectance(rgb r)
     return rgb_make(kk[0], kk[1], kk[2]);
 }
 
+/* A metal's eta or k spectrum: parameter `name` as given, pbrt-v4's named
+ * copper spectrum `copper` when absent; the RGB `value` when a texture
+ * gives it. */
+static spectrum_value metal_spectrum(param_list *pl, const char *name, const char *copper,
+                                     rgb value, const texture *tex)
+{
+    if (tex)
+        return spectrum_value_rgb(value, SPECTRUM_USE_UNBOUNDED);
+    if (params_has(pl, name))
+        return params_spectrum(pl, name, SPECTRUM_USE_UNBOUNDED, value);
+    const named_spectrum_samples *cu = named_spectrum_find(copper);
+    spectrum_value s = spectrum_value_rgb(value, SPECTRUM_USE_UNBOUNDED);
+    if (cu) {
+        s.kind = SPECTRUM_VALUE_SAMPLED;
+        s.lambda = cu->lambda;
+        s.value = cu->value;
+        s.n = cu->n;
+    }
+    return s;
+}
+
 /* A conductor's eta and k (named NAME_ETA, NAME_K; default copper), or
  * "reflectance" r: eta 1 and k = 2 sqrt(r) / sqrt(1 - r), r within
  * [0, 0.9999] (as pbrt-v4). */
@@ -199,6 +222,8 @@ static hz_status read_metal(param_list *pl, const texture_set *ts, const char *n
     }
     *eta = out->eta_tex ? copper_eta : params_rgb(pl, name_eta, copper_eta);
     *k = out->k_tex ? copper_k : params_rgb(pl, name_k, copper_k);
+    out->eta_spec = metal_spectrum(pl, name_eta, "metal-Cu-eta", *eta, out->eta_tex);
+    out->k_spec = metal_spectrum(pl, name_k, "metal-Cu-k", *k, out->k_tex);
     rgb e = *eta, kv = *k;
     if (!(e.r > 0 && e.g > 0 && e.b > 0 && isfinite(e.r + e.g + e.b)))
         params_reject(pl, name_eta, "conductor \"%s\" must be finite and > 0", name_eta);
@@ -650,8 +675,12 @@ static void metal_spectral(const material *m, const spectral_ctx *sp, double out
                        1.0 / outside);
         return;
     }
-    *eta = spectral_from_rgb(sp, *eta, SPECTRAL_UNBOUNDED);
-    *k = spectral_from_rgb(sp, *k, SPECTRAL_UNBOUNDED);
+    *eta = m->eta_spec.kind == SPECTRUM_VALUE_RGB
+               ? spectral_from_rgb(sp, *eta, SPECTRAL_UNBOUNDED)
+               : rgb_scale(spectral_from_value(sp, &m->eta_spec), 1.0 / outside);
+    *k = m->k_spec.kind == SPECTRUM_VALUE_RGB
+             ? spectral_from_rgb(sp, *k, SPECTRAL_UNBOUNDED)
+             : rgb_scale(spectral_from_value(sp, &m->k_spec), 1.0 / outside);
 }
 
 const material *material_spectral(const material *m, const spectral_ctx *sp, material *scratch)

@@ -69,6 +69,10 @@ typedef struct material_s {
      * textured), which spectral rendering turns into k per wavelength. */
     bool metal_by_reflectance;
     rgb metal_r;
+    /* Conductors given by eta and k: the spectra as given (the copper
+     * default: pbrt-v4's metal-Cu-eta/k), which spectral rendering
+     * evaluates per wavelength unless a texture gives the value. */
+    spectrum_value eta_spec, k_spec;
     /* Spectral rendering (material_spectral): the sample's wavelengths,
      * which a measured BRDF's RGB values are turned into; NULL: RGB. */
     const spectral_ctx *spectral;

@@ -32,6 +32,10 @@ struct render_scene {
     integrator integ;
     /* Spectral rendering: the RGB -> spectrum table of sRGB; NULL: RGB. */
     const rgb2spec_table *spectral;
+    /* The sampled spectra of lights, materials and media, copied out of the
+     * scene_desc (which may go before the render_scene does): keep_spectrum. */
+    double **spectra;
+    size_t spectra_count;
     scene_options options;
     /* singlescatter's shadow caches, each at its spacing (voxels): the
      * integrator reads the one of its settings; --target-error's pilot tries
@@ -74,6 +78,27 @@ static hz_status check_motion(scene_desc *sd, FILE *warn, hz_error *err)
     return HZ_OK;
 }
 
+/* Points s's sampled values at a copy the render_scene owns. */
+static hz_status keep_spectrum(render_scene *rs, spectrum_value *s, hz_error *err)
+{
+    if (s->kind != SPECTRUM_VALUE_SAMPLED || s->n == 0)
+        return HZ_OK;
+    double **grown = realloc(rs->spectra, (rs->spectra_count + 1) * sizeof *grown);
+    double *copy = malloc(2 * s->n * sizeof *copy);
+    if (grown)
+        rs->spectra = grown;
+    if (!grown || !copy) {
+        free(copy);
+        return hz_fail(err, "out of memory");
+    }
+    memcpy(copy, s->lambda, s->n * sizeof *copy);
+    memcpy(copy + s->n, s->value, s->n * sizeof *copy);
+    rs->spectra[rs->spectra_count++] = copy;
+    s->lambda = copy;
+    s->value = copy + s->n;
+    return HZ_OK;
+}
+
 /* Every error of the scene in one run: an error with a place (an entity's)
  * is collected and the build goes on without that entity (HZ_OK); one
  * without (memory, devices) is left in `err` and ends the build (HZ_ERROR). */
@@ -108,6 +133,10 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, transform ren
     if (material_resolve_mixes(rs->materials, sd->materials, sd->material_count, err) != HZ_OK &&
         collect(errs, err) != HZ_OK)
         return HZ_ERROR;
+    for (size_t i = 0; i < rs->material_count; ++i)
+        if (keep_spectrum(rs, &rs->materials[i].eta_spec, err) != HZ_OK ||
+            keep_spectrum(rs, &rs->materials[i].k_spec, err) != HZ_OK)
+            return HZ_ERROR;
     return HZ_OK;
 }
 
@@ -184,6 +213,9 @@ static hz_status build_lights(render_scene *rs, scene_desc *sd, transform render
         else if (collect(errs, err) != HZ_OK)
             return HZ_ERROR;
     }
+    for (size_t i = 0; i < rs->light_count; ++i)
+        if (keep_spectrum(rs, &rs->lights[i].spectrum, err) != HZ_OK)
+            return HZ_ERROR;
     return HZ_OK;
 }
 
@@ -572,6 +604,9 @@ void render_scene_destroy(render_scene *rs)
     if (rs->filt)
         filter_destroy(rs->filt);
     camera_free(&rs->cam);
+    for (size_t i = 0; i < rs->spectra_count; ++i)
+        free(rs->spectra[i]);
+    free(rs->spectra);
     free(rs);
 }
 

@@ -9,6 +9,7 @@
 #include "color/rgb_spectrum.h"
 #include "color/spectral.h"
 #include "color/wavelengths.h"
+#include "scene/named_spectra.h"
 #include "scene/spectrum.h"
 
 /* The sRGB table of the module (loaded once; the same pointer after). */
@@ -120,6 +121,35 @@ static void test_conductor_constant(void **state)
 
 enum { SLAB_RES = 32 };
 
+static double gold_head_on(double lambda, const void *ctx)
+{
+    (void)ctx;
+    const named_spectrum_samples *e = named_spectrum_find("metal-Au-eta"),
+                                 *k = named_spectrum_find("metal-Au-k");
+    spectrum_value se = {.kind = SPECTRUM_VALUE_SAMPLED, .scale = 1.0, .lambda = e->lambda,
+                         .value = e->value, .n = e->n};
+    spectrum_value sk = {.kind = SPECTRUM_VALUE_SAMPLED, .scale = 1.0, .lambda = k->lambda,
+                         .value = k->value, .n = k->n};
+    double n = spectrum_value_eval(&se, lambda), kk = spectrum_value_eval(&sk, lambda);
+    return ((n - 1) * (n - 1) + kk * kk) / ((n + 1) * (n + 1) + kk * kk);
+}
+
+typedef double (*spectrum_fn)(double lambda, const void *ctx);
+static rgb rgb_of_illuminated(spectrum_fn s, const void *ctx);
+
+/* Gold by pbrt-v4's named spectra, smooth, head on under a white sky: the
+ * Fresnel reflectance of eta(lambda), k(lambda) per wavelength integrated
+ * against the observer (RGB rendering reduces eta and k to RGB first). */
+static void test_gold_named_spectra(void **state)
+{
+    (void)state;
+    rgb L = plane_radiance("Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\"\n"
+                           "  \"spectrum k\" \"metal-Au-k\" \"float roughness\" 0\n",
+                           &spectral_opt, 1024);
+    rgb want = rgb_of_illuminated(gold_head_on, NULL);
+    expect_rgb_close(L, want, 0.0, 3e-3, "gold head on", 4.5, 4.5);
+}
+
 /* A camera looking through a slab (thickness 1: an interface box or glass)
  * toward a black area light of radiance 1: the mean of a SLAB_RES^2 image
  * of `spp` samples a pixel (tracking through an absorber is a 0-or-1
@@ -167,7 +197,6 @@ static rgb through_slab(const char *slab_material, const char *medium, const ren
 
 /* The RGB (sRGB) of spectrum s(lambda) times the sRGB illuminant (D65 at
  * luminance 1), integrated against the observer at 0.1 nm. */
-typedef double (*spectrum_fn)(double lambda, const void *ctx);
 static rgb rgb_of_illuminated(spectrum_fn s, const void *ctx)
 {
     vec3 xyz = v3(0, 0, 0);
@@ -347,6 +376,7 @@ int main(void)
         cmocka_unit_test(test_coloured_reflectance),
         cmocka_unit_test(test_grey_matches_rgb),
         cmocka_unit_test(test_conductor_constant),
+        cmocka_unit_test(test_gold_named_spectra),
         cmocka_unit_test(test_chromatic_beer_lambert),
         cmocka_unit_test(test_dielectric_slab),
         cmocka_unit_test(test_blackbody_chromaticity),
