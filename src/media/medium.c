@@ -17,15 +17,26 @@ medium_memory medium_bytes(const medium *m)
     return m->ops && m->ops->memory ? m->ops->memory(m) : (medium_memory){0.0, 0.0};
 }
 
+/* The lanes of coefficient v (RGB), a multiple of spectrum s as given: s's
+ * own spectrum when the scene gave one, else v's RGB spectrum. */
+static rgb spectral_coefficient(const spectral_ctx *sp, rgb v, const spectrum_value *s,
+                                spectral_use use)
+{
+    if (s->kind == SPECTRUM_VALUE_RGB)
+        return spectral_from_rgb(sp, v, use);
+    double m = rgb_max(s->rgb);
+    return m > 0.0 ? rgb_scale(spectral_from_value(sp, s), rgb_max(v) / m) : rgb_grey(0.0);
+}
+
 const medium *medium_spectral(const medium *m, const spectral_ctx *sp, medium *copy)
 {
     if (!sp || !m->ops)
         return m;
     *copy = *m;
     copy->spectral = sp;
-    copy->sigma_a = spectral_from_rgb(sp, m->sigma_a, SPECTRAL_UNBOUNDED);
-    copy->sigma_s = spectral_from_rgb(sp, m->sigma_s, SPECTRAL_UNBOUNDED);
-    copy->Le = spectral_from_rgb(sp, m->Le, SPECTRAL_ILLUMINANT);
+    copy->sigma_a = spectral_coefficient(sp, m->sigma_a, &m->sigma_a_spec, SPECTRAL_UNBOUNDED);
+    copy->sigma_s = spectral_coefficient(sp, m->sigma_s, &m->sigma_s_spec, SPECTRAL_UNBOUNDED);
+    copy->Le = spectral_coefficient(sp, m->Le, &m->Le_spec, SPECTRAL_ILLUMINANT);
     /* Coefficients looked up per voxel as RGB bound the majorant by their
      * largest channel; as unbounded spectra they reach up to twice that. */
     if (m->ops->rgb_coefficients)
@@ -38,7 +49,8 @@ bool medium_is_chromatic(const medium *m)
     rgb a = m->sigma_a, s = m->sigma_s;
     return m->ops &&
            (m->ops->rgb_coefficients || m->coloured || a.r != a.g || a.g != a.b || s.r != s.g ||
-            s.g != s.b);
+            s.g != s.b || !spectrum_value_is_constant(&m->sigma_a_spec) ||
+            !spectrum_value_is_constant(&m->sigma_s_spec));
 }
 
 bool medium_clip(const medium *m, vec3 o, vec3 d, double time, double *t0, double *t1)

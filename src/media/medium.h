@@ -131,6 +131,10 @@ struct medium {
     bool emissive;           /* absorbing emission (sigma_a Le): the integrators gather it */
     bool free_emission;      /* emission whatever the density (nanovdb's emission grid) */
     bool coloured;           /* a colour grid scales the scattering albedo */
+    /* sigma_a, sigma_s and Le as the scene gave them: each of the rgb
+     * fields above is a multiple of its spectrum's rgb (spectral rendering
+     * evaluates the spectrum at the path's wavelengths, medium_spectral). */
+    spectrum_value sigma_a_spec, sigma_s_spec, Le_spec;
     /* Spectral rendering: a path's copy of the medium (medium_spectral)
      * holds its coefficients at these wavelengths, and the kinds turn the
      * colours they look up into them; NULL: RGB. */

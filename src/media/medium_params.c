@@ -19,9 +19,10 @@ bool medium_transform_is_finite(const transform *t)
 const char *medium_entity_name(const medium_entity *e) { return e->name ? e->name : ""; }
 
 /* A coefficient spectrum: finite and non-negative in every channel. */
-static rgb read_sigma(param_list *pl, const char *name)
+static rgb read_sigma(param_list *pl, const char *name, spectrum_value *spec)
 {
-    rgb s = params_rgb(pl, name, rgb_grey(1.0));
+    *spec = params_spectrum(pl, name, SPECTRUM_USE_UNBOUNDED, rgb_grey(1.0));
+    rgb s = spec->rgb;
     if (!medium_rgb_is_finite(s) || s.r < 0.0 || s.g < 0.0 || s.b < 0.0)
         params_reject(pl, name, "\"%s\" must be finite and non-negative, got (%g, %g, %g)", name,
                       s.r, s.g, s.b);
@@ -59,11 +60,17 @@ static void read_preset(param_list *pl, bool is_grid, rgb *sigma_a, rgb *sigma_s
 
 void medium_params_read(param_list *pl, const medium_param_rules *rules, medium_common_params *c)
 {
+    c->sigma_a_spec = spectrum_value_rgb(rgb_grey(0.0), SPECTRUM_USE_UNBOUNDED);
+    c->sigma_s_spec = spectrum_value_rgb(rgb_grey(1.0), SPECTRUM_USE_UNBOUNDED);
+    c->Le_spec = spectrum_value_rgb(rgb_grey(0.0), SPECTRUM_USE_ILLUMINANT);
     if (params_has(pl, "preset"))
         read_preset(pl, rules->grid, &c->sigma_a, &c->sigma_s);
-    else {
-        c->sigma_a = rules->coefficients ? read_sigma(pl, "sigma_a") : rgb_grey(0.0);
-        c->sigma_s = rules->coefficients ? read_sigma(pl, "sigma_s") : rgb_grey(1.0);
+    else if (rules->coefficients) {
+        c->sigma_a = read_sigma(pl, "sigma_a", &c->sigma_a_spec);
+        c->sigma_s = read_sigma(pl, "sigma_s", &c->sigma_s_spec);
+    } else {
+        c->sigma_a = rgb_grey(0.0);
+        c->sigma_s = rgb_grey(1.0);
     }
     c->scale = params_float(pl, "scale", 1.0);
     if (!isfinite(c->scale) || c->scale < 0.0)
@@ -76,7 +83,8 @@ void medium_params_read(param_list *pl, const medium_param_rules *rules, medium_
         c->Le = rgb_grey(0.0);
         break;
     case MEDIUM_LE_READ:
-        c->Le = params_illuminant(pl, "Le", rgb_grey(0.0));
+        c->Le_spec = params_spectrum(pl, "Le", SPECTRUM_USE_ILLUMINANT, rgb_grey(0.0));
+        c->Le = c->Le_spec.rgb;
         break;
     case MEDIUM_LE_TINT:
         c->Le = params_illuminant(pl, "Le", rgb_grey(1.0));
@@ -112,6 +120,9 @@ hz_status medium_params_finish(medium_entity *e, const medium_common_params *c, 
     out->sigma_a = sa;
     out->sigma_s = ss;
     out->g = c->g;
+    out->sigma_a_spec = c->sigma_a_spec;
+    out->sigma_s_spec = c->sigma_s_spec;
+    out->Le_spec = c->Le_spec;
     return HZ_OK;
 }
 

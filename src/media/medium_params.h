@@ -29,6 +29,8 @@ typedef struct {
     double scale, g;
     rgb Le;
     double Le_scale;
+    /* The same as given (spectral rendering), their rgb the values above */
+    spectrum_value sigma_a_spec, sigma_s_spec, Le_spec;
 } medium_common_params;
 
 /* Reads the coefficients, scale, g, Le and Lescale; problems are recorded

@@ -242,6 +242,11 @@ static hz_status build_media(render_scene *rs, scene_desc *sd, transform render_
             memset(&rs->media[i], 0, sizeof rs->media[i]);
         }
         rs->medium_count++;
+        medium *m = &rs->media[i];
+        if (keep_spectrum(rs, &m->sigma_a_spec, err) != HZ_OK ||
+            keep_spectrum(rs, &m->sigma_s_spec, err) != HZ_OK ||
+            keep_spectrum(rs, &m->Le_spec, err) != HZ_OK)
+            return HZ_ERROR;
     }
     rs->cam.medium = scene_find_medium(sd, sd->camera.medium);
     if (rs->cam.medium == SCENE_MEDIUM_UNDEFINED &&

@@ -236,6 +236,26 @@ static void test_chromatic_beer_lambert(void **state)
     assert_true(fabs(want.r - in_rgb.r) > 0.02); /* the two modes differ here */
 }
 
+static double sampled_beer_lambert(double lambda, const void *ctx)
+{
+    (void)ctx; /* sigma_a 2 at 400 nm falling linearly to 0.1 at 700 nm, 0 outside */
+    double sigma = lambda < 400.0 || lambda > 700.0 ? 0.0 : 2.0 + (lambda - 400.0) * (-1.9 / 300.0);
+    return exp(-sigma);
+}
+
+/* The same with sigma_a given as a sampled spectrum: the medium's own
+ * spectrum per wavelength, not the RGB spectrum of its RGB. */
+static void test_sampled_medium(void **state)
+{
+    (void)state;
+    const char *medium = "MakeNamedMedium \"ink\" \"string type\" \"homogeneous\"\n"
+                         "  \"spectrum sigma_a\" [400 2 700 0.1] \"rgb sigma_s\" [0 0 0]\n";
+    const char *slab = "MediumInterface \"ink\" \"\"\n  Material \"interface\"";
+    rgb got = through_slab(slab, medium, &spectral_opt, 256, 5);
+    rgb want = rgb_of_illuminated(sampled_beer_lambert, NULL);
+    expect_rgb_close(got, want, 0.0, 2.5e-3, "sampled sigma_a", 2.5, 2.5);
+}
+
 /* A smooth glass slab seen straight on, every interreflection followed:
  * transmittance (1 - R) / (1 + R), R the normal-incidence reflectance. */
 static void test_dielectric_slab(void **state)
@@ -378,6 +398,7 @@ int main(void)
         cmocka_unit_test(test_conductor_constant),
         cmocka_unit_test(test_gold_named_spectra),
         cmocka_unit_test(test_chromatic_beer_lambert),
+        cmocka_unit_test(test_sampled_medium),
         cmocka_unit_test(test_dielectric_slab),
         cmocka_unit_test(test_blackbody_chromaticity),
         cmocka_unit_test(test_auto_choice),
