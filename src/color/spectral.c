@@ -2,6 +2,44 @@
 
 #include "color/rgb_spectrum.h"
 
+spectral_ctx spectral_ctx_make(const rgb2spec_table *table, double u)
+{
+    spectral_ctx sp = {table, wavelengths_sample_visible(u), {0}};
+    for (int i = 0; i < WAVELENGTH_LANES; ++i)
+        sp.illuminant[i] = rgb_spectrum_illuminant(table, sp.wl.lambda[i]);
+    return sp;
+}
+
+static double clamp_unit(double v) { return v < 0.0 ? 0.0 : (v > 1.0 ? 1.0 : v); }
+
+spectral_color spectral_prepare(const rgb2spec_table *t, rgb c, spectral_use use)
+{
+    spectral_color out = {true, use, 1.0, {0.0, 0.0, 0.0}};
+    if (use == SPECTRAL_ALBEDO) {
+        out.poly = sigmoid_poly_from_rgb(t, c);
+        if (c.r == c.g && c.g == c.b) { /* flat: exactly the grey */
+            out.poly = (sigmoid_poly){0.0, 0.0, 0.0};
+            out.scale = 2.0 * clamp_unit(c.r);
+        }
+        return out;
+    }
+    rgb_unbounded_spectrum u = rgb_unbounded_spectrum_from_rgb(t, c);
+    out.scale = u.scale;
+    out.poly = u.poly;
+    return out;
+}
+
+rgb spectral_eval(const spectral_ctx *sp, const spectral_color *c)
+{
+    double v[WAVELENGTH_LANES];
+    for (int i = 0; i < WAVELENGTH_LANES; ++i) {
+        v[i] = c->scale == 0.0 ? 0.0 : c->scale * sigmoid_poly_eval(c->poly, sp->wl.lambda[i]);
+        if (c->use == SPECTRAL_ILLUMINANT)
+            v[i] *= sp->illuminant[i];
+    }
+    return rgb_make(v[0], v[1], v[2]);
+}
+
 rgb spectral_from_rgb(const spectral_ctx *sp, rgb c, spectral_use use)
 {
     double v[WAVELENGTH_LANES];
@@ -24,9 +62,11 @@ rgb spectral_from_rgb(const spectral_ctx *sp, rgb c, spectral_use use)
         break;
     }
     case SPECTRAL_ILLUMINANT: {
-        rgb_illuminant_spectrum s = rgb_illuminant_spectrum_from_rgb(sp->table, c);
+        rgb_unbounded_spectrum s = rgb_unbounded_spectrum_from_rgb(sp->table, c);
         for (int i = 0; i < WAVELENGTH_LANES; ++i)
-            v[i] = rgb_illuminant_spectrum_eval(s, l[i]);
+            v[i] = s.scale == 0.0
+                       ? 0.0
+                       : rgb_unbounded_spectrum_eval(s, l[i]) * sp->illuminant[i];
         break;
     }
     }

@@ -28,13 +28,18 @@ double wavelength_visible_sample(double u)
 
 wavelengths wavelengths_sample_visible(double u)
 {
+    /* The pdf from the sample's tanh T: 1 / cosh^2 = 1 - T^2 (no cosh). */
+    double t0 = tanh_at(WAVELENGTH_MIN), t1 = tanh_at(WAVELENGTH_MAX);
+    double norm = SHARPNESS / (t1 - t0);
     wavelengths w;
     for (int i = 0; i < WAVELENGTH_LANES; ++i) {
         double ui = u + (double)i / WAVELENGTH_LANES;
         if (ui >= 1.0)
             ui -= 1.0;
-        w.lambda[i] = wavelength_visible_sample(ui);
-        w.pdf[i] = wavelength_visible_pdf(w.lambda[i]);
+        double T = t0 + ui * (t1 - t0);
+        double lambda = CENTRE + atanh(T) / SHARPNESS;
+        w.lambda[i] = fmin(fmax(lambda, WAVELENGTH_MIN), WAVELENGTH_MAX);
+        w.pdf[i] = norm * (1.0 - T * T);
     }
     return w;
 }

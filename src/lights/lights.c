@@ -709,8 +709,16 @@ rgb light_phi(const light *l, double scene_radius)
     return rgb_grey(0.0);
 }
 
+void light_prepare_spectral(light *l, const rgb2spec_table *t)
+{
+    if (l->spectrum.kind == SPECTRUM_VALUE_RGB)
+        l->emit_prepared = spectral_prepare(t, l->emit, SPECTRAL_ILLUMINANT);
+}
+
 rgb light_emit_spectral(const light *l, const spectral_ctx *sp)
 {
+    if (l->emit_prepared.ready)
+        return spectral_eval(sp, &l->emit_prepared);
     if (l->spectrum.kind == SPECTRUM_VALUE_RGB)
         return spectral_from_rgb(sp, l->emit, SPECTRAL_ILLUMINANT);
     return rgb_scale(spectral_from_value(sp, &l->spectrum), l->spectrum_factor);

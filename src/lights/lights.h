@@ -28,6 +28,9 @@ typedef struct {
      * Spectral rendering emits spectrum_factor times this spectrum. */
     spectrum_value spectrum;
     double spectrum_factor;
+    /* Spectral rendering: emit's RGB spectrum looked up once
+     * (light_prepare_spectral; an RGB spectrum's). */
+    spectral_color emit_prepared;
     union {
         struct {
             vec3 p;
@@ -174,6 +177,8 @@ double light_pdf_li(const light *l, vec3 p, double time, vec3 pl, vec3 nl);
  * illuminant spectrum of its own (pbrt-v4's image lights' RGBIlluminantSpectrum).
  * L itself when sp is NULL. */
 rgb light_spectral(const light *l, rgb L, const spectral_ctx *sp);
+/* Looks up the spectrum of l's RGB emission once (l->emit_prepared). */
+void light_prepare_spectral(light *l, const rgb2spec_table *t);
 /* The lanes of l's emission (`emit`) as an illuminant spectrum. */
 rgb light_emit_spectral(const light *l, const spectral_ctx *sp);
 

@@ -663,23 +663,31 @@ hz_status material_from_entity(material_entity *e, const texture_set *ts,
                       type);
 }
 
+/* Colour c of a material at the wavelengths: prepared once when constant. */
+static rgb colour_at(const spectral_ctx *sp, const spectral_color *prepared, rgb c,
+                     spectral_use use)
+{
+    return prepared->ready ? spectral_eval(sp, prepared) : spectral_from_rgb(sp, c, use);
+}
+
 /* A metal's eta and k at the wavelengths: from its reflectance per
- * wavelength when given so, else its (textured) indices as unbounded
- * spectra; relative to `outside` (the coating's index) as they are. */
+ * wavelength when given so, else its indices: the spectra as given, or
+ * (textured, RGB) unbounded spectra; relative to `outside` (the coating's
+ * index) as they are. */
 static void metal_spectral(const material *m, const spectral_ctx *sp, double outside, rgb *eta,
                            rgb *k)
 {
     if (m->metal_by_reflectance) {
         *eta = rgb_grey(1.0 / outside);
-        *k = rgb_scale(k_of_reflectance(spectral_from_rgb(sp, m->metal_r, SPECTRAL_ALBEDO)),
-                       1.0 / outside);
+        rgb r = colour_at(sp, &m->prepared.first, m->metal_r, SPECTRAL_ALBEDO);
+        *k = rgb_scale(k_of_reflectance(r), 1.0 / outside);
         return;
     }
     *eta = m->eta_spec.kind == SPECTRUM_VALUE_RGB
-               ? spectral_from_rgb(sp, *eta, SPECTRAL_UNBOUNDED)
+               ? colour_at(sp, &m->prepared.eta, *eta, SPECTRAL_UNBOUNDED)
                : rgb_scale(spectral_from_value(sp, &m->eta_spec), 1.0 / outside);
     *k = m->k_spec.kind == SPECTRUM_VALUE_RGB
-             ? spectral_from_rgb(sp, *k, SPECTRAL_UNBOUNDED)
+             ? colour_at(sp, &m->prepared.k, *k, SPECTRAL_UNBOUNDED)
              : rgb_scale(spectral_from_value(sp, &m->k_spec), 1.0 / outside);
 }
 
@@ -690,27 +698,30 @@ const material *material_spectral(const material *m, const spectral_ctx *sp, mat
     if (scratch != m)
         *scratch = *m;
     material *o = scratch;
+    const material *p = o; /* its prepared colours (copied along) */
     o->spectral = sp;
     switch (m->kind) {
     case MATERIAL_DIFFUSE_TRANSMISSION:
-        o->transmittance = spectral_from_rgb(sp, m->transmittance, SPECTRAL_ALBEDO);
+        o->transmittance =
+            colour_at(sp, &p->prepared.second, o->transmittance, SPECTRAL_ALBEDO);
         /* fall through */
     case MATERIAL_DIFFUSE:
-        o->reflectance = spectral_from_rgb(sp, m->reflectance, SPECTRAL_ALBEDO);
+        o->reflectance = colour_at(sp, &p->prepared.first, o->reflectance, SPECTRAL_ALBEDO);
         break;
     case MATERIAL_CONDUCTOR:
-        metal_spectral(m, sp, 1.0, &o->eta_rgb, &o->k);
+        metal_spectral(p, sp, 1.0, &o->eta_rgb, &o->k);
         break;
     case MATERIAL_COATED_CONDUCTOR:
-        metal_spectral(m, sp, m->coat.eta, &o->coat.eta_rgb, &o->coat.k);
-        o->coat.albedo = spectral_from_rgb(sp, m->coat.albedo, SPECTRAL_ALBEDO);
+        metal_spectral(p, sp, o->coat.eta, &o->coat.eta_rgb, &o->coat.k);
+        o->coat.albedo = colour_at(sp, &p->prepared.second, o->coat.albedo, SPECTRAL_ALBEDO);
         break;
     case MATERIAL_COATED_DIFFUSE:
-        o->coat.reflectance = spectral_from_rgb(sp, m->coat.reflectance, SPECTRAL_ALBEDO);
-        o->coat.albedo = spectral_from_rgb(sp, m->coat.albedo, SPECTRAL_ALBEDO);
+        o->coat.reflectance =
+            colour_at(sp, &p->prepared.first, o->coat.reflectance, SPECTRAL_ALBEDO);
+        o->coat.albedo = colour_at(sp, &p->prepared.second, o->coat.albedo, SPECTRAL_ALBEDO);
         break;
     case MATERIAL_HAIR:
-        o->sigma_a = spectral_from_rgb(sp, m->sigma_a, SPECTRAL_UNBOUNDED);
+        o->sigma_a = colour_at(sp, &p->prepared.first, o->sigma_a, SPECTRAL_UNBOUNDED);
         break;
     case MATERIAL_DIELECTRIC:
     case MATERIAL_THIN_DIELECTRIC:
@@ -720,6 +731,52 @@ const material *material_spectral(const material *m, const spectral_ctx *sp, mat
         break;
     }
     return o;
+}
+
+void material_prepare_spectral(material *m, const rgb2spec_table *t)
+{
+    spectral_color none = {0};
+    m->prepared.first = m->prepared.second = m->prepared.eta = m->prepared.k = none;
+    switch (m->kind) {
+    case MATERIAL_DIFFUSE_TRANSMISSION:
+        if (!m->transmittance_tex)
+            m->prepared.second = spectral_prepare(t, m->transmittance, SPECTRAL_ALBEDO);
+        /* fall through */
+    case MATERIAL_DIFFUSE:
+        if (!m->reflectance_tex)
+            m->prepared.first = spectral_prepare(t, m->reflectance, SPECTRAL_ALBEDO);
+        break;
+    case MATERIAL_COATED_CONDUCTOR:
+    case MATERIAL_CONDUCTOR: {
+        bool coated = m->kind == MATERIAL_COATED_CONDUCTOR;
+        if (m->metal_by_reflectance && !m->metal_r_tex)
+            m->prepared.first = spectral_prepare(t, m->metal_r, SPECTRAL_ALBEDO);
+        if (!m->metal_by_reflectance && !m->eta_tex)
+            m->prepared.eta =
+                spectral_prepare(t, coated ? m->coat.eta_rgb : m->eta_rgb, SPECTRAL_UNBOUNDED);
+        if (!m->metal_by_reflectance && !m->k_tex)
+            m->prepared.k = spectral_prepare(t, coated ? m->coat.k : m->k, SPECTRAL_UNBOUNDED);
+        if (coated && !m->albedo_tex)
+            m->prepared.second = spectral_prepare(t, m->coat.albedo, SPECTRAL_ALBEDO);
+        break;
+    }
+    case MATERIAL_COATED_DIFFUSE:
+        if (!m->reflectance_tex)
+            m->prepared.first = spectral_prepare(t, m->coat.reflectance, SPECTRAL_ALBEDO);
+        if (!m->albedo_tex)
+            m->prepared.second = spectral_prepare(t, m->coat.albedo, SPECTRAL_ALBEDO);
+        break;
+    case MATERIAL_HAIR:
+        if (!m->reflectance_tex)
+            m->prepared.first = spectral_prepare(t, m->sigma_a, SPECTRAL_UNBOUNDED);
+        break;
+    case MATERIAL_DIELECTRIC:
+    case MATERIAL_THIN_DIELECTRIC:
+    case MATERIAL_MEASURED:
+    case MATERIAL_MIX:
+    case MATERIAL_INTERFACE:
+        break;
+    }
 }
 
 static bool grey(rgb c) { return c.r == c.g && c.g == c.b; }

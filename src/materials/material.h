@@ -76,6 +76,14 @@ typedef struct material_s {
     /* Spectral rendering (material_spectral): the sample's wavelengths,
      * which a measured BRDF's RGB values are turned into; NULL: RGB. */
     const spectral_ctx *spectral;
+    /* Spectral rendering: the constant (untextured) colours' spectra looked
+     * up once (material_prepare_spectral): the reflectance (diffuse ones, a
+     * coated diffuse's base, a conductor's "reflectance"), the second colour
+     * (transmittance, a coating's albedo), a conductor's eta and k (RGB
+     * ones), hair's sigma_a. */
+    struct {
+        spectral_color first, second, eta, k;
+    } prepared;
 } material;
 
 /* m or (for a mix) any material it may pick has textures. */
@@ -93,6 +101,10 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
  * conductor's k from its reflectance per wavelength). m itself when sp is
  * NULL; otherwise *scratch (which may be m) filled. */
 const material *material_spectral(const material *m, const spectral_ctx *sp, material *scratch);
+
+/* Looks up the spectra of m's constant colours once (m->prepared), for
+ * material_spectral. */
+void material_prepare_spectral(material *m, const rgb2spec_table *t);
 
 /* Whether m (or a material a mix may pick) has a colour that is not grey
  * (constant or textured) and enters its BSDF other than as a factor: a

@@ -482,6 +482,16 @@ static bool chromatic(const render_scene *rs)
     return false;
 }
 
+/* The constant colours' spectra of materials and lights, looked up once. */
+static void prepare_spectral(render_scene *rs)
+{
+    for (size_t i = 0; i < rs->material_count; ++i)
+        material_prepare_spectral(&rs->materials[i], rs->spectral);
+    material_prepare_spectral(&rs->default_material, rs->spectral);
+    for (size_t i = 0; i < rs->light_count; ++i)
+        light_prepare_spectral(&rs->lights[i], rs->spectral);
+}
+
 static hz_status build_all(render_scene *rs, scene_desc *sd, const render_options *opt,
                            FILE *warn, hz_errors *errs, hz_error *err)
 {
@@ -540,6 +550,7 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         if (rgb2spec_tables_load(&tables, err) != HZ_OK)
             return HZ_ERROR;
         rs->spectral = &tables[COLOR_SPACE_SRGB];
+        prepare_spectral(rs);
     }
     return build_integrator(rs, sd, &ip, warn, err);
 }
@@ -761,7 +772,7 @@ rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, s
 {
     if (!rs->spectral)
         return integrator_li(&rs->integ, r, NULL, s, depth, vs, counters);
-    spectral_ctx sp = {rs->spectral, wavelengths_sample_visible(sampler_wavelength_1d(s))};
+    spectral_ctx sp = spectral_ctx_make(rs->spectral, sampler_wavelength_1d(s));
     return spectral_to_rgb(&sp, integrator_li(&rs->integ, r, &sp, s, depth, vs, counters));
 }
 
