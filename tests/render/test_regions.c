@@ -54,6 +54,33 @@ static void write_scene(const char *name, int w, int h, const char *film_extra)
     write_text_file(path, text);
 }
 
+/* The same scene rendered spectrally: volpath in a coloured fog (--color
+ * auto picks spectral rendering for it). */
+static void write_spectral_scene(const char *name)
+{
+    char path[1200], text[4096];
+    snprintf(path, sizeof path, "%s/%s.pbrt", dir, name);
+    snprintf(text, sizeof text,
+             "LookAt 0 1 -4  0 0.5 0  0 1 0\n"
+             "Camera \"perspective\" \"float fov\" 40\n"
+             "Film \"rgb\" \"integer xresolution\" %d \"integer yresolution\" %d\n"
+             "    \"string filename\" \"unused.exr\" %s\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
+             "Integrator \"volpath\"\n"
+             "WorldBegin\n"
+             "LightSource \"point\" \"point3 from\" [1 3 -1] \"blackbody I\" [2700]\n"
+             "MakeNamedMedium \"fog\" \"string type\" \"homogeneous\"\n"
+             "    \"rgb sigma_a\" [0.02 0.05 0.1] \"rgb sigma_s\" [0.3 0.2 0.1]\n"
+             "MediumInterface \"\" \"fog\"\n"
+             "Material \"conductor\"\n"
+             "Shape \"sphere\" \"float radius\" 0.7\n"
+             "Material \"diffuse\" \"rgb reflectance\" [0.5 0.4 0.3]\n"
+             "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+             "    \"point3 P\" [-5 -0.7 -5 5 -0.7 -5 5 -0.7 5 -5 -0.7 5]\n",
+             W, H, AOVS);
+    write_text_file(path, text);
+}
+
 static void path_in(char *buf, size_t n, const char *name)
 {
     snprintf(buf, n, "%s/%s", dir, name);
@@ -203,6 +230,22 @@ static void test_quadrants_float(void **state)
 {
     (void)state;
     quadrant_case("fog", "fog", "", all_channels, 9, 0);
+}
+
+/* Spectral rendering (the wavelengths are the sampler's): regions merge to
+ * the whole image byte for byte too. */
+static void test_quadrants_spectral(void **state)
+{
+    (void)state;
+    quadrant_case("fogsp", "sp", "", all_channels, 9, 0);
+    exr_image img;
+    read_exr("spfull.exr", &img);
+    bool spectral = false;
+    for (int i = 0; i < img.attribute_count; ++i)
+        spectral |= strcmp(img.attribute_names[i], "haze:color") == 0 &&
+                    strcmp(img.attribute_values[i], "spectral") == 0;
+    exr_image_free(&img);
+    assert_true(spectral);
 }
 
 static void test_quadrants_fp16(void **state)
@@ -501,6 +544,7 @@ static int setup(void **state)
     snprintf(dir, sizeof dir, "%s/regions", HAZE_TMP);
     mkdir(dir, 0755);
     write_scene("fog", W, H, AOVS);
+    write_spectral_scene("fogsp");
     write_scene("fog16", W, H, AOVS " \"bool savefp16\" true");
     return 0;
 }
@@ -509,7 +553,8 @@ int main(void)
 {
     /* In order: later tests use the files of earlier ones. */
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_quadrants_float), cmocka_unit_test(test_quadrants_fp16),
+        cmocka_unit_test(test_quadrants_float),
+        cmocka_unit_test(test_quadrants_spectral), cmocka_unit_test(test_quadrants_fp16),
         cmocka_unit_test(test_quadrants_smoke), cmocka_unit_test(test_target_error_parts),
         cmocka_unit_test(test_cropwindow),
         cmocka_unit_test(test_overrides_film),  cmocka_unit_test(test_refusals),
