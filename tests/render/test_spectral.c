@@ -267,6 +267,47 @@ static void test_dielectric_slab(void **state)
     expect_rgb_close(got, rgb_grey((1 - R) / (1 + R)), 0.0, 3e-3, "glass slab", 2.5, 2.5);
 }
 
+static double furnace(double lambda, const void *ctx)
+{
+    const rgb_albedo_spectrum *rho = ctx;
+    return 1.0 / (1.0 - rgb_albedo_spectrum_eval(*rho, lambda));
+}
+
+/* The white furnace: inside a sphere whose every point emits radiance 1
+ * (white, D65) and reflects diffusely with albedo rho, radiance is
+ * 1 / (1 - rho(lambda)) at every wavelength: every bounce multiplies
+ * spectra. RGB rendering's 1 / (1 - rho_rgb) per channel differs. */
+static void test_white_furnace(void **state)
+{
+    (void)state;
+    const char *text = "LookAt 0 0 0  0 0 1  0 1 0\n"
+                       "Camera \"perspective\" \"float fov\" 60\n"
+                       "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+                       "Sampler \"zsobol\" \"integer pixelsamples\" 256\n"
+                       "Integrator \"volpath\" \"integer maxdepth\" 200\n"
+                       "WorldBegin\n"
+                       "Material \"diffuse\" \"rgb reflectance\" [0.8 0.5 0.2]\n"
+                       "AreaLightSource \"diffuse\" \"rgb L\" [1 1 1] \"bool twosided\" true\n"
+                       "Shape \"sphere\" \"float radius\" 1\n";
+    rgb got[2];
+    for (int mode = 0; mode < 2; ++mode) {
+        render_options opt = {.seed = 0,
+                              .color = mode ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB};
+        render_scene *rs = build_scene_or_fail(text, &opt);
+        render_expect_finite(rs);
+        rgb sum = rgb_grey(0.0);
+        for (int i = 0; i < 256; ++i)
+            sum = rgb_add(sum, film_get_pixel(render_scene_film(rs), i % 16, i / 16, 1.0));
+        got[mode] = rgb_scale(sum, 1.0 / 256);
+        render_scene_destroy(rs);
+    }
+    rgb_albedo_spectrum rho = rgb_albedo_spectrum_from_rgb(srgb_table(), rgb_make(0.8, 0.5, 0.2));
+    rgb want = rgb_of_illuminated(furnace, &rho);
+    expect_rgb_close(got[1], want, 5e-3, 0.0, "spectral furnace", 0, 0);
+    expect_rgb_close(got[0], rgb_make(5.0, 2.0, 1.25), 5e-3, 0.0, "RGB furnace", 0, 0);
+    assert_true(fabs(want.r - 5.0) > 0.1); /* the modes differ by far more than the noise */
+}
+
 /* A blackbody emitter of 2856 K seen directly: the chromaticity of CIE
  * illuminant A (x 0.44757, y 0.40745), from the wavelengths themselves;
  * its luminance 1 as an RGB light's (pbrt-v4's normalisation). */
@@ -401,6 +442,7 @@ int main(void)
         cmocka_unit_test(test_sampled_medium),
         cmocka_unit_test(test_dielectric_slab),
         cmocka_unit_test(test_blackbody_chromaticity),
+        cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_auto_choice),
         cmocka_unit_test(test_thread_count_invariance),
     };
