@@ -393,6 +393,7 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
     if (render_scene_marching(rs, &m) && m.auto_steps)
         printf("stat auto_step_scale %g\n", m.auto_scale);
     printf("stat spectral %d\n", render_scene_spectral(rs) ? 1 : 0);
+    printf("stat rgb_product_deviation %.4f\n", render_scene_color_error(rs));
     printf("stat time_busy_s %.4f\n", st->time_busy_s);
     printf("stat time_surfaces_s %.4f\n", other > 0.0 ? other : 0.0);
     printf("stat time_media_s %.4f\n", st->time_media_s);

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "color/rgb2spec_module.h"
+#include "render/color_choice.h"
 #include "geometry/geometry.h"
 #include "lights/lights.h"
 #include "materials/material.h"
@@ -32,6 +33,7 @@ struct render_scene {
     integrator integ;
     /* Spectral rendering: the RGB -> spectrum table of sRGB; NULL: RGB. */
     const rgb2spec_table *spectral;
+    color_choice choice; /* --color auto's, when it decided */
     /* The sampled spectra of lights, materials and media, copied out of the
      * scene_desc (which may go before the render_scene does): keep_spectrum. */
     double **spectra;
@@ -462,26 +464,6 @@ static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integr
 }
 
 /* Builds what it can; see collect(). */
-/* Where spectral and RGB rendering differ by more than a few tenths of a
- * percent: a coloured medium (exp(-sigma(lambda) d) against exp(-sigma_rgb d))
- * or a material whose colour enters nonlinearly (metals, coatings, hair).
- * Coloured lights and diffuse colours scale every wavelength's radiance:
- * only their products over several bounces differ (a room of saturated
- * walls under coloured lights, volpath maxdepth 8: image means within 0.6%,
- * docs/spectral.md), at 1.5 times the time and more colour noise. */
-static bool chromatic(const render_scene *rs)
-{
-    for (size_t i = 0; i < rs->material_count; ++i)
-        if (material_is_spectrally_nonlinear(&rs->materials[i]))
-            return true;
-    if (material_is_spectrally_nonlinear(&rs->default_material))
-        return true;
-    for (size_t i = 0; i < rs->medium_count; ++i)
-        if (medium_is_chromatic(&rs->media[i]))
-            return true;
-    return false;
-}
-
 /* The constant colours' spectra of materials and lights, looked up once. */
 static void prepare_spectral(render_scene *rs)
 {
@@ -544,8 +526,17 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (color == RENDER_COLOR_SPECTRAL && ip.kind != INTEGRATOR_VOLPATH)
         return hz_fail_at(err, sd->integrator.loc,
                           "spectral rendering (--color spectral) needs Integrator \"volpath\"");
-    if (color == RENDER_COLOR_SPECTRAL ||
-        (color == RENDER_COLOR_AUTO && ip.kind == INTEGRATOR_VOLPATH && chromatic(rs))) {
+    if (color == RENDER_COLOR_AUTO && ip.kind == INTEGRATOR_VOLPATH) {
+        color_choice_scene cs = {rs->materials, rs->material_count, &rs->default_material,
+                                 rs->lights,    rs->light_count,    rs->media,
+                                 rs->medium_count};
+        hz_error why = {0};
+        rs->choice = color_choice_auto(&cs, &why);
+        if (why.message[0])
+            hz_warn_at(warn, sd->integrator.loc, "rendering in RGB: %s", why.message);
+        color = rs->choice.spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
+    }
+    if (color == RENDER_COLOR_SPECTRAL) {
         const rgb2spec_table *tables;
         if (rgb2spec_tables_load(&tables, err) != HZ_OK)
             return HZ_ERROR;
@@ -777,3 +768,4 @@ rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, s
 }
 
 bool render_scene_spectral(const render_scene *rs) { return rs->spectral != NULL; }
+double render_scene_color_error(const render_scene *rs) { return rs->choice.worst_error; }

@@ -143,5 +143,8 @@ rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, s
                             double *depth, film_surface *vs, integrator_counters *counters);
 /* Whether paths carry wavelengths (render_options.color). */
 bool render_scene_spectral(const render_scene *rs);
+/* --color auto: the largest error RGB makes on a product of the scene's
+ * colours (render/color_choice.h; 0 when it did not check). */
+double render_scene_color_error(const render_scene *rs);
 
 #endif

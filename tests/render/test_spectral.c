@@ -356,14 +356,19 @@ static bool auto_spectral(const char *integrator, const char *material)
     return spectral;
 }
 
-/* --color auto: spectral where volpath meets a colour that is not grey in a
- * material or medium; RGB for grey ones (a coloured light alone changes
- * nothing) and for singlescatter; --color spectral with singlescatter is
- * refused at the Integrator. */
+/* --color auto: spectral where volpath meets a coloured medium, a coloured
+ * metal or coating, or colours whose products RGB gets wrong by over 1%;
+ * RGB for grey and near-grey ones (a coloured light alone changes nothing)
+ * and for singlescatter; --color spectral with singlescatter is refused at
+ * the Integrator. */
 static void test_auto_choice(void **state)
 {
     (void)state;
-    assert_false(auto_spectral("volpath", "Material \"diffuse\" \"rgb reflectance\" [0.7 0.1 0.1]"));
+    /* A saturated reflectance: its two-bounce product is 3.5% off in RGB.
+     * A near-grey one (0.1%) and a grey one under the coloured sky are not. */
+    assert_true(auto_spectral("volpath", "Material \"diffuse\" \"rgb reflectance\" [0.6 0.12 0.1]"));
+    assert_false(auto_spectral("volpath", "Material \"diffuse\" \"rgb reflectance\" [0.7 0.7 0.68]"));
+    assert_false(auto_spectral("volpath", "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]"));
     assert_true(auto_spectral("volpath", "Material \"conductor\""));  /* copper */
     assert_false(auto_spectral("volpath", "Material \"conductor\" \"spectrum eta\" [1.5]\n"
                                           "  \"spectrum k\" [2]"));
