@@ -93,9 +93,8 @@ static const char usage_text[] =
     "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
     "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n"
     "  --color auto|rgb|spectral  carry colour along paths as RGB or as three wavelengths\n"
-    "                          per sample, as pbrt-v4 (volpath only); auto (default):\n"
-    "                          spectral when volpath meets non-grey materials or media\n"
-    "                          (docs/spectral.md)\n"
+    "                          per sample, as pbrt-v4; auto (default): spectral for\n"
+    "                          coloured media, metals, coatings, hair (docs/spectral.md)\n"
     "  --portable-isa          Embree at SSE4.2 on every machine: byte-identical images\n"
     "                          across x86 machines (default: the CPU's widest ISA)\n"
     "  --time-limit SECONDS    render in passes (1, 1, 2, 4, ... spp up to the Sampler's\n"
@@ -393,7 +392,6 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
     if (render_scene_marching(rs, &m) && m.auto_steps)
         printf("stat auto_step_scale %g\n", m.auto_scale);
     printf("stat spectral %d\n", render_scene_spectral(rs) ? 1 : 0);
-    printf("stat rgb_product_deviation %.4f\n", render_scene_color_error(rs));
     printf("stat time_busy_s %.4f\n", st->time_busy_s);
     printf("stat time_surfaces_s %.4f\n", other > 0.0 ? other : 0.0);
     printf("stat time_media_s %.4f\n", st->time_media_s);

@@ -2,9 +2,6 @@
 
 #include "color/rgb_spectrum.h"
 
-#include <math.h>
-
-#include "scene/spectrum.h"
 
 spectral_ctx spectral_ctx_make(const rgb2spec_table *table, double u)
 {
@@ -93,47 +90,4 @@ rgb spectral_from_value(const spectral_ctx *sp, const spectrum_value *s)
 rgb spectral_to_rgb(const spectral_ctx *sp, rgb L)
 {
     return rgb_spectrum_rgb_from_xyz(sp->table, wavelengths_xyz(&sp->wl, L));
-}
-
-/* s at lambda: a native spectrum as given, an RGB one through the table. */
-static double value_at(const rgb2spec_table *t, const spectrum_value *s, double lambda)
-{
-    if (s->kind != SPECTRUM_VALUE_RGB)
-        return spectrum_value_eval(s, lambda);
-    switch (s->use) {
-    case SPECTRUM_USE_ALBEDO:
-        return rgb_albedo_spectrum_eval(rgb_albedo_spectrum_from_rgb(t, s->rgb), lambda);
-    case SPECTRUM_USE_UNBOUNDED:
-        return rgb_unbounded_spectrum_eval(rgb_unbounded_spectrum_from_rgb(t, s->rgb), lambda);
-    case SPECTRUM_USE_ILLUMINANT:
-        break;
-    }
-    return rgb_illuminant_spectrum_eval(rgb_illuminant_spectrum_from_rgb(t, s->rgb), lambda);
-}
-
-void spectral_samples_make(const rgb2spec_table *t, const spectrum_value *s,
-                           spectral_samples *out)
-{
-    out->rgb = s->rgb;
-    out->illuminant = s->use == SPECTRUM_USE_ILLUMINANT;
-    for (int i = 0; i < SPECTRAL_SAMPLES; ++i)
-        out->v[i] = value_at(t, s, WAVELENGTH_MIN + 5.0 * i);
-}
-
-double spectral_product_error(const rgb2spec_table *t, const spectral_samples *a,
-                              const spectral_samples *b)
-{
-    bool lit = a->illuminant || b->illuminant;
-    vec3 xyz = v3(0.0, 0.0, 0.0);
-    for (int i = 0; i < SPECTRAL_SAMPLES; ++i) {
-        double l = WAVELENGTH_MIN + 5.0 * i;
-        double v = a->v[i] * b->v[i] * (lit ? 1.0 : rgb_spectrum_illuminant(t, l)) * 5.0;
-        xyz = v3_add(xyz, v3_scale(spectrum_cie_xyz(l), v));
-    }
-    rgb s = rgb_spectrum_rgb_from_xyz(t, v3_scale(xyz, 1.0 / SPECTRUM_CIE_Y_INTEGRAL));
-    rgb r = rgb_mul(a->rgb, b->rgb);
-    double m = fmax(rgb_max(s), rgb_max(r));
-    if (!(m > 0.0))
-        return 0.0;
-    return fmax(fmax(fabs(s.r - r.r), fabs(s.g - r.g)), fabs(s.b - r.b)) / m;
 }

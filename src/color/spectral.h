@@ -49,23 +49,6 @@ rgb spectral_eval(const spectral_ctx *sp, const spectral_color *c);
 /* The lanes of a scene spectrum: an RGB one as spectral_from_rgb for its
  * use, a native one (blackbody, sampled) at the wavelengths themselves. */
 rgb spectral_from_value(const spectral_ctx *sp, const spectrum_value *s);
-/* A colour tabulated every 5 nm over 360..830 nm (spectral_samples_make),
- * with the RGB that RGB rendering uses for it. */
-enum { SPECTRAL_SAMPLES = 95 };
-typedef struct {
-    double v[SPECTRAL_SAMPLES];
-    rgb rgb;
-    bool illuminant; /* an emission (its own light), not a reflectance */
-} spectral_samples;
-void spectral_samples_make(const rgb2spec_table *t, const spectrum_value *s,
-                           spectral_samples *out);
-/* How far RGB rendering is from spectral rendering on the product of two
- * colours (a light's emission and a reflectance, or two reflectances under
- * the colour space's white): the largest channel difference between
- * a.rgb * b.rgb and the RGB of a(lambda) b(lambda), as a fraction of the
- * larger's largest channel (0 when both are black). */
-double spectral_product_error(const rgb2spec_table *t, const spectral_samples *a,
-                              const spectral_samples *b);
 /* The RGB (sRGB) the lanes L estimate: XYZ (wavelengths_xyz) through the
  * table's matrix, whose white is its illuminant's (an illuminant spectrum
  * of RGB (1, 1, 1) comes out (1, 1, 1) in expectation). */

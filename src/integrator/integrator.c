@@ -191,8 +191,7 @@ rgb integrator_li(const integrator *it, const ray_differential *rd, const spectr
 {
     switch (it->kind) {
     case INTEGRATOR_SINGLESCATTER:
-        assert(!sp); /* refused by render_scene_create */
-        return singlescatter_li(&it->singlescatter, rd, st, depth, vs, counters);
+        return singlescatter_li(&it->singlescatter, rd, sp, st, depth, vs, counters);
     case INTEGRATOR_VOLPATH:
         return volpath_li(&it->volpath, rd, sp, st, depth, vs, counters);
     }

@@ -53,7 +53,7 @@ hz_status integrator_init(integrator *out, const integrator_params *p,
 void integrator_free(integrator *it);
 
 /* Radiance along the camera ray `r` (unit direction): RGB, or with `sp`
- * (spectral rendering; volpath only) the lanes at its wavelengths. `depth` receives the
+ * (spectral rendering) the lanes at its wavelengths. `depth` receives the
  * distance to the first opaque surface (INFINITY when none); `vs` (NULL when
  * not wanted: it costs an albedo estimate) what that surface is, when the
  * ray met it before any scattering (vs->hit). Thread-safe; allocates

@@ -37,12 +37,21 @@ typedef struct {
 /* Per-walk state: random numbers beyond the sampler's dimensions and counters. */
 typedef struct {
     double time;          /* the camera ray's scene time: shadow rays and lookups use it */
+    const spectral_ctx *sp; /* spectral rendering: the path's wavelengths; NULL: RGB */
     rng r;
     uint64_t lookups;     /* grid lookups: density, and velocity for moving grids */
     uint64_t shadow_rays;
     uint64_t majorant_steps; /* majorant-grid cells entered */
     uint64_t lost;           /* shadow rays dropped at the crossing limit */
 } media_walk;
+
+/* Medium i of `in` as the walk sees it: itself in RGB, a copy at the walk's
+ * wavelengths in *copy otherwise (medium_spectral). */
+static inline const medium *walk_medium(const integrator_inputs *in, int i, const media_walk *w,
+                                        medium *copy)
+{
+    return w->sp ? medium_spectral(&in->media[i], w->sp, copy) : &in->media[i];
+}
 
 /* Shadow rays from scattering points search surfaces from this fraction of
  * the point's largest render-space coordinate behind it (2^-16), so that

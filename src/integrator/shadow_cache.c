@@ -323,7 +323,7 @@ static inline void catmull_rom(double t, double w[4])
     w[3] = 0.5 * (t3 - t2);
 }
 
-rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p)
+rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p, const spectral_ctx *sp)
 {
     vec3 d = v3_sub(p, c->origin);
     double x[3] = {v3_dot(d, c->ex) * c->inv_h, v3_dot(d, c->ey) * c->inv_h,
@@ -384,5 +384,7 @@ rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p)
         return rgb_grey(0.0);
     rgb depth = rgb_make(acc[0] > 0.0f ? acc[0] : 0.0, acc[1] > 0.0f ? acc[1] : 0.0,
                          acc[2] > 0.0f ? acc[2] : 0.0);
+    if (sp) /* the optical depth is linear in sigma: its unbounded spectrum */
+        depth = spectral_from_rgb(sp, depth, SPECTRAL_UNBOUNDED);
     return rgb_scale(rgb_exp_neg(depth, 1.0), V);
 }

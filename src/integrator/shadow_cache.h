@@ -55,6 +55,6 @@ const shadow_cache *shadow_caches_get(const shadow_caches *c, int medium, size_t
 size_t shadow_caches_bytes(const shadow_caches *c);
 
 /* Transmittance from render-space point p toward the cache's light. */
-rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p);
+rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p, const spectral_ctx *sp);
 
 #endif

@@ -15,12 +15,14 @@
 /* The infinite lights seen along w (light sampling of image lights is not
  * MIS-weighted here: the path that escapes is the camera ray's or a
  * transmitted one, which light sampling does not cover). */
-static rgb sky(const singlescatter_scene *sc, vec3 o, vec3 w)
+static rgb sky(const singlescatter_scene *sc, vec3 o, vec3 w, const spectral_ctx *sp)
 {
     rgb L = rgb_grey(0.0);
     for (size_t i = 0; i < sc->in.light_count; ++i)
-        if (sc->in.lights[i].kind == LIGHT_INFINITE)
-            L = rgb_add(L, light_infinite_le(&sc->in.lights[i], o, w));
+        if (sc->in.lights[i].kind == LIGHT_INFINITE) {
+            const light *l = &sc->in.lights[i];
+            L = rgb_add(L, light_spectral(l, light_infinite_le(l, o, w), sp));
+        }
     return L;
 }
 
@@ -78,6 +80,7 @@ static rgb direct_bsdf(const singlescatter_scene *sc, const geom_hit *h, int med
         light_sample ls;
         if (!light_sample_li(l, h->p, side, walk->time, u, &ls) || ls.pdf <= 0.0)
             continue;
+        ls.L = light_spectral(l, ls.L, walk->sp);
         if (both)
             ls.pdf *= 0.5;
         double cos_theta = v3_dot(ns, ls.wi);
@@ -102,14 +105,17 @@ static rgb surface_li(const singlescatter_scene *sc, const ray_differential *rd,
 {
     vec3 wo = v3_normalize(v3_neg(rd->r.d));
     rgb Ls = rgb_grey(0.0);
-    if (h->shape->area_light >= 0)
-        Ls = light_area_le(&sc->in.lights[h->shape->area_light], h->ng, wo, v2(h->u, h->v), h->p);
+    if (h->shape->area_light >= 0) {
+        const light *l = &sc->in.lights[h->shape->area_light];
+        Ls = light_spectral(l, light_area_le(l, h->ng, wo, v2(h->u, h->v), h->p), walk->sp);
+    }
     if (rd->has_differentials)
         geometry_hit_footprint(h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
     if (vs)
         visible_surface_at(h, rd, vs);
     material scratch;
-    const material *mat = geometry_material_at(h, wo, &scratch);
+    const material *mat = material_spectral(geometry_material_at(h, wo, &scratch), walk->sp,
+                                            &scratch);
     switch (mat->kind) {
     case MATERIAL_DIFFUSE:
     case MATERIAL_CONDUCTOR:
@@ -129,14 +135,15 @@ static rgb surface_li(const singlescatter_scene *sc, const ray_differential *rd,
     return Ls;
 }
 
-rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
-                     double *depth, film_surface *vs, integrator_counters *counters)
+rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd,
+                     const spectral_ctx *sp, sampler_state *st, double *depth, film_surface *vs,
+                     integrator_counters *counters)
 {
     const ray *r = &rd->r;
     counters->camera_rays++;
     *depth = INFINITY;
     vec3 o = r->o, d = r->d;
-    media_walk walk = {.time = r->time};
+    media_walk walk = {.time = r->time, .sp = sp};
     /* The walk's rng is seeded once the ray meets something: a camera ray
      * from vacuum that misses everything (most of a small subject's frame)
      * skips the hashing. The dimension is taken now, as before. */
@@ -161,7 +168,7 @@ rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, 
                 break;
         }
         if (!seg.hit) {
-            L = rgb_add(L, rgb_mul(beta, sky(sc, o, d)));
+            L = rgb_add(L, rgb_mul(beta, sky(sc, o, d, sp)));
             break;
         }
         if (seg.opaque) {

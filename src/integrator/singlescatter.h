@@ -14,8 +14,10 @@
 #include "integrator/singlescatter_scene.h"
 #include "sampler/sampler.h"
 
-/* `r->d` must be unit. */
-rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd, sampler_state *st,
-                     double *depth, film_surface *vs, integrator_counters *counters);
+/* `r->d` must be unit. With `sp` (spectral rendering) the radiance is the
+ * lanes at its wavelengths. */
+rgb singlescatter_li(const singlescatter_scene *sc, const ray_differential *rd,
+                     const spectral_ctx *sp, sampler_state *st, double *depth, film_surface *vs,
+                     integrator_counters *counters);
 
 #endif

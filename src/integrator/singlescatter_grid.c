@@ -180,9 +180,10 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     /* Field by field: an initialiser would zero the accessors too (~2 KB
      * per segment), which medium_ray_start sets up as the medium needs. */
     segment_walk sw;
+    medium copy;
     sw.vs = vs;
     sw.mi = mi;
-    sw.m = &vs->in.media[mi];
+    sw.m = walk_medium(&vs->in, mi, walk, &copy);
     sw.o = o;
     sw.w = w;
     sw.wo = v3_neg(w);

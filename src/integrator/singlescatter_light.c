@@ -31,9 +31,10 @@ static rgb shadow_walk(const singlescatter_scene *vs, vec3 o, vec3 w, double tmi
         medium = seg.medium;
         double t_start = seg.t0, t_end = seg.t1;
         if (medium >= 0) {
-            T = rgb_mul(T,
-                        singlescatter_segment_transmittance(vs, &vs->in.media[medium], o, w, t_start,
-                                                            t_end, walk));
+            struct medium copy; /* `medium` is the index here */
+            T = rgb_mul(T, singlescatter_segment_transmittance(
+                               vs, walk_medium(&vs->in, medium, walk, &copy), o, w, t_start, t_end,
+                               walk));
             if (rgb_is_black(T))
                 return T;
         }
@@ -78,7 +79,8 @@ rgb singlescatter_light_inscattered(const singlescatter_scene *vs, int mi, const
         double f = hg_phase(v3_dot(wo, wi), m->g);
         if (rgb_is_black(l->emit) || !(f > 0.0))
             return rgb_grey(0.0);
-        return rgb_scale(rgb_mul(l->emit, shadow_cache_transmittance(cache, x)), f);
+        rgb E = walk->sp ? light_emit_spectral(l, walk->sp) : l->emit;
+        return rgb_scale(rgb_mul(E, shadow_cache_transmittance(cache, x, walk->sp)), f);
     }
     rgb L = rgb_grey(0.0);
     /* More samples of a delta light through deterministic transmittance
@@ -94,7 +96,7 @@ rgb singlescatter_light_inscattered(const singlescatter_scene *vs, int mi, const
              * visibility to estimate (phase / pdf = 1). */
             double pdf;
             wi = hg_sample(wo, m->g, uu, &pdf);
-            Li = l->emit;
+            Li = walk->sp ? light_emit_spectral(l, walk->sp) : l->emit;
             f = 1.0;
             tmax = INFINITY;
         } else {
@@ -102,7 +104,7 @@ rgb singlescatter_light_inscattered(const singlescatter_scene *vs, int mi, const
             if (!light_sample_li(l, x, v3(0.0, 0.0, 0.0), walk->time, uu, &ls) || !(ls.pdf > 0.0))
                 continue;
             wi = ls.wi;
-            Li = ls.L;
+            Li = light_spectral(l, ls.L, walk->sp);
             f = hg_phase(v3_dot(wo, wi), m->g) / ls.pdf;
             /* Only an emitting surface needs the shadow ray to stop short. */
             tmax = ls.infinite                     ? INFINITY

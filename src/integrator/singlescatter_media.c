@@ -180,7 +180,8 @@ static equiangular light_equiangular(const light *l, vec3 o, vec3 w, double len)
 static rgb scatter_at(const singlescatter_scene *vs, int mi, const light *l, vec3 o, vec3 w,
                       double s, sampler_state *u, media_walk *walk)
 {
-    const medium *m = &vs->in.media[mi];
+    medium copy;
+    const medium *m = walk_medium(&vs->in, mi, walk, &copy);
     rgb Ls = singlescatter_light_inscattered(vs, mi, l, v3_add(o, v3_scale(w, s)), v3_neg(w), u,
                                              walk);
     return rgb_mul(rgb_mul(m->sigma_s, rgb_exp_neg(medium_sigma_t(m), s)), Ls);
@@ -203,7 +204,8 @@ static void homogeneous_segment(const singlescatter_scene *vs, int mi, vec3 o, v
                                 double t1, rgb *beta, rgb *L, sampler_state *u,
                                 media_walk *walk)
 {
-    const medium *m = &vs->in.media[mi];
+    medium copy;
+    const medium *m = walk_medium(&vs->in, mi, walk, &copy);
     rgb sigma_t = medium_sigma_t(m);
     double len = t1 - t0;
     vec3 a = v3_add(o, v3_scale(w, t0)); /* the segment starts at s = 0 */

@@ -20,12 +20,21 @@ medium_memory medium_bytes(const medium *m)
 /* The lanes of coefficient v (RGB), a multiple of spectrum s as given: s's
  * own spectrum when the scene gave one, else v's RGB spectrum. */
 static rgb spectral_coefficient(const spectral_ctx *sp, rgb v, const spectrum_value *s,
-                                spectral_use use)
+                                const spectral_color *prepared, spectral_use use)
 {
     if (s->kind == SPECTRUM_VALUE_RGB)
-        return spectral_from_rgb(sp, v, use);
+        return prepared->ready ? spectral_eval(sp, prepared) : spectral_from_rgb(sp, v, use);
     double m = rgb_max(s->rgb);
     return m > 0.0 ? rgb_scale(spectral_from_value(sp, s), rgb_max(v) / m) : rgb_grey(0.0);
+}
+
+void medium_prepare_spectral(medium *m, const rgb2spec_table *t)
+{
+    if (!m->ops)
+        return;
+    m->prepared.sigma_a = spectral_prepare(t, m->sigma_a, SPECTRAL_UNBOUNDED);
+    m->prepared.sigma_s = spectral_prepare(t, m->sigma_s, SPECTRAL_UNBOUNDED);
+    m->prepared.Le = spectral_prepare(t, m->Le, SPECTRAL_ILLUMINANT);
 }
 
 const medium *medium_spectral(const medium *m, const spectral_ctx *sp, medium *copy)
@@ -34,9 +43,12 @@ const medium *medium_spectral(const medium *m, const spectral_ctx *sp, medium *c
         return m;
     *copy = *m;
     copy->spectral = sp;
-    copy->sigma_a = spectral_coefficient(sp, m->sigma_a, &m->sigma_a_spec, SPECTRAL_UNBOUNDED);
-    copy->sigma_s = spectral_coefficient(sp, m->sigma_s, &m->sigma_s_spec, SPECTRAL_UNBOUNDED);
-    copy->Le = spectral_coefficient(sp, m->Le, &m->Le_spec, SPECTRAL_ILLUMINANT);
+    copy->sigma_a = spectral_coefficient(sp, m->sigma_a, &m->sigma_a_spec, &m->prepared.sigma_a,
+                                         SPECTRAL_UNBOUNDED);
+    copy->sigma_s = spectral_coefficient(sp, m->sigma_s, &m->sigma_s_spec, &m->prepared.sigma_s,
+                                         SPECTRAL_UNBOUNDED);
+    copy->Le =
+        spectral_coefficient(sp, m->Le, &m->Le_spec, &m->prepared.Le, SPECTRAL_ILLUMINANT);
     /* Coefficients looked up per voxel as RGB bound the majorant by their
      * largest channel; as unbounded spectra they reach up to twice that. */
     if (m->ops->rgb_coefficients)

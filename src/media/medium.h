@@ -135,6 +135,11 @@ struct medium {
      * fields above is a multiple of its spectrum's rgb (spectral rendering
      * evaluates the spectrum at the path's wavelengths, medium_spectral). */
     spectrum_value sigma_a_spec, sigma_s_spec, Le_spec;
+    /* Spectral rendering: sigma_a, sigma_s and Le's RGB spectra looked up
+     * once (medium_prepare_spectral). */
+    struct {
+        spectral_color sigma_a, sigma_s, Le;
+    } prepared;
     /* Spectral rendering: a path's copy of the medium (medium_spectral)
      * holds its coefficients at these wavelengths, and the kinds turn the
      * colours they look up into them; NULL: RGB. */
@@ -204,6 +209,9 @@ medium_memory medium_bytes(const medium *m);
  * grey, per-point RGB coefficients, a colour grid): where spectral and RGB
  * rendering differ. */
 bool medium_is_chromatic(const medium *m);
+
+/* Looks up the RGB spectra of m's coefficients once (m->prepared). */
+void medium_prepare_spectral(medium *m, const rgb2spec_table *t);
 
 /* m at the wavelengths of `sp`, for one path: a copy whose sigma_a and
  * sigma_s are unbounded spectra and whose Le is an illuminant spectrum

@@ -33,7 +33,6 @@ struct render_scene {
     integrator integ;
     /* Spectral rendering: the RGB -> spectrum table of sRGB; NULL: RGB. */
     const rgb2spec_table *spectral;
-    color_choice choice; /* --color auto's, when it decided */
     /* The sampled spectra of lights, materials and media, copied out of the
      * scene_desc (which may go before the render_scene does): keep_spectrum. */
     double **spectra;
@@ -472,6 +471,8 @@ static void prepare_spectral(render_scene *rs)
     material_prepare_spectral(&rs->default_material, rs->spectral);
     for (size_t i = 0; i < rs->light_count; ++i)
         light_prepare_spectral(&rs->lights[i], rs->spectral);
+    for (size_t i = 0; i < rs->medium_count; ++i)
+        medium_prepare_spectral(&rs->media[i], rs->spectral);
 }
 
 static hz_status build_all(render_scene *rs, scene_desc *sd, const render_options *opt,
@@ -523,18 +524,10 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         return HZ_OK; /* reported by the caller; nothing to render */
     warn_default_integrator(rs, sd, warn);
     render_color color = opt ? opt->color : RENDER_COLOR_AUTO;
-    if (color == RENDER_COLOR_SPECTRAL && ip.kind != INTEGRATOR_VOLPATH)
-        return hz_fail_at(err, sd->integrator.loc,
-                          "spectral rendering (--color spectral) needs Integrator \"volpath\"");
-    if (color == RENDER_COLOR_AUTO && ip.kind == INTEGRATOR_VOLPATH) {
+    if (color == RENDER_COLOR_AUTO) {
         color_choice_scene cs = {rs->materials, rs->material_count, &rs->default_material,
-                                 rs->lights,    rs->light_count,    rs->media,
-                                 rs->medium_count};
-        hz_error why = {0};
-        rs->choice = color_choice_auto(&cs, &why);
-        if (why.message[0])
-            hz_warn_at(warn, sd->integrator.loc, "rendering in RGB: %s", why.message);
-        color = rs->choice.spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
+                                 rs->media, rs->medium_count};
+        color = color_choice_auto(&cs).spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
     }
     if (color == RENDER_COLOR_SPECTRAL) {
         const rgb2spec_table *tables;
@@ -768,4 +761,3 @@ rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, s
 }
 
 bool render_scene_spectral(const render_scene *rs) { return rs->spectral != NULL; }
-double render_scene_color_error(const render_scene *rs) { return rs->choice.worst_error; }

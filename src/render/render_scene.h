@@ -22,9 +22,7 @@
 
 /* How colour is carried along paths (docs/spectral.md): in RGB, or
  * spectrally (three wavelengths per camera sample, color/wavelengths.h;
- * volpath only). AUTO: spectrally when volpath renders a scene with a
- * colour that is not grey in a material or a medium (where the two differ),
- * in RGB otherwise. */
+ * either integrator). AUTO: as render/color_choice.h decides. */
 typedef enum { RENDER_COLOR_AUTO = 0, RENDER_COLOR_RGB, RENDER_COLOR_SPECTRAL } render_color;
 
 typedef struct {
@@ -143,8 +141,5 @@ rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, s
                             double *depth, film_surface *vs, integrator_counters *counters);
 /* Whether paths carry wavelengths (render_options.color). */
 bool render_scene_spectral(const render_scene *rs);
-/* --color auto: the largest error RGB makes on a product of the scene's
- * colours (render/color_choice.h; 0 when it did not check). */
-double render_scene_color_error(const render_scene *rs);
 
 #endif

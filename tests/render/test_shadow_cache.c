@@ -59,14 +59,14 @@ static void check_closed_form(bool grey)
     for (int k = 0; k < 200; ++k) {
         vec3 p = v3(-0.5 + 0.2 * rng_uniform(&r), -0.5 + rng_uniform(&r),
                     -0.2 + 0.4 * rng_uniform(&r));
-        rgb T = shadow_cache_transmittance(c, render_point(rs, p));
+        rgb T = shadow_cache_transmittance(c, render_point(rs, p), NULL);
         double d = (1.0 - p.y) / w.y;
         for (int ch = 0; ch < 3; ++ch) {
             double want = exp(-rgb_ch(sigma_t, ch) * d);
             worst = fmax(worst, fabs(rgb_ch(T, ch) / want - 1.0));
         }
         vec3 q = v3(0.6 + 0.1 * rng_uniform(&r), p.y, p.z);
-        rgb T0 = shadow_cache_transmittance(c, render_point(rs, q));
+        rgb T0 = shadow_cache_transmittance(c, render_point(rs, q), NULL);
         assert_true(T0.r == 0.0 && T0.g == 0.0 && T0.b == 0.0);
     }
     print_message("closed form: worst relative error %.3g\n", worst);
