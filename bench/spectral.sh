@@ -100,7 +100,7 @@ spectral_top() {
 # (converted once with nanovdb_convert), beside TOP so relative paths hold.
 spectral_pbrt_top() {
     # A bench wrapper Includes the scene: inline it for the rewrite.
-    inc=$(awk '$1 == "Include" { gsub(/"/, "", $2); print $2 }' "$1")
+    inc=$(awk '$1 == "Include" && $2 ~ /^"\// && !n++ { gsub(/"/, "", $2); print $2 }' "$1")
     src=$1
     [ -n "$inc" ] && src=$inc
     grep -q '\.vdb"' "$src" || { echo "$1"; return 0; }
