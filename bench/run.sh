@@ -26,12 +26,13 @@ BENCH_LOAD=$(cut -d' ' -f1-3 /proc/loadavg)
 . "$BENCH/bounce.sh"
 . "$BENCH/target.sh"
 . "$BENCH/scale.sh"
+. "$BENCH/spectral.sh"
 . "$BENCH/report.sh"
 
-# BENCH_PARTS: a subset of "ladder peer bounce target yardsticks scale" (the
-# others' tables of the last run are reused by the report). The scale part
-# writes its own scale.md; trade.md is written when any other part ran.
-PARTS=${BENCH_PARTS-ladder peer bounce target yardsticks scale}
+# BENCH_PARTS: a subset of "ladder peer bounce target yardsticks scale spectral" (the
+# others' tables of the last run are reused by the report). The scale and spectral parts
+# write their own scale.md and spectral.md; trade.md is written when any other part ran.
+PARTS=${BENCH_PARTS-ladder peer bounce target yardsticks scale spectral}
 start=$(now)
 for part in $PARTS; do
     echo "bench: $part" >&2
