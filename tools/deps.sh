@@ -10,6 +10,7 @@ packages=(
   libisal-dev        # the EXR writer's ZIP chunks (ISA-L's igzip: faster than zlib, same streams)
   libpng-dev         # --preview PNG
   zlib1g-dev         # ZIP-compressed .nvdb files (NanoVDB codec)
+  libxxhash-dev      # XXH3: the fingerprint of large input files (render id) at memory speed
   libcmocka-dev      # test framework
   libopenvdb-dev libnanovdb-dev  # volumes (OpenVDB 10 + NanoVDB)
   libboost-iostreams-dev         # needed by OpenVDB's headers, not pulled in by libopenvdb-dev

@@ -20,10 +20,10 @@ static inline uint64_t fnv1a(uint64_t h, const void *p, size_t n)
 
 #define HASH_FIELD(h, x) ((h) = fnv1a((h), &(x), sizeof(x)))
 
-/* The same kind of fingerprint of a large block at memory speed (FNV-1a
- * takes a byte per multiply, a second per GB): four lanes of 8-byte words,
- * each (lane ^ word) * prime, rotated, then folded into h with the length.
- * Chained like fnv1a, but a different function of the bytes. */
-uint64_t hash_block(uint64_t h, const void *p, size_t n);
+/* The fingerprint of a large block at memory speed (FNV-1a takes a byte per
+ * multiply, a second per GB): XXH3's 64-bit hash of the bytes with `seed`
+ * (Debian's libxxhash; its values are fixed across versions since 0.8.0).
+ * A different function of the bytes than fnv1a. */
+uint64_t hash_block(uint64_t seed, const void *p, size_t n);
 
 #endif

@@ -23,6 +23,7 @@ struct grid {
     vec3 background_vec;
     bool empty;
     uint64_t inactive_folded; /* grid_inactive_folded */
+    nvdb_leaf_table leaves;   /* from the value check: what grid_blocks reads of each leaf */
     grid_ibox bounds;
     /* Trilinear lookups outside [min - 1, max + 1] are background: skip the tree. */
     vec3 support_lo, support_hi;
@@ -222,6 +223,7 @@ void grid_destroy(grid *g)
     if (!g)
         return;
     vdb_buffer_free(&g->owned);
+    free(g->leaves.leaf);
     free(g);
 }
 
@@ -397,12 +399,19 @@ static hz_status check_values(grid *g, int nonnegative, hz_error *err)
 {
     float lo, hi;
     char why[512];
+    free(g->leaves.leaf);
     if (nvdb_check_float_values(g->owned.data, g->owned.size, nonnegative, &lo, &hi,
-                                &g->inactive_folded, why, sizeof why) != 0)
+                                &g->inactive_folded, &g->leaves, why, sizeof why) != 0)
         return hz_fail(err, "%s", why);
     g->min_value = lo;
     g->max_value = hi;
     return HZ_OK;
+}
+
+void grid_drop_leaf_stats(grid *g)
+{
+    free(g->leaves.leaf);
+    g->leaves = (nvdb_leaf_table){NULL, 0, 0, 0};
 }
 
 hz_status grid_check_density(grid *g, hz_error *err) { return check_values(g, 1, err); }
@@ -708,6 +717,43 @@ static uint64_t leaf_yz_mask(int y0, int y1, int z0, int z1)
     return m;
 }
 
+/* The leaf's entry in the value check's table, or NULL. */
+static const nvdb_leaf_stats *leaf_stats_of(const grid *g, uint64_t at)
+{
+    const nvdb_leaf_table *t = &g->leaves;
+    if (!t->leaf || at < t->first || (at - t->first) % t->stride != 0 ||
+        (at - t->first) / t->stride >= t->count)
+        return NULL;
+    return &t->leaf[(at - t->first) / t->stride];
+}
+
+/* When the check's table says where a leaf's active voxels lie and the
+ * window r0 .. r1 (per axis, in the leaf) holds all of them or none:
+ * true, having added their bounding box (what the mask scan would find). */
+static bool leaf_support_from_stats(const grid *g, uint64_t at, const int32_t origin[3],
+                                    const int r0[3], const int r1[3], grid_ibox *acc, bool *any)
+{
+    const nvdb_leaf_stats *s = leaf_stats_of(g, at);
+    if (!s)
+        return false;
+    const uint8_t bits[3] = {s->xs, s->ys, s->zs};
+    int64_t lo[3], hi[3];
+    bool inside = true;
+    for (int a = 0; a < 3; ++a) {
+        if (!bits[a])
+            return true; /* no active voxel */
+        int first = lowest_bit(bits[a]), last = highest_bit(bits[a]);
+        if (last < r0[a] || first > r1[a])
+            return true; /* none inside the window */
+        inside = inside && first >= r0[a] && last <= r1[a];
+        lo[a] = origin[a] + first;
+        hi[a] = origin[a] + last;
+    }
+    if (inside)
+        support_add(acc, any, lo, hi);
+    return inside;
+}
+
 /* The active voxels of a leaf inside `box`, from its value mask (bit
  * 64 x + 8 y + z is voxel origin + (x, y, z)). */
 static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const int32_t origin[3],
@@ -721,6 +767,8 @@ static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const int32
         if (r1[a] < r0[a])
             return;
     }
+    if (leaf_support_from_stats(g, leaf.address.byte_offset, origin, r0, r1, acc, any))
+        return;
     uint64_t yz = leaf_yz_mask(r0[1], r1[1], r0[2], r1[2]), all = 0;
     uint32_t xs = 0;
     for (int x = r0[0]; x <= r1[0]; ++x) {
@@ -854,9 +902,30 @@ static grid_block tile_block(float v)
     return (grid_block){v, v, 0, v != 0.0f ? GRID_BLOCK_FULL : GRID_BLOCK_ZERO};
 }
 
-/* A leaf as lower_region_range and leaf_support see it. */
+/* A leaf of stored statistics vmin, vmax as lower_region_range and
+ * leaf_support see it. */
+static grid_block leaf_block_of(const grid *g, uint64_t leaf, float vmin, float vmax, bool all,
+                                bool some)
+{
+    if (!all) /* statistics cover active voxels; the others hold the background */
+        vmin = min_of(vmin, g->background);
+    return (grid_block){vmin, vmax, (uint32_t)leaf,
+                        all    ? GRID_BLOCK_FULL
+                        : some ? GRID_BLOCK_PARTIAL
+                               : GRID_BLOCK_ZERO};
+}
+
+/* A leaf as lower_region_range and leaf_support see it: from what the value
+ * check gathered when the leaf lies in the leaf array (not touching the
+ * leaf), else from the leaf itself. */
 static grid_block leaf_block(const grid *g, pnanovdb_leaf_handle_t leaf)
 {
+    uint64_t at = leaf.address.byte_offset;
+    const nvdb_leaf_stats *s = leaf_stats_of(g, at);
+    if (s) {
+        return leaf_block_of(g, at, s->min, s->max, s->active == NVDB_LEAF_ALL_ACTIVE,
+                             s->active != NVDB_LEAF_NONE_ACTIVE);
+    }
     uint32_t all = 0xFFFFFFFFu, some = 0;
     for (uint32_t i = 0; i < 16; ++i) {
         uint32_t m = pnanovdb_read_uint32(
@@ -866,12 +935,7 @@ static grid_block leaf_block(const grid *g, pnanovdb_leaf_handle_t leaf)
     }
     float vmin = pnanovdb_read_float(g->buf, pnanovdb_leaf_get_min_address(FLOAT_GRID, g->buf, leaf));
     float vmax = pnanovdb_read_float(g->buf, pnanovdb_leaf_get_max_address(FLOAT_GRID, g->buf, leaf));
-    if (all != 0xFFFFFFFFu) /* statistics cover active voxels; the others hold the background */
-        vmin = min_of(vmin, g->background);
-    return (grid_block){vmin, vmax, leaf.address.byte_offset,
-                        all == 0xFFFFFFFFu ? GRID_BLOCK_FULL
-                        : some             ? GRID_BLOCK_PARTIAL
-                                           : GRID_BLOCK_ZERO};
+    return leaf_block_of(g, at, vmin, vmax, all == 0xFFFFFFFFu, some != 0);
 }
 
 static void lower_blocks(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],

@@ -107,6 +107,10 @@ float grid_min_value(const grid *g);
 float grid_background(const grid *g);
 uint64_t grid_active_voxel_count(const grid *g);
 const char *grid_name(const grid *g);
+/* Drops what the value check gathered of each leaf (grid_blocks, and the
+ * supports of partial leaves, then read the leaves themselves: the same
+ * answers, slower). For tests. */
+void grid_drop_leaf_stats(grid *g);
 /* Voxels whose inactive value was not the background when the grid was
  * checked (they hold it now). */
 uint64_t grid_inactive_folded(const grid *g);

@@ -452,11 +452,38 @@ typedef struct leaf_pass {
     values proto;
     uint64_t first, count, size; /* the leaf array: byte offset, leaves, bytes per leaf */
     leaf_result *out;
+    nvdb_leaf_stats *stats; /* NULL: not asked for */
     atomic_uint_fast64_t next;
     atomic_uint_fast64_t folded;
 } leaf_pass;
 
 enum { LEAF_CHUNK = 256 };
+
+/* A leaf's stored statistics and how much of it is active (its header,
+ * which leaf_values has just read). */
+static nvdb_leaf_stats leaf_stats(const values *v, pnanovdb_leaf_handle_t leaf)
+{
+    uint64_t slice[8], all = ~0ull, some = 0; /* bit 8 y + z of slice x: voxel (x, y, z) */
+    memcpy(slice, v->data + leaf.address.byte_offset + PNANOVDB_LEAF_OFF_VALUE_MASK, sizeof slice);
+    uint8_t xs = 0, ys = 0, zs = 0;
+    for (int x = 0; x < 8; ++x) {
+        all &= slice[x];
+        some |= slice[x];
+        xs |= (uint8_t)((slice[x] != 0) << x);
+    }
+    for (int y = 0; y < 8; ++y) {
+        uint8_t row = (uint8_t)(some >> (8 * y));
+        ys |= (uint8_t)((row != 0) << y);
+        zs |= row;
+    }
+    return (nvdb_leaf_stats){
+        pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_min_address(v->c.type, v->c.buf, leaf)),
+        pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_max_address(v->c.type, v->c.buf, leaf)),
+        all == ~0ull ? NVDB_LEAF_ALL_ACTIVE
+        : some       ? NVDB_LEAF_SOME_ACTIVE
+                     : NVDB_LEAF_NONE_ACTIVE,
+        xs, ys, zs};
+}
 
 static void *leaf_pass_worker(void *ctx)
 {
@@ -477,15 +504,18 @@ static void *leaf_pass_worker(void *ctx)
             bool a = false;
             int st = leaf_values(&v, leaf, &l, &h, &a);
             p->out[i] = (leaf_result){l, h, st != 0 ? LEAF_BAD : a ? LEAF_ACTIVE : LEAF_EMPTY};
+            if (p->stats)
+                p->stats[i] = leaf_stats(&v, leaf);
         }
     }
     atomic_fetch_add(&p->folded, v.folded);
     return NULL;
 }
 
-/* Runs the pass over the tree's leaf array; false (and nothing done) when
- * its results cannot be held. */
-static bool leaf_pass_run(leaf_pass *p, const values *v)
+/* Runs the pass over the tree's leaf array, gathering each leaf's
+ * statistics too when `stats`; false (and nothing done) when its results
+ * cannot be held. */
+static bool leaf_pass_run(leaf_pass *p, const values *v, bool stats)
 {
     pnanovdb_tree_handle_t tree = pnanovdb_grid_get_tree(v->c.buf, (pnanovdb_grid_handle_t){addr(0)});
     p->proto = *v;
@@ -495,6 +525,7 @@ static bool leaf_pass_run(leaf_pass *p, const values *v)
     atomic_init(&p->next, 0);
     atomic_init(&p->folded, 0);
     p->out = p->count ? malloc(p->count * sizeof *p->out) : NULL;
+    p->stats = p->out && stats ? malloc(p->count * sizeof *p->stats) : NULL;
     if (!p->out)
         return false;
     /* A few thousand leaves take less than starting a thread. */
@@ -614,8 +645,11 @@ static int root_values(values *v, float *l, float *h, bool *a)
 }
 
 int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *vmin,
-                            float *vmax, uint64_t *folded, char *why, size_t why_size)
+                            float *vmax, uint64_t *folded, nvdb_leaf_table *leaves, char *why,
+                            size_t why_size)
 {
+    if (leaves)
+        *leaves = (nvdb_leaf_table){NULL, 0, 0, 0};
     values v = {{pnanovdb_make_buf((pnanovdb_uint32_t *)data, size / 4), size,
                  PNANOVDB_GRID_TYPE_FLOAT, why, why_size, 0, 0, 0, 0, 0, 0},
                 false, 0.0f, 0.0f, !nonnegative, data, 0.0f, 0, NULL};
@@ -631,7 +665,7 @@ int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *v
         return bad_value(&v, bg, &nowhere, "the background, given at");
     v.bg = bg;
     leaf_pass pass;
-    if (leaf_pass_run(&pass, &v))
+    if (leaf_pass_run(&pass, &v, leaves != NULL))
         v.pass = &pass;
     float l = 0, h = 0;
     bool a = false;
@@ -639,6 +673,10 @@ int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *v
     if (v.pass) {
         v.folded += atomic_load(&pass.folded);
         free(pass.out);
+        if (st == 0 && leaves && pass.stats)
+            *leaves = (nvdb_leaf_table){pass.stats, pass.first, pass.count, pass.size};
+        else
+            free(pass.stats);
     }
     if (st != 0)
         return -1;

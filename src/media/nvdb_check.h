@@ -35,6 +35,26 @@ int nvdb_check_grid(const void *data, uint64_t size, char *why, size_t why_size)
  * vector's length of a vec3f grid. */
 void nvdb_root_range(const void *data, uint64_t size, double *lo, double *hi);
 
+/* What the majorant build reads of each leaf of the tree's leaf array,
+ * gathered by nvdb_check_float_values while it reads the leaf anyway, so
+ * that the build need not touch the leaves again: the leaf's stored min/max
+ * statistics, whether all, some or none of its voxels are active, and
+ * where: bit c of xs (ys, zs) is set when an active voxel has x (y, z)
+ * = c within the leaf. */
+enum { NVDB_LEAF_NONE_ACTIVE, NVDB_LEAF_SOME_ACTIVE, NVDB_LEAF_ALL_ACTIVE };
+typedef struct {
+    float min, max;
+    uint8_t active;
+    uint8_t xs, ys, zs;
+} nvdb_leaf_stats;
+
+typedef struct {
+    nvdb_leaf_stats *leaf; /* one per leaf, in array order (malloc'd); NULL: none */
+    uint64_t first;        /* the first leaf's byte offset in the buffer */
+    uint64_t count;        /* leaves in the array */
+    uint64_t stride;       /* bytes per leaf */
+} nvdb_leaf_table;
+
 /* For a float grid whose buffer passed nvdb_check_tree (every grid buffer
  * does, in grid_create_from_buffer; this does not walk it again): every
  * active value (voxels, tile values at every level) and the background are
@@ -43,10 +63,13 @@ void nvdb_root_range(const void *data, uint64_t size, double *lo, double *hi);
  * statistics). Every inactive value (voxel or tile) that is not the
  * background is overwritten with it, and *folded counts the voxels they
  * cover: haze takes inactive voxels to hold the background. Fills the true
- * range of the active values (0, 0 when there are none). Returns 0, or -1
- * with the first bad value's place in why. One pass over the values. */
+ * range of the active values (0, 0 when there are none). When `leaves` is
+ * not NULL, fills it (the caller frees leaves->leaf; NULL when it could not
+ * be held or on failure). Returns 0, or -1 with the first bad value's place
+ * in why. One pass over the values. */
 int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *vmin,
-                            float *vmax, uint64_t *folded, char *why, size_t why_size);
+                            float *vmax, uint64_t *folded, nvdb_leaf_table *leaves, char *why,
+                            size_t why_size);
 
 #ifdef __cplusplus
 }
