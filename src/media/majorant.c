@@ -463,7 +463,7 @@ static bool cellmap_pack(const majorant_bounds *cells, const majorant_box *boxes
         }
     for (int w = 0, before = 0; w < MAJORANT_MAP_WORDS; ++w) {
         out->map.before[w] = (uint16_t)before;
-        before += __builtin_popcountll(out->map.occupied[w]);
+        before += (int)majorant_popcount(out->map.occupied[w]);
     }
     size_t each = sizeof *out->cells + (boxes ? sizeof *out->boxes : 0);
     out->cells = out->n ? malloc(out->n * each) : NULL;

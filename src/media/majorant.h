@@ -8,9 +8,9 @@
  * Two levels, so that memory follows the data and not its bounding box:
  * bricks of MAJORANT_BRICK^3 cells cover the support (at most
  * MAJORANT_MAX_BRICKS of them), and only a brick whose cells differ (one that
- * holds the edge or the inside of the medium) stores its cells; a brick whose
- * every cell has the same bounds (empty space, a constant tile) is one pair of
- * floats. Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
+ * holds the edge or the inside of the medium) stores its cells, and of those
+ * only the occupied ones (majorant_cellmap); a brick whose every cell has the
+ * same bounds (empty space, a constant tile) is one pair of floats. Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
  * multiple of it when the support is large or densely active), aligned to
  * multiples of `cell` in index space, like the tree's nodes; bricks to
  * multiples of MAJORANT_BRICK * cell. A cell [a, a + cell) reads voxels
@@ -21,9 +21,10 @@
  *
  * A ray crosses the grid with a two-level 3D DDA (Amanatides & Woo):
  * majorant_walk returns, in order, one t interval per uniform brick crossed
- * and one per cell of the other bricks, with its bounds. Intervals whose upper
- * bound is 0 hold no medium: estimators skip them without a single density
- * lookup. */
+ * and one per cell of the other bricks, with its bounds, except that a run
+ * of empty ones (no density, no emission) is one interval. Intervals whose
+ * upper bound is 0 hold no medium: estimators skip them without a single
+ * density lookup. */
 #ifndef HAZE_MEDIA_MAJORANT_H
 #define HAZE_MEDIA_MAJORANT_H
 
@@ -175,11 +176,20 @@ static inline bool majorant_cell_occupied(const majorant_cellmap *m, int32_t i)
     return (m->occupied[i >> 6] >> (i & 63)) & 1u;
 }
 
+/* Bits set in v (SWAR: without -mpopcnt the builtin is a library call). */
+static inline uint32_t majorant_popcount(uint64_t v)
+{
+    v -= (v >> 1) & UINT64_C(0x5555555555555555);
+    v = (v & UINT64_C(0x3333333333333333)) + ((v >> 2) & UINT64_C(0x3333333333333333));
+    v = (v + (v >> 4)) & UINT64_C(0x0f0f0f0f0f0f0f0f);
+    return (uint32_t)((v * UINT64_C(0x0101010101010101)) >> 56);
+}
+
 /* Where occupied cell i of the brick is stored. */
 static inline size_t majorant_cell_slot(const majorant_cellmap *m, int32_t i)
 {
     uint64_t below = m->occupied[i >> 6] & ((UINT64_C(1) << (i & 63)) - 1u);
-    return (size_t)m->first + m->before[i >> 6] + (size_t)__builtin_popcountll(below);
+    return (size_t)m->first + m->before[i >> 6] + majorant_popcount(below);
 }
 
 static inline bool majorant_bounds_empty(majorant_bounds b)
