@@ -11,8 +11,11 @@
 //   sparse.vdb/.nvdb    small balls (radius 10 voxels, density 1 - d/10) at
 //                       hashed places inside voxels [-500, 499]^3, voxel size
 //                       1/500 (world [-1, 1]^3): about 2% of the bound active.
+//   sparse-2000.vdb/.nvdb  the same balls, as many per voxel of bound, inside
+//                       voxels [-1000, 999]^3, voxel size 1/1000: 2% of 2000^3
+//                       (a 2.2 GB .nvdb; not part of make bench).
 //
-// Usage: haze_scale_volumes OUTDIR (sphere R | sparse)...
+// Usage: haze_scale_volumes OUTDIR (sphere R | sparse | sparse-2000)...
 // Prints one line per file: its name, the active voxels and the occupancy.
 #include <openvdb/openvdb.h>
 #include <openvdb/io/File.h>
@@ -89,13 +92,13 @@ uint32_t hash(uint32_t x)
     return x;
 }
 
-// Balls until 2% of the bound's 10^9 voxels are active.
-FloatGrid::Ptr sparse()
+// Balls until 2% of the bound's (2 half)^3 voxels are active.
+FloatGrid::Ptr sparse(int half)
 {
-    const int half = 500, rb = 10;
+    const int rb = 10;
     FloatGrid::Ptr grid = make_density(1.0 / half);
     auto acc = grid->getAccessor();
-    const uint64_t want = uint64_t(0.02 * 1e9);
+    const uint64_t want = uint64_t(0.02 * 8.0 * double(half) * double(half) * double(half));
     uint64_t active = 0;
     for (uint32_t ball = 0; active < want; ++ball) {
         int c[3];
@@ -141,7 +144,7 @@ void write(const std::string &dir, const std::string &name, const FloatGrid::Ptr
 int main(int argc, char **argv)
 {
     if (argc < 3) {
-        std::fprintf(stderr, "usage: %s OUTDIR (sphere R | sparse)...\n", argv[0]);
+        std::fprintf(stderr, "usage: %s OUTDIR (sphere R | sparse | sparse-2000)...\n", argv[0]);
         return 2;
     }
     const std::string dir = argv[1];
@@ -150,12 +153,14 @@ int main(int argc, char **argv)
         for (int i = 2; i < argc; ++i) {
             const std::string what = argv[i];
             if (what == "sparse") {
-                write(dir, "sparse", sparse(), 1e9);
+                write(dir, "sparse", sparse(500), 1e9);
+            } else if (what == "sparse-2000") {
+                write(dir, "sparse-2000", sparse(1000), 8e9);
             } else if (what == "sphere" && i + 1 < argc && std::atoi(argv[i + 1]) > 0) {
                 const int R = std::atoi(argv[++i]);
                 write(dir, "sphere-" + std::to_string(R), sphere(R), 8.0 * R * R * R);
             } else {
-                std::fprintf(stderr, "haze_scale_volumes: expected \"sphere R\" or \"sparse\", got \"%s\"\n",
+                std::fprintf(stderr, "haze_scale_volumes: expected \"sphere R\", \"sparse\" or \"sparse-2000\", got \"%s\"\n",
                              what.c_str());
                 return 2;
             }

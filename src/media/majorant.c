@@ -407,12 +407,16 @@ static uint64_t layout(const double l3[3], const double h3[3], int32_t cell, int
     return count;
 }
 
-/* The cells of one brick that is not uniform, until they are stored. */
+/* The cells of one brick that is not uniform, until they are stored: its
+ * occupied ones only (cellmap_pack), so that the build's memory follows
+ * them too. */
 typedef struct {
     bool differ;            /* its cells differ: the brick keeps them */
     majorant_bounds first;  /* its first cell's bounds */
-    majorant_bounds cells[CELLS_PER_BRICK];
-    majorant_box boxes[CELLS_PER_BRICK];
+    majorant_cellmap map;   /* first unset */
+    size_t n;               /* occupied cells */
+    majorant_bounds *cells; /* n of them, then n boxes when boxed */
+    majorant_box *boxes;
 } brick_cells;
 
 /* The bricks' bounds and the non-uniform bricks' cells are independent: both
@@ -446,11 +450,51 @@ static void brick_first(const majorant_grid *mg, const int32_t b3[3], int64_t fi
         first[a] = mg->origin[a] + b3[a] * (int64_t)mg->cell * B;
 }
 
+/* The occupied ones of a brick's cells `cells` (and `boxes`, NULL: none)
+ * into out->map and its own arrays; false when out of memory. */
+static bool cellmap_pack(const majorant_bounds *cells, const majorant_box *boxes, brick_cells *out)
+{
+    memset(&out->map, 0, sizeof out->map);
+    out->n = 0;
+    for (int32_t i = 0; i < CELLS_PER_BRICK; ++i)
+        if (!majorant_bounds_empty(cells[i])) {
+            out->map.occupied[i >> 6] |= UINT64_C(1) << (i & 63);
+            ++out->n;
+        }
+    for (int w = 0, before = 0; w < MAJORANT_MAP_WORDS; ++w) {
+        out->map.before[w] = (uint16_t)before;
+        before += (int)majorant_popcount(out->map.occupied[w]);
+    }
+    size_t each = sizeof *out->cells + (boxes ? sizeof *out->boxes : 0);
+    out->cells = out->n ? malloc(out->n * each) : NULL;
+    out->boxes = out->cells && boxes ? (majorant_box *)(out->cells + out->n) : NULL;
+    if (out->n && !out->cells)
+        return false;
+    for (int32_t i = 0, k = 0; i < CELLS_PER_BRICK; ++i)
+        if (majorant_cell_occupied(&out->map, i)) {
+            out->cells[k] = cells[i];
+            if (boxes)
+                out->boxes[k] = boxes[i];
+            ++k;
+        }
+    return true;
+}
+
+static void brick_cells_free(brick_cells *bc)
+{
+    if (bc)
+        free(bc->cells);
+    free(bc);
+}
+
 /* The cells of brick b3 into `out` (its windows aimed at the brick);
  * differ: whether they differ (the brick must keep them), and when all are
- * equal their bounds are the brick's, tighter than the brick's own query. */
-static void bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3], brick_cells *out)
+ * equal their bounds are the brick's, tighter than the brick's own query.
+ * False when out of memory. */
+static bool bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3], brick_cells *out)
 {
+    majorant_bounds cells[CELLS_PER_BRICK];
+    majorant_box boxes[CELLS_PER_BRICK];
     size_t i = 0;
     bool differ = false;
     for (int32_t z = 0; z < B; ++z)
@@ -460,13 +504,16 @@ static void bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3],
                 int64_t first[3];
                 for (int a = 0; a < 3; ++a)
                     first[a] = mg->origin[a] + ((int64_t)b3[a] * B + c3[a]) * mg->cell;
-                out->cells[i] = span_bounds(r, first, mg->cell);
+                cells[i] = span_bounds(r, first, mg->cell);
                 if (r->src->boxes)
-                    out->boxes[i] = cell_box(r, first, mg->cell, out->cells[i]);
-                differ = differ || !same_bounds(out->cells[i], out->cells[0]);
+                    boxes[i] = cell_box(r, first, mg->cell, cells[i]);
+                differ = differ || !same_bounds(cells[i], cells[0]);
             }
-    out->first = out->cells[0];
+    out->first = cells[0];
     out->differ = differ;
+    out->cells = NULL;
+    out->n = 0;
+    return !differ || cellmap_pack(cells, r->src->boxes ? boxes : NULL, out);
 }
 
 /* The cells of brick i into job->cells[i]; false when out of memory. */
@@ -480,7 +527,10 @@ static bool brick_cells_of(brick_job *job, reader *r, size_t i)
     if (!bc)
         return false;
     reader_aim(r, first, (int64_t)job->mg->cell * B);
-    bound_cells(r, job->mg, b3, bc);
+    if (!bound_cells(r, job->mg, b3, bc)) {
+        free(bc);
+        return false;
+    }
     job->cells[i] = bc;
     return true;
 }
@@ -507,8 +557,10 @@ static void *bound_bricks_worker(void *ctx)
             /* the same windows: the brick's cells cost no second walk */
             if (job->with_cells && !uniform_bounds(br->bounds)) {
                 brick_cells *bc = malloc(sizeof *bc);
-                if (bc)
-                    bound_cells(&r, mg, b3, bc);
+                if (bc && !bound_cells(&r, mg, b3, bc)) {
+                    free(bc);
+                    bc = NULL;
+                }
                 job->cells[i] = bc; /* NULL: store_cells tries again */
             }
         }
@@ -531,12 +583,35 @@ static size_t bound_bricks(const source *src, majorant_grid *mg, brick_cells **c
     return varied;
 }
 
-/* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose varied
- * bricks fit MAJORANT_MAX_STORED_CELLS: lays out out's bricks and bounds
- * them. *varied: the bricks whose cells differ. When the layout is sure to
- * be the last (too few bricks to vary beyond the limit), the same pass
- * bounds the varied bricks' cells into *cells (one per brick, NULL where
- * not), else *cells is NULL. */
+static void free_cells(brick_cells **cells, size_t count)
+{
+    for (size_t i = 0; cells && i < count; ++i)
+        brick_cells_free(cells[i]);
+    free(cells);
+}
+
+/* The most cells a grid stores: memory follows the active voxels. */
+static size_t stored_cells_cap(const source *src)
+{
+    uint64_t per_active = src->empty ? 0 : grid_active_voxel_count(src->g) / 16;
+    return per_active > MAJORANT_MIN_STORED_CELLS ? (size_t)per_active : MAJORANT_MIN_STORED_CELLS;
+}
+
+/* The cells the bricks would store (a brick whose cells were not bounded
+ * counts as all of them). */
+static size_t cells_to_store(const majorant_grid *mg, brick_cells *const *cells)
+{
+    size_t count = (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2], n = 0;
+    for (size_t i = 0; i < count; ++i)
+        if (!uniform_bounds(mg->bricks[i].bounds))
+            n += !cells[i] ? CELLS_PER_BRICK : cells[i]->differ ? cells[i]->n : 0;
+    return n;
+}
+
+/* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose occupied
+ * cells fit stored_cells_cap: lays out out's bricks and bounds them, and the
+ * cells of those not uniform into *cells (one per brick, NULL where not).
+ * *varied: the bricks whose cells may differ. */
 static hz_status choose_layout(const source *src, const double l3[3], const double h3[3],
                                majorant_grid *out, size_t *varied, brick_cells ***cells,
                                hz_error *err)
@@ -552,17 +627,19 @@ static hz_status choose_layout(const source *src, const double l3[3], const doub
             out->res[a] = (int32_t)res[a];
             out->origin[a] = (int32_t)(first[a] * out->cell * B);
         }
-        bool last = count <= MAJORANT_MAX_STORED_CELLS / CELLS_PER_BRICK || out->cell >= MAX_CELL;
         out->bricks = malloc((size_t)count * sizeof *out->bricks);
-        *cells = last && !src->by_queries ? calloc((size_t)count, sizeof **cells) : NULL;
-        if (!out->bricks) {
+        *cells = calloc((size_t)count, sizeof **cells);
+        if (!out->bricks || !*cells) {
             free(*cells);
+            *cells = NULL;
             majorant_grid_free(out);
             return hz_fail(err, "out of memory for a majorant grid of %zu bricks", (size_t)count);
         }
         *varied = bound_bricks(src, out, *cells);
-        if (*varied <= MAJORANT_MAX_STORED_CELLS / CELLS_PER_BRICK || out->cell >= MAX_CELL)
+        if (out->cell >= MAX_CELL || cells_to_store(out, *cells) <= stored_cells_cap(src))
             return HZ_OK;
+        free_cells(*cells, (size_t)count);
+        *cells = NULL;
         free(out->bricks);
         out->bricks = NULL;
         out->cell *= 2;
@@ -585,8 +662,8 @@ static void *store_cells_worker(void *ctx)
 }
 
 /* Bounds the cells of every brick that is not uniform (`varied` of them)
- * that the bricks' pass did not, then keeps those whose cells differ, in
- * brick order. */
+ * that the bricks' pass could not, then keeps those whose cells differ, in
+ * brick order: their maps, and their occupied cells. */
 static hz_status store_cells(const source *src, majorant_grid *out, size_t varied,
                              brick_cells **cells, hz_error *err)
 {
@@ -602,12 +679,16 @@ static hz_status store_cells(const source *src, majorant_grid *out, size_t varie
         job.brick = brick;
         hz_parallel_run(threads_for(varied), store_cells_worker, &job);
     }
-    size_t stored = 0;
-    for (size_t k = 0; brick && k < varied; ++k)
-        stored += cells[brick[k]] && cells[brick[k]]->differ;
-    out->cells = stored ? malloc(stored * CELLS_PER_BRICK * sizeof *out->cells) : NULL;
-    out->boxes = stored && src->boxes ? malloc(stored * CELLS_PER_BRICK * sizeof *out->boxes) : NULL;
-    if (!brick || atomic_load(&job.no_memory) || (stored && !out->cells) ||
+    size_t maps = 0, stored = 0;
+    for (size_t k = 0; brick && !atomic_load(&job.no_memory) && k < varied; ++k)
+        if (cells[brick[k]]->differ) {
+            ++maps;
+            stored += cells[brick[k]]->n;
+        }
+    out->maps = maps ? malloc(maps * sizeof *out->maps) : NULL;
+    out->cells = stored ? malloc(stored * sizeof *out->cells) : NULL;
+    out->boxes = stored && src->boxes ? malloc(stored * sizeof *out->boxes) : NULL;
+    if (!brick || atomic_load(&job.no_memory) || (maps && !out->maps) || (stored && !out->cells) ||
         (stored && src->boxes && !out->boxes)) {
         free(brick);
         return hz_fail(err, "out of memory for a majorant grid of %zu cells",
@@ -619,21 +700,17 @@ static hz_status store_cells(const source *src, majorant_grid *out, size_t varie
         br->bounds = bc->first;
         if (!bc->differ)
             continue;
-        size_t to = out->stored_bricks * CELLS_PER_BRICK;
-        memcpy(out->cells + to, bc->cells, sizeof bc->cells);
+        majorant_cellmap *map = &out->maps[out->stored_bricks];
+        *map = bc->map;
+        map->first = (uint32_t)out->stored_cells;
+        memcpy(out->cells + out->stored_cells, bc->cells, bc->n * sizeof *bc->cells);
         if (out->boxes)
-            memcpy(out->boxes + to, bc->boxes, sizeof bc->boxes);
+            memcpy(out->boxes + out->stored_cells, bc->boxes, bc->n * sizeof *bc->boxes);
+        out->stored_cells += bc->n;
         br->cells = (int32_t)out->stored_bricks++;
     }
     free(brick);
     return HZ_OK;
-}
-
-static void free_cells(brick_cells **cells, size_t count)
-{
-    for (size_t i = 0; cells && i < count; ++i)
-        free(cells[i]);
-    free(cells);
 }
 
 static hz_status build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
@@ -693,20 +770,23 @@ hz_status majorant_grid_build_by_queries(const grid *g, const majorant_emission 
 void majorant_grid_free(majorant_grid *mg)
 {
     free(mg->bricks);
+    free(mg->maps);
     free(mg->cells);
     free(mg->boxes);
     mg->bricks = NULL;
+    mg->maps = NULL;
     mg->cells = NULL;
     mg->boxes = NULL;
     mg->stored_bricks = 0;
+    mg->stored_cells = 0;
     mg->res[0] = mg->res[1] = mg->res[2] = 0;
 }
 
 size_t majorant_grid_bytes(const majorant_grid *mg)
 {
     return (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2] * sizeof *mg->bricks +
-           mg->stored_bricks * CELLS_PER_BRICK *
-               (sizeof *mg->cells + (mg->boxes ? sizeof *mg->boxes : 0));
+           mg->stored_bricks * sizeof *mg->maps +
+           mg->stored_cells * (sizeof *mg->cells + (mg->boxes ? sizeof *mg->boxes : 0));
 }
 
 
@@ -725,8 +805,14 @@ bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *o
         c[a] = (int32_t)u % B;
     }
     const majorant_brick *br = &mg->bricks[majorant_brick_index(mg, b)];
-    *out = br->cells < 0 ? br->bounds
-                         : mg->cells[(size_t)br->cells * CELLS_PER_BRICK + cell_index(c)];
+    if (br->cells < 0) {
+        *out = br->bounds;
+        return true;
+    }
+    const majorant_cellmap *map = &mg->maps[br->cells];
+    int32_t i = (int32_t)cell_index(c);
+    *out = majorant_cell_occupied(map, i) ? mg->cells[majorant_cell_slot(map, i)]
+                                          : (majorant_bounds){0.0f, 0.0f, 0.0f};
     return true;
 }
 
@@ -764,7 +850,7 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
 {
     w->mg = mg;
     w->done = true;
-    w->cell = NULL;
+    w->map = NULL;
     w->clip_cell = NULL;
     if (!mg->bricks || !(t0 <= t1))
         return false;
@@ -781,7 +867,7 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
         return false;
     /* The brick of t0, clamped: robust against the entry point rounding
      * onto a face. */
-    const ptrdiff_t stride[3] = {1, B, B * B};
+    const int32_t stride[3] = {1, B, B * B};
     for (int a = 0; a < 3; ++a) {
         int32_t c = clamped_floor((w->u0[a] + t0 * w->du[a]) / B, mg->res[a]);
         w->brick[a] = c;
@@ -819,12 +905,13 @@ void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, doubl
                           : w->step[a] < 0 ? (first + c - w->u0[a]) / w->du[a]
                                            : INFINITY;
     }
-    w->cell = w->mg->cells + (size_t)br->cells * CELLS_PER_BRICK + cell_index(w->cell_ijk);
+    w->map = &w->mg->maps[br->cells];
+    w->ci = (int32_t)cell_index(w->cell_ijk);
 }
 
-void majorant_walk_clip(majorant_walk *w)
+void majorant_walk_clip(majorant_walk *w, size_t k)
 {
-    const majorant_box *bx = &w->mg->boxes[w->cell - w->mg->cells];
+    const majorant_box *bx = &w->mg->boxes[k];
     double t0 = -INFINITY, t1 = INFINITY;
     for (int a = 0; a < 3; ++a) {
         double c = (double)w->brick[a] * B + w->cell_ijk[a];
@@ -842,7 +929,7 @@ void majorant_walk_clip(majorant_walk *w)
             break;
         }
     }
-    w->clip_cell = w->cell;
+    w->clip_cell = &w->mg->cells[k];
     w->clip_t0 = t0;
     w->clip_t1 = t1;
 }

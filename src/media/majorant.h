@@ -8,9 +8,9 @@
  * Two levels, so that memory follows the data and not its bounding box:
  * bricks of MAJORANT_BRICK^3 cells cover the support (at most
  * MAJORANT_MAX_BRICKS of them), and only a brick whose cells differ (one that
- * holds the edge or the inside of the medium) stores its cells; a brick whose
- * every cell has the same bounds (empty space, a constant tile) is one pair of
- * floats. Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
+ * holds the edge or the inside of the medium) stores its cells, and of those
+ * only the occupied ones (majorant_cellmap); a brick whose every cell has the
+ * same bounds (empty space, a constant tile) is one pair of floats. Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
  * multiple of it when the support is large or densely active), aligned to
  * multiples of `cell` in index space, like the tree's nodes; bricks to
  * multiples of MAJORANT_BRICK * cell. A cell [a, a + cell) reads voxels
@@ -21,9 +21,10 @@
  *
  * A ray crosses the grid with a two-level 3D DDA (Amanatides & Woo):
  * majorant_walk returns, in order, one t interval per uniform brick crossed
- * and one per cell of the other bricks, with its bounds. Intervals whose upper
- * bound is 0 hold no medium: estimators skip them without a single density
- * lookup. */
+ * and one per cell of the other bricks, with its bounds, except that a run
+ * of empty ones (no density, no emission) is one interval. Intervals whose
+ * upper bound is 0 hold no medium: estimators skip them without a single
+ * density lookup. */
 #ifndef HAZE_MEDIA_MAJORANT_H
 #define HAZE_MEDIA_MAJORANT_H
 
@@ -38,11 +39,14 @@
 
 /* Cells per brick edge. */
 #define MAJORANT_BRICK 8
-/* At most this many bricks (32^3: 512 KiB) and this many stored cells (2^22:
- * 48 MiB, a support of 1024^3 voxels active everywhere at leaf resolution);
- * beyond either, cells grow. */
-#define MAJORANT_MAX_BRICKS (1u << 15)
-#define MAJORANT_MAX_STORED_CELLS (1u << 22)
+#define MAJORANT_BRICK_CELLS (MAJORANT_BRICK * MAJORANT_BRICK * MAJORANT_BRICK)
+/* At most this many bricks (64^3: 4 MiB, a support of 4096^3 voxels in cells
+ * of 8); beyond, cells grow. Cells are stored only where they hold something
+ * (see majorant_cellmap): at most MAJORANT_MIN_STORED_CELLS of them (48 MiB
+ * with their boxes), or one per 16 active voxels of the grid when that is
+ * more; beyond, cells grow. */
+#define MAJORANT_MAX_BRICKS (1u << 18)
+#define MAJORANT_MIN_STORED_CELLS (1u << 22)
 
 typedef struct {
     float max, min; /* of the density */
@@ -59,8 +63,19 @@ typedef struct {
 
 typedef struct {
     majorant_bounds bounds; /* of the whole brick (exact for every cell when uniform) */
-    int32_t cells;          /* its first cell in majorant_grid.cells, or -1: uniform */
+    int32_t cells;          /* its map in majorant_grid.maps, or -1: uniform */
 } majorant_brick;
+
+/* Which cells of a brick that stores its cells hold something (bounds other
+ * than all 0: density or emission), one bit per cell, x fastest; only those
+ * are stored, in cell order, so that memory follows the occupied cells and a
+ * walk crosses the empty ones reading this map alone. */
+#define MAJORANT_MAP_WORDS (MAJORANT_BRICK_CELLS / 64)
+typedef struct {
+    uint64_t occupied[MAJORANT_MAP_WORDS];
+    uint32_t first;                      /* its first cell in majorant_grid.cells */
+    uint16_t before[MAJORANT_MAP_WORDS]; /* its cells stored before word w */
+} majorant_cellmap;
 
 /* Where in a stored cell the density may be non-zero: [lo, hi] per axis in
  * 64ths of the cell from its first voxel, rounded outward (lo > hi: nowhere).
@@ -75,9 +90,11 @@ typedef struct {
     int32_t origin[3];       /* index coordinate of brick (0,0,0)'s first voxel */
     int32_t cell;            /* edge of a cell in voxels */
     majorant_brick *bricks;  /* res[0]*res[1]*res[2], x fastest */
-    majorant_bounds *cells;  /* MAJORANT_BRICK^3 per non-uniform brick, x fastest */
+    majorant_cellmap *maps;  /* one per brick that stores its cells */
+    majorant_bounds *cells;  /* the occupied cells of those bricks, brick by brick */
     majorant_box *boxes;     /* one per stored cell; NULL with a non-zero background */
-    size_t stored_bricks;    /* bricks that store their cells */
+    size_t stored_bricks;    /* bricks that store their cells (maps) */
+    size_t stored_cells;     /* cells stored */
 } majorant_grid;
 
 /* Builds the grid covering the index box [lo, hi] (the support; lo > hi: an
@@ -110,9 +127,10 @@ typedef struct {
     int32_t brick[3];
     double brick_next[3], brick_delta[3];
     /* cell level, while inside a brick that stores its cells */
-    const majorant_bounds *cell;  /* the current cell; NULL at brick level */
+    const majorant_cellmap *map;  /* the brick's map; NULL at brick level */
+    int32_t ci;                   /* the current cell's index in the brick */
     int32_t cell_ijk[3];          /* its place in the brick: 0 .. MAJORANT_BRICK - 1 */
-    ptrdiff_t cell_stride[3];     /* step[a] x the cell's stride along a */
+    int32_t cell_stride[3];       /* step[a] x the cell's stride along a */
     double cell_next[3], cell_delta[3];
     double brick_exit;
     /* where the current cell's box lies on the ray (boxes only) */
@@ -149,8 +167,35 @@ static inline bool majorant_box_full(const majorant_box *bx)
 
 /* Starts the cell level in a brick that stores its cells, at w->t. */
 void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, double exit);
-/* Sets clip_t0/clip_t1 to the current cell's box along the ray. */
-void majorant_walk_clip(majorant_walk *w);
+/* Sets clip_t0/clip_t1 to the box of stored cell k (the current one) along
+ * the ray. */
+void majorant_walk_clip(majorant_walk *w, size_t k);
+
+static inline bool majorant_cell_occupied(const majorant_cellmap *m, int32_t i)
+{
+    return (m->occupied[i >> 6] >> (i & 63)) & 1u;
+}
+
+/* Bits set in v (SWAR: without -mpopcnt the builtin is a library call). */
+static inline uint32_t majorant_popcount(uint64_t v)
+{
+    v -= (v >> 1) & UINT64_C(0x5555555555555555);
+    v = (v & UINT64_C(0x3333333333333333)) + ((v >> 2) & UINT64_C(0x3333333333333333));
+    v = (v + (v >> 4)) & UINT64_C(0x0f0f0f0f0f0f0f0f);
+    return (uint32_t)((v * UINT64_C(0x0101010101010101)) >> 56);
+}
+
+/* Where occupied cell i of the brick is stored. */
+static inline size_t majorant_cell_slot(const majorant_cellmap *m, int32_t i)
+{
+    uint64_t below = m->occupied[i >> 6] & ((UINT64_C(1) << (i & 63)) - 1u);
+    return (size_t)m->first + m->before[i >> 6] + majorant_popcount(below);
+}
+
+static inline bool majorant_bounds_empty(majorant_bounds b)
+{
+    return !(b.max > 0.0f) && !(b.emit > 0.0f);
+}
 
 static inline int majorant_nearest_axis(const double t[3])
 {
@@ -182,53 +227,97 @@ static inline void majorant_walk_next_brick(majorant_walk *w, int a)
         w->done = true; /* rounding left the box a little early: the rest is outside */
 }
 
+/* The current cell's next piece (cell level): its end *t1 and bounds;
+ * *whole: the piece ends the cell (else a box splits it and the cell goes
+ * on). */
+static inline majorant_bounds majorant_walk_piece(majorant_walk *w, double *t1, bool *whole)
+{
+    const majorant_bounds zero = {0.0f, 0.0f, 0.0f};
+    *whole = true;
+    if (!majorant_cell_occupied(w->map, w->ci))
+        return zero;
+    size_t k = majorant_cell_slot(w->map, w->ci);
+    majorant_bounds b = w->mg->cells[k];
+    if (w->mg->boxes && b.max > 0.0f && !majorant_box_full(&w->mg->boxes[k])) {
+        /* up to three pieces: before the box, in it, after it */
+        if (w->clip_cell != &w->mg->cells[k])
+            majorant_walk_clip(w, k);
+        bool inside = !(w->t < w->clip_t0) && w->t < w->clip_t1;
+        double change = w->t < w->clip_t0 ? w->clip_t0 : w->clip_t1;
+        if (!inside)
+            b = zero;
+        if (change > w->t && change < *t1) {
+            *t1 = change;
+            *whole = false;
+        }
+    }
+    return b;
+}
+
 /* The next interval, or false at the end of [t0, t1]. Segments are
- * contiguous and cover the part of [t0, t1] inside the grid. */
+ * contiguous and cover the part of [t0, t1] inside the grid. Consecutive
+ * empty cells and bricks (no density, no emission) come as one interval:
+ * the DDA still crosses them one by one (so every boundary is the same
+ * number whatever was merged before it), but reads only the bricks' bounds
+ * and cell maps there. */
 static inline bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
 {
+    bool run = false; /* empty pieces since run_t0, not reported yet */
+    double run_t0 = 0.0;
     while (!w->done) {
-        if (w->cell) {
+        majorant_bounds b;
+        bool empty;
+        if (w->map) {
             int a = majorant_nearest_axis(w->cell_next);
             int32_t c = w->cell_ijk[a] + w->step[a];
             bool leave = !(w->cell_next[a] < w->brick_exit) || (uint32_t)c >= MAJORANT_BRICK;
-            double exit = leave ? w->brick_exit : w->cell_next[a];
-            majorant_bounds b = *w->cell;
-            if (w->mg->boxes && b.max > 0.0f &&
-                !majorant_box_full(&w->mg->boxes[w->cell - w->mg->cells])) {
-                /* up to three intervals: before the box, in it, after it */
-                if (w->clip_cell != w->cell)
-                    majorant_walk_clip(w);
-                bool inside = !(w->t < w->clip_t0) && w->t < w->clip_t1;
-                double change = w->t < w->clip_t0 ? w->clip_t0 : w->clip_t1;
-                if (!inside)
-                    b = (majorant_bounds){0.0f, 0.0f, 0.0f};
-                if (change > w->t && change < exit) {
-                    majorant_walk_emit(w, seg, change, b); /* the cell goes on */
-                    return true;
-                }
+            double t1 = leave ? w->brick_exit : w->cell_next[a];
+            bool whole;
+            b = majorant_walk_piece(w, &t1, &whole);
+            empty = majorant_bounds_empty(b);
+            if (!empty && run)
+                break;
+            if (empty && !run) {
+                run = true;
+                run_t0 = w->t;
             }
-            majorant_walk_emit(w, seg, exit, b);
-            if (leave) {
-                w->cell = NULL;
+            majorant_walk_emit(w, seg, t1, b);
+            if (whole && leave) {
+                w->map = NULL;
                 majorant_walk_next_brick(w, majorant_nearest_axis(w->brick_next));
-            } else {
+            } else if (whole) {
                 w->cell_ijk[a] = c;
-                w->cell += w->cell_stride[a];
+                w->ci += w->cell_stride[a];
                 w->cell_next[a] += w->cell_delta[a];
             }
-            return true;
-        }
-        int a = majorant_nearest_axis(w->brick_next);
-        double exit = w->brick_next[a] < w->t_end ? w->brick_next[a] : w->t_end;
-        const majorant_brick *br = &w->mg->bricks[majorant_brick_index(w->mg, w->brick)];
-        if (br->cells < 0) {
-            majorant_walk_emit(w, seg, exit, br->bounds);
+        } else {
+            int a = majorant_nearest_axis(w->brick_next);
+            double exit = w->brick_next[a] < w->t_end ? w->brick_next[a] : w->t_end;
+            const majorant_brick *br = &w->mg->bricks[majorant_brick_index(w->mg, w->brick)];
+            if (br->cells >= 0) {
+                majorant_walk_enter_brick(w, br, exit);
+                continue;
+            }
+            b = br->bounds;
+            empty = majorant_bounds_empty(b);
+            if (!empty && run)
+                break;
+            if (empty && !run) {
+                run = true;
+                run_t0 = w->t;
+            }
+            majorant_walk_emit(w, seg, exit, b);
             majorant_walk_next_brick(w, a);
-            return true;
         }
-        majorant_walk_enter_brick(w, br, exit);
+        if (!empty)
+            return true;
     }
-    return false;
+    if (!run)
+        return false;
+    seg->t0 = run_t0;
+    seg->t1 = w->t;
+    seg->max = seg->min = seg->emit = 0.0;
+    return true;
 }
 
 #endif
