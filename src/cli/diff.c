@@ -208,7 +208,9 @@ static void accumulate(diff_stats *s, const exr_image *img)
         double a = fa, b = fb, d = a - b, ad = fabs(d);
         s->n++;
         s->sum_sq += d * d;
-        s->sum_rel += d * d / ((b + 0.01) * (b + 0.01));
+        /* |b|: spectral images hold small negative values (colours beyond
+         * sRGB), where b + 0.01 would vanish. */
+        s->sum_rel += d * d / ((fabs(b) + 0.01) * (fabs(b) + 0.01));
         s->sum_abs += ad;
         s->sum_a += a;
         s->sum_b += b;
@@ -783,7 +785,7 @@ static void print_figures(const diff_options *opt, const exr_image *a, const dif
             a->data_y0 + a->height - 1, nc, nc == 1 ? "" : "s");
     for (int c = 0; c < nc; c++)
         fprintf(out, " %s", st[c].name);
-    fprintf(out, "\nPSNR with peak 1; relMSE = mean (a-b)^2/(b+0.01)^2; "
+    fprintf(out, "\nPSNR with peak 1; relMSE = mean (a-b)^2/(|b|+0.01)^2; "
                  "rel diff = (mean A - mean B)/|mean B|; NaN/Inf values are counted and excluded\n\n");
     fprintf(out, "%-10s %12s %12s %12s %12s %12s %-16s %10s %12s %12s %10s %9s %9s\n", "channel",
             "MSE", "RMSE", "relMSE", "MAE", "max", "max at", "PSNR", "mean A", "mean B",

@@ -142,7 +142,7 @@ static expect expected(pixel_fn fa, pixel_fn fb, int c0, int c1)
                     continue;
                 e.n++;
                 e.sq += d * d;
-                e.rel += d * d / ((b + 0.01) * (b + 0.01));
+                e.rel += d * d / ((fabs(b) + 0.01) * (fabs(b) + 0.01));
                 e.abs += fabs(d);
                 e.a += a;
                 e.b += b;

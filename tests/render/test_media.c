@@ -754,7 +754,9 @@ static char *smoke_scene(const char *integrator) { return smoke_scene_scaled(int
 
 /* raymarch at pixel centres is deterministic, in thick media too (its march
  * ends at a transmittance cut-off, not by roulette): two seeds give the same
- * image, and two seeds of jittered marching do not. */
+ * image, and two seeds of jittered marching do not. In RGB: the coloured
+ * smoke would render spectrally by default, where the wavelengths are the
+ * seed's. */
 static void test_raymarch_seed_independent(void **state)
 {
     (void)state;
@@ -776,7 +778,7 @@ static void test_raymarch_seed_independent(void **state)
             write_text_file(path, text);
             snprintf(args, sizeof args,
                      "render '%s' -o '%s/seed_%s_%d.exr' --quiet --spp 1 "
-                     "--disable-pixel-jitter",
+                     "--disable-pixel-jitter --color rgb",
                      path, HAZE_TMP, modes[m], seed);
             assert_int_equal(run_haze(args, out, sizeof out), 0);
         }
