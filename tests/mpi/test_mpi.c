@@ -157,6 +157,27 @@ static void test_two_ranks_bit_identical(void **state)
     expect_identical("-np 2", "np2t2.exr", "--threads 2 --quiet");
 }
 
+/* Spectral rendering: the wavelengths are the sampler's, so ranks give the
+ * single-process image too. */
+static void test_spectral_ranks_bit_identical(void **state)
+{
+    (void)state;
+    char cmd[4096], out[8192], single[1200], text[16384], ranks[1200];
+    snprintf(single, sizeof single, "%s/spectral-single.exr", dir);
+    snprintf(cmd, sizeof cmd,
+             "'%s' render '%s' -o '%s' --seed 5 --threads 2 --quiet --color spectral", HAZE_BIN,
+             scene, single);
+    if (run_shell(cmd, out, sizeof out) != 0)
+        fail_msg("spectral reference render failed: %s", out);
+    int rc = mpi_render("-np 2", "spectral-np2.exr", "--threads 1 --quiet --color spectral", text,
+                        sizeof text);
+    if (rc != 0)
+        fail_msg("mpirun -np 2 exited %d: %s", rc, text);
+    snprintf(ranks, sizeof ranks, "%s/spectral-np2.exr", dir);
+    assert_true(files_equal(ranks, single));
+    assert_false(files_equal(ranks, reference)); /* and it is not the RGB image */
+}
+
 static void test_four_ranks_bit_identical(void **state)
 {
     (void)state;
@@ -378,6 +399,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_two_ranks_bit_identical),
+        cmocka_unit_test(test_spectral_ranks_bit_identical),
         cmocka_unit_test(test_four_ranks_bit_identical),
         cmocka_unit_test(test_summary_names_ranks),
         cmocka_unit_test(test_time_limit_passes),
