@@ -523,18 +523,25 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (errs->count || errs->dropped)
         return HZ_OK; /* reported by the caller; nothing to render */
     warn_default_integrator(rs, sd, warn);
-    render_color color = opt ? opt->color : RENDER_COLOR_AUTO;
-    if (color == RENDER_COLOR_AUTO) {
+    render_color asked = opt ? opt->color : RENDER_COLOR_AUTO, color = asked;
+    color_choice choice = {false, NULL};
+    if (asked == RENDER_COLOR_AUTO) {
         color_choice_scene cs = {rs->materials, rs->material_count, &rs->default_material,
                                  rs->media, rs->medium_count};
-        color = color_choice_auto(&cs).spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
+        choice = color_choice_auto(&cs);
+        color = choice.spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
     }
     if (color == RENDER_COLOR_SPECTRAL) {
         const rgb2spec_table *tables;
-        if (rgb2spec_tables_load(&tables, err) != HZ_OK)
+        if (rgb2spec_tables_load(&tables, err) == HZ_OK) {
+            rs->spectral = &tables[COLOR_SPACE_SRGB];
+            prepare_spectral(rs);
+        } else if (asked == RENDER_COLOR_SPECTRAL) {
             return HZ_ERROR;
-        rs->spectral = &tables[COLOR_SPACE_SRGB];
-        prepare_spectral(rs);
+        } else if (warn) { /* auto: the scene still renders, in RGB */
+            fprintf(warn, "haze: warning: rendering in RGB although the scene has %s: %s\n",
+                    choice.why, err->message);
+        }
     }
     return build_integrator(rs, sd, &ip, warn, err);
 }

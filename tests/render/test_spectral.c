@@ -1,3 +1,4 @@
+#define _POSIX_C_SOURCE 200809L
 /* Spectral rendering (--color spectral, docs/spectral.md) against closed
  * forms: the wavelength density, a coloured reflectance under a white sky,
  * a grey scene equal to its RGB image, a conductor of constant eta and k, a
@@ -445,6 +446,44 @@ static void test_auto_choice(void **state)
     assert_false(auto_spectral("singlescatter", "Material \"diffuse\""));
 }
 
+/* Without the tables' module, --color spectral is an error naming what to
+ * set, and auto renders in RGB with a warning. */
+static void test_missing_module(void **state)
+{
+    (void)state;
+    const char *text = "Camera \"orthographic\"\n"
+                       "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                       "Integrator \"volpath\"\n"
+                       "WorldBegin\n"
+                       "Material \"conductor\"\n"
+                       "Shape \"sphere\"\n";
+    setenv("HAZE_RGB2SPEC_MODULE", "/nonexistent/libhaze_rgb2spec.so", 1);
+    for (int mode = 0; mode < 2; ++mode) {
+        scene_desc sd;
+        hz_error err = {0};
+        assert_int_equal(scene_parse_string(text, "m.pbrt", &sd, &err), HZ_OK);
+        render_options opt = {.seed = 0,
+                              .color = mode ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_AUTO};
+        char warned[2048] = "";
+        FILE *warn = fmemopen(warned, sizeof warned - 1, "w");
+        assert_non_null(warn);
+        render_scene *rs = NULL;
+        hz_status st = render_scene_create(&sd, &opt, warn, &rs, &err);
+        fclose(warn);
+        scene_desc_free(&sd);
+        if (mode) {
+            assert_int_equal(st, HZ_ERROR);
+            assert_non_null(strstr(err.message, "HAZE_RGB2SPEC_MODULE"));
+        } else {
+            assert_int_equal(st, HZ_OK);
+            assert_false(render_scene_spectral(rs));
+            assert_non_null(strstr(warned, "rendering in RGB"));
+            render_scene_destroy(rs);
+        }
+    }
+    unsetenv("HAZE_RGB2SPEC_MODULE");
+}
+
 /* The same scene and seed give the same image on 1 and 2 threads. */
 static void test_thread_count_invariance(void **state)
 {
@@ -492,6 +531,7 @@ int main(void)
         cmocka_unit_test(test_blackbody_chromaticity),
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_auto_choice),
+        cmocka_unit_test(test_missing_module),
         cmocka_unit_test(test_thread_count_invariance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
