@@ -583,7 +583,8 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
     counters->camera_rays++;
     *depth = INFINITY;
     bool media = sc->in.medium_count > 0;
-    path pa = {.sc = sc, .sp = sp, .st = st, .walk = {.time = r->time}, .counters = counters,
+    path pa = {.sc = sc, .sp = sp, .st = st, .walk = {.time = r->time, .sp = sp},
+               .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
                .r_l = rgb_grey(1.0), .eta_scale = 1.0};
     path_media spectral_media;
