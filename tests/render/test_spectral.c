@@ -267,6 +267,14 @@ static void test_sampled_medium(void **state)
     rgb got = through_slab(slab, medium, &spectral_opt, 256, 5);
     rgb want = rgb_of_illuminated(sampled_beer_lambert, NULL);
     expect_rgb_close(got, want, 0.0, 2.5e-3, "sampled sigma_a", 2.5, 2.5);
+    /* The detour through the spectrum's RGB would be told apart. */
+    const double lambda[2] = {400.0, 700.0}, value[2] = {2.0, 0.1};
+    rgb_unbounded_spectrum detour = rgb_unbounded_spectrum_from_rgb(
+        srgb_table(), spectrum_sampled_to_rgb(lambda, value, 2));
+    rgb other = rgb_of_illuminated(beer_lambert, &detour);
+    /* (0.604 0.332 0.172 as given, 0.577 0.335 0.167 by the detour) */
+    assert_true(fabs(other.r - want.r) > 0.01 || fabs(other.g - want.g) > 0.01 ||
+                fabs(other.b - want.b) > 0.01);
 }
 
 /* The mean of a render of a coloured fog sphere (volumes/fog_sphere.vdb)
