@@ -33,7 +33,7 @@ typedef struct {
     double filter_weight;
 } camera_sample;
 
-typedef struct {
+typedef struct camera_s {
     camera_kind kind;
     transform render_from_camera; /* at the start time when the camera moves */
     transform world_from_render;  /* a translation */
@@ -61,6 +61,11 @@ typedef struct {
     double pinhole_from_film[3][3];
     vec3 pinhole_o;
     realistic_lens realistic;     /* CAMERA_REALISTIC: focused, exit pupil bounded */
+    /* pbrt-v4's smallest one-pixel differentials over the film's diagonal
+     * (camera/footprint.h; zero until camera_find_min_differentials): origin
+     * offsets in camera space, direction offsets in the frame of each ray
+     * (z along it). */
+    vec3 min_pos_dx, min_pos_dy, min_dir_dx, min_dir_dy;
 } camera;
 
 /* Everything camera_create reads from the scene, already interpreted: the

@@ -143,10 +143,10 @@ typedef struct {
      * partial derivatives. */
     double u, v;
     vec3 dpdu, dpdv;
-    /* Screen-space footprint of (u, v): 0 unless geometry_hit_footprint set
-     * it (camera rays with differentials at textured shapes). */
+    /* Screen-space footprint of (u, v): 0 unless geometry_hit_footprint or
+     * geometry_hit_set_footprint set it (textured shapes). */
     double dudx, dudy, dvdx, dvdy;
-    vec3 dpdx, dpdy; /* the point's own footprint (0 unless geometry_hit_footprint set it) */
+    vec3 dpdx, dpdy; /* the point's own footprint (0 unless one of those set it) */
     /* How far the point may be off the surface a leaving ray must clear
      * (curves: the width there, pbrt-v4's error bound; 0: float rounding
      * only). geometry_leave_origin moves that far off along the normal. */
@@ -157,6 +157,9 @@ typedef struct {
  * tangent plane at p + dp/dx and p + dp/dy, and (du/dx, dv/dx, ...) solve
  * dp/dx = du/dx dp/du + dv/dx dp/dv in the least-squares sense. */
 void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d);
+/* Sets the hit's footprint to p + dpdx, p + dpdy, and on a textured shape
+ * the (u, v) derivatives that solve it (as geometry_hit_footprint). */
+void geometry_hit_set_footprint(geom_hit *h, vec3 dpdx, vec3 dpdy);
 /* Where the differential rays meet the hit's tangent plane, as offsets from
  * h->p (pbrt-v4's dpdx, dpdy). False (zeros) when one runs parallel to it. */
 bool geometry_hit_dpdxy(const geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d,

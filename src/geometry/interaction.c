@@ -32,13 +32,12 @@ bool geometry_hit_dpdxy(const geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3
     return true;
 }
 
-void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d)
+void geometry_hit_set_footprint(geom_hit *h, vec3 dpdx, vec3 dpdy)
 {
-    vec3 dpdx, dpdy;
-    if (!h->shape->textured || !geometry_hit_dpdxy(h, rx_o, rx_d, ry_o, ry_d, &dpdx, &dpdy))
-        return;
     h->dpdx = dpdx;
     h->dpdy = dpdy;
+    if (!h->shape->textured)
+        return;
     double a00 = v3_dot(h->dpdu, h->dpdu), a01 = v3_dot(h->dpdu, h->dpdv);
     double a11 = v3_dot(h->dpdv, h->dpdv);
     double inv = 1.0 / diff_products(a00, a11, a01, a01);
@@ -49,6 +48,13 @@ void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 r
     h->dvdx = clamp_derivative(diff_products(a00, b1x, a01, b0x) * inv);
     h->dudy = clamp_derivative(diff_products(a11, b0y, a01, b1y) * inv);
     h->dvdy = clamp_derivative(diff_products(a00, b1y, a01, b0y) * inv);
+}
+
+void geometry_hit_footprint(geom_hit *h, vec3 rx_o, vec3 rx_d, vec3 ry_o, vec3 ry_d)
+{
+    vec3 dpdx, dpdy;
+    if (h->shape->textured && geometry_hit_dpdxy(h, rx_o, rx_d, ry_o, ry_d, &dpdx, &dpdy))
+        geometry_hit_set_footprint(h, dpdx, dpdy);
 }
 
 const material *geometry_material_at(const geom_hit *h, vec3 wo, material *scratch)

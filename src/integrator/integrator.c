@@ -185,6 +185,18 @@ void integrator_free(integrator *it)
     }
 }
 
+void integrator_set_footprint_scale(integrator *it, double scale)
+{
+    switch (it->kind) {
+    case INTEGRATOR_SINGLESCATTER: /* shades the camera ray's hit only */
+        it->singlescatter.in.footprint_scale = scale;
+        break;
+    case INTEGRATOR_VOLPATH:
+        it->volpath.in.footprint_scale = scale;
+        break;
+    }
+}
+
 rgb integrator_li(const integrator *it, const ray_differential *rd, const spectral_ctx *sp,
                   sampler_state *st, double *depth, film_surface *vs,
                   integrator_counters *counters)

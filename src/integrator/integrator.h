@@ -51,6 +51,9 @@ typedef struct {
 hz_status integrator_init(integrator *out, const integrator_params *p,
                           const integrator_inputs *in, hz_error *err);
 void integrator_free(integrator *it);
+/* The footprint scale of integrator_inputs, which the renderer knows once
+ * it has the samples per pixel (set before rendering, not during). */
+void integrator_set_footprint_scale(integrator *it, double scale);
 
 /* Radiance along the camera ray `r` (unit direction): RGB, or with `sp`
  * (spectral rendering) the lanes at its wavelengths. `depth` receives the

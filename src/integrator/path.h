@@ -20,6 +20,13 @@ typedef struct {
     size_t light_count;
     const medium *media;
     size_t medium_count;
+    /* Footprints of hits whose ray carries no differentials (volpath after a
+     * diffuse bounce): estimated from this camera (camera_approximate_dpdxy)
+     * at this scale, the camera rays' differential scale (pbrt-v4's
+     * max(1/8, 1/sqrt(spp))). NULL or 0: none, textures are then looked up
+     * without a footprint there. */
+    const struct camera_s *camera;
+    double footprint_scale;
 } integrator_inputs;
 
 /* Per-thread counters, summed by the renderer for the summary. */

@@ -7,6 +7,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "camera/footprint.h"
 #include "core/clock.h"
 #include "core/ray.h"
 #include "core/phase.h"
@@ -119,6 +120,12 @@ typedef struct {
      * steps over them; interfaces there only switch the medium). */
     ray_walk ray;
     bool scattered, terminated;
+    /* The ray's differentials (pbrt-v4's RayDifferential): the camera ray's,
+     * carried through specular bounces (specular_differentials); none after
+     * any other scattering, where hits estimate their footprint from the
+     * camera (camera_approximate_dpdxy). */
+    bool diff;
+    vec3 rx_o, rx_d, ry_o, ry_d;
 } path;
 
 /* Medium i of the scene at the path's wavelengths (itself in RGB). */
@@ -357,6 +364,7 @@ static void scatter(path *pa, const volpath_event *ev)
     }
     /* hg_sample draws exactly the density it returns: p / pdf = 1. */
     pa->r_l = rgb_div(pa->r_u, p_pdf);
+    pa->diff = false;
     pa->prev_p = x;
     pa->prev_n = v3(0.0, 0.0, 0.0);
     pa->scattered = true;
@@ -471,6 +479,67 @@ static void force_diffuse(bsdf *b, vec3 wo, sampler_state *st)
     b->reflectance = r;
 }
 
+/* pbrt-v4's ComputeDifferentials at opaque hit h, where a texture or the
+ * ray's differentials need it: where the differentials meet the tangent
+ * plane, else the camera's estimate (in scenes with textures: a footprint
+ * scale). */
+static void hit_footprint(path *pa, geom_hit *h)
+{
+    const integrator_inputs *in = &pa->sc->in;
+    if (!h->shape->textured && !pa->diff)
+        return;
+    vec3 dpdx, dpdy;
+    if (!pa->diff || !geometry_hit_dpdxy(h, pa->rx_o, pa->rx_d, pa->ry_o, pa->ry_d, &dpdx, &dpdy)) {
+        if (!in->camera || !(in->footprint_scale > 0.0))
+            return;
+        camera_approximate_dpdxy(in->camera, h->p, h->ng, pa->walk.time, in->footprint_scale,
+                                 &dpdx, &dpdy);
+    }
+    geometry_hit_set_footprint(h, dpdx, dpdy);
+}
+
+/* The differentials of the ray a specular bounce at h sends along wi (pbrt-
+ * v4's SurfaceInteraction::SpawnRay): the offset rays leave the footprint's
+ * corners, turned by the same mirror or refraction, to first order in the
+ * change of wo (the shading normal is taken as constant over the
+ * footprint). Any other bounce drops them. */
+static void specular_differentials(path *pa, const geom_hit *h, vec3 n, vec3 wo,
+                                   const bsdf_sample *bs)
+{
+    if (!pa->diff)
+        return;
+    if (!bs->specular) {
+        pa->diff = false;
+        return;
+    }
+    const vec3 wi = bs->wi;
+    const vec3 rd[2] = {pa->rx_d, pa->ry_d};
+    const vec3 dp[2] = {h->dpdx, h->dpdy};
+    vec3 o[2], d[2];
+    if (bs->transmission && v3_dot(wo, n) < 0.0)
+        n = v3_neg(n);
+    for (int k = 0; k < 2; ++k) {
+        vec3 dwo = v3_sub(v3_neg(rd[k]), wo);
+        double dcos = v3_dot(dwo, n);
+        o[k] = v3_add(h->p, dp[k]);
+        if (!bs->transmission) {
+            d[k] = v3_add(v3_sub(wi, dwo), v3_scale(n, 2.0 * dcos));
+        } else {
+            double eta = bs->eta;
+            double dmu = dcos * (1.0 / eta + v3_dot(wo, n) / (eta * eta * v3_dot(wi, n)));
+            d[k] = v3_add(v3_sub(wi, v3_scale(dwo, eta)), v3_scale(n, dmu));
+        }
+    }
+    pa->rx_o = o[0];
+    pa->ry_o = o[1];
+    pa->rx_d = d[0];
+    pa->ry_d = d[1];
+    /* pbrt-v4 drops differentials that blew up. */
+    pa->diff = v3_length_sq(d[0]) <= 1e16 && v3_length_sq(d[1]) <= 1e16 &&
+               v3_length_sq(o[0]) <= 1e16 && v3_length_sq(o[1]) <= 1e16 &&
+               v3_is_finite(d[0]) && v3_is_finite(d[1]);
+}
+
 /* The bounce at opaque hit h: light sampling, BSDF sampling, roulette.
  * False when the path ends. */
 static bool bounce(path *pa, const geom_hit *h)
@@ -503,6 +572,7 @@ static bool bounce(path *pa, const geom_hit *h)
     bsdf_sample bs;
     if (!bsdf_sample_f(&b, wo, uc, u, &bs))
         return false;
+    specular_differentials(pa, h, b.n, wo, &bs);
     pa->beta = rgb_mul(pa->beta, rgb_scale(bs.f, fabs(v3_dot(bs.wi, b.n)) / bs.pdf));
     /* A layered BSDF's sampled pdf is only proportional: MIS uses its pdf
      * estimate (pbrt-v4's pdfIsProportional). */
@@ -593,6 +663,13 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
         pa.media = &spectral_media;
     }
     path_ray(&pa, r->o, r->d, 0.0, 0.0, r->medium);
+    pa.diff = rd->has_differentials;
+    if (pa.diff) {
+        pa.rx_o = rd->rx_o;
+        pa.rx_d = rd->rx_d;
+        pa.ry_o = rd->ry_o;
+        pa.ry_d = rd->ry_d;
+    }
     /* As singlescatter_li: the rng is seeded once the ray meets something. */
     int seed_dim = -1;
     if (media) {
@@ -627,13 +704,10 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
         if (!seg.opaque)
             continue;
         geom_hit *h = &seg.h;
+        hit_footprint(&pa, h);
         if (camera_ray) {
             *depth = v3_length(v3_sub(h->p, r->o));
             camera_ray = false;
-            /* Textures are filtered over the camera ray's footprint only
-             * (later bounces: no filtering; docs/differences-from-pbrt.md). */
-            if (rd->has_differentials)
-                geometry_hit_footprint(h, rd->rx_o, rd->rx_d, rd->ry_o, rd->ry_d);
             if (vs && pa.depth == 0)
                 visible_surface_at(h, rd, vs);
         }

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "camera/footprint.h"
 #include "color/rgb2spec_module.h"
 #include "render/color_choice.h"
 #include "geometry/geometry.h"
@@ -447,7 +448,7 @@ static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integr
      * them, byte for byte. */
     bool media_used = rs->cam.medium >= 0 || geometry_references_media(rs->geom);
     integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media,
-                            media_used ? rs->medium_count : 0};
+                            media_used ? rs->medium_count : 0, &rs->cam, 0.0};
     bool cached = ip->kind == INTEGRATOR_SINGLESCATTER && ip->singlescatter.shadow_cache > 0.0;
     if (cached && check_shadow_cache(rs, sd, &in, err) != HZ_OK)
         return HZ_ERROR;
@@ -765,6 +766,13 @@ rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, s
         return integrator_li(&rs->integ, r, NULL, s, depth, vs, counters);
     spectral_ctx sp = spectral_ctx_make(rs->spectral, sampler_wavelength_1d(s));
     return spectral_to_rgb(&sp, integrator_li(&rs->integ, r, &sp, s, depth, vs, counters));
+}
+
+void render_scene_set_footprint_scale(render_scene *rs, double scale)
+{
+    if (scale > 0.0 && rs->film)
+        camera_find_min_differentials(&rs->cam);
+    integrator_set_footprint_scale(&rs->integ, scale);
 }
 
 bool render_scene_spectral(const render_scene *rs) { return rs->spectral != NULL; }

@@ -70,6 +70,9 @@ const camera *render_scene_camera(const render_scene *rs);
 /* The scene has textures, or its film is a gbuffer (whose depth slopes
  * need them): camera rays should carry differentials. */
 bool render_scene_has_textures(const render_scene *rs);
+/* The camera rays' differential scale, which footprints estimated later on a
+ * path use too (integrator_inputs.footprint_scale); 0 (the default): none. */
+void render_scene_set_footprint_scale(render_scene *rs, double scale);
 film *render_scene_film(render_scene *rs);
 const sampler *render_scene_sampler(const render_scene *rs);
 const filter *render_scene_filter(const render_scene *rs);

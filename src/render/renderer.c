@@ -319,6 +319,7 @@ static void job_init_camera_rays(render_job *job, const renderer_options *opt, i
     job->surfaces = film_wants_surface(render_scene_film(rs));
     if (render_scene_has_textures(rs))
         job->diff_scale = opt->disable_pixel_jitter ? 1.0 : fmax(0.125, 1.0 / sqrt(spp));
+    render_scene_set_footprint_scale(rs, job->diff_scale);
     job->needs = (camera_sample_needs){!opt->disable_pixel_jitter,
                                        motion.camera || motion.surfaces || motion.media > 0,
                                        camera_has_lens(render_scene_camera(rs))};

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "camera/camera.h"
+#include "camera/footprint.h"
 #include "unit/assert_util.h"
 #include "unit/camera_util.h"
 
@@ -428,6 +429,59 @@ static void test_illegal_values_are_rejected(void **state)
     expect_invalid(c, "", "camera transform");
 }
 
+/* Where the film's pixel differentials are smallest (the far corner of the
+ * film's diagonal, whose neighbours lie outside it), pbrt-v4's approximate footprint of a point on the plane facing
+ * that corner's ray is the exact one: the neighbouring ray meets the plane
+ * as far from the point. Elsewhere it is smaller; an orthographic
+ * camera's, on its axis, is the pixel step at every distance. */
+static double plane_offset(vec3 o, vec3 d, vec3 p, vec3 n)
+{
+    double t = v3_dot(n, v3_sub(p, o)) / v3_dot(n, d);
+    return v3_length(v3_sub(v3_add(o, v3_scale(d, t)), p));
+}
+
+static void test_approximate_footprint(void **state)
+{
+    (void)state;
+    camera_config cfg = camera_config_default(CAMERA_PERSPECTIVE, 64, 48);
+    camera c = make_camera(cfg);
+    camera_find_min_differentials(&c);
+    ray_differential rd;
+    assert_true(camera_generate_ray_differential(&c, at(64.0, 48.0), &rd));
+    vec3 p = v3_add(rd.r.o, v3_scale(rd.r.d, 5.0)), n = v3_neg(rd.r.d);
+    vec3 dpdx, dpdy;
+    camera_approximate_dpdxy(&c, p, n, 0.0, 1.0, &dpdx, &dpdy);
+    double ex = plane_offset(rd.rx_o, rd.rx_d, p, n), ey = plane_offset(rd.ry_o, rd.ry_d, p, n);
+    print_message("corner: approximate %.9f %.9f, exact %.9f %.9f\n", v3_length(dpdx),
+                  v3_length(dpdy), ex, ey);
+    assert_near(v3_length(dpdx), ex, 1e-9 * ex);
+    assert_near(v3_length(dpdy), ey, 1e-9 * ey);
+    /* In the tangent plane, and scaled as the camera rays' differentials. */
+    assert_near(v3_dot(dpdx, n), 0.0, 1e-12);
+    vec3 sx, sy;
+    camera_approximate_dpdxy(&c, p, n, 0.0, 0.25, &sx, &sy);
+    assert_near(v3_length(sx), 0.25 * ex, 1e-9 * ex);
+    /* At the film's centre, the same distance facing the camera gives the
+     * same footprint, smaller than the centre pixel's own. */
+    assert_true(camera_generate_ray_differential(&c, at(32.0, 24.0), &rd));
+    p = v3_add(rd.r.o, v3_scale(rd.r.d, 5.0));
+    n = v3_neg(rd.r.d);
+    camera_approximate_dpdxy(&c, p, n, 0.0, 1.0, &dpdx, &dpdy);
+    double cx = plane_offset(rd.rx_o, rd.rx_d, p, n);
+    print_message("centre: approximate %.9f, exact %.9f\n", v3_length(dpdx), cx);
+    assert_near(v3_length(dpdx), ex, 1e-9 * ex);
+    assert_true(v3_length(dpdx) < cx);
+
+    camera_config oc = camera_config_default(CAMERA_ORTHOGRAPHIC, 200, 100);
+    camera o = make_camera(oc);
+    camera_find_min_differentials(&o);
+    for (double z = 1.0; z < 1000.0; z *= 10.0) {
+        camera_approximate_dpdxy(&o, v3(0.0, 0.0, z), v3(0.0, 0.0, -1.0), 0.0, 1.0, &dpdx, &dpdy);
+        assert_near(v3_length(dpdx), 0.02, 1e-12);
+        assert_near(v3_length(dpdy), 0.02, 1e-12);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -436,6 +490,7 @@ int main(void)
         cmocka_unit_test(test_fov_spans_shorter_axis_landscape),
         cmocka_unit_test(test_fov_spans_shorter_axis_portrait),
         cmocka_unit_test(test_orthographic_rays),
+        cmocka_unit_test(test_approximate_footprint),
         cmocka_unit_test(test_differentials_equal_neighbouring_rays),
         cmocka_unit_test(test_perspective_pinhole_differential_direction),
         cmocka_unit_test(test_lens_radius_zero_is_the_pinhole_bit_for_bit),
