@@ -25,6 +25,10 @@ linear sRGB, so it needs two 3x3 matrices per sensor:
 "cie1931" is the XYZ matching functions as a sensor: sensor_from_render is
 XYZ_from_RGB and output_from_sensor(T) pbrt-v4's Bradford white balance from
 the illuminant's white to D65.
+
+Spectral rendering needs no fit: each camera's three response curves, as
+pbrt-v4 gives them (piecewise linear, 380-720 nm every 10 nm, zero outside),
+turn a sample's wavelengths into the sensor's RGB directly (curves).
 """
 import itertools
 import re
@@ -33,6 +37,7 @@ import sys
 import numpy as np
 
 SEGMENT_NODES = (10, 7, 24)
+CURVE_MIN, CURVE_MAX, CURVE_STEP = 380, 720, 10
 MIRED_MIN, MIRED_MAX = 20.0, 1000.0
 
 
@@ -155,11 +160,25 @@ def main(src):
     out.write('const double sensor_mired_bounds[4] = {%.17g, %.17g, %.17g, %.17g};\n'
               % (MIRED_MIN, mired_kink, mired_jump, MIRED_MAX))
     out.write('const int sensor_segment_nodes[3] = {%d, %d, %d};\n\n' % SEGMENT_NODES)
+    nodes = np.arange(CURVE_MIN, CURVE_MAX + 1, CURVE_STEP)
     out.write('const sensor_table_entry sensor_table[SENSOR_TABLE_COUNT] = {\n')
     for name in names:
         curves = None if name == 'cie1931' else [piecewise(table(name + '_' + c)) for c in 'rgb']
         s = xyz_from_rgb if curves is None else fit_sensor_from_render(curves)
-        out.write('    {"%s",\n     {%s},\n     {\n' % (name, rows(s, 6)))
+        out.write('    {"%s",\n     {%s},\n' % (name, rows(s, 6)))
+        if curves is None:
+            out.write('     false, {{0}},\n     {\n')
+        else:
+            native = []
+            for c in 'rgb':
+                v = table(name + '_' + c)
+                assert np.array_equal(v[0::2], nodes), name
+                native.append(v[1::2])
+            def wrapped(row):  # 6 values a line
+                parts = ['%.9g' % x for x in row]
+                return ',\n       '.join(', '.join(parts[i:i + 6]) for i in range(0, len(parts), 6))
+            out.write('     true,\n     {%s},\n     {\n' % ',\n      '.join(
+                '{' + wrapped(row) + '}' for row in native))
         for si, (a, b) in enumerate(segments):
             n = SEGMENT_NODES[si]
             for k in range(n):

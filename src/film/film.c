@@ -55,6 +55,7 @@ struct film {
     film_gbuffer *gbuf; /* NULL unless gbuffer */
     transform output_from_render; /* gbuffer positions and normals */
     double clamp_ratio;
+    bool sensor_rgb_in; /* film_take_sensor_rgb */
     atomic_long nonfinite; /* tiles run in parallel; only this is shared */
 };
 
@@ -431,6 +432,12 @@ const film_params *film_get_params(const film *f) { return &f->p; }
 
 void film_set_imaging_ratio(film *f, double imaging_ratio) { f->clamp_ratio = imaging_ratio; }
 
+void film_take_sensor_rgb(film *f)
+{
+    assert(f->p.sensor.curves);
+    f->sensor_rgb_in = true;
+}
+
 long film_nonfinite_count(const film *f)
 {
     return atomic_load_explicit(&((film *)f)->nonfinite, memory_order_relaxed);
@@ -654,7 +661,7 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
      * sensor's RGB, and turns it into output RGB when it writes the image
      * (a linear map, so applying it per sample gives the same mean). */
     const film_sensor *sensor = &f->p.sensor;
-    if (sensor->active)
+    if (sensor->active && !f->sensor_rgb_in)
         L = sensor_apply(sensor->sensor_from_render, L);
     double m = rgb_max(L) * f->clamp_ratio;
     if (m > f->p.max_component_value)

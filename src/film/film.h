@@ -125,6 +125,11 @@ void film_set_output_from_render(film *f, transform output_from_render);
 /* The imaging ratio that maxcomponentvalue clamping assumes (default 1); pass
  * the same ratio to the output functions. */
 void film_set_imaging_ratio(film *f, double imaging_ratio);
+/* From now on samples arrive as the camera sensor's RGB, which spectral
+ * rendering computes from each sample's wavelengths (sensor_response):
+ * film_add_sample skips sensor_from_render. Only for a film whose sensor
+ * has curves. */
+void film_take_sensor_rgb(film *f);
 /* Final pixel value = imaging_ratio * sum(w L) / sum(w) (0 when sum(w) == 0). */
 rgb film_get_pixel(const film *f, int px, int py, double imaging_ratio);
 /* Estimated variance of film_get_pixel's value (the weighted mean), per

@@ -51,9 +51,24 @@ bool sensor_lookup(const char *name, double kelvin, film_sensor *out)
         out->active = true;
         memcpy(out->sensor_from_render, e->sensor_from_render, sizeof out->sensor_from_render);
         output_at(e, kelvin == 0.0 ? 6500.0 : kelvin, out->output_from_sensor);
+        out->curves = e->has_curves ? e->curves : NULL;
         return true;
     }
     return false;
+}
+
+rgb sensor_response(const film_sensor *s, double lambda)
+{
+    double x = (lambda - SENSOR_CURVE_MIN) / SENSOR_CURVE_STEP;
+    if (!(x >= 0.0 && x <= SENSOR_CURVE_NODES - 1))
+        return rgb_grey(0.0);
+    int i = (int)x;
+    if (i >= SENSOR_CURVE_NODES - 1)
+        i = SENSOR_CURVE_NODES - 2;
+    double t = x - i, v[3];
+    for (int c = 0; c < 3; ++c)
+        v[c] = (1.0 - t) * s->curves[c][i] + t * s->curves[c][i + 1];
+    return rgb_make(v[0], v[1], v[2]);
 }
 
 const char *sensor_names(void)

@@ -1,9 +1,11 @@
-/* pbrt-v4's Film "sensor" and "whitebalance" for an RGB renderer: each sensor
- * is two 3x3 matrices (tools/gen_sensor_table.py derives them from pbrt-v4's
- * spectral response curves). A radiance value in haze's linear sRGB becomes
- * the sensor's RGB (sensor_from_render), which Film "maxcomponentvalue"
- * clamps as in pbrt-v4, then output RGB (output_from_sensor, pbrt-v4's fitted
- * XYZ-from-sensor matrix for the white-balance temperature, then sRGB). */
+/* pbrt-v4's Film "sensor" and "whitebalance": each sensor is two 3x3
+ * matrices (tools/gen_sensor_table.py derives them from pbrt-v4's spectral
+ * response curves). A radiance value in haze's linear sRGB becomes the
+ * sensor's RGB (sensor_from_render; spectral rendering projects its
+ * wavelengths on the camera's curves instead), which Film
+ * "maxcomponentvalue" clamps as in pbrt-v4, then output RGB
+ * (output_from_sensor, pbrt-v4's fitted XYZ-from-sensor matrix for the
+ * white-balance temperature, then sRGB). */
 #ifndef HAZE_FILM_SENSOR_H
 #define HAZE_FILM_SENSOR_H
 
@@ -11,10 +13,20 @@
 
 #include "core/vec.h"
 
+/* A camera's spectral response: pbrt-v4's curves, piecewise linear on nodes
+ * every SENSOR_CURVE_STEP nm from SENSOR_CURVE_MIN, zero outside. */
+#define SENSOR_CURVE_MIN 380.0
+#define SENSOR_CURVE_STEP 10.0
+#define SENSOR_CURVE_NODES 35
+
 typedef struct {
     bool active;                 /* false: the identity ("cie1931" without white balance) */
     double sensor_from_render[9]; /* row-major */
     double output_from_sensor[9];
+    /* A camera's response curves (r, g, b), for spectral rendering, which
+     * projects a sample's wavelengths on them instead of using
+     * sensor_from_render (sensor_response); NULL for "cie1931". */
+    const double (*curves)[SENSOR_CURVE_NODES];
 } film_sensor;
 
 /* White-balance temperatures haze accepts (kelvin): the table's range. */
@@ -26,6 +38,9 @@ typedef struct {
  * "cie1931", 6500 K for a camera). False for an unknown name; `kelvin` must be
  * 0 or in [SENSOR_MIN_KELVIN, SENSOR_MAX_KELVIN]. */
 bool sensor_lookup(const char *name, double kelvin, film_sensor *out);
+
+/* The camera's response (r, g, b) at `lambda` nm; s->curves must be set. */
+rgb sensor_response(const film_sensor *s, double lambda);
 
 /* The names sensor_lookup knows, comma separated, for error messages. */
 const char *sensor_names(void);
@@ -45,6 +60,8 @@ static inline rgb sensor_apply(const double m[9], rgb v)
 typedef struct {
     const char *name;
     double sensor_from_render[9];
+    bool has_curves;
+    double curves[3][SENSOR_CURVE_NODES];
     double output_from_sensor[SENSOR_TABLE_NODES][9];
 } sensor_table_entry;
 extern const double sensor_mired_bounds[4];

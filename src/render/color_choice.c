@@ -3,6 +3,11 @@
 color_choice color_choice_auto(const color_choice_scene *sc)
 {
     color_choice out = {false, NULL};
+    if (sc->camera_sensor) {
+        out.spectral = true;
+        out.why = "a camera sensor";
+        return out;
+    }
     for (size_t i = 0; i < sc->medium_count; ++i)
         if (medium_is_chromatic(&sc->media[i])) {
             out.spectral = true;

@@ -5,6 +5,10 @@
  *     is exp(-sigma(lambda) d), not exp(-sigma_rgb d));
  *   - a material whose colour enters nonlinearly (metals' Fresnel term,
  *     coatings, hair, measured BRDFs: material_is_spectrally_nonlinear).
+ *   - a Film with a camera sensor: its response is a spectral integral, which
+ *     the RGB fit (film/sensor.h) misses by up to 27% on saturated lights
+ *     (a (0.8, 0.1, 0.1) emitter's blue on nikon_d850; spectral: within 1%
+ *     of pbrt-v4).
  * Diffuse colours and coloured lights only scale each wavelength: their
  * products over bounces differ per pixel, but image means stay within 0.6%
  * of pbrt-v4's in RGB on saturated rooms (bench/results/spectral.md), where
@@ -29,6 +33,7 @@ typedef struct {
     const material *default_material;
     const medium *media;
     size_t medium_count;
+    bool camera_sensor; /* the Film's sensor has response curves */
 } color_choice_scene;
 
 color_choice color_choice_auto(const color_choice_scene *s);

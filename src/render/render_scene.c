@@ -10,6 +10,7 @@
 
 #include "camera/footprint.h"
 #include "color/rgb2spec_module.h"
+#include "scene/spectrum.h"
 #include "render/color_choice.h"
 #include "geometry/geometry.h"
 #include "lights/lights.h"
@@ -34,6 +35,9 @@ struct render_scene {
     integrator integ;
     /* Spectral rendering: the RGB -> spectrum table of sRGB; NULL: RGB. */
     const rgb2spec_table *spectral;
+    /* Spectral rendering with a camera sensor: samples reach the film as
+     * that sensor's RGB (sensor_rgb); NULL otherwise. */
+    const film_sensor *sensor;
     /* The sampled spectra of lights, materials and media, copied out of the
      * scene_desc (which may go before the render_scene does): keep_spectrum. */
     double **spectra;
@@ -528,7 +532,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     color_choice choice = {false, NULL};
     if (asked == RENDER_COLOR_AUTO) {
         color_choice_scene cs = {rs->materials, rs->material_count, &rs->default_material,
-                                 rs->media, rs->medium_count};
+                                 rs->media, rs->medium_count,
+                                 rs->film && film_get_params(rs->film)->sensor.curves};
         choice = color_choice_auto(&cs);
         color = choice.spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
     }
@@ -537,6 +542,10 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         if (rgb2spec_tables_load(&tables, err) == HZ_OK) {
             rs->spectral = &tables[COLOR_SPACE_SRGB];
             prepare_spectral(rs);
+            if (rs->film && film_get_params(rs->film)->sensor.curves) {
+                rs->sensor = &film_get_params(rs->film)->sensor;
+                film_take_sensor_rgb(rs->film);
+            }
         } else if (asked == RENDER_COLOR_SPECTRAL) {
             return HZ_ERROR;
         } else if (warn) { /* auto: the scene still renders, in RGB */
@@ -753,19 +762,43 @@ void render_scene_keep_current_cache(render_scene *rs)
         }
 }
 
+/* The camera sensor's RGB of a sample's wavelengths (pbrt-v4's
+ * PixelSensor::ToSensorRGB): each lane's radiance over its density, on the
+ * sensor's curves, in the units of the XYZ spectral_to_rgb makes. */
+static rgb sensor_rgb(const film_sensor *fs, const spectral_ctx *sp, rgb L)
+{
+    const double v[WAVELENGTH_LANES] = {L.r, L.g, L.b};
+    rgb sum = rgb_grey(0.0);
+    for (int i = 0; i < WAVELENGTH_LANES; ++i) {
+        if (!(sp->wl.pdf[i] > 0.0) || v[i] == 0.0)
+            continue;
+        sum = rgb_add(sum, rgb_scale(sensor_response(fs, sp->wl.lambda[i]), v[i] / sp->wl.pdf[i]));
+    }
+    return rgb_scale(sum, 1.0 / (WAVELENGTH_LANES * SPECTRUM_CIE_Y_INTEGRAL));
+}
+
+/* One camera sample's radiance: linear RGB, or the sensor's RGB when
+ * `to_sensor` and spectral rendering has a camera sensor. */
+static rgb li(const render_scene *rs, const ray_differential *r, sampler_state *s, double *depth,
+              film_surface *vs, integrator_counters *counters, bool to_sensor)
+{
+    if (!rs->spectral)
+        return integrator_li(&rs->integ, r, NULL, s, depth, vs, counters);
+    spectral_ctx sp = spectral_ctx_make(rs->spectral, sampler_wavelength_1d(s));
+    rgb L = integrator_li(&rs->integ, r, &sp, s, depth, vs, counters);
+    return to_sensor && rs->sensor ? sensor_rgb(rs->sensor, &sp, L) : spectral_to_rgb(&sp, L);
+}
+
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, integrator_counters *counters)
 {
-    return render_scene_li_surface(rs, r, s, depth, NULL, counters);
+    return li(rs, r, s, depth, NULL, counters, false);
 }
 
 rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, sampler_state *s,
                             double *depth, film_surface *vs, integrator_counters *counters)
 {
-    if (!rs->spectral)
-        return integrator_li(&rs->integ, r, NULL, s, depth, vs, counters);
-    spectral_ctx sp = spectral_ctx_make(rs->spectral, sampler_wavelength_1d(s));
-    return spectral_to_rgb(&sp, integrator_li(&rs->integ, r, &sp, s, depth, vs, counters));
+    return li(rs, r, s, depth, vs, counters, true);
 }
 
 void render_scene_set_footprint_scale(render_scene *rs, double scale)

@@ -139,7 +139,10 @@ void render_scene_keep_current_cache(render_scene *rs);
  * none). Thread-safe; allocates nothing. */
 rgb render_scene_li(const render_scene *rs, const ray_differential *r, sampler_state *s,
                     double *depth, integrator_counters *counters);
-/* The same, and what the ray saw first for a gbuffer film (integrator_li). */
+/* The same as the film takes it (film_add_sample), and what the ray saw
+ * first for a gbuffer film (integrator_li): under spectral rendering with a
+ * camera sensor, the sensor's RGB of the sample's wavelengths
+ * (film_take_sensor_rgb). */
 rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, sampler_state *s,
                             double *depth, film_surface *vs, integrator_counters *counters);
 /* Whether paths carry wavelengths (render_options.color). */

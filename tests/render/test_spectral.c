@@ -401,6 +401,70 @@ static void test_blackbody_chromaticity(void **state)
     expect_close(xyz.y, 1.0, 0.0, 3e-3, "luminance", 2.5, 2.5);
 }
 
+/* The film's mean of a quad emitting `colour`, filling a 16x16 image taken
+ * with Film "sensor" "nikon_d850", in colour mode `color`. */
+static rgb sensor_image_mean(const char *colour, render_color color)
+{
+    char text[1024];
+    snprintf(text, sizeof text,
+             "LookAt 0 0 0  0 0 1  0 1 0\n"
+             "Camera \"perspective\" \"float fov\" 30\n"
+             "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+             "  \"string sensor\" \"nikon_d850\"\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" 256\n"
+             "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+             "WorldBegin\n"
+             "AreaLightSource \"diffuse\" \"rgb L\" [%s]\n"
+             "Shape \"trianglemesh\" \"point3 P\" [-10 -10 5  10 -10 5  10 10 5  -10 10 5]\n"
+             "  \"integer indices\" [0 2 1 0 3 2]\n",
+             colour);
+    render_options opt = {.seed = 0, .color = color};
+    render_scene *rs = build_scene_or_fail(text, &opt);
+    render_expect_finite(rs);
+    rgb sum = rgb_grey(0.0);
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            sum = rgb_add(sum, film_get_pixel(render_scene_film(rs), x, y, 1.0));
+    render_scene_destroy(rs);
+    return rgb_scale(sum, 1.0 / 256.0);
+}
+
+/* A camera sensor under spectral rendering: each sample's wavelengths on the
+ * camera's response curves, as pbrt-v4's PixelSensor. pbrt-v4's image means
+ * of the same scene (4096 spp: `pbrt --spp 4096`) are the reference; the RGB
+ * fit of the sensor (film/sensor.h) is exact for greys only. And --color
+ * auto renders spectrally when the Film has a camera sensor. */
+static void test_camera_sensor(void **state)
+{
+    (void)state;
+    rgb red = sensor_image_mean("0.8 0.1 0.1", RENDER_COLOR_SPECTRAL);
+    expect_rgb_close(red, rgb_make(0.84399, 0.11490, 0.11847), 0.015, 0.0, "red emitter", 0, 0);
+    rgb grey = sensor_image_mean("0.5 0.5 0.5", RENDER_COLOR_SPECTRAL);
+    expect_rgb_close(grey, rgb_make(0.49224, 0.49756, 0.49145), 0.005, 0.0, "grey emitter", 0, 0);
+    rgb grey_rgb = sensor_image_mean("0.5 0.5 0.5", RENDER_COLOR_RGB);
+    expect_rgb_close(grey_rgb, grey, 0.005, 0.0, "grey emitter, RGB", 0, 0);
+    /* The RGB fit's blue of the red emitter: 0.73 of pbrt-v4's. */
+    rgb red_rgb = sensor_image_mean("0.8 0.1 0.1", RENDER_COLOR_RGB);
+    print_message("red emitter: spectral %.5f %.5f %.5f, RGB %.5f %.5f %.5f\n", red.r, red.g,
+                  red.b, red_rgb.r, red_rgb.g, red_rgb.b);
+    assert_true(red_rgb.b < 0.9 * red.b);
+
+    const char *scene = "Camera \"orthographic\"\n"
+                        "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+                        "  \"string sensor\" \"%s\"\n"
+                        "WorldBegin\n"
+                        "Shape \"sphere\"\n";
+    const char *sensors[2] = {"canon_eos_5d_mkiv", "cie1931"};
+    for (int k = 0; k < 2; ++k) {
+        char text[512];
+        snprintf(text, sizeof text, scene, sensors[k]);
+        render_options opt = {.seed = 0};
+        render_scene *rs = build_scene_or_fail(text, &opt);
+        assert_true(render_scene_spectral(rs) == (k == 0));
+        render_scene_destroy(rs);
+    }
+}
+
 /* A scene of `material` under a white sky with `integrator`, built with
  * the default colour mode: whether it renders spectrally. */
 static bool auto_spectral(const char *integrator, const char *material)
@@ -539,6 +603,7 @@ int main(void)
         cmocka_unit_test(test_blackbody_chromaticity),
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_auto_choice),
+        cmocka_unit_test(test_camera_sensor),
         cmocka_unit_test(test_missing_module),
         cmocka_unit_test(test_thread_count_invariance),
     };
