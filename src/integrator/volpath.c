@@ -126,6 +126,9 @@ typedef struct {
      * camera (camera_approximate_dpdxy). */
     bool diff;
     vec3 rx_o, rx_d, ry_o, ry_d;
+    /* Spectral: the path met a dispersive dielectric, so only the hero's
+     * lane counts (material_disperse). */
+    bool one_lane;
 } path;
 
 /* Medium i of the scene at the path's wavelengths (itself in RGB). */
@@ -553,6 +556,10 @@ static bool bounce(path *pa, const geom_hit *h)
     const material *mat = geometry_material_at(h, wo, &scratch);
     vec3 ns = geometry_shading_normal(h, mat);
     mat = material_spectral(mat, pa->sp, &scratch);
+    if (pa->sp && mat->dispersive) { /* material_spectral copied it to scratch */
+        material_disperse(&scratch, pa->sp, pa->hero);
+        pa->one_lane = true;
+    }
     if (!bsdf_from_material(mat, ns, h->dpdu, h->v, &b))
         return false;
     if (pa->depth++ >= sc->settings.max_depth)
@@ -713,6 +720,10 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
         }
         if (!bounce(&pa, h))
             break;
+    }
+    if (pa.one_lane) { /* the hero's wavelength alone, three times (its share of the lanes) */
+        double v = WAVELENGTH_LANES * rgb_ch(pa.L, pa.hero);
+        pa.L = rgb_make(pa.hero == 0 ? v : 0.0, pa.hero == 1 ? v : 0.0, pa.hero == 2 ? v : 0.0);
     }
     counters->shadow_rays += pa.walk.shadow_rays;
     counters->density_lookups += pa.walk.lookups;

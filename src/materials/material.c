@@ -307,12 +307,23 @@ static hz_status read_conductor(param_list *pl, const texture_set *ts, material 
     return HZ_OK;
 }
 
+/* A dielectric's "eta": read_eta's index (RGB rendering's, at 550 nm for a
+ * spectrum), and a spectrum that varies kept for spectral rendering. */
+static void read_dielectric_eta(param_list *pl, material *out)
+{
+    out->eta = read_eta(pl, "eta");
+    if (!params_is_spectrum(pl, "eta"))
+        return;
+    out->eta_spec = params_spectrum(pl, "eta", SPECTRUM_USE_UNBOUNDED, rgb_grey(out->eta));
+    out->dispersive = !spectrum_value_is_constant(&out->eta_spec);
+}
+
 static hz_status read_dielectric(param_list *pl, const texture_set *ts, material *out,
                                  hz_error *err)
 {
     (void)err;
     out->kind = MATERIAL_DIELECTRIC;
-    out->eta = read_eta(pl, "eta");
+    read_dielectric_eta(pl, out);
     read_roughness(pl, ts, out);
     return HZ_OK;
 }
@@ -323,7 +334,7 @@ static hz_status read_thin_dielectric(param_list *pl, const texture_set *ts, mat
     (void)ts;
     (void)err;
     out->kind = MATERIAL_THIN_DIELECTRIC;
-    out->eta = read_eta(pl, "eta");
+    read_dielectric_eta(pl, out);
     return HZ_OK;
 }
 
@@ -731,6 +742,15 @@ const material *material_spectral(const material *m, const spectral_ctx *sp, mat
         break;
     }
     return o;
+}
+
+void material_disperse(material *m, const spectral_ctx *sp, int lane)
+{
+    assert(m->dispersive && lane >= 0 && lane < WAVELENGTH_LANES);
+    double eta = spectrum_value_eval(&m->eta_spec, sp->wl.lambda[lane]);
+    /* A spectrum that reaches 0 or below somewhere: its 550 nm index. */
+    if (isfinite(eta) && eta > 0.0)
+        m->eta = eta;
 }
 
 void material_prepare_spectral(material *m, const rgb2spec_table *t)

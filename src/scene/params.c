@@ -516,6 +516,12 @@ bool params_has(const param_list *pl, const char *name)
     return find(pl, name) != NULL;
 }
 
+bool params_is_spectrum(const param_list *pl, const char *name)
+{
+    const param *p = find(pl, name);
+    return p && p->type == PARAM_SPECTRUM;
+}
+
 file_loc params_loc(const param_list *pl, const char *name)
 {
     const param *p = find(pl, name);

@@ -156,6 +156,8 @@ const double *params_rgbs(param_list *pl, const char *name, size_t *n);
 const char *params_peek_string(const param_list *pl, const char *name, const char *def);
 /* True when a parameter of this name is present (does not mark it used). */
 bool params_has(const param_list *pl, const char *name);
+/* Whether `name` is given as a "spectrum" (not a float, rgb or blackbody). */
+bool params_is_spectrum(const param_list *pl, const char *name);
 /* The texture a "texture NAME" parameter names (marked used), or NULL when
  * `name` is absent or of another type (left for the typed getters). */
 const char *params_texture(param_list *pl, const char *name);

@@ -334,6 +334,32 @@ static void test_dielectric_slab(void **state)
     expect_rgb_close(got, rgb_grey((1 - R) / (1 + R)), 0.0, 3e-3, "glass slab", 2.5, 2.5);
 }
 
+/* A glass slab seen straight on whose index falls from 3 at 360 nm to 1.2
+ * at 830 nm: each wavelength passes (1 - R(lambda)) / (1 + R(lambda)) of
+ * the light behind it, so the slab tints it red; a path keeps one
+ * wavelength past a dispersive surface (pbrt-v4's TerminateSecondary). A
+ * constant index (RGB rendering's, at 550 nm) would pass grey. */
+static double dispersed_slab(double lambda, const void *ctx)
+{
+    (void)ctx;
+    double eta = 3.0 + (1.2 - 3.0) * (lambda - 360.0) / (830.0 - 360.0);
+    double r = (eta - 1.0) / (eta + 1.0);
+    r *= r;
+    return (1.0 - r) / (1.0 + r);
+}
+
+static void test_dispersive_slab(void **state)
+{
+    (void)state;
+    rgb got = through_slab("Material \"dielectric\" \"spectrum eta\" [360 3  830 1.2]", "",
+                           &spectral_opt, 1024, 100);
+    rgb want = rgb_of_illuminated(dispersed_slab, NULL);
+    print_message("dispersive slab: %.4f %.4f %.4f, want %.4f %.4f %.4f\n", got.r, got.g, got.b,
+                  want.r, want.g, want.b);
+    expect_rgb_close(got, want, 0.0, 4e-3, "dispersive slab", 2.5, 2.5);
+    assert_true(want.r - want.b > 0.1);
+}
+
 static double furnace(double lambda, const void *ctx)
 {
     const rgb_albedo_spectrum *rho = ctx;
@@ -600,6 +626,7 @@ int main(void)
         cmocka_unit_test(test_sampled_medium),
         cmocka_unit_test(test_singlescatter_grid),
         cmocka_unit_test(test_dielectric_slab),
+        cmocka_unit_test(test_dispersive_slab),
         cmocka_unit_test(test_blackbody_chromaticity),
         cmocka_unit_test(test_white_furnace),
         cmocka_unit_test(test_auto_choice),
