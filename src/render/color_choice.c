@@ -14,6 +14,14 @@ color_choice color_choice_auto(const color_choice_scene *sc)
             out.why = "a coloured medium";
             return out;
         }
+    bool dispersive = sc->volpath && sc->default_material->dispersive;
+    for (size_t i = 0; i < sc->material_count && !dispersive; ++i)
+        dispersive = sc->volpath && sc->materials[i].dispersive;
+    if (dispersive) {
+        out.spectral = true;
+        out.why = "a dispersive glass";
+        return out;
+    }
     bool nonlinear = material_is_spectrally_nonlinear(sc->default_material);
     for (size_t i = 0; i < sc->material_count && !nonlinear; ++i)
         nonlinear = material_is_spectrally_nonlinear(&sc->materials[i]);

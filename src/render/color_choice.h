@@ -5,6 +5,8 @@
  *     is exp(-sigma(lambda) d), not exp(-sigma_rgb d));
  *   - a material whose colour enters nonlinearly (metals' Fresnel term,
  *     coatings, hair, measured BRDFs: material_is_spectrally_nonlinear).
+ *   - under volpath, a dielectric whose index is a spectrum that varies (a
+ *     named glass): only spectral rendering disperses light through it;
  *   - a Film with a camera sensor: its response is a spectral integral, which
  *     the RGB fit (film/sensor.h) misses by up to 27% on saturated lights
  *     (a (0.8, 0.1, 0.1) emitter's blue on nikon_d850; spectral: within 1%
@@ -34,6 +36,7 @@ typedef struct {
     const medium *media;
     size_t medium_count;
     bool camera_sensor; /* the Film's sensor has response curves */
+    bool volpath;       /* the integrator disperses (material.dispersive) */
 } color_choice_scene;
 
 color_choice color_choice_auto(const color_choice_scene *s);

@@ -533,7 +533,8 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
     if (asked == RENDER_COLOR_AUTO) {
         color_choice_scene cs = {rs->materials, rs->material_count, &rs->default_material,
                                  rs->media, rs->medium_count,
-                                 rs->film && film_get_params(rs->film)->sensor.curves};
+                                 rs->film && film_get_params(rs->film)->sensor.curves,
+                                 ip.kind == INTEGRATOR_VOLPATH};
         choice = color_choice_auto(&cs);
         color = choice.spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
     }

@@ -542,6 +542,11 @@ static void test_auto_choice(void **state)
                                           "MediumInterface \"m\" \"\"\nMaterial \"interface\""));
     assert_true(auto_spectral("singlescatter", "Material \"conductor\""));
     assert_false(auto_spectral("singlescatter", "Material \"diffuse\""));
+    /* A named glass disperses, in volpath only; a constant spectrum does not. */
+    assert_true(auto_spectral("volpath", "Material \"dielectric\" \"spectrum eta\" \"glass-BK7\""));
+    assert_false(auto_spectral("volpath", "Material \"dielectric\" \"spectrum eta\" [1.5]"));
+    assert_false(
+        auto_spectral("singlescatter", "Material \"dielectric\" \"spectrum eta\" \"glass-BK7\""));
 }
 
 /* Without the tables' module, --color spectral is an error naming what to
