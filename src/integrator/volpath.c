@@ -3,6 +3,7 @@
 #include "integrator/visible_surface.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <embree3/rtcore.h>
@@ -12,6 +13,7 @@
 #include "core/ray.h"
 #include "core/phase.h"
 #include "materials/bsdf.h"
+#include "integrator/equiangular.h"
 #include "integrator/volpath_media.h"
 #include "integrator/walk.h"
 
@@ -70,7 +72,13 @@ static double scene_radius(const geometry *geom)
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
                              volpath_settings settings, hz_error *err)
 {
-    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0), false, -1, false};
+    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0), false, -1, false, NULL, 0};
+    for (size_t i = 0; in->medium_count > 0 && i < in->light_count; ++i)
+        if (in->lights[i].kind == LIGHT_POINT || in->lights[i].kind == LIGHT_SPOT) {
+            if (!out->eq_lights && !(out->eq_lights = malloc(in->light_count * sizeof(size_t))))
+                return hz_fail(err, "out of memory");
+            out->eq_lights[out->eq_light_count++] = i;
+        }
     for (size_t i = 0; i < in->light_count; ++i)
         if (in->lights[i].kind == LIGHT_INFINITE && !light_is_image(&in->lights[i])) {
             out->sky = rgb_add(out->sky, in->lights[i].emit);
@@ -79,11 +87,21 @@ hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
                 out->sky_light = (int)i;
         } else if (light_is_image(&in->lights[i]))
             out->image_lights = true;
-    return light_sampler_create(settings.light_sampler, in->lights, in->light_count,
-                                scene_radius(in->geom), &out->sampler, err);
+    if (light_sampler_create(settings.light_sampler, in->lights, in->light_count,
+                             scene_radius(in->geom), &out->sampler, err) != HZ_OK) {
+        free(out->eq_lights);
+        out->eq_lights = NULL;
+        return HZ_ERROR;
+    }
+    return HZ_OK;
 }
 
-void volpath_scene_free(volpath_scene *sc) { light_sampler_free(&sc->sampler); }
+void volpath_scene_free(volpath_scene *sc)
+{
+    light_sampler_free(&sc->sampler);
+    free(sc->eq_lights);
+    sc->eq_lights = NULL;
+}
 
 /* ---- path state ---- */
 
@@ -129,6 +147,14 @@ typedef struct {
     /* Spectral: the path met a dispersive dielectric, so only the hero's
      * lane counts (material_disperse). */
     bool one_lane;
+    /* While the path tracks a segment of a homogeneous medium that the
+     * equiangular strategy light-samples (equiangular_ld): the segment
+     * (start point, direction, length) and the path's r_u at its start,
+     * for the MIS weight of the light samples of its scattering points. */
+    bool eq_on;
+    vec3 eq_o, eq_w;
+    double eq_len;
+    rgb eq_r_u;
 } path;
 
 /* Medium i of the scene at the path's wavelengths (itself in RGB). */
@@ -265,6 +291,10 @@ typedef struct {
     const geom_hit *h;  /* surface only */
     double g;           /* medium only */
     int medium;         /* the medium the point is in (surface: the ray's, before it) */
+    /* A scattering point of a segment under equiangular sampling (eq_on):
+     * its distance from the segment's start and the hero's density of
+     * sampling it there (T_maj sigma_s). */
+    double eq_s, eq_pdf;
 } vertex;
 
 /* Transmittance estimate (with r_u, r_l) of the shadow ray of light sample ls
@@ -293,6 +323,15 @@ static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_sta
     vec3 x = v->p, w = ls->wi;
     double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
     return shadow_walk(s, v3_sub(x, v3_scale(w, e)), w, 0.0, e, tmax + e, v->medium);
+}
+
+/* The equiangular strategy's density of choosing light l and distance s on
+ * the path's current segment (equiangular_ld): a point or spot light picked
+ * uniformly, then s toward it. */
+static double equiangular_light_pdf(const path *pa, const light *l, double s)
+{
+    equiangular e = light_equiangular(l, pa->eq_o, pa->eq_w, pa->eq_len);
+    return equiangular_pdf(&e, s) / (double)pa->sc->eq_light_count;
 }
 
 /* pbrt-v4's SampleLd: one light chosen by the light sampler, one point of
@@ -334,6 +373,11 @@ static rgb sample_ld(path *pa, const vertex *v)
     if (!lit)
         return rgb_grey(0.0);
     rgb r_l = rgb_scale(rgb_mul(s.r_l, pa->r_u), pmf * ls.pdf);
+    /* In a segment that equiangular_ld light-samples, this point could have
+     * come from there too: the balance heuristic adds its density. */
+    if (!v->b && pa->eq_on && (l->kind == LIGHT_POINT || l->kind == LIGHT_SPOT))
+        r_l = rgb_add(r_l, rgb_scale(rgb_mul(s.r_l, pa->eq_r_u),
+                                     equiangular_light_pdf(pa, l, v->eq_s) / v->eq_pdf));
     rgb r_u = rgb_scale(rgb_mul(s.r_u, pa->r_u), scatter_pdf);
     rgb c = rgb_mul(rgb_mul(rgb_mul(pa->beta, f_hat), s.T), ls.L);
     double den = light_only_sampled(l) ? rgb_avg(r_l) : rgb_avg(rgb_add(r_l, r_u));
@@ -357,7 +401,11 @@ static void scatter(path *pa, const volpath_event *ev)
     const medium *m = &sc->in.media[pa->ray.medium];
     vec3 x = v3_add(pa->ray.o, v3_scale(pa->ray.d, ev->t));
     vec3 wo = v3_neg(pa->ray.d);
-    vertex v = {x, wo, NULL, NULL, m->g, pa->ray.medium};
+    vertex v = {x, wo, NULL, NULL, m->g, pa->ray.medium, 0.0, 0.0};
+    if (pa->eq_on) {
+        v.eq_s = v3_dot(v3_sub(x, pa->eq_o), pa->eq_w);
+        v.eq_pdf = pdf;
+    }
     pa->L = rgb_add(pa->L, sample_ld(pa, &v));
     double p_pdf;
     vec3 wi = hg_sample(wo, m->g, sampler_2d(pa->st), &p_pdf);
@@ -569,7 +617,7 @@ static bool bounce(path *pa, const geom_hit *h)
     if (sc->settings.force_diffuse && b.kind != BSDF_DIFFUSE)
         force_diffuse(&b, wo, pa->st);
     if (bsdf_is_non_specular(&b)) {
-        vertex v = {h->p, wo, &b, h, 0.0, pa->ray.medium};
+        vertex v = {h->p, wo, &b, h, 0.0, pa->ray.medium, 0.0, 0.0};
         pa->L = rgb_add(pa->L, sample_ld(pa, &v));
     }
     pa->prev_p = h->p;
@@ -604,14 +652,72 @@ static bool bounce(path *pa, const geom_hit *h)
 
 /* ---- the path ---- */
 
+/* The second strategy for light scattered on the current segment [t_start,
+ * t_hit] of a homogeneous medium m toward point and spot lights
+ * (Kulla & Fajardo 2012): a light picked uniformly, a distance s sampled
+ * equiangularly toward it, its light sample there; combined by the balance
+ * heuristic with the light samples of the points distance sampling
+ * scatters at (sample_ld), both weighed by the densities of both ways to
+ * the same point and light. Distance sampling alone has unbounded variance
+ * near a point light in a scattering medium: its estimate grows as 1 / r^2
+ * where the density of points within r falls only as r^3. */
+static void equiangular_ld(path *pa, const medium *m, double t_start, double t_hit)
+{
+    const volpath_scene *sc = pa->sc;
+    pa->eq_on = true;
+    pa->eq_o = v3_add(pa->ray.o, v3_scale(pa->ray.d, t_start));
+    pa->eq_w = pa->ray.d;
+    pa->eq_len = t_hit - t_start;
+    pa->eq_r_u = pa->r_u;
+    double ul = sampler_1d(pa->st), us = sampler_1d(pa->st);
+    size_t n = sc->eq_light_count, k = (size_t)(ul * (double)n);
+    size_t li = sc->eq_lights[k < n ? k : n - 1];
+    const light *l = &sc->in.lights[li];
+    equiangular e = light_equiangular(l, pa->eq_o, pa->eq_w, pa->eq_len);
+    if (!e.valid)
+        return;
+    double s = equiangular_sample(&e, us);
+    double p_eq = equiangular_pdf(&e, s) / (double)n;
+    if (!(s >= e.lo && s < e.hi && s < pa->eq_len) || !(p_eq > 0.0) || !isfinite(p_eq))
+        return;
+    vec3 x = v3_add(pa->eq_o, v3_scale(pa->eq_w, s));
+    light_sample ls;
+    if (!light_sample_li(l, x, v3(0.0, 0.0, 0.0), pa->walk.time, v2(0.5, 0.5), &ls) ||
+        rgb_is_black(ls.L))
+        return;
+    ls.L = light_spectral(l, ls.L, pa->sp);
+    double phase = hg_phase(v3_dot(v3_neg(pa->eq_w), ls.wi), m->g);
+    /* Distance sampling's density of scattering at s, per lane. */
+    rgb p_dist = rgb_mul(m->sigma_s, rgb_exp_neg(medium_sigma_t(m), s));
+    if (!(phase > 0.0) || rgb_is_black(p_dist))
+        return;
+    vertex v = {x, v3_neg(pa->eq_w), NULL, NULL, m->g, pa->ray.medium, 0.0, 0.0};
+    shadow_state st = {pa, rgb_grey(1.0), rgb_grey(1.0), rgb_grey(1.0)};
+    if (!shadow(pa, &v, &ls, &st))
+        return;
+    double pmf = light_sampler_pmf(&sc->sampler, x, v3(0.0, 0.0, 0.0), li);
+    rgb den = rgb_mul(rgb_mul(st.r_l, pa->r_u),
+                      rgb_add(rgb_scale(p_dist, pmf), rgb_grey(p_eq)));
+    rgb c = rgb_scale(rgb_mul(rgb_mul(rgb_mul(pa->beta, p_dist), st.T), ls.L), phase);
+    double d = rgb_avg(den);
+    if (d > 0.0)
+        pa->L = rgb_add(pa->L, rgb_div(c, d));
+}
+
 /* Tracks the current ray's medium over [t_start, t_hit]. False when the
  * path ended there; pa->scattered when it scattered. */
 static bool cross_medium(path *pa, double t_start, double t_hit)
 {
     pa->scattered = pa->terminated = false;
     uint64_t t0 = pa->counters->timed ? hz_clock_ns() : 0;
-    rgb T_maj = volpath_track(path_medium(pa, pa->ray.medium, false), pa->ray.o, pa->ray.d,
-                              t_start, t_hit, pa->hero, true, &pa->walk, path_event, pa);
+    const medium *m = path_medium(pa, pa->ray.medium, false);
+    pa->eq_on = false;
+    if (pa->sc->eq_light_count > 0 && medium_is_homogeneous(m) &&
+        pa->depth < pa->sc->settings.max_depth && !rgb_is_black(m->sigma_s) && t_hit > t_start)
+        equiangular_ld(pa, m, t_start, t_hit);
+    rgb T_maj = volpath_track(m, pa->ray.o, pa->ray.d, t_start, t_hit, pa->hero, true,
+                              &pa->walk, path_event, pa);
+    pa->eq_on = false;
     if (pa->counters->timed)
         pa->counters->media_ns += hz_clock_ns() - t0;
     if (pa->terminated || rgb_is_black(pa->beta) || rgb_is_black(pa->r_u))

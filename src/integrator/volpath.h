@@ -59,6 +59,11 @@ typedef struct {
      * the first, -1 for none; whether there are more. */
     int sky_light;
     bool sky_lights_many;
+    /* The point and spot lights (indices into in.lights), which homogeneous
+     * media also light-sample by equiangular sampling along each segment
+     * (docs/media.md); NULL and 0 when there are none. */
+    size_t *eq_lights;
+    size_t eq_light_count;
 } volpath_scene;
 
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
