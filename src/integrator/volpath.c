@@ -669,7 +669,8 @@ static void equiangular_ld(path *pa, const medium *m, double t_start, double t_h
     pa->eq_w = pa->ray.d;
     pa->eq_len = t_hit - t_start;
     pa->eq_r_u = pa->r_u;
-    double ul = sampler_1d(pa->st), us = sampler_1d(pa->st);
+    vec2 u = sampler_2d(pa->st); /* the light, the distance */
+    double ul = u.x, us = u.y;
     size_t n = sc->eq_light_count, k = (size_t)(ul * (double)n);
     size_t li = sc->eq_lights[k < n ? k : n - 1];
     const light *l = &sc->in.lights[li];
