@@ -38,6 +38,7 @@ struct render_scene {
     /* Spectral rendering with a camera sensor: samples reach the film as
      * that sensor's RGB (sensor_rgb); NULL otherwise. */
     const film_sensor *sensor;
+    bool cam_differentials; /* camera_find_min_differentials done */
     /* The sampled spectra of lights, materials and media, copied out of the
      * scene_desc (which may go before the render_scene does): keep_spectrum. */
     double **spectra;
@@ -804,8 +805,10 @@ rgb render_scene_li_surface(const render_scene *rs, const ray_differential *r, s
 
 void render_scene_set_footprint_scale(render_scene *rs, double scale)
 {
-    if (scale > 0.0 && rs->film)
+    if (scale > 0.0 && rs->film && !rs->cam_differentials) { /* once: every pass calls this */
         camera_find_min_differentials(&rs->cam);
+        rs->cam_differentials = true;
+    }
     integrator_set_footprint_scale(&rs->integ, scale);
 }
 
