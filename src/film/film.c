@@ -55,6 +55,7 @@ struct film {
     film_gbuffer *gbuf; /* NULL unless gbuffer */
     transform output_from_render; /* gbuffer positions and normals */
     double clamp_ratio;
+    double xyz_from_render[9]; /* the clamp's space without an active sensor */
     bool sensor_rgb_in; /* film_take_sensor_rgb */
     atomic_long nonfinite; /* tiles run in parallel; only this is shared */
 };
@@ -313,6 +314,17 @@ hz_status film_params_check_format(const scene_entity *e, const film_params *p, 
     return HZ_OK;
 }
 
+/* XYZ from linear sRGB and back (white D65 at Y = 1): the sensor RGB of
+ * pbrt-v4's default "cie1931" sensor is XYZ. */
+static void srgb_xyz(double xyz_from_srgb[9], double srgb_from_xyz[9])
+{
+    double xy[8];
+    color_space_chromaticities(COLOR_SPACE_SRGB, xy);
+    double w[3] = {xy[6] / xy[7], 1.0, (1.0 - xy[6] - xy[7]) / xy[7]};
+    color_space_xyz_from_rgb_white(COLOR_SPACE_SRGB, w, xyz_from_srgb);
+    color_space_rgb_from_xyz_white(COLOR_SPACE_SRGB, w, srgb_from_xyz);
+}
+
 void film_params_set_color_space(film_params *p, color_space cs)
 {
     p->color_space = cs;
@@ -321,10 +333,8 @@ void film_params_set_color_space(film_params *p, color_space cs)
     double m[9], out[9];
     color_space_convert_matrix(COLOR_SPACE_SRGB, cs, m);
     film_sensor *s = &p->sensor;
-    if (!s->active) {
-        static const double id[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-        memcpy(s->sensor_from_render, id, sizeof id);
-        memcpy(s->output_from_sensor, id, sizeof id);
+    if (!s->active) { /* "cie1931": sensor RGB is XYZ, which maxcomponentvalue clamps */
+        srgb_xyz(s->sensor_from_render, s->output_from_sensor);
         s->active = true;
     }
     for (int r = 0; r < 3; ++r)
@@ -394,6 +404,8 @@ film *film_create(const film_params *p, hz_error *err)
     f->width = b.x1 - b.x0;
     f->height = b.y1 - b.y0;
     f->clamp_ratio = 1.0;
+    double unused[9];
+    srgb_xyz(f->xyz_from_render, unused);
     atomic_init(&f->nonfinite, 0);
     size_t n = (size_t)f->width * (size_t)f->height;
     f->pixels = hz_big_calloc(n, sizeof *f->pixels);
@@ -663,7 +675,8 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
     const film_sensor *sensor = &f->p.sensor;
     if (sensor->active && !f->sensor_rgb_in)
         L = sensor_apply(sensor->sensor_from_render, L);
-    double m = rgb_max(L) * f->clamp_ratio;
+    /* The sensor RGB of pbrt-v4's default "cie1931" sensor is XYZ. */
+    double m = rgb_max(sensor->active ? L : sensor_apply(f->xyz_from_render, L)) * f->clamp_ratio;
     if (m > f->p.max_component_value)
         L = rgb_scale(L, f->p.max_component_value / m);
     if (sensor->active)

@@ -265,7 +265,10 @@ static void test_accumulation(void **state)
     assert_float_equal(film_get_pixel(f, 6, 4, 1.0).g, 7.0 / 4.0, 1e-15);
     film_destroy(f);
 
-    /* maxcomponentvalue scales the sample so its largest component fits. */
+    /* maxcomponentvalue scales the sample so the largest component of its
+     * sensor RGB fits: XYZ for pbrt-v4's default "cie1931" sensor. sRGB
+     * (4, 2, 1) is XYZ (2.5452, 2.3531, 1.2665); blue (0, 0, 1) has X, Y, Z
+     * at most 0.9503, so a clamp at 0.95 scales it (one on sRGB would not). */
     film_params p;
     film_params_default(&p);
     p.xres = p.yres = 2;
@@ -275,16 +278,27 @@ static void test_accumulation(void **state)
     assert_non_null(f);
     film_add_sample(f, 1, 1, rgb_make(4.0, 2.0, 1.0), 1.0, INFINITY);
     v = film_get_pixel(f, 1, 1, 1.0);
-    assert_true(v.r == 2.0 && v.g == 1.0 && v.b == 0.5);
+    double k = 2.0 / (0.4123908 * 4.0 + 0.3575843 * 2.0 + 0.1804808 * 1.0);
+    assert_float_equal(v.r, 4.0 * k, 1e-5);
+    assert_float_equal(v.g, 2.0 * k, 1e-5);
+    assert_float_equal(v.b, 1.0 * k, 1e-5);
     film_add_sample(f, 0, 0, rgb_make(1.0, 0.5, 0.0), 1.0, INFINITY);
     film_set_imaging_ratio(f, 4.0); /* clamp applies to L * ratio, as pbrt-v4's sensor value */
     film_add_sample(f, 0, 1, rgb_make(1.0, 0.5, 0.0), 1.0, INFINITY);
     assert_true(film_get_pixel(f, 0, 0, 1.0).r == 1.0);
-    assert_true(film_get_pixel(f, 0, 1, 4.0).r == 2.0);
+    /* X = 0.5911 * 4 = 2.364 > 2 */
+    assert_float_equal(film_get_pixel(f, 0, 1, 1.0).r, 0.5 / (0.4123908 + 0.5 * 0.3575843), 1e-5);
     film_destroy(f);
+    p.max_component_value = 0.95;
+    f = film_create(&p, NULL);
+    assert_non_null(f);
+    film_add_sample(f, 0, 0, rgb_make(0.0, 0.0, 1.0), 1.0, INFINITY);
+    assert_float_equal(film_get_pixel(f, 0, 0, 1.0).b, 0.95 / 0.9505321, 1e-5);
+    film_destroy(f);
+    p.max_component_value = 2.0;
 
     /* pbrt-v4's old Film "scale" multiplies the image written, after the
-     * clamp: (4, 2, 1) clamped to (2, 1, 0.5), written times 3. */
+     * clamp: (4, 2, 1) clamped to k (4, 2, 1), written times 3. */
     p.scale = 3.0;
     f = film_create(&p, NULL);
     assert_non_null(f);
@@ -296,7 +310,8 @@ static void test_accumulation(void **state)
     exr_image img;
     assert_int_equal(exr_read(path, &img, &werr), HZ_OK);
     const exr_channel *R = exr_find_channel(&img, "R"), *B = exr_find_channel(&img, "B");
-    assert_true(R->pixels[3] == 6.0f && B->pixels[3] == 1.5f);
+    assert_float_equal(R->pixels[3], 3.0 * 4.0 * k, 1e-5);
+    assert_float_equal(B->pixels[3], 3.0 * 1.0 * k, 1e-5);
     exr_image_free(&img);
     film_destroy(f);
     p.scale = 1.0;
@@ -542,13 +557,16 @@ static void test_variance_weighted(void **state)
     assert_int_equal(film_get_sample_count(f, 1, 0), 3);
     film_destroy(f);
 
-    /* The moments see the clamped values the mean sees: 4 -> 2 (max 2). */
-    f = stats_film(1, 1, false, 2.0);
-    film_add_sample(f, 0, 0, rgb_make(4.0, 1.0, 0.0), 1.0, INFINITY);
-    film_add_sample(f, 0, 0, rgb_make(1.0, 0.5, 0.0), 1.0, INFINITY);
-    assert_true(film_get_pixel(f, 0, 0, 1.0).r == 1.5);
+    /* The moments see the clamped values the mean sees: red 4 has X =
+     * 4 * 0.412391 = 1.64956 and clamps to 4 * 1.2 / 1.64956 = 2.9099. */
+    f = stats_film(1, 1, false, 1.2);
+    film_add_sample(f, 0, 0, rgb_make(4.0, 0.0, 0.0), 1.0, INFINITY);
+    film_add_sample(f, 0, 0, rgb_make(1.0, 0.0, 0.0), 1.0, INFINITY);
+    double c = 4.0 * 1.2 / (4.0 * 0.4123908);
+    assert_float_equal(film_get_pixel(f, 0, 0, 1.0).r, (c + 1.0) / 2.0, 1e-6);
     rgb cv = film_get_variance(f, 0, 0, 1.0);
-    assert_true(cv.r == 0.25 && cv.g == 0.0 && cv.b == 0.0); /* (2-1)^2/2 / 2 */
+    assert_float_equal(cv.r, (c - 1.0) * (c - 1.0) / 4.0, 1e-6); /* s^2 / n */
+    assert_true(cv.g == 0.0 && cv.b == 0.0);
     film_destroy(f);
 }
 
