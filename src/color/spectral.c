@@ -38,7 +38,7 @@ rgb spectral_eval(const spectral_ctx *sp, const spectral_color *c)
         if (c->use == SPECTRAL_ILLUMINANT)
             v[i] *= sp->illuminant[i];
     }
-    return rgb_make(v[0], v[1], v[2]);
+    return wavelengths_lanes(v);
 }
 
 rgb spectral_from_rgb(const spectral_ctx *sp, rgb c, spectral_use use)
@@ -71,7 +71,7 @@ rgb spectral_from_rgb(const spectral_ctx *sp, rgb c, spectral_use use)
         break;
     }
     }
-    return rgb_make(v[0], v[1], v[2]);
+    return wavelengths_lanes(v);
 }
 
 rgb spectral_from_value(const spectral_ctx *sp, const spectrum_value *s)
@@ -83,8 +83,10 @@ rgb spectral_from_value(const spectral_ctx *sp, const spectrum_value *s)
         return spectral_from_rgb(sp, s->rgb, use);
     }
     const double *l = sp->wl.lambda;
-    return rgb_make(spectrum_value_eval(s, l[0]), spectrum_value_eval(s, l[1]),
-                    spectrum_value_eval(s, l[2]));
+    double v[WAVELENGTH_LANES];
+    for (int i = 0; i < WAVELENGTH_LANES; ++i)
+        v[i] = spectrum_value_eval(s, l[i]);
+    return wavelengths_lanes(v);
 }
 
 rgb spectral_to_rgb(const spectral_ctx *sp, rgb L)

@@ -2,7 +2,7 @@
  * wavelengths and the RGB -> spectrum table of haze's working space (sRGB,
  * where the parser puts every rgb value). An integrator carries a
  * `const spectral_ctx *` (NULL: RGB rendering) and turns each colour it
- * meets into the three lanes of color/wavelengths.h:
+ * meets into the four lanes of color/wavelengths.h:
  *   - reflectances (albedo), coefficients and indices (unbounded) and
  *     emission (illuminant) given as RGB, as pbrt-v4's RGBAlbedoSpectrum,
  *     RGBUnboundedSpectrum and RGBIlluminantSpectrum;

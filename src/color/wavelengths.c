@@ -46,7 +46,7 @@ wavelengths wavelengths_sample_visible(double u)
 
 vec3 wavelengths_xyz(const wavelengths *w, rgb L)
 {
-    const double v[WAVELENGTH_LANES] = {L.r, L.g, L.b};
+    const double v[WAVELENGTH_LANES] = {L.r, L.g, L.b, L.w};
     vec3 xyz = v3(0.0, 0.0, 0.0);
     for (int i = 0; i < WAVELENGTH_LANES; ++i) {
         if (!(w->pdf[i] > 0.0) || v[i] == 0.0)

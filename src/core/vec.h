@@ -19,8 +19,14 @@ static inline double hz_fmin(double a, double b) { return a < b || b != b ? a : 
 
 typedef struct { double x, y; } vec2;
 typedef struct { double x, y, z; } vec3;
-/* Linear (scene-referred) RGB in the sRGB/Rec.709 primaries. */
-typedef struct { double r, g, b; } rgb;
+/* Linear (scene-referred) RGB in the sRGB/Rec.709 primaries: r, g, b; w is
+ * a copy of g, kept by every function below, so that reductions over four
+ * lanes (rgb_max, rgb_is_black) give the three channels' answer. Spectral
+ * rendering (color/wavelengths.h) carries four wavelengths in the same
+ * struct, one per lane r, g, b, w; its reductions that differ from RGB's
+ * take the lane count (rgb_lanes_avg). Build one from three channels with
+ * rgb_make, never a three-element literal. */
+typedef struct { double r, g, b, w; } rgb;
 
 static inline vec2 v2(double x, double y) { return (vec2){x, y}; }
 static inline vec3 v3(double x, double y, double z) { return (vec3){x, y, z}; }
@@ -65,26 +71,49 @@ static inline void v3_basis(vec3 n, vec3 *b1, vec3 *b2)
     *b2 = v3(b, sign + n.y * n.y * a, -n.y);
 }
 
-static inline rgb rgb_make(double r, double g, double b) { return (rgb){r, g, b}; }
-static inline rgb rgb_grey(double v) { return (rgb){v, v, v}; }
-static inline rgb rgb_add(rgb a, rgb b) { return (rgb){a.r + b.r, a.g + b.g, a.b + b.b}; }
-static inline rgb rgb_mul(rgb a, rgb b) { return (rgb){a.r * b.r, a.g * b.g, a.b * b.b}; }
-static inline rgb rgb_sub(rgb a, rgb b) { return (rgb){a.r - b.r, a.g - b.g, a.b - b.b}; }
-static inline rgb rgb_scale(rgb a, double s) { return (rgb){a.r * s, a.g * s, a.b * s}; }
-/* e^{-sigma d} per channel; a channel that does not attenuate stays 1 (0 *
+static inline rgb rgb_make(double r, double g, double b) { return (rgb){r, g, b, g}; }
+static inline rgb rgb_grey(double v) { return (rgb){v, v, v, v}; }
+static inline rgb rgb_add(rgb a, rgb b) { return (rgb){a.r + b.r, a.g + b.g, a.b + b.b, a.w + b.w}; }
+static inline rgb rgb_mul(rgb a, rgb b) { return (rgb){a.r * b.r, a.g * b.g, a.b * b.b, a.w * b.w}; }
+static inline rgb rgb_sub(rgb a, rgb b) { return (rgb){a.r - b.r, a.g - b.g, a.b - b.b, a.w - b.w}; }
+static inline rgb rgb_scale(rgb a, double s) { return (rgb){a.r * s, a.g * s, a.b * s, a.w * s}; }
+/* e^{-sigma d} per lane; a lane that does not attenuate stays 1 (0 *
  * INFINITY would be NaN). A grey sigma takes one exp. */
+static inline double exp_neg_lane(double sigma, double d) { return sigma > 0.0 ? exp(-sigma * d) : 1.0; }
 static inline rgb rgb_exp_neg(rgb sigma, double d)
 {
-    if (sigma.r == sigma.g && sigma.g == sigma.b)
-        return rgb_grey(sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0);
-    return (rgb){sigma.r > 0.0 ? exp(-sigma.r * d) : 1.0, sigma.g > 0.0 ? exp(-sigma.g * d) : 1.0,
-                 sigma.b > 0.0 ? exp(-sigma.b * d) : 1.0};
+    if (sigma.r == sigma.g && sigma.g == sigma.b && sigma.b == sigma.w)
+        return rgb_grey(exp_neg_lane(sigma.r, d));
+    double g = exp_neg_lane(sigma.g, d);
+    return (rgb){exp_neg_lane(sigma.r, d), g, exp_neg_lane(sigma.b, d),
+                 sigma.w == sigma.g ? g : exp_neg_lane(sigma.w, d)};
 }
-static inline bool rgb_is_black(rgb a) { return a.r == 0.0 && a.g == 0.0 && a.b == 0.0; }
-static inline double rgb_max(rgb a) { return hz_fmax(a.r, hz_fmax(a.g, a.b)); }
+static inline bool rgb_is_black(rgb a) { return a.r == 0.0 && a.g == 0.0 && a.b == 0.0 && a.w == 0.0; }
+static inline double rgb_max(rgb a) { return hz_fmax(a.r, hz_fmax(a.g, hz_fmax(a.b, a.w))); }
+/* The mean of the three channels (RGB rendering). */
 static inline double rgb_avg(rgb a) { return (a.r + a.g + a.b) / 3.0; }
-/* Channel i (0 r, 1 g, 2 b). */
-static inline double rgb_ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : c.b; }
+/* The mean of the first `lanes` lanes: 3 in RGB, 4 in spectral rendering. */
+static inline double rgb_lanes_avg(rgb a, int lanes)
+{
+    return lanes == 3 ? rgb_avg(a) : (a.r + a.g + a.b + a.w) / 4.0;
+}
+/* a / b per lane, 0 where b is not positive. */
+static inline double div_or_zero(double a, double b) { return b > 0.0 ? a / b : 0.0; }
+static inline rgb rgb_div_or_zero(rgb a, rgb b)
+{
+    return (rgb){div_or_zero(a.r, b.r), div_or_zero(a.g, b.g), div_or_zero(a.b, b.b),
+                 div_or_zero(a.w, b.w)};
+}
+/* f of each lane. */
+static inline rgb rgb_map(rgb a, double (*f)(double)) { return (rgb){f(a.r), f(a.g), f(a.b), f(a.w)}; }
+/* Channel or lane i (0 r, 1 g, 2 b, 3 w). */
+static inline double rgb_ch(rgb c, int i) { return i == 0 ? c.r : i == 1 ? c.g : i == 2 ? c.b : c.w; }
+/* Lane i set to v (the copy w follows g only through rgb_make). */
+static inline void rgb_set_ch(rgb *c, int i, double v)
+{
+    double *lane = i == 0 ? &c->r : i == 1 ? &c->g : i == 2 ? &c->b : &c->w;
+    *lane = v;
+}
 /* Rec.709 luminance. */
 static inline double rgb_luminance(rgb a) { return 0.2126 * a.r + 0.7152 * a.g + 0.0722 * a.b; }
 

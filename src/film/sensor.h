@@ -48,8 +48,8 @@ const char *sensor_names(void);
 /* sensor_from_render and output_from_sensor of one sensor; out = m * v. */
 static inline rgb sensor_apply(const double m[9], rgb v)
 {
-    return (rgb){m[0] * v.r + m[1] * v.g + m[2] * v.b, m[3] * v.r + m[4] * v.g + m[5] * v.b,
-                 m[6] * v.r + m[7] * v.g + m[8] * v.b};
+    return rgb_make(m[0] * v.r + m[1] * v.g + m[2] * v.b, m[3] * v.r + m[4] * v.g + m[5] * v.b,
+                    m[6] * v.r + m[7] * v.g + m[8] * v.b);
 }
 
 /* The generated table (src/film/sensor_table.c). output_from_sensor is

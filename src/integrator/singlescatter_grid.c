@@ -55,12 +55,12 @@ static inline rgb coloured_sigma_s(const medium *m, rgb C) { return rgb_mul(m->s
  * nothing attenuates). */
 static inline rgb free_emission_over(rgb eps, rgb sigma_t, double d, double dt, rgb step_t)
 {
-    double w[3];
-    for (int c = 0; c < 3; ++c) {
+    rgb w = rgb_grey(0.0);
+    for (int c = 0; c < 4; ++c) { /* every lane: w copies g in RGB */
         double k = rgb_ch(sigma_t, c) * d;
-        w[c] = k > 0.0 ? (1.0 - rgb_ch(step_t, c)) / k : dt;
+        rgb_set_ch(&w, c, k > 0.0 ? (1.0 - rgb_ch(step_t, c)) / k : dt);
     }
-    return rgb_mul(eps, rgb_make(w[0], w[1], w[2]));
+    return rgb_mul(eps, w);
 }
 
 /* sig (1 - e^{-sigma_t d dt}) / sigma_t per channel: the share of the
@@ -68,9 +68,7 @@ static inline rgb free_emission_over(rgb eps, rgb sigma_t, double d, double dt, 
  * constant density. */
 static inline rgb over_stratum(rgb sig, rgb sigma_t, rgb step_t)
 {
-    return rgb_make(sigma_t.r > 0.0 ? (1.0 - step_t.r) * sig.r / sigma_t.r : 0.0,
-                    sigma_t.g > 0.0 ? (1.0 - step_t.g) * sig.g / sigma_t.g : 0.0,
-                    sigma_t.b > 0.0 ? (1.0 - step_t.b) * sig.b / sigma_t.b : 0.0);
+    return rgb_div_or_zero(rgb_mul(rgb_sub(rgb_grey(1.0), step_t), sig), sigma_t);
 }
 
 /* Marching over the strata whose samples lie in [.., b): piecewise-constant

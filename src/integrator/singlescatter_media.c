@@ -16,13 +16,14 @@
 typedef struct {
     rgb sigma_t;
     double len;
-    int active[3], n_active;
+    int active[WAVELENGTH_LANES], n_active;
 } exp_sampler;
 
-static exp_sampler exp_sampler_make(rgb sigma_t, double len)
+/* Over `lanes` lanes: 3 in RGB, WAVELENGTH_LANES in spectral rendering. */
+static exp_sampler exp_sampler_make(rgb sigma_t, double len, int lanes)
 {
-    exp_sampler e = {sigma_t, len, {0, 0, 0}, 0};
-    for (int c = 0; c < 3; ++c)
+    exp_sampler e = {sigma_t, len, {0}, 0};
+    for (int c = 0; c < lanes; ++c)
         if (rgb_ch(sigma_t, c) > 0.0)
             e.active[e.n_active++] = c;
     return e;
@@ -81,12 +82,12 @@ static rgb scatter_at(const singlescatter_scene *vs, int mi, const light *l, vec
  * per channel (a channel that does not attenuate does not absorb: 0). */
 static rgb homogeneous_emission(const medium *m, rgb sigma_t, double len)
 {
-    double e[3];
-    for (int c = 0; c < 3; ++c) {
+    rgb e = rgb_grey(0.0);
+    for (int c = 0; c < 4; ++c) { /* every lane: w copies g in RGB */
         double st = rgb_ch(sigma_t, c), sa = rgb_ch(m->sigma_a, c);
-        e[c] = st > 0.0 ? sa * rgb_ch(m->Le, c) * -expm1(-st * len) / st : 0.0;
+        rgb_set_ch(&e, c, st > 0.0 ? sa * rgb_ch(m->Le, c) * -expm1(-st * len) / st : 0.0);
     }
-    return rgb_make(e[0], e[1], e[2]);
+    return e;
 }
 
 static void homogeneous_segment(const singlescatter_scene *vs, int mi, vec3 o, vec3 w, double t0,
@@ -99,7 +100,7 @@ static void homogeneous_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     double len = t1 - t0;
     vec3 a = v3_add(o, v3_scale(w, t0)); /* the segment starts at s = 0 */
     if (!rgb_is_black(m->sigma_s) && len > 0.0) {
-        exp_sampler es = exp_sampler_make(sigma_t, len);
+        exp_sampler es = exp_sampler_make(sigma_t, len, walk->sp ? WAVELENGTH_LANES : 3);
         rgb Lseg = rgb_grey(0.0);
         for (size_t i = 0; i < vs->in.light_count; ++i) {
             const light *l = &vs->in.lights[i];

@@ -135,8 +135,8 @@ static inline cell_rates cell_rates_make(const singlescatter_settings *set, tran
 /* T times 1 - sigma_t (dens - lo) / mu per channel: one tentative collision. */
 static inline rgb collide(rgb T, rgb sigma_t, double d, double mu)
 {
-    return rgb_mul(T, rgb_make(1.0 - sigma_t.r * d / mu, 1.0 - sigma_t.g * d / mu,
-                               1.0 - sigma_t.b * d / mu));
+    return rgb_mul(T, (rgb){1.0 - sigma_t.r * d / mu, 1.0 - sigma_t.g * d / mu,
+                            1.0 - sigma_t.b * d / mu, 1.0 - sigma_t.w * d / mu});
 }
 
 /* An optical distance to the next tentative collision, Exp(1). It is carried

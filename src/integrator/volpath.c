@@ -122,6 +122,7 @@ typedef struct {
     media_walk walk;
     integrator_counters *counters;
     int hero;
+    int lanes; /* 3 (RGB) or WAVELENGTH_LANES (spectral): what MIS averages over */
     rgb L, beta, r_u, r_l;
     /* pbrt-v4's etaScale: the squared relative indices the path crossed by
      * transmission. Radiance through a dielectric is divided by eta^2 going
@@ -223,19 +224,27 @@ typedef struct {
     rgb T, r_u, r_l;
 } shadow_state;
 
+/* The mean of x over the path's lanes (pbrt-v4's SampledSpectrum::Average). */
+static inline double lane_avg(const path *pa, rgb x) { return rgb_lanes_avg(x, pa->lanes); }
+
+static double nonnegative(double x) { return fmax(0.0, x); }
+/* sigma_n = sigma_maj - sigma_t, per lane, at least 0. */
+static rgb sigma_null(const volpath_event *ev)
+{
+    return rgb_map(rgb_sub(rgb_sub(ev->sigma_maj, ev->sigma_a), ev->sigma_s), nonnegative);
+}
+
 static bool shadow_event(void *ctx, const volpath_event *ev)
 {
     shadow_state *s = ctx;
     int h = s->pa->hero;
-    rgb sigma_n = rgb_make(fmax(0.0, ev->sigma_maj.r - ev->sigma_a.r - ev->sigma_s.r),
-                           fmax(0.0, ev->sigma_maj.g - ev->sigma_a.g - ev->sigma_s.g),
-                           fmax(0.0, ev->sigma_maj.b - ev->sigma_a.b - ev->sigma_s.b));
+    rgb sigma_n = sigma_null(ev);
     double pdf = rgb_ch(ev->T_maj, h) * rgb_ch(ev->sigma_maj, h);
     rgb tn = rgb_div(rgb_mul(ev->T_maj, sigma_n), pdf);
     s->T = rgb_mul(s->T, tn);
     s->r_l = rgb_mul(s->r_l, rgb_div(rgb_mul(ev->T_maj, ev->sigma_maj), pdf));
     s->r_u = rgb_mul(s->r_u, tn);
-    rgb Tr = rgb_div(s->T, rgb_avg(rgb_add(s->r_l, s->r_u)));
+    rgb Tr = rgb_div(s->T, lane_avg(s->pa, rgb_add(s->r_l, s->r_u)));
     if (rgb_max(Tr) < 0.05) {
         if (rng_uniform(&s->pa->walk.r) < 0.75)
             s->T = rgb_grey(0.0);
@@ -380,7 +389,7 @@ static rgb sample_ld(path *pa, const vertex *v)
                                      equiangular_light_pdf(pa, l, v->eq_s) / v->eq_pdf));
     rgb r_u = rgb_scale(rgb_mul(s.r_u, pa->r_u), scatter_pdf);
     rgb c = rgb_mul(rgb_mul(rgb_mul(pa->beta, f_hat), s.T), ls.L);
-    double den = light_only_sampled(l) ? rgb_avg(r_l) : rgb_avg(rgb_add(r_l, r_u));
+    double den = light_only_sampled(l) ? lane_avg(pa, r_l) : lane_avg(pa, rgb_add(r_l, r_u));
     return den > 0.0 ? rgb_div(c, den) : rgb_grey(0.0);
 }
 
@@ -440,7 +449,7 @@ static bool path_event(void *ctx, const volpath_event *ev)
         double pdf = rgb_ch(ev->T_maj, h) * sm;
         rgb betap = rgb_div(rgb_mul(pa->beta, ev->T_maj), pdf);
         rgb r_e = rgb_div(rgb_mul(pa->r_u, rgb_mul(ev->sigma_maj, ev->T_maj)), pdf);
-        double r = rgb_avg(r_e);
+        double r = lane_avg(pa, r_e);
         if (r > 0.0)
             pa->L = rgb_add(pa->L, rgb_div(rgb_mul(betap, ev->emission), r));
     }
@@ -458,9 +467,7 @@ static bool path_event(void *ctx, const volpath_event *ev)
             scatter(pa, ev);
         return false;
     }
-    rgb sigma_n = rgb_make(fmax(0.0, ev->sigma_maj.r - ev->sigma_a.r - ev->sigma_s.r),
-                           fmax(0.0, ev->sigma_maj.g - ev->sigma_a.g - ev->sigma_s.g),
-                           fmax(0.0, ev->sigma_maj.b - ev->sigma_a.b - ev->sigma_s.b));
+    rgb sigma_n = sigma_null(ev);
     double pdf = rgb_ch(ev->T_maj, h) * rgb_ch(sigma_n, h);
     if (!(pdf > 0.0)) {
         pa->beta = rgb_grey(0.0);
@@ -485,13 +492,13 @@ static void add_emission(path *pa, const geom_hit *h, vec3 wo)
     if (rgb_is_black(Le))
         return;
     if (pa->depth == 0 || pa->specular) {
-        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(pa->r_u)));
+        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), lane_avg(pa, pa->r_u)));
         return;
     }
     double p_l = light_sampler_pmf(&sc->sampler, pa->prev_p, pa->prev_n, (size_t)li) *
                  light_pdf_li(l, pa->prev_p, pa->walk.time, h->p, h->ng);
     rgb den = rgb_add(pa->r_u, rgb_scale(pa->r_l, p_l));
-    pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(den)));
+    pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), lane_avg(pa, den)));
 }
 
 /* The image infinite lights seen by a path leaving the scene along w,
@@ -512,7 +519,7 @@ static void add_image_lights(path *pa, vec3 o, vec3 w)
                          light_infinite_pdf(l, w);
             den = rgb_add(den, rgb_scale(pa->r_l, p_l));
         }
-        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), rgb_avg(den)));
+        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, Le), lane_avg(pa, den)));
     }
 }
 
@@ -639,7 +646,7 @@ static bool bounce(path *pa, const geom_hit *h)
     ray_from_surface(pa, h, bs.wi);
     if (rgb_is_black(pa->beta))
         return false;
-    rgb rr = rgb_scale(rgb_div(pa->beta, rgb_avg(pa->r_u)), pa->eta_scale);
+    rgb rr = rgb_scale(rgb_div(pa->beta, lane_avg(pa, pa->r_u)), pa->eta_scale);
     double u_rr = sampler_1d(pa->st);
     if (rgb_max(rr) < 1.0 && pa->depth > 1) {
         double q = fmax(0.0, 1.0 - rgb_max(rr));
@@ -700,7 +707,7 @@ static void equiangular_ld(path *pa, const medium *m, double t_start, double t_h
     rgb den = rgb_mul(rgb_mul(st.r_l, pa->r_u),
                       rgb_add(rgb_scale(p_dist, pmf), rgb_grey(p_eq)));
     rgb c = rgb_scale(rgb_mul(rgb_mul(rgb_mul(pa->beta, p_dist), st.T), ls.L), phase);
-    double d = rgb_avg(den);
+    double d = lane_avg(pa, den);
     if (d > 0.0)
         pa->L = rgb_add(pa->L, rgb_div(c, d));
 }
@@ -754,7 +761,7 @@ static void add_escaped(path *pa)
     const volpath_scene *sc = pa->sc;
     /* A constant sky is never light-sampled (light_sampler.h): full weight. */
     if (!rgb_is_black(sc->sky))
-        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, sky_radiance(pa)), rgb_avg(pa->r_u)));
+        pa->L = rgb_add(pa->L, rgb_div(rgb_mul(pa->beta, sky_radiance(pa)), lane_avg(pa, pa->r_u)));
     if (sc->image_lights)
         add_image_lights(pa, pa->ray.o, pa->ray.d);
 }
@@ -770,7 +777,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
     path pa = {.sc = sc, .sp = sp, .st = st, .walk = {.time = r->time, .sp = sp},
                .counters = counters,
                .L = rgb_grey(0.0), .beta = rgb_grey(1.0), .r_u = rgb_grey(1.0),
-               .r_l = rgb_grey(1.0), .eta_scale = 1.0};
+               .r_l = rgb_grey(1.0), .eta_scale = 1.0, .lanes = sp ? WAVELENGTH_LANES : 3};
     path_media spectral_media;
     if (sp) {
         spectral_media.ray_index = spectral_media.shadow_index = -1;
@@ -788,7 +795,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
     int seed_dim = -1;
     if (media) {
         seed_dim = sampler_reserve_dim(st);
-        pa.hero = (int)fmin(2.0, floor(3.0 * sampler_1d(st)));
+        pa.hero = (int)fmin(pa.lanes - 1.0, floor(pa.lanes * sampler_1d(st)));
     }
     bool camera_ray = true;
     /* Every scattering and bounce starts a new walk (its crossings anew). */
@@ -828,9 +835,10 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
         if (!bounce(&pa, h))
             break;
     }
-    if (pa.one_lane) { /* the hero's wavelength alone, three times (its share of the lanes) */
+    if (pa.one_lane) { /* the hero's wavelength alone, times the lanes (its share of them) */
         double v = WAVELENGTH_LANES * rgb_ch(pa.L, pa.hero);
-        pa.L = rgb_make(pa.hero == 0 ? v : 0.0, pa.hero == 1 ? v : 0.0, pa.hero == 2 ? v : 0.0);
+        pa.L = rgb_grey(0.0);
+        rgb_set_ch(&pa.L, pa.hero, v);
     }
     counters->shadow_rays += pa.walk.shadow_rays;
     counters->density_lookups += pa.walk.lookups;

@@ -57,6 +57,7 @@ bool bsdf_from_material(const material *m, vec3 ns, vec3 dpdu, double v, bsdf *o
         out->kind = BSDF_HAIR;
         out->hair = hair_make(2.0 * v - 1.0, m->eta, m->sigma_a, m->beta_m, m->beta_n,
                               m->hair_alpha);
+        out->hair.lanes = m->spectral ? WAVELENGTH_LANES : 3;
         return true;
     }
     case MATERIAL_MEASURED:

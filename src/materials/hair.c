@@ -71,8 +71,7 @@ static void ap(double cos_o, double eta, double h, rgb T, rgb out[HAIR_P_MAX + 1
     rgb tf = rgb_scale(T, f);
     rgb den = rgb_sub(rgb_grey(1.0), tf);
     rgb num = rgb_mul(out[HAIR_P_MAX - 1], tf);
-    out[HAIR_P_MAX] = rgb_make(den.r > 0.0 ? num.r / den.r : 0.0, den.g > 0.0 ? num.g / den.g : 0.0,
-                               den.b > 0.0 ? num.b / den.b : 0.0);
+    out[HAIR_P_MAX] = rgb_div_or_zero(num, den);
 }
 
 static double phi_of(int p, double gamma_o, double gamma_t)
@@ -90,7 +89,7 @@ static double np(double phi, int p, double s, double gamma_o, double gamma_t)
 hair_bxdf hair_make(double h, double eta, rgb sigma_a, double beta_m, double beta_n,
                     double alpha_deg)
 {
-    hair_bxdf b = {.h = fmin(fmax(h, -1.0), 1.0), .eta = eta, .sigma_a = sigma_a};
+    hair_bxdf b = {.h = fmin(fmax(h, -1.0), 1.0), .eta = eta, .sigma_a = sigma_a, .lanes = 3};
     beta_m = fmin(fmax(beta_m, 0.01), 1.0);
     beta_n = fmin(fmax(beta_n, 0.01), 1.0);
     b.v[0] = sq(0.726 * beta_m + 0.812 * sq(beta_m) + 3.7 * pow(beta_m, 20));
@@ -151,20 +150,19 @@ static hair_wo at_wo(const hair_bxdf *b, vec3 wo)
     double sin_gamma_t = b->h / etap, cos_gamma_t = safe_sqrt(1.0 - sq(sin_gamma_t));
     w.gamma_t = safe_asin(sin_gamma_t);
     double path = cos_t > 0.0 ? 2.0 * cos_gamma_t / cos_t : INFINITY;
-    rgb T = rgb_make(exp(-b->sigma_a.r * path), exp(-b->sigma_a.g * path),
-                     exp(-b->sigma_a.b * path));
+    rgb T = rgb_exp_neg(b->sigma_a, path);
     ap(w.cos_o, b->eta, b->h, T, w.a);
     return w;
 }
 
 /* The lobes' sampling probabilities: their attenuations' channel means. */
-static void ap_pdf(const hair_wo *w, double pdf[HAIR_P_MAX + 1])
+static void ap_pdf(const hair_wo *w, int lanes, double pdf[HAIR_P_MAX + 1])
 {
     double sum = 0.0;
     for (int p = 0; p <= HAIR_P_MAX; ++p)
-        sum += rgb_avg(w->a[p]);
+        sum += rgb_lanes_avg(w->a[p], lanes);
     for (int p = 0; p <= HAIR_P_MAX; ++p)
-        pdf[p] = sum > 0.0 ? rgb_avg(w->a[p]) / sum : 0.0;
+        pdf[p] = sum > 0.0 ? rgb_lanes_avg(w->a[p], lanes) / sum : 0.0;
 }
 
 rgb hair_f(const hair_bxdf *b, vec3 wo, vec3 wi)
@@ -206,7 +204,7 @@ double hair_pdf(const hair_bxdf *b, vec3 wo, vec3 wi)
 {
     hair_wo w = at_wo(b, wo);
     double apdf[HAIR_P_MAX + 1];
-    ap_pdf(&w, apdf);
+    ap_pdf(&w, b->lanes, apdf);
     double sin_i = wi.x, cos_i = safe_sqrt(1.0 - sq(sin_i));
     return pdf_given(b, &w, apdf, sin_i, cos_i, atan2(wi.z, wi.y) - w.phi_o);
 }
@@ -215,7 +213,7 @@ bool hair_sample(const hair_bxdf *b, vec3 wo, double uc, vec2 u, bsdf_sample *ou
 {
     hair_wo w = at_wo(b, wo);
     double apdf[HAIR_P_MAX + 1];
-    ap_pdf(&w, apdf);
+    ap_pdf(&w, b->lanes, apdf);
     /* The lobe, and uc remapped to what is left of it. */
     int p = 0;
     double acc = 0.0;
@@ -248,7 +246,7 @@ bool hair_sample(const hair_bxdf *b, vec3 wo, double uc, vec2 u, bsdf_sample *ou
 
 rgb hair_sigma_a_from_concentration(double eumelanin, double pheomelanin)
 {
-    const rgb eu = {0.419, 0.697, 1.37}, pheo = {0.187, 0.4, 1.05};
+    const rgb eu = rgb_make(0.419, 0.697, 1.37), pheo = rgb_make(0.187, 0.4, 1.05);
     return rgb_add(rgb_scale(eu, fmax(eumelanin, 0.0)), rgb_scale(pheo, fmax(pheomelanin, 0.0)));
 }
 

@@ -5,8 +5,9 @@
  * azimuthal N_p (trimmed logistic, roughness beta_n), attenuation A_p, and
  * cuticle scales tilting the lobes by alpha. Directions are in the hair's
  * frame: x along the hair, z the surface normal; h in [-1, 1] is the offset
- * across the hair where the ray hit it. RGB throughout (pbrt-v4 samples
- * wavelengths). */
+ * across the hair where the ray hit it. Its colours are RGB or, in spectral
+ * rendering, the four wavelengths' lanes (`lanes`, which the lobes' sampling
+ * probabilities average over). */
 #ifndef HAZE_MATERIALS_HAIR_H
 #define HAZE_MATERIALS_HAIR_H
 
@@ -21,6 +22,7 @@ typedef struct {
     double v[HAIR_P_MAX + 1]; /* longitudinal variances */
     double s;                 /* azimuthal logistic scale */
     double sin2k_alpha[HAIR_P_MAX], cos2k_alpha[HAIR_P_MAX];
+    int lanes; /* 3: RGB (hair_make's), WAVELENGTH_LANES: spectral */
 } hair_bxdf;
 
 /* beta_m and beta_n in [0.01, 1] (clamped, as pbrt-v4's material does),

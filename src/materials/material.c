@@ -99,8 +99,8 @@ bool material_transmits(const material *m)
  * incidence reflectance equals the RGB of the spectral one under D65
  * (0.956, 0.638, 0.538); at 60 degrees the reduction is within 0.4% of the
  * spectral reflectance, at 78 degrees within 2.5% (red). */
-static const rgb copper_eta = {0.43052, 0.96400, 1.16244};
-static const rgb copper_k = {6.06186, 2.60415, 2.32192};
+static const rgb copper_eta = {0.43052, 0.96400, 1.16244, 0.96400}; /* w: g */
+static const rgb copper_k = {6.06186, 2.60415, 2.32192, 2.60415};
 
 /* The texture a "texture NAME" parameter names, of the given value type;
  * NULL when the parameter is not a texture. An unknown name is refused at
@@ -164,15 +164,12 @@ static double read_eta(param_list *pl, const char *name)
 }
 
 /* A conductor's "reflectance" r as eta 1 and k = 2 sqrt(r) / sqrt(1 - r). */
-static rgb k_of_reflectance(rgb r)
+static double k_of_reflectance1(double r)
 {
-    double c[3] = {r.r, r.g, r.b}, kk[3];
-    for (int i = 0; i < 3; ++i) {
-        double ri = hz_clamp(c[i], 0.0, 0.9999);
-        kk[i] = 2.0 * sqrt(ri) / sqrt(1.0 - ri);
-    }
-    return rgb_make(kk[0], kk[1], kk[2]);
+    double ri = hz_clamp(r, 0.0, 0.9999);
+    return 2.0 * sqrt(ri) / sqrt(1.0 - ri);
 }
+static rgb k_of_reflectance(rgb r) { return rgb_map(r, k_of_reflectance1); }
 
 /* A metal's eta or k spectrum: parameter `name` as given, pbrt-v4's named
  * copper spectrum `copper` when absent; the RGB `value` when a texture

@@ -114,8 +114,8 @@ static double fresnel_complex1(double cos_i, double eta_re, double k)
 
 rgb fresnel_complex(double cos_i, rgb eta, rgb k)
 {
-    return rgb_make(fresnel_complex1(cos_i, eta.r, k.r), fresnel_complex1(cos_i, eta.g, k.g),
-                    fresnel_complex1(cos_i, eta.b, k.b));
+    return (rgb){fresnel_complex1(cos_i, eta.r, k.r), fresnel_complex1(cos_i, eta.g, k.g),
+                 fresnel_complex1(cos_i, eta.b, k.b), fresnel_complex1(cos_i, eta.w, k.w)};
 }
 
 bool refract_dir(vec3 wi, vec3 n, double eta, double *etap, vec3 *wt)

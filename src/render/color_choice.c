@@ -8,6 +8,11 @@ color_choice color_choice_auto(const color_choice_scene *sc)
         out.why = "a camera sensor";
         return out;
     }
+    if (sc->clamped) {
+        out.spectral = true;
+        out.why = "a Film maxcomponentvalue (it clamps each sample's wavelengths)";
+        return out;
+    }
     for (size_t i = 0; i < sc->medium_count; ++i)
         if (medium_is_chromatic(&sc->media[i])) {
             out.spectral = true;

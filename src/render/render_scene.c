@@ -535,6 +535,7 @@ static hz_status build_all(render_scene *rs, scene_desc *sd, const render_option
         color_choice_scene cs = {rs->materials, rs->material_count, &rs->default_material,
                                  rs->media, rs->medium_count,
                                  rs->film && film_get_params(rs->film)->sensor.curves,
+                                 rs->film && isfinite(film_get_params(rs->film)->max_component_value),
                                  ip.kind == INTEGRATOR_VOLPATH};
         choice = color_choice_auto(&cs);
         color = choice.spectral ? RENDER_COLOR_SPECTRAL : RENDER_COLOR_RGB;
@@ -769,7 +770,7 @@ void render_scene_keep_current_cache(render_scene *rs)
  * sensor's curves, in the units of the XYZ spectral_to_rgb makes. */
 static rgb sensor_rgb(const film_sensor *fs, const spectral_ctx *sp, rgb L)
 {
-    const double v[WAVELENGTH_LANES] = {L.r, L.g, L.b};
+    const double v[WAVELENGTH_LANES] = {L.r, L.g, L.b, L.w};
     rgb sum = rgb_grey(0.0);
     for (int i = 0; i < WAVELENGTH_LANES; ++i) {
         if (!(sp->wl.pdf[i] > 0.0) || v[i] == 0.0)

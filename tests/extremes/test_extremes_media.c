@@ -67,7 +67,7 @@ static void test_dense_slab_closed_form(void **state)
 {
     (void)state;
     const double scales[] = {1e2, 1e6, 1e9, 1e12};
-    const rgb albedo = {1.0, 1.0 / 1.5, 0.5};
+    const rgb albedo = {1.0, 1.0 / 1.5, 0.5, 1.0 / 1.5};
     const int spp = 256;
     for (size_t k = 0; k < sizeof scales / sizeof scales[0]; ++k) {
         char *text = slab_scene(scales[k], spp);
@@ -107,7 +107,7 @@ static void test_extreme_g_slab(void **state)
     const struct {
         double g, ly, lz;
     } cases[] = {{0.99999, 0.6, 0.8}, {-0.99999, 0.6, 0.8}, {-0.99999, 0.0, 1.0}};
-    const rgb albedo = {1.0, 1.0 / 1.5, 0.5};
+    const rgb albedo = {1.0, 1.0 / 1.5, 0.5, 1.0 / 1.5};
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         char *box = box_mesh(v3(-10, -10, -1), v3(10, 10, 0));
         char *text = sfmt("LookAt 0 0 5  0 0 0  0 1 0\n"
@@ -151,7 +151,7 @@ static void test_dense_sphere(void **state)
 {
     (void)state;
     const double scales[] = {1e6, 1e9, 1e12};
-    const rgb albedo = {1.0, 1.0 / 1.5, 0.5};
+    const rgb albedo = {1.0, 1.0 / 1.5, 0.5, 1.0 / 1.5};
     for (size_t k = 0; k < sizeof scales / sizeof scales[0]; ++k) {
         char *text = sfmt("LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 30\n"
                           "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"

@@ -16,7 +16,7 @@ static const char *plane =
     "Shape \"trianglemesh\" \"point3 P\" [-20 -20 0  20 -20 0  20 20 0  -20 20 0]\n"
     "  \"integer indices\" [0 1 2 0 2 3]\n";
 
-static const rgb rho = {0.2, 0.5, 0.8};
+static const rgb rho = {0.2, 0.5, 0.8, 0.5};
 
 /* ρ/π · I · cosθ / d² for a plane z = 0 with normal +z. */
 static rgb point_on_plane(vec3 p, vec3 light, rgb I)

@@ -48,13 +48,13 @@ static void test_quad_one_and_two_sided(void **state)
     snprintf(world, sizeof world,
              "AreaLightSource \"diffuse\" \"rgb L\" [0.5 1 2] \"float power\" 8\n%s", quad);
     double k = 8.0 / (2.0 * HZ_PI);
-    expect_seen(world, 0.3, -0.4, (rgb){0.5 * k, k, 2 * k}, 1e-6,
+    expect_seen(world, 0.3, -0.4, (rgb){0.5 * k, k, 2 * k, k}, 1e-6,
                      "one-sided quad");
     snprintf(world, sizeof world,
              "AreaLightSource \"diffuse\" \"rgb L\" [0.5 1 2] \"float power\" 8 "
              "\"bool twosided\" true \"float scale\" 3\n%s", quad);
     expect_seen(world, 0.3, -0.4,
-                     (rgb){1.5 * k / 2, 3 * k / 2, 6 * k / 2}, 1e-6, "two-sided quad");
+                     (rgb){1.5 * k / 2, 3 * k / 2, 6 * k / 2, 3 * k / 2}, 1e-6, "two-sided quad");
     /* A bilinear patch is one emitter of area 4. */
     snprintf(world, sizeof world,
              "AreaLightSource \"diffuse\" \"float power\" 8\n"

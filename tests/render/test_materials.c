@@ -108,10 +108,10 @@ static void test_coated_closed_forms(void **state)
     } cases[] = {
         {"Material \"coateddiffuse\" \"float eta\" 1 \"float thickness\" 0 "
          "\"rgb reflectance\" [0.6 0.3 0.1]",
-         {0.6, 0.3, 0.1}},
+         {0.6, 0.3, 0.1, 0.3}},
         {"Material \"coatedconductor\" \"float interface.eta\" 1 \"float thickness\" 0 "
          "\"rgb reflectance\" [0.2 0.5 0.9]",
-         {0.2, 0.5, 0.9}},
+         {0.2, 0.5, 0.9, 0.5}},
     };
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         char *text = mirror_scene(cases[k].mat);

@@ -11,8 +11,8 @@
 
 /* ---- 1. Beer–Lambert, homogeneous ------------------------------------------ */
 
-static const rgb ink_sigma = {0.5 * 0.8, 1.0 * 0.8, 2.0 * 0.8}; /* sigma_a times scale */
-static const rgb emit_L = {2, 3, 4};
+static const rgb ink_sigma = {0.5 * 0.8, 1.0 * 0.8, 2.0 * 0.8, 1.0 * 0.8}; /* sigma_a times scale */
+static const rgb emit_L = {2, 3, 4, 3};
 
 /* An emitting 40x40 quad at z = -3 (both sides), a purely absorbing medium
  * "ink" (sigma_a [0.5 1 2], scale 0.8), and `shapes`. */
@@ -170,7 +170,7 @@ static char *box_file_scene(const char *file, const char *view, const char *inte
     return s;
 }
 
-static const rgb box_sigma = {0.5, 1.0, 2.0};
+static const rgb box_sigma = {0.5, 1.0, 2.0, 1.0};
 
 /* Every pixel of an unbiased estimator's image of `file` (looked at along
  * z, where its optical depth is sigma * depth / c) within 4.5 standard
@@ -957,7 +957,7 @@ static void test_extreme_density(void **state)
                        false);
     rs = build(text);
     pstat *px = image_stats(rs, 16, 16, 512);
-    const rgb albedo = {1.0, 1.0 / 1.5, 0.5};
+    const rgb albedo = {1.0, 1.0 / 1.5, 0.5, 1.0 / 1.5};
     double worst = 0.0;
     int checked = 0;
     for (int i = 0; i < 256; ++i) {

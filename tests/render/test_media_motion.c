@@ -91,7 +91,7 @@ static const char *slide_head =
     "Integrator \"singlescatter\" \"string transmittance\" \"raymarch\" \"float stepsize\" 0.125\n";
 static const char *slide_params = "\"rgb sigma_a\" [0.25 0.5 1] \"rgb sigma_s\" [0 0 0]";
 static const char *slide_tail = "LightSource \"infinite\" \"rgb L\" [1 1 1]\n";
-static const rgb slide_sigma = {0.25, 0.5, 1.0};
+static const rgb slide_sigma = {0.25, 0.5, 1.0, 0.5};
 #define SLIDE_STEP 0.125 /* voxels, as in slide_head */
 
 static double trapezoid(double u) { return fmax(0.0, fmin(1.0, fmin(u + 1.0, 32.0 - u))); }

@@ -40,11 +40,18 @@ static void test_wavelength_density(void **state)
             cdf += wavelength_visible_pdf(l) * h;
         expect_close(cdf, u, 0.0, 1e-4, "CDF at the sample", u, 0);
     }
-    /* Companions a third of the sample apart, at the same density. */
+    /* Four lanes, as pbrt-v4's: companions a quarter of the sample apart,
+     * at the same density. */
+    assert_int_equal(WAVELENGTH_LANES, 4);
     wavelengths w = wavelengths_sample_visible(0.9);
     expect_close(w.lambda[0], wavelength_visible_sample(0.9), 1e-15, 0.0, "hero", 0, 0);
-    expect_close(w.lambda[1], wavelength_visible_sample(0.9 + 1.0 / 3.0 - 1.0), 1e-12, 0.0,
-                 "companion", 0, 0);
+    for (int i = 1; i < WAVELENGTH_LANES; ++i) {
+        double ui = 0.9 + i / 4.0;
+        expect_close(w.lambda[i], wavelength_visible_sample(ui - floor(ui)), 1e-12, 0.0,
+                     "companion", i, 0);
+        expect_close(w.pdf[i], wavelength_visible_pdf(w.lambda[i]), 1e-9, 0.0, "its density",
+                     i, 0);
+    }
     /* A constant spectrum 1, its lanes averaged over stratified samples,
      * is equal-energy white: X = Y = Z = 1 within the CIE tables' sums. */
     enum { N = 30000 };
@@ -493,24 +500,28 @@ static void test_camera_sensor(void **state)
 
 /* A scene of `material` under a white sky with `integrator`, built with
  * the default colour mode: whether it renders spectrally. */
-static bool auto_spectral(const char *integrator, const char *material)
+static bool auto_spectral_film(const char *integrator, const char *film, const char *material)
 {
     char text[2048];
     snprintf(text, sizeof text,
              "LookAt 0 0 5  0 0 0  0 1 0\n"
              "Camera \"orthographic\"\n"
-             "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4\n"
+             "Film \"rgb\" \"integer xresolution\" 4 \"integer yresolution\" 4 %s\n"
              "Integrator \"%s\"\n"
              "WorldBegin\n"
              "LightSource \"infinite\" \"rgb L\" [1 0.5 0.2]\n"
              "%s\n"
              "Shape \"sphere\"\n",
-             integrator, material);
+             film, integrator, material);
     render_options opt = {.seed = 0}; /* RENDER_COLOR_AUTO */
     render_scene *rs = build_scene_or_fail(text, &opt);
     bool spectral = render_scene_spectral(rs);
     render_scene_destroy(rs);
     return spectral;
+}
+static bool auto_spectral(const char *integrator, const char *material)
+{
+    return auto_spectral_film(integrator, "", material);
 }
 
 /* --color auto: spectral where a scene has a coloured medium or a coloured
@@ -547,6 +558,10 @@ static void test_auto_choice(void **state)
     assert_false(auto_spectral("volpath", "Material \"dielectric\" \"spectrum eta\" [1.5]"));
     assert_false(
         auto_spectral("singlescatter", "Material \"dielectric\" \"spectrum eta\" \"glass-BK7\""));
+    /* A clamp acts on each sample's four wavelengths, as pbrt-v4's. */
+    assert_true(auto_spectral_film("volpath", "\"float maxcomponentvalue\" 10", "Material \"diffuse\""));
+    assert_true(
+        auto_spectral_film("singlescatter", "\"float maxcomponentvalue\" 10", "Material \"diffuse\""));
 }
 
 /* Without the tables' module, --color spectral is an error naming what to

@@ -280,7 +280,7 @@ static void test_illuminants(void **state)
 static void test_unbounded_and_emitters(void **state)
 {
     (void)state;
-    const rgb cs_in[] = {{3.0, 1.5, 0.3}, {0.2, 7.0, 0.01}, {0.05, 0.1, 40.0}, {0.6, 0.6, 0.6}};
+    const rgb cs_in[] = {{3.0, 1.5, 0.3, 1.5}, {0.2, 7.0, 0.01, 7.0}, {0.05, 0.1, 40.0, 0.1}, {0.6, 0.6, 0.6, 0.6}};
     for (size_t i = 0; i < sizeof cs_in / sizeof cs_in[0]; ++i) {
         rgb c = cs_in[i];
         double m = rgb_max(c);

@@ -82,7 +82,7 @@ static void test_cie1931_white_balance(void **state)
         rgb white = spectrum_blackbody_to_rgb(t * 1.4388 / 1.4380);
         char what[64];
         snprintf(what, sizeof what, "cie1931 at %g K", t);
-        expect_rgb(full(&s, white), (rgb){1.0, 1.0, 1.0}, 4e-3, what);
+        expect_rgb(full(&s, white), (rgb){1.0, 1.0, 1.0, 1.0}, 4e-3, what);
     }
 }
 
@@ -96,12 +96,12 @@ static void test_cameras_white(void **state)
     for (int e = 1; e < SENSOR_TABLE_COUNT; e++) {
         film_sensor s;
         assert_true(sensor_lookup(sensor_table[e].name, 0.0, &s)); /* 0: 6500 K */
-        expect_rgb(full(&s, (rgb){1.0, 1.0, 1.0}), (rgb){1.0, 1.0, 1.0}, 0.025,
+        expect_rgb(full(&s, (rgb){1.0, 1.0, 1.0, 1.0}), (rgb){1.0, 1.0, 1.0, 1.0}, 0.025,
                    sensor_table[e].name);
         double last = -INFINITY;
         for (double t = 12000.0; t >= 2000.0; t -= 250.0) {
             assert_true(sensor_lookup(sensor_table[e].name, t, &s));
-            rgb w = full(&s, (rgb){1.0, 1.0, 1.0});
+            rgb w = full(&s, (rgb){1.0, 1.0, 1.0, 1.0});
             double blue = (w.b - w.r) / w.g;
             if (!(blue > last))
                 fail_msg("%s at %g K: (b - r) / g %g not above %g", sensor_table[e].name, t, blue,
@@ -119,9 +119,9 @@ static void test_matches_pbrt_on_grey(void **state)
     (void)state;
     film_sensor s;
     assert_true(sensor_lookup("nikon_d850", 5000.0, &s));
-    expect_rgb(full(&s, (rgb){0.8, 0.8, 0.8}), (rgb){0.6380, 0.8089, 1.0410}, 4e-3, "d850 5000");
+    expect_rgb(full(&s, (rgb){0.8, 0.8, 0.8, 0.8}), (rgb){0.6380, 0.8089, 1.0410, 0.8089}, 4e-3, "d850 5000");
     assert_true(sensor_lookup("nikon_d850", 0.0, &s));
-    expect_rgb(full(&s, (rgb){0.8, 0.8, 0.8}), (rgb){0.7878, 0.7958, 0.7866}, 4e-3, "d850 6500");
+    expect_rgb(full(&s, (rgb){0.8, 0.8, 0.8, 0.8}), (rgb){0.7878, 0.7958, 0.7866, 0.7958}, 4e-3, "d850 6500");
 }
 
 /* The film turns each sample into sensor RGB, clamps it there
@@ -137,7 +137,7 @@ static void test_film_applies_sensor(void **state)
     hz_error err = {0};
     film *f = film_create(&p, &err);
     assert_non_null(f);
-    rgb L = {0.3, 0.5, 0.2};
+    rgb L = {0.3, 0.5, 0.2, 0.5};
     film_add_sample(f, 1, 1, L, 1.0, INFINITY);
     expect_rgb(film_get_pixel(f, 1, 1, 1.0), full(&p.sensor, L), 1e-12, "unclamped");
     film_destroy(f);
@@ -149,7 +149,7 @@ static void test_film_applies_sensor(void **state)
     film_add_sample(f, 0, 0, L, 1.0, INFINITY);
     rgb sensor = sensor_apply(p.sensor.sensor_from_render, L);
     double m = fmax(sensor.r, fmax(sensor.g, sensor.b)) * 2.0;
-    rgb clamped = {sensor.r * 0.1 / m, sensor.g * 0.1 / m, sensor.b * 0.1 / m};
+    rgb clamped = {sensor.r * 0.1 / m, sensor.g * 0.1 / m, sensor.b * 0.1 / m, sensor.g * 0.1 / m};
     expect_rgb(film_get_pixel(f, 0, 0, 1.0), sensor_apply(p.sensor.output_from_sensor, clamped),
                1e-12, "clamped in sensor RGB");
     film_destroy(f);
