@@ -154,7 +154,8 @@ static void read_roughness(param_list *pl, const texture_set *ts, material *out)
 }
 
 /* An index > 0: a float, or a spectrum taken at 550 nm (a named glass
- * too): haze does not disperse. */
+ * too; spectral rendering disperses by the spectrum itself: eta_spec,
+ * interface_eta_spec). */
 static double read_eta(param_list *pl, const char *name)
 {
     double eta = params_float_or_550(pl, name, 1.5);
@@ -260,6 +261,18 @@ static void read_layers(param_list *pl, const texture_set *ts, material *out)
                       l->n_samples);
 }
 
+/* A coating whose index `name` is a spectrum that varies: dispersive, as
+ * pbrt-v4's coated materials (their interface index at the hero wavelength,
+ * the others terminated). */
+static void read_interface_spectrum(param_list *pl, const char *name, material *out)
+{
+    if (!params_is_spectrum(pl, name))
+        return;
+    out->interface_eta_spec =
+        params_spectrum(pl, name, SPECTRUM_USE_UNBOUNDED, rgb_grey(out->coat.eta));
+    out->dispersive = !spectrum_value_is_constant(&out->interface_eta_spec);
+}
+
 static hz_status read_coated_diffuse(param_list *pl, const texture_set *ts, material *out,
                                      hz_error *err)
 {
@@ -271,6 +284,7 @@ static hz_status read_coated_diffuse(param_list *pl, const texture_set *ts, mate
     l->reflectance = rgb_make(hz_clamp(r.r, 0, 1), hz_clamp(r.g, 0, 1), hz_clamp(r.b, 0, 1));
     l->top = read_roughness_of(pl, "", ts, out->rough);
     l->eta = read_eta(pl, "eta");
+    read_interface_spectrum(pl, "eta", out);
     read_layers(pl, ts, out);
     return HZ_OK;
 }
@@ -284,6 +298,7 @@ static hz_status read_coated_conductor(param_list *pl, const texture_set *ts, ma
     l->top = read_roughness_of(pl, "interface.", ts, out->rough);
     l->bottom = read_roughness_of(pl, "conductor.", ts, out->rough + 2);
     l->eta = read_eta(pl, "interface.eta");
+    read_interface_spectrum(pl, "interface.eta", out);
     if (read_metal(pl, ts, "conductor.eta", "conductor.k", &l->eta_rgb, &l->k, out, err) !=
         HZ_OK)
         return HZ_ERROR;
@@ -744,10 +759,21 @@ const material *material_spectral(const material *m, const spectral_ctx *sp, mat
 void material_disperse(material *m, const spectral_ctx *sp, int lane)
 {
     assert(m->dispersive && lane >= 0 && lane < WAVELENGTH_LANES);
-    double eta = spectrum_value_eval(&m->eta_spec, sp->wl.lambda[lane]);
+    bool coated = m->kind == MATERIAL_COATED_DIFFUSE || m->kind == MATERIAL_COATED_CONDUCTOR;
+    double eta = spectrum_value_eval(coated ? &m->interface_eta_spec : &m->eta_spec,
+                                     sp->wl.lambda[lane]);
     /* A spectrum that reaches 0 or below somewhere: its 550 nm index. */
-    if (isfinite(eta) && eta > 0.0)
+    if (!(isfinite(eta) && eta > 0.0))
+        return;
+    if (!coated) {
         m->eta = eta;
+        return;
+    }
+    /* The conductor under a coating has its index relative to it. */
+    double rel = m->coat.eta / eta;
+    m->coat.eta_rgb = rgb_scale(m->coat.eta_rgb, rel);
+    m->coat.k = rgb_scale(m->coat.k, rel);
+    m->coat.eta = eta;
 }
 
 void material_prepare_spectral(material *m, const rgb2spec_table *t)

@@ -74,8 +74,9 @@ typedef struct material_s {
      * evaluates per wavelength unless a texture gives the value. A
      * dielectric or thin dielectric whose "eta" is a spectrum that varies
      * (a named glass): that spectrum in eta_spec, and `dispersive`
-     * (material_dispersed). */
-    spectrum_value eta_spec, k_spec;
+     * (material_disperse); a coated material's coating of such an index:
+     * interface_eta_spec, and `dispersive`. */
+    spectrum_value eta_spec, k_spec, interface_eta_spec;
     bool dispersive;
     /* Spectral rendering (material_spectral): the sample's wavelengths,
      * which a measured BRDF's RGB values are turned into; NULL: RGB. */
@@ -105,11 +106,12 @@ const material *material_textured(const material *m, const texture_ctx *c, mater
  * conductor's k from its reflectance per wavelength). m itself when sp is
  * NULL; otherwise *scratch (which may be m) filled. */
 const material *material_spectral(const material *m, const spectral_ctx *sp, material *scratch);
-/* pbrt-v4's dispersion: a dispersive dielectric (m->dispersive) refracts
- * each wavelength by its own index, so a path through it keeps one
- * wavelength, lane `lane` (the caller drops the others and triples it, as
- * pbrt-v4's TerminateSecondary): m (a copy from material_spectral, not
- * the scene's) gets that lane's index. */
+/* pbrt-v4's dispersion: a dispersive dielectric or coating (m->dispersive)
+ * refracts each wavelength by its own index, so a path through it keeps one
+ * wavelength, lane `lane` (the caller drops the others and counts it for
+ * all, as pbrt-v4's TerminateSecondary): m (a copy from material_spectral,
+ * not the scene's) gets that lane's index (a coated conductor's base stays
+ * relative to it). */
 void material_disperse(material *m, const spectral_ctx *sp, int lane);
 
 /* Looks up the spectra of m's constant colours once (m->prepared), for

@@ -142,7 +142,8 @@ static hz_status build_materials(render_scene *rs, scene_desc *sd, transform ren
         return HZ_ERROR;
     for (size_t i = 0; i < rs->material_count; ++i)
         if (keep_spectrum(rs, &rs->materials[i].eta_spec, err) != HZ_OK ||
-            keep_spectrum(rs, &rs->materials[i].k_spec, err) != HZ_OK)
+            keep_spectrum(rs, &rs->materials[i].k_spec, err) != HZ_OK ||
+            keep_spectrum(rs, &rs->materials[i].interface_eta_spec, err) != HZ_OK)
             return HZ_ERROR;
     return HZ_OK;
 }
