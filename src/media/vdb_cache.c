@@ -9,25 +9,14 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "core/cache_dir.h"
+#include "core/digest_cache.h"
 #include "media/vdb_module.h"
 
 /* Bump when what an entry holds changes (the converter's output, its layout). */
 #define VDB_CACHE_FORMAT 1
-
-static bool cache_dir(char *out, size_t size)
-{
-    const char *dir = getenv("HAZE_CACHE_DIR");
-    int n;
-    if (dir)
-        n = snprintf(out, size, "%s", dir);
-    else if ((dir = getenv("XDG_CACHE_HOME")) && dir[0] == '/')
-        n = snprintf(out, size, "%s/haze", dir);
-    else if ((dir = getenv("HOME")) && dir[0] == '/')
-        n = snprintf(out, size, "%s/.cache/haze", dir);
-    else
-        return false;
-    return n > 0 && (size_t)n < size;
-}
+/* The digest cache's kind of the bytes_key of a .vdb file. */
+#define VDB_CACHE_DIGEST "vdb-bytes-128"
 
 /* Two 64-bit lanes over 8-byte words: x = (x ^ w) * p, rotated; the lanes use
  * different primes and rotations. Not cryptographic: the cache trusts its
@@ -63,14 +52,21 @@ static void mix_string(hash128 *h, const char *s)
     mix(h, strlen(s));
 }
 
-bool vdb_cache_open(vdb_cache *c, const char *path, uint64_t file_size)
+/* The hash of the file's bytes and size: from the digest cache when it
+ * has the file as it is, else read through (and kept there). */
+static bool bytes_key(const char *path, uint64_t file_size, hash128 *out)
 {
-    memset(c, 0, sizeof *c);
-    if (!cache_dir(c->dir, sizeof c->dir) || !c->dir[0])
-        return false;
     int fd = open(path, O_RDONLY | O_CLOEXEC);
     if (fd < 0)
         return false;
+    file_identity id;
+    bool known = file_identity_of(fd, &id) && id.size == file_size;
+    file_digest d;
+    if (known && digest_cache_get(VDB_CACHE_DIGEST, &id, &d)) {
+        close(fd);
+        *out = (hash128){d.v[0], d.v[1]};
+        return true;
+    }
     hash128 h = {0x243F6A8885A308D3ull, 0x13198A2E03707344ull};
     enum { CHUNK = 1 << 20 };
     unsigned char *buf = malloc(CHUNK);
@@ -94,6 +90,18 @@ bool vdb_cache_open(vdb_cache *c, const char *path, uint64_t file_size)
     if (!ok || total != file_size)
         return false; /* the file changed under us: no cache this time */
     mix(&h, total);
+    if (known)
+        digest_cache_put(VDB_CACHE_DIGEST, &id, &(file_digest){{h.a, h.b}});
+    *out = h;
+    return true;
+}
+
+bool vdb_cache_open(vdb_cache *c, const char *path, uint64_t file_size)
+{
+    memset(c, 0, sizeof *c);
+    hash128 h;
+    if (!hz_cache_dir(c->dir, sizeof c->dir) || !bytes_key(path, file_size, &h))
+        return false;
     mix(&h, VDB_CACHE_FORMAT);
     mix(&h, HAZE_OPENVDB_ABI);
     /* The converter that would run: its path, size and time, so a rebuilt or
@@ -123,21 +131,4 @@ bool vdb_cache_entry(const vdb_cache *c, const char *name, vdb_value_type type, 
     return n > 0 && (size_t)n < size;
 }
 
-bool vdb_cache_prepare(const vdb_cache *c)
-{
-    char path[sizeof c->dir];
-    memcpy(path, c->dir, sizeof path);
-    for (char *p = path + 1;; ++p) {
-        bool end = *p == '\0';
-        if (*p == '/' || end) {
-            *p = '\0';
-            if (mkdir(path, 0700) != 0 && errno != EEXIST)
-                return false;
-            if (end)
-                break;
-            *p = '/';
-        }
-    }
-    struct stat st;
-    return stat(c->dir, &st) == 0 && S_ISDIR(st.st_mode);
-}
+bool vdb_cache_prepare(const vdb_cache *c) { return hz_cache_dir_prepare(c->dir); }

@@ -1,16 +1,15 @@
 /* A cache of .vdb grids converted to NanoVDB: the second render of the same
  * .vdb file reads its grids as a .nvdb file, without the reader process that
  * loads OpenVDB and converts (vdb_module.h). Entries are keyed by the file's
- * bytes (a 128-bit hash and the size), the grid's name and value type, the
+ * bytes (a 128-bit hash and the size; the digest cache keeps it while the
+ * file is unchanged, core/digest_cache.h), the grid's name and value type, the
  * module ABI and the module file that would convert it (its path, size and
  * modification time: a rebuilt or another module has entries of its own);
  * they are written to a temporary file and renamed, so a reader sees a
  * whole entry or none, and an entry that fails to load is ignored (the grid
- * is converted again and the entry rewritten). Nothing else ever reads the
- * directory; nothing is deleted.
+ * is converted again and the entry rewritten). Nothing is deleted.
  *
- * Where: $HAZE_CACHE_DIR (empty: no cache), else $XDG_CACHE_HOME/haze, else
- * $HOME/.cache/haze. */
+ * Where: core/cache_dir.h's folder. */
 #ifndef HAZE_MEDIA_VDB_CACHE_H
 #define HAZE_MEDIA_VDB_CACHE_H
 

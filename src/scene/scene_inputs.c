@@ -7,6 +7,7 @@
 #include <unistd.h>
 #include <string.h>
 
+#include "core/digest_cache.h"
 #include "core/file.h"
 #include "core/hash.h"
 #include "core/parallel.h"
@@ -77,11 +78,15 @@ hz_status scene_input_files(const scene_desc *sd, char ***out, size_t *count, hz
  * production volume of a GB took 1.3 s that way) by windows of
  * SCENE_INPUTS_WINDOW bytes: each window's hash_block (XXH3, seeded with the
  * window's number) on every core, then the windows' values folded in file
- * order with FNV-1a. A window is mapped or, when it cannot be, read: the same
- * value either way. A changed byte changes its window's value, and each fold
- * step is a bijection of the running value, so it changes the result. */
+ * order with FNV-1a into the file's digest. A window is mapped or, when it
+ * cannot be, read: the same value either way. A changed byte changes its
+ * window's value, and each fold step is a bijection of the running value, so
+ * it changes the result. The digest cache keeps a large file's digest
+ * between runs (a warm 1.1 GB volume: 0.07 s of its 0.28 s load). */
 #define SCENE_INPUTS_BYTEWISE ((off_t)16 << 20)
 #define SCENE_INPUTS_BLOCK ((size_t)1 << 20)
+/* The digest cache's kind of these digests. */
+#define SCENE_INPUTS_DIGEST "inputs-xxh3-4m"
 
 /* Mapped a window at a time: mapped whole, a volume the render has mapped
  * too would count twice in the process's resident memory. */
@@ -146,7 +151,8 @@ static void *hash_windows(void *ctx)
     return NULL;
 }
 
-static bool hash_large(int fd, off_t size, uint64_t *h)
+/* The windows' values folded in file order: the file's digest. */
+static bool digest_large(int fd, off_t size, uint64_t *digest)
 {
     window_job j = {.fd = fd, .size = (size_t)size};
     j.windows = (j.size + SCENE_INPUTS_WINDOW - 1) / SCENE_INPUTS_WINDOW;
@@ -159,11 +165,30 @@ static bool hash_large(int fd, off_t size, uint64_t *h)
     atomic_init(&j.error, 0);
     hz_parallel_run(0, hash_windows, &j);
     int e = atomic_load(&j.error);
+    uint64_t d = HZ_FNV_OFFSET;
     for (size_t w = 0; !e && w < j.windows; ++w)
-        HASH_FIELD(*h, j.value[w]);
+        HASH_FIELD(d, j.value[w]);
     free(j.value);
+    *digest = d;
     errno = e;
     return e == 0;
+}
+
+/* A large file's digest, from the digest cache when it has the file as it
+ * is (core/digest_cache.h), folded into h. */
+static bool hash_large(int fd, off_t size, uint64_t *h)
+{
+    file_identity id;
+    bool known = file_identity_of(fd, &id);
+    file_digest d = {{0, 0}};
+    if (!(known && digest_cache_get(SCENE_INPUTS_DIGEST, &id, &d))) {
+        if (!digest_large(fd, size, &d.v[0]))
+            return false;
+        if (known)
+            digest_cache_put(SCENE_INPUTS_DIGEST, &id, &d);
+    }
+    HASH_FIELD(*h, d.v[0]);
+    return true;
 }
 
 static bool hash_small(int fd, unsigned char *buf, uint64_t *h)

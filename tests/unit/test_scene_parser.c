@@ -1,3 +1,4 @@
+#define _POSIX_C_SOURCE 200809L
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -8,10 +9,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <fcntl.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <zlib.h>
 
+#include "core/digest_cache.h"
 #include "core/hash.h"
 #include "scene/scene_desc.h"
 
@@ -804,17 +808,39 @@ static void test_input_files(void **state)
     assert_non_null(strstr(err.message, "nul.pbrt:2:11: NUL byte inside a string"));
 }
 
+/* HAZE_CACHE_DIR set to `dir` (NULL: unset); gives back what it was. */
+static char *swap_cache_dir(const char *dir)
+{
+    const char *was = getenv("HAZE_CACHE_DIR");
+    char *old = was ? strdup(was) : NULL;
+    if (dir)
+        setenv("HAZE_CACHE_DIR", dir, 1);
+    else
+        unsetenv("HAZE_CACHE_DIR");
+    return old;
+}
+
+/* Waits until a file written now has settled for the digest cache. */
+static void settle(void)
+{
+    struct timespec t = {0, 2 * DIGEST_CACHE_SETTLE_MS * 1000000L};
+    nanosleep(&t, NULL);
+}
+
 /* scene_inputs_hash: the scene and the files it names. Up to 16 MiB a file
  * counts byte by byte (FNV-1a: the render ids of every scene before large
- * volumes did not change); a larger one as the hash_block of each 4 MiB
- * window (seeded with its number), folded in order with FNV-1a. Either way
- * every byte counts. */
+ * volumes did not change); a larger one by its digest: the hash_block of
+ * each 4 MiB window (seeded with its number), folded in order with FNV-1a.
+ * Either way every byte counts. A large file's digest is kept in the digest
+ * cache once the file has settled, and read back while it is unchanged. */
 static void test_inputs_hash(void **state)
 {
     (void)state;
-    char dir[512], scene[700], vol[700];
+    char dir[512], scene[700], vol[700], cache[600];
     snprintf(dir, sizeof dir, "%s/scene_inputs_hash", HAZE_TMP);
     mkdir(dir, 0755);
+    snprintf(cache, sizeof cache, "%s/cache", dir);
+    char *was = swap_cache_dir(cache);
     snprintf(scene, sizeof scene, "%s/s.pbrt", dir);
     snprintf(vol, sizeof vol, "%s/v.nvdb", dir);
     const char *text = "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"nanovdb\" "
@@ -842,11 +868,14 @@ static void test_inputs_hash(void **state)
             want = fnv1a(want, text, strlen(text));
             HASH_FIELD(want, vol_size);
             const size_t window = (size_t)4 << 20;
+            uint64_t digest = HZ_FNV_OFFSET;
             for (size_t w = 0; large && w * window < n; ++w) { /* 4 whole, 4097 bytes */
                 uint64_t v = hash_block(w, bytes + w * window, n - w * window < window ? n - w * window : window);
-                HASH_FIELD(want, v);
+                HASH_FIELD(digest, v);
             }
-            if (!large)
+            if (large)
+                HASH_FIELD(want, digest);
+            else
                 want = fnv1a(want, bytes, n);
             assert_true(h0 == want);
         }
@@ -862,11 +891,80 @@ static void test_inputs_hash(void **state)
         write_bytes(vol, bytes, n);
         assert_int_equal(scene_inputs_hash(&sd, &h1, &err), HZ_OK);
         assert_true(h1 == h0);
+        if (large) { /* settled: kept, then read back; a rewrite misses it */
+            settle();
+            assert_int_equal(scene_inputs_hash(&sd, &h1, &err), HZ_OK);
+            assert_true(h1 == h0);
+            int fd = open(vol, O_RDONLY);
+            file_identity id;
+            file_digest d;
+            assert_true(fd >= 0 && file_identity_of(fd, &id));
+            close(fd);
+            assert_true(digest_cache_get("inputs-xxh3-4m", &id, &d));
+            d.v[0] ^= 1; /* a kept digest is what the hash takes (h0 must differ) */
+            digest_cache_put("inputs-xxh3-4m", &id, &d);
+            assert_int_equal(scene_inputs_hash(&sd, &h1, &err), HZ_OK);
+            assert_true(h1 != h0);
+            bytes[n / 2] ^= 0x40; /* rewritten: its times move, the entry no longer counts */
+            write_bytes(vol, bytes, n);
+            assert_int_equal(scene_inputs_hash(&sd, &h1, &err), HZ_OK);
+            assert_true(h1 == h2);
+            bytes[n / 2] ^= 0x40;
+        }
         scene_desc_free(&sd);
         free(bytes);
     }
+    free(swap_cache_dir(was));
+    free(was);
     remove(vol);
     remove(scene);
+}
+
+/* The digest cache (core/digest_cache.h): an entry counts for its kind and
+ * while the file's identity (device, inode, size, times) is unchanged; a
+ * file changed just before its reading is not kept; no folder, no cache. */
+static void test_digest_cache(void **state)
+{
+    (void)state;
+    char dir[512], file[700];
+    snprintf(dir, sizeof dir, "%s/digest_cache", HAZE_TMP);
+    mkdir(dir, 0755);
+    snprintf(file, sizeof file, "%s/f.bin", dir);
+    char cache[600];
+    snprintf(cache, sizeof cache, "%s/cache", dir);
+    char *was = swap_cache_dir(cache);
+    write_bytes(file, "0123456789", 10);
+    file_identity fresh, settled, id;
+    int fd = open(file, O_RDONLY);
+    assert_true(fd >= 0 && file_identity_of(fd, &fresh));
+    const file_digest d = {{0x1234, 0xabcd}};
+    file_digest got;
+    digest_cache_put("k1", &fresh, &d); /* just written: not kept */
+    assert_false(digest_cache_get("k1", &fresh, &got));
+    settle();
+    assert_true(file_identity_of(fd, &settled));
+    close(fd);
+    digest_cache_put("k1", &settled, &d);
+    assert_true(digest_cache_get("k1", &settled, &got));
+    assert_true(got.v[0] == 0x1234 && got.v[1] == 0xabcd);
+    assert_false(digest_cache_get("k2", &settled, &got)); /* another kind */
+    assert_false(digest_cache_get("K/..", &settled, &got)); /* not a kind */
+    id = settled;
+    id.size++;
+    assert_false(digest_cache_get("k1", &id, &got));
+    id = settled;
+    id.ctime_ns ^= 1;
+    assert_false(digest_cache_get("k1", &id, &got));
+    write_bytes(file, "9876543210", 10); /* same size, new times */
+    fd = open(file, O_RDONLY);
+    assert_true(fd >= 0 && file_identity_of(fd, &id));
+    close(fd);
+    assert_false(digest_cache_get("k1", &id, &got));
+    free(swap_cache_dir("")); /* empty: no cache */
+    assert_false(digest_cache_get("k1", &settled, &got));
+    free(swap_cache_dir(was));
+    free(was);
+    remove(file);
 }
 
 /* Garbage must give an error or a scene, never a crash, hang or leak (run
@@ -943,6 +1041,7 @@ int main(void)
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_input_files),
         cmocka_unit_test(test_inputs_hash),
+        cmocka_unit_test(test_digest_cache),
         cmocka_unit_test(test_look_at),
         cmocka_unit_test(test_transform_is_transposed),
         cmocka_unit_test(test_composition_order),
