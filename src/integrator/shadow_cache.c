@@ -2,6 +2,7 @@
 #include "integrator/shadow_cache.h"
 
 #include <math.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,7 +20,21 @@ struct shadow_cache {
     double h, inv_h; /* node spacing */
     int n[3];
     float *nodes;
+    /* Columns are built when a lookup first needs them (lazy), so a render
+     * pays for the columns its in-scattering samples reach: a pilot of a
+     * few hundred pixels builds a few, a sparse volume's empty columns are
+     * never walked. state: COLUMN_EMPTY, _BUILDING (one thread walks it, the
+     * others wait), _BUILT. The walk's inputs are the render's. */
+    const integrator_inputs *in;
+    int medium;
+    atomic_uchar *state; /* NULL: built whole at creation */
 };
+
+enum { COLUMN_EMPTY, COLUMN_BUILDING, COLUMN_BUILT };
+
+/* A column's node count up to which its walk's scratch lives on the stack
+ * (3 doubles a node); a cache with longer columns is built whole when made. */
+#define SHADOW_CACHE_LAZY_MAX_NZ 4096
 
 struct shadow_caches {
     size_t medium_count, light_count;
@@ -34,7 +49,7 @@ struct shadow_caches {
 
 typedef struct {
     const integrator_inputs *in;
-    shadow_cache *c;
+    const shadow_cache *c;
     int medium; /* the cached medium: the columns start in it */
     atomic_int next_column;
 } build_job;
@@ -123,7 +138,7 @@ static void accumulate(column_walk *cw, int mi, vec3 o, vec3 w, double a, double
     }
 }
 
-static void build_column(const build_job *job, int column, double *cum)
+static void build_column(const build_job *job, size_t column, double *cum)
 {
     const shadow_cache *c = job->c;
     int i = column / c->n[1], j = column % c->n[1];
@@ -148,7 +163,7 @@ static void build_column(const build_job *job, int column, double *cum)
     if (walk_lost(&rw)) /* as a shadow ray: lost, black */
         t_block = INFINITY;
     accumulate(&cw, -1, o, w, INFINITY, INFINITY); /* nodes a lost walk did not reach */
-    float *node = c->nodes + (size_t)column * (size_t)c->n[2] * 4;
+    float *node = c->nodes + column * (size_t)c->n[2] * 4;
     for (int k = 0; k < c->n[2]; ++k, node += 4) {
         for (int ch = 0; ch < 3; ++ch) {
             double tau = cw.tau[ch] - cum[3 * k + ch];
@@ -167,7 +182,7 @@ static void *build_worker(void *arg)
     if (cum) {
         int columns = job->c->n[0] * job->c->n[1];
         for (int col; (col = atomic_fetch_add(&job->next_column, 1)) < columns;)
-            build_column(job, col, cum);
+            build_column(job, (size_t)col, cum);
     }
     bool failed = !cum; /* the others build every column; the cache fails */
     free(cum);
@@ -176,9 +191,31 @@ static void *build_worker(void *arg)
 
 static void cache_destroy(shadow_cache *c)
 {
-    if (c)
+    if (c) {
         free(c->nodes);
+        free(c->state);
+    }
     free(c);
+}
+
+/* Column `col` of a lazy cache, built by the first lookup that needs it;
+ * the same nodes whichever thread builds it. */
+static void ensure_column(const shadow_cache *c, size_t col)
+{
+    atomic_uchar *s = &c->state[col];
+    if (atomic_load_explicit(s, memory_order_acquire) == COLUMN_BUILT)
+        return;
+    unsigned char expect = COLUMN_EMPTY;
+    if (atomic_compare_exchange_strong_explicit(s, &expect, COLUMN_BUILDING,
+                                                memory_order_acquire, memory_order_acquire)) {
+        double cum[3 * SHADOW_CACHE_LAZY_MAX_NZ];
+        build_job job = {.in = c->in, .c = c, .medium = c->medium};
+        build_column(&job, col, cum);
+        atomic_store_explicit(s, COLUMN_BUILT, memory_order_release);
+        return;
+    }
+    while (atomic_load_explicit(s, memory_order_acquire) != COLUMN_BUILT)
+        sched_yield();
 }
 
 /* The cache of grid medium mi and distant light li, NULL with *err unset
@@ -234,11 +271,21 @@ static hz_status cache_create(const integrator_inputs *in, int mi, size_t li, do
     c->origin = v3_add(v3_add(v3_scale(c->ex, bmin[0]), v3_scale(c->ey, bmin[1])),
                        v3_scale(c->ez, bmin[2]));
     size_t count = (size_t)c->n[0] * (size_t)c->n[1] * (size_t)c->n[2];
+    size_t columns = (size_t)c->n[0] * (size_t)c->n[1];
     c->nodes = malloc(count * 4 * sizeof *c->nodes);
-    if (!c->nodes) {
+    bool lazy = c->n[2] <= SHADOW_CACHE_LAZY_MAX_NZ;
+    if (lazy)
+        c->state = calloc(columns, sizeof *c->state); /* COLUMN_EMPTY */
+    if (!c->nodes || (lazy && !c->state)) {
         cache_destroy(c);
         return hz_fail(err, "shadow cache of medium \"%s\": out of memory for %zu nodes",
                        m->name ? m->name : "", count);
+    }
+    c->in = in;
+    c->medium = mi;
+    if (lazy) {
+        *out = c;
+        return HZ_OK;
     }
     build_job job = {.in = in, .c = c, .medium = mi};
     atomic_init(&job.next_column, 0);
@@ -356,6 +403,10 @@ rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p, const spectral_ctx
         ox[a] = (size_t)ix * (size_t)c->n[1] * col_stride;
         oy[a] = (size_t)iy * col_stride;
     }
+    if (c->state)
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b)
+                ensure_column(c, (ox[a] + oy[b]) / col_stride);
     const float *base = c->nodes + (size_t)i[2] * 4;
     /* Separable: across y within each of the 4 x-columns, then across x. */
     float fx[4], fy0[4], fy1[4];

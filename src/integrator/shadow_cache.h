@@ -20,8 +20,10 @@
  * The error is the marching of the columns and the interpolation between
  * them: both shrink as S squared in smooth media; a surface's shadow edge is
  * blurred over one node. It replaces shadow rays, so it needs a static
- * scene (render_scene refuses it otherwise). The same scene gives the same
- * cache for any thread count. */
+ * scene (render_scene refuses it otherwise). A column is walked when a
+ * lookup first needs it (its 4 x 4 neighbourhood), so a cache costs the
+ * columns the render reaches. The same scene gives the same cache for any
+ * thread count. */
 #ifndef HAZE_INTEGRATOR_SHADOW_CACHE_H
 #define HAZE_INTEGRATOR_SHADOW_CACHE_H
 
@@ -40,9 +42,11 @@ typedef struct shadow_cache shadow_cache;
 /* Every (grid medium, distant light) pair of a scene. */
 typedef struct shadow_caches shadow_caches;
 
-/* Builds the caches of every grid medium and distant light of `in` at
- * `spacing` voxels (> 0) on up to `threads` threads (< 1: one per core).
- * Says on `warn` (may be NULL) where a cap coarsened one. */
+/* Makes the caches of every grid medium and distant light of `in` at
+ * `spacing` voxels (> 0); their columns are built by the lookups (`in` must
+ * outlive the caches), or, for columns too long for that, here on up to
+ * `threads` threads (< 1: one per core). Says on `warn` (may be NULL) where
+ * a cap coarsened one. */
 hz_status shadow_caches_create(const integrator_inputs *in, double spacing, int threads,
                                FILE *warn, shadow_caches **out, hz_error *err);
 void shadow_caches_destroy(shadow_caches *c);

@@ -463,7 +463,10 @@ static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integr
     if (!cached)
         return HZ_OK;
     rs->cache_spacing[0] = ip->singlescatter.shadow_cache;
-    if (shadow_caches_create(&in, rs->cache_spacing[0], 0, warn, &rs->caches[0], err) != HZ_OK)
+    /* The caches walk their columns at lookups: the inputs the integrator
+     * keeps, which live as long as the render_scene. */
+    if (shadow_caches_create(&rs->integ.singlescatter.in, rs->cache_spacing[0], 0, warn,
+                             &rs->caches[0], err) != HZ_OK)
         return HZ_ERROR;
     rs->integ.singlescatter.caches = rs->caches[0];
     return HZ_OK;
