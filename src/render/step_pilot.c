@@ -29,14 +29,40 @@ static pilot_grid pilot_grid_make(const film_params *fp)
     return g;
 }
 
+/* The order the pilot takes the grid's pixels in: pixel q of it is grid
+ * cell (q * A) mod n, A the integer nearest the golden section of n that is
+ * prime to n, so that every prefix is spread over the image. */
+static int *pilot_order(int n)
+{
+    int *order = malloc((size_t)(n > 0 ? n : 1) * sizeof *order);
+    if (!order)
+        return NULL;
+    int a = (int)lround(0.6180339887498949 * n);
+    for (;; ++a) {
+        int x = a, y = n;
+        while (y) {
+            int t = x % y;
+            x = y;
+            y = t;
+        }
+        if (x == 1 || n <= 1)
+            break;
+    }
+    for (int q = 0; q < n; ++q)
+        order[q] = (int)(((long long)q * a) % (n > 0 ? n : 1));
+    return order;
+}
+
 typedef struct {
     render_scene *rs;
     const pilot_grid *g;
+    const int *order;
+    int first, last; /* the order's pixels to render */
     const sampler *smp; /* the scene's, with at least k samples a pixel */
     int k;
     rgb *out;
     const volatile sig_atomic_t *cancel; /* NULL, or a signal's flag: stop */
-    atomic_int next; /* the next pixel of the grid to take */
+    atomic_int next; /* the next pixel of the order to take */
 } pilot_job;
 
 enum { PILOT_PIXELS_PER_TAKE = 16 };
@@ -48,14 +74,15 @@ static void *pilot_worker(void *arg)
     const camera *cam = render_scene_camera(job->rs);
     const sampler *smp = job->smp;
     integrator_counters counters = {0};
-    int n = g->nx * g->ny;
+    int n = job->last;
     for (;;) {
         int p0 = atomic_fetch_add(&job->next, PILOT_PIXELS_PER_TAKE);
         if (p0 >= n)
             break;
         int p1 = p0 + PILOT_PIXELS_PER_TAKE < n ? p0 + PILOT_PIXELS_PER_TAKE : n;
         for (int p = p0; p < p1; ++p) {
-            int x = g->x0 + (p % g->nx) * g->stride, y = g->y0 + (p / g->nx) * g->stride;
+            int cell = job->order[p];
+            int x = g->x0 + (cell % g->nx) * g->stride, y = g->y0 + (cell / g->nx) * g->stride;
             camera_sample cs = {v2(x + 0.5, y + 0.5), v2(0.5, 0.5), 0.5, 1.0};
             ray_differential rd;
             bool ray = camera_generate_ray_differential(cam, cs, &rd);
@@ -76,21 +103,23 @@ static void *pilot_worker(void *arg)
     return NULL;
 }
 
-/* The pilot image at `step`: the scene's estimators at each pixel centre,
- * samples 0 .. k - 1 of it (out[pixel * k + sample]), on `threads` threads
- * (each value depends only on its pixel and sample). */
+/* Pixels first .. last - 1 (of `order`) of the pilot image at `step`: the
+ * scene's estimators at each pixel centre, samples 0 .. k - 1 of it
+ * (out[pixel * k + sample]), on `threads` threads (each value depends only
+ * on its pixel and sample). */
 static void pilot_render(render_scene *rs, const render_marching *base, double step,
                          double shadow_ratio, double cache_ratio, const pilot_grid *g,
-                         const sampler *smp, int k, int threads,
-                         const volatile sig_atomic_t *cancel, rgb *out)
+                         const int *order, int first, int last, const sampler *smp, int k,
+                         int threads, const volatile sig_atomic_t *cancel, rgb *out)
 {
     render_marching m = *base;
     m.step = step;
     m.shadow_step = step * shadow_ratio;
     m.shadow_cache = step * cache_ratio;
     render_scene_set_marching(rs, &m);
-    pilot_job job = {.rs = rs, .g = g, .smp = smp, .k = k, .out = out, .cancel = cancel};
-    atomic_init(&job.next, 0);
+    pilot_job job = {.rs = rs, .g = g, .order = order, .first = first, .last = last,
+                     .smp = smp, .k = k, .out = out, .cancel = cancel};
+    atomic_init(&job.next, first);
     hz_parallel_run(threads, pilot_worker, &job);
 }
 
@@ -99,11 +128,12 @@ static void pilot_render(render_scene *rs, const render_marching *base, double s
  * each pixel (the same sample indices: their noise is correlated): per pixel
  * and channel the squared mean difference less its variance (s^2 / k of the
  * differences), at least 0. With k = 1 (deterministic estimators) the plain
- * relMSE. */
-static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k)
+ * relMSE. *se: the standard error of that mean over the n pixels. */
+static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k, double *se)
 {
-    double sum = 0.0;
-    for (int i = 0; i < n; ++i)
+    double sum = 0.0, sum2 = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double pixel = 0.0;
         for (int c = 0; c < 3; ++c) {
             double md = 0.0, mb = 0.0;
             for (int s = 0; s < k; ++s) {
@@ -119,10 +149,22 @@ static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k)
             }
             double sq = k > 1 ? md * md - var / ((double)k * (k - 1)) : md * md;
             double r = mb + 0.01, e = sq > 0.0 ? sq / (r * r) : 0.0;
-            sum += isfinite(e) ? e : 0.0;
+            pixel += isfinite(e) ? e / 3.0 : 0.0;
         }
-    return n > 0 ? sum / (3.0 * n) : 0.0;
+        sum += pixel;
+        sum2 += pixel * pixel;
+    }
+    double mean = n > 0 ? sum / n : 0.0;
+    *se = n > 1 ? sqrt(fmax(0.0, sum2 / n - mean * mean) / (n - 1)) : INFINITY;
+    return mean;
 }
+
+/* A pilot image: pixels 0 .. m - 1 of the order at `step`. */
+typedef struct {
+    rgb *px;
+    double step;
+    int m;
+} pilot_image;
 
 /* What the pilot renders of one choice share. */
 typedef struct {
@@ -130,34 +172,61 @@ typedef struct {
     const render_marching *base;
     double shadow_ratio, cache_ratio; /* of the shadow step and cache to the step */
     const pilot_grid *g;
+    const int *order;
     const sampler *smp;
     int n, k, threads; /* pixels, samples of each, threads */
+    int start;         /* pixels a comparison starts with */
     int renders;       /* made so far */
+    int pixels;        /* the most a comparison took */
     double max_step;   /* the coarsest step tried */
     const volatile sig_atomic_t *cancel;
 } pilot;
 
 static bool cancelled(const pilot *p) { return p->cancel && *p->cancel; }
 
-static void pilot_at(pilot *p, double step, rgb *out)
+/* img's pixels up to m rendered. */
+static void pilot_extend(pilot *p, pilot_image *img, int m)
 {
-    pilot_render(p->rs, p->base, step, p->shadow_ratio, p->cache_ratio, p->g, p->smp, p->k,
-                 p->threads, p->cancel, out);
+    if (img->m >= m)
+        return;
+    pilot_render(p->rs, p->base, img->step, p->shadow_ratio, p->cache_ratio, p->g, p->order,
+                 img->m, m, p->smp, p->k, p->threads, p->cancel, img->px);
+    img->m = m;
+}
+
+/* A new pilot image at `step`, its first p->start pixels rendered. */
+static void pilot_at(pilot *p, double step, pilot_image *img)
+{
+    img->step = step;
+    img->m = 0;
+    pilot_extend(p, img, p->start);
     ++p->renders;
 }
 
 /* The bias of the step of `coarse`, from its relMSE against the half step's
- * `fine` (midpoint marching: halving the step at least halves the error). */
-static double pilot_bias(const pilot *p, const rgb *coarse, const rgb *fine)
+ * `fine` (midpoint marching: halving the step at least halves the error),
+ * as far as it tells against `goal`: while the estimate lies within
+ * STEP_PILOT_Z standard errors of the goal, both images take twice the
+ * pixels (the whole grid at most). */
+static double pilot_bias(pilot *p, pilot_image *coarse, pilot_image *fine, double goal)
 {
-    if (cancelled(p)) /* the images are incomplete */
-        return INFINITY;
-    return 2.0 * bias_rel_mse(coarse, fine, p->n, p->k);
+    int m = coarse->m > fine->m ? coarse->m : fine->m;
+    for (;;) {
+        pilot_extend(p, coarse, m);
+        pilot_extend(p, fine, m);
+        if (cancelled(p)) /* the images are incomplete */
+            return INFINITY;
+        double se, bias = 2.0 * bias_rel_mse(coarse->px, fine->px, m, p->k, &se);
+        p->pixels = m > p->pixels ? m : p->pixels;
+        if (m >= p->n || !(fabs(bias - goal) <= 2.0 * STEP_PILOT_Z * se))
+            return bias;
+        m = 2 * m < p->n ? 2 * m : p->n;
+    }
 }
 
-static void swap_images(rgb **a, rgb **b)
+static void swap_images(pilot_image **a, pilot_image **b)
 {
-    rgb *t = *a;
+    pilot_image *t = *a;
     *a = *b;
     *b = t;
 }
@@ -165,12 +234,12 @@ static void swap_images(rgb **a, rgb **b)
 /* From x (rendered in img[0]), x doubles while twice it has a bias of at
  * most `goal` (rendered in img[2], kept in img[0] when it does): whether x
  * doubled, and *bias, that of the last x. */
-static bool go_coarser(pilot *p, rgb **img, double goal, double *x, double *bias)
+static bool go_coarser(pilot *p, pilot_image **img, double goal, double *x, double *bias)
 {
     bool coarser = false;
     while (2.0 * *x <= p->max_step && !cancelled(p)) {
         pilot_at(p, 2.0 * *x, img[2]);
-        double coarse = pilot_bias(p, img[2], img[0]);
+        double coarse = pilot_bias(p, img[2], img[0], goal);
         if (!(coarse <= goal))
             break;
         coarser = true;
@@ -184,15 +253,15 @@ static bool go_coarser(pilot *p, rgb **img, double goal, double *x, double *bias
 /* From h (rendered in img[0]), h halves until its bias (against h / 2 in
  * img[1]) meets `goal` or h / 2 would be finer than STEP_PILOT_MIN_STEP:
  * the bias of the last h. */
-static double go_finer(pilot *p, rgb **img, double goal, double *h)
+static double go_finer(pilot *p, pilot_image **img, double goal, double *h)
 {
     pilot_at(p, *h / 2.0, img[1]);
-    double bias = pilot_bias(p, img[0], img[1]);
+    double bias = pilot_bias(p, img[0], img[1], goal);
     while (!(bias <= goal) && *h / 2.0 >= STEP_PILOT_MIN_STEP && !cancelled(p)) {
         *h /= 2.0;
         swap_images(&img[0], &img[1]);
         pilot_at(p, *h / 2.0, img[1]);
-        bias = pilot_bias(p, img[0], img[1]);
+        bias = pilot_bias(p, img[0], img[1], goal);
     }
     return bias;
 }
@@ -219,7 +288,9 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     if (smp.spp < k)
         sampler_set_spp(&smp, k);
     size_t bytes = (size_t)n * (size_t)k * sizeof(rgb);
-    rgb *img[3] = {malloc(bytes), malloc(bytes), malloc(bytes)};
+    pilot_image slots[3] = {{malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}};
+    pilot_image *img[3] = {&slots[0], &slots[1], &slots[2]};
+    int *order = pilot_order(n);
     double goal = STEP_PILOT_SHARE * target_error;
     /* Under "auto" the steps start where it puts them: finer ones march as
      * coarsely as that. */
@@ -229,12 +300,14 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     double cache_ratio = base.shadow_cache > 0.0     ? base.shadow_cache / base.step
                          : base.shadow_cache_possible ? 1.0
                                                       : 0.0;
-    if (!img[0] || !img[1] || !img[2] || n < 1) { /* keep the scene's steps */
-        for (int q = 0; q < 3; ++q)
-            free(img[q]);
+    if (!slots[0].px || !slots[1].px || !slots[2].px || !order || n < 1) {
+        for (int q = 0; q < 3; ++q) /* keep the scene's steps */
+            free(slots[q].px);
+        free(order);
         return;
     }
-    pilot p = {rs, &base, ratio, cache_ratio, &g, &smp, n, k, threads, 0,
+    pilot p = {rs, &base, ratio, cache_ratio, &g, order, &smp, n, k, threads,
+               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, 0, 0,
                STEP_PILOT_MAX_STEP * base.auto_scale, cancel};
     /* Coarser first, and cheapest first: the bias of 2x is estimated from x
      * and 2x (img[0]: at x, img[2]: at 2x), starting at x = 2h, so a scene
@@ -248,7 +321,7 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
         h = x;
     } else if (x > h) {
         pilot_at(&p, h, img[1]);
-        double coarse = pilot_bias(&p, img[0], img[1]);
+        double coarse = pilot_bias(&p, img[0], img[1], goal);
         if (coarse <= goal) {
             coarser = true;
             h = x;
@@ -262,7 +335,8 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     if (cancelled(&p)) { /* the scene's own steps; the render stops at once */
         render_scene_set_marching(rs, &base);
         for (int q = 0; q < 3; ++q)
-            free(img[q]);
+            free(slots[q].px);
+        free(order);
         return;
     }
     render_marching m = base;
@@ -273,7 +347,8 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     render_scene_keep_current_cache(rs);
     render_marching set;
     render_scene_marching(rs, &set); /* 0 if the cache could not be built */
-    *out = (step_choice){true, m.step, m.shadow_step, set.shadow_cache, bias, n, p.renders};
+    *out = (step_choice){true, m.step, m.shadow_step, set.shadow_cache, bias, p.pixels, p.renders};
     for (int q = 0; q < 3; ++q)
-        free(img[q]);
+        free(slots[q].px);
+    free(order);
 }

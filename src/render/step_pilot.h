@@ -7,7 +7,8 @@
  * is deterministic there; STEP_PILOT_SAMPLES for `jittered`, whose noise is
  * then subtracted: per pixel the squared mean difference less its variance);
  * twice their relMSE (haze diff's) estimates the bias of h
- * (midpoint marching: halving the step at least halves the error). From the
+ * (midpoint marching: halving the step at least halves the error), on as
+ * many of the grid's pixels as tell it from the goal (STEP_PILOT_Z). From the
  * scene's step the step doubles while twice it still has a bias of at most
  * STEP_PILOT_SHARE of the target (cheapest first: 4h against 2h before 2h
  * against h, so a step that goes coarser never renders the scene's own, and
@@ -37,6 +38,12 @@
  * STEP_PILOT_MIN_PIXELS (all of a smaller image's). */
 #define STEP_PILOT_SHARE_OF_IMAGE 64
 #define STEP_PILOT_MIN_PIXELS 256
+/* A comparison of two steps starts on this many of the grid's pixels (an
+ * even spread of them) and doubles them while its bias estimate lies
+ * within STEP_PILOT_Z standard errors (over pixels) of the goal: a clear
+ * case costs a fraction of the grid, a close one all of it. */
+#define STEP_PILOT_START_PIXELS 64
+#define STEP_PILOT_Z 3.0
 /* Samples per pilot pixel of a random (jittered) estimator. */
 #define STEP_PILOT_SAMPLES 8
 #define STEP_PILOT_MIN_STEP (1.0 / 64.0)
@@ -48,7 +55,7 @@ typedef struct {
     double step, shadow_step; /* voxels, set on the scene */
     double shadow_cache;      /* voxels, set on the scene (0: none) */
     double bias;    /* the estimated relMSE of the chosen step */
-    int pixels;     /* in the pilot grid */
+    int pixels;     /* of the pilot grid, the most a comparison took */
     int renders;    /* pilot renders made */
 } step_choice;
 
