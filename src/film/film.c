@@ -314,15 +314,16 @@ hz_status film_params_check_format(const scene_entity *e, const film_params *p, 
     return HZ_OK;
 }
 
-/* XYZ from linear sRGB and back (white D65 at Y = 1): the sensor RGB of
- * pbrt-v4's default "cie1931" sensor is XYZ. */
-static void srgb_xyz(double xyz_from_srgb[9], double srgb_from_xyz[9])
+/* XYZ from linear sRGB and (when srgb_from_xyz) back, white D65 at Y = 1:
+ * the sensor RGB of pbrt-v4's default "cie1931" sensor is XYZ. */
+static void srgb_xyz(double xyz_from_srgb[9], double *srgb_from_xyz)
 {
     double xy[8];
     color_space_chromaticities(COLOR_SPACE_SRGB, xy);
     double w[3] = {xy[6] / xy[7], 1.0, (1.0 - xy[6] - xy[7]) / xy[7]};
     color_space_xyz_from_rgb_white(COLOR_SPACE_SRGB, w, xyz_from_srgb);
-    color_space_rgb_from_xyz_white(COLOR_SPACE_SRGB, w, srgb_from_xyz);
+    if (srgb_from_xyz)
+        color_space_rgb_from_xyz_white(COLOR_SPACE_SRGB, w, srgb_from_xyz);
 }
 
 void film_params_set_color_space(film_params *p, color_space cs)
@@ -404,8 +405,7 @@ film *film_create(const film_params *p, hz_error *err)
     f->width = b.x1 - b.x0;
     f->height = b.y1 - b.y0;
     f->clamp_ratio = 1.0;
-    double unused[9];
-    srgb_xyz(f->xyz_from_render, unused);
+    srgb_xyz(f->xyz_from_render, NULL);
     atomic_init(&f->nonfinite, 0);
     size_t n = (size_t)f->width * (size_t)f->height;
     f->pixels = hz_big_calloc(n, sizeof *f->pixels);
