@@ -92,7 +92,11 @@ void digest_cache_put(const char *kind, const file_identity *id, const file_dige
     int64_t since_ms = (id->read_s - id->ctime_s) * 1000 + (id->read_ns - id->ctime_ns) / 1000000;
     int64_t since_m_ms =
         (id->read_s - id->mtime_s) * 1000 + (id->read_ns - id->mtime_ns) / 1000000;
-    if (since_ms < DIGEST_CACHE_SETTLE_MS || since_m_ms < DIGEST_CACHE_SETTLE_MS)
+    /* Times without nanoseconds come from a file system that keeps whole
+     * seconds (FAT keeps two): wait that long. */
+    int64_t settle = id->ctime_ns == 0 && id->mtime_ns == 0 ? DIGEST_CACHE_SETTLE_COARSE_MS
+                                                              : DIGEST_CACHE_SETTLE_MS;
+    if (since_ms < settle || since_m_ms < settle)
         return;
     char path[4352], dir[4096], tmp[4400];
     if (!entry_path(kind, id, path, sizeof path, dir, sizeof dir) || !hz_cache_dir_prepare(dir))

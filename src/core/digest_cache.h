@@ -8,7 +8,8 @@
  * match. Every write to a file moves its status-change time, so a changed
  * file misses. A file changed within DIGEST_CACHE_SETTLE_MS before its
  * digest was read is not kept: timestamps come from a coarse clock, and a
- * second write in the same tick would keep the same times. Entries are
+ * second write in the same tick would keep the same times (on a file
+ * system that keeps whole seconds, DIGEST_CACHE_SETTLE_COARSE_MS). Entries are
  * written to a temporary file and renamed (a reader sees a whole entry or
  * none); one that does not parse is a miss. Each kind of digest (its
  * function and what it covers) has its own entries. */
@@ -19,6 +20,9 @@
 #include <stdint.h>
 
 #define DIGEST_CACHE_SETTLE_MS 100
+/* ... or, for a file whose times have no nanoseconds (a file system that
+ * keeps whole seconds), this. */
+#define DIGEST_CACHE_SETTLE_COARSE_MS 2100
 
 typedef struct {
     uint64_t dev, ino, size;
