@@ -68,18 +68,27 @@ static void test_wavelength_density(void **state)
 
 /* An orthographic camera looking down -z at the plane z = 0 under a white
  * sky: the centre pixel's radiance, `spp` samples (zsobol). */
+/* The scene of plane_radiance: 8x8 pixels of `spp` samples. */
+static char *plane_scene(const char *material, int spp)
+{
+    char head[512];
+    snprintf(head, sizeof head,
+             "LookAt 0 0 5  0 0 0  0 1 0\n"
+             "Camera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\n"
+             "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" %d\n"
+             "Integrator \"volpath\" \"integer maxdepth\" 1\n"
+             "WorldBegin\n"
+             "LightSource \"infinite\" \"rgb L\" [1 1 1]\n",
+             spp);
+    return cat(head, material,
+               "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
+               "  \"point3 P\" [-2 -2 0 2 -2 0 2 2 0 -2 2 0]\n");
+}
+
 static rgb plane_radiance(const char *material, const render_options *opt, int spp)
 {
-    char *text = cat("LookAt 0 0 5  0 0 0  0 1 0\n"
-                     "Camera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\n"
-                     "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
-                     "Sampler \"zsobol\" \"integer pixelsamples\" 16\n"
-                     "Integrator \"volpath\" \"integer maxdepth\" 1\n"
-                     "WorldBegin\n"
-                     "LightSource \"infinite\" \"rgb L\" [1 1 1]\n",
-                     material,
-                     "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
-                     "  \"point3 P\" [-2 -2 0 2 -2 0 2 2 0 -2 2 0]\n");
+    char *text = plane_scene(material, 16);
     render_options o = *opt;
     render_scene *rs = build_scene_or_fail(text, &o);
     free(text);
@@ -374,17 +383,9 @@ static void test_dispersive_coating(void **state)
 {
     (void)state;
     /* Rendered (not eval_pixel's one fixed ray), as dispersion asks. */
-    char *text = cat("LookAt 0 0 5  0 0 0  0 1 0\n"
-                     "Camera \"orthographic\" \"float screenwindow\" [-1 1 -1 1]\n"
-                     "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
-                     "Sampler \"zsobol\" \"integer pixelsamples\" 8192\n"
-                     "Integrator \"volpath\" \"integer maxdepth\" 1\n"
-                     "WorldBegin\n"
-                     "LightSource \"infinite\" \"rgb L\" [1 1 1]\n",
-                     "Material \"coateddiffuse\" \"rgb reflectance\" [0 0 0]\n"
-                     "  \"float roughness\" 0 \"spectrum eta\" [360 3  830 1.2]\n",
-                     "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
-                     "  \"point3 P\" [-2 -2 0 2 -2 0 2 2 0 -2 2 0]\n");
+    char *text = plane_scene("Material \"coateddiffuse\" \"rgb reflectance\" [0 0 0]\n"
+                             "  \"float roughness\" 0 \"spectrum eta\" [360 3  830 1.2]\n",
+                             8192);
     render_options opt = {.seed = 0}; /* --color auto: spectral for the dispersive coating */
     render_scene *rs = build_scene_or_fail(text, &opt);
     free(text);
