@@ -92,7 +92,7 @@ static const char usage_text[] =
     "  --stats                 after the summary, 'stat NAME VALUE' lines: rays, lookups and\n"
     "                          majorant steps per pixel, time split, memory (docs/performance.md)\n"
     "  --disable-pixel-jitter  every camera ray through its pixel's centre (as pbrt-v4)\n"
-    "  --color auto|rgb|spectral  carry colour along paths as RGB or as three wavelengths\n"
+    "  --color auto|rgb|spectral  carry colour along paths as RGB or as four wavelengths\n"
     "                          per sample, as pbrt-v4; auto (default): spectral for\n"
     "                          coloured media, metals, coatings, hair (docs/spectral.md)\n"
     "  --portable-isa          Embree at SSE4.2 on every machine: byte-identical images\n"

@@ -21,7 +21,7 @@
 #include "scene/scene_desc.h"
 
 /* How colour is carried along paths (docs/spectral.md): in RGB, or
- * spectrally (three wavelengths per camera sample, color/wavelengths.h;
+ * spectrally (four wavelengths per camera sample, color/wavelengths.h;
  * either integrator). AUTO: as render/color_choice.h decides. */
 typedef enum { RENDER_COLOR_AUTO = 0, RENDER_COLOR_RGB, RENDER_COLOR_SPECTRAL } render_color;
 
