@@ -675,10 +675,13 @@ void film_add_sample(film *f, int px, int py, rgb L, double weight, double depth
     const film_sensor *sensor = &f->p.sensor;
     if (sensor->active && !f->sensor_rgb_in)
         L = sensor_apply(sensor->sensor_from_render, L);
-    /* The sensor RGB of pbrt-v4's default "cie1931" sensor is XYZ. */
-    double m = rgb_max(sensor->active ? L : sensor_apply(f->xyz_from_render, L)) * f->clamp_ratio;
-    if (m > f->p.max_component_value)
-        L = rgb_scale(L, f->p.max_component_value / m);
+    if (f->p.max_component_value < INFINITY) {
+        /* The sensor RGB of pbrt-v4's default "cie1931" sensor is XYZ. */
+        double m =
+            rgb_max(sensor->active ? L : sensor_apply(f->xyz_from_render, L)) * f->clamp_ratio;
+        if (m > f->p.max_component_value)
+            L = rgb_scale(L, f->p.max_component_value / m);
+    }
     if (sensor->active)
         L = sensor_apply(sensor->output_from_sensor, L);
     size_t i = film_index(f, px, py);

@@ -31,25 +31,25 @@ static pilot_grid pilot_grid_make(const film_params *fp)
 
 /* The order the pilot takes the grid's pixels in: pixel q of it is grid
  * cell (q * A) mod n, A the integer nearest the golden section of n that is
- * prime to n, so that every prefix is spread over the image. */
+ * prime to n (n >= 1), so that every prefix is spread over the image. */
 static int *pilot_order(int n)
 {
-    int *order = malloc((size_t)(n > 0 ? n : 1) * sizeof *order);
+    int *order = malloc((size_t)n * sizeof *order);
     if (!order)
         return NULL;
     int a = (int)lround(0.6180339887498949 * n);
-    for (;; ++a) {
+    for (;; ++a) { /* Euclid: a prime to n (a = 1 is, for n = 1 and 2) */
         int x = a, y = n;
         while (y) {
             int t = x % y;
             x = y;
             y = t;
         }
-        if (x == 1 || n <= 1)
+        if (x == 1)
             break;
     }
     for (int q = 0; q < n; ++q)
-        order[q] = (int)(((long long)q * a) % (n > 0 ? n : 1));
+        order[q] = (int)(((long long)q * a) % n);
     return order;
 }
 
@@ -57,7 +57,7 @@ typedef struct {
     render_scene *rs;
     const pilot_grid *g;
     const int *order;
-    int first, last; /* the order's pixels to render */
+    int last; /* the order's pixels to render: up to this one */
     const sampler *smp; /* the scene's, with at least k samples a pixel */
     int k;
     rgb *out;
@@ -117,7 +117,7 @@ static void pilot_render(render_scene *rs, const render_marching *base, double s
     m.shadow_step = step * shadow_ratio;
     m.shadow_cache = step * cache_ratio;
     render_scene_set_marching(rs, &m);
-    pilot_job job = {.rs = rs, .g = g, .order = order, .first = first, .last = last,
+    pilot_job job = {.rs = rs, .g = g, .order = order, .last = last,
                      .smp = smp, .k = k, .out = out, .cancel = cancel};
     atomic_init(&job.next, first);
     hz_parallel_run(threads, pilot_worker, &job);
@@ -290,7 +290,7 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     size_t bytes = (size_t)n * (size_t)k * sizeof(rgb);
     pilot_image slots[3] = {{malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}};
     pilot_image *img[3] = {&slots[0], &slots[1], &slots[2]};
-    int *order = pilot_order(n);
+    int *order = n >= 1 ? pilot_order(n) : NULL;
     double goal = STEP_PILOT_SHARE * target_error;
     /* Under "auto" the steps start where it puts them: finer ones march as
      * coarsely as that. */
