@@ -571,13 +571,19 @@ static void write_file(const char *path, const char *text)
     fclose(f);
 }
 
+/* The folder HAZE_TMP/name in dir[size], made. */
+static void test_dir(char *dir, size_t size, const char *name)
+{
+    snprintf(dir, size, "%s/%s", HAZE_TMP, name);
+    mkdir(dir, 0755);
+}
+
 static void test_include(void **state)
 {
     (void)state;
     char dir[512], sub[600], path[700];
-    snprintf(dir, sizeof dir, "%s/scene_include", HAZE_TMP);
+    test_dir(dir, sizeof dir, "scene_include");
     snprintf(sub, sizeof sub, "%s/sub", dir);
-    mkdir(dir, 0755);
     mkdir(sub, 0755);
     snprintf(path, sizeof path, "%s/main.pbrt", dir);
     write_file(path, "WorldBegin\nInclude \"sub/a.pbrt\"\nShape \"disk\"\n");
@@ -631,8 +637,7 @@ static void test_all_errors_in_one_run(void **state)
 {
     (void)state;
     char dir[512], path[700];
-    snprintf(dir, sizeof dir, "%s/scene_errors", HAZE_TMP);
-    mkdir(dir, 0755);
+    test_dir(dir, sizeof dir, "scene_errors");
     snprintf(path, sizeof path, "%s/inc.pbrt", dir);
     write_file(path, "Shape \"sphere\" \"float radius\" true\n");
     snprintf(path, sizeof path, "%s/main.pbrt", dir);
@@ -694,8 +699,7 @@ static void test_include_continues_stream(void **state)
 {
     (void)state;
     char dir[512], path[700];
-    snprintf(dir, sizeof dir, "%s/scene_include_stream", HAZE_TMP);
-    mkdir(dir, 0755);
+    test_dir(dir, sizeof dir, "scene_include_stream");
     snprintf(path, sizeof path, "%s/mat.pbrt", dir);
     write_file(path, "Material \"diffuse\"\n");
     snprintf(path, sizeof path, "%s/shape.pbrt", dir);
@@ -746,8 +750,7 @@ static void test_input_files(void **state)
 {
     (void)state;
     char dir[512], path[700], fifo[700];
-    snprintf(dir, sizeof dir, "%s/scene_input_files", HAZE_TMP);
-    mkdir(dir, 0755);
+    test_dir(dir, sizeof dir, "scene_input_files");
     scene_desc sd;
     hz_error err;
 
@@ -808,7 +811,8 @@ static void test_input_files(void **state)
     assert_non_null(strstr(err.message, "nul.pbrt:2:11: NUL byte inside a string"));
 }
 
-/* HAZE_CACHE_DIR set to `dir` (NULL: unset); gives back what it was. */
+/* HAZE_CACHE_DIR set to `dir` ("": no cache; NULL: unset); gives back what
+ * it was (free it). */
 static char *swap_cache_dir(const char *dir)
 {
     const char *was = getenv("HAZE_CACHE_DIR");
@@ -818,6 +822,14 @@ static char *swap_cache_dir(const char *dir)
     else
         unsetenv("HAZE_CACHE_DIR");
     return old;
+}
+
+/* The cache folder `parent`/cache for a test; gives back what it was. */
+static char *cache_in(const char *parent)
+{
+    char cache[600];
+    snprintf(cache, sizeof cache, "%s/cache", parent);
+    return swap_cache_dir(cache);
 }
 
 /* Waits until the file at `path`, written now, has settled for the digest
@@ -847,11 +859,9 @@ static void settle(const char *path)
 static void test_inputs_hash(void **state)
 {
     (void)state;
-    char dir[512], scene[700], vol[700], cache[600];
-    snprintf(dir, sizeof dir, "%s/scene_inputs_hash", HAZE_TMP);
-    mkdir(dir, 0755);
-    snprintf(cache, sizeof cache, "%s/cache", dir);
-    char *was = swap_cache_dir(cache);
+    char dir[512], scene[700], vol[700];
+    test_dir(dir, sizeof dir, "scene_inputs_hash");
+    char *was = cache_in(dir);
     snprintf(scene, sizeof scene, "%s/s.pbrt", dir);
     snprintf(vol, sizeof vol, "%s/v.nvdb", dir);
     const char *text = "WorldBegin\nMakeNamedMedium \"m\" \"string type\" \"nanovdb\" "
@@ -938,12 +948,9 @@ static void test_digest_cache(void **state)
 {
     (void)state;
     char dir[512], file[700];
-    snprintf(dir, sizeof dir, "%s/digest_cache", HAZE_TMP);
-    mkdir(dir, 0755);
+    test_dir(dir, sizeof dir, "digest_cache");
     snprintf(file, sizeof file, "%s/f.bin", dir);
-    char cache[600];
-    snprintf(cache, sizeof cache, "%s/cache", dir);
-    char *was = swap_cache_dir(cache);
+    char *was = cache_in(dir);
     write_bytes(file, "0123456789", 10);
     file_identity fresh, settled, id;
     int fd = open(file, O_RDONLY);
