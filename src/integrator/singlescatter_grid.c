@@ -209,7 +209,9 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     strata_make(&sw.s, &sw.gr, t0, t1, step, offset, &walk->r);
     if (mode == TRANSMITTANCE_RAYMARCH)
         sw.cutoff = SINGLESCATTER_MARCH_CUTOFF * rgb_max(*beta);
-    if (!marching)
+    if (marching)
+        medium_ray_coarsen(&sw.gr, step);
+    else
         sw.tau = exp1(&walk->r);
     double sigma_max = rgb_max(sw.sigma_t);
     bool alive = true, skip = false; /* skip: strata up to seg.t0 lie in empty cells */

@@ -44,6 +44,7 @@ static rgb grid_transmittance(const singlescatter_scene *vs, const medium *m, ve
         double offset = mode == TRANSMITTANCE_JITTERED ? rng_uniform(&walk->r) : 0.5;
         strata s;
         strata_make(&s, &gr, t0, t1, shadow_step, offset, &walk->r);
+        medium_ray_coarsen(&gr, shadow_step);
         double tau = 0.0;
         bool skip = false; /* strata to skip up to seg.t0 (empty cells before it) */
         while (next_cell(&gr, &seg, walk)) {

@@ -412,7 +412,7 @@ static uint64_t layout(const double l3[3], const double h3[3], int32_t cell, int
  * them too. */
 typedef struct {
     bool differ;            /* its cells differ: the brick keeps them */
-    majorant_bounds first;  /* its first cell's bounds */
+    majorant_bounds whole;  /* the union of its cells' bounds */
     majorant_cellmap map;   /* first unset */
     size_t n;               /* occupied cells */
     majorant_bounds *cells; /* n of them, then n boxes when boxed */
@@ -488,8 +488,9 @@ static void brick_cells_free(brick_cells *bc)
 }
 
 /* The cells of brick b3 into `out` (its windows aimed at the brick);
- * differ: whether they differ (the brick must keep them), and when all are
- * equal their bounds are the brick's, tighter than the brick's own query.
+ * differ: whether they differ (the brick must keep them); whole: the union
+ * of their bounds, tighter than the brick's own query (when all are equal,
+ * every cell's).
  * False when out of memory. */
 static bool bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3], brick_cells *out)
 {
@@ -508,8 +509,12 @@ static bool bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3],
                 if (r->src->boxes)
                     boxes[i] = cell_box(r, first, mg->cell, cells[i]);
                 differ = differ || !same_bounds(cells[i], cells[0]);
+                if (i == 0)
+                    out->whole = cells[0];
+                out->whole.max = fmaxf(out->whole.max, cells[i].max);
+                out->whole.min = fminf(out->whole.min, cells[i].min);
+                out->whole.emit = fmaxf(out->whole.emit, cells[i].emit);
             }
-    out->first = cells[0];
     out->differ = differ;
     out->cells = NULL;
     out->n = 0;
@@ -697,7 +702,7 @@ static hz_status store_cells(const source *src, majorant_grid *out, size_t varie
     for (size_t k = 0; k < varied; ++k) {
         const brick_cells *bc = cells[brick[k]];
         majorant_brick *br = &out->bricks[brick[k]];
-        br->bounds = bc->first;
+        br->bounds = bc->whole;
         if (!bc->differ)
             continue;
         majorant_cellmap *map = &out->maps[out->stored_bricks];
@@ -852,6 +857,7 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
     w->done = true;
     w->map = NULL;
     w->clip_cell = NULL;
+    w->coarse = false;
     if (!mg->bricks || !(t0 <= t1))
         return false;
     const double o3[3] = {o.x, o.y, o.z}, d3[3] = {d.x, d.y, d.z};

@@ -62,7 +62,7 @@ typedef struct {
 } majorant_emission;
 
 typedef struct {
-    majorant_bounds bounds; /* of the whole brick (exact for every cell when uniform) */
+    majorant_bounds bounds; /* of the whole brick: every cell's when uniform, else their union */
     int32_t cells;          /* its map in majorant_grid.maps, or -1: uniform */
 } majorant_brick;
 
@@ -136,6 +136,7 @@ typedef struct {
     /* where the current cell's box lies on the ray (boxes only) */
     const majorant_bounds *clip_cell; /* the cell clip_t0/clip_t1 belong to */
     double clip_t0, clip_t1;
+    bool coarse; /* report bricks whole (majorant_walk_coarsen) */
     bool done;
 } majorant_walk;
 
@@ -150,6 +151,20 @@ typedef struct {
 /* Starts a walk over [t0, t1] (finite). False when the ray misses the grid. */
 bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3 d, double t0,
                          double t1);
+/* Tells a walk, before its first step, that its consumer samples the ray no
+ * finer than every `voxels` voxels and reads of the bounds only whether they
+ * are 0 (marching): when that is at least half a brick's edge, every brick
+ * comes as one interval with the brick's bounds, so the walk costs a step
+ * per brick, not per cell. Empty runs are still merged and skipped; what is
+ * lost is only the cells' finer empty space, which such a consumer crosses
+ * in one or two samples, each a lookup that finds 0: the values are the
+ * same. (On sphere-100 at steps of 40 and 80 voxels, half a brick against a
+ * whole one: 157 steps a pixel against 279, 0.8% more lookups, 5% less
+ * time.) */
+static inline void majorant_walk_coarsen(majorant_walk *w, double voxels)
+{
+    w->coarse = voxels >= 0.5 * MAJORANT_BRICK * w->mg->cell;
+}
 
 /* ---- the walk's steps, inline: they run once per cell crossed ---- */
 
@@ -294,7 +309,7 @@ static inline bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
             int a = majorant_nearest_axis(w->brick_next);
             double exit = w->brick_next[a] < w->t_end ? w->brick_next[a] : w->t_end;
             const majorant_brick *br = &w->mg->bricks[majorant_brick_index(w->mg, w->brick)];
-            if (br->cells >= 0) {
+            if (br->cells >= 0 && !w->coarse) {
                 majorant_walk_enter_brick(w, br, exit);
                 continue;
             }

@@ -245,6 +245,15 @@ static inline bool medium_ray_next(medium_ray *r, majorant_segment *seg, uint64_
     return true;
 }
 
+/* Before the first medium_ray_next: the caller samples the ray every
+ * `voxels` voxels or more and needs of a segment's bounds only whether they
+ * are 0, so segments may be coarser (majorant_walk_coarsen). */
+static inline void medium_ray_coarsen(medium_ray *r, double voxels)
+{
+    if (r->dda)
+        majorant_walk_coarsen(&r->mw, voxels);
+}
+
 /* pbrt-v4's SamplePoint at o + t d; `emission`: fill p->emission. Adds its
  * lookups to *lookups. */
 static inline void medium_ray_sample(medium_ray *r, double t, bool emission, medium_props *p,
