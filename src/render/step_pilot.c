@@ -127,8 +127,9 @@ static void pilot_render(render_scene *rs, const render_marching *base, double s
  * b)^2 / (b + 0.01)^2 over pixels and channels, from k paired samples of
  * each pixel (the same sample indices: their noise is correlated): per pixel
  * and channel the squared mean difference less its variance (s^2 / k of the
- * differences), at least 0. With k = 1 (deterministic estimators) the plain
- * relMSE. *se: the standard error of that mean over the n pixels. */
+ * differences), an unbiased estimate that may be negative. With k = 1
+ * (deterministic estimators) the plain relMSE. *se: the standard error of
+ * that mean over the n pixels. */
 static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k, double *se)
 {
     double sum = 0.0, sum2 = 0.0;
@@ -147,8 +148,10 @@ static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k, double *se)
                 double d = rgb_ch(a[(size_t)i * k + s], c) - rgb_ch(b[(size_t)i * k + s], c) - md;
                 var += d * d;
             }
+            /* Not clipped at 0 per pixel: that would read noise as bias,
+             * the more so the fewer the samples. */
             double sq = k > 1 ? md * md - var / ((double)k * (k - 1)) : md * md;
-            double r = mb + 0.01, e = sq > 0.0 ? sq / (r * r) : 0.0;
+            double r = mb + 0.01, e = sq / (r * r);
             pixel += isfinite(e) ? e / 3.0 : 0.0;
         }
         sum += pixel;
@@ -176,6 +179,8 @@ typedef struct {
     const sampler *smp;
     int n, k, threads; /* pixels, samples of each, threads */
     int start;         /* pixels a comparison starts with */
+    double budget;     /* samples the comparisons may grow to (step_pilot_budget) */
+    double samples;    /* rendered so far */
     int renders;       /* made so far */
     int pixels;        /* the most a comparison took */
     double max_step;   /* the coarsest step tried */
@@ -191,6 +196,7 @@ static void pilot_extend(pilot *p, pilot_image *img, int m)
         return;
     pilot_render(p->rs, p->base, img->step, p->shadow_ratio, p->cache_ratio, p->g, p->order,
                  img->m, m, p->smp, p->k, p->threads, p->cancel, img->px);
+    p->samples += (double)(m - img->m) * p->k;
     img->m = m;
 }
 
@@ -203,11 +209,19 @@ static void pilot_at(pilot *p, double step, pilot_image *img)
     ++p->renders;
 }
 
+/* The samples that taking both images to m pixels adds. */
+static double samples_to(const pilot *p, const pilot_image *a, const pilot_image *b, int m)
+{
+    return ((double)(m > a->m ? m - a->m : 0) + (double)(m > b->m ? m - b->m : 0)) * p->k;
+}
+
 /* The bias of the step of `coarse`, from its relMSE against the half step's
  * `fine` (midpoint marching: halving the step at least halves the error),
  * as far as it tells against `goal`: while the estimate lies within
  * STEP_PILOT_Z standard errors of the goal, both images take twice the
- * pixels (the whole grid at most). */
+ * pixels (the whole grid at most), as long as the pilot's samples stay
+ * within its budget. A case still close then is decided by the estimate:
+ * either step's bias is near the goal. */
 static double pilot_bias(pilot *p, pilot_image *coarse, pilot_image *fine, double goal)
 {
     int m = coarse->m > fine->m ? coarse->m : fine->m;
@@ -218,9 +232,11 @@ static double pilot_bias(pilot *p, pilot_image *coarse, pilot_image *fine, doubl
             return INFINITY;
         double se, bias = 2.0 * bias_rel_mse(coarse->px, fine->px, m, p->k, &se);
         p->pixels = m > p->pixels ? m : p->pixels;
-        if (m >= p->n || !(fabs(bias - goal) <= 2.0 * STEP_PILOT_Z * se))
-            return bias;
-        m = 2 * m < p->n ? 2 * m : p->n;
+        int more = 2 * m < p->n ? 2 * m : p->n;
+        if (m >= p->n || !(fabs(bias - goal) <= 2.0 * STEP_PILOT_Z * se) ||
+            p->samples + samples_to(p, coarse, fine, more) > p->budget)
+            return bias > 0.0 ? bias : 0.0; /* an estimate below 0: no bias seen */
+        m = more;
     }
 }
 
@@ -306,8 +322,13 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
         free(order);
         return;
     }
+    /* The render's first pass takes two samples a pixel (at most spp). */
+    const film_params *fp = film_get_params(render_scene_film(rs));
+    int first_spp = render_scene_sampler(rs)->spp < 2 ? render_scene_sampler(rs)->spp : 2;
+    double budget = STEP_PILOT_BUDGET * (double)(fp->bounds.x1 - fp->bounds.x0) *
+                    (double)(fp->bounds.y1 - fp->bounds.y0) * first_spp;
     pilot p = {rs, &base, ratio, cache_ratio, &g, order, &smp, n, k, threads,
-               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, 0, 0,
+               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, budget, 0.0, 0, 0,
                STEP_PILOT_MAX_STEP * base.auto_scale, cancel};
     /* Coarser first, and cheapest first: the bias of 2x is estimated from x
      * and 2x (img[0]: at x, img[2]: at 2x), starting at x = 2h, so a scene

@@ -44,6 +44,11 @@
  * case costs a fraction of the grid, a close one all of it. */
 #define STEP_PILOT_START_PIXELS 64
 #define STEP_PILOT_Z 3.0
+/* Comparisons grow only while the pilot's samples stay within this share of
+ * the render's first pass (two samples of every pixel): on a small image a
+ * pilot stays a small part of a render that may end after that pass. Each
+ * comparison's first STEP_PILOT_START_PIXELS are taken whatever the budget. */
+#define STEP_PILOT_BUDGET 0.1
 /* Samples per pilot pixel of a random (jittered) estimator. */
 #define STEP_PILOT_SAMPLES 8
 #define STEP_PILOT_MIN_STEP (1.0 / 64.0)
