@@ -268,8 +268,7 @@ static grid_ibox span_box(const source *src, const int64_t first[3], int64_t n)
     return box;
 }
 
-/* The bounds of the trilinear density over `n` cells starting at voxel
- * `first` per axis: over span_box's voxels. */
+/* The density bounds of a box whose voxels range over [vmin, vmax]. */
 static majorant_bounds bounds_of_range(float vmin, float vmax)
 {
     majorant_bounds b = {nonnegative(vmax), 0.0f, 0.0f};
@@ -277,6 +276,8 @@ static majorant_bounds bounds_of_range(float vmin, float vmax)
     return b;
 }
 
+/* The bounds of the trilinear density over `n` cells starting at voxel
+ * `first` per axis: over span_box's voxels. */
 static majorant_bounds span_bounds(reader *r, const int64_t first[3], int64_t n)
 {
     const source *src = r->src;
@@ -312,7 +313,6 @@ static void reader_end(reader *r)
     window_free(&r->emis);
     free(r->scratch);
 }
-
 
 /* Where the emission grid may be non-zero in `region` of density voxels:
  * its non-zero voxels, dilated by its own voxel of reach when its voxels
