@@ -8,6 +8,23 @@ now() { date +%s.%N; }
 # elapsed T0 T1: T1 - T0 in seconds, 3 decimals.
 elapsed() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.3f", b - a }'; }
 
+# cpu_timed OUT UNDER CMD...: CMD under GNU time; writes "cpu wall" seconds
+# to OUT (cpu = user + sys of the whole process): the median of three runs,
+# or of those until one takes UNDER seconds of wall or more (1e30: three).
+cpu_timed() {
+    ct_o=$1 ct_under=$2
+    shift 2
+    ct_cs= ct_ws=
+    for _ in 1 2 3; do
+        /usr/bin/time -f '%U %S %e' -o "$ct_o.time" "$@" >>"$LOG" 2>&1 ||
+            { echo "bench: failed: $*" >&2; tail -5 "$LOG" >&2; exit 1; }
+        ct_w=$(awk '{ print $3 }' "$ct_o.time")
+        ct_cs="$ct_cs $(awk '{ printf "%.3f", $1 + $2 }' "$ct_o.time")" ct_ws="$ct_ws $ct_w"
+        awk -v w="$ct_w" -v u="$ct_under" 'BEGIN { exit !(w < u) }' || break
+    done
+    printf '%s %s\n' "$(printf '%s\n' $ct_cs | median)" "$(printf '%s\n' $ct_ws | median)" >"$ct_o"
+}
+
 # median of the numbers on stdin.
 median() { sort -g | awk '{ v[NR] = $1 } END { if (NR % 2) print v[(NR + 1) / 2]; else printf "%.3f\n", (v[NR / 2] + v[NR / 2 + 1]) / 2 }'; }
 

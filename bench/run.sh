@@ -27,11 +27,14 @@ BENCH_LOAD=$(cut -d' ' -f1-3 /proc/loadavg)
 . "$BENCH/target.sh"
 . "$BENCH/scale.sh"
 . "$BENCH/spectral.sh"
+. "$BENCH/cycles.sh"
 . "$BENCH/report.sh"
 
-# BENCH_PARTS: a subset of "ladder peer bounce target yardsticks scale spectral" (the
-# others' tables of the last run are reused by the report). The scale and spectral parts
-# write their own scale.md and spectral.md; trade.md is written when any other part ran.
+# BENCH_PARTS: a subset of "ladder peer bounce target yardsticks scale spectral cycles" (the
+# others' tables of the last run are reused by the report). The scale, spectral and cycles
+# parts write their own scale.md, spectral.md and cycles.md; trade.md is written when any
+# other part ran. cycles (Blender's Cycles, a bench tool to install by hand) runs only when
+# named.
 PARTS=${BENCH_PARTS-ladder peer bounce target yardsticks scale spectral}
 start=$(now)
 for part in $PARTS; do

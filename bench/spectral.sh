@@ -127,22 +127,6 @@ spectral_pbrt_top() {
     echo "$base-pbrt.pbrt"
 }
 
-# spectral_time OUT CMD...: CMD under GNU time; writes "cpu wall" seconds
-# (user + sys) to OUT; under 2 s of wall, the median of three runs.
-spectral_time() {
-    o=$1
-    shift
-    cs= ws=
-    for _ in 1 2 3; do
-        /usr/bin/time -f '%U %S %e' -o "$o.time" "$@" >>"$LOG" 2>&1 ||
-            { echo "bench: failed: $*" >&2; tail -5 "$LOG" >&2; exit 1; }
-        c=$(awk '{ printf "%.3f", $1 + $2 }' "$o.time") w=$(awk '{ print $3 }' "$o.time")
-        cs="$cs $c" ws="$ws $w"
-        awk -v w="$w" 'BEGIN { exit !(w < 2) }' || break
-    done
-    printf '%s %s\n' "$(printf '%s\n' $cs | median)" "$(printf '%s\n' $ws | median)" >"$o"
-}
-
 # spectral_errors A.exr REF.exr: "NMSE RELMSE" over R, G, B (NMSE: MSE over
 # REF's mean squared).
 spectral_errors() {
@@ -195,7 +179,7 @@ spectral_mode() {
     fi
     r=$SPECTRAL_DIR/run
     for n in $n1 $n2; do
-        spectral_time "$r-$n" "$HAZE" render "$top" --color "$mode" --spp "$n" --threads "$THREADS" --seed 1 -o "$r-$n.exr" --quiet
+        cpu_timed "$r-$n" 2 "$HAZE" render "$top" --color "$mode" --spp "$n" --threads "$THREADS" --seed 1 -o "$r-$n.exr" --quiet
         spectral_errors "$r-$n.exr" "$ref" >"$r-$n.err"
     done
     awk -v n1="$n1" -v n2="$n2" -v rs="$rs" -v e1="$(cut -d' ' -f1 "$r-$n1.err")" -v e2="$(cut -d' ' -f1 "$r-$n2.err")" \
