@@ -22,7 +22,10 @@ typedef struct {
     medium_ray gr;
     strata s;
     rgb T, Lseg;
-    double tau; /* optical distance left to the next tentative collision */
+    /* optical distance left to the next tentative collision, Exp(1) when
+     * drawn; carried across cells (each uses up mu times its length of it),
+     * so cell boundaries draw no random numbers */
+    double tau;
     /* raymarch: a deterministic end where T falls below this, instead of
      * roulette, so that a pixel centre's value does not depend on the seed */
     double cutoff;
@@ -136,7 +139,7 @@ static bool track_cell(segment_walk *sw, const majorant_segment *seg, cell_rates
             sw->T = collide(sw->T, sw->sigma_t, d, c.mu);
             if (!singlescatter_roulette(&sw->T, r))
                 return false;
-            sw->tau = exp1(r);
+            sw->tau = rng_exp1(r);
         }
         if (x > pos) {
             sw->tau = fmax(sw->tau - c.mu * (x - pos), 0.0);
@@ -212,7 +215,7 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     if (marching)
         medium_ray_coarsen(&sw.gr, step);
     else
-        sw.tau = exp1(&walk->r);
+        sw.tau = rng_exp1(&walk->r);
     double sigma_max = rgb_max(sw.sigma_t);
     bool alive = true, skip = false; /* skip: strata up to seg.t0 lie in empty cells */
     majorant_segment seg;

@@ -64,7 +64,7 @@ static rgb grid_transmittance(const singlescatter_scene *vs, const medium *m, ve
     case TRANSMITTANCE_RESIDUAL: {
         double sigma_max = rgb_max(sigma_t);
         rgb T = rgb_grey(1.0);
-        double tau = exp1(&walk->r);
+        double tau = rng_exp1(&walk->r);
         while (next_cell(&gr, &seg, walk)) {
             if (!(seg.max > 0.0))
                 continue;
@@ -85,7 +85,7 @@ static rgb grid_transmittance(const singlescatter_scene *vs, const medium *m, ve
                     T = collide(T, sigma_t, grid_ray_density(&gr, pos, walk) - c.lo, c.mu);
                     if (!singlescatter_roulette(&T, &walk->r))
                         return T;
-                    tau = exp1(&walk->r);
+                    tau = rng_exp1(&walk->r);
                 }
             }
             if (!singlescatter_roulette(&T, &walk->r))

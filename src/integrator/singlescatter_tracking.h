@@ -139,10 +139,4 @@ static inline rgb collide(rgb T, rgb sigma_t, double d, double mu)
                             1.0 - sigma_t.b * d / mu, 1.0 - sigma_t.w * d / mu});
 }
 
-/* An optical distance to the next tentative collision, Exp(1). It is carried
- * across cells (each cell uses up mu times its length of it), so cell
- * boundaries draw no random numbers: a collision lands at the same place
- * however a ray's cells are cut, up to rounding. */
-static inline double exp1(rng *r) { return -log1p(-rng_uniform(r)); }
-
 #endif

@@ -27,7 +27,7 @@ static bool track_span(tracker *tr, double a, double b, double bound, double ext
         return true;
     }
     for (double t = a;;) {
-        double tn = t - log1p(-rng_uniform(&tr->walk->r)) / rate;
+        double tn = t + rng_exp1(&tr->walk->r) / rate;
         if (!(tn < b)) {
             tr->T_maj = rgb_mul(tr->T_maj, rgb_exp_neg(sigma_maj, b - t));
             return true;

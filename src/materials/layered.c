@@ -203,7 +203,7 @@ static inline void f_walk_layers(f_walk *fw)
             fw->z = fw->z == l->thickness ? 0.0 : l->thickness;
             fw->beta = rgb_scale(fw->beta, tr(l->thickness, fw->w));
         } else {
-            double dz = -log1p(-rng_uniform(&fw->r)) * fabs(fw->w.z);
+            double dz = rng_exp1(&fw->r) * fabs(fw->w.z);
             double zp = fw->w.z > 0.0 ? fw->z + dz : fw->z - dz;
             if (zp == fw->z)
                 continue;
@@ -299,7 +299,7 @@ bool layered_sample(const layered *l, vec3 wo, double uc, vec2 u, bsdf_sample *o
         if (w.z == 0.0)
             return false;
         if (scatters) {
-            double dz = -log1p(-rng_uniform(&r)) * fabs(w.z);
+            double dz = rng_exp1(&r) * fabs(w.z);
             double zp = w.z > 0.0 ? z + dz : z - dz;
             if (zp == z)
                 return false;
