@@ -21,10 +21,11 @@
  *
  * A ray crosses the grid with a two-level 3D DDA (Amanatides & Woo):
  * majorant_walk returns, in order, one t interval per uniform brick crossed
- * and one per cell of the other bricks, with its bounds, except that a run
- * of empty ones (no density, no emission) is one interval. Intervals whose
- * upper bound is 0 hold no medium: estimators skip them without a single
- * density lookup. */
+ * and one per cell of the other bricks (per brick, for a consumer that
+ * marches at half a brick or coarser: majorant_walk_coarsen), with its
+ * bounds, except that a run of empty ones (no density, no emission) is one
+ * interval. Intervals whose upper bound is 0 hold no medium: estimators
+ * skip them without a single density lookup. */
 #ifndef HAZE_MEDIA_MAJORANT_H
 #define HAZE_MEDIA_MAJORANT_H
 

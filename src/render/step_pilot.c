@@ -180,7 +180,7 @@ typedef struct {
     const sampler *smp;
     int n, k, threads; /* pixels, samples of each, threads */
     int start;         /* pixels a comparison starts with */
-    double budget;     /* samples the comparisons may grow to (step_pilot_budget) */
+    double budget;     /* samples the comparisons may grow to (STEP_PILOT_BUDGET) */
     double samples;    /* rendered so far */
     int renders;       /* made so far */
     int pixels;        /* the most a comparison took */
