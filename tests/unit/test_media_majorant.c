@@ -266,8 +266,6 @@ static void coarse_walk_covers_fine(const char *file, bool dense)
             assert_true(cs[k].max >= fs.max && cs[k].min <= fs.min && cs[k].emit >= fs.emit);
         }
         assert_true(nc >= 1 && cs[0].t0 == first && cs[nc - 1].t1 == fs.t1); /* the same span */
-        /* (a ray through only the empty cells of a brick that holds
-         * density is one empty run of the fine walk, a brick of the coarse) */
         all_f += nf;
         all_c += nc;
         /* a step per brick crossed at most: bricks along each axis, plus one */
@@ -276,8 +274,9 @@ static void coarse_walk_covers_fine(const char *file, bool dense)
     assert_true(hits > 1000);
     /* Where density fills most of the bricks it touches, fewer steps (on
      * smoke.vdb 2577 against 4520); on the sparse balls more (4044 against
-     * 2910: the fine walk merges a brick's empty cells into the empty run
-     * around them), but never over a step per brick. */
+     * 2910: a ray through only the empty cells of a brick that holds
+     * density is part of an empty run of the fine walk, a brick of the
+     * coarse one), but never over a step per brick. */
     if (dense)
         assert_true(all_c < 0.7 * all_f);
     destroy(&f);
