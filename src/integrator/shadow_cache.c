@@ -121,6 +121,9 @@ static void accumulate(column_walk *cw, int mi, vec3 o, vec3 w, double a, double
     bool grid = m && medium_is_density_grid(m) &&
                 medium_ray_start(m, o, w, 0.0, &g.ca, &g.cb, &g.r);
     if (grid) {
+        /* Marching at the node spacing, a piece of a brick or more needs
+         * only whether it holds density. */
+        medium_ray_coarsen(&g.r, cw->h * g.r.voxels_per_t);
         uint64_t steps = 0;
         g.more = medium_ray_next(&g.r, &g.seg, &steps);
     }
