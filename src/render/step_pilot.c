@@ -133,14 +133,17 @@ static void pilot_render(render_scene *rs, const render_marching *base, double s
  * over 512 pixels, where its bias is 1.2e-4) and the pilot chose it at
  * 1e-4. With k = 1 (deterministic estimators) the plain relMSE. *se: the
  * standard error of that mean over the n pixels. */
-static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k, double *se)
+static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k, double *se, int *differ)
 {
     double sum = 0.0, sum2 = 0.0;
+    *differ = 0;
     for (int i = 0; i < n; ++i) {
         double pixel = 0.0;
+        bool differs = false;
         for (int c = 0; c < 3; ++c) {
             double md = 0.0, mb = 0.0;
             for (int s = 0; s < k; ++s) {
+                differs |= rgb_ch(a[(size_t)i * k + s], c) != rgb_ch(b[(size_t)i * k + s], c);
                 md += rgb_ch(a[(size_t)i * k + s], c) - rgb_ch(b[(size_t)i * k + s], c);
                 mb += rgb_ch(b[(size_t)i * k + s], c);
             }
@@ -155,6 +158,7 @@ static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k, double *se)
             double r = mb + 0.01, e = sq > 0.0 ? sq / (r * r) : 0.0;
             pixel += isfinite(e) ? e / 3.0 : 0.0;
         }
+        *differ += differs;
         sum += pixel;
         sum2 += pixel * pixel;
     }
@@ -183,6 +187,7 @@ typedef struct {
     double budget;     /* samples the comparisons may grow to (STEP_PILOT_BUDGET) */
     double samples;    /* rendered so far */
     int renders;       /* made so far */
+    double finest;     /* the finest step rendered */
     int pixels;        /* the most a comparison took */
     double max_step;   /* the coarsest step tried */
     const volatile sig_atomic_t *cancel;
@@ -208,6 +213,7 @@ static void pilot_at(pilot *p, double step, pilot_image *img)
     img->m = 0;
     pilot_extend(p, img, p->start);
     ++p->renders;
+    p->finest = step < p->finest ? step : p->finest;
 }
 
 /* The samples that taking both images to m pixels adds. */
@@ -218,24 +224,35 @@ static double samples_to(const pilot *p, const pilot_image *a, const pilot_image
 
 /* The bias of the step of `coarse`, from its relMSE against the half step's
  * `fine` (midpoint marching: halving the step at least halves the error),
- * as far as it tells against `goal`: while the estimate lies within
- * STEP_PILOT_Z standard errors of the goal, both images take twice the
- * pixels (the whole grid at most), as long as the pilot's samples stay
- * within its budget. A case still close then is decided by the estimate:
- * either step's bias is near the goal. */
-static double pilot_bias(pilot *p, pilot_image *coarse, pilot_image *fine, double goal)
+ * on as many pixels as the verdict against `goal` needs where it could be
+ * wrong at a cost (doubling them, up to the whole grid, while the pilot's
+ * samples stay within its budget):
+ * - a pass that ends the walk (`pass_ends`) chooses the coarse step: it
+ *   takes pixels until it lies beyond STEP_PILOT_Z standard errors of the
+ *   goal on at least STEP_PILOT_MIN_DIFFER pixels that tell the steps apart;
+ * - a failure sends the walk one step finer: within STEP_PILOT_NEAR of the
+ *   goal it takes pixels until it lies beyond Z standard errors (a false
+ *   one would halve the step chosen); farther it stands as it is;
+ * - a pass that does not end the walk changes nothing.
+ * A verdict still close when the budget or the grid ends stands: either
+ * step's bias is near the goal. */
+static double pilot_bias(pilot *p, pilot_image *coarse, pilot_image *fine, double goal,
+                         bool pass_ends)
 {
-    int m = coarse->m > fine->m ? coarse->m : fine->m;
+    int m = coarse->m < fine->m ? coarse->m : fine->m; /* a new image: its first pixels */
     for (;;) {
         pilot_extend(p, coarse, m);
         pilot_extend(p, fine, m);
         if (cancelled(p)) /* the images are incomplete */
             return INFINITY;
-        double se, bias = 2.0 * bias_rel_mse(coarse->px, fine->px, m, p->k, &se);
+        int differ;
+        double se, bias = 2.0 * bias_rel_mse(coarse->px, fine->px, m, p->k, &se, &differ);
         p->pixels = m > p->pixels ? m : p->pixels;
         int more = 2 * m < p->n ? 2 * m : p->n;
-        if (m >= p->n || !(fabs(bias - goal) <= 2.0 * STEP_PILOT_Z * se) ||
-            p->samples + samples_to(p, coarse, fine, more) > p->budget)
+        bool close = fabs(bias - goal) <= 2.0 * STEP_PILOT_Z * se;
+        bool settled = bias <= goal ? !pass_ends || (!close && differ >= STEP_PILOT_MIN_DIFFER)
+                                    : !close || !(bias <= STEP_PILOT_NEAR * goal);
+        if (m >= p->n || settled || p->samples + samples_to(p, coarse, fine, more) > p->budget)
             return bias;
         m = more;
     }
@@ -248,39 +265,41 @@ static void swap_images(pilot_image **a, pilot_image **b)
     *b = t;
 }
 
-/* From x (rendered in img[0]), x doubles while twice it has a bias of at
- * most `goal` (rendered in img[2], kept in img[0] when it does): whether x
- * doubled, and *bias, that of the last x. */
-static bool go_coarser(pilot *p, pilot_image **img, double goal, double *x, double *bias)
+/* From the coarsest step `top` down: x halves, each x compared with x / 2
+ * (img[0] at x, img[1] at x / 2), until an x whose bias meets `goal` below
+ * one whose bias did not: that x. A pass above every failure does not
+ * count (two steps longer than every chord through the medium march it
+ * alike and agree however biased they are), so the walk goes on down; when
+ * every x passes down to 2 `floor_` (the scene's step), or down to the
+ * finest (x / 2 at least STEP_PILOT_MIN_STEP), the steps agree all the way
+ * and `top` is chosen. Below `floor_` only failures lead; at the finest the
+ * last x is chosen, failing. *bias: that of the x chosen. The renders go
+ * from the cheapest on, and the finest is half the step chosen (about as
+ * costly as all the coarser ones together). */
+static double go_down(pilot *p, pilot_image **img, double goal, double top, double floor_,
+                      double *bias)
 {
-    bool coarser = false;
-    while (2.0 * *x <= p->max_step && !cancelled(p)) {
-        pilot_at(p, 2.0 * *x, img[2]);
-        double coarse = pilot_bias(p, img[2], img[0], goal);
-        if (!(coarse <= goal))
-            break;
-        coarser = true;
-        *x *= 2.0;
-        *bias = coarse;
-        swap_images(&img[0], &img[2]);
-    }
-    return coarser;
-}
-
-/* From h (rendered in img[0]), h halves until its bias (against h / 2 in
- * img[1]) meets `goal` or h / 2 would be finer than STEP_PILOT_MIN_STEP:
- * the bias of the last h. */
-static double go_finer(pilot *p, pilot_image **img, double goal, double *h)
-{
-    pilot_at(p, *h / 2.0, img[1]);
-    double bias = pilot_bias(p, img[0], img[1], goal);
-    while (!(bias <= goal) && *h / 2.0 >= STEP_PILOT_MIN_STEP && !cancelled(p)) {
-        *h /= 2.0;
+    double x = top, top_bias = INFINITY;
+    bool failed = false;
+    pilot_at(p, x, img[0]);
+    for (;;) {
+        bool finest = x / 2.0 < STEP_PILOT_MIN_STEP, last = finest || x <= 2.0 * floor_;
+        pilot_at(p, x / 2.0, img[1]);
+        double b = pilot_bias(p, img[0], img[1], goal, failed || last);
+        if (x == top)
+            top_bias = b;
+        if (cancelled(p) || (b <= goal && failed) || (failed && finest)) {
+            *bias = b;
+            return x;
+        }
+        failed |= !(b <= goal);
+        if (!failed && last) {
+            *bias = top_bias;
+            return top;
+        }
+        x /= 2.0;
         swap_images(&img[0], &img[1]);
-        pilot_at(p, *h / 2.0, img[1]);
-        bias = pilot_bias(p, img[0], img[1], goal);
     }
-    return bias;
 }
 
 void step_pilot_choose(render_scene *rs, double target_error, int threads,
@@ -305,8 +324,8 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     if (smp.spp < k)
         sampler_set_spp(&smp, k);
     size_t bytes = (size_t)n * (size_t)k * sizeof(rgb);
-    pilot_image slots[3] = {{malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}};
-    pilot_image *img[3] = {&slots[0], &slots[1], &slots[2]};
+    pilot_image slots[2] = {{malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}};
+    pilot_image *img[2] = {&slots[0], &slots[1]};
     int *order = n >= 1 ? pilot_order(n) : NULL;
     double goal = STEP_PILOT_SHARE * target_error;
     /* Under "auto" the steps start where it puts them: finer ones march as
@@ -317,8 +336,8 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     double cache_ratio = base.shadow_cache > 0.0     ? base.shadow_cache / base.step
                          : base.shadow_cache_possible ? 1.0
                                                       : 0.0;
-    if (!slots[0].px || !slots[1].px || !slots[2].px || !order || n < 1) {
-        for (int q = 0; q < 3; ++q) /* keep the scene's steps */
+    if (!slots[0].px || !slots[1].px || !order || n < 1) {
+        for (int q = 0; q < 2; ++q) /* keep the scene's steps */
             free(slots[q].px);
         free(order);
         return;
@@ -329,34 +348,17 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     double budget = STEP_PILOT_BUDGET * (double)(fp->bounds.x1 - fp->bounds.x0) *
                     (double)(fp->bounds.y1 - fp->bounds.y0) * first_spp;
     pilot p = {rs, &base, ratio, cache_ratio, &g, order, &smp, n, k, threads,
-               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, budget, 0.0, 0, 0,
+               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, budget, 0.0, 0, INFINITY, 0,
                STEP_PILOT_MAX_STEP * base.auto_scale, cancel};
-    /* Coarser first, and cheapest first: the bias of 2x is estimated from x
-     * and 2x (img[0]: at x, img[2]: at 2x), starting at x = 2h, so a scene
-     * whose step goes coarser never renders its own; only when twice its step
-     * fails is h rendered (img[1]), for the bias of 2h. Nothing finer than h
-     * is rendered unless h fails. */
-    double bias = INFINITY, x = 4.0 * h <= p.max_step ? 2.0 * h : h;
-    pilot_at(&p, x, img[0]);
-    bool coarser = go_coarser(&p, img, goal, &x, &bias);
-    if (coarser) {
-        h = x;
-    } else if (x > h) {
-        pilot_at(&p, h, img[1]);
-        double coarse = pilot_bias(&p, img[0], img[1], goal);
-        if (coarse <= goal) {
-            coarser = true;
-            h = x;
-            bias = coarse;
-        } else { /* img[0]: at h */
-            swap_images(&img[0], &img[1]);
-        }
-    }
-    if (!coarser && !cancelled(&p)) /* h itself, or finer */
-        bias = go_finer(&p, img, goal, &h);
+    /* The lattice of steps h 2^j, from the coarsest within max_step down. */
+    double top = h;
+    while (2.0 * top <= p.max_step)
+        top *= 2.0;
+    double bias = INFINITY;
+    h = go_down(&p, img, goal, top, h, &bias);
     if (cancelled(&p)) { /* the scene's own steps; the render stops at once */
         render_scene_set_marching(rs, &base);
-        for (int q = 0; q < 3; ++q)
+        for (int q = 0; q < 2; ++q)
             free(slots[q].px);
         free(order);
         return;
@@ -369,8 +371,9 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     render_scene_keep_current_cache(rs);
     render_marching set;
     render_scene_marching(rs, &set); /* 0 if the cache could not be built */
-    *out = (step_choice){true, m.step, m.shadow_step, set.shadow_cache, bias, p.pixels, p.renders};
-    for (int q = 0; q < 3; ++q)
+    *out = (step_choice){true,    m.step,   m.shadow_step, set.shadow_cache,
+                         bias,    p.pixels, p.renders,     p.finest};
+    for (int q = 0; q < 2; ++q)
         free(slots[q].px);
     free(order);
 }

@@ -8,12 +8,12 @@
  * then subtracted: per pixel the squared mean difference less its variance);
  * twice their relMSE (haze diff's) estimates the bias of h
  * (midpoint marching: halving the step at least halves the error), on as
- * many of the grid's pixels as tell it from the goal (STEP_PILOT_Z). From the
- * scene's step the step doubles while twice it still has a bias of at most
- * STEP_PILOT_SHARE of the target (cheapest first: 4h against 2h before 2h
- * against h, so a step that goes coarser never renders the scene's own, and
- * nothing finer is rendered), else halves until it has; the shadow step
- * keeps its ratio to it. The
+ * many of the grid's pixels as tell it from the goal (STEP_PILOT_Z). The
+ * steps are the scene's times powers of two; from the coarsest within
+ * STEP_PILOT_MAX_STEP the step halves until its bias is at most STEP_PILOT_SHARE
+ * of the target below one that was not (cheapest first, and nothing finer
+ * than half the step chosen is rendered); the shadow step keeps its ratio
+ * to it. The
  * shadow cache's spacing (integrator/shadow_cache.h) does too; where the
  * scene has none but one applies (a static scene, a distant light, a grid
  * medium), the pilot uses one at the step's spacing, its bias measured with
@@ -44,6 +44,15 @@
  * case costs a fraction of the grid, a close one all of it. */
 #define STEP_PILOT_START_PIXELS 64
 #define STEP_PILOT_Z 3.0
+/* ... and while fewer than this many of its pixels tell the two steps apart
+ * (pixels whose rays miss the media read the same at every step: on the
+ * bench cloud, which covers a sixth of the image, 64 pixels held about ten
+ * that do, and a clear verdict on those chose step 32 where step 8 was
+ * already too coarse). */
+#define STEP_PILOT_MIN_DIFFER 32
+/* A failure more than this many times the goal stands on the pixels it has
+ * (pilot_bias). */
+#define STEP_PILOT_NEAR 4.0
 /* Comparisons grow only while the pilot's samples stay within this share of
  * the render's first pass (two samples of every pixel): on a small image a
  * pilot stays a small part of a render that may end after that pass. Each
@@ -62,6 +71,7 @@ typedef struct {
     double bias;    /* the estimated relMSE of the chosen step */
     int pixels;     /* of the pilot grid, the most a comparison took */
     int renders;    /* pilot renders made */
+    double finest;  /* voxels: the finest step they were at */
 } step_choice;
 
 /* Chooses the step for `target_error` (> 0) and sets it on `rs`, rendering

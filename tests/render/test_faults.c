@@ -475,10 +475,47 @@ static void test_sigint_before_any_slow_tile(void **state)
     interrupt_expect_nothing(spawn(scene, out, NULL, LIMIT_NONE, 0), 1.5, "slow-none", out, 2.5);
 }
 
-/* --target-error's step pilot on the slow scene (every pilot render marches
- * at its step of a millionth of a voxel): SIGINT stops the pilot too, within
- * the sample under way, and the render writes nothing, at once. Before, the
- * pilot ran its renders to their end first (minutes here). */
+/* A scene whose step pilot takes seconds: the camera looks down a grid a
+ * thousand voxels long whose density alternates every three voxels, marched
+ * (raymarch), so that at --target-error 1e-8 the pilot halves its step down
+ * to a 64th of a voxel, some 64,000 lookups a ray. */
+static void write_slow_pilot_scene(const char *path)
+{
+    enum { NZ = 1000 };
+    static char text[NZ * 16 + 2048];
+    size_t n = (size_t)snprintf(text, sizeof text,
+                                "LookAt 0 0 -50  0 0 0  0 1 0\n"
+                                "Camera \"perspective\" \"float fov\" 4\n"
+                                "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+                                "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
+                                "Integrator \"singlescatter\" \"float stepsize\" 1\n"
+                                "  \"string transmittance\" \"raymarch\"\n"
+                                "  \"string shadowtransmittance\" \"raymarch\"\n"
+                                "WorldBegin\n"
+                                "LightSource \"infinite\" \"rgb L\" [0.2 0.25 0.3]\n"
+                                "MakeNamedMedium \"long\" \"string type\" \"uniformgrid\"\n"
+                                "  \"integer nx\" 2 \"integer ny\" 2 \"integer nz\" %d\n"
+                                "  \"point3 p0\" [-0.7 -0.7 -20] \"point3 p1\" [0.7 0.7 20]\n"
+                                "  \"rgb sigma_a\" [0.02 0.02 0.02] \"rgb sigma_s\" [0.05 0.05 0.05]\n"
+                                "  \"float density\" [",
+                                NZ);
+    for (int k = 0; k < NZ; ++k)
+        n += (size_t)snprintf(text + n, sizeof text - n, "%s", (k / 3) % 2 ? " 1 1 1 1" : " 0.2 0.2 0.2 0.2");
+    snprintf(text + n, sizeof text - n,
+             "]\n"
+             "AttributeBegin\n"
+             "  Material \"interface\"\n"
+             "  MediumInterface \"long\" \"\"\n"
+             "  Scale 1 1 20\n"
+             "  Shape \"sphere\" \"float radius\" 1\n"
+             "AttributeEnd\n");
+    write_text_file(path, text);
+}
+
+/* --target-error's step pilot on a scene whose pilot takes seconds: SIGINT
+ * stops the pilot too, within the sample under way, and the render writes
+ * nothing, at once. Before issue 42, the pilot ran its renders to their end
+ * first. */
 static void test_sigint_during_step_pilot(void **state)
 {
     (void)state;
@@ -486,11 +523,11 @@ static void test_sigint_during_step_pilot(void **state)
     snprintf(scene, sizeof scene, "%s/slow-pilot.pbrt", dir);
     snprintf(out, sizeof out, "%s/slow-pilot.exr", dir);
     unlink(out);
-    write_slow_scene(scene, NULL);
+    write_slow_pilot_scene(scene);
     char *argv[] = {"haze", "render", scene, "-o", out, "--threads", "2", "--quiet",
-                    "--target-error", "1e-3", NULL};
-    /* The pilot stops at its next sample: one sample of this scene takes
-     * about 0.3 s here, about 20 s under AddressSanitizer. */
+                    "--target-error", "1e-8", NULL};
+    /* The pilot stops at its next sample (its renders take 6.6 s in all
+     * here, the finest a few ms a sample; more under AddressSanitizer). */
     interrupt_expect_nothing(spawn_argv(argv, LIMIT_NONE, 0), 1.5, "slow-pilot", out,
                              UNDER_ASAN ? 60.0 : 2.5);
 }

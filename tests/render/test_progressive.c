@@ -991,10 +991,12 @@ static void test_step_pilot(void **state)
     render_scene_destroy(fine);
     render_scene_destroy(coarse);
 
-    /* From a fine step and a loose target it goes coarser (renders nothing
-     * finer than the scene's step) and stays within the share. */
+    /* From a fine step and a loose target it goes coarser and stays within
+     * the share; coming down from the coarsest step, it renders nothing
+     * finer than half the step it chooses (not the scene's own step). */
     chosen = pilot_bias("raymarch", 0.25, 1e-2, 1, &ch);
     assert_true(ch.step > 0.25 && chosen <= STEP_PILOT_SHARE * 1e-2);
+    assert_true(ch.finest == 0.5 * ch.step);
     /* Jittered marching: its noise is told from its bias (8 paired samples
      * per pilot pixel); measured with 64 samples per pixel. */
     chosen = pilot_bias("jittered", 8.0, E, 64, &ch);
@@ -1027,6 +1029,47 @@ static void test_step_pilot(void **state)
     step_pilot_choose(rs, E, 2, NULL, &ch);
     assert_false(ch.applies);
     render_scene_destroy(rs);
+}
+
+/* The step pilot where the medium covers a small part of the image: the
+ * bench cloud (volumes/plume.vdb, a sixth of a 320x240 image) at E = 1e-2.
+ * Of a comparison's first 64 pixels about ten see the cloud; on those the
+ * comparison of steps 32 and 16 read as a clear pass and the pilot chose
+ * step 32. Comparisons now take pixels until 32 of them tell the steps
+ * apart: steps 8 and 4 then differ by an estimated 1.9e-2 (four times the
+ * goal), so the step chosen is finer than 8. */
+static void test_step_pilot_small_medium(void **state)
+{
+    (void)state;
+    char text[4096];
+    snprintf(text, sizeof text,
+             "LookAt 1.2 1.1 -3.0  -0.05 0.95 -0.05  0 1 0\n"
+             "Camera \"perspective\" \"float fov\" 40\n"
+             "Film \"rgb\" \"integer xresolution\" 320 \"integer yresolution\" 240\n"
+             "Sampler \"zsobol\" \"integer pixelsamples\" 16\n"
+             "WorldBegin\n"
+             "LightSource \"distant\" \"point3 from\" [-2 1.2 -1] \"point3 to\" [0 0 0]"
+             " \"rgb L\" [9 8.5 8]\n"
+             "LightSource \"infinite\" \"rgb L\" [0.08 0.1 0.14]\n"
+             "MakeNamedMedium \"cloud\" \"string type\" \"nanovdb\" \"string filename\" \"%s\"\n"
+             "    \"rgb sigma_a\" [0.5 0.5 0.5] \"rgb sigma_s\" [60 60 60] \"float g\" 0.6\n"
+             "AttributeBegin\n  Material \"interface\"\n  MediumInterface \"cloud\" \"\"\n"
+             "  Shape \"trianglemesh\" \"integer indices\" [0 6 2  0 4 6  1 3 7  1 7 5  0 1 5"
+             "  0 5 4  2 7 3  2 6 7  0 3 1  0 2 3  4 5 7  4 7 6]\n"
+             "    \"point3 P\" [-0.42 -0.05 -0.42  0.31 -0.05 -0.42  -0.42 1.96 -0.42"
+             "  0.31 1.96 -0.42  -0.42 -0.05 0.31  0.31 -0.05 0.31  -0.42 1.96 0.31"
+             "  0.31 1.96 0.31]\n"
+             "AttributeEnd\n",
+             HAZE_SCENES "/../volumes/plume.vdb");
+    render_scene *rs = build_scene_or_fail(text, NULL);
+    step_choice ch;
+    step_pilot_choose(rs, 1e-2, 2, NULL, &ch);
+    print_message("pilot on the cloud: step %g, bias %.3g, %d pixels, %d renders\n", ch.step,
+                  ch.bias, ch.pixels, ch.renders);
+    render_scene_destroy(rs);
+    assert_true(ch.applies);
+    assert_true(ch.step < 8.0 && ch.bias <= STEP_PILOT_SHARE * 1e-2);
+    assert_true(ch.pixels > STEP_PILOT_START_PIXELS);
 }
 
 static char dir[1024];
@@ -1148,6 +1191,7 @@ int main(void)
         cmocka_unit_test(test_pass_estimates),
         cmocka_unit_test(test_target_error_heavy_tails),
         cmocka_unit_test(test_step_pilot),
+        cmocka_unit_test(test_step_pilot_small_medium),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
