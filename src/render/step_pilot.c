@@ -63,6 +63,7 @@ typedef struct {
     rgb *out;
     const volatile sig_atomic_t *cancel; /* NULL, or a signal's flag: stop */
     atomic_int next; /* the next pixel of the order to take */
+    atomic_uint_fast64_t lookups; /* density lookups made (a sum: the same on any threads) */
 } pilot_job;
 
 enum { PILOT_PIXELS_PER_TAKE = 16 };
@@ -100,14 +101,15 @@ static void *pilot_worker(void *arg)
             }
         }
     }
+    atomic_fetch_add(&job->lookups, counters.density_lookups);
     return NULL;
 }
 
 /* Pixels first .. last - 1 (of `order`) of the pilot image at `step`: the
  * scene's estimators at each pixel centre, samples 0 .. k - 1 of it
  * (out[pixel * k + sample]), on `threads` threads (each value depends only
- * on its pixel and sample). */
-static void pilot_render(render_scene *rs, const render_marching *base, double step,
+ * on its pixel and sample). Returns the density lookups it made. */
+static uint64_t pilot_render(render_scene *rs, const render_marching *base, double step,
                          double shadow_ratio, double cache_ratio, const pilot_grid *g,
                          const int *order, int first, int last, const sampler *smp, int k,
                          int threads, const volatile sig_atomic_t *cancel, rgb *out)
@@ -120,7 +122,9 @@ static void pilot_render(render_scene *rs, const render_marching *base, double s
     pilot_job job = {.rs = rs, .g = g, .order = order, .last = last,
                      .smp = smp, .k = k, .out = out, .cancel = cancel};
     atomic_init(&job.next, first);
+    atomic_init(&job.lookups, 0);
     hz_parallel_run(threads, pilot_worker, &job);
+    return atomic_load(&job.lookups);
 }
 
 /* haze diff's relMSE of the expected image a against b, mean of (a -
@@ -167,11 +171,13 @@ static double bias_rel_mse(const rgb *a, const rgb *b, int n, int k, double *se,
     return mean;
 }
 
-/* A pilot image: pixels 0 .. m - 1 of the order at `step`. */
+/* A pilot image: pixels 0 .. m - 1 of the order at `step`, and their cost:
+ * samples plus density lookups. */
 typedef struct {
     rgb *px;
     double step;
     int m;
+    double cost;
 } pilot_image;
 
 /* What the pilot renders of one choice share. */
@@ -184,8 +190,8 @@ typedef struct {
     const sampler *smp;
     int n, k, threads; /* pixels, samples of each, threads */
     int start;         /* pixels a comparison starts with */
-    double budget;     /* samples the comparisons may grow to (STEP_PILOT_BUDGET) */
-    double samples;    /* rendered so far */
+    double first_pass; /* samples of the render's first pass */
+    double cost;       /* samples and density lookups rendered so far */
     int renders;       /* made so far */
     double finest;     /* the finest step rendered */
     int pixels;        /* the most a comparison took */
@@ -200,9 +206,12 @@ static void pilot_extend(pilot *p, pilot_image *img, int m)
 {
     if (img->m >= m)
         return;
-    pilot_render(p->rs, p->base, img->step, p->shadow_ratio, p->cache_ratio, p->g, p->order,
-                 img->m, m, p->smp, p->k, p->threads, p->cancel, img->px);
-    p->samples += (double)(m - img->m) * p->k;
+    double cost = (double)(m - img->m) * p->k +
+                  (double)pilot_render(p->rs, p->base, img->step, p->shadow_ratio,
+                                       p->cache_ratio, p->g, p->order, img->m, m, p->smp, p->k,
+                                       p->threads, p->cancel, img->px);
+    p->cost += cost;
+    img->cost += cost;
     img->m = m;
 }
 
@@ -211,22 +220,33 @@ static void pilot_at(pilot *p, double step, pilot_image *img)
 {
     img->step = step;
     img->m = 0;
+    img->cost = 0.0;
     pilot_extend(p, img, p->start);
     ++p->renders;
     p->finest = step < p->finest ? step : p->finest;
 }
 
-/* The samples that taking both images to m pixels adds. */
-static double samples_to(const pilot *p, const pilot_image *a, const pilot_image *b, int m)
+/* What taking both images to m pixels would add to the pilot's cost, at
+ * each image's cost a pixel so far. */
+static double cost_to(const pilot_image *a, const pilot_image *b, int m)
 {
-    return ((double)(m > a->m ? m - a->m : 0) + (double)(m > b->m ? m - b->m : 0)) * p->k;
+    return (m > a->m ? m - a->m : 0) * (a->cost / a->m) +
+           (m > b->m ? m - b->m : 0) * (b->cost / b->m);
+}
+
+/* The pilot's budget when it would choose the step of `coarse`: a share of
+ * the render's first pass at that step, its cost a sample as the pilot
+ * measured it. */
+static double budget_at(const pilot *p, const pilot_image *coarse)
+{
+    return STEP_PILOT_BUDGET * p->first_pass * (coarse->cost / ((double)coarse->m * p->k));
 }
 
 /* The bias of the step of `coarse`, from its relMSE against the half step's
  * `fine` (midpoint marching: halving the step at least halves the error),
  * on as many pixels as the verdict against `goal` needs where it could be
  * wrong at a cost (doubling them, up to the whole grid, while the pilot's
- * samples stay within its budget):
+ * cost stays within its budget, budget_at):
  * - a pass that ends the walk (`pass_ends`) chooses the coarse step: it
  *   takes pixels until it lies beyond STEP_PILOT_Z standard errors of the
  *   goal on at least STEP_PILOT_MIN_DIFFER pixels that tell the steps apart;
@@ -252,7 +272,7 @@ static double pilot_bias(pilot *p, pilot_image *coarse, pilot_image *fine, doubl
         bool close = fabs(bias - goal) <= 2.0 * STEP_PILOT_Z * se;
         bool settled = bias <= goal ? !pass_ends || (!close && differ >= STEP_PILOT_MIN_DIFFER)
                                     : !close || !(bias <= STEP_PILOT_NEAR * goal);
-        if (m >= p->n || settled || p->samples + samples_to(p, coarse, fine, more) > p->budget)
+        if (m >= p->n || settled || p->cost + cost_to(coarse, fine, more) > budget_at(p, coarse))
             return bias;
         m = more;
     }
@@ -324,7 +344,7 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     if (smp.spp < k)
         sampler_set_spp(&smp, k);
     size_t bytes = (size_t)n * (size_t)k * sizeof(rgb);
-    pilot_image slots[2] = {{malloc(bytes), 0.0, 0}, {malloc(bytes), 0.0, 0}};
+    pilot_image slots[2] = {{malloc(bytes), 0.0, 0, 0.0}, {malloc(bytes), 0.0, 0, 0.0}};
     pilot_image *img[2] = {&slots[0], &slots[1]};
     int *order = n >= 1 ? pilot_order(n) : NULL;
     double goal = STEP_PILOT_SHARE * target_error;
@@ -345,10 +365,10 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     /* The render's first pass takes two samples a pixel (at most spp). */
     const film_params *fp = film_get_params(render_scene_film(rs));
     int first_spp = render_scene_sampler(rs)->spp < 2 ? render_scene_sampler(rs)->spp : 2;
-    double budget = STEP_PILOT_BUDGET * (double)(fp->bounds.x1 - fp->bounds.x0) *
-                    (double)(fp->bounds.y1 - fp->bounds.y0) * first_spp;
+    double first_pass =
+        (double)(fp->bounds.x1 - fp->bounds.x0) * (double)(fp->bounds.y1 - fp->bounds.y0) * first_spp;
     pilot p = {rs, &base, ratio, cache_ratio, &g, order, &smp, n, k, threads,
-               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, budget, 0.0, 0, INFINITY, 0,
+               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, first_pass, 0.0, 0, INFINITY, 0,
                STEP_PILOT_MAX_STEP * base.auto_scale, cancel};
     /* The lattice of steps h 2^j, from the coarsest within max_step down. */
     double top = h;

@@ -53,10 +53,14 @@
 /* A failure more than this many times the goal stands on the pixels it has
  * (pilot_bias). */
 #define STEP_PILOT_NEAR 4.0
-/* Comparisons grow only while the pilot's samples stay within this share of
- * the render's first pass (two samples of every pixel): on a small image a
- * pilot stays a small part of a render that may end after that pass. Each
- * comparison's first STEP_PILOT_START_PIXELS are taken whatever the budget. */
+/* Comparisons grow only while the pilot's cost stays within this share of
+ * the render's first pass (two samples of every pixel) at the step the
+ * comparison would choose: on a small image a pilot stays a small part of a
+ * render that may end after that pass. Costs are samples plus density
+ * lookups, counted in the pilot's renders (a count, the same on any number
+ * of threads): the coarse renders at the top of the walk take little of it.
+ * Each comparison's first STEP_PILOT_START_PIXELS are taken whatever the
+ * budget. */
 #define STEP_PILOT_BUDGET 0.1
 /* Samples per pilot pixel of a random (jittered) estimator. */
 #define STEP_PILOT_SAMPLES 8

@@ -1010,8 +1010,8 @@ static void test_step_pilot(void **state)
     render_scene_destroy(rs);
     assert_true(one.step == ch.step && one.bias == ch.bias && one.renders == ch.renders);
     /* On this 32x32 image the render's first pass is 2048 samples: a tenth
-     * of that is less than one comparison's first 64 pixels of 8 samples,
-     * so no comparison grows past them. */
+     * of that (at any step's cost a sample) is less than one comparison's
+     * first 64 pixels of 8 samples, so no comparison grows past them. */
     assert_int_equal(ch.pixels, STEP_PILOT_START_PIXELS);
     /* The same with the render capped at 2 samples a pixel (--spp 2): the
      * pilot's 8 samples are its own, not the render's 2. */
