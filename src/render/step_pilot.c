@@ -190,7 +190,9 @@ typedef struct {
     const sampler *smp;
     int n, k, threads; /* pixels, samples of each, threads */
     int start;         /* pixels a comparison starts with */
-    double first_pass; /* samples of the render's first pass */
+    double pixels_img; /* of the image */
+    double first_spp, max_spp; /* of the render's first pass; its cap */
+    double target;     /* E */
     double cost;       /* samples and density lookups rendered so far */
     int renders;       /* made so far */
     double finest;     /* the finest step rendered */
@@ -234,12 +236,40 @@ static double cost_to(const pilot_image *a, const pilot_image *b, int m)
            (m > b->m ? m - b->m : 0) * (b->cost / b->m);
 }
 
+/* The relMSE of one sample of `img` (its pixels' sample variance over
+ * (mean + 0.01)^2, haze diff's weighting; 0 with one sample a pixel): the
+ * noise of a pixel centre's estimate, a lower bound of a pixel's. */
+static double one_sample_rel_mse(const pilot_image *img, int k)
+{
+    if (k < 2 || img->m < 1)
+        return 0.0;
+    double sum = 0.0;
+    for (int i = 0; i < img->m; ++i)
+        for (int c = 0; c < 3; ++c) {
+            double mean = 0.0, var = 0.0;
+            for (int s = 0; s < k; ++s)
+                mean += rgb_ch(img->px[(size_t)i * k + s], c);
+            mean /= k;
+            for (int s = 0; s < k; ++s) {
+                double d = rgb_ch(img->px[(size_t)i * k + s], c) - mean;
+                var += d * d;
+            }
+            double r = mean + 0.01, e = var / (k - 1) / (r * r);
+            sum += isfinite(e) ? e : 0.0;
+        }
+    return sum / (3.0 * img->m);
+}
+
 /* The pilot's budget when it would choose the step of `coarse`: a share of
- * the render's first pass at that step, its cost a sample as the pilot
- * measured it. */
+ * the render at that step, at the cost a sample the pilot measured there.
+ * The render takes at least its first pass, and at least the samples that
+ * bring the noise of `coarse`'s pixel centres down to E (fewer than it
+ * will take: pixels vary over their area too, and the bias takes a share
+ * of E), up to its cap. */
 static double budget_at(const pilot *p, const pilot_image *coarse)
 {
-    return STEP_PILOT_BUDGET * p->first_pass * (coarse->cost / ((double)coarse->m * p->k));
+    double spp = fmin(p->max_spp, fmax(p->first_spp, one_sample_rel_mse(coarse, p->k) / p->target));
+    return STEP_PILOT_BUDGET * p->pixels_img * spp * (coarse->cost / ((double)coarse->m * p->k));
 }
 
 /* The bias of the step of `coarse`, from its relMSE against the half step's
@@ -364,11 +394,11 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     }
     /* The render's first pass takes two samples a pixel (at most spp). */
     const film_params *fp = film_get_params(render_scene_film(rs));
-    int first_spp = render_scene_sampler(rs)->spp < 2 ? render_scene_sampler(rs)->spp : 2;
-    double first_pass =
-        (double)(fp->bounds.x1 - fp->bounds.x0) * (double)(fp->bounds.y1 - fp->bounds.y0) * first_spp;
+    double max_spp = render_scene_sampler(rs)->spp, first_spp = max_spp < 2 ? max_spp : 2;
+    double pixels_img = (double)(fp->bounds.x1 - fp->bounds.x0) * (double)(fp->bounds.y1 - fp->bounds.y0);
     pilot p = {rs, &base, ratio, cache_ratio, &g, order, &smp, n, k, threads,
-               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, first_pass, 0.0, 0, INFINITY, 0,
+               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, pixels_img, first_spp, max_spp,
+               target_error, 0.0, 0, INFINITY, 0,
                STEP_PILOT_MAX_STEP * base.auto_scale, cancel};
     /* The lattice of steps h 2^j, from the coarsest within max_step down. */
     double top = h;

@@ -54,9 +54,10 @@
  * (pilot_bias). */
 #define STEP_PILOT_NEAR 4.0
 /* Comparisons grow only while the pilot's cost stays within this share of
- * the render's first pass (two samples of every pixel) at the step the
- * comparison would choose: on a small image a pilot stays a small part of a
- * render that may end after that pass. Costs are samples plus density
+ * the render at the step the comparison would choose: at least its first
+ * pass (two samples of every pixel; on a small image a pilot stays a small
+ * part of a render that may end after that pass), and at least the samples
+ * that bring the noise of the pilot's pixel centres down to E. Costs are samples plus density
  * lookups, counted in the pilot's renders (a count, the same on any number
  * of threads): the coarse renders at the top of the walk take little of it.
  * Each comparison's first STEP_PILOT_START_PIXELS are taken whatever the
