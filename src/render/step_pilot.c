@@ -395,10 +395,11 @@ void step_pilot_choose(render_scene *rs, double target_error, int threads,
     /* The render's first pass takes two samples a pixel (at most spp). */
     const film_params *fp = film_get_params(render_scene_film(rs));
     double max_spp = render_scene_sampler(rs)->spp, first_spp = max_spp < 2 ? max_spp : 2;
-    double pixels_img = (double)(fp->bounds.x1 - fp->bounds.x0) * (double)(fp->bounds.y1 - fp->bounds.y0);
+    double pixels_img =
+        (double)(fp->bounds.x1 - fp->bounds.x0) * (double)(fp->bounds.y1 - fp->bounds.y0);
     pilot p = {rs, &base, ratio, cache_ratio, &g, order, &smp, n, k, threads,
-               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n, pixels_img, first_spp, max_spp,
-               target_error, 0.0, 0, INFINITY, 0,
+               STEP_PILOT_START_PIXELS < n ? STEP_PILOT_START_PIXELS : n,
+               pixels_img, first_spp, max_spp, target_error, 0.0, 0, INFINITY, 0,
                STEP_PILOT_MAX_STEP * base.auto_scale, cancel};
     /* The lattice of steps h 2^j, from the coarsest within max_step down. */
     double top = h;

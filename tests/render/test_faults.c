@@ -483,24 +483,26 @@ static void write_slow_pilot_scene(const char *path)
 {
     enum { NZ = 1000 };
     static char text[NZ * 16 + 2048];
-    size_t n = (size_t)snprintf(text, sizeof text,
-                                "LookAt 0 0 -50  0 0 0  0 1 0\n"
-                                "Camera \"perspective\" \"float fov\" 4\n"
-                                "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
-                                "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
-                                "Integrator \"singlescatter\" \"float stepsize\" 1\n"
-                                "  \"string transmittance\" \"raymarch\"\n"
-                                "  \"string shadowtransmittance\" \"raymarch\"\n"
-                                "WorldBegin\n"
-                                "LightSource \"infinite\" \"rgb L\" [0.2 0.25 0.3]\n"
-                                "MakeNamedMedium \"long\" \"string type\" \"uniformgrid\"\n"
-                                "  \"integer nx\" 2 \"integer ny\" 2 \"integer nz\" %d\n"
-                                "  \"point3 p0\" [-0.7 -0.7 -20] \"point3 p1\" [0.7 0.7 20]\n"
-                                "  \"rgb sigma_a\" [0.02 0.02 0.02] \"rgb sigma_s\" [0.05 0.05 0.05]\n"
-                                "  \"float density\" [",
-                                NZ);
+    size_t n = (size_t)snprintf(
+        text, sizeof text,
+        "LookAt 0 0 -50  0 0 0  0 1 0\n"
+        "Camera \"perspective\" \"float fov\" 4\n"
+        "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
+        "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
+        "Integrator \"singlescatter\" \"float stepsize\" 1\n"
+        "  \"string transmittance\" \"raymarch\"\n"
+        "  \"string shadowtransmittance\" \"raymarch\"\n"
+        "WorldBegin\n"
+        "LightSource \"infinite\" \"rgb L\" [0.2 0.25 0.3]\n"
+        "MakeNamedMedium \"long\" \"string type\" \"uniformgrid\"\n"
+        "  \"integer nx\" 2 \"integer ny\" 2 \"integer nz\" %d\n"
+        "  \"point3 p0\" [-0.7 -0.7 -20] \"point3 p1\" [0.7 0.7 20]\n"
+        "  \"rgb sigma_a\" [0.02 0.02 0.02] \"rgb sigma_s\" [0.05 0.05 0.05]\n"
+        "  \"float density\" [",
+        NZ);
     for (int k = 0; k < NZ; ++k)
-        n += (size_t)snprintf(text + n, sizeof text - n, "%s", (k / 3) % 2 ? " 1 1 1 1" : " 0.2 0.2 0.2 0.2");
+        n += (size_t)snprintf(text + n, sizeof text - n, "%s",
+                              (k / 3) % 2 ? " 1 1 1 1" : " 0.2 0.2 0.2 0.2");
     snprintf(text + n, sizeof text - n,
              "]\n"
              "AttributeBegin\n"
