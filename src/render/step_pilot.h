@@ -39,12 +39,14 @@
 #define STEP_PILOT_SHARE_OF_IMAGE 64
 #define STEP_PILOT_MIN_PIXELS 256
 /* A comparison of two steps starts on this many of the grid's pixels (an
- * even spread of them) and doubles them while its bias estimate lies
- * within STEP_PILOT_Z standard errors (over pixels) of the goal: a clear
- * case costs a fraction of the grid, a close one all of it. */
+ * even spread of them) and doubles them where its verdict could be wrong at
+ * a cost (step_pilot.c, pilot_bias): while its bias estimate lies within
+ * STEP_PILOT_Z standard errors (over pixels) of the goal, so that a clear
+ * case costs a fraction of the grid and a close one up to all of it ... */
 #define STEP_PILOT_START_PIXELS 64
 #define STEP_PILOT_Z 3.0
-/* ... and while fewer than this many of its pixels tell the two steps apart
+/* ... and, for a pass that would choose its step, while fewer than this
+ * many of its pixels tell the two steps apart
  * (pixels whose rays miss the media read the same at every step: on the
  * bench cloud, which covers a sixth of the image, 64 pixels held about ten
  * that do, and a clear verdict on those chose step 32 where step 8 was
@@ -57,9 +59,10 @@
  * the render at the step the comparison would choose: at least its first
  * pass (two samples of every pixel; on a small image a pilot stays a small
  * part of a render that may end after that pass), and at least the samples
- * that bring the noise of the pilot's pixel centres down to E. Costs are samples plus density
- * lookups, counted in the pilot's renders (a count, the same on any number
- * of threads): the coarse renders at the top of the walk take little of it.
+ * that bring the noise of the pilot's pixel centres down to E. Costs are
+ * samples plus density lookups, counted in the pilot's renders (a count,
+ * the same on any number of threads): the coarse renders at the top of the
+ * walk take little of it.
  * Each comparison's first STEP_PILOT_START_PIXELS are taken whatever the
  * budget. */
 #define STEP_PILOT_BUDGET 0.1
