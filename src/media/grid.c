@@ -909,7 +909,7 @@ static grid_block leaf_block_of(const grid *g, uint64_t leaf, float vmin, float 
 {
     if (!all) /* statistics cover active voxels; the others hold the background */
         vmin = min_of(vmin, g->background);
-    return (grid_block){vmin, vmax, (uint32_t)leaf,
+    return (grid_block){vmin, vmax, leaf,
                         all    ? GRID_BLOCK_FULL
                         : some ? GRID_BLOCK_PARTIAL
                                : GRID_BLOCK_ZERO};

@@ -173,7 +173,7 @@ typedef enum {
 
 typedef struct {
     float min, max;          /* as grid_region_range over the block's voxels */
-    uint32_t leaf;           /* GRID_BLOCK_PARTIAL: the leaf's byte offset in the buffer */
+    uint64_t leaf;           /* GRID_BLOCK_PARTIAL: the leaf's byte offset in the buffer */
     grid_block_support support; /* for a zero background (else see grid_region_support) */
 } grid_block;
 

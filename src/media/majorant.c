@@ -12,7 +12,7 @@
 /* A brick of the largest cells is 2^30 voxels: at most 5 per axis of the
  * int32 index space, so the layout always fits. */
 #define MAX_CELL (1 << 27)
-/* The most 8^3 blocks a worker reads a brick's box into (8 MiB): bricks of
+/* The most 8^3 blocks a worker reads a brick's box into (12 MiB): bricks of
  * leaf-sized cells take 10^3, of 64-voxel cells 66^3; larger cells or pads
  * ask the tree per cell instead. */
 #define WINDOW_MAX_BLOCKS ((size_t)1 << 19)
