@@ -12,6 +12,9 @@
 #ifdef __SSE__
 #include <xmmintrin.h>
 #endif
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #include "core/parallel.h"
 
@@ -388,6 +391,71 @@ static bool full_leaf_range(const float *x, float floor_value, float *lo, float 
     return bad || !(*lo >= floor_value);
 }
 
+/* The first active zero of a leaf's values (first_zero over its active
+ * voxels). */
+static float first_active_zero(const float *x, const uint32_t *mask)
+{
+    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; ++n)
+        if ((mask[n >> 5] >> (n & 31) & 1) && x[n] == 0.0f)
+            return x[n];
+    return 0.0f;
+}
+
+/* A partly active leaf: its active values' range and whether one of them is
+ * out of range, as full_leaf_range gives a full leaf's (*lo = INFINITY,
+ * *hi = -INFINITY when none is active); *stray: whether an inactive voxel
+ * holds anything but bg (NaN included). Four voxels at a time, their mask
+ * bits spread over the lanes, without a branch per voxel. */
+static bool part_leaf_range(const float *x, const uint32_t *mask, float floor_value, float bg,
+                            float *lo, float *hi, bool *stray)
+{
+    float l = INFINITY, h = -INFINITY;
+    bool bad = false, off = false;
+#ifdef __SSE2__
+    const __m128i bit = _mm_set_epi32(8, 4, 2, 1);
+    const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY),
+                 bgv = _mm_set1_ps(bg), zero = _mm_setzero_ps();
+    __m128 l0 = inf, h0 = ninf, z0 = zero, s0 = zero;
+    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; n += 4) {
+        __m128i m = _mm_set1_epi32((int)(mask[n >> 5] >> (n & 31)));
+        __m128 on = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(m, bit), bit));
+        __m128 v = _mm_loadu_ps(x + n), va = _mm_and_ps(on, v);
+        l0 = _mm_min_ps(_mm_or_ps(va, _mm_andnot_ps(on, inf)), l0);
+        h0 = _mm_max_ps(_mm_or_ps(va, _mm_andnot_ps(on, ninf)), h0);
+        z0 = _mm_add_ps(z0, _mm_mul_ps(va, zero));
+        s0 = _mm_or_ps(s0, _mm_andnot_ps(on, _mm_cmpneq_ps(v, bgv)));
+    }
+    float lv[4], hv[4], zv[4];
+    _mm_storeu_ps(lv, l0);
+    _mm_storeu_ps(hv, h0);
+    _mm_storeu_ps(zv, z0);
+    for (int k = 0; k < 4; ++k) {
+        bad = bad || zv[k] != 0.0f;
+        l = lv[k] < l ? lv[k] : l;
+        h = hv[k] > h ? hv[k] : h;
+    }
+    off = _mm_movemask_ps(s0) != 0;
+    if (l == 0.0f)
+        l = first_active_zero(x, mask);
+    if (h == 0.0f)
+        h = first_active_zero(x, mask);
+#else
+    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; ++n) {
+        if (!(mask[n >> 5] >> (n & 31) & 1)) {
+            off = off || x[n] != bg;
+            continue;
+        }
+        bad |= !(x[n] >= floor_value && x[n] <= FLT_MAX);
+        l = x[n] < l ? x[n] : l;
+        h = x[n] > h ? x[n] : h;
+    }
+#endif
+    *lo = l;
+    *hi = h;
+    *stray = off;
+    return bad || (l != INFINITY && !(l >= floor_value));
+}
+
 /* One leaf: its mask and value table copied out in two moves (the per-voxel
  * accessors cost 5 ns a voxel), inactive values folded, active ones checked
  * without a branch per voxel. */
@@ -407,19 +475,16 @@ static int leaf_values(values *v, pnanovdb_leaf_handle_t leaf, float *lo, float 
     if (full == 0xFFFFFFFFu) { /* most leaves of a dense grid: no voxel to fold */
         bad = full_leaf_range(x, floor_value, &l, &h);
         a = true;
-    }
-    for (uint32_t n = 0; full != 0xFFFFFFFFu && n < PNANOVDB_LEAF_TABLE_COUNT; ++n) {
-        if (!(mask[n >> 5] >> (n & 31) & 1)) {
-            if (x[n] != v->bg) {
+    } else {
+        bool stray = false;
+        bad = part_leaf_range(x, mask, floor_value, v->bg, &l, &h, &stray);
+        for (uint32_t w = 0; w < PNANOVDB_LEAF_TABLE_COUNT / 32; ++w)
+            a = a || mask[w] != 0;
+        for (uint32_t n = 0; stray && n < PNANOVDB_LEAF_TABLE_COUNT; ++n)
+            if (!(mask[n >> 5] >> (n & 31) & 1) && x[n] != v->bg) {
                 memcpy(v->data + table + 4 * (uint64_t)n, &v->bg, sizeof v->bg);
                 v->folded++;
             }
-            continue;
-        }
-        bad |= !(x[n] >= floor_value && x[n] <= FLT_MAX);
-        l = x[n] < l ? x[n] : l;
-        h = x[n] > h ? x[n] : h;
-        a = true;
     }
     if (bad)
         return leaf_bad_value(v, leaf, mask, x);

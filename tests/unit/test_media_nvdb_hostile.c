@@ -263,10 +263,65 @@ static void test_many_leaves(void **state)
     free(values);
 }
 
+/* Partly active leaves (every third voxel 0, so inactive): the range is
+ * that of the active values alone, whichever lanes of the vector pass met
+ * them, and a bad active value among inactive neighbours is refused by
+ * name. */
+static void test_partial_leaves(void **state)
+{
+    (void)state;
+    enum { N = 40 };
+    float *values = malloc(sizeof(float) * N * N * N);
+    assert_non_null(values);
+    float lo = INFINITY, hi = -INFINITY;
+    for (size_t i = 0; i < (size_t)N * N * N; ++i) {
+        values[i] = i % 3 == 0 ? 0.0f : 0.3f + (float)(i % 11) * 0.0625f + (float)(i % 5) * 1e-3f;
+        if (values[i] != 0.0f) {
+            lo = values[i] < lo ? values[i] : lo;
+            hi = values[i] > hi ? values[i] : hi;
+        }
+    }
+    const double scale[3] = {1, 1, 1}, origin[3] = {0, 0, 0};
+    const struct {
+        float value;
+        const char *message;
+    } cases[] = {{0.0f, NULL},
+                 {NAN, "voxel (13, 9, 21) is NaN"},
+                 {-0.5f, "voxel (13, 9, 21) is negative (-0.5)"}};
+    const size_t at = ((size_t)21 * N + 9) * N + 13; /* voxel (13, 9, 21), active */
+    assert_true(at % 3 != 0);
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        float keep = values[at];
+        if (cases[k].message)
+            values[at] = cases[k].value;
+        vdb_buffer buf;
+        char why[256];
+        assert_int_equal(vdb_grid_from_dense(values, N, N, N, scale, origin, "density", &buf, why,
+                                             sizeof why),
+                         HZ_OK);
+        values[at] = keep;
+        grid *gr = NULL;
+        hz_error err = {0};
+        assert_int_equal(grid_create_from_buffer(&buf, "density", &gr, &err), HZ_OK);
+        if (!cases[k].message) {
+            assert_int_equal(grid_check_density(gr, &err), HZ_OK);
+            assert_true(grid_min_value(gr) == lo && grid_max_value(gr) == hi);
+            assert_int_equal(grid_inactive_folded(gr), 0);
+        } else {
+            assert_int_equal(grid_check_density(gr, &err), HZ_ERROR);
+            if (!strstr(err.message, cases[k].message))
+                fail_msg("got \"%s\", want \"%s\"", err.message, cases[k].message);
+        }
+        grid_destroy(gr);
+    }
+    free(values);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_offsets_outside),
+        cmocka_unit_test(test_partial_leaves),
         cmocka_unit_test(test_random_tree_bytes),
         cmocka_unit_test(test_bad_values),
         cmocka_unit_test(test_header_checksum),
