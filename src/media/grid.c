@@ -23,6 +23,7 @@ struct grid {
     vec3 background_vec;
     bool empty;
     uint64_t inactive_folded; /* grid_inactive_folded */
+    bool folded;              /* the value check ran: every inactive value is the background */
     nvdb_leaf_table leaves;   /* from the value check: what grid_blocks reads of each leaf */
     grid_ibox bounds;
     /* Trilinear lookups outside [min - 1, max + 1] are background: skip the tree. */
@@ -405,6 +406,7 @@ static hz_status check_values(grid *g, int nonnegative, hz_error *err)
         return hz_fail(err, "%s", why);
     g->min_value = lo;
     g->max_value = hi;
+    g->folded = true;
     return HZ_OK;
 }
 
@@ -717,23 +719,37 @@ static uint64_t leaf_yz_mask(int y0, int y1, int z0, int z1)
     return m;
 }
 
-/* The leaf's entry in the value check's table, or NULL. */
-static const nvdb_leaf_stats *leaf_stats_of(const grid *g, uint64_t at)
+/* The index of the leaf at byte offset `at` in the value check's table, or
+ * UINT32_MAX. Once per block of every brick the majorant grid bounds: the
+ * quotient by a multiplication, corrected to the exact one, not a 64-bit
+ * division (tens of cycles). */
+static uint32_t leaf_stats_index(const grid *g, uint64_t at)
 {
     const nvdb_leaf_table *t = &g->leaves;
-    if (!t->leaf || at < t->first || (at - t->first) % t->stride != 0 ||
-        (at - t->first) / t->stride >= t->count)
-        return NULL;
-    return &t->leaf[(at - t->first) / t->stride];
+    if (!t->leaf || at < t->first || t->stride == 0)
+        return UINT32_MAX;
+    uint64_t d = at - t->first;
+    uint64_t i = (uint64_t)((double)d * (1.0 / (double)t->stride));
+    while (i > 0 && i * t->stride > d)
+        --i;
+    while ((i + 1) * t->stride <= d)
+        ++i;
+    if (i * t->stride != d || i >= t->count || i >= UINT32_MAX)
+        return UINT32_MAX;
+    return (uint32_t)i;
+}
+
+static const nvdb_leaf_stats *stats_at(const grid *g, uint32_t i)
+{
+    return i == UINT32_MAX ? NULL : &g->leaves.leaf[i];
 }
 
 /* When the check's table says where a leaf's active voxels lie and the
  * window r0 .. r1 (per axis, in the leaf) holds all of them or none:
  * true, having added their bounding box (what the mask scan would find). */
-static bool leaf_support_from_stats(const grid *g, uint64_t at, const int32_t origin[3],
+static bool leaf_support_from_stats(const nvdb_leaf_stats *s, const int32_t origin[3],
                                     const int r0[3], const int r1[3], grid_ibox *acc, bool *any)
 {
-    const nvdb_leaf_stats *s = leaf_stats_of(g, at);
     if (!s)
         return false;
     const uint8_t bits[3] = {s->xs, s->ys, s->zs};
@@ -755,9 +771,10 @@ static bool leaf_support_from_stats(const grid *g, uint64_t at, const int32_t or
 }
 
 /* The active voxels of a leaf inside `box`, from its value mask (bit
- * 64 x + 8 y + z is voxel origin + (x, y, z)). */
-static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const int32_t origin[3],
-                         grid_ibox box, grid_ibox *acc, bool *any)
+ * 64 x + 8 y + z is voxel origin + (x, y, z)); `s`: its entry in the value
+ * check's table (NULL: none). */
+static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const nvdb_leaf_stats *s,
+                         const int32_t origin[3], grid_ibox box, grid_ibox *acc, bool *any)
 {
     int r0[3], r1[3];
     for (int a = 0; a < 3; ++a) {
@@ -767,16 +784,21 @@ static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const int32
         if (r1[a] < r0[a])
             return;
     }
-    if (leaf_support_from_stats(g, leaf.address.byte_offset, origin, r0, r1, acc, any))
+    if (leaf_support_from_stats(s, origin, r0, r1, acc, any))
         return;
     uint64_t yz = leaf_yz_mask(r0[1], r1[1], r0[2], r1[2]), all = 0;
     uint32_t xs = 0;
     for (int x = r0[0]; x <= r1[0]; ++x) {
-        pnanovdb_address_t at =
-            pnanovdb_address_offset(leaf.address, PNANOVDB_LEAF_OFF_VALUE_MASK + 8u * (uint32_t)x);
-        uint64_t slice = ((uint64_t)pnanovdb_read_uint32(g->buf, pnanovdb_address_offset(at, 4u)) << 32 |
-                          pnanovdb_read_uint32(g->buf, at)) &
-                         yz;
+        uint64_t slice;
+        if (s) {
+            slice = s->mask[x] & yz;
+        } else {
+            pnanovdb_address_t at = pnanovdb_address_offset(
+                leaf.address, PNANOVDB_LEAF_OFF_VALUE_MASK + 8u * (uint32_t)x);
+            slice = ((uint64_t)pnanovdb_read_uint32(g->buf, pnanovdb_address_offset(at, 4u)) << 32 |
+                     pnanovdb_read_uint32(g->buf, at)) &
+                    yz;
+        }
         if (slice) {
             xs |= 1u << x;
             all |= slice;
@@ -822,9 +844,13 @@ static void internal_support(const grid *g, grid_level level, pnanovdb_address_t
                         internal_support(g, GRID_LOWER,
                                          pnanovdb_upper_get_child(FLOAT_GRID, g->buf, up, n).address,
                                          child_origin, box, acc, any);
-                    else
-                        leaf_support(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, low, n),
+                    else {
+                        pnanovdb_leaf_handle_t leaf =
+                            pnanovdb_lower_get_child(FLOAT_GRID, g->buf, low, n);
+                        leaf_support(g, leaf,
+                                     stats_at(g, leaf_stats_index(g, leaf.address.byte_offset)),
                                      child_origin, box, acc, any);
+                    }
                     continue;
                 }
                 pnanovdb_address_t tile =
@@ -899,17 +925,17 @@ static void fill_blocks(const block_window *w, const int32_t origin[3], int32_t 
 
 static grid_block tile_block(float v)
 {
-    return (grid_block){v, v, 0, v != 0.0f ? GRID_BLOCK_FULL : GRID_BLOCK_ZERO};
+    return (grid_block){v, v, 0, UINT32_MAX, v != 0.0f ? GRID_BLOCK_FULL : GRID_BLOCK_ZERO};
 }
 
 /* A leaf of stored statistics vmin, vmax as lower_region_range and
  * leaf_support see it. */
-static grid_block leaf_block_of(const grid *g, uint64_t leaf, float vmin, float vmax, bool all,
-                                bool some)
+static grid_block leaf_block_of(const grid *g, uint64_t leaf, uint32_t stats, float vmin,
+                                float vmax, bool all, bool some)
 {
     if (!all) /* statistics cover active voxels; the others hold the background */
         vmin = min_of(vmin, g->background);
-    return (grid_block){vmin, vmax, leaf,
+    return (grid_block){vmin, vmax, leaf, stats,
                         all    ? GRID_BLOCK_FULL
                         : some ? GRID_BLOCK_PARTIAL
                                : GRID_BLOCK_ZERO};
@@ -921,9 +947,10 @@ static grid_block leaf_block_of(const grid *g, uint64_t leaf, float vmin, float 
 static grid_block leaf_block(const grid *g, pnanovdb_leaf_handle_t leaf)
 {
     uint64_t at = leaf.address.byte_offset;
-    const nvdb_leaf_stats *s = leaf_stats_of(g, at);
+    uint32_t i = leaf_stats_index(g, at);
+    const nvdb_leaf_stats *s = stats_at(g, i);
     if (s) {
-        return leaf_block_of(g, at, s->min, s->max, s->active == NVDB_LEAF_ALL_ACTIVE,
+        return leaf_block_of(g, at, i, s->min, s->max, s->active == NVDB_LEAF_ALL_ACTIVE,
                              s->active != NVDB_LEAF_NONE_ACTIVE);
     }
     uint32_t all = 0xFFFFFFFFu, some = 0;
@@ -935,7 +962,7 @@ static grid_block leaf_block(const grid *g, pnanovdb_leaf_handle_t leaf)
     }
     float vmin = pnanovdb_read_float(g->buf, pnanovdb_leaf_get_min_address(FLOAT_GRID, g->buf, leaf));
     float vmax = pnanovdb_read_float(g->buf, pnanovdb_leaf_get_max_address(FLOAT_GRID, g->buf, leaf));
-    return leaf_block_of(g, at, vmin, vmax, all == 0xFFFFFFFFu, some != 0);
+    return leaf_block_of(g, at, UINT32_MAX, vmin, vmax, all == 0xFFFFFFFFu, some != 0);
 }
 
 static void lower_blocks(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
@@ -950,11 +977,14 @@ static void lower_blocks(const grid *g, pnanovdb_lower_handle_t lower, const int
                 uint32_t n = (uint32_t)((x << 8) | (y << 4) | z);
                 const int64_t b[3] = {(int64_t)origin[0] / 8 + x, (int64_t)origin[1] / 8 + y,
                                       (int64_t)origin[2] / 8 + z};
-                *window_at(w, b) =
-                    pnanovdb_lower_get_child_mask(g->buf, lower, n)
-                        ? leaf_block(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n))
-                        : tile_block(pnanovdb_read_float(
-                              g->buf, pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, lower, n)));
+                grid_block *at = window_at(w, b);
+                if (pnanovdb_lower_get_child_mask(g->buf, lower, n))
+                    *at = leaf_block(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n));
+                else if (g->folded && !pnanovdb_lower_get_value_mask(g->buf, lower, n))
+                    *at = tile_block(g->background); /* the mask, not the value table */
+                else
+                    *at = tile_block(pnanovdb_read_float(
+                        g->buf, pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, lower, n)));
             }
 }
 
@@ -973,6 +1003,8 @@ static void upper_blocks(const grid *g, pnanovdb_upper_handle_t upper, const int
                 if (pnanovdb_upper_get_child_mask(g->buf, upper, n))
                     lower_blocks(g, pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n),
                                  child_origin, box, w);
+                else if (g->folded && !pnanovdb_upper_get_value_mask(g->buf, upper, n))
+                    fill_blocks(w, child_origin, 128, tile_block(g->background));
                 else
                     fill_blocks(w, child_origin, 128,
                                 tile_block(pnanovdb_read_float(
@@ -996,7 +1028,7 @@ void grid_blocks(const grid *g, grid_ibox blocks, grid_block *out)
         box.max[a] = blocks.max[a] * 8 + 7;
     }
     /* Where no root tile lies, every voxel reads the background. */
-    const grid_block none = {g->background, g->background, 0, GRID_BLOCK_ZERO};
+    const grid_block none = {g->background, g->background, 0, UINT32_MAX, GRID_BLOCK_ZERO};
     for (size_t i = 0; i < total; ++i)
         out[i] = none;
     uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
@@ -1025,7 +1057,8 @@ void grid_block_support_add(const grid *g, const grid_block *b, const int32_t or
         support_add_block(origin, 8, box, acc, any);
         return;
     case GRID_BLOCK_PARTIAL:
-        leaf_support(g, (pnanovdb_leaf_handle_t){{b->leaf}}, origin, box, acc, any);
+        leaf_support(g, (pnanovdb_leaf_handle_t){{b->leaf}}, stats_at(g, b->stats), origin, box,
+                     acc, any);
         return;
     }
 }

@@ -174,6 +174,7 @@ typedef enum {
 typedef struct {
     float min, max;          /* as grid_region_range over the block's voxels */
     uint64_t leaf;           /* GRID_BLOCK_PARTIAL: the leaf's byte offset in the buffer */
+    uint32_t stats;          /* its entry in the value check's leaf table (UINT32_MAX: none) */
     grid_block_support support; /* for a zero background (else see grid_region_support) */
 } grid_block;
 

@@ -541,13 +541,16 @@ static nvdb_leaf_stats leaf_stats(const values *v, pnanovdb_leaf_handle_t leaf)
         ys |= (uint8_t)((row != 0) << y);
         zs |= row;
     }
-    return (nvdb_leaf_stats){
+    nvdb_leaf_stats st = {
+        {0},
         pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_min_address(v->c.type, v->c.buf, leaf)),
         pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_max_address(v->c.type, v->c.buf, leaf)),
         all == ~0ull ? NVDB_LEAF_ALL_ACTIVE
         : some       ? NVDB_LEAF_SOME_ACTIVE
                      : NVDB_LEAF_NONE_ACTIVE,
         xs, ys, zs};
+    memcpy(st.mask, slice, sizeof slice);
+    return st;
 }
 
 static void *leaf_pass_worker(void *ctx)

@@ -40,9 +40,12 @@ void nvdb_root_range(const void *data, uint64_t size, double *lo, double *hi);
  * that the build need not touch the leaves again: the leaf's stored min/max
  * statistics, whether all, some or none of its voxels are active, and
  * where: bit c of xs (ys, zs) is set when an active voxel has x (y, z)
- * = c within the leaf. */
+ * = c within the leaf; and its value mask (slice x: bit 8 y + z), which
+ * the build's support queries read many times over, here in one compact
+ * array rather than scattered over the whole buffer. */
 enum { NVDB_LEAF_NONE_ACTIVE, NVDB_LEAF_SOME_ACTIVE, NVDB_LEAF_ALL_ACTIVE };
 typedef struct {
+    uint64_t mask[8];
     float min, max;
     uint8_t active;
     uint8_t xs, ys, zs;
