@@ -350,15 +350,17 @@ static majorant_box cell_box(reader *r, const int64_t first[3], int32_t cell, ma
         return full; /* walks take a cell without density whole */
     grid_ibox region = span_box(src, first, cell), nz, enz;
     /* The cell's own voxels, and how far the support must reach for the
-     * box below to come out whole (a support past `enough` on every side
-     * gives lo = 0 and hi = cell): the windows stop there. */
+     * box below to come out whole: a support past `enough` on every side
+     * gives lo < cell / 4 and hi > 3 cell / 4 on every axis, a box that cuts
+     * less than a quarter off every side, which the cell does not keep
+     * (`worth`). The windows stop there: more support only widens it. */
     grid_ibox core, enough;
     for (int a = 0; a < 3; ++a) {
         int64_t reach = 1 + (int64_t)src->pad[a];
         core.min[a] = (int32_t)first[a];
         core.max[a] = clamp_index((double)(first[a] + cell - 1));
-        enough.min[a] = clamp_index((double)(first[a] + reach + 1));
-        enough.max[a] = clamp_index((double)(first[a] + cell - reach - 1));
+        enough.min[a] = clamp_index((double)(first[a] + reach + 1 + (cell - 1) / 4));
+        enough.max[a] = clamp_index((double)(first[a] + 3 * (int64_t)cell / 4 - reach));
     }
     bool any = support_over(src->g, src->empty, &r->dens, region, &core, &enough, &nz);
     if (src->em && emission_support(r, region, &core, &enough, &enz)) {
