@@ -225,6 +225,7 @@ void grid_destroy(grid *g)
         return;
     vdb_buffer_free(&g->owned);
     free(g->leaves.leaf);
+    free(g->leaves.mask);
     free(g);
 }
 
@@ -401,6 +402,7 @@ static hz_status check_values(grid *g, int nonnegative, hz_error *err)
     float lo, hi;
     char why[512];
     free(g->leaves.leaf);
+    free(g->leaves.mask);
     if (nvdb_check_float_values(g->owned.data, g->owned.size, nonnegative, &lo, &hi,
                                 &g->inactive_folded, &g->leaves, why, sizeof why) != 0)
         return hz_fail(err, "%s", why);
@@ -413,7 +415,8 @@ static hz_status check_values(grid *g, int nonnegative, hz_error *err)
 void grid_drop_leaf_stats(grid *g)
 {
     free(g->leaves.leaf);
-    g->leaves = (nvdb_leaf_table){NULL, 0, 0, 0};
+    free(g->leaves.mask);
+    g->leaves = (nvdb_leaf_table){NULL, NULL, 0, 0, 0};
 }
 
 hz_status grid_check_density(grid *g, hz_error *err) { return check_values(g, 1, err); }
@@ -771,11 +774,12 @@ static bool leaf_support_from_stats(const nvdb_leaf_stats *s, const int32_t orig
 }
 
 /* The active voxels of a leaf inside `box`, from its value mask (bit
- * 64 x + 8 y + z is voxel origin + (x, y, z)); `s`: its entry in the value
- * check's table (NULL: none). */
-static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const nvdb_leaf_stats *s,
+ * 64 x + 8 y + z is voxel origin + (x, y, z)); `si`: its entry in the value
+ * check's table (UINT32_MAX: none). */
+static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, uint32_t si,
                          const int32_t origin[3], grid_ibox box, grid_ibox *acc, bool *any)
 {
+    const nvdb_leaf_stats *s = stats_at(g, si);
     int r0[3], r1[3];
     for (int a = 0; a < 3; ++a) {
         int64_t lo = (int64_t)box.min[a] - origin[a], hi = (int64_t)box.max[a] - origin[a];
@@ -790,8 +794,8 @@ static void leaf_support(const grid *g, pnanovdb_leaf_handle_t leaf, const nvdb_
     uint32_t xs = 0;
     for (int x = r0[0]; x <= r1[0]; ++x) {
         uint64_t slice;
-        if (s) {
-            slice = s->mask[x] & yz;
+        if (s && s->active == NVDB_LEAF_SOME_ACTIVE) { /* the check kept its mask */
+            slice = g->leaves.mask[si].slice[x] & yz;
         } else {
             pnanovdb_address_t at = pnanovdb_address_offset(
                 leaf.address, PNANOVDB_LEAF_OFF_VALUE_MASK + 8u * (uint32_t)x);
@@ -848,7 +852,7 @@ static void internal_support(const grid *g, grid_level level, pnanovdb_address_t
                         pnanovdb_leaf_handle_t leaf =
                             pnanovdb_lower_get_child(FLOAT_GRID, g->buf, low, n);
                         leaf_support(g, leaf,
-                                     stats_at(g, leaf_stats_index(g, leaf.address.byte_offset)),
+                                     leaf_stats_index(g, leaf.address.byte_offset),
                                      child_origin, box, acc, any);
                     }
                     continue;
@@ -1057,7 +1061,7 @@ void grid_block_support_add(const grid *g, const grid_block *b, const int32_t or
         support_add_block(origin, 8, box, acc, any);
         return;
     case GRID_BLOCK_PARTIAL:
-        leaf_support(g, (pnanovdb_leaf_handle_t){{b->leaf}}, stats_at(g, b->stats), origin, box,
+        leaf_support(g, (pnanovdb_leaf_handle_t){{b->leaf}}, b->stats, origin, box,
                      acc, any);
         return;
     }

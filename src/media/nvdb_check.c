@@ -518,6 +518,7 @@ typedef struct leaf_pass {
     uint64_t first, count, size; /* the leaf array: byte offset, leaves, bytes per leaf */
     leaf_result *out;
     nvdb_leaf_stats *stats; /* NULL: not asked for */
+    nvdb_leaf_mask *masks;  /* with stats */
     atomic_uint_fast64_t next;
     atomic_uint_fast64_t folded;
 } leaf_pass;
@@ -541,16 +542,13 @@ static nvdb_leaf_stats leaf_stats(const values *v, pnanovdb_leaf_handle_t leaf)
         ys |= (uint8_t)((row != 0) << y);
         zs |= row;
     }
-    nvdb_leaf_stats st = {
-        {0},
+    return (nvdb_leaf_stats){
         pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_min_address(v->c.type, v->c.buf, leaf)),
         pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_max_address(v->c.type, v->c.buf, leaf)),
         all == ~0ull ? NVDB_LEAF_ALL_ACTIVE
         : some       ? NVDB_LEAF_SOME_ACTIVE
                      : NVDB_LEAF_NONE_ACTIVE,
         xs, ys, zs};
-    memcpy(st.mask, slice, sizeof slice);
-    return st;
 }
 
 static void *leaf_pass_worker(void *ctx)
@@ -572,8 +570,13 @@ static void *leaf_pass_worker(void *ctx)
             bool a = false;
             int st = leaf_values(&v, leaf, &l, &h, &a);
             p->out[i] = (leaf_result){l, h, st != 0 ? LEAF_BAD : a ? LEAF_ACTIVE : LEAF_EMPTY};
-            if (p->stats)
+            if (p->stats) {
                 p->stats[i] = leaf_stats(&v, leaf);
+                if (p->stats[i].active == NVDB_LEAF_SOME_ACTIVE)
+                    memcpy(p->masks[i].slice,
+                           v.data + leaf.address.byte_offset + PNANOVDB_LEAF_OFF_VALUE_MASK,
+                           sizeof p->masks[i].slice);
+            }
         }
     }
     atomic_fetch_add(&p->folded, v.folded);
@@ -594,6 +597,11 @@ static bool leaf_pass_run(leaf_pass *p, const values *v, bool stats)
     atomic_init(&p->folded, 0);
     p->out = p->count ? malloc(p->count * sizeof *p->out) : NULL;
     p->stats = p->out && stats ? malloc(p->count * sizeof *p->stats) : NULL;
+    p->masks = p->stats ? calloc(p->count, sizeof *p->masks) : NULL;
+    if (!p->masks) {
+        free(p->stats);
+        p->stats = NULL;
+    }
     if (!p->out)
         return false;
     /* A few thousand leaves take less than starting a thread. */
@@ -717,7 +725,7 @@ int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *v
                             size_t why_size)
 {
     if (leaves)
-        *leaves = (nvdb_leaf_table){NULL, 0, 0, 0};
+        *leaves = (nvdb_leaf_table){NULL, NULL, 0, 0, 0};
     values v = {{pnanovdb_make_buf((pnanovdb_uint32_t *)data, size / 4), size,
                  PNANOVDB_GRID_TYPE_FLOAT, why, why_size, 0, 0, 0, 0, 0, 0},
                 false, 0.0f, 0.0f, !nonnegative, data, 0.0f, 0, NULL};
@@ -741,10 +749,12 @@ int nvdb_check_float_values(void *data, uint64_t size, int nonnegative, float *v
     if (v.pass) {
         v.folded += atomic_load(&pass.folded);
         free(pass.out);
-        if (st == 0 && leaves && pass.stats)
-            *leaves = (nvdb_leaf_table){pass.stats, pass.first, pass.count, pass.size};
-        else
+        if (st == 0 && leaves && pass.stats) {
+            *leaves = (nvdb_leaf_table){pass.stats, pass.masks, pass.first, pass.count, pass.size};
+        } else {
             free(pass.stats);
+            free(pass.masks);
+        }
     }
     if (st != 0)
         return -1;

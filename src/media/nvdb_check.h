@@ -40,19 +40,26 @@ void nvdb_root_range(const void *data, uint64_t size, double *lo, double *hi);
  * that the build need not touch the leaves again: the leaf's stored min/max
  * statistics, whether all, some or none of its voxels are active, and
  * where: bit c of xs (ys, zs) is set when an active voxel has x (y, z)
- * = c within the leaf; and its value mask (slice x: bit 8 y + z), which
- * the build's support queries read many times over, here in one compact
- * array rather than scattered over the whole buffer. */
+ * = c within the leaf. */
 enum { NVDB_LEAF_NONE_ACTIVE, NVDB_LEAF_SOME_ACTIVE, NVDB_LEAF_ALL_ACTIVE };
 typedef struct {
-    uint64_t mask[8];
     float min, max;
     uint8_t active;
     uint8_t xs, ys, zs;
 } nvdb_leaf_stats;
 
+/* A partly active leaf's value mask (slice x: bit 8 y + z), which the
+ * build's support queries read many times over: kept in one compact array
+ * rather than read scattered over the whole buffer. */
+typedef struct {
+    uint64_t slice[8];
+} nvdb_leaf_mask;
+
 typedef struct {
     nvdb_leaf_stats *leaf; /* one per leaf, in array order (malloc'd); NULL: none */
+    /* One per leaf (calloc'd: only the partly active leaves' entries are
+     * written, so the others cost no memory); NULL with leaf. */
+    nvdb_leaf_mask *mask;
     uint64_t first;        /* the first leaf's byte offset in the buffer */
     uint64_t count;        /* leaves in the array */
     uint64_t stride;       /* bytes per leaf */
