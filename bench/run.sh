@@ -26,16 +26,17 @@ BENCH_LOAD=$(cut -d' ' -f1-3 /proc/loadavg)
 . "$BENCH/bounce.sh"
 . "$BENCH/target.sh"
 . "$BENCH/scale.sh"
+. "$BENCH/bigcloud.sh"
 . "$BENCH/spectral.sh"
 . "$BENCH/cycles.sh"
 . "$BENCH/report.sh"
 
-# BENCH_PARTS: a subset of "ladder peer bounce target yardsticks scale spectral cycles" (the
-# others' tables of the last run are reused by the report). The scale, spectral and cycles
-# parts write their own scale.md, spectral.md and cycles.md; trade.md is written when any
-# other part ran. cycles (Blender's Cycles, a bench tool to install by hand) runs only when
-# named.
-PARTS=${BENCH_PARTS-ladder peer bounce target yardsticks scale spectral}
+# BENCH_PARTS: a subset of "ladder peer bounce target yardsticks scale bigcloud spectral cycles"
+# (the others' tables of the last run are reused by the report). The scale, bigcloud, spectral
+# and cycles parts write their own scale.md, bigcloud.md, spectral.md and cycles.md; trade.md
+# is written when any other part ran. cycles (Blender's Cycles, a bench tool to install by
+# hand) runs only when named.
+PARTS=${BENCH_PARTS-ladder peer bounce target yardsticks scale bigcloud spectral}
 start=$(now)
 for part in $PARTS; do
     echo "bench: $part" >&2
