@@ -45,6 +45,8 @@ bigcloud_row() {
 bigcloud_run() {
     [ -x /usr/bin/time ] || { echo "bench: the bigcloud part needs GNU time (/usr/bin/time)" >&2; exit 1; }
     mkdir -p "$BIGCLOUD_DIR"
+    # BENCH_QUICK: a 256-spp reference and one rung.
+    [ -z "$BENCH_QUICK" ] || bigcloud_ref_spp=256 bigcloud_rungs=16
     nv=$BIGCLOUD_DIR/cloud-250.nvdb
     if [ ! -f "$nv" ]; then
         [ -x "$BIGCLOUD_GEN" ] || { echo "bench: $BIGCLOUD_GEN is not built (cmake --build build)" >&2; exit 1; }
