@@ -1,8 +1,10 @@
 /* haze_vdb_reader MODULE FILE FILE_SIZE N (GRID TYPE)...: reads N grids of an
  * OpenVDB file with haze's OpenVDB module and writes them, as NanoVDB buffers,
- * to stdout; TYPE is two digits, the value type and whether the grid is
- * optional (see src/media/vdb_isolated.h, vdb_module_load_grid_isolated). Run
- * by haze, not by users. */
+ * to stdout; TYPE is two or three digits, the value type, whether the grid is
+ * optional and whether a memory file for it waits on descriptor
+ * VDB_READER_MEMFD + its index (the grid is then built there; see
+ * src/media/vdb_isolated.h, vdb_module_load_grid_isolated). Run by haze, not
+ * by users. */
 #define _POSIX_C_SOURCE 200809L
 #include <fcntl.h>
 #include <stdbool.h>
@@ -38,17 +40,19 @@ int main(int argc, char **argv)
         return 2;
     }
     vdb_grid_request req[MAX_REQUESTS];
+    int memfds[MAX_REQUESTS];
     for (int i = 0; i < n; ++i) {
         const char *t = argv[6 + 2 * i];
         req[i].name = argv[5 + 2 * i];
         req[i].type = t[0] == '1' ? VDB_VEC3 : VDB_FLOAT;
         req[i].optional = t[0] && t[1] == '1';
+        memfds[i] = t[0] && t[1] && t[2] == '1' ? VDB_READER_MEMFD + i : -1;
     }
     int replies = take_stdout();
     if (replies < 0) {
         perror("haze_vdb_reader: stdout");
         return 1;
     }
-    return vdb_reader_run(argv[1], argv[2], strtoull(argv[3], NULL, 10), req, (size_t)n,
+    return vdb_reader_run(argv[1], argv[2], strtoull(argv[3], NULL, 10), req, (size_t)n, memfds,
                           replies);
 }

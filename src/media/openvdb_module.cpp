@@ -205,7 +205,7 @@ const char *type_name(vdb_value_type type) { return type == VDB_VEC3 ? "vec3s" :
 
 template <typename GridT>
 vdb_buffer convert_vdb(const std::string &path, const std::string &name,
-                       const openvdb::GridBase::Ptr &base)
+                       const openvdb::GridBase::Ptr &base, int memfd)
 {
     typename GridT::Ptr grid = openvdb::gridPtrCast<GridT>(base);
     if (!grid)
@@ -215,15 +215,18 @@ vdb_buffer convert_vdb(const std::string &path, const std::string &name,
     // bounds use (for vectors: the values of least and greatest length). The
     // grid is built straight into the buffer haze receives: the reader's
     // peak is OpenVDB's tree and the NanoVDB grid, not a third copy.
-    auto handle = nanovdb::openToNanoVDB<c_buffer>(*grid, nanovdb::StatsMode::MinMax,
-                                                   nanovdb::ChecksumMode::Partial);
+    using OpenBuildT = typename GridT::TreeType::BuildType;
+    using NanoBuildT = typename nanovdb::OpenToNanoType<OpenBuildT>::Type;
+    nanovdb::OpenToNanoVDB<OpenBuildT, NanoBuildT, nanovdb::AbsDiff, c_buffer> convert;
+    auto handle = convert(*grid, nanovdb::StatsMode::MinMax, nanovdb::ChecksumMode::Partial, 0,
+                          c_buffer::in_file(memfd));
     if (!handle)
         throw load_error(path + ": converting grid \"" + name + "\" to NanoVDB failed");
     return handle.buffer().release();
 }
 
 vdb_buffer load_vdb(const std::string &path, const std::string &name, vdb_value_type type,
-                    std::uintmax_t size)
+                    std::uintmax_t size, int memfd)
 {
     auto file_ptr = open_vdb(path, size);
     openvdb::io::File &file = *file_ptr;
@@ -239,8 +242,8 @@ vdb_buffer load_vdb(const std::string &path, const std::string &name, vdb_value_
                          ", expected " + type_name(type));
     openvdb::GridBase::Ptr base = file.readGrid(name);
     file.close();
-    return type == VDB_VEC3 ? convert_vdb<openvdb::Vec3SGrid>(path, name, base)
-                            : convert_vdb<openvdb::FloatGrid>(path, name, base);
+    return type == VDB_VEC3 ? convert_vdb<openvdb::Vec3SGrid>(path, name, base, memfd)
+                            : convert_vdb<openvdb::FloatGrid>(path, name, base, memfd);
 }
 
 // World bounds of the cells of the voxels in [lo, hi]: the 8 corners of
@@ -322,10 +325,12 @@ void list_vdb(const std::string &path, std::uintmax_t size, vdb_grid_callback cb
 
 
 hz_status module_load_grid(const char *path, uint64_t file_size, const char *gridname,
-                           vdb_value_type type, vdb_buffer *out, char *err, size_t err_size)
+                           vdb_value_type type, int memfd, vdb_buffer *out, char *err,
+                           size_t err_size)
 {
     *out = vdb_buffer{nullptr, 0, nullptr, 0};
-    return guarded(path, err, err_size, [&] { *out = load_vdb(path, gridname, type, file_size); });
+    return guarded(path, err, err_size,
+                   [&] { *out = load_vdb(path, gridname, type, file_size, memfd); });
 }
 
 hz_status module_list_grids(const char *path, uint64_t file_size, vdb_grid_callback cb,

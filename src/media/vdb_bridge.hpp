@@ -18,6 +18,9 @@
 #include <limits>
 #include <new>
 #include <stdexcept>
+
+#include <sys/mman.h>
+#include <unistd.h>
 #include <string>
 #include <vector>
 
@@ -76,17 +79,23 @@ inline std::string join(const std::vector<std::string> &names)
 // A NanoVDB buffer type (what GridHandle and the converters allocate through)
 // whose memory is the vdb_buffer C will own: 32-byte aligned, freed with
 // free() (one C library serves haze and the module, so either side may free
-// it). A grid built into it is handed over without a copy.
+// it). A grid built into it is handed over without a copy. Built with an
+// allocator from in_file(fd) (the converters pass theirs to create), the
+// memory is the file fd instead (a memfd the renderer holds too), mapped
+// shared: the grid is built where the renderer will map it, and the
+// vdb_buffer it releases is that mapping.
 class c_buffer
 {
   public:
     c_buffer() = default;
     c_buffer(const c_buffer &) = delete;
     c_buffer &operator=(const c_buffer &) = delete;
-    c_buffer(c_buffer &&o) noexcept : data_(o.data_), size_(o.size_)
+    c_buffer(c_buffer &&o) noexcept
+        : data_(o.data_), size_(o.size_), mapped_(o.mapped_), fd_(o.fd_)
     {
         o.data_ = nullptr;
         o.size_ = 0;
+        o.mapped_ = 0;
     }
     c_buffer &operator=(c_buffer &&o) noexcept
     {
@@ -94,21 +103,46 @@ class c_buffer
             clear();
             data_ = o.data_;
             size_ = o.size_;
+            mapped_ = o.mapped_;
+            fd_ = o.fd_;
             o.data_ = nullptr;
             o.size_ = 0;
+            o.mapped_ = 0;
         }
         return *this;
     }
     ~c_buffer() { clear(); }
 
+    // An allocator (no memory) whose buffers live in file fd.
+    static c_buffer in_file(int fd)
+    {
+        c_buffer b;
+        b.fd_ = fd;
+        return b;
+    }
+
     // What NanoVDB calls (the second argument is its context).
-    static c_buffer create(uint64_t size, const c_buffer * = nullptr)
+    static c_buffer create(uint64_t size, const c_buffer *context = nullptr)
     {
         // aligned_alloc needs a multiple of the alignment; the tail is zeroed.
         if (size > std::numeric_limits<size_t>::max() - 32)
             throw std::bad_alloc();
         const uint64_t alloc = std::max<uint64_t>(32, (size + 31) / 32 * 32);
         c_buffer b;
+        if (context && context->fd_ >= 0) {
+            // A fresh file's bytes read 0: the tail is zeroed already.
+            if (ftruncate(context->fd_, off_t(alloc)) != 0)
+                throw std::bad_alloc();
+            void *m = mmap(nullptr, size_t(alloc), PROT_READ | PROT_WRITE, MAP_SHARED,
+                           context->fd_, 0);
+            if (m == MAP_FAILED)
+                throw std::bad_alloc();
+            b.data_ = static_cast<uint8_t *>(m);
+            b.mapped_ = alloc;
+            b.fd_ = context->fd_;
+            b.size_ = size;
+            return b;
+        }
         b.data_ = static_cast<uint8_t *>(std::aligned_alloc(32, size_t(alloc)));
         if (!b.data_)
             throw std::bad_alloc();
@@ -121,22 +155,29 @@ class c_buffer
     uint64_t size() const { return size_; }
     void clear()
     {
-        std::free(data_);
+        if (mapped_)
+            munmap(data_, size_t(mapped_));
+        else
+            std::free(data_);
         data_ = nullptr;
         size_ = 0;
+        mapped_ = 0;
     }
     // Hands the memory to C (vdb_buffer_free releases it).
     vdb_buffer release()
     {
-        vdb_buffer b{data_, size_t(size_), nullptr, 0};
+        vdb_buffer b{data_, size_t(size_), mapped_ ? data_ : nullptr, size_t(mapped_)};
         data_ = nullptr;
         size_ = 0;
+        mapped_ = 0;
         return b;
     }
 
   private:
     uint8_t *data_ = nullptr;
     uint64_t size_ = 0;
+    uint64_t mapped_ = 0; /* bytes mapped from fd_ (0: malloc'd) */
+    int fd_ = -1;
 };
 
 // Copies the handle's bytes into memory that C owns.

@@ -28,18 +28,21 @@ extern "C" {
 #endif
 
 /* Bump when haze_openvdb_api changes in any way. */
-#define HAZE_OPENVDB_ABI 1
+#define HAZE_OPENVDB_ABI 2
 #define HAZE_OPENVDB_ENTRY "haze_openvdb_entry"
 
 /* The module's entry table. Its functions behave as vdb_load_typed_grid and
  * vdb_list_grids for a file already known to be an OpenVDB file of `file_size`
  * bytes: they never throw, a failure is one line in `err`. Buffers they return
- * are malloc'd (aligned_alloc) and freed by haze with vdb_buffer_free. */
+ * are malloc'd (aligned_alloc), or with memfd >= 0 built in that file (sized
+ * to the grid, mapped shared: out->mapping), and freed by haze with
+ * vdb_buffer_free. */
 typedef struct {
     uint32_t abi_version;  /* HAZE_OPENVDB_ABI of the module's build */
     uint32_t struct_size;  /* sizeof(haze_openvdb_api) of the module's build */
     hz_status (*load_grid)(const char *path, uint64_t file_size, const char *gridname,
-                           vdb_value_type type, vdb_buffer *out, char *err, size_t err_size);
+                           vdb_value_type type, int memfd, vdb_buffer *out, char *err,
+                           size_t err_size);
     hz_status (*list_grids)(const char *path, uint64_t file_size, vdb_grid_callback cb,
                             void *user, char *err, size_t err_size);
 } haze_openvdb_api;

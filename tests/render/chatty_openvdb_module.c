@@ -7,9 +7,10 @@
 #include "media/vdb_module.h"
 
 static hz_status load_grid(const char *path, uint64_t file_size, const char *gridname,
-                           vdb_value_type type, vdb_buffer *out, char *err, size_t err_size)
+                           vdb_value_type type, int memfd, vdb_buffer *out, char *err,
+                           size_t err_size)
 {
-    (void)file_size, (void)type, (void)out;
+    (void)file_size, (void)memfd, (void)type, (void)out;
     for (int i = 0; i < 3; ++i)
         printf("\033[35m WARN: %s has more than one grid named \"%s\"\n\033[0m", path, gridname);
     fflush(stdout);

@@ -8,9 +8,10 @@
 #include "media/vdb_module.h"
 
 static hz_status load_grid(const char *path, uint64_t file_size, const char *gridname,
-                           vdb_value_type type, vdb_buffer *out, char *err, size_t err_size)
+                           vdb_value_type type, int memfd, vdb_buffer *out, char *err,
+                           size_t err_size)
 {
-    (void)path, (void)file_size, (void)gridname, (void)type, (void)out, (void)err,
+    (void)path, (void)file_size, (void)memfd, (void)gridname, (void)type, (void)out, (void)err,
         (void)err_size;
     fprintf(stderr, "Error allocating memory!");
     raise(SIGSEGV);
