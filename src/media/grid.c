@@ -23,7 +23,7 @@ struct grid {
     vec3 background_vec;
     bool empty;
     uint64_t inactive_folded; /* grid_inactive_folded */
-    bool folded;              /* the value check ran: every inactive value is the background */
+    bool checked;             /* the value check ran: every inactive value is the background */
     nvdb_leaf_table leaves;   /* from the value check: what grid_blocks reads of each leaf */
     grid_ibox bounds;
     /* Trilinear lookups outside [min - 1, max + 1] are background: skip the tree. */
@@ -408,7 +408,7 @@ static hz_status check_values(grid *g, int nonnegative, hz_error *err)
         return hz_fail(err, "%s", why);
     g->min_value = lo;
     g->max_value = hi;
-    g->folded = true;
+    g->checked = true;
     return HZ_OK;
 }
 
@@ -984,7 +984,7 @@ static void lower_blocks(const grid *g, pnanovdb_lower_handle_t lower, const int
                 grid_block *at = window_at(w, b);
                 if (pnanovdb_lower_get_child_mask(g->buf, lower, n))
                     *at = leaf_block(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n));
-                else if (g->folded && !pnanovdb_lower_get_value_mask(g->buf, lower, n))
+                else if (g->checked && !pnanovdb_lower_get_value_mask(g->buf, lower, n))
                     *at = tile_block(g->background); /* the mask, not the value table */
                 else
                     *at = tile_block(pnanovdb_read_float(
@@ -1007,7 +1007,7 @@ static void upper_blocks(const grid *g, pnanovdb_upper_handle_t upper, const int
                 if (pnanovdb_upper_get_child_mask(g->buf, upper, n))
                     lower_blocks(g, pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n),
                                  child_origin, box, w);
-                else if (g->folded && !pnanovdb_upper_get_value_mask(g->buf, upper, n))
+                else if (g->checked && !pnanovdb_upper_get_value_mask(g->buf, upper, n))
                     fill_blocks(w, child_origin, 128, tile_block(g->background));
                 else
                     fill_blocks(w, child_origin, 128,

@@ -526,8 +526,9 @@ typedef struct leaf_pass {
 enum { LEAF_CHUNK = 256 };
 
 /* A leaf's stored statistics and how much of it is active (its header,
- * which leaf_values has just read). */
-static nvdb_leaf_stats leaf_stats(const values *v, pnanovdb_leaf_handle_t leaf)
+ * which leaf_values has just read); a partly active leaf's mask into *mask. */
+static nvdb_leaf_stats leaf_stats(const values *v, pnanovdb_leaf_handle_t leaf,
+                                  nvdb_leaf_mask *mask)
 {
     uint64_t slice[8], all = ~0ull, some = 0; /* bit 8 y + z of slice x: voxel (x, y, z) */
     memcpy(slice, v->data + leaf.address.byte_offset + PNANOVDB_LEAF_OFF_VALUE_MASK, sizeof slice);
@@ -542,6 +543,8 @@ static nvdb_leaf_stats leaf_stats(const values *v, pnanovdb_leaf_handle_t leaf)
         ys |= (uint8_t)((row != 0) << y);
         zs |= row;
     }
+    if (some && all != ~0ull)
+        memcpy(mask->slice, slice, sizeof slice);
     return (nvdb_leaf_stats){
         pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_min_address(v->c.type, v->c.buf, leaf)),
         pnanovdb_read_float(v->c.buf, pnanovdb_leaf_get_max_address(v->c.type, v->c.buf, leaf)),
@@ -570,13 +573,8 @@ static void *leaf_pass_worker(void *ctx)
             bool a = false;
             int st = leaf_values(&v, leaf, &l, &h, &a);
             p->out[i] = (leaf_result){l, h, st != 0 ? LEAF_BAD : a ? LEAF_ACTIVE : LEAF_EMPTY};
-            if (p->stats) {
-                p->stats[i] = leaf_stats(&v, leaf);
-                if (p->stats[i].active == NVDB_LEAF_SOME_ACTIVE)
-                    memcpy(p->masks[i].slice,
-                           v.data + leaf.address.byte_offset + PNANOVDB_LEAF_OFF_VALUE_MASK,
-                           sizeof p->masks[i].slice);
-            }
+            if (p->stats)
+                p->stats[i] = leaf_stats(&v, leaf, &p->masks[i]);
         }
     }
     atomic_fetch_add(&p->folded, v.folded);
