@@ -18,11 +18,11 @@
 #include <limits>
 #include <new>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <sys/mman.h>
 #include <unistd.h>
-#include <string>
-#include <vector>
 
 namespace haze_vdb
 {
@@ -139,7 +139,6 @@ class c_buffer
                 throw std::bad_alloc();
             b.data_ = static_cast<uint8_t *>(m);
             b.mapped_ = alloc;
-            b.fd_ = context->fd_;
             b.size_ = size;
             return b;
         }
@@ -176,8 +175,8 @@ class c_buffer
   private:
     uint8_t *data_ = nullptr;
     uint64_t size_ = 0;
-    uint64_t mapped_ = 0; /* bytes mapped from fd_ (0: malloc'd) */
-    int fd_ = -1;
+    uint64_t mapped_ = 0; /* bytes mapped from an allocator's file (0: malloc'd) */
+    int fd_ = -1;         /* an allocator's file (in_file); -1: malloc */
 };
 
 // Copies the handle's bytes into memory that C owns.

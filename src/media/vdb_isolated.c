@@ -131,9 +131,17 @@ static int spawn_reader(const char *reader, char *const argv[], int fd_out, cons
 static bool map_memfd(int memfd, uint64_t length, vdb_buffer *out)
 {
     struct stat st;
-    if (memfd < 0 || fstat(memfd, &st) != 0 || st.st_size <= 0 ||
-        (uint64_t)st.st_size < length || length == 0 || (uint64_t)st.st_size > SIZE_MAX)
+    if (memfd < 0) {
+        errno = EBADF; /* a reply about a memory file haze did not pass */
         return false;
+    }
+    if (fstat(memfd, &st) != 0)
+        return false;
+    if (st.st_size <= 0 || (uint64_t)st.st_size < length || length == 0 ||
+        (uint64_t)st.st_size > SIZE_MAX) {
+        errno = EINVAL; /* the reader's reply does not fit the file: say so, not a stale errno */
+        return false;
+    }
     void *m = mmap(NULL, (size_t)st.st_size, PROT_READ | PROT_WRITE, MAP_SHARED, memfd, 0);
     if (m == MAP_FAILED)
         return false;
