@@ -244,13 +244,8 @@ static bool shadow_event(void *ctx, const volpath_event *ev)
     s->T = rgb_mul(s->T, tn);
     s->r_l = rgb_mul(s->r_l, rgb_div(rgb_mul(ev->T_maj, ev->sigma_maj), pdf));
     s->r_u = rgb_mul(s->r_u, tn);
-    rgb Tr = rgb_div(s->T, lane_avg(s->pa, rgb_add(s->r_l, s->r_u)));
-    if (rgb_max(Tr) < 0.05) {
-        if (rng_uniform(&s->pa->walk.r) < 0.75)
-            s->T = rgb_grey(0.0);
-        else
-            s->T = rgb_scale(s->T, 4.0);
-    }
+    double estimate = rgb_max(s->T) / lane_avg(s->pa, rgb_add(s->r_l, s->r_u));
+    s->T = rgb_scale(s->T, volpath_shadow_roulette(estimate, &s->pa->walk.r));
     return !rgb_is_black(s->T);
 }
 
@@ -258,13 +253,13 @@ static bool shadow_event(void *ctx, const volpath_event *ev)
  * opaque surfaces block unless they lie before t_fill), with tracking in
  * media. False when the ray is blocked or its estimate is 0. */
 static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_fill, double tmax,
-                        int medium)
+                        int mi)
 {
     path *pa = s->pa;
     const volpath_scene *sc = pa->sc;
     pa->walk.shadow_rays++;
     ray_walk rw;
-    walk_start(&rw, sc->in.geom, o, w, tmin, t_fill, tmax, pa->walk.time, medium,
+    walk_start(&rw, sc->in.geom, o, w, tmin, t_fill, tmax, pa->walk.time, mi,
                WALK_EXACT_ENDS | WALK_CONVEX_START);
     for (walk_segment seg; walk_next(&rw, &seg);) {
         if (seg.opaque) {
@@ -273,11 +268,19 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
             walk_step_over(&rw);
             continue;
         }
-        medium = seg.medium;
+        mi = seg.medium;
         double t_start = seg.t0, t_end = seg.t1;
-        if (medium >= 0) {
-            rgb T_maj = volpath_track(path_medium(pa, medium, true), o, w, t_start, t_end,
-                                      pa->hero, false, &pa->walk, shadow_event, s);
+        const medium *m = mi >= 0 ? path_medium(pa, mi, true) : NULL;
+        if (m && volpath_grey(m)) {
+            double ft, fu;
+            if (!volpath_grey_ratio(m, o, w, t_start, t_end, &pa->walk, rgb_max(s->T),
+                                    lane_avg(pa, s->r_l), lane_avg(pa, s->r_u), &ft, &fu))
+                return false;
+            s->T = rgb_scale(s->T, ft);
+            s->r_u = rgb_scale(s->r_u, fu);
+        } else if (m) {
+            rgb T_maj = volpath_track(m, o, w, t_start, t_end, pa->hero, false, &pa->walk,
+                                      shadow_event, s);
             double th = rgb_ch(T_maj, pa->hero);
             if (rgb_is_black(s->T) || !(th > 0.0))
                 return false;
@@ -712,6 +715,30 @@ static void equiangular_ld(path *pa, const medium *m, double t_start, double t_h
         pa->L = rgb_add(pa->L, rgb_div(c, d));
 }
 
+/* volpath_track with path_event over [t_start, t_hit] of grey medium m
+ * (volpath_grey): the null collisions change no weight, so the walk itself
+ * decides them and path_event sees the real collision alone (sigma_maj
+ * there = sigma_t, no null share). The majorant transmittance to the end:
+ * 1 in every lane (its ratios are what counts), 0 when opaque. */
+static rgb grey_flight(path *pa, const medium *m, double t_start, double t_hit)
+{
+    double t, d;
+    switch (volpath_grey_flight(m, pa->ray.o, pa->ray.d, t_start, t_hit, &pa->walk, &t, &d)) {
+    case VOLPATH_PASSED:
+        break;
+    case VOLPATH_REAL: {
+        volpath_event ev = {t, rgb_scale(m->sigma_a, d), rgb_scale(m->sigma_s, d), rgb_grey(0.0),
+                            rgb_grey(1.0), rgb_grey(0.0)};
+        ev.sigma_maj = rgb_add(ev.sigma_a, ev.sigma_s);
+        path_event(pa, &ev);
+        break;
+    }
+    case VOLPATH_OPAQUE:
+        return rgb_grey(0.0);
+    }
+    return rgb_grey(1.0);
+}
+
 /* Tracks the current ray's medium over [t_start, t_hit]. False when the
  * path ended there; pa->scattered when it scattered. */
 static bool cross_medium(path *pa, double t_start, double t_hit)
@@ -723,8 +750,9 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
     if (pa->sc->eq_light_count > 0 && medium_is_homogeneous(m) &&
         pa->depth < pa->sc->settings.max_depth && !rgb_is_black(m->sigma_s) && t_hit > t_start)
         equiangular_ld(pa, m, t_start, t_hit);
-    rgb T_maj = volpath_track(m, pa->ray.o, pa->ray.d, t_start, t_hit, pa->hero, true,
-                              &pa->walk, path_event, pa);
+    rgb T_maj = volpath_grey(m) ? grey_flight(pa, m, t_start, t_hit)
+                                : volpath_track(m, pa->ray.o, pa->ray.d, t_start, t_hit, pa->hero,
+                                                true, &pa->walk, path_event, pa);
     pa->eq_on = false;
     if (pa->counters->timed)
         pa->counters->media_ns += hz_clock_ns() - t0;

@@ -47,4 +47,46 @@ typedef bool (*volpath_event_fn)(void *ctx, const volpath_event *ev);
 rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero, bool emission,
                   media_walk *walk, volpath_event_fn fn, void *ctx);
 
+/* pbrt-v4's roulette of a shadow ray's ratio tracking: once its estimate
+ * (T over the mean of r_l + r_u, largest lane) is below 0.05, the ray ends
+ * with probability 0.75 and survives with its estimate times 4. The factor
+ * to apply: 0 (ended), 4 or 1. */
+static inline double volpath_shadow_roulette(double estimate, rng *r)
+{
+    if (!(estimate < 0.05))
+        return 1.0;
+    return rng_uniform(r) < 0.75 ? 0.0 : 4.0;
+}
+
+/* Grey media: density grids that neither move nor carry emission or colour
+ * grids, whose sigma_a and sigma_s are the same in every lane (as the path
+ * sees them: m may be a spectral copy). There the hero's majorant is every
+ * lane's, so the ratios volpath_track's callers form from T_maj are all 1:
+ * delta tracking changes no weight at a null collision and ratio tracking
+ * multiplies every lane by the same 1 - density / bound. The two walks below
+ * do that with scalars and no exponential; in expectation they are
+ * volpath_track with path_event and shadow_event (tests/unit/
+ * test_integrator_volpath_grey.c checks both against the closed forms). */
+bool volpath_grey(const medium *m);
+
+typedef enum {
+    VOLPATH_PASSED, /* no real collision on the segment */
+    VOLPATH_REAL,   /* a real collision at *t, density *density there */
+    VOLPATH_OPAQUE  /* past VOLPATH_MAX_COLLISIONS: the segment counts as opaque */
+} volpath_flight;
+
+/* Delta tracking of grey medium m (volpath_grey) along o + t w over [t0, t1]:
+ * the first real collision. */
+volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, double t1,
+                                   media_walk *walk, double *t, double *density);
+
+/* Ratio tracking of a shadow ray through grey medium m over [t0, t1] with
+ * volpath_shadow_roulette: on entry *T and *r_u are 1, and t_max, rl_avg,
+ * ru_avg are the ray's estimate so far (its T's largest lane, the means of
+ * its r_l and r_u); on return every lane of T is to be multiplied by *T and
+ * every lane of r_u by *r_u (r_l is unchanged). False when the estimate
+ * ended at 0 (roulette, or past VOLPATH_MAX_COLLISIONS). */
+bool volpath_grey_ratio(const medium *m, vec3 o, vec3 w, double t0, double t1, media_walk *walk,
+                        double t_max, double rl_avg, double ru_avg, double *T, double *r_u);
+
 #endif
