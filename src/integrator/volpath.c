@@ -279,8 +279,8 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
             s->T = rgb_scale(s->T, ft);
             s->r_u = rgb_scale(s->r_u, fu);
         } else if (m) {
-            rgb T_maj = volpath_track(m, o, w, t_start, t_end, pa->hero, false, &pa->walk,
-                                      shadow_event, s);
+            rgb T_maj = volpath_track(m, o, w, t_start, t_end, pa->hero, false, -1.0,
+                                      &pa->walk, shadow_event, s);
             double th = rgb_ch(T_maj, pa->hero);
             if (rgb_is_black(s->T) || !(th > 0.0))
                 return false;
@@ -720,10 +720,10 @@ static void equiangular_ld(path *pa, const medium *m, double t_start, double t_h
  * decides them and path_event sees the real collision alone (sigma_maj
  * there = sigma_t, no null share). The majorant transmittance to the end:
  * 1 in every lane (its ratios are what counts), 0 when opaque. */
-static rgb grey_flight(path *pa, const medium *m, double t_start, double t_hit)
+static rgb grey_flight(path *pa, const medium *m, double t_start, double t_hit, double u)
 {
     double t, d;
-    switch (volpath_grey_flight(m, pa->ray.o, pa->ray.d, t_start, t_hit, &pa->walk, &t, &d)) {
+    switch (volpath_grey_flight(m, pa->ray.o, pa->ray.d, t_start, t_hit, u, &pa->walk, &t, &d)) {
     case VOLPATH_PASSED:
         break;
     case VOLPATH_REAL: {
@@ -750,9 +750,10 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
     if (pa->sc->eq_light_count > 0 && medium_is_homogeneous(m) &&
         pa->depth < pa->sc->settings.max_depth && !rgb_is_black(m->sigma_s) && t_hit > t_start)
         equiangular_ld(pa, m, t_start, t_hit);
-    rgb T_maj = volpath_grey(m) ? grey_flight(pa, m, t_start, t_hit)
+    double u = sampler_1d(pa->st); /* the first collision's (volpath_track) */
+    rgb T_maj = volpath_grey(m) ? grey_flight(pa, m, t_start, t_hit, u)
                                 : volpath_track(m, pa->ray.o, pa->ray.d, t_start, t_hit, pa->hero,
-                                                true, &pa->walk, path_event, pa);
+                                                true, u, &pa->walk, path_event, pa);
     pa->eq_on = false;
     if (pa->counters->timed)
         pa->counters->media_ns += hz_clock_ns() - t0;

@@ -12,7 +12,19 @@ typedef struct {
     void *ctx;
     rgb T_maj;
     uint32_t collisions;
+    double u; /* the first collision's uniform; < 0: drawn (first_exp) */
 } tracker;
+
+/* Exp(1) for the next tentative collision: the first from u when given,
+ * the rest from the walk's rng. */
+static inline double first_exp(double *u, rng *r)
+{
+    if (*u < 0.0)
+        return rng_exp1(r);
+    double e = -log(1.0 - *u);
+    *u = -1.0;
+    return e;
+}
 
 /* Collisions over [a, b] at the majorant sigma_t * bound (+ extra, a rate
  * for free emission). False when the callback ended the walk or the
@@ -28,7 +40,7 @@ static bool track_span(tracker *tr, double a, double b, double bound, double ext
         return true;
     }
     for (double t = a;;) {
-        double tn = t + rng_exp1(&tr->walk->r) / rate;
+        double tn = t + first_exp(&tr->u, &tr->walk->r) / rate;
         if (!(tn < b)) {
             tr->T_maj = rgb_mul(tr->T_maj, rgb_exp_neg(sigma_maj, b - t));
             return true;
@@ -49,7 +61,7 @@ static bool track_span(tracker *tr, double a, double b, double bound, double ext
 }
 
 rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero, bool emission,
-                  media_walk *walk, volpath_event_fn fn, void *ctx)
+                  double u, media_walk *walk, volpath_event_fn fn, void *ctx)
 {
     if (!(t1 > t0))
         return rgb_grey(1.0);
@@ -64,6 +76,7 @@ rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int her
     tr.ctx = ctx;
     tr.T_maj = rgb_grey(1.0);
     tr.collisions = 0;
+    tr.u = u;
     if (!medium_ray_start(m, o, w, walk->time, &t0, &t1, &tr.r))
         return rgb_grey(1.0); /* no density anywhere on the segment */
     majorant_segment seg;
@@ -101,7 +114,7 @@ static inline double grey_density(medium_ray *r, double t, media_walk *walk)
 /* Both walks draw tentative collisions at rate sigma_t * bound per cell, the
  * optical distance to the next one (Exp(1)) carried across cells. */
 volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, double t1,
-                                   media_walk *walk, double *t, double *density)
+                                   double u, media_walk *walk, double *t, double *density)
 {
     medium_ray r;
     if (!(t1 > t0) || !medium_ray_start(m, o, w, walk->time, &t0, &t1, &r))
@@ -109,7 +122,7 @@ volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, d
     assert(r.plain);
     const double sigma_t = m->sigma_a.r + m->sigma_s.r;
     uint32_t collisions = 0;
-    double tau = rng_exp1(&walk->r);
+    double tau = first_exp(&u, &walk->r);
     majorant_segment seg;
     while (medium_ray_next(&r, &seg, &walk->majorant_steps)) {
         double rate = sigma_t * seg.max;

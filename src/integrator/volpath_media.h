@@ -37,7 +37,11 @@ typedef bool (*volpath_event_fn)(void *ctx, const volpath_event *ev);
 #define VOLPATH_MAX_COLLISIONS (1u << 16)
 
 /* Walks o + t w (unit w) over [t0, t1] (t1 may be INFINITY) in medium m at the
- * walk's time, calling `fn` at each tentative collision. Returns the majorant
+ * walk's time, calling `fn` at each tentative collision. The first
+ * collision's exponential deviate is -log(1 - u) for u in [0, 1) (a pixel
+ * sampler dimension, as pbrt-v4's SampleT_maj takes one: stratified over a
+ * pixel's samples), the rest come from the walk's rng (all of them for
+ * u < 0). Returns the majorant
  * transmittance from the last collision to t1, (1, 1, 1) when `fn` ended the
  * walk, or (0, 0, 0) past VOLPATH_MAX_COLLISIONS. `hero` in 0..2 is the
  * channel whose majorant sets the rate. With `emission` (a path's segment,
@@ -45,7 +49,7 @@ typedef bool (*volpath_event_fn)(void *ctx, const volpath_event *ev);
  * emission grid glows but there is no density get tentative collisions too
  * (two expected per cell). */
 rgb volpath_track(const medium *m, vec3 o, vec3 w, double t0, double t1, int hero, bool emission,
-                  media_walk *walk, volpath_event_fn fn, void *ctx);
+                  double u, media_walk *walk, volpath_event_fn fn, void *ctx);
 
 /* pbrt-v4's roulette of a shadow ray's ratio tracking: once its estimate
  * (T over the mean of r_l + r_u, largest lane) is below 0.05, the ray ends
@@ -76,9 +80,9 @@ typedef enum {
 } volpath_flight;
 
 /* Delta tracking of grey medium m (volpath_grey) along o + t w over [t0, t1]:
- * the first real collision. */
+ * the first real collision (u as volpath_track's). */
 volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, double t1,
-                                   media_walk *walk, double *t, double *density);
+                                   double u, media_walk *walk, double *t, double *density);
 
 /* Ratio tracking of a shadow ray through grey medium m over [t0, t1] with
  * volpath_shadow_roulette: on entry *T and *r_u are 1, and t_max, rl_avg,

@@ -88,9 +88,13 @@ static void test_unbounded_and_dark(void **state)
     for (int k = 0; k < 2; ++k) {
         char *text = sfmt(fmt, integ[k], glowing);
         render_scene *rs = build(text);
-        pstat p = pixel_stats_raw(rs, 1, 1, 64);
-        expect_rgb_close(p.mean, rgb_make(3, 2, 1), k == 0 ? 1e-9 : 0.05, 1e-9, "unbounded", k,
-                         0);
+        /* singlescatter: exact; volpath: within its noise (one-sample MIS
+         * over the hero channels: single samples range over 0 .. 9) */
+        pstat p = pixel_stats_raw(rs, 1, 1, k == 0 ? 64 : 16384);
+        if (k == 0)
+            expect_rgb_close(p.mean, rgb_make(3, 2, 1), 1e-9, 1e-9, "unbounded", k, 0);
+        else
+            expect_within_noise(p.mean, p.se, rgb_make(3, 2, 1), 0.0, "unbounded");
         render_scene_destroy(rs);
         free(text);
         text = sfmt(fmt, integ[k], dark);

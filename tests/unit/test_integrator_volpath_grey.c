@@ -180,7 +180,9 @@ static void test_flight_distribution(void **state)
             int before[3] = {0, 0, 0};
             for (int i = 0; i < n; ++i) {
                 double t, d;
-                volpath_flight f = volpath_grey_flight(&b.m, l.o, l.w, 0.0, t1, &walk, &t, &d);
+                volpath_flight f = volpath_grey_flight(&b.m, l.o, l.w, 0.0, t1,
+                                                       i % 2 ? -1.0 : (i / 2 + 0.5) / (n / 2), &walk,
+                                                       &t, &d);
                 assert_int_not_equal(f, VOLPATH_OPAQUE);
                 if (f != VOLPATH_REAL)
                     continue;
