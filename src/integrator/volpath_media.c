@@ -103,22 +103,22 @@ bool volpath_grey(const medium *m)
            lanes_equal(m->sigma_a) && lanes_equal(m->sigma_s) && !medium_moves(m);
 }
 
-/* The density at o + t w of a grey medium's ray (plain: an inline lookup). */
-static inline double grey_density(medium_ray *r, double t, media_walk *walk)
-{
-    ++walk->lookups;
-    return grid_density_index(r->lookup, &r->acc.density,
-                              v3_add(r->at.grid.o, v3_scale(r->at.grid.d, t)));
-}
+/* The walk of a grey medium over [t0, t1]: tentative collisions at rate
+ * sigma_t * bound in each majorant cell, the optical distance to the next one
+ * (Exp(1)) carried across cells; at each, `at` gets its place, the density
+ * there and the cell's bound, and returns whether to go on. GREY_END: the
+ * walk reached t1 (or missed the density); GREY_STOPPED: `at` ended it;
+ * GREY_OVER: past VOLPATH_MAX_COLLISIONS. Inline, with `at` a constant at
+ * each call, so the loop's state stays in registers. */
+typedef enum { GREY_END, GREY_STOPPED, GREY_OVER } grey_end;
 
-/* Both walks draw tentative collisions at rate sigma_t * bound per cell, the
- * optical distance to the next one (Exp(1)) carried across cells. */
-volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, double t1,
-                                   double u, media_walk *walk, double *t, double *density)
+static inline __attribute__((always_inline)) grey_end
+grey_walk(const medium *m, vec3 o, vec3 w, double t0, double t1, double u, media_walk *walk,
+          bool (*at)(void *ctx, double x, double density, double bound), void *ctx)
 {
     medium_ray r;
     if (!(t1 > t0) || !medium_ray_start(m, o, w, walk->time, &t0, &t1, &r))
-        return VOLPATH_PASSED;
+        return GREY_END;
     assert(r.plain);
     const double sigma_t = m->sigma_a.r + m->sigma_s.r;
     uint32_t collisions = 0;
@@ -136,58 +136,77 @@ volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, d
             }
             x += dx;
             if (++collisions > VOLPATH_MAX_COLLISIONS)
-                return VOLPATH_OPAQUE;
-            double d = grey_density(&r, x, walk);
+                return GREY_OVER;
+            ++walk->lookups;
+            double d = grid_density_index(r.lookup, &r.acc.density,
+                                          v3_add(r.at.grid.o, v3_scale(r.at.grid.d, x)));
             tau = rng_exp1(&walk->r);
-            if (rng_uniform(&walk->r) * seg.max < d) {
-                *t = x;
-                *density = d;
-                return VOLPATH_REAL;
-            }
+            if (!at(ctx, x, d, seg.max))
+                return GREY_STOPPED;
         }
     }
+    return GREY_END;
+}
+
+/* Delta tracking: a collision is real with probability density / bound. */
+typedef struct {
+    rng *r;
+    double t, density;
+} flight_state;
+
+static inline bool flight_at(void *ctx, double x, double density, double bound)
+{
+    flight_state *f = ctx;
+    if (!(rng_uniform(f->r) * bound < density))
+        return true;
+    f->t = x;
+    f->density = density;
+    return false;
+}
+
+volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, double t1,
+                                   double u, media_walk *walk, double *t, double *density)
+{
+    flight_state f = {&walk->r, 0.0, 0.0};
+    switch (grey_walk(m, o, w, t0, t1, u, walk, flight_at, &f)) {
+    case GREY_END:
+        break;
+    case GREY_STOPPED:
+        *t = f.t;
+        *density = f.density;
+        return VOLPATH_REAL;
+    case GREY_OVER:
+        return VOLPATH_OPAQUE;
+    }
     return VOLPATH_PASSED;
+}
+
+/* Ratio tracking: T and r_u times sigma_n / sigma_maj, then the roulette. */
+typedef struct {
+    rng *r;
+    double t_max, rl_avg, ru_avg;
+    double T, r_u; /* the factors so far */
+} ratio_state;
+
+static inline bool ratio_at(void *ctx, double x, double density, double bound)
+{
+    (void)x;
+    ratio_state *s = ctx;
+    /* sigma_n / sigma_maj, at least 0 (the bound rounds up) */
+    double f = 1.0 - density / bound;
+    f = f > 0.0 ? f : 0.0;
+    s->T *= f;
+    s->r_u *= f;
+    s->T *= volpath_shadow_roulette(s->t_max * s->T / (s->rl_avg + s->ru_avg * s->r_u), s->r);
+    return s->T > 0.0;
 }
 
 bool volpath_grey_ratio(const medium *m, vec3 o, vec3 w, double t0, double t1, media_walk *walk,
                         double t_max, double rl_avg, double ru_avg, double *T, double *r_u)
 {
-    *T = *r_u = 1.0;
-    medium_ray r;
-    if (!(t1 > t0) || !medium_ray_start(m, o, w, walk->time, &t0, &t1, &r))
-        return true;
-    assert(r.plain);
-    const double sigma_t = m->sigma_a.r + m->sigma_s.r;
-    uint32_t collisions = 0;
-    double ft = 1.0, fu = 1.0; /* the factors of T and of r_u */
-    double tau = rng_exp1(&walk->r);
-    majorant_segment seg;
-    while (medium_ray_next(&r, &seg, &walk->majorant_steps)) {
-        double rate = sigma_t * seg.max;
-        if (!(rate > 0.0))
-            continue;
-        const double inv = 1.0 / seg.max;
-        for (double x = seg.t0;;) {
-            double dx = tau / rate;
-            if (!(x + dx < seg.t1)) {
-                tau -= rate * (seg.t1 - x);
-                break;
-            }
-            x += dx;
-            if (++collisions > VOLPATH_MAX_COLLISIONS)
-                return false;
-            /* sigma_n / sigma_maj, at least 0 (the bound rounds up) */
-            double f = 1.0 - grey_density(&r, x, walk) * inv;
-            f = f > 0.0 ? f : 0.0;
-            ft *= f;
-            fu *= f;
-            ft *= volpath_shadow_roulette(t_max * ft / (rl_avg + ru_avg * fu), &walk->r);
-            if (!(ft > 0.0))
-                return false;
-            tau = rng_exp1(&walk->r);
-        }
-    }
-    *T = ft;
-    *r_u = fu;
-    return true;
+    ratio_state s = {&walk->r, t_max, rl_avg, ru_avg, 1.0, 1.0};
+    grey_end e = grey_walk(m, o, w, t0, t1, -1.0, walk, ratio_at, &s);
+    *T = s.T;
+    *r_u = s.r_u;
+    return e == GREY_END;
 }
