@@ -112,4 +112,12 @@ static inline uint32_t smp_owen_scramble(uint32_t x, uint32_t seed)
     return smp_reverse_bits32(x);
 }
 
+/* smp_owen_scramble(smp_sobol0(i), seed) without the two reversals that
+ * cancel: Sobol' dimension 0 is i reversed, which the scramble reverses
+ * back. */
+static inline uint32_t smp_owen_sobol0(uint32_t i, uint32_t seed)
+{
+    return smp_reverse_bits32(smp_laine_karras_permutation(i, seed));
+}
+
 #endif
