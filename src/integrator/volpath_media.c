@@ -120,7 +120,7 @@ grey_walk(const medium *m, vec3 o, vec3 w, double t0, double t1, double u, media
     if (!(t1 > t0) || !medium_ray_start(m, o, w, walk->time, &t0, &t1, &r))
         return GREY_END;
     assert(r.plain);
-    const double sigma_t = m->sigma_a.r + m->sigma_s.r;
+    const double sigma_t = medium_sigma_t(m).r; /* every lane's */
     uint32_t collisions = 0;
     double tau = first_exp(&u, &walk->r);
     majorant_segment seg;

@@ -85,11 +85,12 @@ volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, d
                                    double u, media_walk *walk, double *t, double *density);
 
 /* Ratio tracking of a shadow ray through grey medium m over [t0, t1] with
- * volpath_shadow_roulette: on entry *T and *r_u are 1, and t_max, rl_avg,
- * ru_avg are the ray's estimate so far (its T's largest lane, the means of
- * its r_l and r_u); on return every lane of T is to be multiplied by *T and
- * every lane of r_u by *r_u (r_l is unchanged). False when the estimate
- * ended at 0 (roulette, or past VOLPATH_MAX_COLLISIONS). */
+ * volpath_shadow_roulette, whose estimate needs the ray's state so far:
+ * t_max, rl_avg, ru_avg are its T's largest lane and the means of its r_l
+ * and r_u. Sets *T and *r_u to the factors every lane of the ray's T and r_u
+ * is to be multiplied by (1 where the ray misses the density; r_l is
+ * unchanged). False when the estimate ended at 0 (roulette, or past
+ * VOLPATH_MAX_COLLISIONS). */
 bool volpath_grey_ratio(const medium *m, vec3 o, vec3 w, double t0, double t1, media_walk *walk,
                         double t_max, double rl_avg, double ru_avg, double *T, double *r_u);
 
