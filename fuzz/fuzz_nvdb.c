@@ -25,8 +25,11 @@ static void use_grid(grid *g)
         majorant_grid mg;
         hz_error err;
         int32_t pad[3] = {1, 0, 2};
-        if (majorant_grid_build(g, NULL, lo, hi, pad, &mg, &err) == HZ_OK)
+        if (majorant_grid_build(g, NULL, lo, hi, pad, &mg, &err) == HZ_OK) {
+            size_t bricks, cells; /* every brick, also those left to their first use */
+            majorant_grid_count(&mg, &bricks, &cells);
             majorant_grid_free(&mg);
+        }
         grid_accessor acc;
         grid_accessor_init(g, &acc);
         volatile double sink = 0.0;

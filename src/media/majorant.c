@@ -425,7 +425,7 @@ static uint64_t layout(const double l3[3], const double h3[3], int32_t cell, int
 typedef struct {
     bool differ;            /* its cells differ: the brick keeps them */
     majorant_bounds whole;  /* the union of its cells' bounds */
-    majorant_cellmap map;   /* first unset */
+    majorant_cellmap map;   /* pointing at cells and boxes below */
     size_t n;               /* occupied cells */
     majorant_bounds *cells; /* n of them, then n boxes when boxed */
     majorant_box *boxes;
@@ -489,6 +489,8 @@ static bool cellmap_pack(const majorant_bounds *cells, const majorant_box *boxes
                 out->boxes[k] = boxes[i];
             ++k;
         }
+    out->map.cells = out->cells;
+    out->map.boxes = out->boxes;
     return true;
 }
 
@@ -623,7 +625,9 @@ static bool bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3],
             }
     out->differ = differ;
     out->cells = NULL;
+    out->boxes = NULL;
     out->n = 0;
+    memset(&out->map, 0, sizeof out->map);
     return !differ || cellmap_pack(cells, r->src->boxes ? boxes : NULL, out);
 }
 
@@ -722,11 +726,15 @@ static size_t cells_to_store(const majorant_grid *mg, brick_cells *const *cells)
 /* The smallest cell whose bricks fit MAJORANT_MAX_BRICKS and whose occupied
  * cells fit stored_cells_cap: lays out out's bricks and bounds them, and the
  * cells of those not uniform into *cells (one per brick, NULL where not).
- * *varied: the bricks whose cells may differ. */
+ * *varied: the bricks whose cells may differ. *lazy (and *cells NULL): the
+ * cells of every brick that is not uniform fit the cap whatever they hold,
+ * so they wait for their first use (the same cell size: the occupied ones
+ * fit too). */
 static hz_status choose_layout(const source *src, const double l3[3], const double h3[3],
                                majorant_grid *out, size_t *varied, brick_cells ***cells,
-                               hz_error *err)
+                               bool *lazy, hz_error *err)
 {
+    *lazy = false;
     for (;;) {
         int64_t first[3], res[3];
         uint64_t count = layout(l3, h3, out->cell, first, res);
@@ -739,6 +747,14 @@ static hz_status choose_layout(const source *src, const double l3[3], const doub
             out->origin[a] = (int32_t)(first[a] * out->cell * B);
         }
         out->bricks = malloc((size_t)count * sizeof *out->bricks);
+        if (out->bricks && !src->by_queries) {
+            *varied = bound_bricks(src, out, NULL);
+            if (*varied <= stored_cells_cap(src) / CELLS_PER_BRICK) {
+                *lazy = true;
+                *cells = NULL;
+                return HZ_OK;
+            }
+        }
         *cells = calloc((size_t)count, sizeof **cells);
         if (!out->bricks || !*cells) {
             free(*cells);
@@ -813,7 +829,8 @@ static hz_status store_cells(const source *src, majorant_grid *out, size_t varie
             continue;
         majorant_cellmap *map = &out->maps[out->stored_bricks];
         *map = bc->map;
-        map->first = (uint32_t)out->stored_cells;
+        map->cells = out->cells + out->stored_cells;
+        map->boxes = out->boxes ? out->boxes + out->stored_cells : NULL;
         memcpy(out->cells + out->stored_cells, bc->cells, bc->n * sizeof *bc->cells);
         if (out->boxes)
             memcpy(out->boxes + out->stored_cells, bc->boxes, bc->n * sizeof *bc->boxes);
@@ -822,6 +839,157 @@ static hz_status store_cells(const source *src, majorant_grid *out, size_t varie
     }
     free(brick);
     return HZ_OK;
+}
+
+/* ---- bricks built at their first use ---- */
+
+/* A brick built at its first use: its cells as bound_cells gives them. */
+typedef struct {
+    majorant_bounds whole;
+    bool differ;
+    majorant_cellmap map; /* differ: pointing at `own` */
+    majorant_bounds *own; /* its cells and boxes (one allocation) */
+    size_t n;
+} lazy_brick;
+
+struct majorant_lazy {
+    source src; /* pointing at pad and em below */
+    int32_t pad[3];
+    majorant_emission em;
+    size_t count;                 /* slots: the bricks left to their first use */
+    _Atomic(lazy_brick *) *built; /* per slot, NULL until built */
+};
+
+static void lazy_brick_free(lazy_brick *lb)
+{
+    if (lb)
+        free(lb->own);
+    free(lb);
+}
+
+/* Every brick not uniform gets a slot, in brick order. */
+static hz_status lazy_start(const source *src, const int32_t pad[3], const majorant_emission *em,
+                            majorant_grid *out, size_t varied, hz_error *err)
+{
+    struct majorant_lazy *lz = malloc(sizeof *lz);
+    _Atomic(lazy_brick *) *built = malloc(varied * sizeof *built);
+    if (!lz || !built) {
+        free(lz);
+        free(built);
+        majorant_grid_free(out);
+        return hz_fail(err, "out of memory for a majorant grid of %zu bricks", varied);
+    }
+    lz->src = *src;
+    memcpy(lz->pad, pad, sizeof lz->pad);
+    lz->src.pad = lz->pad;
+    if (em) {
+        lz->em = *em;
+        lz->src.em = &lz->em;
+    }
+    lz->count = varied;
+    lz->built = built;
+    for (size_t k = 0; k < varied; ++k)
+        atomic_init(&built[k], NULL);
+    size_t count = (size_t)out->res[0] * (size_t)out->res[1] * (size_t)out->res[2];
+    for (size_t i = 0, k = 0; i < count; ++i)
+        if (!uniform_bounds(out->bricks[i].bounds))
+            out->bricks[i].cells = MAJORANT_BRICK_LAZY - (int32_t)k++;
+    out->lazy = lz;
+    return HZ_OK;
+}
+
+/* Brick i's cells, as a build at loading bounds them; NULL when out of
+ * memory. */
+static lazy_brick *lazy_build(const majorant_grid *mg, size_t i)
+{
+    lazy_brick *lb = malloc(sizeof *lb);
+    if (!lb)
+        return NULL;
+    int32_t b3[3];
+    int64_t first[3];
+    brick_xyz(mg, i, b3);
+    brick_first(mg, b3, first);
+    reader r = reader_start(&mg->lazy->src);
+    reader_aim(&r, first, (int64_t)mg->cell * B);
+    brick_cells bc;
+    bool ok = bound_cells(&r, mg, b3, &bc);
+    reader_end(&r);
+    if (!ok) {
+        free(lb);
+        return NULL;
+    }
+    *lb = (lazy_brick){bc.whole, bc.differ, bc.map, bc.cells, bc.n};
+    return lb;
+}
+
+const majorant_cellmap *majorant_grid_brick(const majorant_grid *mg, size_t index,
+                                            majorant_bounds *bounds)
+{
+    const majorant_brick *br = &mg->bricks[index];
+    *bounds = br->bounds;
+    if (br->cells >= 0)
+        return &mg->maps[br->cells];
+    if (br->cells > MAJORANT_BRICK_LAZY)
+        return NULL;
+    _Atomic(lazy_brick *) *slot = &mg->lazy->built[MAJORANT_BRICK_LAZY - br->cells];
+    lazy_brick *lb = atomic_load_explicit(slot, memory_order_acquire);
+    if (!lb) {
+        lazy_brick *mine = lazy_build(mg, index);
+        /* Out of memory: the brick's own bounds, looser but still bounds
+         * (this walk then differs from one after a build). */
+        if (!mine)
+            return NULL;
+        lazy_brick *none = NULL;
+        if (atomic_compare_exchange_strong_explicit(slot, &none, mine, memory_order_acq_rel,
+                                                    memory_order_acquire)) {
+            lb = mine;
+        } else { /* another thread built the same bits first */
+            lazy_brick_free(mine);
+            lb = none;
+        }
+    }
+    *bounds = lb->whole;
+    return lb->differ ? &lb->map : NULL;
+}
+
+typedef struct {
+    const majorant_grid *mg;
+    size_t count;
+    atomic_size_t next;
+} resolve_job;
+
+static void *resolve_worker(void *ctx)
+{
+    resolve_job *job = ctx;
+    for (;;) {
+        size_t i = atomic_fetch_add(&job->next, BRICK_CHUNK);
+        if (i >= job->count)
+            break;
+        size_t end = i + BRICK_CHUNK < job->count ? i + BRICK_CHUNK : job->count;
+        for (majorant_bounds b; i < end; ++i)
+            if (job->mg->bricks[i].cells <= MAJORANT_BRICK_LAZY)
+                majorant_grid_brick(job->mg, i, &b);
+    }
+    return NULL;
+}
+
+void majorant_grid_count(const majorant_grid *mg, size_t *bricks, size_t *cells)
+{
+    size_t count = (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2];
+    *bricks = mg->stored_bricks;
+    *cells = mg->stored_cells;
+    if (!mg->lazy || !mg->bricks)
+        return;
+    resolve_job job = {.mg = mg, .count = count};
+    atomic_init(&job.next, 0);
+    hz_parallel_run(threads_for(mg->lazy->count), resolve_worker, &job);
+    for (size_t k = 0; k < mg->lazy->count; ++k) {
+        const lazy_brick *lb = atomic_load(&mg->lazy->built[k]);
+        if (lb && lb->differ) {
+            ++*bricks;
+            *cells += lb->n;
+        }
+    }
 }
 
 static hz_status build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,
@@ -845,15 +1013,19 @@ static hz_status build(const grid *g, const majorant_emission *em, vec3 lo, vec3
     }
     /* Boxes need zero backgrounds (an emission grid's always is). */
     src.boxes = grid_background(g) == 0.0f && (!em || grid_background(em->grid) == 0.0f);
+    out->boxed = src.boxes;
     size_t varied = 0;
     brick_cells **cells = NULL;
-    if (choose_layout(&src, l3, h3, out, &varied, &cells, err) != HZ_OK)
+    bool lazy = false;
+    if (choose_layout(&src, l3, h3, out, &varied, &cells, &lazy, err) != HZ_OK)
         return HZ_ERROR;
     size_t count = (size_t)out->res[0] * (size_t)out->res[1] * (size_t)out->res[2];
     if (varied == 0) {
         free_cells(cells, count);
         return HZ_OK;
     }
+    if (lazy)
+        return lazy_start(&src, pad, em, out, varied, err);
     if (!cells)
         cells = calloc(count, sizeof *cells);
     hz_status st = cells ? store_cells(&src, out, varied, cells, err)
@@ -880,6 +1052,13 @@ hz_status majorant_grid_build_by_queries(const grid *g, const majorant_emission 
 
 void majorant_grid_free(majorant_grid *mg)
 {
+    if (mg->lazy) {
+        for (size_t k = 0; k < mg->lazy->count; ++k)
+            lazy_brick_free(atomic_load(&mg->lazy->built[k]));
+        free(mg->lazy->built);
+        free(mg->lazy);
+        mg->lazy = NULL;
+    }
     free(mg->bricks);
     free(mg->maps);
     free(mg->cells);
@@ -895,9 +1074,17 @@ void majorant_grid_free(majorant_grid *mg)
 
 size_t majorant_grid_bytes(const majorant_grid *mg)
 {
-    return (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2] * sizeof *mg->bricks +
-           mg->stored_bricks * sizeof *mg->maps +
-           mg->stored_cells * (sizeof *mg->cells + (mg->boxes ? sizeof *mg->boxes : 0));
+    size_t cell_bytes = sizeof(majorant_bounds) + (mg->boxed ? sizeof(majorant_box) : 0);
+    size_t n = (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2] * sizeof *mg->bricks +
+               mg->stored_bricks * sizeof *mg->maps + mg->stored_cells * cell_bytes;
+    if (mg->lazy) {
+        n += sizeof *mg->lazy + mg->lazy->count * sizeof *mg->lazy->built;
+        for (size_t k = 0; k < mg->lazy->count; ++k) {
+            const lazy_brick *lb = atomic_load(&mg->lazy->built[k]);
+            n += lb ? sizeof *lb + lb->n * cell_bytes : 0;
+        }
+    }
+    return n;
 }
 
 
@@ -915,14 +1102,11 @@ bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *o
         b[a] = (int32_t)u / B;
         c[a] = (int32_t)u % B;
     }
-    const majorant_brick *br = &mg->bricks[majorant_brick_index(mg, b)];
-    if (br->cells < 0) {
-        *out = br->bounds;
+    const majorant_cellmap *map = majorant_grid_brick(mg, majorant_brick_index(mg, b), out);
+    if (!map)
         return true;
-    }
-    const majorant_cellmap *map = &mg->maps[br->cells];
     int32_t i = (int32_t)cell_index(c);
-    *out = majorant_cell_occupied(map, i) ? mg->cells[majorant_cell_slot(map, i)]
+    *out = majorant_cell_occupied(map, i) ? map->cells[majorant_cell_slot(map, i)]
                                           : (majorant_bounds){0.0f, 0.0f, 0.0f};
     return true;
 }
@@ -1006,7 +1190,7 @@ bool majorant_walk_start(majorant_walk *w, const majorant_grid *mg, vec3 o, vec3
 }
 
 /* Starts the cell level in a brick that stores its cells, at w->t. */
-void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, double exit)
+void majorant_walk_enter_brick(majorant_walk *w, const majorant_cellmap *map, double exit)
 {
     w->brick_exit = exit;
     for (int a = 0; a < 3; ++a) {
@@ -1017,13 +1201,13 @@ void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, doubl
                           : w->step[a] < 0 ? (first + c - w->u0[a]) / w->du[a]
                                            : INFINITY;
     }
-    w->map = &w->mg->maps[br->cells];
+    w->map = map;
     w->ci = (int32_t)cell_index(w->cell_ijk);
 }
 
 void majorant_walk_clip(majorant_walk *w, size_t k)
 {
-    const majorant_box *bx = &w->mg->boxes[k];
+    const majorant_box *bx = &w->map->boxes[k];
     double t0 = -INFINITY, t1 = INFINITY;
     for (int a = 0; a < 3; ++a) {
         double c = (double)w->brick[a] * B + w->cell_ijk[a];
@@ -1041,7 +1225,7 @@ void majorant_walk_clip(majorant_walk *w, size_t k)
             break;
         }
     }
-    w->clip_cell = &w->mg->cells[k];
+    w->clip_cell = &w->map->cells[k];
     w->clip_t0 = t0;
     w->clip_t1 = t1;
 }

@@ -10,7 +10,16 @@
  * MAJORANT_MAX_BRICKS of them), and only a brick whose cells differ (one that
  * holds the edge or the inside of the medium) stores its cells, and of those
  * only the occupied ones (majorant_cellmap); a brick whose every cell has the
- * same bounds (empty space, a constant tile) is one pair of floats. Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
+ * same bounds (empty space, a constant tile) is one pair of floats.
+ *
+ * The build bounds every brick and, where the cells would fit their cap
+ * whatever they hold, leaves the cells of a brick that is not uniform to
+ * the first walk that enters it (or asks its bounds): loading then costs
+ * one bound per brick, and a render builds the bricks its rays reach, each
+ * once (on whichever thread comes first: the result is the same bits as a
+ * build at loading, so images do not depend on the order).
+ *
+ * Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
  * multiple of it when the support is large or densely active), aligned to
  * multiples of `cell` in index space, like the tree's nodes; bricks to
  * multiples of MAJORANT_BRICK * cell. A cell [a, a + cell) reads voxels
@@ -62,21 +71,17 @@ typedef struct {
     transform eindex_from_index; /* its index from the density's index */
 } majorant_emission;
 
+/* A brick's `cells`: its map in majorant_grid.maps (>= 0), uniform (-1), or
+ * not built yet (<= MAJORANT_BRICK_LAZY: slot MAJORANT_BRICK_LAZY - cells
+ * of the lazy bricks). */
+#define MAJORANT_BRICK_UNIFORM (-1)
+#define MAJORANT_BRICK_LAZY (-2)
 typedef struct {
-    majorant_bounds bounds; /* of the whole brick: every cell's when uniform, else their union */
-    int32_t cells;          /* its map in majorant_grid.maps, or -1: uniform */
+    /* of the whole brick: every cell's when uniform, else their union (not
+     * built yet: a looser bound of the brick's voxels) */
+    majorant_bounds bounds;
+    int32_t cells;
 } majorant_brick;
-
-/* Which cells of a brick that stores its cells hold something (bounds other
- * than all 0: density or emission), one bit per cell, x fastest; only those
- * are stored, in cell order, so that memory follows the occupied cells and a
- * walk crosses the empty ones reading this map alone. */
-#define MAJORANT_MAP_WORDS (MAJORANT_BRICK_CELLS / 64)
-typedef struct {
-    uint64_t occupied[MAJORANT_MAP_WORDS];
-    uint32_t first;                      /* its first cell in majorant_grid.cells */
-    uint16_t before[MAJORANT_MAP_WORDS]; /* its cells stored before word w */
-} majorant_cellmap;
 
 /* Where in a stored cell the density may be non-zero: [lo, hi] per axis in
  * 64ths of the cell from its first voxel, rounded outward (lo > hi: nowhere).
@@ -86,16 +91,34 @@ typedef struct {
     uint8_t lo[3], hi[3];
 } majorant_box;
 
+/* Which cells of a brick that stores its cells hold something (bounds other
+ * than all 0: density or emission), one bit per cell, x fastest; only those
+ * are stored, in cell order, so that memory follows the occupied cells and a
+ * walk crosses the empty ones reading this map alone. */
+#define MAJORANT_MAP_WORDS (MAJORANT_BRICK_CELLS / 64)
+typedef struct {
+    uint64_t occupied[MAJORANT_MAP_WORDS];
+    uint16_t before[MAJORANT_MAP_WORDS]; /* its cells stored before word w */
+    const majorant_bounds *cells;        /* its occupied cells, in cell order */
+    const majorant_box *boxes;           /* one per stored cell; NULL: none */
+} majorant_cellmap;
+
+
+struct majorant_lazy; /* the bricks not built yet, and what builds them */
+
 typedef struct {
     int32_t res[3];          /* bricks per axis */
     int32_t origin[3];       /* index coordinate of brick (0,0,0)'s first voxel */
     int32_t cell;            /* edge of a cell in voxels */
+    bool boxed;              /* stored cells have boxes (zero backgrounds) */
     majorant_brick *bricks;  /* res[0]*res[1]*res[2], x fastest */
-    majorant_cellmap *maps;  /* one per brick that stores its cells */
-    majorant_bounds *cells;  /* the occupied cells of those bricks, brick by brick */
-    majorant_box *boxes;     /* one per stored cell; NULL with a non-zero background */
-    size_t stored_bricks;    /* bricks that store their cells (maps) */
-    size_t stored_cells;     /* cells stored */
+    /* the bricks built at loading that store their cells */
+    majorant_cellmap *maps;  /* one per such brick */
+    majorant_bounds *cells;  /* their occupied cells, brick by brick (maps point in) */
+    majorant_box *boxes;     /* one per stored cell; NULL when not boxed */
+    size_t stored_bricks;    /* maps */
+    size_t stored_cells;     /* cells */
+    struct majorant_lazy *lazy; /* NULL: every brick built */
 } majorant_grid;
 
 /* Builds the grid covering the index box [lo, hi] (the support; lo > hi: an
@@ -112,7 +135,16 @@ hz_status majorant_grid_build_by_queries(const grid *g, const majorant_emission 
                                          vec3 hi, const int32_t pad[3], majorant_grid *out,
                                          hz_error *err);
 void majorant_grid_free(majorant_grid *mg);
+/* What the grid holds now (lazy bricks once built). */
 size_t majorant_grid_bytes(const majorant_grid *mg);
+/* Brick `index` (majorant_brick_index) as walks see it: its bounds into
+ * *bounds, and its map when it stores its cells (NULL: uniform). Builds it
+ * when it was left to the first use. */
+const majorant_cellmap *majorant_grid_brick(const majorant_grid *mg, size_t index,
+                                            majorant_bounds *bounds);
+/* Builds every brick not built yet (on every core) and counts the bricks
+ * that store their cells and the cells stored. */
+void majorant_grid_count(const majorant_grid *mg, size_t *bricks, size_t *cells);
 /* The bounds of the cell holding the index-space point p; false outside the
  * grid. */
 bool majorant_grid_bounds_at(const majorant_grid *mg, vec3 p, majorant_bounds *out);
@@ -181,8 +213,8 @@ static inline bool majorant_box_full(const majorant_box *bx)
            (bx->hi[0] & bx->hi[1] & bx->hi[2]) == MAJORANT_BOX_UNITS;
 }
 
-/* Starts the cell level in a brick that stores its cells, at w->t. */
-void majorant_walk_enter_brick(majorant_walk *w, const majorant_brick *br, double exit);
+/* Starts the cell level in a brick that stores its cells (map), at w->t. */
+void majorant_walk_enter_brick(majorant_walk *w, const majorant_cellmap *map, double exit);
 /* Sets clip_t0/clip_t1 to the box of stored cell k (the current one) along
  * the ray. */
 void majorant_walk_clip(majorant_walk *w, size_t k);
@@ -201,11 +233,11 @@ static inline uint32_t majorant_popcount(uint64_t v)
     return (uint32_t)((v * UINT64_C(0x0101010101010101)) >> 56);
 }
 
-/* Where occupied cell i of the brick is stored. */
+/* Where occupied cell i of the brick is stored: its index in m->cells. */
 static inline size_t majorant_cell_slot(const majorant_cellmap *m, int32_t i)
 {
     uint64_t below = m->occupied[i >> 6] & ((UINT64_C(1) << (i & 63)) - 1u);
-    return (size_t)m->first + m->before[i >> 6] + majorant_popcount(below);
+    return (size_t)m->before[i >> 6] + majorant_popcount(below);
 }
 
 static inline bool majorant_bounds_empty(majorant_bounds b)
@@ -253,10 +285,10 @@ static inline majorant_bounds majorant_walk_piece(majorant_walk *w, double *t1, 
     if (!majorant_cell_occupied(w->map, w->ci))
         return zero;
     size_t k = majorant_cell_slot(w->map, w->ci);
-    majorant_bounds b = w->mg->cells[k];
-    if (w->mg->boxes && b.max > 0.0f && !majorant_box_full(&w->mg->boxes[k])) {
+    majorant_bounds b = w->map->cells[k];
+    if (w->map->boxes && b.max > 0.0f && !majorant_box_full(&w->map->boxes[k])) {
         /* up to three pieces: before the box, in it, after it */
-        if (w->clip_cell != &w->mg->cells[k])
+        if (w->clip_cell != &w->map->cells[k])
             majorant_walk_clip(w, k);
         bool inside = !(w->t < w->clip_t0) && w->t < w->clip_t1;
         double change = w->t < w->clip_t0 ? w->clip_t0 : w->clip_t1;
@@ -309,12 +341,18 @@ static inline bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
         } else {
             int a = majorant_nearest_axis(w->brick_next);
             double exit = w->brick_next[a] < w->t_end ? w->brick_next[a] : w->t_end;
-            const majorant_brick *br = &w->mg->bricks[majorant_brick_index(w->mg, w->brick)];
-            if (br->cells >= 0 && !w->coarse) {
-                majorant_walk_enter_brick(w, br, exit);
+            size_t bi = majorant_brick_index(w->mg, w->brick);
+            const majorant_brick *br = &w->mg->bricks[bi];
+            const majorant_cellmap *map = NULL;
+            b = br->bounds;
+            if (br->cells >= 0)
+                map = &w->mg->maps[br->cells];
+            else if (br->cells <= MAJORANT_BRICK_LAZY)
+                map = majorant_grid_brick(w->mg, bi, &b);
+            if (map && !w->coarse) {
+                majorant_walk_enter_brick(w, map, exit);
                 continue;
             }
-            b = br->bounds;
             empty = majorant_bounds_empty(b);
             if (!empty && run)
                 break;

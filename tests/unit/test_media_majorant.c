@@ -298,7 +298,7 @@ static void boxes_hold_no_density(const char *file, int32_t pad, double least_cu
 {
     fixture f = build(file, pad);
     const majorant_grid *mg = &f.mg;
-    assert_non_null(mg->boxes);
+    assert_true(mg->boxed);
     grid_accessor acc;
     grid_accessor_init(f.g, &acc);
     rng r = rng_seeded(11);
@@ -395,7 +395,7 @@ static void boxes_hold_emission_in(const char *emission_file, bool aligned, tran
     majorant_grid mg;
     int32_t pad[3] = {0, 0, 0};
     assert_int_equal(majorant_grid_build(g, &em, lo, hi, pad, &mg, &err), HZ_OK);
-    assert_non_null(mg.boxes);
+    assert_true(mg.boxed);
     grid_accessor ga, ea;
     grid_accessor_init(g, &ga);
     grid_accessor_init(e, &ea);
@@ -482,7 +482,9 @@ static void huge_supports_stay_bounded(void **state)
         assert_int_equal(majorant_grid_build(f.g, NULL, lo, hi, pad, &mg, &err), HZ_OK);
         uint64_t bricks = (uint64_t)mg.res[0] * (uint64_t)mg.res[1] * (uint64_t)mg.res[2];
         assert_true(bricks >= 1 && bricks <= MAJORANT_MAX_BRICKS);
-        assert_true(mg.stored_cells <= MAJORANT_MIN_STORED_CELLS);
+        size_t sb, sc;
+        majorant_grid_count(&mg, &sb, &sc);
+        assert_true(sc <= MAJORANT_MIN_STORED_CELLS);
         assert_true(cell_of(&mg, v3(16, 16, 16)).max == 1.0f);
         majorant_grid_free(&mg);
     }
@@ -508,8 +510,10 @@ static void memory_follows_active_data(void **state)
         HZ_OK);
     assert_int_equal(mg.cell, 8);
     assert_int_equal(mg.res[0], 32);
-    assert_int_equal(mg.stored_bricks, 8);
-    assert_int_equal(mg.stored_cells, 6 * 6 * 6);
+    size_t sb, sc;
+    majorant_grid_count(&mg, &sb, &sc);
+    assert_int_equal(sb, 8);
+    assert_int_equal(sc, 6 * 6 * 6);
     assert_true(majorant_grid_bytes(&mg) < 600 * 1024);
     assert_true(cell_of(&mg, v3(16, 16, 16)).min == 1.0f);
     assert_true(cell_of(&mg, v3(500, -700, 3)).max == 0.0f);
@@ -541,9 +545,37 @@ static void memory_follows_active_data(void **state)
     destroy(&f);
 }
 
-/* majorant_grid_build (the tree walked once per brick) of g and
- * majorant_grid_build_by_queries (one query per brick and cell) of q make
- * the same grid, bit for bit: layout, bricks, cells and boxes. */
+/* Every brick of a and b as walks see it (majorant_grid_brick: built at
+ * first use or not), bit for bit: bounds, cell maps, cells and boxes. */
+static void same_bricks(const majorant_grid *a, const majorant_grid *b, const char *what,
+                        int32_t pad)
+{
+    size_t bricks = (size_t)a->res[0] * (size_t)a->res[1] * (size_t)a->res[2];
+    for (size_t i = 0; i < bricks; ++i) {
+        majorant_bounds ba, bb;
+        const majorant_cellmap *ma = majorant_grid_brick(a, i, &ba);
+        const majorant_cellmap *mb = majorant_grid_brick(b, i, &bb);
+        if (memcmp(&ba, &bb, sizeof ba) != 0 || (ma == NULL) != (mb == NULL))
+            fail_msg("%s, pad %d: brick %zu differs", what, pad, i);
+        if (!ma)
+            continue;
+        size_t n = 0;
+        for (int w = 0; w < MAJORANT_MAP_WORDS; ++w)
+            n += majorant_popcount(ma->occupied[w]);
+        if (memcmp(ma->occupied, mb->occupied, sizeof ma->occupied) != 0 ||
+            memcmp(ma->before, mb->before, sizeof ma->before) != 0 ||
+            memcmp(ma->cells, mb->cells, n * sizeof *ma->cells) != 0)
+            fail_msg("%s, pad %d: the cells of brick %zu differ", what, pad, i);
+        if ((ma->boxes == NULL) != (mb->boxes == NULL) ||
+            (ma->boxes && memcmp(ma->boxes, mb->boxes, n * sizeof *ma->boxes) != 0))
+            fail_msg("%s, pad %d: the boxes of brick %zu differ", what, pad, i);
+    }
+}
+
+/* majorant_grid_build (the tree walked once per brick, the cells at their
+ * first use where they fit) of g and majorant_grid_build_by_queries (one
+ * query per brick and cell, every brick at once) of q make the same grid,
+ * bit for bit: layout, bricks, cells and boxes. */
 static void same_as_by_queries_of(const grid *g, const grid *q, const majorant_emission *em,
                                   vec3 lo, vec3 hi, int32_t pad, const char *what)
 {
@@ -552,23 +584,16 @@ static void same_as_by_queries_of(const grid *g, const grid *q, const majorant_e
     int32_t p[3] = {pad, pad + 1, 2 * pad}; /* unequal axes too */
     assert_int_equal(majorant_grid_build(g, em, lo, hi, p, &a, &err), HZ_OK);
     assert_int_equal(majorant_grid_build_by_queries(q, em, lo, hi, p, &b, &err), HZ_OK);
-    size_t bricks = (size_t)a.res[0] * (size_t)a.res[1] * (size_t)a.res[2];
-    size_t cells = a.stored_cells;
+    assert_null(b.lazy); /* the reference builds every brick at once */
     if (memcmp(a.res, b.res, sizeof a.res) != 0 || memcmp(a.origin, b.origin, sizeof a.origin) != 0 ||
-        a.cell != b.cell || a.stored_bricks != b.stored_bricks || a.stored_cells != b.stored_cells ||
-        (a.boxes == NULL) != (b.boxes == NULL))
+        a.cell != b.cell || a.boxed != b.boxed)
         fail_msg("%s, pad %d: the layouts differ", what, pad);
-    if (bricks && memcmp(a.bricks, b.bricks, bricks * sizeof *a.bricks) != 0)
-        fail_msg("%s, pad %d: the bricks differ", what, pad);
-    for (size_t k = 0; k < a.stored_bricks; ++k)
-        if (memcmp(a.maps[k].occupied, b.maps[k].occupied, sizeof a.maps[k].occupied) != 0 ||
-            a.maps[k].first != b.maps[k].first ||
-            memcmp(a.maps[k].before, b.maps[k].before, sizeof a.maps[k].before) != 0)
-            fail_msg("%s, pad %d: the cell maps differ", what, pad);
-    if (cells && memcmp(a.cells, b.cells, cells * sizeof *a.cells) != 0)
-        fail_msg("%s, pad %d: the cells differ", what, pad);
-    if (cells && a.boxes && memcmp(a.boxes, b.boxes, cells * sizeof *a.boxes) != 0)
-        fail_msg("%s, pad %d: the boxes differ", what, pad);
+    same_bricks(&a, &b, what, pad);
+    size_t ab, ac, bb, bc;
+    majorant_grid_count(&a, &ab, &ac);
+    majorant_grid_count(&b, &bb, &bc);
+    if (ab != bb || ac != bc)
+        fail_msg("%s, pad %d: %zu and %zu bricks store %zu and %zu cells", what, pad, ab, bb, ac, bc);
     majorant_grid_free(&a);
     majorant_grid_free(&b);
 }
@@ -587,7 +612,7 @@ static void bottom_up_is_by_queries(void **state)
     (void)state;
     const char *files[] = {"box.vdb",  "box_inactive.vdb", "fog_sphere.vdb", "sheet.vdb",
                            "smoke.vdb", "plume.vdb",       "sparse.vdb",     "explosion.vdb"};
-    int stored = 0, boxed = 0;
+    int stored = 0, boxed = 0, left = 0;
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
         char path[512];
         snprintf(path, sizeof path, "%s%s", VOLUMES, files[i]);
@@ -608,14 +633,18 @@ static void bottom_up_is_by_queries(void **state)
         majorant_grid mg;
         int32_t p0[3] = {0, 0, 0};
         assert_int_equal(majorant_grid_build(g, NULL, lo, hi, p0, &mg, &err), HZ_OK);
-        stored += mg.stored_bricks > 0;
-        boxed += mg.boxes != NULL;
+        size_t sb, sc;
+        majorant_grid_count(&mg, &sb, &sc);
+        stored += sb > 0;
+        boxed += mg.boxed;
+        left += mg.lazy != NULL;
         majorant_grid_free(&mg);
         grid_destroy(g);
         grid_destroy(q);
     }
     assert_true(stored >= 6); /* the comparisons saw cells, not only bricks */
     assert_true(boxed >= 6);
+    assert_true(left >= 6); /* ... and bricks built at their first use */
 }
 
 /* ... and with an emission grid, in the density's index space or not. */

@@ -60,8 +60,9 @@ static void write_bytes(const char *path, const unsigned char *bytes, size_t n)
     fclose(f);
 }
 
-/* Loads `bytes`, builds its majorant and looks up a few points when it loads;
- * returns whether it loaded. */
+/* Loads `bytes`, builds its majorant (every brick, also those a build leaves
+ * to their first use) and looks up a few points when it loads; returns
+ * whether it loaded. */
 static bool try_load(const unsigned char *bytes, size_t n, char *message, size_t msize)
 {
     const char *path = HAZE_TMP "/hostile.nvdb";
@@ -78,8 +79,11 @@ static bool try_load(const unsigned char *bytes, size_t n, char *message, size_t
     if (grid_support_bounds(g, &lo, &hi)) {
         majorant_grid mg;
         int32_t pad[3] = {0, 0, 0};
-        if (majorant_grid_build(g, NULL, lo, hi, pad, &mg, &err) == HZ_OK)
+        if (majorant_grid_build(g, NULL, lo, hi, pad, &mg, &err) == HZ_OK) {
+            size_t bricks, cells;
+            majorant_grid_count(&mg, &bricks, &cells);
             majorant_grid_free(&mg);
+        }
     }
     grid_accessor acc;
     grid_accessor_init(g, &acc);
