@@ -60,21 +60,32 @@ static pnanovdb_address_t addr(uint64_t a)
     return r;
 }
 
+/* Word w (bits 32 w .. 32 w + 31) of the mask at byte `off` of a node: the
+ * tables' masks read a word at a time, not a bit at a time (a lower node
+ * has 4096 entries; a sparse grid's lower nodes are mostly empty). */
+static uint32_t mask_word(pnanovdb_buf_t buf, pnanovdb_address_t node, uint32_t off, uint32_t w)
+{
+    return pnanovdb_read_uint32(buf, pnanovdb_address_offset(node, off + 4u * w));
+}
+
+static uint32_t lowest_bit(uint32_t m) { return (uint32_t)__builtin_ctz(m); }
+
 static int check_lower(checker *c, uint64_t lower_at)
 {
     pnanovdb_lower_handle_t lower = {addr(lower_at)};
     uint32_t leaf_size = PNANOVDB_GRID_TYPE_GET(c->type, leaf_size);
-    for (uint32_t n = 0; n < PNANOVDB_LOWER_TABLE_COUNT; ++n) {
-        if (!pnanovdb_lower_get_child_mask(c->buf, lower, n))
-            continue;
-        if (++c->leaves > c->max_leaves)
-            return fail(c, "more leaf children than the tree's %llu leaf nodes",
-                        (unsigned long long)c->max_leaves);
-        int64_t rel = pnanovdb_lower_get_table_child(c->type, c->buf, lower, n);
-        uint64_t at;
-        if (!node_fits(c, lower_at, rel, leaf_size, &at))
-            return fail(c, "a lower node's child %u points outside the buffer", n);
-    }
+    for (uint32_t w = 0; w < PNANOVDB_LOWER_TABLE_COUNT / 32; ++w)
+        for (uint32_t bits = mask_word(c->buf, lower.address, PNANOVDB_LOWER_OFF_CHILD_MASK, w);
+             bits; bits &= bits - 1) {
+            uint32_t n = 32 * w + lowest_bit(bits);
+            if (++c->leaves > c->max_leaves)
+                return fail(c, "more leaf children than the tree's %llu leaf nodes",
+                            (unsigned long long)c->max_leaves);
+            int64_t rel = pnanovdb_lower_get_table_child(c->type, c->buf, lower, n);
+            uint64_t at;
+            if (!node_fits(c, lower_at, rel, leaf_size, &at))
+                return fail(c, "a lower node's child %u points outside the buffer", n);
+        }
     return 0;
 }
 
@@ -416,14 +427,31 @@ static bool part_leaf_range(const float *x, const uint32_t *mask, float floor_va
     const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY),
                  bgv = _mm_set1_ps(bg), zero = _mm_setzero_ps();
     __m128 l0 = inf, h0 = ninf, z0 = zero, s0 = zero;
-    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; n += 4) {
-        __m128i m = _mm_set1_epi32((int)(mask[n >> 5] >> (n & 31)));
-        __m128 on = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(m, bit), bit));
-        __m128 v = _mm_loadu_ps(x + n), va = _mm_and_ps(on, v);
-        l0 = _mm_min_ps(_mm_or_ps(va, _mm_andnot_ps(on, inf)), l0);
-        h0 = _mm_max_ps(_mm_or_ps(va, _mm_andnot_ps(on, ninf)), h0);
-        z0 = _mm_add_ps(z0, _mm_mul_ps(va, zero));
-        s0 = _mm_or_ps(s0, _mm_andnot_ps(on, _mm_cmpneq_ps(v, bgv)));
+    /* A word of the mask whose 32 voxels are all active or all inactive (most
+     * of a sparse grid's partial leaves) takes the unmasked steps. */
+    for (uint32_t n = 0; n < PNANOVDB_LEAF_TABLE_COUNT; n += 32) {
+        uint32_t word = mask[n >> 5];
+        if (word == 0xFFFFFFFFu) {
+            for (uint32_t k = n; k < n + 32; k += 4) {
+                __m128 v = _mm_loadu_ps(x + k);
+                l0 = _mm_min_ps(v, l0);
+                h0 = _mm_max_ps(v, h0);
+                z0 = _mm_add_ps(z0, _mm_mul_ps(v, zero));
+            }
+        } else if (word == 0) {
+            for (uint32_t k = n; k < n + 32; k += 4)
+                s0 = _mm_or_ps(s0, _mm_cmpneq_ps(_mm_loadu_ps(x + k), bgv));
+        } else {
+            for (uint32_t k = n; k < n + 32; k += 4) {
+                __m128i m = _mm_set1_epi32((int)(word >> (k & 31)));
+                __m128 on = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(m, bit), bit));
+                __m128 v = _mm_loadu_ps(x + k), va = _mm_and_ps(on, v);
+                l0 = _mm_min_ps(_mm_or_ps(va, _mm_andnot_ps(on, inf)), l0);
+                h0 = _mm_max_ps(_mm_or_ps(va, _mm_andnot_ps(on, ninf)), h0);
+                z0 = _mm_add_ps(z0, _mm_mul_ps(va, zero));
+                s0 = _mm_or_ps(s0, _mm_andnot_ps(on, _mm_cmpneq_ps(v, bgv)));
+            }
+        }
     }
     float lv[4], hv[4], zv[4];
     _mm_storeu_ps(lv, l0);
@@ -631,12 +659,17 @@ static int lower_values(values *v, pnanovdb_lower_handle_t lower, float *lo, flo
     pnanovdb_coord_t origin = pnanovdb_lower_get_bbox_min(v->c.buf, lower);
     float l = 0, h = 0;
     bool a = false;
+    uint32_t child = 0, value = 0;
     for (uint32_t n = 0; n < PNANOVDB_LOWER_TABLE_COUNT; ++n) {
-        if (pnanovdb_lower_get_child_mask(v->c.buf, lower, n)) {
+        if (n % 32 == 0) {
+            child = mask_word(v->c.buf, lower.address, PNANOVDB_LOWER_OFF_CHILD_MASK, n / 32);
+            value = mask_word(v->c.buf, lower.address, PNANOVDB_LOWER_OFF_VALUE_MASK, n / 32);
+        }
+        if (child >> (n % 32) & 1u) {
             if (child_leaf_values(v, pnanovdb_lower_get_child(v->c.type, v->c.buf, lower, n), &l,
                                   &h, &a) != 0)
                 return -1;
-        } else if (pnanovdb_lower_get_value_mask(v->c.buf, lower, n)) {
+        } else if (value >> (n % 32) & 1u) {
             float x = pnanovdb_read_float(
                 v->c.buf, pnanovdb_lower_get_table_address(v->c.type, v->c.buf, lower, n));
             if (take(v, x, &origin, "a tile value of the lower node at", &l, &h, &a) != 0)
