@@ -668,7 +668,7 @@ static void *bound_bricks_worker(void *ctx)
             reader_aim(&r, first, (int64_t)mg->cell * B);
             majorant_brick *br = &mg->bricks[i];
             br->bounds = span_bounds(&r, first, (int64_t)mg->cell * B);
-            br->cells = -1;
+            br->cells = MAJORANT_BRICK_UNIFORM;
             /* the same windows: the brick's cells cost no second walk */
             if (job->with_cells && !uniform_bounds(br->bounds)) {
                 brick_cells *bc = malloc(sizeof *bc);
@@ -929,7 +929,7 @@ const majorant_cellmap *majorant_grid_brick(const majorant_grid *mg, size_t inde
     *bounds = br->bounds;
     if (br->cells >= 0)
         return &mg->maps[br->cells];
-    if (br->cells > MAJORANT_BRICK_LAZY)
+    if (br->cells == MAJORANT_BRICK_UNIFORM)
         return NULL;
     _Atomic(lazy_brick *) *slot = &mg->lazy->built[MAJORANT_BRICK_LAZY - br->cells];
     lazy_brick *lb = atomic_load_explicit(slot, memory_order_acquire);
@@ -1014,6 +1014,7 @@ static hz_status build(const grid *g, const majorant_emission *em, vec3 lo, vec3
     /* Boxes need zero backgrounds (an emission grid's always is). */
     src.boxes = grid_background(g) == 0.0f && (!em || grid_background(em->grid) == 0.0f);
     out->boxed = src.boxes;
+    out->brick_bounds_exact = !em || em->aligned;
     size_t varied = 0;
     brick_cells **cells = NULL;
     bool lazy = false;

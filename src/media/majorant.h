@@ -17,7 +17,9 @@
  * the first walk that enters it (or asks its bounds): loading then costs
  * one bound per brick, and a render builds the bricks its rays reach, each
  * once (on whichever thread comes first: the result is the same bits as a
- * build at loading, so images do not depend on the order).
+ * build at loading, so images do not depend on the order). A coarse walk
+ * (majorant_walk_coarsen) builds none: it reads bricks whole, and their
+ * bounds are known without their cells.
  *
  * Cells are cubes of `cell` voxels (8, a leaf, or a power-of-two
  * multiple of it when the support is large or densely active), aligned to
@@ -103,7 +105,6 @@ typedef struct {
     const majorant_box *boxes;           /* one per stored cell; NULL: none */
 } majorant_cellmap;
 
-
 struct majorant_lazy; /* the bricks not built yet, and what builds them */
 
 typedef struct {
@@ -111,6 +112,11 @@ typedef struct {
     int32_t origin[3];       /* index coordinate of brick (0,0,0)'s first voxel */
     int32_t cell;            /* edge of a cell in voxels */
     bool boxed;              /* stored cells have boxes (zero backgrounds) */
+    /* a brick not built yet has the bounds it will have (the union of its
+     * cells' is the range over the same voxels: all but an emission grid
+     * in another index space): coarse walks, which read bricks whole, then
+     * never build one */
+    bool brick_bounds_exact;
     majorant_brick *bricks;  /* res[0]*res[1]*res[2], x fastest */
     /* the bricks built at loading that store their cells */
     majorant_cellmap *maps;  /* one per such brick */
@@ -347,7 +353,7 @@ static inline bool majorant_walk_next(majorant_walk *w, majorant_segment *seg)
             b = br->bounds;
             if (br->cells >= 0)
                 map = &w->mg->maps[br->cells];
-            else if (br->cells <= MAJORANT_BRICK_LAZY)
+            else if (br->cells <= MAJORANT_BRICK_LAZY && !(w->coarse && w->mg->brick_bounds_exact))
                 map = majorant_grid_brick(w->mg, bi, &b);
             if (map && !w->coarse) {
                 majorant_walk_enter_brick(w, map, exit);
