@@ -419,9 +419,9 @@ static uint64_t layout(const double l3[3], const double h3[3], int32_t cell, int
     return count;
 }
 
-/* The cells of one brick that is not uniform, until they are stored: its
- * occupied ones only (cellmap_pack), so that the build's memory follows
- * them too. */
+/* The cells of one brick that is not uniform, until they are stored (or,
+ * built at first use, for good): its occupied ones only (cellmap_pack), so
+ * that the build's memory follows them too. */
 typedef struct {
     bool differ;            /* its cells differ: the brick keeps them */
     majorant_bounds whole;  /* the union of its cells' bounds */
@@ -631,23 +631,29 @@ static bool bound_cells(reader *r, const majorant_grid *mg, const int32_t b3[3],
     return !differ || cellmap_pack(cells, r->src->boxes ? boxes : NULL, out);
 }
 
-/* The cells of brick i into job->cells[i]; false when out of memory. */
-static bool brick_cells_of(brick_job *job, reader *r, size_t i)
+/* The cells of brick i, r's windows aimed at it; NULL when out of memory. */
+static brick_cells *cells_of_brick(reader *r, const majorant_grid *mg, size_t i)
 {
     int32_t b3[3];
     int64_t first[3];
-    brick_xyz(job->mg, i, b3);
-    brick_first(job->mg, b3, first);
+    brick_xyz(mg, i, b3);
+    brick_first(mg, b3, first);
     brick_cells *bc = malloc(sizeof *bc);
     if (!bc)
-        return false;
-    reader_aim(r, first, (int64_t)job->mg->cell * B);
-    if (!bound_cells(r, job->mg, b3, bc)) {
+        return NULL;
+    reader_aim(r, first, (int64_t)mg->cell * B);
+    if (!bound_cells(r, mg, b3, bc)) {
         free(bc);
-        return false;
+        return NULL;
     }
-    job->cells[i] = bc;
-    return true;
+    return bc;
+}
+
+/* The cells of brick i into job->cells[i]; false when out of memory. */
+static bool brick_cells_of(brick_job *job, reader *r, size_t i)
+{
+    job->cells[i] = cells_of_brick(r, job->mg, i);
+    return job->cells[i] != NULL;
 }
 
 static void *bound_bricks_worker(void *ctx)
@@ -843,36 +849,22 @@ static hz_status store_cells(const source *src, majorant_grid *out, size_t varie
 
 /* ---- bricks built at their first use ---- */
 
-/* A brick built at its first use: its cells as bound_cells gives them. */
-typedef struct {
-    majorant_bounds whole;
-    bool differ;
-    majorant_cellmap map; /* differ: pointing at `own` */
-    majorant_bounds *own; /* its cells and boxes (one allocation) */
-    size_t n;
-} lazy_brick;
-
+/* A brick built at its first use keeps its cells as bound_cells gives them
+ * (a brick_cells: its map points at its own cells and boxes). */
 struct majorant_lazy {
     source src; /* pointing at pad and em below */
     int32_t pad[3];
     majorant_emission em;
-    size_t count;                 /* slots: the bricks left to their first use */
-    _Atomic(lazy_brick *) *built; /* per slot, NULL until built */
+    size_t count;                  /* slots: the bricks left to their first use */
+    _Atomic(brick_cells *) *built; /* per slot, NULL until built */
 };
-
-static void lazy_brick_free(lazy_brick *lb)
-{
-    if (lb)
-        free(lb->own);
-    free(lb);
-}
 
 /* Every brick not uniform gets a slot, in brick order. */
 static hz_status lazy_start(const source *src, const int32_t pad[3], const majorant_emission *em,
                             majorant_grid *out, size_t varied, hz_error *err)
 {
     struct majorant_lazy *lz = malloc(sizeof *lz);
-    _Atomic(lazy_brick *) *built = malloc(varied * sizeof *built);
+    _Atomic(brick_cells *) *built = malloc(varied * sizeof *built);
     if (!lz || !built) {
         free(lz);
         free(built);
@@ -900,26 +892,12 @@ static hz_status lazy_start(const source *src, const int32_t pad[3], const major
 
 /* Brick i's cells, as a build at loading bounds them; NULL when out of
  * memory. */
-static lazy_brick *lazy_build(const majorant_grid *mg, size_t i)
+static brick_cells *lazy_build(const majorant_grid *mg, size_t i)
 {
-    lazy_brick *lb = malloc(sizeof *lb);
-    if (!lb)
-        return NULL;
-    int32_t b3[3];
-    int64_t first[3];
-    brick_xyz(mg, i, b3);
-    brick_first(mg, b3, first);
     reader r = reader_start(&mg->lazy->src);
-    reader_aim(&r, first, (int64_t)mg->cell * B);
-    brick_cells bc;
-    bool ok = bound_cells(&r, mg, b3, &bc);
+    brick_cells *bc = cells_of_brick(&r, mg, i);
     reader_end(&r);
-    if (!ok) {
-        free(lb);
-        return NULL;
-    }
-    *lb = (lazy_brick){bc.whole, bc.differ, bc.map, bc.cells, bc.n};
-    return lb;
+    return bc;
 }
 
 const majorant_cellmap *majorant_grid_brick(const majorant_grid *mg, size_t index,
@@ -931,20 +909,20 @@ const majorant_cellmap *majorant_grid_brick(const majorant_grid *mg, size_t inde
         return &mg->maps[br->cells];
     if (br->cells == MAJORANT_BRICK_UNIFORM)
         return NULL;
-    _Atomic(lazy_brick *) *slot = &mg->lazy->built[MAJORANT_BRICK_LAZY - br->cells];
-    lazy_brick *lb = atomic_load_explicit(slot, memory_order_acquire);
+    _Atomic(brick_cells *) *slot = &mg->lazy->built[MAJORANT_BRICK_LAZY - br->cells];
+    brick_cells *lb = atomic_load_explicit(slot, memory_order_acquire);
     if (!lb) {
-        lazy_brick *mine = lazy_build(mg, index);
+        brick_cells *mine = lazy_build(mg, index);
         /* Out of memory: the brick's own bounds, looser but still bounds
          * (this walk then differs from one after a build). */
         if (!mine)
             return NULL;
-        lazy_brick *none = NULL;
+        brick_cells *none = NULL;
         if (atomic_compare_exchange_strong_explicit(slot, &none, mine, memory_order_acq_rel,
                                                     memory_order_acquire)) {
             lb = mine;
         } else { /* another thread built the same bits first */
-            lazy_brick_free(mine);
+            brick_cells_free(mine);
             lb = none;
         }
     }
@@ -984,7 +962,7 @@ void majorant_grid_count(const majorant_grid *mg, size_t *bricks, size_t *cells)
     atomic_init(&job.next, 0);
     hz_parallel_run(threads_for(mg->lazy->count), resolve_worker, &job);
     for (size_t k = 0; k < mg->lazy->count; ++k) {
-        const lazy_brick *lb = atomic_load(&mg->lazy->built[k]);
+        const brick_cells *lb = atomic_load(&mg->lazy->built[k]);
         if (lb && lb->differ) {
             ++*bricks;
             *cells += lb->n;
@@ -1055,7 +1033,7 @@ void majorant_grid_free(majorant_grid *mg)
 {
     if (mg->lazy) {
         for (size_t k = 0; k < mg->lazy->count; ++k)
-            lazy_brick_free(atomic_load(&mg->lazy->built[k]));
+            brick_cells_free(atomic_load(&mg->lazy->built[k]));
         free(mg->lazy->built);
         free(mg->lazy);
         mg->lazy = NULL;
@@ -1081,7 +1059,7 @@ size_t majorant_grid_bytes(const majorant_grid *mg)
     if (mg->lazy) {
         n += sizeof *mg->lazy + mg->lazy->count * sizeof *mg->lazy->built;
         for (size_t k = 0; k < mg->lazy->count; ++k) {
-            const lazy_brick *lb = atomic_load(&mg->lazy->built[k]);
+            const brick_cells *lb = atomic_load(&mg->lazy->built[k]);
             n += lb ? sizeof *lb + lb->n * cell_bytes : 0;
         }
     }
