@@ -369,6 +369,7 @@ static void warn_target_missed(double target, double estimate, double bias, int 
 typedef struct {
     double start, parse, build, render, write, end;
     double pilot_seconds; /* --target-error's step pilot, part of the render */
+    medium_work pilot_work; /* what the media did on demand during the pilot */
 } phase_times;
 
 /* --stats: one 'stat NAME VALUE' line per figure (docs/performance.md). */
@@ -401,6 +402,11 @@ static void print_stats(const render_scene *rs, const render_stats *st, double b
     printf("stat time_build_s %.4f\n", ph->render - ph->build);
     printf("stat time_render_s %.4f\n", ph->write - ph->render);
     printf("stat time_pilot_s %.4f\n", ph->pilot_seconds);
+    medium_work work = render_scene_media_work(rs);
+    printf("stat majorant_bricks_built %zu\n", work.majorant_bricks);
+    printf("stat cpu_majorant_build_s %.4f\n", work.majorant_seconds);
+    printf("stat pilot_majorant_bricks_built %zu\n", ph->pilot_work.majorant_bricks);
+    printf("stat cpu_pilot_majorant_build_s %.4f\n", ph->pilot_work.majorant_seconds);
     printf("stat time_write_s %.4f\n", ph->end - ph->write);
     printf("stat memory_peak_mib %.2f\n", peak_memory_mib());
     printf("stat memory_baseline_mib %.2f\n", baseline_mib);
@@ -523,8 +529,12 @@ static int load_scene(const cli *c, distributed *dist, render_job *job, phase_ti
 static void choose_step(const cli *c, render_scene *rs, bool rank0,
                         const volatile sig_atomic_t *cancel, step_choice *steps, phase_times *ph)
 {
+    medium_work w0 = render_scene_media_work(rs);
     step_pilot_choose(rs, c->target_error, c->threads, cancel, steps);
     ph->pilot_seconds = hz_clock_seconds() - ph->render;
+    medium_work w1 = render_scene_media_work(rs);
+    ph->pilot_work = (medium_work){w1.majorant_bricks - w0.majorant_bricks,
+                                   w1.majorant_seconds - w0.majorant_seconds};
     if (!steps->applies || !rank0 || c->quiet)
         return;
     char cache[64] = "";

@@ -239,6 +239,12 @@ medium_memory grid_medium_memory(const medium *m)
     return mem;
 }
 
+medium_work grid_medium_work(const medium *m)
+{
+    majorant_work w = majorant_grid_work(&grid_medium_of(m)->majorant);
+    return (medium_work){w.bricks, w.seconds};
+}
+
 bool grid_medium_moves(const medium *m)
 {
     const grid_medium *gm = grid_medium_of(m);

@@ -121,6 +121,7 @@ double grid_medium_density_max(const medium *m);
 bool grid_medium_clear_along(const medium *m, vec3 o, vec3 d, double t0, double t1,
                              double time, uint64_t *cells);
 medium_memory grid_medium_memory(const medium *m);
+medium_work grid_medium_work(const medium *m);
 bool grid_medium_moves(const medium *m);
 
 /* The placement of grid g at both keyframes: animated when they differ. */
@@ -249,7 +250,7 @@ static inline rgb grid_medium_color(const grid_medium *gm, medium_ray *r, vec3 p
     .density = grid_medium_density, .density_point = grid_medium_density_point,                    \
     .support = grid_medium_support, .density_max = grid_medium_density_max,                        \
     .clear_along = grid_medium_clear_along,                                                        \
-    .memory = grid_medium_memory, .moves = grid_medium_moves
+    .memory = grid_medium_memory, .work = grid_medium_work, .moves = grid_medium_moves
 void grid_medium_sample(medium_ray *r, double t, bool emission, medium_props *p,
                         uint64_t *lookups);
 double grid_medium_density(medium_ray *r, double t, uint64_t *lookups);

@@ -1,3 +1,4 @@
+#define _POSIX_C_SOURCE 200809L
 #include "media/majorant.h"
 
 #include <math.h>
@@ -5,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/clock.h"
 #include "core/parallel.h"
 
 #define B MAJORANT_BRICK
@@ -857,6 +859,10 @@ struct majorant_lazy {
     majorant_emission em;
     size_t count;                  /* slots: the bricks left to their first use */
     _Atomic(brick_cells *) *built; /* per slot, NULL until built */
+    /* The builds so far (a loser's of a race too) and their time on the
+     * threads that made them: majorant_grid_work. */
+    atomic_size_t builds;
+    atomic_uint_fast64_t build_ns;
 };
 
 /* Every brick not uniform gets a slot, in brick order. */
@@ -880,6 +886,8 @@ static hz_status lazy_start(const source *src, const int32_t pad[3], const major
     }
     lz->count = varied;
     lz->built = built;
+    atomic_init(&lz->builds, 0);
+    atomic_init(&lz->build_ns, 0);
     for (size_t k = 0; k < varied; ++k)
         atomic_init(&built[k], NULL);
     size_t count = (size_t)out->res[0] * (size_t)out->res[1] * (size_t)out->res[2];
@@ -912,7 +920,10 @@ const majorant_cellmap *majorant_grid_brick(const majorant_grid *mg, size_t inde
     _Atomic(brick_cells *) *slot = &mg->lazy->built[MAJORANT_BRICK_LAZY - br->cells];
     brick_cells *lb = atomic_load_explicit(slot, memory_order_acquire);
     if (!lb) {
+        uint64_t t0 = hz_clock_ns();
         brick_cells *mine = lazy_build(mg, index);
+        atomic_fetch_add_explicit(&mg->lazy->build_ns, hz_clock_ns() - t0, memory_order_relaxed);
+        atomic_fetch_add_explicit(&mg->lazy->builds, 1, memory_order_relaxed);
         /* Out of memory: the brick's own bounds, looser but still bounds
          * (this walk then differs from one after a build). */
         if (!mine)
@@ -968,6 +979,14 @@ void majorant_grid_count(const majorant_grid *mg, size_t *bricks, size_t *cells)
             *cells += lb->n;
         }
     }
+}
+
+majorant_work majorant_grid_work(const majorant_grid *mg)
+{
+    if (!mg->lazy)
+        return (majorant_work){0, 0.0};
+    return (majorant_work){atomic_load(&mg->lazy->builds),
+                           (double)atomic_load(&mg->lazy->build_ns) * 1e-9};
 }
 
 static hz_status build(const grid *g, const majorant_emission *em, vec3 lo, vec3 hi,

@@ -148,6 +148,13 @@ size_t majorant_grid_bytes(const majorant_grid *mg);
  * when it was left to the first use. */
 const majorant_cellmap *majorant_grid_brick(const majorant_grid *mg, size_t index,
                                             majorant_bounds *bounds);
+/* The bricks built at their first use so far, and the time that took on
+ * the threads that built them (seconds summed over threads). */
+typedef struct {
+    size_t bricks;
+    double seconds;
+} majorant_work;
+majorant_work majorant_grid_work(const majorant_grid *mg);
 /* Builds every brick not built yet (on every core) and counts the bricks
  * that store their cells and the cells stored. */
 void majorant_grid_count(const majorant_grid *mg, size_t *bricks, size_t *cells);

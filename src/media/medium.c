@@ -17,6 +17,11 @@ medium_memory medium_bytes(const medium *m)
     return m->ops && m->ops->memory ? m->ops->memory(m) : (medium_memory){0.0, 0.0};
 }
 
+medium_work medium_work_done(const medium *m)
+{
+    return m->ops && m->ops->work ? m->ops->work(m) : (medium_work){0, 0.0};
+}
+
 /* The lanes of coefficient v (RGB), a multiple of spectrum s as given: s's
  * own spectrum when the scene gave one, else v's RGB spectrum. */
 static rgb spectral_coefficient(const spectral_ctx *sp, rgb v, const spectrum_value *s,

@@ -82,6 +82,14 @@ typedef struct {
     double grids, majorants;
 } medium_memory;
 
+/* Work a medium does on demand while rendering: the majorant bricks whose
+ * cells were bounded at their first use, and the time that took on the
+ * threads that did it (seconds summed over threads). */
+typedef struct {
+    size_t majorant_bricks;
+    double majorant_seconds;
+} medium_work;
+
 /* What a kind implements. Properties are what the integrators may ask:
  * `homogeneous` (constant coefficients everywhere: closed forms apply) and
  * `density_grid` (a voxel density times constant coefficients: singlescatter's
@@ -117,6 +125,7 @@ typedef struct {
     bool (*clear_along)(const medium *m, vec3 o, vec3 d, double t0, double t1, double time,
                         uint64_t *cells);
     medium_memory (*memory)(const medium *m);
+    medium_work (*work)(const medium *m); /* NULL: none */
     bool (*moves)(const medium *m);
 } medium_ops;
 
@@ -204,6 +213,8 @@ static inline bool medium_moves(const medium *m)
     return m->ops && m->ops->moves && m->ops->moves(m);
 }
 medium_memory medium_bytes(const medium *m);
+/* The work m did on demand so far (zero for kinds that do none). */
+medium_work medium_work_done(const medium *m);
 
 /* Whether m's coefficients differ between channels (constant ones not
  * grey, per-point RGB coefficients, a colour grid): where spectral and RGB

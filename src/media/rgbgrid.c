@@ -118,5 +118,6 @@ const medium_ops medium_rgbgrid_ops = {
     .ray_start = grid_medium_ray_start,
     .sample = sample,
     .memory = grid_medium_memory,
+    .work = grid_medium_work,
     .moves = grid_medium_moves,
 };

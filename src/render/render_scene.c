@@ -681,6 +681,17 @@ render_memory render_scene_memory(const render_scene *rs)
     return mem;
 }
 
+medium_work render_scene_media_work(const render_scene *rs)
+{
+    medium_work w = {0, 0.0};
+    for (size_t i = 0; i < rs->medium_count; ++i) {
+        medium_work mw = medium_work_done(&rs->media[i]);
+        w.majorant_bricks += mw.majorant_bricks;
+        w.majorant_seconds += mw.majorant_seconds;
+    }
+    return w;
+}
+
 const shadow_caches *render_scene_shadow_caches(const render_scene *rs)
 {
     return rs->integ.kind == INTEGRATOR_SINGLESCATTER ? rs->integ.singlescatter.caches : NULL;

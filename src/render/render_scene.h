@@ -104,6 +104,8 @@ typedef struct {
     double grids, majorants, film, embree, shadow_caches;
 } render_memory;
 render_memory render_scene_memory(const render_scene *rs);
+/* The work the scene's media did on demand so far, summed over them. */
+medium_work render_scene_media_work(const render_scene *rs);
 
 /* The singlescatter integrator's shadow caches (integrator/shadow_cache.h);
  * NULL when it has none. */

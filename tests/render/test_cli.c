@@ -235,6 +235,9 @@ static void test_stats(void **state)
     assert_non_null(strstr(out, "stat camera_rays 6144\n")); /* 48 x 32 x 4 */
     assert_non_null(strstr(out, "stat density_lookups_per_pixel 0.00\n"));
     assert_non_null(strstr(out, "stat time_pilot_s 0.0000\n")); /* no --target-error */
+    /* no medium: nothing built on demand, and no pilot to build it */
+    assert_non_null(strstr(out, "stat majorant_bricks_built 0\n"));
+    assert_non_null(strstr(out, "stat pilot_majorant_bricks_built 0\n"));
 }
 
 int main(void)

@@ -1063,10 +1063,18 @@ static void test_step_pilot_small_medium(void **state)
              HAZE_SCENES "/../volumes/plume.vdb");
     render_scene *rs = build_scene_or_fail(text, NULL);
     step_choice ch;
+    /* Loading built no majorant cells; the pilot's fine walks bound those
+     * of the bricks they reached, and the media report it. */
+    medium_work w0 = render_scene_media_work(rs);
     step_pilot_choose(rs, 1e-2, 2, NULL, &ch);
-    print_message("pilot on the cloud: step %g, bias %.3g, %d pixels, %d renders\n", ch.step,
-                  ch.bias, ch.pixels, ch.renders);
+    medium_work w = render_scene_media_work(rs);
+    print_message("pilot on the cloud: step %g, bias %.3g, %d pixels, %d renders, "
+                  "%zu majorant bricks built (%.4f s)\n",
+                  ch.step, ch.bias, ch.pixels, ch.renders, w.majorant_bricks, w.majorant_seconds);
     render_scene_destroy(rs);
+    assert_int_equal(w0.majorant_bricks, 0);
+    assert_true(w0.majorant_seconds == 0.0);
+    assert_true(w.majorant_bricks > 0 && w.majorant_seconds > 0.0);
     assert_true(ch.applies);
     assert_true(ch.step < 8.0 && ch.bias <= STEP_PILOT_SHARE * 1e-2);
     assert_true(ch.pixels > STEP_PILOT_START_PIXELS);

@@ -588,6 +588,7 @@ static void same_as_by_queries_of(const grid *g, const grid *q, const majorant_e
     assert_int_equal(majorant_grid_build(g, em, lo, hi, p, &a, &err), HZ_OK);
     assert_int_equal(majorant_grid_build_by_queries(q, em, lo, hi, p, &b, &err), HZ_OK);
     assert_null(b.lazy); /* the reference builds every brick at once */
+    assert_int_equal(majorant_grid_work(&b).bricks, 0);
     if (memcmp(a.res, b.res, sizeof a.res) != 0 || memcmp(a.origin, b.origin, sizeof a.origin) != 0 ||
         a.cell != b.cell || a.boxed != b.boxed)
         fail_msg("%s, pad %d: the layouts differ", what, pad);
@@ -636,8 +637,21 @@ static void bottom_up_is_by_queries(void **state)
         majorant_grid mg;
         int32_t p0[3] = {0, 0, 0};
         assert_int_equal(majorant_grid_build(g, NULL, lo, hi, p0, &mg, &err), HZ_OK);
+        /* The work report counts each first use: none yet, then every
+         * brick left to it once, and nothing more on a second count. */
+        size_t waiting = 0;
+        for (size_t b = 0; b < (size_t)mg.res[0] * mg.res[1] * mg.res[2]; ++b)
+            waiting += mg.bricks[b].cells <= MAJORANT_BRICK_LAZY;
+        majorant_work w = majorant_grid_work(&mg);
+        assert_int_equal(w.bricks, 0);
+        assert_true(w.seconds == 0.0);
         size_t sb, sc;
         majorant_grid_count(&mg, &sb, &sc);
+        w = majorant_grid_work(&mg);
+        assert_int_equal(w.bricks, waiting);
+        assert_true(waiting == 0 ? w.seconds == 0.0 : w.seconds > 0.0);
+        majorant_grid_count(&mg, &sb, &sc);
+        assert_int_equal(majorant_grid_work(&mg).bricks, waiting);
         stored += sb > 0;
         boxed += mg.boxed;
         left += mg.lazy != NULL;
