@@ -30,21 +30,22 @@ scale_pilot_spp=16
 scale_run_one() {
     o=$1
     shift
-    ts= kb=0 st=ok n=0
+    # (sh has no locals: names the callers do not use)
+    ts= kb=0 st=ok sro_n=0
     while :; do
         rc=0
-        t0=$(now)
+        sro_t0=$(now)
         /usr/bin/time -f '%e %M' -o "$o.time" timeout "$SCALE_TIMEOUT" "$@" >"$o.out" 2>&1 || rc=$?
-        t1=$(now)
+        sro_t1=$(now)
         cat "$o.out" >>"$LOG"
         [ $rc -eq 124 ] && st=timeout
         [ $rc -ne 0 ] && [ $rc -ne 124 ] && st=failed
         # GNU time writes "Command exited with non-zero status" first.
-        t=$(elapsed "$t0" "$t1") k=$(tail -1 "$o.time" | cut -d' ' -f2)
-        ts="$ts $t" n=$((n + 1))
+        t=$(elapsed "$sro_t0" "$sro_t1") k=$(tail -1 "$o.time" | cut -d' ' -f2)
+        ts="$ts $t" sro_n=$((sro_n + 1))
         [ "$k" -gt "$kb" ] && kb=$k
         [ "$st" = ok ] || break
-        awk -v t="$t" -v n="$n" 'BEGIN { exit !((t < 0.5 && n < 7) || (t < 2 && n < 3)) }' || break
+        awk -v t="$t" -v n="$sro_n" 'BEGIN { exit !((t < 0.5 && n < 7) || (t < 2 && n < 3)) }' || break
     done
     [ "$st" = failed ] && { echo "bench: failed: $*" >&2; tail -3 "$o.out" >&2; }
     printf '%s %s %s\n' "$(printf '%s\n' $ts | median)" "$kb" "$st" >"$o"
