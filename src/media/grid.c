@@ -894,39 +894,6 @@ bool grid_region_support(const grid *g, grid_ibox box, grid_ibox *out)
 
 /* ---- the tree per block of 8^3 voxels ---- */
 
-typedef struct {
-    grid_ibox blocks; /* the window, in blocks */
-    int64_t n[3];
-    grid_block *out;
-} block_window;
-
-static grid_block *window_at(const block_window *w, const int64_t b[3])
-{
-    return w->out + (((b[2] - w->blocks.min[2]) * w->n[1] + (b[1] - w->blocks.min[1])) * w->n[0] +
-                     (b[0] - w->blocks.min[0]));
-}
-
-/* The blocks of the node or tile of edge `dim` at `origin` that lie in the
- * window, set to b. */
-static void fill_blocks(const block_window *w, const int32_t origin[3], int32_t dim, grid_block b)
-{
-    int64_t lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) {
-        int64_t b0 = (int64_t)origin[a] / 8, b1 = b0 + dim / 8 - 1; /* origin: a multiple of 8 */
-        lo[a] = b0 > w->blocks.min[a] ? b0 : w->blocks.min[a];
-        hi[a] = b1 < w->blocks.max[a] ? b1 : w->blocks.max[a];
-        if (hi[a] < lo[a])
-            return;
-    }
-    for (int64_t z = lo[2]; z <= hi[2]; ++z)
-        for (int64_t y = lo[1]; y <= hi[1]; ++y) {
-            const int64_t first[3] = {lo[0], y, z};
-            grid_block *row = window_at(w, first);
-            for (int64_t x = 0; x <= hi[0] - lo[0]; ++x)
-                row[x] = b;
-        }
-}
-
 static grid_block tile_block(float v)
 {
     return (grid_block){v, v, 0, UINT32_MAX, v != 0.0f ? GRID_BLOCK_FULL : GRID_BLOCK_ZERO};
@@ -969,86 +936,196 @@ static grid_block leaf_block(const grid *g, pnanovdb_leaf_handle_t leaf)
     return leaf_block_of(g, at, UINT32_MAX, vmin, vmax, all == 0xFFFFFFFFu, some != 0);
 }
 
-static void lower_blocks(const grid *g, pnanovdb_lower_handle_t lower, const int32_t origin[3],
-                         grid_ibox box, const block_window *w)
+/* Calls fn with the blocks [lo, hi] of `blocks` that the node or tile of
+ * edge `dim` at `origin` covers, when there are any. */
+static inline __attribute__((always_inline)) void
+visit_node(grid_ibox blocks, const int32_t origin[3], int32_t dim, grid_block b,
+           grid_block_fn fn, void *ctx)
 {
-    int32_t lo[3], hi[3];
-    if (!child_range(origin, 128, 8, box, lo, hi))
+    int64_t lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+        int64_t b0 = (int64_t)origin[a] / 8, b1 = b0 + dim / 8 - 1; /* origin: a multiple of 8 */
+        lo[a] = b0 > blocks.min[a] ? b0 : blocks.min[a];
+        hi[a] = b1 < blocks.max[a] ? b1 : blocks.max[a];
+        if (hi[a] < lo[a])
+            return;
+    }
+    fn(ctx, lo, hi, b);
+}
+
+/* Child n of a lower node (block b): a leaf, or a tile. */
+static inline __attribute__((always_inline)) void
+visit_lower_child(const grid *g, pnanovdb_lower_handle_t lower, uint32_t n, const int64_t b[3],
+                  grid_block_fn fn, void *ctx)
+{
+    grid_block gb =
+        pnanovdb_lower_get_child_mask(g->buf, lower, n)
+            ? leaf_block(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n))
+        : g->checked && !pnanovdb_lower_get_value_mask(g->buf, lower, n)
+            ? tile_block(g->background) /* the mask, not the value table */
+            : tile_block(pnanovdb_read_float(
+                  g->buf, pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, lower, n)));
+    fn(ctx, b, b, gb);
+}
+
+/* Word w of the child mask or'ed with the value mask of a node (off: the
+ * node's child mask; its value mask follows at value_off). */
+static inline uint32_t node_word(pnanovdb_buf_t buf, pnanovdb_address_t node, uint32_t child_off,
+                                 uint32_t value_off, uint32_t w)
+{
+    return pnanovdb_read_uint32(buf, pnanovdb_address_offset(node, child_off + 4u * w)) |
+           pnanovdb_read_uint32(buf, pnanovdb_address_offset(node, value_off + 4u * w));
+}
+
+static inline bool in_range(const int32_t lo[3], const int32_t hi[3], int32_t x, int32_t y,
+                            int32_t z)
+{
+    return x >= lo[0] && x <= hi[0] && y >= lo[1] && y <= hi[1] && z >= lo[2] && z <= hi[2];
+}
+
+/* Child n (x, y, z) of an upper node at `origin`: a lower node's leaves and
+ * tiles in `box` (all of them, or with `sparse` those a child or value mask
+ * sets, a word at a time), or a tile. */
+static inline __attribute__((always_inline)) void
+visit_upper_child(const grid *g, grid_ibox blocks, grid_ibox box, pnanovdb_upper_handle_t upper,
+                  uint32_t n, const int32_t origin[3], int32_t x, int32_t y, int32_t z, bool sparse,
+                  grid_block_fn fn, void *ctx)
+{
+    int32_t uo[3] = {origin[0] + 128 * x, origin[1] + 128 * y, origin[2] + 128 * z};
+    if (!pnanovdb_upper_get_child_mask(g->buf, upper, n)) {
+        visit_node(blocks, uo, 128,
+                   g->checked && !pnanovdb_upper_get_value_mask(g->buf, upper, n)
+                       ? tile_block(g->background)
+                       : tile_block(pnanovdb_read_float(
+                             g->buf, pnanovdb_upper_get_table_address(FLOAT_GRID, g->buf, upper, n))),
+                   fn, ctx);
         return;
-    for (int32_t x = lo[0]; x <= hi[0]; ++x)
-        for (int32_t y = lo[1]; y <= hi[1]; ++y)
-            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
-                uint32_t n = (uint32_t)((x << 8) | (y << 4) | z);
-                const int64_t b[3] = {(int64_t)origin[0] / 8 + x, (int64_t)origin[1] / 8 + y,
-                                      (int64_t)origin[2] / 8 + z};
-                grid_block *at = window_at(w, b);
-                if (pnanovdb_lower_get_child_mask(g->buf, lower, n))
-                    *at = leaf_block(g, pnanovdb_lower_get_child(FLOAT_GRID, g->buf, lower, n));
-                else if (g->checked && !pnanovdb_lower_get_value_mask(g->buf, lower, n))
-                    *at = tile_block(g->background); /* the mask, not the value table */
-                else
-                    *at = tile_block(pnanovdb_read_float(
-                        g->buf, pnanovdb_lower_get_table_address(FLOAT_GRID, g->buf, lower, n)));
+    }
+    pnanovdb_lower_handle_t lower = pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n);
+    int32_t llo[3], lhi[3];
+    if (!child_range(uo, 128, 8, box, llo, lhi))
+        return;
+    if (sparse) {
+        for (uint32_t v = 0; v < PNANOVDB_LOWER_TABLE_COUNT / 32; ++v)
+            for (uint32_t lb = node_word(g->buf, lower.address, PNANOVDB_LOWER_OFF_CHILD_MASK,
+                                         PNANOVDB_LOWER_OFF_VALUE_MASK, v);
+                 lb; lb &= lb - 1) {
+                uint32_t m = 32 * v + (uint32_t)__builtin_ctz(lb);
+                int32_t i = (int32_t)(m >> 8), j = (int32_t)(m >> 4 & 15u), k = (int32_t)(m & 15u);
+                if (!in_range(llo, lhi, i, j, k))
+                    continue;
+                const int64_t b[3] = {(int64_t)uo[0] / 8 + i, (int64_t)uo[1] / 8 + j,
+                                      (int64_t)uo[2] / 8 + k};
+                visit_lower_child(g, lower, m, b, fn, ctx);
+            }
+        return;
+    }
+    for (int32_t i = llo[0]; i <= lhi[0]; ++i)
+        for (int32_t j = llo[1]; j <= lhi[1]; ++j)
+            for (int32_t k = llo[2]; k <= lhi[2]; ++k) {
+                const int64_t b[3] = {(int64_t)uo[0] / 8 + i, (int64_t)uo[1] / 8 + j,
+                                      (int64_t)uo[2] / 8 + k};
+                visit_lower_child(g, lower, (uint32_t)((i << 8) | (j << 4) | k), b, fn, ctx);
             }
 }
 
-static void upper_blocks(const grid *g, pnanovdb_upper_handle_t upper, const int32_t origin[3],
-                         grid_ibox box, const block_window *w)
+/* Every leaf and tile of the tree that covers blocks of `blocks`, in the
+ * tree's order: fn gets each with the blocks it covers there and what
+ * grid_region_range and grid_region_support find in each of them. With
+ * `active_only` (and a checked grid), not the tiles that are inactive:
+ * they read the background, as blocks no call covers do, and a sparse
+ * grid's nodes are mostly those (its masks are then read a word at a
+ * time). Inline with fn a constant at each call: the fills of grid_blocks
+ * stay a store. */
+static inline __attribute__((always_inline)) void visit_blocks(const grid *g, grid_ibox blocks,
+                                                               bool active_only, grid_block_fn fn,
+                                                               void *ctx)
 {
-    int32_t lo[3], hi[3];
-    if (!child_range(origin, 4096, 128, box, lo, hi))
-        return;
-    for (int32_t x = lo[0]; x <= hi[0]; ++x)
-        for (int32_t y = lo[1]; y <= hi[1]; ++y)
-            for (int32_t z = lo[2]; z <= hi[2]; ++z) {
-                uint32_t n = (uint32_t)((x << 10) | (y << 5) | z);
-                int32_t child_origin[3] = {origin[0] + 128 * x, origin[1] + 128 * y,
-                                           origin[2] + 128 * z};
-                if (pnanovdb_upper_get_child_mask(g->buf, upper, n))
-                    lower_blocks(g, pnanovdb_upper_get_child(FLOAT_GRID, g->buf, upper, n),
-                                 child_origin, box, w);
-                else if (g->checked && !pnanovdb_upper_get_value_mask(g->buf, upper, n))
-                    fill_blocks(w, child_origin, 128, tile_block(g->background));
-                else
-                    fill_blocks(w, child_origin, 128,
-                                tile_block(pnanovdb_read_float(
-                                    g->buf,
-                                    pnanovdb_upper_get_table_address(FLOAT_GRID, g->buf, upper, n))));
-            }
+    grid_ibox box; /* the blocks' voxels */
+    for (int a = 0; a < 3; ++a) {
+        assert(blocks.min[a] <= blocks.max[a] && blocks.min[a] >= INT32_MIN / 8 &&
+               blocks.max[a] <= INT32_MAX / 8);
+        box.min[a] = blocks.min[a] * 8;
+        box.max[a] = blocks.max[a] * 8 + 7;
+    }
+    bool sparse = active_only && g->checked;
+    uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
+    for (uint32_t t = 0; t < count; ++t) {
+        pnanovdb_root_tile_handle_t tile;
+        int32_t origin[3], lo[3], hi[3];
+        if (!root_tile_overlaps(g, t, box, &tile, origin))
+            continue;
+        if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile))) {
+            visit_node(blocks, origin, 4096,
+                       tile_block(pnanovdb_read_float(
+                           g->buf, pnanovdb_root_tile_get_value_address(FLOAT_GRID, g->buf, tile))),
+                       fn, ctx);
+            continue;
+        }
+        pnanovdb_upper_handle_t upper = pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile);
+        if (!child_range(origin, 4096, 128, box, lo, hi))
+            continue;
+        if (sparse) {
+            for (uint32_t w = 0; w < PNANOVDB_UPPER_TABLE_COUNT / 32; ++w)
+                for (uint32_t bits = node_word(g->buf, upper.address, PNANOVDB_UPPER_OFF_CHILD_MASK,
+                                               PNANOVDB_UPPER_OFF_VALUE_MASK, w);
+                     bits; bits &= bits - 1) {
+                    uint32_t n = 32 * w + (uint32_t)__builtin_ctz(bits);
+                    int32_t x = (int32_t)(n >> 10), y = (int32_t)(n >> 5 & 31u),
+                            z = (int32_t)(n & 31u);
+                    if (in_range(lo, hi, x, y, z))
+                        visit_upper_child(g, blocks, box, upper, n, origin, x, y, z, true, fn, ctx);
+                }
+            continue;
+        }
+        for (int32_t x = lo[0]; x <= hi[0]; ++x)
+            for (int32_t y = lo[1]; y <= hi[1]; ++y)
+                for (int32_t z = lo[2]; z <= hi[2]; ++z)
+                    visit_upper_child(g, blocks, box, upper, (uint32_t)((x << 10) | (y << 5) | z),
+                                      origin, x, y, z, false, fn, ctx);
+    }
+}
+
+void grid_visit_active_blocks(const grid *g, grid_ibox blocks, grid_block_fn fn, void *ctx)
+{
+    assert(g->type == FLOAT_GRID);
+    visit_blocks(g, blocks, true, fn, ctx);
+}
+
+typedef struct {
+    grid_ibox blocks; /* the window, in blocks */
+    int64_t n[3];
+    grid_block *out;
+} block_window;
+
+/* Blocks [lo, hi] of the window set to b. */
+static inline void fill_window(void *ctx, const int64_t lo[3], const int64_t hi[3], grid_block b)
+{
+    const block_window *w = ctx;
+    for (int64_t z = lo[2]; z <= hi[2]; ++z)
+        for (int64_t y = lo[1]; y <= hi[1]; ++y) {
+            grid_block *row = w->out + (((z - w->blocks.min[2]) * w->n[1] + (y - w->blocks.min[1])) *
+                                            w->n[0] +
+                                        (lo[0] - w->blocks.min[0]));
+            for (int64_t x = 0; x <= hi[0] - lo[0]; ++x)
+                row[x] = b;
+        }
 }
 
 void grid_blocks(const grid *g, grid_ibox blocks, grid_block *out)
 {
     assert(g->type == FLOAT_GRID);
     block_window w = {blocks, {0, 0, 0}, out};
-    grid_ibox box; /* the window's voxels */
     size_t total = 1;
     for (int a = 0; a < 3; ++a) {
-        assert(blocks.min[a] <= blocks.max[a] && blocks.min[a] >= INT32_MIN / 8 &&
-               blocks.max[a] <= INT32_MAX / 8);
         w.n[a] = (int64_t)blocks.max[a] - blocks.min[a] + 1;
         total *= (size_t)w.n[a];
-        box.min[a] = blocks.min[a] * 8;
-        box.max[a] = blocks.max[a] * 8 + 7;
     }
     /* Where no root tile lies, every voxel reads the background. */
     const grid_block none = {g->background, g->background, 0, UINT32_MAX, GRID_BLOCK_ZERO};
     for (size_t i = 0; i < total; ++i)
         out[i] = none;
-    uint32_t count = pnanovdb_root_get_tile_count(g->buf, g->root);
-    for (uint32_t t = 0; t < count; ++t) {
-        pnanovdb_root_tile_handle_t tile;
-        int32_t origin[3];
-        if (!root_tile_overlaps(g, t, box, &tile, origin))
-            continue;
-        if (pnanovdb_int64_is_zero(pnanovdb_root_tile_get_child(g->buf, tile)))
-            fill_blocks(&w, origin, 4096,
-                        tile_block(pnanovdb_read_float(
-                            g->buf, pnanovdb_root_tile_get_value_address(FLOAT_GRID, g->buf, tile))));
-        else
-            upper_blocks(g, pnanovdb_root_get_child(FLOAT_GRID, g->buf, g->root, tile), origin, box,
-                         &w);
-    }
+    visit_blocks(g, blocks, false, fill_window, &w);
 }
 
 void grid_block_support_add(const grid *g, const grid_block *b, const int32_t origin[3],

@@ -181,6 +181,15 @@ typedef struct {
 /* The blocks b (voxels 8 b .. 8 b + 7 per axis) of the inclusive box
  * `blocks`, x fastest, into out (one per block). */
 void grid_blocks(const grid *g, grid_ibox blocks, grid_block *out);
+/* What grid_visit_active_blocks hands over: blocks lo .. hi (inclusive, per axis)
+ * of a leaf or tile, and what each of them holds. */
+typedef void (*grid_block_fn)(void *ctx, const int64_t lo[3], const int64_t hi[3], grid_block b);
+/* Every leaf and tile of the tree that covers blocks of the inclusive box
+ * `blocks`, once each, with the blocks of the box it covers (a leaf: one),
+ * but the tiles that are inactive in a checked grid: the blocks no call
+ * covers read the background. grid_blocks is a fill of the same walk with
+ * those tiles too. */
+void grid_visit_active_blocks(const grid *g, grid_ibox blocks, grid_block_fn fn, void *ctx);
 /* Adds to *acc (*any: whether it holds anything yet) the voxels of `box`
  * where block b (first voxel `origin`) may be non-zero, as
  * grid_region_support would find them. Zero background only. */

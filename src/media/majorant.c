@@ -692,6 +692,234 @@ static void *bound_bricks_worker(void *ctx)
     return NULL;
 }
 
+/* The bricks' bounds from one visit of the tree (grid_visit_active_blocks)
+ * rather than a window of blocks per brick: each leaf or active tile folds
+ * into the bricks whose windows (the blocks of the brick's span_box, as
+ * reader_aim aims them) it covers, and a window that some block of is not
+ * covered also holds the background; a span box apart from the active
+ * voxels holds the background alone (range_over). The same bits as
+ * span_bounds of every brick (test_media_majorant compares them with a
+ * build by queries). The visit runs on up to FOLD_SLABS cores, each over a
+ * slab of the blocks into its own bounds, merged after. */
+enum { FOLD_SLABS = 4 };
+/* The most blocks along the three axes that get a table of their windows. */
+#define FOLD_TABLE_MAX ((size_t)1 << 20)
+
+typedef struct {
+    const majorant_grid *mg;
+    int64_t *wlo[3], *whi[3]; /* per axis, per brick coordinate: its window's blocks */
+    int64_t reach;            /* bricks a window reaches back past its own */
+    /* Per axis, per block k of `all` (from all_min): the first brick whose
+     * window holds it (res when none), and the count that do. NULL: too
+     * many blocks; first_window_search then. */
+    int32_t *first[3], *count[3];
+    int64_t all_min[3], all_n[3];
+} brick_windows;
+
+/* One slab's bounds and covered blocks (per brick of its windows). */
+typedef struct {
+    const brick_windows *w;
+    float *vmin, *vmax;
+    int64_t *covered;
+} brick_fold;
+
+/* The first brick coordinate along axis a whose window ends at block k or
+ * later (windows are in order along each axis, and reach at most `reach`
+ * bricks before the one holding the block). */
+static int32_t first_window_search(const brick_windows *w, int a, int64_t k)
+{
+    const majorant_grid *mg = w->mg;
+    int64_t c = floor_div(k * 8 - mg->origin[a], (int64_t)mg->cell * B) - w->reach;
+    if (c < 0)
+        c = 0;
+    while (c < mg->res[a] && w->whi[a][c] < k)
+        ++c;
+    return (int32_t)c;
+}
+
+/* The bricks along axis a whose windows hold some of blocks lo .. hi:
+ * [*b0, *b1); false when none do. */
+static bool windows_over(const brick_windows *w, int a, int64_t lo, int64_t hi, int32_t *b0,
+                         int32_t *b1)
+{
+    const majorant_grid *mg = w->mg;
+    int64_t k = lo - w->all_min[a];
+    if (w->first[a] && lo == hi && k >= 0 && k < w->all_n[a]) {
+        *b0 = w->first[a][k];
+        *b1 = *b0 + w->count[a][k];
+        return *b1 > *b0;
+    }
+    *b0 = first_window_search(w, a, lo);
+    *b1 = *b0;
+    while (*b1 < mg->res[a] && w->wlo[a][*b1] <= hi)
+        ++*b1;
+    return *b1 > *b0;
+}
+
+static void fold_into_bricks(void *ctx, const int64_t lo[3], const int64_t hi[3], grid_block b)
+{
+    brick_fold *f = ctx;
+    const brick_windows *w = f->w;
+    const majorant_grid *mg = w->mg;
+    int32_t b0[3], b1[3];
+    for (int a = 0; a < 3; ++a)
+        if (!windows_over(w, a, lo[a], hi[a], &b0[a], &b1[a]))
+            return;
+    for (int32_t z = b0[2]; z < b1[2]; ++z)
+        for (int32_t y = b0[1]; y < b1[1]; ++y)
+            for (int32_t x = b0[0]; x < b1[0]; ++x) {
+                const int32_t c[3] = {x, y, z};
+                int64_t n = 1;
+                for (int a = 0; a < 3; ++a) {
+                    int64_t l = lo[a] > w->wlo[a][c[a]] ? lo[a] : w->wlo[a][c[a]];
+                    int64_t h = hi[a] < w->whi[a][c[a]] ? hi[a] : w->whi[a][c[a]];
+                    n *= h - l + 1;
+                }
+                size_t i = ((size_t)z * (size_t)mg->res[1] + (size_t)y) * (size_t)mg->res[0] +
+                           (size_t)x;
+                f->vmin[i] = b.min < f->vmin[i] ? b.min : f->vmin[i];
+                f->vmax[i] = b.max > f->vmax[i] ? b.max : f->vmax[i];
+                f->covered[i] += n;
+            }
+}
+
+typedef struct {
+    const grid *g;
+    grid_ibox all; /* every window's blocks */
+    int axis, slabs;
+    brick_fold *fold; /* one per slab */
+    atomic_int next;
+} fold_job;
+
+/* Slabs of `all` along its longest axis, one at a time. */
+static void *fold_worker(void *ctx)
+{
+    fold_job *job = ctx;
+    for (;;) {
+        int s = atomic_fetch_add(&job->next, 1);
+        if (s >= job->slabs)
+            break;
+        grid_ibox part = job->all;
+        int a = job->axis;
+        int64_t first = job->all.min[a], n = (int64_t)job->all.max[a] - first + 1;
+        part.min[a] = (int32_t)(first + n * s / job->slabs);
+        part.max[a] = (int32_t)(first + n * (s + 1) / job->slabs - 1);
+        if (part.max[a] >= part.min[a])
+            grid_visit_active_blocks(job->g, part, fold_into_bricks, &job->fold[s]);
+    }
+    return NULL;
+}
+
+/* Every brick's bounds by one visit of the tree; false (nothing set) when
+ * it does not apply: emission bounds, a build by queries, windows larger
+ * than WINDOW_MAX_BLOCKS (span_bounds asks the tree then), or no memory. */
+static bool bound_bricks_by_visit(const source *src, majorant_grid *mg)
+{
+    if (src->em || src->by_queries)
+        return false;
+    size_t count = (size_t)mg->res[0] * (size_t)mg->res[1] * (size_t)mg->res[2];
+    size_t axes = (size_t)mg->res[0] + (size_t)mg->res[1] + (size_t)mg->res[2];
+    int cores = hz_core_count(), slabs = cores < FOLD_SLABS ? (cores > 1 ? cores : 1) : FOLD_SLABS;
+    brick_windows w = {.mg = mg};
+    brick_fold fold[FOLD_SLABS];
+    int64_t *ends = malloc(2 * axes * sizeof *ends);
+    float *vals = malloc(2 * (size_t)slabs * count * sizeof *vals);
+    int64_t *covered = calloc((size_t)slabs * count, sizeof *covered);
+    bool ok = ends && vals && covered;
+    int64_t edge = (int64_t)mg->cell * B, span[3] = {0, 0, 0};
+    grid_ibox all = {{0, 0, 0}, {0, 0, 0}};
+    for (int a = 0, at = 0; ok && a < 3; at += mg->res[a], ++a) {
+        w.wlo[a] = ends + at;
+        w.whi[a] = ends + axes + at;
+        for (int32_t c = 0; c < mg->res[a]; ++c) {
+            int64_t first[3] = {0, 0, 0};
+            first[a] = mg->origin[a] + c * edge;
+            grid_ibox box = span_box(src, first, edge);
+            w.wlo[a][c] = floor_div(box.min[a], 8);
+            w.whi[a][c] = floor_div(box.max[a], 8);
+            int64_t n = w.whi[a][c] - w.wlo[a][c] + 1;
+            span[a] = n > span[a] ? n : span[a];
+        }
+        all.min[a] = (int32_t)w.wlo[a][0];
+        all.max[a] = (int32_t)w.whi[a][mg->res[a] - 1];
+    }
+    /* a window starts 1 + pad voxels before its brick, rounded down to a block */
+    int32_t pad = src->pad[0] > src->pad[1] ? src->pad[0] : src->pad[1];
+    pad = pad > src->pad[2] ? pad : src->pad[2];
+    w.reach = 1 + ((int64_t)pad + 9) / edge;
+    /* each block's windows, looked up rather than searched for every leaf */
+    size_t table = 0;
+    for (int a = 0; ok && a < 3; ++a) {
+        w.all_min[a] = all.min[a];
+        w.all_n[a] = (int64_t)all.max[a] - all.min[a] + 1;
+        table += (size_t)w.all_n[a];
+    }
+    int32_t *lookup = ok && table <= FOLD_TABLE_MAX ? malloc(2 * table * sizeof *lookup) : NULL;
+    for (int a = 0, at = 0; lookup && a < 3; at += (int)w.all_n[a], ++a) {
+        w.first[a] = lookup + at;
+        w.count[a] = lookup + table + at;
+        for (int64_t k = 0; k < w.all_n[a]; ++k) {
+            int32_t c0 = first_window_search(&w, a, w.all_min[a] + k), c1 = c0;
+            while (c1 < mg->res[a] && w.wlo[a][c1] <= w.all_min[a] + k)
+                ++c1;
+            w.first[a][k] = c0;
+            w.count[a][k] = c1 - c0;
+        }
+    }
+    ok = ok && (uint64_t)span[0] * (uint64_t)span[1] <= WINDOW_MAX_BLOCKS &&
+         (uint64_t)span[0] * (uint64_t)span[1] * (uint64_t)span[2] <= WINDOW_MAX_BLOCKS;
+    if (ok) {
+        for (int s = 0; s < slabs; ++s) {
+            fold[s] = (brick_fold){&w, vals + 2 * (size_t)s * count,
+                                   vals + (2 * (size_t)s + 1) * count, covered + (size_t)s * count};
+            for (size_t i = 0; i < count; ++i) {
+                fold[s].vmin[i] = INFINITY;
+                fold[s].vmax[i] = -INFINITY;
+            }
+        }
+        int axis = 0;
+        for (int a = 1; a < 3; ++a)
+            axis = (int64_t)all.max[a] - all.min[a] > (int64_t)all.max[axis] - all.min[axis] ? a : axis;
+        fold_job job = {.g = src->g, .all = all, .axis = axis, .slabs = slabs, .fold = fold};
+        atomic_init(&job.next, 0);
+        if (!src->empty)
+            hz_parallel_run(count < 64 ? 1 : slabs, fold_worker, &job);
+        float bg = grid_background(src->g);
+        for (size_t i = 0; i < count; ++i) {
+            int32_t b3[3];
+            int64_t first[3];
+            brick_xyz(mg, i, b3);
+            brick_first(mg, b3, first);
+            grid_ibox box = span_box(src, first, edge);
+            bool apart = src->empty;
+            int64_t blocks = 1, seen = 0;
+            for (int a = 0; a < 3; ++a) {
+                apart = apart || box.max[a] < src->active.min[a] || box.min[a] > src->active.max[a];
+                blocks *= w.whi[a][b3[a]] - w.wlo[a][b3[a]] + 1;
+            }
+            float l = INFINITY, h = -INFINITY;
+            for (int s = 0; s < slabs; ++s) {
+                l = fold[s].vmin[i] < l ? fold[s].vmin[i] : l;
+                h = fold[s].vmax[i] > h ? fold[s].vmax[i] : h;
+                seen += fold[s].covered[i];
+            }
+            if (apart) {
+                l = h = bg;
+            } else if (seen < blocks) {
+                l = bg < l ? bg : l;
+                h = bg > h ? bg : h;
+            }
+            mg->bricks[i].bounds = bounds_of_range(l, h);
+            mg->bricks[i].cells = MAJORANT_BRICK_UNIFORM;
+        }
+    }
+    free(ends);
+    free(vals);
+    free(covered);
+    free(lookup);
+    return ok;
+}
+
 /* Every brick's bounds (and, with_cells, the cells of those not uniform);
  * returns how many bricks are not uniform (their cells may differ). */
 static size_t bound_bricks(const source *src, majorant_grid *mg, brick_cells **cells)
@@ -700,7 +928,8 @@ static size_t bound_bricks(const source *src, majorant_grid *mg, brick_cells **c
     brick_job job = {.src = src, .mg = mg, .count = count, .cells = cells, .with_cells = cells != NULL};
     atomic_init(&job.next, 0);
     atomic_init(&job.no_memory, false);
-    hz_parallel_run(threads_for(count), bound_bricks_worker, &job);
+    if (cells || !bound_bricks_by_visit(src, mg))
+        hz_parallel_run(threads_for(count), bound_bricks_worker, &job);
     for (size_t i = 0; i < count; ++i)
         varied += !uniform_bounds(mg->bricks[i].bounds);
     return varied;
