@@ -880,13 +880,17 @@ static void test_inputs_hash(void **state)
         if (scene_parse_file(scene, &sd, &err) != HZ_OK)
             fail_msg("%s", err.message);
         assert_int_equal(scene_inputs_hash(&sd, &h0, &err), HZ_OK);
-        { /* FNV-1a of the count, then of each file's size and bytes (windows) */
+        { /* FNV-1a of the count, then of each file's size and its 1 MiB blocks'
+           * (small: hash and length) or 4 MiB windows' (large: digest) values */
             uint64_t want = HZ_FNV_OFFSET;
             size_t count = 2;
             off_t scene_size = (off_t)strlen(text), vol_size = (off_t)n;
             HASH_FIELD(want, count);
             HASH_FIELD(want, scene_size);
-            want = fnv1a(want, text, strlen(text));
+            uint64_t tv = hash_block(0, text, strlen(text));
+            ssize_t tn = (ssize_t)strlen(text);
+            HASH_FIELD(want, tv);
+            HASH_FIELD(want, tn);
             HASH_FIELD(want, vol_size);
             const size_t window = (size_t)4 << 20;
             uint64_t digest = HZ_FNV_OFFSET;
@@ -894,10 +898,15 @@ static void test_inputs_hash(void **state)
                 uint64_t v = hash_block(w, bytes + w * window, n - w * window < window ? n - w * window : window);
                 HASH_FIELD(digest, v);
             }
+            const size_t block = (size_t)1 << 20;
+            for (size_t b = 0; !large && b * block < n; ++b) { /* 3 whole blocks */
+                ssize_t bn = (ssize_t)(n - b * block < block ? n - b * block : block);
+                uint64_t v = hash_block(b, bytes + b * block, (size_t)bn);
+                HASH_FIELD(want, v);
+                HASH_FIELD(want, bn);
+            }
             if (large)
                 HASH_FIELD(want, digest);
-            else
-                want = fnv1a(want, bytes, n);
             assert_true(h0 == want);
         }
         bytes[n - 1] ^= 1; /* the last byte, past the last whole block */
