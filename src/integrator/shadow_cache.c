@@ -442,3 +442,12 @@ rgb shadow_cache_transmittance(const shadow_cache *c, vec3 p, const spectral_ctx
         depth = spectral_from_rgb(sp, depth, SPECTRAL_UNBOUNDED);
     return rgb_scale(rgb_exp_neg(depth, 1.0), V);
 }
+
+double shadow_cache_spacing_param(param_list *pl, double dflt)
+{
+    double s = params_float(pl, "shadowcache", dflt);
+    if (!(s >= 0.0 && isfinite(s)))
+        params_reject(pl, "shadowcache",
+                      "\"shadowcache\" must be a number of voxels >= 0 (0: no cache)");
+    return s;
+}

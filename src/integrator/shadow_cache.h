@@ -1,8 +1,10 @@
-/* The shadow cache (Integrator "singlescatter" "float shadowcache" S): for
- * each distant light shining into a grid medium, the transmittance toward the
- * light tabulated on a grid aligned with the light, so that the in-scattering
- * samples of camera rays in that medium look it up instead of tracing a
- * shadow ray (a deep shadow map, Lokovic & Veach 2000).
+/* The shadow cache (Integrator "singlescatter" or "volpath", "float
+ * shadowcache" S): for each distant light shining into a grid medium, the
+ * transmittance toward the light tabulated on a grid aligned with the light,
+ * so that the scattering points in that medium (singlescatter's
+ * in-scattering samples of camera rays, volpath's scattering vertices) look
+ * it up instead of tracing a shadow ray (a deep shadow map, Lokovic & Veach
+ * 2000).
  *
  * The grid's nodes are S voxels of the medium apart (the geometric mean of
  * its voxel's edges in render space) and cover the medium's support box; its
@@ -32,12 +34,17 @@
 
 #include "core/error.h"
 #include "integrator/path.h"
+#include "scene/params.h"
 
 /* Caches are capped at this many nodes each (16 bytes a node); a larger one
  * is built with a coarser spacing, with a warning. */
 #define SHADOW_CACHE_MAX_NODES (1u << 23)
 
 typedef struct shadow_cache shadow_cache;
+
+/* An integrator's "float shadowcache" (default `dflt`): a node spacing in
+ * voxels >= 0, 0 for no cache; anything else is refused at its place. */
+double shadow_cache_spacing_param(param_list *pl, double dflt);
 
 /* Every (grid medium, distant light) pair of a scene. */
 typedef struct shadow_caches shadow_caches;

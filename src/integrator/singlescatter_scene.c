@@ -3,6 +3,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "integrator/shadow_cache.h"
 #include "media/medium.h"
 
 singlescatter_settings singlescatter_settings_default(void)
@@ -43,10 +44,7 @@ hz_status singlescatter_settings_from_entity(scene_entity *e, singlescatter_sett
     if (!(out->max_collisions >= 0.0))
         params_reject(pl, "maxcollisions",
                       "\"maxcollisions\" must be >= 0 (0: ratio tracking never falls back)");
-    out->shadow_cache = params_float(pl, "shadowcache", out->shadow_cache);
-    if (!(out->shadow_cache >= 0.0 && isfinite(out->shadow_cache)))
-        params_reject(pl, "shadowcache",
-                      "\"shadowcache\" must be a number of voxels >= 0 (0: no cache)");
+    out->shadow_cache = shadow_cache_spacing_param(pl, out->shadow_cache);
     const char *mode = params_string(pl, "transmittance", "auto");
     bool automatic = strcmp(mode, "auto") == 0;
     if (automatic)

@@ -37,6 +37,7 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
                    "pbrt-v4's --upgrade drops it): not used");
     }
     out->force_diffuse = false; /* an Option, set by the scene */
+    out->shadow_cache = shadow_cache_spacing_param(pl, 0.0);
     out->light_sampler = LIGHT_SAMPLER_BVH;
     const char *ls = params_string(pl, "lightsampler", "bvh");
     if (strcmp(ls, "uniform") == 0) {
@@ -72,7 +73,7 @@ static double scene_radius(const geometry *geom)
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,
                              volpath_settings settings, hz_error *err)
 {
-    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0), false, -1, false, NULL, 0};
+    *out = (volpath_scene){*in, settings, {0}, rgb_grey(0.0), false, -1, false, NULL, 0, NULL};
     for (size_t i = 0; in->medium_count > 0 && i < in->light_count; ++i)
         if (in->lights[i].kind == LIGHT_POINT || in->lights[i].kind == LIGHT_SPOT) {
             if (!out->eq_lights && !(out->eq_lights = malloc(in->light_count * sizeof(size_t))))
@@ -310,10 +311,17 @@ typedef struct {
 } vertex;
 
 /* Transmittance estimate (with r_u, r_l) of the shadow ray of light sample ls
- * from v; false when blocked. */
-static bool shadow(path *pa, const vertex *v, const light_sample *ls, shadow_state *s)
+ * of light li from v; false when blocked. A medium point whose medium and
+ * light have a shadow cache reads it instead. */
+static bool shadow(path *pa, const vertex *v, const light_sample *ls, size_t li, shadow_state *s)
 {
     const volpath_scene *sc = pa->sc;
+    const shadow_cache *cache =
+        v->b || !sc->caches ? NULL : shadow_caches_get(sc->caches, v->medium, li);
+    if (cache) {
+        s->T = shadow_cache_transmittance(cache, v->p, pa->sp);
+        return !rgb_is_black(s->T);
+    }
     if (v->b) {
         const geom_hit *h = v->h;
         path_shadow_ray sr = path_surface_shadow_ray(h, ls);
@@ -379,7 +387,7 @@ static rgb sample_ld(path *pa, const vertex *v)
     shadow_state s = {pa, rgb_grey(1.0), rgb_grey(1.0), rgb_grey(1.0)};
     bool timed = v->b && pa->counters->timed && sc->in.medium_count > 0;
     uint64_t t0 = timed ? hz_clock_ns() : 0;
-    bool lit = shadow(pa, v, &ls, &s);
+    bool lit = shadow(pa, v, &ls, li, &s);
     if (timed)
         pa->counters->media_ns += hz_clock_ns() - t0;
     if (!lit)
@@ -704,7 +712,7 @@ static void equiangular_ld(path *pa, const medium *m, double t_start, double t_h
         return;
     vertex v = {x, v3_neg(pa->eq_w), NULL, NULL, m->g, pa->ray.medium, 0.0, 0.0};
     shadow_state st = {pa, rgb_grey(1.0), rgb_grey(1.0), rgb_grey(1.0)};
-    if (!shadow(pa, &v, &ls, &st))
+    if (!shadow(pa, &v, &ls, li, &st))
         return;
     double pmf = light_sampler_pmf(&sc->sampler, x, v3(0.0, 0.0, 0.0), li);
     rgb den = rgb_mul(rgb_mul(st.r_l, pa->r_u),

@@ -8,7 +8,10 @@
  * shadow ray through media by ratio tracking, combined by MIS (balance
  * heuristic) with BSDF or phase-function sampling, which also finds area
  * lights and the sky. Russian roulette after depth 1, `maxdepth` scattering
- * events (surfaces and media alike; interfaces are not events).
+ * events (surfaces and media alike; interfaces are not events). With a
+ * shadow cache, a scattering vertex in a grid medium reads a distant light's
+ * transmittance from it: no shadow ray, and no noise from one (the same
+ * estimate for every hero channel, so r_u and r_l stay as they are).
  *
  * Random numbers: the pixel sampler for light, BSDF and phase sampling and
  * the roulette (as pbrt-v4), a per-path rng (core/rng.h, seeded from the
@@ -30,6 +33,7 @@
 #include "lights/light_sampler.h"
 #include "lights/lights.h"
 #include "integrator/path.h"
+#include "integrator/shadow_cache.h"
 #include "sampler/sampler.h"
 #include "scene/scene_desc.h"
 
@@ -40,6 +44,10 @@ typedef struct {
     /* Option "forcediffuse": each hit's BSDF becomes a diffuse one of its
      * directional albedo, estimated from one sample (as pbrt-v4). */
     bool force_diffuse;
+    /* "shadowcache": the node spacing (voxels) of the shadow cache that
+     * scattering vertices in grid media read for distant lights instead of
+     * tracing shadow rays (integrator/shadow_cache.h); 0: none. */
+    double shadow_cache;
 } volpath_settings;
 
 /* Reads `Integrator "volpath"`'s parameters; "exhaustive" runs as "bvh"
@@ -64,6 +72,9 @@ typedef struct {
      * (docs/media.md); NULL and 0 when there are none. */
     size_t *eq_lights;
     size_t eq_light_count;
+    /* The shadow caches at settings.shadow_cache, built by the caller
+     * (render_scene) over `in`; NULL: every shadow ray is traced. */
+    const shadow_caches *caches;
 } volpath_scene;
 
 hz_status volpath_scene_init(volpath_scene *out, const integrator_inputs *in,

@@ -455,20 +455,26 @@ static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integr
     bool media_used = rs->cam.medium >= 0 || geometry_references_media(rs->geom);
     integrator_inputs in = {rs->geom, rs->lights, rs->light_count, rs->media,
                             media_used ? rs->medium_count : 0, &rs->cam, 0.0};
-    bool cached = ip->kind == INTEGRATOR_SINGLESCATTER && ip->singlescatter.shadow_cache > 0.0;
-    if (cached && check_shadow_cache(rs, sd, &in, err) != HZ_OK)
+    double spacing = ip->kind == INTEGRATOR_SINGLESCATTER ? ip->singlescatter.shadow_cache
+                     : ip->kind == INTEGRATOR_VOLPATH       ? ip->volpath.shadow_cache
+                                                            : 0.0;
+    if (spacing > 0.0 && check_shadow_cache(rs, sd, &in, err) != HZ_OK)
         return HZ_ERROR;
     if (integrator_init(&rs->integ, ip, &in, err) != HZ_OK)
         return HZ_ERROR;
-    if (!cached)
+    if (!(spacing > 0.0))
         return HZ_OK;
-    rs->cache_spacing[0] = ip->singlescatter.shadow_cache;
+    rs->cache_spacing[0] = spacing;
     /* The caches walk their columns at lookups: the inputs the integrator
      * keeps, which live as long as the render_scene. */
-    if (shadow_caches_create(&rs->integ.singlescatter.in, rs->cache_spacing[0], 0, warn,
-                             &rs->caches[0], err) != HZ_OK)
+    bool single = ip->kind == INTEGRATOR_SINGLESCATTER;
+    const integrator_inputs *kept = single ? &rs->integ.singlescatter.in : &rs->integ.volpath.in;
+    if (shadow_caches_create(kept, spacing, 0, warn, &rs->caches[0], err) != HZ_OK)
         return HZ_ERROR;
-    rs->integ.singlescatter.caches = rs->caches[0];
+    if (single)
+        rs->integ.singlescatter.caches = rs->caches[0];
+    else
+        rs->integ.volpath.caches = rs->caches[0];
     return HZ_OK;
 }
 
@@ -694,7 +700,13 @@ medium_work render_scene_media_work(const render_scene *rs)
 
 const shadow_caches *render_scene_shadow_caches(const render_scene *rs)
 {
-    return rs->integ.kind == INTEGRATOR_SINGLESCATTER ? rs->integ.singlescatter.caches : NULL;
+    switch (rs->integ.kind) {
+    case INTEGRATOR_SINGLESCATTER:
+        return rs->integ.singlescatter.caches;
+    case INTEGRATOR_VOLPATH:
+        return rs->integ.volpath.caches;
+    }
+    return NULL;
 }
 
 /* The caches at `spacing`: from the pool, or built into a free slot (or one

@@ -1,7 +1,7 @@
-/* The shadow cache (Integrator "singlescatter" "float shadowcache"):
- * closed-form transmittance through a uniform box under a tilted distant
- * light, a surface's shadow, convergence against exact shadow rays, and the
- * scenes it refuses. */
+/* The shadow cache ("float shadowcache" of Integrator "singlescatter" and
+ * "volpath"): closed-form transmittance through a uniform box under a tilted
+ * distant light, a surface's shadow, convergence against exact shadow rays,
+ * volpath's image against its shadow rays, and the scenes it refuses. */
 #include "media_test_util.h"
 
 #include "integrator/shadow_cache.h"
@@ -9,15 +9,17 @@
 /* Density 1 over [-2, 2]^3 (4^3 voxels of 1), sigma_t (0.75, 1, 1.5) or,
  * `grey`, 1, seen through an interface box
  * [-1, 1]^3; a distant light along w ~ (0.1, 1, 0.1); an opaque quad at
- * y = 1.5 over x >= 0.3 shades part of the box. */
-static char *box_scene(double spacing, bool occluder, bool grey)
+ * y = 1.5 over x >= 0.3 shades part of the box. Rendered by `integrator`
+ * (its name and parameters; NULL: singlescatter's raymarch) with the cache
+ * at `spacing`. */
+static char *box_scene_by(const char *integrator, double spacing, bool occluder, bool grey)
 {
     char *box = box_mesh(v3(-1, -1, -1), v3(1, 1, 1));
     char *s = sfmt(
         "LookAt 0 0 -6  0 0 0  0 1 0\n"
         "Camera \"perspective\" \"float fov\" 30\n"
         "Film \"rgb\" \"integer xresolution\" 16 \"integer yresolution\" 16\n"
-        "Integrator \"singlescatter\" \"string transmittance\" \"raymarch\" \"float shadowcache\" %g\n"
+        "Integrator %s \"float shadowcache\" %g\n"
         "WorldBegin\n"
         "LightSource \"distant\" \"point3 from\" [0.1 1 0.1] \"point3 to\" [0 0 0] \"rgb L\" [1 1 1]\n"
         "MakeNamedMedium \"m\" \"string type\" \"uniformgrid\" \"integer nx\" 4 \"integer ny\" 4\n"
@@ -27,12 +29,18 @@ static char *box_scene(double spacing, bool occluder, bool grey)
         "  \"rgb sigma_a\" %s \"rgb sigma_s\" [0.5 0.5 0.5]\n"
         "AttributeBegin\n  Material \"interface\"\n  MediumInterface \"m\" \"\"\n  %s\nAttributeEnd\n"
         "%s",
+        integrator ? integrator : "\"singlescatter\" \"string transmittance\" \"raymarch\"",
         spacing, grey ? "[0.5 0.5 0.5]" : "[0.25 0.5 1]", box,
         occluder ? "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3]\n"
                    "  \"point3 P\" [0.3 1.5 -3  3 1.5 -3  3 1.5 3  0.3 1.5 3]\n"
                  : "");
     free(box);
     return s;
+}
+
+static char *box_scene(double spacing, bool occluder, bool grey)
+{
+    return box_scene_by(NULL, spacing, occluder, grey);
 }
 
 static vec3 render_point(const render_scene *rs, vec3 world)
@@ -114,6 +122,94 @@ static void test_converges_to_shadow_rays(void **state)
     render_scene_destroy(exact);
 }
 
+/* The mean over a w x h image of the difference between scenes a and b,
+ * sample by sample (the same pixel, sample index and so random numbers, up
+ * to where the two estimators part), and its standard error; *b_mean gets
+ * b's mean, per channel. */
+static void paired_difference(const render_scene *a, const render_scene *b, int w, int h, int spp,
+                              double mean[3], double se[3], double b_mean[3])
+{
+    sampler sa = *render_scene_sampler(a), sb = *render_scene_sampler(b);
+    sampler_set_spp(&sa, spp);
+    sampler_set_spp(&sb, spp);
+    integrator_counters counters = {0};
+    double s[3] = {0}, s2[3] = {0}, sum_b[3] = {0};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            camera_sample cs = {v2(x + 0.5, y + 0.5), v2(0.5, 0.5), 0.5, 1.0};
+            ray_differential rd;
+            assert_true(camera_generate_ray_differential(render_scene_camera(a), cs, &rd));
+            for (int i = 0; i < spp; ++i) {
+                sampler_state st;
+                double depth;
+                sampler_start(&sa, x, y, i, &st);
+                rgb la = render_scene_li(a, &rd, &st, &depth, &counters);
+                sampler_start(&sb, x, y, i, &st);
+                rgb lb = render_scene_li(b, &rd, &st, &depth, &counters);
+                for (int c = 0; c < 3; ++c) {
+                    double d = rgb_ch(la, c) - rgb_ch(lb, c);
+                    s[c] += d;
+                    s2[c] += d * d;
+                    sum_b[c] += rgb_ch(lb, c);
+                }
+            }
+        }
+    double n = (double)w * h * spp;
+    for (int c = 0; c < 3; ++c) {
+        mean[c] = s[c] / n;
+        se[c] = sqrt(fmax(s2[c] / n - mean[c] * mean[c], 0.0) / (n - 1.0));
+        b_mean[c] = sum_b[c] / n;
+    }
+}
+
+/* Under volpath the cache stands in for the shadow rays of scattering
+ * vertices in the medium: the image of the lit, partly shaded box is the
+ * one of exact shadow rays (ratio tracking) within noise, for single and
+ * multiple scattering, grey and chromatic (where the hero channel's MIS
+ * weights see a shadow estimate without noise), and the render looks up
+ * the density fewer times (no shadow rays through the box). Sample by
+ * sample the two estimates share their paths up to the first shadow ray
+ * (under maxdepth 1 nothing after it counts), so the difference's noise is
+ * the shadow rays' own: a bias of 4% of the image would be 4 standard
+ * errors. */
+static void check_volpath(int maxdepth, bool grey)
+{
+    char integ[128];
+    snprintf(integ, sizeof integ, "\"volpath\" \"integer maxdepth\" %d", maxdepth);
+    render_scene *rs[2];
+    uint64_t lookups[2];
+    for (int k = 0; k < 2; ++k) {
+        char *text = box_scene_by(integ, k == 0 ? 0.0 : 0.125, true, grey);
+        rs[k] = build_scene_or_fail(text, NULL);
+        free(text);
+        assert_true((render_scene_shadow_caches(rs[k]) != NULL) == (k == 1));
+        lookups[k] = pixel_stats_raw(rs[k], 8, 6, 256).lookups;
+    }
+    double d[3], se[3], mean[3];
+    paired_difference(rs[1], rs[0], 16, 16, 1024, d, se, mean);
+    for (int c = 0; c < 3; ++c) {
+        print_message("volpath maxdepth %d%s, channel %d: image mean %.5f, cache - shadow rays "
+                      "%+.2e +- %.1e\n",
+                      maxdepth, grey ? " grey" : "", c, mean[c], d[c], se[c]);
+        assert_true(mean[c] > 1e-3); /* not black */
+        assert_true(se[c] < 1e-2 * mean[c]);
+        assert_true(fabs(d[c]) < 4.0 * se[c]);
+    }
+    print_message("density lookups at a pixel: %llu with shadow rays, %llu with the cache\n",
+                  (unsigned long long)lookups[0], (unsigned long long)lookups[1]);
+    assert_true(lookups[1] < lookups[0]);
+    render_scene_destroy(rs[0]);
+    render_scene_destroy(rs[1]);
+}
+
+static void test_volpath(void **state)
+{
+    (void)state;
+    check_volpath(1, true);
+    check_volpath(1, false);
+    check_volpath(8, false);
+}
+
 static void expect_refused(const char *text, const char *what)
 {
     char msg[1024];
@@ -124,14 +220,14 @@ static void expect_refused(const char *text, const char *what)
     assert_non_null(strstr(msg, what));
 }
 
-/* Refused where it would change nothing, or could not hold. */
-static void test_refusals(void **state)
+/* Refused where it would change nothing, or could not hold, under either
+ * integrator (`integrator` as box_scene_by's). */
+static void check_refusals(const char *integrator)
 {
-    (void)state;
-    char *text = box_scene(-1.0, false, false);
+    char *text = box_scene_by(integrator, -1.0, false, false);
     expect_refused(text, ">= 0");
     free(text);
-    text = box_scene(1.0, false, false);
+    text = box_scene_by(integrator, 1.0, false, false);
     char *p = strstr(text, "LightSource \"distant\""), *end = p ? strchr(p, '\n') : NULL;
     assert_non_null(end);
     char *point = sfmt("%.*sLightSource \"point\" \"point3 from\" [0 3 0] \"rgb I\" [1 1 1]%s",
@@ -146,11 +242,19 @@ static void test_refusals(void **state)
     free(text);
 }
 
+static void test_refusals(void **state)
+{
+    (void)state;
+    check_refusals(NULL);
+    check_refusals("\"volpath\"");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_closed_form),
         cmocka_unit_test(test_converges_to_shadow_rays),
+        cmocka_unit_test(test_volpath),
         cmocka_unit_test(test_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
