@@ -21,15 +21,13 @@
 #include <math.h>
 
 #include "core/rng.h"
+#include "integrator/strata.h"
 #include "integrator/path.h"
 #include "integrator/singlescatter_scene.h"
 #include "media/medium.h"
 
 /* Below this largest transmittance component a walk plays Russian roulette. */
 #define SINGLESCATTER_RR_THRESHOLD 1e-2
-/* A walk never places more in-scattering strata than this on one segment: it
- * bounds the work of absurd step sizes (the step grows instead). */
-#define SINGLESCATTER_MAX_STRATA 1000000
 
 /* Russian roulette on a walk's throughput: below SINGLESCATTER_RR_THRESHOLD it survives
  * with probability max(beta)/threshold and is scaled up to compensate. Returns
@@ -50,66 +48,6 @@ static inline double grid_ray_density(medium_ray *gr, double t, media_walk *walk
 static inline bool next_cell(medium_ray *gr, majorant_segment *seg, media_walk *walk)
 {
     return medium_ray_next(gr, seg, &walk->majorant_steps);
-}
-
-/* ---- strata: sample points t0 + (i + offset) dt, i < n ---- */
-
-typedef struct {
-    double t0, dt;
-    int n, i;
-    double offset; /* < 0: a uniform of its own per stratum */
-    uint64_t key;  /* ... the i-th number of the stream that starts at key */
-    double t;      /* sample point of stratum i (INFINITY once i == n) */
-} strata;
-
-/* Per-stratum offsets are read at random from a counter-based stream, not
- * drawn in turn: skipping strata then draws nothing, so where cell
- * boundaries fall (up to rounding) does not shift any later random number. */
-static inline void strata_load(strata *s)
-{
-    double u = s->offset;
-    if (u < 0.0) {
-        rng at = rng_seeded(s->key + (uint64_t)s->i * 0x9e3779b97f4a7c15ull);
-        u = rng_uniform(&at);
-    }
-    s->t = s->i < s->n ? s->t0 + (s->i + u) * s->dt : INFINITY;
-}
-
-/* Strata of about `step` voxels over [t0, t1], positioned at stratum 0. */
-static inline void strata_make(strata *s, const medium_ray *gr, double t0, double t1, double step,
-                        double offset, rng *r)
-{
-    double n = ceil((t1 - t0) * gr->voxels_per_t / step);
-    if (!(n >= 1.0))
-        n = 1.0;
-    if (n > SINGLESCATTER_MAX_STRATA)
-        n = SINGLESCATTER_MAX_STRATA;
-    s->t0 = t0;
-    s->n = (int)n;
-    s->dt = (t1 - t0) / n;
-    s->i = 0;
-    s->offset = offset;
-    s->key = offset < 0.0 ? rng_bits(r) : 0;
-    strata_load(s);
-}
-
-static inline bool strata_before(const strata *s, double b) { return s->i < s->n && s->t < b; }
-
-static inline void strata_next(strata *s)
-{
-    ++s->i;
-    strata_load(s);
-}
-
-/* Moves past every stratum whose sample lies before b (the end of an empty
- * cell), jumping over those that end before it. */
-static inline void strata_skip_to(strata *s, double b)
-{
-    while (strata_before(s, b)) {
-        double k = floor((b - s->t0) / s->dt); /* strata before k end before b */
-        s->i = k > s->i + 1.0 ? (k >= s->n ? s->n : (int)k) : s->i + 1;
-        strata_load(s);
-    }
 }
 
 /* ---- per cell ---- */

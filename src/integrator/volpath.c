@@ -38,6 +38,10 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
     }
     out->force_diffuse = false; /* an Option, set by the scene */
     out->shadow_cache = shadow_cache_spacing_param(pl, 0.0);
+    out->step = params_float(pl, "stepsize", 0.0);
+    if (!(out->step >= 0.0 && isfinite(out->step)))
+        params_reject(pl, "stepsize",
+                      "\"stepsize\" must be a number of voxels >= 0 (0: tracking, unbiased)");
     out->light_sampler = LIGHT_SAMPLER_BVH;
     const char *ls = params_string(pl, "lightsampler", "bvh");
     if (strcmp(ls, "uniform") == 0) {
@@ -272,7 +276,14 @@ static bool shadow_walk(shadow_state *s, vec3 o, vec3 w, double tmin, double t_f
         mi = seg.medium;
         double t_start = seg.t0, t_end = seg.t1;
         const medium *m = mi >= 0 ? path_medium(pa, mi, true) : NULL;
-        if (m && volpath_grey(m)) {
+        if (m && sc->settings.step > 0.0 && volpath_marches(m)) {
+            double D, t, d;
+            (void)volpath_march(m, o, w, t_start, t_end, sc->settings.step, INFINITY, &pa->walk,
+                                &D, &t, &d);
+            s->T = rgb_mul(s->T, rgb_exp_neg(medium_sigma_t(m), D));
+            if (rgb_is_black(s->T))
+                return false;
+        } else if (m && volpath_grey(m)) {
             double ft, fu;
             if (!volpath_grey_ratio(m, o, w, t_start, t_end, &pa->walk, rgb_max(s->T),
                                     lane_avg(pa, s->r_l), lane_avg(pa, s->r_u), &ft, &fu))
@@ -747,6 +758,27 @@ static rgb grey_flight(path *pa, const medium *m, double t_start, double t_hit, 
     return rgb_grey(1.0);
 }
 
+/* A marched flight (volpath_march) over [t_start, t_hit] of medium m: the
+ * distance in the hero channel, a real collision to path_event with the
+ * lanes' transmittances to it (sigma_maj = sigma_t there: no null share).
+ * The lanes' transmittance to the end when the flight passes. */
+static rgb march_flight(path *pa, const medium *m, double t_start, double t_hit, double u)
+{
+    rgb sigma_t = medium_sigma_t(m);
+    double sh = rgb_ch(sigma_t, pa->hero);
+    double stop = sh > 0.0 ? -log(1.0 - u) / sh : INFINITY;
+    double D, t, d;
+    volpath_flight f = volpath_march(m, pa->ray.o, pa->ray.d, t_start, t_hit,
+                                     pa->sc->settings.step, stop, &pa->walk, &D, &t, &d);
+    rgb T = rgb_exp_neg(sigma_t, D);
+    if (f != VOLPATH_REAL)
+        return T;
+    volpath_event ev = {t, rgb_scale(m->sigma_a, d), rgb_scale(m->sigma_s, d), rgb_scale(sigma_t, d),
+                        T, rgb_grey(0.0)};
+    path_event(pa, &ev);
+    return rgb_grey(1.0);
+}
+
 /* Tracks the current ray's medium over [t_start, t_hit]. False when the
  * path ended there; pa->scattered when it scattered. */
 static bool cross_medium(path *pa, double t_start, double t_hit)
@@ -759,8 +791,10 @@ static bool cross_medium(path *pa, double t_start, double t_hit)
         pa->depth < pa->sc->settings.max_depth && !rgb_is_black(m->sigma_s) && t_hit > t_start)
         equiangular_ld(pa, m, t_start, t_hit);
     double u = sampler_1d(pa->st); /* the first collision's (volpath_track) */
-    rgb T_maj = volpath_grey(m) ? grey_flight(pa, m, t_start, t_hit, u)
-                                : volpath_track(m, pa->ray.o, pa->ray.d, t_start, t_hit, pa->hero,
+    rgb T_maj = pa->sc->settings.step > 0.0 && volpath_marches(m)
+                    ? march_flight(pa, m, t_start, t_hit, u)
+                : volpath_grey(m) ? grey_flight(pa, m, t_start, t_hit, u)
+                                  : volpath_track(m, pa->ray.o, pa->ray.d, t_start, t_hit, pa->hero,
                                                 true, u, &pa->walk, path_event, pa);
     pa->eq_on = false;
     if (pa->counters->timed)

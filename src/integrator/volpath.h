@@ -11,7 +11,13 @@
  * events (surfaces and media alike; interfaces are not events). With a
  * shadow cache, a scattering vertex in a grid medium reads a distant light's
  * transmittance from it: no shadow ray, and no noise from one (the same
- * estimate for every hero channel, so r_u and r_l stay as they are).
+ * estimate for every hero channel, so r_u and r_l stay as they are). With a
+ * step, grid media are marched instead of tracked (Cycles' estimator:
+ * biased by the step, cheaper and without null collisions): a flight samples
+ * its distance in the strata's piecewise-constant field in the hero channel,
+ * and the other lanes' weights are their transmittances there over the
+ * hero's; a shadow ray's transmittance is exp(-sigma_t D) of the strata's
+ * density integral D.
  *
  * Random numbers: the pixel sampler for light, BSDF and phase sampling and
  * the roulette (as pbrt-v4), a per-path rng (core/rng.h, seeded from the
@@ -48,6 +54,10 @@ typedef struct {
      * scattering vertices in grid media read for distant lights instead of
      * tracing shadow rays (integrator/shadow_cache.h); 0: none. */
     double shadow_cache;
+    /* "stepsize": voxels between the strata that flights and shadow rays
+     * through marchable grid media march (volpath_media.h's volpath_marches)
+     * instead of tracking them; 0: tracking (pbrt-v4's, unbiased). */
+    double step;
 } volpath_settings;
 
 /* Reads `Integrator "volpath"`'s parameters; "exhaustive" runs as "bvh"

@@ -3,6 +3,8 @@
 #include <assert.h>
 #include <math.h>
 
+#include "integrator/strata.h"
+
 typedef struct {
     medium_ray r;
     int hero;
@@ -209,4 +211,47 @@ bool volpath_grey_ratio(const medium *m, vec3 o, vec3 w, double t0, double t1, m
     *T = s.T;
     *r_u = s.r_u;
     return e == GREY_END;
+}
+
+bool volpath_marches(const medium *m)
+{
+    return medium_is_density_grid(m) && !m->coloured && !m->emissive && !m->free_emission &&
+           !medium_moves(m);
+}
+
+volpath_flight volpath_march(const medium *m, vec3 o, vec3 w, double t0, double t1, double step,
+                             double stop, media_walk *walk, double *D, double *t, double *density)
+{
+    *D = 0.0;
+    medium_ray r;
+    if (!(t1 > t0) || !medium_ray_start(m, o, w, walk->time, &t0, &t1, &r))
+        return VOLPATH_PASSED;
+    strata s;
+    strata_make(&s, &r, t0, t1, step, rng_uniform(&walk->r), &walk->r);
+    medium_ray_coarsen(&r, step);
+    double sum = 0.0;
+    bool skip = false; /* strata to skip up to seg.t0 (empty cells before it) */
+    majorant_segment seg;
+    while (medium_ray_next(&r, &seg, &walk->majorant_steps)) {
+        if (!(seg.max > 0.0)) {
+            skip = true;
+            continue;
+        }
+        if (skip)
+            strata_skip_to(&s, seg.t0);
+        skip = false;
+        for (; strata_before(&s, seg.t1); strata_next(&s)) {
+            double d = medium_ray_density(&r, s.t, &walk->lookups);
+            double piece = d * s.dt;
+            if (sum + piece > stop) {
+                *t = s.t0 + s.i * s.dt + (stop - sum) / d;
+                *density = d;
+                *D = stop;
+                return VOLPATH_REAL;
+            }
+            sum += piece;
+        }
+    }
+    *D = sum;
+    return VOLPATH_PASSED;
 }

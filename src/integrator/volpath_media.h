@@ -84,6 +84,24 @@ typedef enum {
 volpath_flight volpath_grey_flight(const medium *m, vec3 o, vec3 w, double t0, double t1,
                                    double u, media_walk *walk, double *t, double *density);
 
+/* Marching (Integrator "volpath" "float stepsize", Cycles' way through
+ * volumes): density grids whose coefficients are a density times constants
+ * (no colour or emission grid) and that do not move. Along a segment, strata
+ * of about `step` voxels each hold the density at one point (one offset per
+ * ray, from the walk's rng) over their whole length; empty majorant cells
+ * are skipped. In that piecewise-constant field a flight's distance and a
+ * shadow ray's transmittance are exact: biased by the strata, not noisy. */
+bool volpath_marches(const medium *m);
+
+/* A flight through marchable medium m (volpath_marches) along o + t w over
+ * [t0, t1]: the first point where the strata's density integral reaches
+ * `stop` (an Exp(1) deviate over the hero channel's sigma_t; INFINITY: none).
+ * *D gets the integral up to there or to t1; at a VOLPATH_REAL collision *t
+ * and *density are its place and its stratum's density. Never OPAQUE. */
+volpath_flight volpath_march(const medium *m, vec3 o, vec3 w, double t0, double t1, double step,
+                             double stop, media_walk *walk, double *D, double *t,
+                             double *density);
+
 /* Ratio tracking of a shadow ray through grey medium m over [t0, t1] with
  * volpath_shadow_roulette, whose estimate needs the ray's state so far:
  * t_max, rl_avg, ru_avg are its T's largest lane and the means of its r_l

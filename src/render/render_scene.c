@@ -15,6 +15,7 @@
 #include "geometry/geometry.h"
 #include "lights/lights.h"
 #include "materials/material.h"
+#include "integrator/volpath_media.h"
 
 struct render_scene {
     camera cam;
@@ -328,6 +329,15 @@ static const char *shadow_cache_obstacle(const render_scene *rs, const integrato
                       : NULL;
 }
 
+/* Whether volpath's "stepsize" marches any of in's media. */
+static bool any_marchable(const integrator_inputs *in)
+{
+    for (size_t i = 0; i < in->medium_count; ++i)
+        if (volpath_marches(&in->media[i]))
+            return true;
+    return false;
+}
+
 /* The shadow cache replaces shadow rays of distant lights in grid media:
  * refused where it would change nothing or could not hold (anything moves). */
 static hz_status check_shadow_cache(const render_scene *rs, scene_desc *sd,
@@ -460,6 +470,11 @@ static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integr
                                                             : 0.0;
     if (spacing > 0.0 && check_shadow_cache(rs, sd, &in, err) != HZ_OK)
         return HZ_ERROR;
+    if (ip->kind == INTEGRATOR_VOLPATH && ip->volpath.step > 0.0 && !any_marchable(&in))
+        return hz_fail_at(err, params_loc(&sd->integrator.params, "stepsize"),
+                          "\"stepsize\" marches grid media whose coefficients are a density "
+                          "times constants (no colour or emission grid, not moving): this scene "
+                          "has none that rays enter, so it would change nothing");
     if (integrator_init(&rs->integ, ip, &in, err) != HZ_OK)
         return HZ_ERROR;
     if (!(spacing > 0.0))

@@ -21,7 +21,8 @@ static char *sky_furnace(const char *medium, const char *extra)
 }
 
 /* Grey media: scattering and null-collision weights are exactly 1, so each
- * path returns the sky exactly (a zero-variance furnace). */
+ * path returns the sky exactly (a zero-variance furnace); marched (the
+ * grid at "stepsize" 3) too: the strata's field is a medium of albedo 1. */
 static void test_grey_sky_furnace_is_exact(void **state)
 {
     (void)state;
@@ -30,9 +31,11 @@ static void test_grey_sky_furnace_is_exact(void **state)
         "\"float g\" 0.6",
         "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
         "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [8 8 8] \"float g\" -0.3",
+        "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+        "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [8 8 8] \"float g\" -0.3",
     };
-    for (size_t k = 0; k < 2; ++k) {
-        char *text = sky_furnace(media[k], "");
+    for (size_t k = 0; k < 3; ++k) {
+        char *text = sky_furnace(media[k], k == 2 ? "\"float stepsize\" 3" : "");
         render_scene *rs = build(text);
         pstat *px = image_stats(rs, 8, 8, 16);
         for (int i = 0; i < 64; ++i)
@@ -45,7 +48,9 @@ static void test_grey_sky_furnace_is_exact(void **state)
 }
 
 /* Chromatic albedo-1 media: the hero channel's tracking carries the others
- * through r_u; the mean is still the sky, within noise. */
+ * through r_u; the mean is still the sky, within noise. Marched too (the
+ * grid at "stepsize" 3: the other lanes weighted by their transmittance in
+ * the strata's field over the hero's). */
 static void test_chromatic_sky_furnace(void **state)
 {
     (void)state;
@@ -54,9 +59,11 @@ static void test_chromatic_sky_furnace(void **state)
         "\"float g\" 0.5",
         "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
         "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [2 6 12]",
+        "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+        "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [2 6 12]",
     };
-    for (size_t k = 0; k < 2; ++k) {
-        char *text = sky_furnace(media[k], "");
+    for (size_t k = 0; k < 3; ++k) {
+        char *text = sky_furnace(media[k], k == 2 ? "\"float stepsize\" 3" : "");
         render_scene *rs = build(text);
         pstat *px = image_stats(rs, 8, 8, 1024);
         double sum[3] = {0, 0, 0}, var[3] = {0, 0, 0};
@@ -327,6 +334,31 @@ static void test_absurd_density_is_bounded(void **state)
     free(text);
 }
 
+/* "stepsize" is refused where it would change nothing (no grid medium
+ * that can be marched) and when negative, at its place. */
+static void test_stepsize_refusals(void **state)
+{
+    (void)state;
+    const char *cases[][2] = {
+        {"\"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [1 1 1]",
+         "\"float stepsize\" 2"},
+        {"\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
+         "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [2 6 12]",
+         "\"float stepsize\" -1"},
+    };
+    const char *want[] = {"would change nothing", ">= 0"};
+    for (int k = 0; k < 2; ++k) {
+        char *text = sky_furnace(cases[k][0], cases[k][1]);
+        char msg[1024];
+        build_scene_expect_error(text, msg, sizeof msg);
+        print_message("%s\n", msg);
+        assert_non_null(strstr(msg, "test.pbrt:5:"));
+        assert_non_null(strstr(msg, "stepsize"));
+        assert_non_null(strstr(msg, want[k]));
+        free(text);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -337,6 +369,7 @@ int main(void)
         cmocka_unit_test(test_absurd_density_is_bounded),
         cmocka_unit_test(test_cloud_solid_slab),
         cmocka_unit_test(test_rgbgrid_slab),
+        cmocka_unit_test(test_stepsize_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

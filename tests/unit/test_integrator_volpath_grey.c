@@ -3,7 +3,10 @@
  * integrated by a fine midpoint rule over the grid's trilinear density; then
  * ratio tracking's mean transmittance is e^-tau(t1) (its roulette included)
  * and delta tracking's first real collision falls before t with probability
- * 1 - e^-tau(t). Both within 4.5 standard errors of many runs. */
+ * 1 - e^-tau(t). Both within 4.5 standard errors of many runs. Marching
+ * (volpath_march, "stepsize"): its jittered strata integrate the density
+ * without bias at any step, and at a fine step its flights follow
+ * 1 - e^-tau(t) too. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -106,9 +109,11 @@ static void test_grey_predicate(void **state)
     build(&b, "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "fog_sphere.vdb\" "
               "\"rgb sigma_a\" [0.5 0.5 0.5] \"rgb sigma_s\" [3 2 3]");
     assert_false(volpath_grey(&b.m)); /* chromatic: volpath_track */
+    assert_true(volpath_marches(&b.m)); /* marched in every lane */
     unbuild(&b);
     build(&b, "\"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [1 1 1]");
     assert_false(volpath_grey(&b.m)); /* no grid: volpath_track's closed form */
+    assert_false(volpath_marches(&b.m));
     unbuild(&b);
 }
 
@@ -210,12 +215,104 @@ static void test_flight_distribution(void **state)
     }
 }
 
+/* The strata's density integral: sigma_t D is tau in the mean over rays
+ * (one jittered offset each) at a step of 4 voxels, and close to it on
+ * every ray at 1/8 voxel. */
+static void test_march_integral(void **state)
+{
+    (void)state;
+    const int n = 20000;
+    for (size_t k = 0; k < 2; ++k) {
+        built b;
+        build(&b, grey_media[k]);
+        double sigma_t = b.m.sigma_a.r + b.m.sigma_s.r;
+        for (int j = 0; j < 3; ++j) {
+            line l = ray_through(&b.m, j);
+            double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
+            media_walk walk = {.time = 0.0, .r = rng_seeded(3 + 11 * (uint64_t)j)};
+            double sum = 0.0, sum2 = 0.0, D, t, d;
+            for (int i = 0; i < n; ++i) {
+                assert_int_equal(volpath_march(&b.m, l.o, l.w, 0.0, t1, 4.0, INFINITY, &walk, &D,
+                                               &t, &d),
+                                 VOLPATH_PASSED);
+                sum += sigma_t * D;
+                sum2 += sigma_t * D * sigma_t * D;
+            }
+            double mean = sum / n, se = sqrt(fmax(sum2 / n - mean * mean, 0.0) / n);
+            double worst = 0.0;
+            for (int i = 0; i < 20; ++i) {
+                volpath_march(&b.m, l.o, l.w, 0.0, t1, 0.125, INFINITY, &walk, &D, &t, &d);
+                worst = fmax(worst, fabs(sigma_t * D / tau - 1.0));
+            }
+            print_message("medium %zu ray %d: tau %.4f, step 4: %.4f +- %.4f (%.1f lookups a "
+                          "ray); step 1/8: worst %.2g relative\n",
+                          k, j, tau, mean, se, (double)walk.lookups / (n + 20), worst);
+            assert_true(tau > 1.0);
+            assert_true(fabs(mean - tau) < 4.5 * se + 1e-6);
+            assert_true(worst < 2e-3);
+        }
+        unbuild(&b);
+    }
+}
+
+/* A marched flight at 1/8 voxel: P(collision before t) = 1 - e^-tau(t) at a
+ * quarter, half and all of the depth, within noise and the strata's error;
+ * at a collision D is the stop asked for and t lies on the segment. */
+static void test_march_flight_distribution(void **state)
+{
+    (void)state;
+    const int n = 40000;
+    for (size_t k = 0; k < 2; ++k) {
+        built b;
+        build(&b, grey_media[k]);
+        double sigma_t = b.m.sigma_a.r + b.m.sigma_s.r;
+        for (int j = 0; j < 3; ++j) {
+            line l = ray_through(&b.m, j);
+            double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
+            double at[3], frac[3] = {0.25, 0.5, 1.0};
+            for (int q = 0; q < 2; ++q) {
+                double lo = 0.0, hi = t1;
+                while (hi - lo > 1e-9) {
+                    double mid = 0.5 * (lo + hi);
+                    if (optical_depth(&b.m, l.o, l.w, 0.0, mid) < frac[q] * tau)
+                        lo = mid;
+                    else
+                        hi = mid;
+                }
+                at[q] = 0.5 * (lo + hi);
+            }
+            at[2] = t1;
+            media_walk walk = {.time = 0.0, .r = rng_seeded(9 + 13 * (uint64_t)j)};
+            int before[3] = {0, 0, 0};
+            for (int i = 0; i < n; ++i) {
+                double stop = -log(1.0 - (i + 0.5) / n) / sigma_t, D, t, d;
+                if (volpath_march(&b.m, l.o, l.w, 0.0, t1, 0.125, stop, &walk, &D, &t, &d) !=
+                    VOLPATH_REAL)
+                    continue;
+                assert_true(D == stop && t >= 0.0 && t <= t1 && d > 0.0);
+                for (int q = 0; q < 3; ++q)
+                    before[q] += t < at[q];
+            }
+            for (int q = 0; q < 3; ++q) {
+                double p = 1.0 - exp(-frac[q] * tau), got = (double)before[q] / n;
+                double se = sqrt(p * (1.0 - p) / n);
+                print_message("medium %zu ray %d: marched P(t < %.3f) %.5f, 1 - e^-tau %.5f\n",
+                              k, j, at[q], got, p);
+                assert_true(fabs(got - p) < 4.5 * se + 2e-3);
+            }
+        }
+        unbuild(&b);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_grey_predicate),
         cmocka_unit_test(test_ratio_mean_is_transmittance),
         cmocka_unit_test(test_flight_distribution),
+        cmocka_unit_test(test_march_integral),
+        cmocka_unit_test(test_march_flight_distribution),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
