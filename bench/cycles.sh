@@ -2,7 +2,8 @@
 # The cycles part (bench/results/cycles.md): haze's multiple scattering
 # (`Integrator "volpath"`) against Blender's Cycles at equal error on
 # bench/scenes/cloud.pbrt, which bench/cycles/scene.py rebuilds for Cycles.
-# For haze and for Cycles at each volume step rate of CYCLES_RATES:
+# For haze in each configuration of CYCLES_HAZE and for Cycles at each volume
+# step rate of CYCLES_RATES:
 #   - a converged reference of its own (CYCLES_REF_SPP, seed 4321, cached);
 #   - rungs at CYCLES_RUNGS spp (seed 1), each a whole process under GNU time
 #     (CPU seconds = user + sys, 2 threads), and relMSE against its own
@@ -18,6 +19,10 @@
 
 CYCLES_DEPTH=64                          # haze volpath maxdepth; Cycles bounces to match
 CYCLES_RATES=${BENCH_CYCLES_RATES:-1 2 4 8}  # Cycles' volume_step_rate (1: its default)
+# haze's configurations: "haze" (pbrt-v4's estimator, unbiased) and haze
+# with biased knobs, named by them: cacheS is "float shadowcache" S, stepS is
+# "float stepsize" S (e.g. haze-cache1-step2).
+CYCLES_HAZE=${BENCH_CYCLES_HAZE:-haze haze-cache1 haze-step4 haze-cache1-step2}
 CYCLES_REF_SPP=${BENCH_CYCLES_REF_SPP:-2048}
 CYCLES_RUNGS=${BENCH_CYCLES_RUNGS:-16 64 256}
 CYCLES_ERRORS="1e-2 1e-3 1e-4"           # 1e-4 is extrapolated (beyond the top rung)
@@ -30,12 +35,28 @@ cycles_cmd() {
         --threads "$THREADS" --step-rate "$1" --maxdepth "$CYCLES_DEPTH"
 }
 
-# cycles_render WHO OUT SPP SEED [TIMEFILE]: one render by haze (WHO = haze)
-# or by Cycles at step rate R (WHO = cycles-R); timed into TIMEFILE when
-# given. The command is split on spaces: paths without spaces.
+# cycles_knobs WHO: the Integrator parameters of haze configuration WHO.
+cycles_knobs() {
+    for ck in $(echo "$1" | tr '-' ' '); do
+        case $ck in
+        haze) ;;
+        cache*) printf ' "float shadowcache" %s' "${ck#cache}" ;;
+        step*) printf ' "float stepsize" %s' "${ck#step}" ;;
+        *) echo "bench: cycles: unknown haze configuration $1" >&2; exit 1 ;;
+        esac
+    done
+}
+
+# cycles_scene WHO: haze configuration WHO's scene (made by cycles_run).
+cycles_scene() { echo "$CACHE/cycles-$1.pbrt"; }
+
+# cycles_render WHO OUT SPP SEED [TIMEFILE]: one render by haze (WHO = haze or
+# a configuration of it) or by Cycles at step rate R (WHO = cycles-R); timed
+# into TIMEFILE when given. The command is split on spaces: paths without
+# spaces.
 cycles_render() {
     case $1 in
-    haze) cr_cmd="$HAZE render $CYCLES_VARIANT --spp $3 --threads $THREADS --seed $4 -o $2 --quiet" ;;
+    haze*) cr_cmd="$HAZE render $(cycles_scene "$1") --spp $3 --threads $THREADS --seed $4 -o $2 --quiet" ;;
     cycles-*) cr_cmd=$(cycles_cmd "${1#cycles-}" "$2" "$3" "$4") ;;
     esac
     if [ -n "${5:-}" ]; then
@@ -54,7 +75,8 @@ cycles_render() {
 cycles_reference() {
     cref_words="cycles-ref $1 maxdepth $CYCLES_DEPTH spp $CYCLES_REF_SPP seed 4321"
     case $1 in
-    haze) cref_key=$(key_of "${BENCH_HAZE_ID:-$("$HAZE" --version 2>&1) $(sha256sum <"$HAZE" | cut -c1-40)}" \
+    haze*) cref_words="$cref_words$(cycles_knobs "$1")"
+        cref_key=$(key_of "${BENCH_HAZE_ID:-$("$HAZE" --version 2>&1) $(sha256sum <"$HAZE" | cut -c1-40)}" \
         "$BENCH/scenes/cloud.pbrt" -- "$cref_words") ;;
     *) cref_key=$(content_key "$BENCH/scenes/cloud.pbrt" "$BENCH/cycles/scene.py" "$CYCLES_TOP/volumes/plume.vdb" -- \
         "$cref_words $(blender --version 2>/dev/null | head -1)") ;;
@@ -79,14 +101,21 @@ cycles_run() {
     mkdir -p "$CACHE/cycles"
     # haze's scene: the variant sits in $CACHE (two levels under the
     # repository, as the scene) so the scene's relative grid path resolves.
-    CYCLES_VARIANT=$CACHE/cycles-volpath.pbrt
-    variant "$CYCLES_VARIANT" "$BENCH/scenes/cloud.pbrt" "Integrator \"volpath\" \"integer maxdepth\" $CYCLES_DEPTH"
+    case " $CYCLES_HAZE " in
+    " haze "*) ;;
+    *) echo "bench: cycles: BENCH_CYCLES_HAZE must start with haze (the unbiased reference)" >&2; exit 1 ;;
+    esac
+    for who in $CYCLES_HAZE; do
+        cycles_knobs "$who" >/dev/null # exits on an unknown name
+        variant "$(cycles_scene "$who")" "$BENCH/scenes/cloud.pbrt" \
+            "Integrator \"volpath\" \"integer maxdepth\" $CYCLES_DEPTH$(cycles_knobs "$who")"
+    done
     tsv=$RESULTS/cycles.tsv
     # rung rows: relMSE against the renderer's own reference; reference rows:
     # relMSE against haze's reference, and the image's means.
     printf 'who\tkind\tspp\tcpu_s\twall_s\trelmse\tmean_r\tmean_g\tmean_b\n' >"$tsv"
     href=$(cycles_reference haze) || exit 1
-    for who in haze $(for r in $CYCLES_RATES; do echo "cycles-$r"; done); do
+    for who in $CYCLES_HAZE $(for r in $CYCLES_RATES; do echo "cycles-$r"; done); do
         wref=$href
         [ "$who" = haze ] || wref=$(cycles_reference "$who") || exit 1
         # The reference against haze's: the means and the relMSE (the bias
@@ -174,6 +203,23 @@ cycles_report() {
         for (i = 1; i <= n; i++) {
             E = el[i]; h = tE("haze", E); c1 = tE("cycles-1", E); cb = tE(best, E)
             printf "| %s | %.1f | %.1f | %.2f | %.1f | %.2f |\n", E, h, c1, h / c1, cb, h / cb
+        }
+        print ""
+        print "## haze'"'"'s biased knobs"
+        print ""
+        print "haze-cacheS: `volpath` with `\"float shadowcache\" S` (distant lights'"'"' transmittance read from the shadow cache at S voxels);"
+        print "haze-stepS: `\"float stepsize\" S` (flights and shadow rays marched at S voxels instead of tracked, Cycles'"'"' estimator)."
+        print "Each against its own reference, as Cycles'"'"' rates; the bias column is its reference'"'"'s mean over haze'"'"'s unbiased one"
+        print "(channel average; Cycles'"'"' rows for comparison)."
+        print ""
+        printf "| renderer | bias | t(1e-2) | / Cycles rate %s | t(1e-3) | / Cycles | t(1e-4) | / Cycles |\n", substr(best, 8)
+        print "|---|---|---|---|---|---|---|---|"
+        for (i = 1; i <= nw; i++) {
+            w = order[i]
+            b = ((mr[w] / mr["haze"] + mg[w] / mg["haze"] + mb[w] / mb["haze"]) / 3 - 1) * 100
+            printf "| %s | %+.2f%% | %.1f | %.2f | %.1f | %.2f | %.1f | %.2f |\n", w, b,
+                tE(w, 1e-2), tE(w, 1e-2) / tE(best, 1e-2), tE(w, 1e-3), tE(w, 1e-3) / tE(best, 1e-3),
+                tE(w, 1e-4), tE(w, 1e-4) / tE(best, 1e-4)
         }
         print ""
         print "## The fits"
