@@ -220,15 +220,10 @@ void singlescatter_grid_segment(const singlescatter_scene *vs, int mi, vec3 o, v
     bool alive = true, skip = false; /* skip: strata up to seg.t0 lie in empty cells */
     majorant_segment seg;
     while (alive && next_cell(&sw.gr, &seg, walk)) {
-        /* No density and no free emission: nothing to sample (the strata are
-         * skipped when the next interval that has something begins). */
-        if (!(seg.max > 0.0) && !(sw.free_emission && seg.emit > 0.0)) {
-            skip = true;
+        /* No density and no free emission: nothing to sample. */
+        if (!strata_enter(&sw.s, seg.t0, seg.max > 0.0 || (sw.free_emission && seg.emit > 0.0),
+                          &skip))
             continue;
-        }
-        if (skip)
-            strata_skip_to(&sw.s, seg.t0);
-        skip = false;
         if (!(seg.max > 0.0)) { /* free emission only, integrated over the strata */
             alive = march_strata(&sw, seg.t1);
             continue;

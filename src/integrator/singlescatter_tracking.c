@@ -48,13 +48,8 @@ static rgb grid_transmittance(const singlescatter_scene *vs, const medium *m, ve
         double tau = 0.0;
         bool skip = false; /* strata to skip up to seg.t0 (empty cells before it) */
         while (next_cell(&gr, &seg, walk)) {
-            if (!(seg.max > 0.0)) {
-                skip = true;
+            if (!strata_enter(&s, seg.t0, seg.max > 0.0, &skip))
                 continue;
-            }
-            if (skip)
-                strata_skip_to(&s, seg.t0);
-            skip = false;
             for (; strata_before(&s, seg.t1); strata_next(&s))
                 tau += grid_ray_density(&gr, s.t, walk);
         }

@@ -74,4 +74,21 @@ static inline void strata_skip_to(strata *s, double b)
     }
 }
 
+/* At the next majorant segment of a marched ray, beginning at t0: false when
+ * it holds nothing to sample (`holds` false); its strata, and those of the
+ * empty segments after it, are skipped when a segment that holds something
+ * begins (their samples lie where the density is 0). `*skip` carries that
+ * between segments: false at the ray's start. */
+static inline bool strata_enter(strata *s, double t0, bool holds, bool *skip)
+{
+    if (!holds) {
+        *skip = true;
+        return false;
+    }
+    if (*skip)
+        strata_skip_to(s, t0);
+    *skip = false;
+    return true;
+}
+
 #endif

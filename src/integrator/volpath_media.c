@@ -233,13 +233,8 @@ volpath_flight volpath_march(const medium *m, vec3 o, vec3 w, double t0, double 
     bool skip = false; /* strata to skip up to seg.t0 (empty cells before it) */
     majorant_segment seg;
     while (medium_ray_next(&r, &seg, &walk->majorant_steps)) {
-        if (!(seg.max > 0.0)) {
-            skip = true;
+        if (!strata_enter(&s, seg.t0, seg.max > 0.0, &skip))
             continue;
-        }
-        if (skip)
-            strata_skip_to(&s, seg.t0);
-        skip = false;
         for (; strata_before(&s, seg.t1); strata_next(&s)) {
             double d = medium_ray_density(&r, s.t, &walk->lookups);
             double piece = d * s.dt;

@@ -97,6 +97,40 @@ static line ray_through(const medium *m, int k)
     return (line){v3_sub(p, v3_scale(w, 2.0 * v3_length(e))), w};
 }
 
+/* The fractions of the optical depth tau at which flights are counted. */
+static const double depth_fraction[3] = {0.25, 0.5, 1.0};
+
+/* at[q]: where the optical depth along l reaches depth_fraction[q] of tau,
+ * its value at t1 (bisection; at[2] = t1). */
+static void depth_points(const medium *m, line l, double t1, double tau, double at[3])
+{
+    for (int q = 0; q < 2; ++q) {
+        double lo = 0.0, hi = t1;
+        while (hi - lo > 1e-9) {
+            double mid = 0.5 * (lo + hi);
+            if (optical_depth(m, l.o, l.w, 0.0, mid) < depth_fraction[q] * tau)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        at[q] = 0.5 * (lo + hi);
+    }
+    at[2] = t1;
+}
+
+/* before[q] of n flights ended before depth_points' at[q]: each share within
+ * 4.5 standard errors (plus `slack`) of 1 - e^-(fraction tau). */
+static void expect_depth_fractions(const int before[3], int n, double tau, double slack)
+{
+    for (int q = 0; q < 3; ++q) {
+        double p = 1.0 - exp(-depth_fraction[q] * tau), got = (double)before[q] / n;
+        double se = sqrt(p * (1.0 - p) / n);
+        print_message("  P(t < depth at %.2f tau) %.5f, 1 - e^-tau %.5f (se %.5f)\n",
+                      depth_fraction[q], got, p, se);
+        assert_true(fabs(got - p) < 4.5 * se + slack);
+    }
+}
+
 static void test_grey_predicate(void **state)
 {
     (void)state;
@@ -168,20 +202,8 @@ static void test_flight_distribution(void **state)
         for (int j = 0; j < 3; ++j) {
             line l = ray_through(&b.m, j);
             double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
-            /* where tau(t) reaches a quarter and half of tau (bisection) */
-            double at[3], frac[3] = {0.25, 0.5, 1.0};
-            for (int q = 0; q < 2; ++q) {
-                double lo = 0.0, hi = t1;
-                while (hi - lo > 1e-9) {
-                    double mid = 0.5 * (lo + hi);
-                    if (optical_depth(&b.m, l.o, l.w, 0.0, mid) < frac[q] * tau)
-                        lo = mid;
-                    else
-                        hi = mid;
-                }
-                at[q] = 0.5 * (lo + hi);
-            }
-            at[2] = t1;
+            double at[3];
+            depth_points(&b.m, l, t1, tau, at);
             media_walk walk = {.time = 0.0, .r = rng_seeded(5 + 7 * (uint64_t)j)};
             int before[3] = {0, 0, 0};
             for (int i = 0; i < n; ++i) {
@@ -203,103 +225,76 @@ static void test_flight_distribution(void **state)
                 for (int q = 0; q < 3; ++q)
                     before[q] += t < at[q];
             }
-            for (int q = 0; q < 3; ++q) {
-                double p = 1.0 - exp(-frac[q] * tau), got = (double)before[q] / n;
-                double se = sqrt(p * (1.0 - p) / n);
-                print_message("medium %zu ray %d: P(t < %.3f) %.5f, 1 - e^-tau %.5f (se %.5f)\n",
-                              k, j, at[q], got, p, se);
-                assert_true(fabs(got - p) < 4.5 * se + 1e-4);
-            }
+            expect_depth_fractions(before, n, tau, 1e-4);
         }
         unbuild(&b);
     }
 }
 
-/* The strata's density integral: sigma_t D is tau in the mean over rays
- * (one jittered offset each) at a step of 4 voxels, and close to it on
+/* The strata's density integral along l: sigma_t D is tau in the mean over
+ * rays (one jittered offset each) at a step of 4 voxels, and close to it on
  * every ray at 1/8 voxel. */
-static void test_march_integral(void **state)
+static void check_march_integral(const medium *m, line l, double t1, double tau, uint64_t seed)
 {
-    (void)state;
     const int n = 20000;
-    for (size_t k = 0; k < 2; ++k) {
-        built b;
-        build(&b, grey_media[k]);
-        double sigma_t = b.m.sigma_a.r + b.m.sigma_s.r;
-        for (int j = 0; j < 3; ++j) {
-            line l = ray_through(&b.m, j);
-            double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
-            media_walk walk = {.time = 0.0, .r = rng_seeded(3 + 11 * (uint64_t)j)};
-            double sum = 0.0, sum2 = 0.0, D, t, d;
-            for (int i = 0; i < n; ++i) {
-                assert_int_equal(volpath_march(&b.m, l.o, l.w, 0.0, t1, 4.0, INFINITY, &walk, &D,
-                                               &t, &d),
-                                 VOLPATH_PASSED);
-                sum += sigma_t * D;
-                sum2 += sigma_t * D * sigma_t * D;
-            }
-            double mean = sum / n, se = sqrt(fmax(sum2 / n - mean * mean, 0.0) / n);
-            double worst = 0.0;
-            for (int i = 0; i < 20; ++i) {
-                volpath_march(&b.m, l.o, l.w, 0.0, t1, 0.125, INFINITY, &walk, &D, &t, &d);
-                worst = fmax(worst, fabs(sigma_t * D / tau - 1.0));
-            }
-            print_message("medium %zu ray %d: tau %.4f, step 4: %.4f +- %.4f (%.1f lookups a "
-                          "ray); step 1/8: worst %.2g relative\n",
-                          k, j, tau, mean, se, (double)walk.lookups / (n + 20), worst);
-            assert_true(tau > 1.0);
-            assert_true(fabs(mean - tau) < 4.5 * se + 1e-6);
-            assert_true(worst < 2e-3);
-        }
-        unbuild(&b);
+    double sigma_t = m->sigma_a.r + m->sigma_s.r;
+    media_walk walk = {.time = 0.0, .r = rng_seeded(seed)};
+    double sum = 0.0, sum2 = 0.0, D, t, d;
+    for (int i = 0; i < n; ++i) {
+        assert_int_equal(volpath_march(m, l.o, l.w, 0.0, t1, 4.0, INFINITY, &walk, &D, &t, &d),
+                         VOLPATH_PASSED);
+        sum += sigma_t * D;
+        sum2 += sigma_t * D * sigma_t * D;
     }
+    double mean = sum / n, se = sqrt(fmax(sum2 / n - mean * mean, 0.0) / n);
+    double worst = 0.0;
+    for (int i = 0; i < 20; ++i) {
+        volpath_march(m, l.o, l.w, 0.0, t1, 0.125, INFINITY, &walk, &D, &t, &d);
+        worst = fmax(worst, fabs(sigma_t * D / tau - 1.0));
+    }
+    print_message("  tau %.4f, step 4: %.4f +- %.4f (%.1f lookups a ray); step 1/8: worst %.2g "
+                  "relative\n",
+                  tau, mean, se, (double)walk.lookups / (n + 20), worst);
+    assert_true(fabs(mean - tau) < 4.5 * se + 1e-6);
+    assert_true(worst < 2e-3);
 }
 
-/* A marched flight at 1/8 voxel: P(collision before t) = 1 - e^-tau(t) at a
- * quarter, half and all of the depth, within noise and the strata's error;
- * at a collision D is the stop asked for and t lies on the segment. */
-static void test_march_flight_distribution(void **state)
+/* Marched flights along l at 1/8 voxel: P(collision before t) = 1 -
+ * e^-tau(t) at a quarter, half and all of the depth, within noise and the
+ * strata's error; at a collision D is the stop asked for and t lies on the
+ * segment. */
+static void check_march_flights(const medium *m, line l, double t1, double tau, uint64_t seed)
+{
+    const int n = 40000;
+    double sigma_t = m->sigma_a.r + m->sigma_s.r, at[3];
+    depth_points(m, l, t1, tau, at);
+    media_walk walk = {.time = 0.0, .r = rng_seeded(seed)};
+    int before[3] = {0, 0, 0};
+    for (int i = 0; i < n; ++i) {
+        double stop = -log(1.0 - (i + 0.5) / n) / sigma_t, D, t, d;
+        if (volpath_march(m, l.o, l.w, 0.0, t1, 0.125, stop, &walk, &D, &t, &d) != VOLPATH_REAL)
+            continue;
+        assert_true(D == stop && t >= 0.0 && t <= t1 && d > 0.0);
+        for (int q = 0; q < 3; ++q)
+            before[q] += t < at[q];
+    }
+    expect_depth_fractions(before, n, tau, 2e-3);
+}
+
+/* Marching (volpath_march) on each medium and ray. */
+static void test_march(void **state)
 {
     (void)state;
-    const int n = 40000;
     for (size_t k = 0; k < 2; ++k) {
         built b;
         build(&b, grey_media[k]);
-        double sigma_t = b.m.sigma_a.r + b.m.sigma_s.r;
         for (int j = 0; j < 3; ++j) {
             line l = ray_through(&b.m, j);
             double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
-            double at[3], frac[3] = {0.25, 0.5, 1.0};
-            for (int q = 0; q < 2; ++q) {
-                double lo = 0.0, hi = t1;
-                while (hi - lo > 1e-9) {
-                    double mid = 0.5 * (lo + hi);
-                    if (optical_depth(&b.m, l.o, l.w, 0.0, mid) < frac[q] * tau)
-                        lo = mid;
-                    else
-                        hi = mid;
-                }
-                at[q] = 0.5 * (lo + hi);
-            }
-            at[2] = t1;
-            media_walk walk = {.time = 0.0, .r = rng_seeded(9 + 13 * (uint64_t)j)};
-            int before[3] = {0, 0, 0};
-            for (int i = 0; i < n; ++i) {
-                double stop = -log(1.0 - (i + 0.5) / n) / sigma_t, D, t, d;
-                if (volpath_march(&b.m, l.o, l.w, 0.0, t1, 0.125, stop, &walk, &D, &t, &d) !=
-                    VOLPATH_REAL)
-                    continue;
-                assert_true(D == stop && t >= 0.0 && t <= t1 && d > 0.0);
-                for (int q = 0; q < 3; ++q)
-                    before[q] += t < at[q];
-            }
-            for (int q = 0; q < 3; ++q) {
-                double p = 1.0 - exp(-frac[q] * tau), got = (double)before[q] / n;
-                double se = sqrt(p * (1.0 - p) / n);
-                print_message("medium %zu ray %d: marched P(t < %.3f) %.5f, 1 - e^-tau %.5f\n",
-                              k, j, at[q], got, p);
-                assert_true(fabs(got - p) < 4.5 * se + 2e-3);
-            }
+            print_message("medium %zu ray %d:\n", k, j);
+            assert_true(tau > 1.0);
+            check_march_integral(&b.m, l, t1, tau, 3 + 11 * (uint64_t)j);
+            check_march_flights(&b.m, l, t1, tau, 9 + 13 * (uint64_t)j);
         }
         unbuild(&b);
     }
@@ -311,8 +306,7 @@ int main(void)
         cmocka_unit_test(test_grey_predicate),
         cmocka_unit_test(test_ratio_mean_is_transmittance),
         cmocka_unit_test(test_flight_distribution),
-        cmocka_unit_test(test_march_integral),
-        cmocka_unit_test(test_march_flight_distribution),
+        cmocka_unit_test(test_march),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
