@@ -131,6 +131,28 @@ static void expect_depth_fractions(const int before[3], int n, double tau, doubl
     }
 }
 
+/* A check of one ray through a medium: l over [0, t1], its optical depth
+ * tau; j is the ray's index (for seeds). */
+typedef void (*ray_check)(const medium *m, line l, double t1, double tau, int j);
+
+/* `check` on each grey medium and each of its rays (ray_through), whose
+ * optical depths are all above 1. */
+static void each_ray(ray_check check)
+{
+    for (size_t k = 0; k < 2; ++k) {
+        built b;
+        build(&b, grey_media[k]);
+        for (int j = 0; j < 3; ++j) {
+            line l = ray_through(&b.m, j);
+            double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
+            print_message("medium %zu ray %d: tau %.4f\n", k, j, tau);
+            assert_true(tau > 1.0);
+            check(&b.m, l, t1, tau, j);
+        }
+        unbuild(&b);
+    }
+}
+
 static void test_grey_predicate(void **state)
 {
     (void)state;
@@ -154,81 +176,69 @@ static void test_grey_predicate(void **state)
 /* Mean of ratio tracking's T (a fresh shadow ray: T = r_l = r_u = 1) against
  * e^-tau; the rays' optical depths are 1.9 to 4.8 (T well below pbrt-v4's
  * roulette threshold 0.05 on the deepest), so the roulette acts. */
+static void check_ratio(const medium *m, line l, double t1, double tau, int j)
+{
+    const int n = 100000;
+    media_walk walk = {.time = 0.0, .r = rng_seeded(17 + 31 * (uint64_t)j)};
+    double sum = 0.0, sum2 = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double T, r_u;
+        double x = volpath_grey_ratio(m, l.o, l.w, 0.0, t1, &walk, 1.0, 1.0, 1.0, &T, &r_u) ? T
+                                                                                            : 0.0;
+        assert_true(x >= 0.0 && isfinite(x));
+        sum += x;
+        sum2 += x * x;
+    }
+    double mean = sum / n, se = sqrt(fmax(sum2 / n - mean * mean, 0.0) / n);
+    double want = exp(-tau);
+    print_message("  T %.5f +- %.5f, e^-tau %.5f, %.1f lookups a ray\n", mean, se, want,
+                  (double)walk.lookups / n);
+    assert_true(walk.lookups > 0);
+    assert_true(fabs(mean - want) < 4.5 * se + 1e-4 * want);
+}
+
 static void test_ratio_mean_is_transmittance(void **state)
 {
     (void)state;
-    const int n = 100000;
-    for (size_t k = 0; k < 2; ++k) {
-        built b;
-        build(&b, grey_media[k]);
-        for (int j = 0; j < 3; ++j) {
-            line l = ray_through(&b.m, j);
-            double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
-            media_walk walk = {.time = 0.0, .r = rng_seeded(17 + 31 * (uint64_t)j)};
-            double sum = 0.0, sum2 = 0.0;
-            for (int i = 0; i < n; ++i) {
-                double T, r_u;
-                double x = volpath_grey_ratio(&b.m, l.o, l.w, 0.0, t1, &walk, 1.0, 1.0, 1.0, &T,
-                                              &r_u)
-                               ? T
-                               : 0.0;
-                assert_true(x >= 0.0 && isfinite(x));
-                sum += x;
-                sum2 += x * x;
-            }
-            double mean = sum / n, se = sqrt(fmax(sum2 / n - mean * mean, 0.0) / n);
-            double want = exp(-tau);
-            print_message("medium %zu ray %d: tau %.3f, T %.5f +- %.5f, e^-tau %.5f, %.1f "
-                          "lookups a ray\n",
-                          k, j, tau, mean, se, want, (double)walk.lookups / n);
-            assert_true(tau > 1.0);
-            assert_true(walk.lookups > 0);
-            assert_true(fabs(mean - want) < 4.5 * se + 1e-4 * want);
-        }
-        unbuild(&b);
-    }
+    each_ray(check_ratio);
 }
 
 /* Delta tracking: P(real collision before t) = 1 - e^-tau(t) at a quarter,
  * half and all of the ray's depth, and the density reported is the grid's
  * there. */
+static void check_flights(const medium *m, line l, double t1, double tau, int j)
+{
+    const int n = 100000;
+    double at[3];
+    depth_points(m, l, t1, tau, at);
+    media_walk walk = {.time = 0.0, .r = rng_seeded(5 + 7 * (uint64_t)j)};
+    int before[3] = {0, 0, 0};
+    for (int i = 0; i < n; ++i) {
+        double t, d;
+        volpath_flight f = volpath_grey_flight(m, l.o, l.w, 0.0, t1,
+                                               i % 2 ? -1.0 : (i / 2 + 0.5) / (n / 2), &walk, &t,
+                                               &d);
+        assert_int_not_equal(f, VOLPATH_OPAQUE);
+        if (f != VOLPATH_REAL)
+            continue;
+        if (i % 97 == 0) { /* the density is the grid's at t */
+            medium_ray r;
+            double a = 0.0, c = t1;
+            assert_true(medium_ray_start(m, l.o, l.w, 0.0, &a, &c, &r));
+            uint64_t lk = 0;
+            assert_true(d > 0.0);
+            assert_true(fabs(d - medium_ray_density(&r, t, &lk)) <= 1e-12);
+        }
+        for (int q = 0; q < 3; ++q)
+            before[q] += t < at[q];
+    }
+    expect_depth_fractions(before, n, tau, 1e-4);
+}
+
 static void test_flight_distribution(void **state)
 {
     (void)state;
-    const int n = 100000;
-    for (size_t k = 0; k < 2; ++k) {
-        built b;
-        build(&b, grey_media[k]);
-        for (int j = 0; j < 3; ++j) {
-            line l = ray_through(&b.m, j);
-            double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
-            double at[3];
-            depth_points(&b.m, l, t1, tau, at);
-            media_walk walk = {.time = 0.0, .r = rng_seeded(5 + 7 * (uint64_t)j)};
-            int before[3] = {0, 0, 0};
-            for (int i = 0; i < n; ++i) {
-                double t, d;
-                volpath_flight f = volpath_grey_flight(&b.m, l.o, l.w, 0.0, t1,
-                                                       i % 2 ? -1.0 : (i / 2 + 0.5) / (n / 2), &walk,
-                                                       &t, &d);
-                assert_int_not_equal(f, VOLPATH_OPAQUE);
-                if (f != VOLPATH_REAL)
-                    continue;
-                if (i % 97 == 0) { /* the density is the grid's at t */
-                    medium_ray r;
-                    double a = 0.0, c = t1;
-                    assert_true(medium_ray_start(&b.m, l.o, l.w, 0.0, &a, &c, &r));
-                    uint64_t lk = 0;
-                    assert_true(d > 0.0);
-                    assert_true(fabs(d - medium_ray_density(&r, t, &lk)) <= 1e-12);
-                }
-                for (int q = 0; q < 3; ++q)
-                    before[q] += t < at[q];
-            }
-            expect_depth_fractions(before, n, tau, 1e-4);
-        }
-        unbuild(&b);
-    }
+    each_ray(check_flights);
 }
 
 /* The strata's density integral along l: sigma_t D is tau in the mean over
@@ -282,22 +292,16 @@ static void check_march_flights(const medium *m, line l, double t1, double tau, 
 }
 
 /* Marching (volpath_march) on each medium and ray. */
+static void check_march(const medium *m, line l, double t1, double tau, int j)
+{
+    check_march_integral(m, l, t1, tau, 3 + 11 * (uint64_t)j);
+    check_march_flights(m, l, t1, tau, 9 + 13 * (uint64_t)j);
+}
+
 static void test_march(void **state)
 {
     (void)state;
-    for (size_t k = 0; k < 2; ++k) {
-        built b;
-        build(&b, grey_media[k]);
-        for (int j = 0; j < 3; ++j) {
-            line l = ray_through(&b.m, j);
-            double t1 = 1e3, tau = optical_depth(&b.m, l.o, l.w, 0.0, t1);
-            print_message("medium %zu ray %d:\n", k, j);
-            assert_true(tau > 1.0);
-            check_march_integral(&b.m, l, t1, tau, 3 + 11 * (uint64_t)j);
-            check_march_flights(&b.m, l, t1, tau, 9 + 13 * (uint64_t)j);
-        }
-        unbuild(&b);
-    }
+    each_ray(check_march);
 }
 
 int main(void)
