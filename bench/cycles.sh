@@ -20,9 +20,11 @@
 CYCLES_DEPTH=64                          # haze volpath maxdepth; Cycles bounces to match
 CYCLES_RATES=${BENCH_CYCLES_RATES:-1 2 4 8}  # Cycles' volume_step_rate (1: its default)
 # haze's configurations: "haze" (pbrt-v4's estimator, unbiased) and haze
-# with biased knobs, named by them: cacheS is "float shadowcache" S, stepS is
-# "float stepsize" S (e.g. haze-cache1-step2).
-CYCLES_HAZE=${BENCH_CYCLES_HAZE:-haze haze-cache1 haze-step4 haze-cache1-step2}
+# with knobs, named by them: cacheS is "float shadowcache" S, stepS is
+# "float stepsize" S (both biased), splitK is "integer mediumsplits" K
+# (unbiased: it shares the reference of the configuration without it), e.g.
+# haze-cache1-step2-split3.
+CYCLES_HAZE=${BENCH_CYCLES_HAZE:-haze haze-split3 haze-cache1 haze-step4 haze-cache1-step2 haze-cache1-step2-split3}
 CYCLES_REF_SPP=${BENCH_CYCLES_REF_SPP:-2048}
 CYCLES_RUNGS=${BENCH_CYCLES_RUNGS:-16 64 256}
 CYCLES_ERRORS="1e-2 1e-3 1e-4"           # 1e-4 is extrapolated (beyond the top rung)
@@ -42,10 +44,15 @@ cycles_knobs() {
         haze) ;;
         cache*) printf ' "float shadowcache" %s' "${ck#cache}" ;;
         step*) printf ' "float stepsize" %s' "${ck#step}" ;;
+        split*) printf ' "integer mediumsplits" %s' "${ck#split}" ;;
         *) echo "bench: cycles: unknown haze configuration $1" >&2; exit 1 ;;
         esac
     done
 }
+
+# cycles_unsplit WHO: configuration WHO without its splitK (the same
+# expectation: its reference).
+cycles_unsplit() { echo "$1" | sed 's/-split[0-9]*//g'; }
 
 # cycles_scene WHO: haze configuration WHO's scene (made by cycles_run).
 cycles_scene() { echo "$CACHE/cycles-$1.pbrt"; }
@@ -117,7 +124,7 @@ cycles_run() {
     href=$(cycles_reference haze) || exit 1
     for who in $CYCLES_HAZE $(for r in $CYCLES_RATES; do echo "cycles-$r"; done); do
         wref=$href
-        [ "$who" = haze ] || wref=$(cycles_reference "$who") || exit 1
+        [ "$(cycles_unsplit "$who")" = haze ] || wref=$(cycles_reference "$(cycles_unsplit "$who")") || exit 1
         # The reference against haze's: the means and the relMSE (the bias
         # of the model and of the step, plus both references' noise).
         printf '%s\treference\t%s\t-\t-\t%s\t%s\n' "$who" "$CYCLES_REF_SPP" "$(errors "$wref" "$href" | cut -d' ' -f2)" \
@@ -205,12 +212,13 @@ cycles_report() {
             printf "| %s | %.1f | %.1f | %.2f | %.1f | %.2f |\n", E, h, c1, h / c1, cb, h / cb
         }
         print ""
-        print "## haze'"'"'s biased knobs"
+        print "## haze'"'"'s knobs"
         print ""
         print "haze-cacheS: `volpath` with `\"float shadowcache\" S` (distant lights'"'"' transmittance read from the shadow cache at S voxels);"
-        print "haze-stepS: `\"float stepsize\" S` (flights and shadow rays marched at S voxels instead of tracked, Cycles'"'"' estimator)."
-        print "Each against its own reference, as Cycles'"'"' rates; the bias column is its reference'"'"'s mean over haze'"'"'s unbiased one"
-        print "(channel average; Cycles'"'"' rows for comparison)."
+        print "haze-stepS: `\"float stepsize\" S` (flights and shadow rays marched at S voxels instead of tracked, Cycles'"'"' estimator);"
+        print "haze-splitK: `\"integer mediumsplits\" K` (K continuations from each path'"'"'s first scattering point in the cloud; unbiased)."
+        print "Each against its own reference (splitK: the one without it), as Cycles'"'"' rates; the bias column is its reference'"'"'s"
+        print "mean over haze'"'"'s unbiased one (channel average; Cycles'"'"' rows for comparison)."
         print ""
         printf "| renderer | bias | t(1e-2) | / Cycles rate %s | t(1e-3) | / Cycles | t(1e-4) | / Cycles |\n", substr(best, 8)
         print "|---|---|---|---|---|---|---|---|"

@@ -42,6 +42,11 @@ hz_status volpath_settings_from_entity(scene_entity *e, FILE *warn, volpath_sett
     if (!(out->step >= 0.0 && isfinite(out->step)))
         params_reject(pl, "stepsize",
                       "\"stepsize\" must be a number of voxels >= 0 (0: tracking, unbiased)");
+    out->medium_splits = params_int(pl, "mediumsplits", 1);
+    if (out->medium_splits < 1 || out->medium_splits > VOLPATH_MAX_SPLITS)
+        params_reject(pl, "mediumsplits",
+                      "\"mediumsplits\" must be an integer from 1 (no splitting) to %d",
+                      VOLPATH_MAX_SPLITS);
     out->light_sampler = LIGHT_SAMPLER_BVH;
     const char *ls = params_string(pl, "lightsampler", "bvh");
     if (strcmp(ls, "uniform") == 0) {
@@ -161,7 +166,22 @@ typedef struct {
     vec3 eq_o, eq_w;
     double eq_len;
     rgb eq_r_u;
+    /* "mediumsplits" > 1: where the path's first scattering point in a
+     * medium is saved for its other continuations (volpath_li); NULL once
+     * taken, and without splitting. */
+    struct path_split *split;
 } path;
+
+/* A path as it stood at its first scattering point in a medium, after the
+ * light sample there and before the phase function's direction: each
+ * continuation starts from here with its own sampler scramble. */
+typedef struct path_split {
+    bool taken;
+    path at;
+    sampler_state st;
+    vec3 x, wo;
+    double g;
+} path_split;
 
 /* Medium i of the scene at the path's wavelengths (itself in RGB). */
 static const medium *path_medium(path *pa, int i, bool shadow)
@@ -417,8 +437,30 @@ static rgb sample_ld(path *pa, const vertex *v)
 
 /* ---- media events of the path ---- */
 
+/* The path leaves medium point x (where it arrived from -wo) in the
+ * direction the phase function (asymmetry g) samples. */
+static void scatter_on(path *pa, vec3 x, vec3 wo, double g)
+{
+    double p_pdf;
+    vec3 wi = hg_sample(wo, g, sampler_2d(pa->st), &p_pdf);
+    if (!(p_pdf > 0.0)) {
+        pa->terminated = true;
+        return;
+    }
+    /* hg_sample draws exactly the density it returns: p / pdf = 1. */
+    pa->r_l = rgb_div(pa->r_u, p_pdf);
+    pa->diff = false;
+    pa->prev_p = x;
+    pa->prev_n = v3(0.0, 0.0, 0.0);
+    pa->scattered = true;
+    ray_from_medium(pa, x, wi, pa->ray.medium);
+    pa->specular = false;
+    pa->any_non_specular = true;
+}
+
 /* A real scattering event at ev->t of the current ray: light sampling, then
- * the phase function chooses the next direction. */
+ * the phase function chooses the next direction. The first one in a medium
+ * saves the path for its other continuations ("mediumsplits"). */
 static void scatter(path *pa, const volpath_event *ev)
 {
     const volpath_scene *sc = pa->sc;
@@ -438,21 +480,12 @@ static void scatter(path *pa, const volpath_event *ev)
         v.eq_pdf = pdf;
     }
     pa->L = rgb_add(pa->L, sample_ld(pa, &v));
-    double p_pdf;
-    vec3 wi = hg_sample(wo, m->g, sampler_2d(pa->st), &p_pdf);
-    if (!(p_pdf > 0.0)) {
-        pa->terminated = true;
-        return;
+    if (pa->split) {
+        path_split *sp = pa->split;
+        pa->split = NULL;
+        *sp = (path_split){true, *pa, *pa->st, x, wo, m->g};
     }
-    /* hg_sample draws exactly the density it returns: p / pdf = 1. */
-    pa->r_l = rgb_div(pa->r_u, p_pdf);
-    pa->diff = false;
-    pa->prev_p = x;
-    pa->prev_n = v3(0.0, 0.0, 0.0);
-    pa->scattered = true;
-    ray_from_medium(pa, x, wi, pa->ray.medium);
-    pa->specular = false;
-    pa->any_non_specular = true;
+    scatter_on(pa, x, wo, m->g);
 }
 
 static bool path_event(void *ctx, const volpath_event *ev)
@@ -837,6 +870,73 @@ static void add_escaped(path *pa)
         add_image_lights(pa, pa->ray.o, pa->ray.d);
 }
 
+/* Follows the path from its current ray until it ends. `camera_ray`: the
+ * ray is the camera's (depth, vs and the rng's seed dimension, seed_dim >= 0,
+ * are set on its way). */
+static void trace(path *pa, const ray_differential *rd, bool camera_ray, int seed_dim,
+                  double *depth, film_surface *vs)
+{
+    const ray *r = &rd->r;
+    sampler_state *st = pa->st;
+    /* Every scattering and bounce starts a new walk (its crossings anew). */
+    for (walk_segment seg;;) {
+        ray_walk *ray = &pa->ray;
+        if (!walk_next(ray, &seg)) { /* lost: the walk that leaves the scene ends the path */
+            pa->walk.lost++;
+            break;
+        }
+        if (seed_dim >= 0 && (seg.hit || seg.medium >= 0)) {
+            pa->walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
+            seed_dim = -1;
+        }
+        double t_start = seg.t0, t_hit = seg.t1;
+        if (ray->medium >= 0) {
+            if (!cross_medium(pa, t_start, t_hit))
+                break;
+            if (pa->scattered) {
+                camera_ray = false;
+                continue;
+            }
+        }
+        if (!seg.hit) {
+            add_escaped(pa);
+            break;
+        }
+        if (!seg.opaque)
+            continue;
+        geom_hit *h = &seg.h;
+        hit_footprint(pa, h);
+        if (camera_ray) {
+            *depth = v3_length(v3_sub(h->p, r->o));
+            camera_ray = false;
+            if (vs && pa->depth == 0)
+                visible_surface_at(h, rd, vs);
+        }
+        if (!bounce(pa, h))
+            break;
+    }
+}
+
+/* The radiance the path gathered. Spectral paths that met a dispersive
+ * dielectric count the hero's wavelength alone, times the lanes (its share
+ * of them). */
+static rgb path_radiance(const path *pa)
+{
+    if (!pa->one_lane)
+        return pa->L;
+    rgb L = rgb_grey(0.0);
+    rgb_set_ch(&L, pa->hero, WAVELENGTH_LANES * rgb_ch(pa->L, pa->hero));
+    return L;
+}
+
+static void add_walk_counters(integrator_counters *c, const media_walk *w)
+{
+    c->shadow_rays += w->shadow_rays;
+    c->density_lookups += w->lookups;
+    c->majorant_steps += w->majorant_steps;
+    c->lost_paths += w->lost;
+}
+
 rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectral_ctx *sp,
                sampler_state *st,
                double *depth, film_surface *vs, integrator_counters *counters)
@@ -868,52 +968,31 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
         seed_dim = sampler_reserve_dim(st);
         pa.hero = (int)fmin(pa.lanes - 1.0, floor(pa.lanes * sampler_1d(st)));
     }
-    bool camera_ray = true;
-    /* Every scattering and bounce starts a new walk (its crossings anew). */
-    for (walk_segment seg;;) {
-        ray_walk *ray = &pa.ray;
-        if (!walk_next(ray, &seg)) { /* lost: the walk that leaves the scene ends the path */
-            pa.walk.lost++;
-            break;
-        }
-        if (seed_dim >= 0 && (seg.hit || seg.medium >= 0)) {
-            pa.walk.r = rng_seeded(sampler_stream_seed_at(st, seed_dim));
-            seed_dim = -1;
-        }
-        double t_start = seg.t0, t_hit = seg.t1;
-        if (ray->medium >= 0) {
-            if (!cross_medium(&pa, t_start, t_hit))
-                break;
-            if (pa.scattered) {
-                camera_ray = false;
-                continue;
-            }
-        }
-        if (!seg.hit) {
-            add_escaped(&pa);
-            break;
-        }
-        if (!seg.opaque)
-            continue;
-        geom_hit *h = &seg.h;
-        hit_footprint(&pa, h);
-        if (camera_ray) {
-            *depth = v3_length(v3_sub(h->p, r->o));
-            camera_ray = false;
-            if (vs && pa.depth == 0)
-                visible_surface_at(h, rd, vs);
-        }
-        if (!bounce(&pa, h))
-            break;
+    int splits = media ? sc->settings.medium_splits : 1;
+    path_split split;
+    if (splits > 1) {
+        split.taken = false;
+        pa.split = &split;
     }
-    if (pa.one_lane) { /* the hero's wavelength alone, times the lanes (its share of them) */
-        double v = WAVELENGTH_LANES * rgb_ch(pa.L, pa.hero);
-        pa.L = rgb_grey(0.0);
-        rgb_set_ch(&pa.L, pa.hero, v);
+    trace(&pa, rd, true, seed_dim, depth, vs);
+    add_walk_counters(counters, &pa.walk);
+    rgb L = path_radiance(&pa);
+    if (!(splits > 1 && split.taken))
+        return L;
+    /* The other continuations from the first scattering point in a medium,
+     * each from its own scramble of the sampler's later dimensions and its
+     * own rng stream: k estimates of the path sharing their start. */
+    for (int k = 1; k < splits; ++k) {
+        pa = split.at;
+        pa.walk.lookups = pa.walk.shadow_rays = pa.walk.majorant_steps = pa.walk.lost = 0;
+        *st = split.st;
+        sampler_fork(st, k);
+        pa.walk.r = rng_seeded(sampler_stream_seed_at(st, sampler_reserve_dim(st)));
+        scatter_on(&pa, split.x, split.wo, split.g);
+        if (!pa.terminated)
+            trace(&pa, rd, false, -1, depth, vs);
+        add_walk_counters(counters, &pa.walk);
+        L = rgb_add(L, path_radiance(&pa));
     }
-    counters->shadow_rays += pa.walk.shadow_rays;
-    counters->density_lookups += pa.walk.lookups;
-    counters->majorant_steps += pa.walk.majorant_steps;
-    counters->lost_paths += pa.walk.lost;
-    return pa.L;
+    return rgb_scale(L, 1.0 / splits);
 }

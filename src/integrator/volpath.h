@@ -43,6 +43,9 @@
 #include "sampler/sampler.h"
 #include "scene/scene_desc.h"
 
+/* The most continuations "mediumsplits" may ask for. */
+#define VOLPATH_MAX_SPLITS 256
+
 typedef struct {
     int max_depth;                     /* "maxdepth", default 5 */
     bool regularize;                   /* "regularize", default false */
@@ -58,6 +61,10 @@ typedef struct {
      * through marchable grid media march (volpath_media.h's volpath_marches)
      * instead of tracking them; 0: tracking (pbrt-v4's, unbiased). */
     double step;
+    /* "mediumsplits": how many continuations a path runs from its first
+     * scattering point in a medium, each with its own phase-sampled
+     * direction and random numbers, averaged (unbiased); 1: none. */
+    int medium_splits;
 } volpath_settings;
 
 /* Reads `Integrator "volpath"`'s parameters; "exhaustive" runs as "bvh"

@@ -475,6 +475,10 @@ static hz_status build_integrator(render_scene *rs, scene_desc *sd, const integr
                           "\"stepsize\" marches grid media whose coefficients are a density "
                           "times constants (no colour or emission grid, not moving): this scene "
                           "has none that rays enter, so it would change nothing");
+    if (ip->kind == INTEGRATOR_VOLPATH && ip->volpath.medium_splits > 1 && in.medium_count == 0)
+        return hz_fail_at(err, params_loc(&sd->integrator.params, "mediumsplits"),
+                          "\"mediumsplits\" splits paths where they first scatter in a medium: "
+                          "this scene has no medium that rays enter, so it would change nothing");
     if (integrator_init(&rs->integ, ip, &in, err) != HZ_OK)
         return HZ_ERROR;
     if (!(spacing > 0.0))

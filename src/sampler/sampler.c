@@ -15,7 +15,7 @@
 
 /* Tags keep the streams of different uses apart even at equal dimensions. */
 enum { TAG_PIXEL = 0x70697865, TAG_1D = 0x31640000, TAG_2D = 0x32640000, TAG_JITTER = 0x6a697474,
-       TAG_STREAM = 0x73747265, TAG_WAVELENGTH = 0x77617665 };
+       TAG_STREAM = 0x73747265, TAG_WAVELENGTH = 0x77617665, TAG_FORK = 0x666f726b };
 
 /* Largest spp: sample indices stay 32-bit for Sobol' (and stay far from overflow elsewhere). */
 #define SAMPLER_MAX_SPP (1 << 30)
@@ -181,6 +181,12 @@ void sampler_start(const sampler *s, int px, int py, int sample_index, sampler_s
     st->index = sample_index;
     st->dim = 0;
     st->hash = smp_hash4((uint64_t)(int64_t)px, (uint64_t)(int64_t)py, s->seed, 0x68617a65u);
+}
+
+void sampler_fork(sampler_state *st, int copy)
+{
+    assert(copy >= 1);
+    st->hash = smp_hash2(st->hash, ((uint64_t)TAG_FORK << 32) | (uint32_t)copy);
 }
 
 static uint64_t dim_hash(const sampler_state *st, uint64_t tag, uint64_t dim)

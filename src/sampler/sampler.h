@@ -43,6 +43,11 @@ vec2 sampler_2d(sampler_state *st);
 /* Consumes n dimensions without computing them (1D and 2D dimensions alike):
  * a caller that does not need a value keeps every later dimension where it was. */
 static inline void sampler_skip(sampler_state *st, int n) { st->dim += n; }
+/* Copy `copy` (>= 1) of a path split at this state (volpath's "mediumsplits"):
+ * every later dimension and stream seed from an independent scramble, each
+ * still stratified over the pixel's samples. The film position and the
+ * wavelengths are the pixel sample's: a fork is for what follows them. */
+void sampler_fork(sampler_state *st, int copy);
 /* The film position sample: the first 2D dimension, stratified across the pixel's samples. */
 vec2 sampler_pixel_2d(sampler_state *st);
 /* The wavelength sample of spectral rendering (color/wavelengths.h): a 1D

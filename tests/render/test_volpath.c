@@ -22,7 +22,8 @@ static char *sky_furnace(const char *medium, const char *extra)
 
 /* Grey media: scattering and null-collision weights are exactly 1, so each
  * path returns the sky exactly (a zero-variance furnace); marched (the
- * grid at "stepsize" 3) too: the strata's field is a medium of albedo 1. */
+ * grid at "stepsize" 3) too: the strata's field is a medium of albedo 1; and
+ * split in three at the first scattering point (their mean). */
 static void test_grey_sky_furnace_is_exact(void **state)
 {
     (void)state;
@@ -33,9 +34,12 @@ static void test_grey_sky_furnace_is_exact(void **state)
         "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [8 8 8] \"float g\" -0.3",
         "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
         "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [8 8 8] \"float g\" -0.3",
+        "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [3 3 3] "
+        "\"float g\" 0.6",
     };
-    for (size_t k = 0; k < 3; ++k) {
-        char *text = sky_furnace(media[k], k == 2 ? "\"float stepsize\" 3" : "");
+    const char *extra[] = {"", "", "\"float stepsize\" 3", "\"integer mediumsplits\" 3"};
+    for (size_t k = 0; k < 4; ++k) {
+        char *text = sky_furnace(media[k], extra[k]);
         render_scene *rs = build(text);
         pstat *px = image_stats(rs, 8, 8, 16);
         for (int i = 0; i < 64; ++i)
@@ -90,7 +94,9 @@ static void test_chromatic_sky_furnace(void **state)
  * an albedo-1 medium: the radiance is Le / (1 - rho) everywhere, in every
  * direction (the medium neither adds nor removes light from a uniform
  * field). Exercises area-light MIS (light sampling against BSDF and phase
- * sampling), shadow rays by ratio tracking, and surface-medium bounces. */
+ * sampling), shadow rays by ratio tracking, and surface-medium bounces; and
+ * (the third) the continuations of paths split at their first scattering
+ * point, which meet walls, the light and the medium again. */
 static char *emitting_room(const char *medium, const char *integrator)
 {
     char *box = box_mesh(v3(-2, -2, -2), v3(2, 2, 2));
@@ -118,10 +124,12 @@ static void test_emitting_room_furnace(void **state)
     };
     const char *integ[] = {"Integrator \"volpath\" \"integer maxdepth\" 400",
                            "Integrator \"volpath\" \"integer maxdepth\" 400 "
-                           "\"string lightsampler\" \"uniform\""};
+                           "\"string lightsampler\" \"uniform\"",
+                           "Integrator \"volpath\" \"integer maxdepth\" 400 "
+                           "\"integer mediumsplits\" 3"};
     const double want[3] = {1.0 / 0.5, 2.0 / 0.75, 0.5 / 0.25};
-    for (size_t k = 0; k < 2; ++k) {
-        char *text = emitting_room(media[k], integ[k]);
+    for (size_t k = 0; k < 3; ++k) {
+        char *text = emitting_room(media[k % 2], integ[k]);
         render_scene *rs = build(text);
         pstat *px = image_stats(rs, 6, 6, 1024);
         double sum[3] = {0, 0, 0}, var[3] = {0, 0, 0};
@@ -334,27 +342,132 @@ static void test_absurd_density_is_bounded(void **state)
     free(text);
 }
 
-/* "stepsize" is refused where it would change nothing (no grid medium
- * that can be marched) and when negative, at its place. */
-static void test_stepsize_refusals(void **state)
+/* ---- "mediumsplits" ---- */
+
+/* A chromatic fog sphere over a grey floor, lit by a sun and a sky: the
+ * paths' first scattering points in the fog take light samples, their
+ * continuations scatter again, bounce off the floor (roulette there) and
+ * escape. `extra`: more integrator parameters; `shapes`: more shapes. */
+static char *split_scene(const char *extra, const char *shapes)
+{
+    return sfmt("LookAt 0 0.4 4  0 -0.2 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n"
+                "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
+                "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+                "Integrator \"volpath\" \"integer maxdepth\" 30 %s\n"
+                "WorldBegin\n"
+                "LightSource \"distant\" \"point3 from\" [-1 2 1] \"point3 to\" [0 0 0] "
+                "\"rgb L\" [3 3 3]\n"
+                "LightSource \"infinite\" \"rgb L\" [0.2 0.3 0.4]\n"
+                "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES
+                "/fog_sphere.vdb\" \"rgb sigma_a\" [0.3 0.3 0.3] \"rgb sigma_s\" [2 6 12] "
+                "\"float g\" 0.5\n"
+                "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n"
+                "Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n"
+                "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
+                "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
+                "\"point3 P\" [-4 -1.05 -4  4 -1.05 -4  4 -1.05 4  -4 -1.05 4]\n%s",
+                extra, shapes);
+}
+
+/* Per-pixel statistics of split_scene(extra, shapes) under `opt`: the image
+ * mean, its standard error, and the mean of the pixels' variances. */
+static void split_stats(const char *extra, const char *shapes, const render_options *opt,
+                        int spp, rgb *mean, rgb *se, double *var)
+{
+    char *text = split_scene(extra, shapes);
+    render_scene *rs = build_scene_or_fail(text, (render_options *)opt);
+    pstat *px = image_stats(rs, 8, 8, spp);
+    double m[3] = {0, 0, 0}, v[3] = {0, 0, 0};
+    *var = 0.0;
+    for (int i = 0; i < 64; ++i)
+        for (int c = 0; c < 3; ++c) {
+            m[c] += ch(px[i].mean, c) / 64;
+            v[c] += ch(px[i].se, c) * ch(px[i].se, c) / (64.0 * 64.0);
+            *var += ch(px[i].se, c) * ch(px[i].se, c) * spp / (3 * 64.0);
+        }
+    *mean = rgb_make(m[0], m[1], m[2]);
+    *se = rgb_make(sqrt(v[0]), sqrt(v[1]), sqrt(v[2]));
+    free(px);
+    render_scene_destroy(rs);
+    free(text);
+}
+
+/* Splitting is unbiased: the image split in four at the first scattering
+ * point has the unsplit image's mean, within noise, and a sample's variance
+ * well under it (independent continuations). In RGB, and spectrally with a
+ * dispersive glass sphere beside the fog (each continuation that meets it
+ * keeps the hero's wavelength alone; the others all four). Tracked, and
+ * marched at 2 voxels (the bias of the strata is the same split or not). */
+static void test_splits_keep_the_mean_and_lower_the_noise(void **state)
 {
     (void)state;
-    const char *cases[][2] = {
+    const render_options rgb_opt = {.seed = 0, .color = RENDER_COLOR_RGB};
+    const render_options spectral_opt = {.seed = 0, .color = RENDER_COLOR_SPECTRAL};
+    const char *glass = "Material \"dielectric\" \"spectrum eta\" [360 1.9  830 1.3]\n"
+                        "AttributeBegin\nTranslate 1.1 -0.6 0.5\n"
+                        "Shape \"sphere\" \"float radius\" 0.45\nAttributeEnd\n";
+    struct {
+        const render_options *opt;
+        const char *step, *shapes;
+        int spp;
+    } cases[] = {{&rgb_opt, "", "", 512}, {&rgb_opt, "\"float stepsize\" 2", "", 512},
+                 {&spectral_opt, "", glass, 2048}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        char *one = sfmt("%s", cases[k].step);
+        char *four = sfmt("%s \"integer mediumsplits\" 4", cases[k].step);
+        rgb m1, s1, m4, s4;
+        double v1, v4;
+        split_stats(one, cases[k].shapes, cases[k].opt, cases[k].spp, &m1, &s1, &v1);
+        split_stats(four, cases[k].shapes, cases[k].opt, cases[k].spp, &m4, &s4, &v4);
+        for (int c = 0; c < 3; ++c) {
+            double se = hypot(ch(s1, c), ch(s4, c));
+            if (verbose())
+                print_message("case %zu c%d: unsplit %.5f +- %.5f, split %.5f +- %.5f\n", k, c,
+                              ch(m1, c), ch(s1, c), ch(m4, c), ch(s4, c));
+            assert_true(ch(s1, c) < 0.01 * ch(m1, c));
+            assert_true(fabs(ch(m4, c) - ch(m1, c)) < 4.0 * se);
+        }
+        if (verbose())
+            print_message("case %zu: a sample's variance split / unsplit %.3f\n", k, v4 / v1);
+        assert_true(v4 < 0.8 * v1);
+        free(one);
+        free(four);
+    }
+}
+
+/* "stepsize" and "mediumsplits" are refused where they would change nothing
+ * (no grid medium that can be marched; no medium at all) and out of range,
+ * at their place. */
+static void test_knob_refusals(void **state)
+{
+    (void)state;
+    const char *fog = "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES
+                      "/fog_sphere.vdb\" \"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [2 6 12]";
+    const char *cases[][4] = {
         {"\"string type\" \"homogeneous\" \"rgb sigma_a\" [1 1 1] \"rgb sigma_s\" [1 1 1]",
-         "\"float stepsize\" 2"},
-        {"\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES "/fog_sphere.vdb\" "
-         "\"rgb sigma_a\" [0 0 0] \"rgb sigma_s\" [2 6 12]",
-         "\"float stepsize\" -1"},
+         "\"float stepsize\" 2", "stepsize", "would change nothing"},
+        {fog, "\"float stepsize\" -1", "stepsize", ">= 0"},
+        {fog, "\"integer mediumsplits\" 0", "mediumsplits", "from 1"},
+        {fog, "\"integer mediumsplits\" 257", "mediumsplits", "to 256"},
+        {NULL, "\"integer mediumsplits\" 2", "mediumsplits", "no medium"},
     };
-    const char *want[] = {"would change nothing", ">= 0"};
-    for (int k = 0; k < 2; ++k) {
-        char *text = sky_furnace(cases[k][0], cases[k][1]);
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
+        char *text =
+            cases[k][0] ? sky_furnace(cases[k][0], cases[k][1])
+                        : sfmt("LookAt 0 0 4  0 0 0  0 1 0\nCamera \"perspective\"\n"
+                               "Film \"rgb\" \"integer xresolution\" 8 "
+                               "\"integer yresolution\" 8\n"
+                               "Sampler \"independent\" \"integer pixelsamples\" 16\n"
+                               "Integrator \"volpath\" \"integer maxdepth\" 5 %s\n"
+                               "WorldBegin\nLightSource \"infinite\" \"rgb L\" [1 1 1]\n"
+                               "Shape \"sphere\" \"float radius\" 1\n",
+                               cases[k][1]);
         char msg[1024];
         build_scene_expect_error(text, msg, sizeof msg);
         print_message("%s\n", msg);
         assert_non_null(strstr(msg, "test.pbrt:5:"));
-        assert_non_null(strstr(msg, "stepsize"));
-        assert_non_null(strstr(msg, want[k]));
+        assert_non_null(strstr(msg, cases[k][2]));
+        assert_non_null(strstr(msg, cases[k][3]));
         free(text);
     }
 }
@@ -369,7 +482,8 @@ int main(void)
         cmocka_unit_test(test_absurd_density_is_bounded),
         cmocka_unit_test(test_cloud_solid_slab),
         cmocka_unit_test(test_rgbgrid_slab),
-        cmocka_unit_test(test_stepsize_refusals),
+        cmocka_unit_test(test_splits_keep_the_mean_and_lower_the_noise),
+        cmocka_unit_test(test_knob_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

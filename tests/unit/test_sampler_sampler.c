@@ -200,6 +200,45 @@ static void assert_net(const vec2 *p, int k)
     free(count);
 }
 
+/* A fork (a split path's copy) draws its later dimensions from another
+ * scramble: over a pixel's samples each copy's 2D dimension is still a
+ * (0, k, 2)-net and its 1D dimension stratified, and the copies' values
+ * differ from each other's and from the unforked path's. */
+static void test_fork(void **state)
+{
+    (void)state;
+    enum { K = 6, N = 1 << K, COPIES = 3 };
+    sampler s = make(SAMPLER_SOBOL, N, 7);
+    vec2 p[COPIES + 1][N];
+    double one[COPIES + 1][N];
+    for (int c = 0; c <= COPIES; c++)
+        for (int i = 0; i < N; i++) {
+            sampler_state st;
+            sampler_start(&s, 3, 5, i, &st);
+            (void)sampler_pixel_2d(&st);
+            (void)sampler_1d(&st);
+            if (c > 0)
+                sampler_fork(&st, c);
+            one[c][i] = sampler_1d(&st);
+            p[c][i] = sampler_2d(&st);
+        }
+    for (int c = 0; c <= COPIES; c++) {
+        assert_net(p[c], K);
+        char seen[N] = {0};
+        for (int i = 0; i < N; i++) {
+            int b = (int)(one[c][i] * N);
+            assert_false(seen[b]);
+            seen[b] = 1;
+        }
+        for (int d = 0; d < c; d++) {
+            int same = 0;
+            for (int i = 0; i < N; i++)
+                same += one[c][i] == one[d][i] || p[c][i].x == p[d][i].x;
+            assert_int_equal(same, 0);
+        }
+    }
+}
+
 static void test_sobol_nets(void **state)
 {
     (void)state;
@@ -457,6 +496,7 @@ int main(void)
         cmocka_unit_test(test_deferred_stream_seed),
         cmocka_unit_test(test_stratified_strata),
         cmocka_unit_test(test_sobol_nets),
+        cmocka_unit_test(test_fork),
         cmocka_unit_test(test_integration_error),
         cmocka_unit_test(test_dimensions_independent),
         cmocka_unit_test(test_from_entity), /* needs scene/params: last */
