@@ -24,7 +24,7 @@ CYCLES_RATES=${BENCH_CYCLES_RATES:-1 2 4 8}  # Cycles' volume_step_rate (1: its 
 # "float stepsize" S (both biased), splitK is "integer mediumsplits" K
 # (unbiased: it shares the reference of the configuration without it), e.g.
 # haze-cache1-step2-split3.
-CYCLES_HAZE=${BENCH_CYCLES_HAZE:-haze haze-split3 haze-cache1 haze-step4 haze-cache1-step2 haze-cache1-step2-split3}
+CYCLES_HAZE=${BENCH_CYCLES_HAZE:-haze haze-split3 haze-cache1 haze-step4 haze-step4-split3 haze-cache1-step2 haze-cache1-step2-split3}
 CYCLES_REF_SPP=${BENCH_CYCLES_REF_SPP:-2048}
 CYCLES_RUNGS=${BENCH_CYCLES_RUNGS:-16 64 256}
 CYCLES_ERRORS="1e-2 1e-3 1e-4"           # 1e-4 is extrapolated (beyond the top rung)
@@ -157,7 +157,14 @@ cycles_report() {
         n = nr[w]; sx = sy = sxx = sxy = 0
         for (k = 1; k <= n; k++) { sx += sp[w, k]; sy += cpu[w, k]; sxx += sp[w, k] ^ 2; sxy += sp[w, k] * cpu[w, k] }
         ts[w] = (n * sxy - sx * sy) / (n * sxx - sx * sx); t0[w] = (sy - ts[w] * sx) / n
-        e1[w] = err[w, n] / (1 / sp[w, n] + 1 / refspp)
+        # The top rung'"'"'s error holds the reference'"'"'s noise, e1 / REF of the
+        # configuration that rendered it: a splitK configuration'"'"'s is the
+        # unsplit one'"'"'s (fitted first); without its rungs, its own e1 stands in.
+        uw[w] = w; sub(/-split[0-9]+/, "", uw[w])
+        if (uw[w] != w && (uw[w] in e1))
+            e1[w] = (err[w, n] - e1[uw[w]] / refspp) * sp[w, n]
+        else
+            e1[w] = err[w, n] / (1 / sp[w, n] + 1 / refspp)
         # the slope of log relMSE against log spp, first rung to top (-1: pure noise)
         slope[w] = log(err[w, n] / err[w, 1]) / log(sp[w, n] / sp[w, 1])
     }
@@ -165,7 +172,8 @@ cycles_report() {
     function rel(a, b) { return a / b - 1 < 0 ? 1 - a / b : a / b - 1 }
     function ok(w) { return rel(mr[w], mr["haze"]) <= 0.01 && rel(mg[w], mg["haze"]) <= 0.01 && rel(mb[w], mb["haze"]) <= 0.01 }
     END {
-        for (i = 1; i <= nw; i++) fit(order[i])
+        for (i = 1; i <= nw; i++) if (order[i] !~ /-split[0-9]/) fit(order[i])
+        for (i = 1; i <= nw; i++) if (order[i] ~ /-split[0-9]/) fit(order[i])
         # The best step rate: least CPU time at relMSE 1e-3 among the rates
         # whose reference keeps every channel mean within 1% of haze'"'"'s (a
         # coarser step is faster and darker: an error against its own
@@ -251,7 +259,7 @@ cycles_report() {
         print "|---|---|---|---|---|---|---|"
         for (i = 1; i <= nw; i++) {
             w = order[i]
-            net = (w == "haze") ? 0 : rmse[w] - (e1[w] + e1["haze"]) / refspp
+            net = (uw[w] == "haze") ? 0 : rmse[w] - ((uw[w] in e1 ? e1[uw[w]] : e1[w]) + e1["haze"]) / refspp
             printf "| %s | %.5f | %.5f | %.5f | %+.2f%%, %+.2f%%, %+.2f%% | %.3g | %.2g |\n", w, mr[w], mg[w], mb[w],
                 100 * (mr[w] / mr["haze"] - 1), 100 * (mg[w] / mg["haze"] - 1), 100 * (mb[w] / mb["haze"] - 1), rmse[w], net
         }
