@@ -201,13 +201,14 @@ static const medium *path_medium(path *pa, int i, bool shadow)
 /* ---- rays ---- */
 
 /* Starts the path's next ray, o + t d: surfaces are searched from tmin on,
- * media fill it from t_fill on. */
-static void path_ray(path *pa, vec3 o, vec3 d, double tmin, double t_fill, int medium)
+ * media fill it from t_fill on. `flags`: walk_start's beyond the path's own. */
+static void path_ray(path *pa, vec3 o, vec3 d, double tmin, double t_fill, int medium,
+                     unsigned flags)
 {
     const integrator_inputs *in = &pa->sc->in;
     unsigned exact = in->medium_count > 0 ? WALK_EXACT_ENDS : 0u;
     walk_start(&pa->ray, in->geom, o, d, tmin, t_fill, INFINITY, pa->walk.time, medium,
-               exact | WALK_PASS_BEHIND);
+               exact | WALK_PASS_BEHIND | flags);
 }
 
 /* Leaving surface hit h along w. With media, the medium also fills the bit
@@ -219,7 +220,7 @@ static void ray_from_surface(path *pa, const geom_hit *h, vec3 w)
     vec3 o = geometry_leave_origin(h, w);
     int after = geometry_medium_after(h, w, pa->ray.medium);
     if (pa->sc->in.medium_count == 0) {
-        path_ray(pa, o, w, 0.0, 0.0, after);
+        path_ray(pa, o, w, 0.0, 0.0, after, 0u);
         return;
     }
     vec3 off = v3_sub(o, h->p);
@@ -227,7 +228,7 @@ static void ray_from_surface(path *pa, const geom_hit *h, vec3 w)
     double e = v3_length(off) * 16.0;
     if (wn * e > fabs(v3_dot(off, h->ng)))
         e = fabs(v3_dot(off, h->ng)) / wn;
-    path_ray(pa, v3_sub(o, v3_scale(w, e)), w, e, 0.0, after);
+    path_ray(pa, v3_sub(o, v3_scale(w, e)), w, e, 0.0, after, 0u);
 }
 
 /* Leaving the medium point x along w: Embree sees x rounded to float, which
@@ -237,7 +238,7 @@ static void ray_from_surface(path *pa, const geom_hit *h, vec3 w)
 static void ray_from_medium(path *pa, vec3 x, vec3 w, int medium)
 {
     double e = PATH_SHADOW_BACKOFF * fmax(fmax(fabs(x.x), fabs(x.y)), fabs(x.z));
-    path_ray(pa, v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium);
+    path_ray(pa, v3_sub(x, v3_scale(w, e)), w, 0.0, e, medium, WALK_CONVEX_START);
 }
 
 static inline rgb rgb_div(rgb a, double s) { return rgb_scale(a, 1.0 / s); }
@@ -954,7 +955,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
         spectral_media.ray_index = spectral_media.shadow_index = -1;
         pa.media = &spectral_media;
     }
-    path_ray(&pa, r->o, r->d, 0.0, 0.0, r->medium);
+    path_ray(&pa, r->o, r->d, 0.0, 0.0, r->medium, 0u);
     pa.diff = rd->has_differentials;
     if (pa.diff) {
         pa.rx_o = rd->rx_o;
