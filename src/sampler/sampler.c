@@ -242,7 +242,7 @@ static vec2 sobol_2d(const sampler_state *st, uint64_t h, bool shuffle)
     uint32_t idx = shuffle ? smp_owen_scramble((uint32_t)st->index, (uint32_t)h) : (uint32_t)st->index;
     uint64_t h2 = smp_mix64(h);
     uint32_t x = smp_owen_sobol0(idx, (uint32_t)(h >> 32));
-    uint32_t y = smp_owen_scramble(smp_sobol1(idx), (uint32_t)h2);
+    uint32_t y = smp_owen_sobol1(idx, (uint32_t)h2);
     return v2(x * 0x1p-32, y * 0x1p-32);
 }
 

@@ -80,17 +80,23 @@ static inline uint32_t smp_reverse_bits32(uint32_t v)
 }
 
 /* Sobol' dimension 0 (van der Corput) and 1 as 0.32 fixed point. Dimension
- * 1's generator matrix is the Pascal matrix mod 2: column k is built by
- * v ^= v >> 1 from the top bit. */
+ * 1's generator matrix is the Pascal matrix mod 2: column k (the one index
+ * bit k selects) has bit 31 - m set where m's bits are a subset of k's
+ * (Lucas), so bit 31 - m of the point is the parity of the index bits k
+ * that contain m. smp_sobol1_reversed computes those parities, bit m, in
+ * five shift-and-mask steps (the superset-sum transform over GF(2)), where
+ * a loop over the index's 32 scrambled bits took 32 steps. */
 static inline uint32_t smp_sobol0(uint32_t i) { return smp_reverse_bits32(i); }
-static inline uint32_t smp_sobol1(uint32_t i)
+static inline uint32_t smp_sobol1_reversed(uint32_t i)
 {
-    uint32_t r = 0;
-    for (uint32_t v = 1u << 31; i; i >>= 1, v ^= v >> 1)
-        if (i & 1u)
-            r ^= v;
-    return r;
+    i ^= (i >> 1) & 0x55555555u;
+    i ^= (i >> 2) & 0x33333333u;
+    i ^= (i >> 4) & 0x0f0f0f0fu;
+    i ^= (i >> 8) & 0x00ff00ffu;
+    i ^= (i >> 16) & 0x0000ffffu;
+    return i;
 }
+static inline uint32_t smp_sobol1(uint32_t i) { return smp_reverse_bits32(smp_sobol1_reversed(i)); }
 
 /* Burley 2020, "Practical Hash-based Owen Scrambling": each output bit is
  * flipped by a hash of the bits above it (in the reversed representation,
@@ -118,6 +124,12 @@ static inline uint32_t smp_owen_scramble(uint32_t x, uint32_t seed)
 static inline uint32_t smp_owen_sobol0(uint32_t i, uint32_t seed)
 {
     return smp_reverse_bits32(smp_laine_karras_permutation(i, seed));
+}
+
+/* smp_owen_scramble(smp_sobol1(i), seed), the same way. */
+static inline uint32_t smp_owen_sobol1(uint32_t i, uint32_t seed)
+{
+    return smp_reverse_bits32(smp_laine_karras_permutation(smp_sobol1_reversed(i), seed));
 }
 
 #endif

@@ -61,6 +61,23 @@ static void test_permutation(void **state)
     assert_int_equal(smp_sobol1(3), 0x40000000u);
     assert_int_equal(smp_sobol0(1), 0x80000000u);
     assert_int_equal(smp_sobol0(2), 0x40000000u);
+    /* Dimension 1 against its generator matrix column by column (column k:
+     * v ^= v >> 1, k times, from the top bit), on scrambled 32-bit indices
+     * (every bit in use), and its Owen scramble against the general one. */
+    uint32_t col[32], v = 1u << 31;
+    for (int k = 0; k < 32; k++, v ^= v >> 1)
+        col[k] = v;
+    uint64_t h = 1;
+    for (int n = 0; n < 100000; n++) {
+        h = smp_mix64(h + 0x9e3779b97f4a7c15ull);
+        uint32_t i = (uint32_t)h, want = 0;
+        for (int k = 0; k < 32; k++)
+            if (i >> k & 1u)
+                want ^= col[k];
+        assert_int_equal(smp_sobol1(i), want);
+        assert_int_equal(smp_owen_sobol1(i, (uint32_t)(h >> 32)),
+                         smp_owen_scramble(want, (uint32_t)(h >> 32)));
+    }
 }
 
 /* A seed whose dimension is reserved and whose value is computed later is
