@@ -23,8 +23,8 @@ CYCLES_RATES=${BENCH_CYCLES_RATES:-1 2 4 8}  # Cycles' volume_step_rate (1: its 
 # with knobs, named by them: cacheS is "float shadowcache" S, stepS is
 # "float stepsize" S (both biased), splitK is "integer mediumsplits" K
 # (unbiased: it shares the reference of the configuration without it), e.g.
-# haze-cache1-step2-split3.
-CYCLES_HAZE=${BENCH_CYCLES_HAZE:-haze haze-split3 haze-cache1 haze-step4 haze-step4-split3 haze-cache1-step2 haze-cache1-step2-split3}
+# haze-cache1-step2-split4.
+CYCLES_HAZE=${BENCH_CYCLES_HAZE:-haze haze-split4 haze-cache1 haze-step4 haze-step4-split4 haze-cache1-step1-split4 haze-cache1-step2-split4}
 CYCLES_REF_SPP=${BENCH_CYCLES_REF_SPP:-2048}
 CYCLES_RUNGS=${BENCH_CYCLES_RUNGS:-16 64 256}
 CYCLES_ERRORS="1e-2 1e-3 1e-4"           # 1e-4 is extrapolated (beyond the top rung)
@@ -112,7 +112,8 @@ cycles_run() {
     " haze "*) ;;
     *) echo "bench: cycles: BENCH_CYCLES_HAZE must start with haze (the unbiased reference)" >&2; exit 1 ;;
     esac
-    for who in $CYCLES_HAZE; do
+    # Each configuration's scene, and its unsplit twin's.
+    for who in $(for w in $CYCLES_HAZE; do echo "$w"; cycles_unsplit "$w"; done | sort -u); do
         cycles_knobs "$who" >/dev/null # exits on an unknown name
         variant "$(cycles_scene "$who")" "$BENCH/scenes/cloud.pbrt" \
             "Integrator \"volpath\" \"integer maxdepth\" $CYCLES_DEPTH$(cycles_knobs "$who")"
@@ -122,7 +123,10 @@ cycles_run() {
     # relMSE against haze's reference, and the image's means.
     printf 'who\tkind\tspp\tcpu_s\twall_s\trelmse\tmean_r\tmean_g\tmean_b\n' >"$tsv"
     href=$(cycles_reference haze) || exit 1
-    for who in $CYCLES_HAZE $(for r in $CYCLES_RATES; do echo "cycles-$r"; done); do
+    # A splitK configuration's unsplit twin is measured too, before it: the
+    # fit takes the twin's reference noise out of its error.
+    timed=$(for w in $CYCLES_HAZE; do cycles_unsplit "$w"; echo "$w"; done | awk '!seen[$0]++')
+    for who in $timed $(for r in $CYCLES_RATES; do echo "cycles-$r"; done); do
         wref=$href
         [ "$(cycles_unsplit "$who")" = haze ] || wref=$(cycles_reference "$(cycles_unsplit "$who")") || exit 1
         # The reference against haze's: the means and the relMSE (the bias
@@ -158,8 +162,8 @@ cycles_report() {
         for (k = 1; k <= n; k++) { sx += sp[w, k]; sy += cpu[w, k]; sxx += sp[w, k] ^ 2; sxy += sp[w, k] * cpu[w, k] }
         ts[w] = (n * sxy - sx * sy) / (n * sxx - sx * sx); t0[w] = (sy - ts[w] * sx) / n
         # The top rung'"'"'s error holds the reference'"'"'s noise, e1 / REF of the
-        # configuration that rendered it: a splitK configuration'"'"'s is the
-        # unsplit one'"'"'s (fitted first); without its rungs, its own e1 stands in.
+        # configuration that rendered it: a splitK configuration'"'"'s is its
+        # unsplit twin'"'"'s (timed too, and fitted first).
         uw[w] = w; sub(/-split[0-9]+/, "", uw[w])
         if (uw[w] != w && (uw[w] in e1))
             e1[w] = (err[w, n] - e1[uw[w]] / refspp) * sp[w, n]

@@ -56,3 +56,7 @@ render bench-smoke-target "$w" --target-error 1e-2 --spp 8
 w="$TOP/bench/cache/hash-smoke-cache.pbrt"
 printf 'Integrator "singlescatter" "float shadowcache" 1\nInclude "../scenes/smoke.pbrt"\n' >"$w"
 render bench-smoke-cache "$w" --spp "$SPP"
+# volpath's knobs together (the shadow cache, marching, splitting).
+w="$TOP/bench/cache/hash-cloud-knobs.pbrt"
+printf 'Integrator "volpath" "integer maxdepth" 16 "float shadowcache" 1 "float stepsize" 2 "integer mediumsplits" 3\nInclude "../scenes/cloud.pbrt"\n' >"$w"
+render bench-cloud-knobs "$w" --spp "$SPP"
