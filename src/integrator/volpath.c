@@ -985,6 +985,7 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
      * own rng stream: k estimates of the path sharing their start. */
     for (int k = 1; k < splits; ++k) {
         pa = split.at;
+        pa.eq_on = false; /* the segment it scattered on is behind it */
         pa.walk.lookups = pa.walk.shadow_rays = pa.walk.majorant_steps = pa.walk.lost = 0;
         *st = split.st;
         sampler_fork(st, k);

@@ -344,11 +344,12 @@ static void test_absurd_density_is_bounded(void **state)
 
 /* ---- "mediumsplits" ---- */
 
-/* A chromatic fog sphere over a grey floor, lit by a sun and a sky: the
- * paths' first scattering points in the fog take light samples, their
- * continuations scatter again, bounce off the floor (roulette there) and
- * escape. `extra`: more integrator parameters; `shapes`: more shapes. */
-static char *split_scene(const char *extra, const char *shapes)
+/* A chromatic fog sphere (`medium`: MakeNamedMedium's parameters) over a
+ * grey floor, lit by a sun and a sky: the paths' first scattering points in
+ * the fog take light samples, their continuations scatter again, bounce off
+ * the floor (roulette there) and escape. `extra`: more integrator
+ * parameters; `shapes`: more shapes and lights. */
+static char *split_scene(const char *medium, const char *extra, const char *shapes)
 {
     return sfmt("LookAt 0 0.4 4  0 -0.2 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n"
                 "Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 8\n"
@@ -358,23 +359,21 @@ static char *split_scene(const char *extra, const char *shapes)
                 "LightSource \"distant\" \"point3 from\" [-1 2 1] \"point3 to\" [0 0 0] "
                 "\"rgb L\" [3 3 3]\n"
                 "LightSource \"infinite\" \"rgb L\" [0.2 0.3 0.4]\n"
-                "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES
-                "/fog_sphere.vdb\" \"rgb sigma_a\" [0.3 0.3 0.3] \"rgb sigma_s\" [2 6 12] "
-                "\"float g\" 0.5\n"
+                "MakeNamedMedium \"m\" %s\n"
                 "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n"
                 "Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n"
                 "Material \"diffuse\" \"rgb reflectance\" [0.5 0.5 0.5]\n"
                 "Shape \"trianglemesh\" \"integer indices\" [0 1 2 0 2 3] "
                 "\"point3 P\" [-4 -1.05 -4  4 -1.05 -4  4 -1.05 4  -4 -1.05 4]\n%s",
-                extra, shapes);
+                extra, medium, shapes);
 }
 
-/* Per-pixel statistics of split_scene(extra, shapes) under `opt`: the image
- * mean, its standard error, and the mean of the pixels' variances. */
-static void split_stats(const char *extra, const char *shapes, const render_options *opt,
-                        int spp, rgb *mean, rgb *se, double *var)
+/* Per-pixel statistics of split_scene(medium, extra, shapes) under `opt`:
+ * the image mean, its standard error, and the mean of the pixels' variances. */
+static void split_stats(const char *medium, const char *extra, const char *shapes,
+                        const render_options *opt, int spp, rgb *mean, rgb *se, double *var)
 {
-    char *text = split_scene(extra, shapes);
+    char *text = split_scene(medium, extra, shapes);
     render_scene *rs = build_scene_or_fail(text, (render_options *)opt);
     pstat *px = image_stats(rs, 8, 8, spp);
     double m[3] = {0, 0, 0}, v[3] = {0, 0, 0};
@@ -397,7 +396,9 @@ static void split_stats(const char *extra, const char *shapes, const render_opti
  * well under it (independent continuations). In RGB, and spectrally with a
  * dispersive glass sphere beside the fog (each continuation that meets it
  * keeps the hero's wavelength alone; the others all four). Tracked, and
- * marched at 2 voxels (the bias of the strata is the same split or not). */
+ * marched at 2 voxels (the bias of the strata is the same split or not); and
+ * homogeneous fog with a point light inside, which each segment also
+ * light-samples equiangularly (MIS with the split vertex's light sample). */
 static void test_splits_keep_the_mean_and_lower_the_noise(void **state)
 {
     (void)state;
@@ -406,19 +407,29 @@ static void test_splits_keep_the_mean_and_lower_the_noise(void **state)
     const char *glass = "Material \"dielectric\" \"spectrum eta\" [360 1.9  830 1.3]\n"
                         "AttributeBegin\nTranslate 1.1 -0.6 0.5\n"
                         "Shape \"sphere\" \"float radius\" 0.45\nAttributeEnd\n";
+    const char *grid = "\"string type\" \"nanovdb\" \"string filename\" \"" VOLUMES
+                       "/fog_sphere.vdb\" \"rgb sigma_a\" [0.3 0.3 0.3] "
+                       "\"rgb sigma_s\" [2 6 12] \"float g\" 0.5";
+    const char *fog = "\"string type\" \"homogeneous\" \"rgb sigma_a\" [0.1 0.1 0.1] "
+                      "\"rgb sigma_s\" [0.4 0.8 1.2] \"float g\" 0.3";
+    const char *lamp = "LightSource \"point\" \"point3 from\" [0.3 0.2 0.4] \"rgb I\" [2 2 2]\n";
     struct {
         const render_options *opt;
-        const char *step, *shapes;
+        const char *medium, *step, *shapes;
         int spp;
-    } cases[] = {{&rgb_opt, "", "", 512}, {&rgb_opt, "\"float stepsize\" 2", "", 512},
-                 {&spectral_opt, "", glass, 2048}};
+    } cases[] = {{&rgb_opt, grid, "", "", 512},
+                 {&rgb_opt, grid, "\"float stepsize\" 2", "", 512},
+                 {&spectral_opt, grid, "", glass, 2048},
+                 {&rgb_opt, fog, "", lamp, 512}};
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; ++k) {
         char *one = sfmt("%s", cases[k].step);
         char *four = sfmt("%s \"integer mediumsplits\" 4", cases[k].step);
         rgb m1, s1, m4, s4;
         double v1, v4;
-        split_stats(one, cases[k].shapes, cases[k].opt, cases[k].spp, &m1, &s1, &v1);
-        split_stats(four, cases[k].shapes, cases[k].opt, cases[k].spp, &m4, &s4, &v4);
+        split_stats(cases[k].medium, one, cases[k].shapes, cases[k].opt, cases[k].spp, &m1, &s1,
+                    &v1);
+        split_stats(cases[k].medium, four, cases[k].shapes, cases[k].opt, cases[k].spp, &m4, &s4,
+                    &v4);
         for (int c = 0; c < 3; ++c) {
             double se = hypot(ch(s1, c), ch(s4, c));
             if (verbose())
