@@ -137,6 +137,31 @@ static void test_threads_bit_identical(void **state)
     expect_threads_bit_identical(HAZE_SCENES "/smoke.pbrt", "--spp 1");
     expect_threads_bit_identical(HAZE_SCENES "/foggy-dof.pbrt", "--spp 1");
     expect_threads_bit_identical(HAZE_SCENES "/camera-pan.pbrt", "--spp 1"); /* motion blur */
+    /* volpath with its knobs: split paths (each copy's own scramble and
+     * stream), marched grid media, the shadow cache's columns built on
+     * whichever thread reaches them first. */
+    char path[1024];
+    snprintf(path, sizeof path, "%s/cli_volpath_knobs.pbrt", HAZE_TMP);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fprintf(f,
+            "LookAt 0 0.3 4  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 35\n"
+            "Film \"rgb\" \"integer xresolution\" 24 \"integer yresolution\" 16\n"
+            "Sampler \"zsobol\" \"integer pixelsamples\" 4\n"
+            "Integrator \"volpath\" \"integer maxdepth\" 20 \"integer mediumsplits\" 3 "
+            "\"float stepsize\" 2 \"float shadowcache\" 1\n"
+            "WorldBegin\n"
+            "LightSource \"distant\" \"point3 from\" [-1 2 1] \"point3 to\" [0 0 0] "
+            "\"rgb L\" [3 3 3]\n"
+            "LightSource \"infinite\" \"rgb L\" [0.2 0.3 0.4]\n"
+            "MakeNamedMedium \"m\" \"string type\" \"nanovdb\" \"string filename\" "
+            "\"%s/../volumes/fog_sphere.vdb\" \"rgb sigma_a\" [0.1 0.1 0.1] "
+            "\"rgb sigma_s\" [4 4 4] \"float g\" 0.5\n"
+            "AttributeBegin\nMediumInterface \"m\" \"\"\nMaterial \"interface\"\n"
+            "Shape \"sphere\" \"float radius\" 1\nAttributeEnd\n",
+            HAZE_SCENES);
+    assert_int_equal(fclose(f), 0);
+    expect_threads_bit_identical(path, "");
 }
 
 static void test_output_dir_missing_exit_1(void **state)
