@@ -382,8 +382,19 @@ static hz_status describe_pbrt(const char *path, FILE *out, hz_error *err)
                 param_num(&sd.integrator.params, "shadowstepsize", 2.0, &has));
     } else {
         int depth = (int)param_num(&sd.integrator.params, "maxdepth", 5, &has);
-        fprintf(out, "  %-15s %s, max depth %d%s\n", "integrator", sd.integrator.type, depth,
+        fprintf(out, "  %-15s %s, max depth %d%s", "integrator", sd.integrator.type, depth,
                 has ? "" : " (default)");
+        /* volpath's own knobs, where the scene sets them. */
+        double cache = param_num(&sd.integrator.params, "shadowcache", 0.0, NULL);
+        double step = param_num(&sd.integrator.params, "stepsize", 0.0, NULL);
+        double splits = param_num(&sd.integrator.params, "mediumsplits", 1.0, NULL);
+        if (cache > 0.0)
+            fprintf(out, ", shadow cache %g voxels", cache);
+        if (step > 0.0)
+            fprintf(out, ", marched at %g voxels", step);
+        if (splits > 1.0)
+            fprintf(out, ", %g continuations from the first medium vertex", splits);
+        fprintf(out, "\n");
     }
 
     size_t area = 0;

@@ -213,6 +213,28 @@ static void test_pbrt(void **state)
     assert_string_equal(one_line(line_with(out, "media"), line, sizeof line), "media           0");
 }
 
+/* volpath's knobs, where a scene sets them, on the integrator line. */
+static void test_pbrt_volpath_knobs(void **state)
+{
+    (void)state;
+    const char *integrators[] = {"Integrator \"volpath\" \"integer maxdepth\" 64 "
+                                 "\"float shadowcache\" 1 \"float stepsize\" 2 "
+                                 "\"integer mediumsplits\" 4\n",
+                                 "Integrator \"volpath\"\n"};
+    const char *want[] = {"integrator      volpath, max depth 64, shadow cache 1 voxels, marched at "
+                          "2 voxels, 4 continuations from the first medium vertex",
+                          "integrator      volpath, max depth 5 (default)"};
+    for (int k = 0; k < 2; ++k) {
+        char path[1024], text[4096], out[8192], args[2048], line[256];
+        snprintf(path, sizeof path, "%s/info_volpath.pbrt", HAZE_TMP);
+        snprintf(text, sizeof text, "%s%s", integrators[k], tiny_scene);
+        write_text_file(path, text);
+        snprintf(args, sizeof args, "info '%s'", path);
+        assert_int_equal(run_haze(args, out, sizeof out), 0);
+        assert_string_equal(one_line(line_with(out, "integrator"), line, sizeof line), want[k]);
+    }
+}
+
 /* Windows in the file's own coordinates, however they are offset. */
 static void test_exr_offset_windows(void **state)
 {
@@ -386,6 +408,7 @@ int main(void)
         cmocka_unit_test(test_bsdf),
         cmocka_unit_test(test_vdb_duplicate_names),
         cmocka_unit_test(test_exr_from_render), cmocka_unit_test(test_pbrt),
+        cmocka_unit_test(test_pbrt_volpath_knobs),
         cmocka_unit_test(test_exr_offset_windows), cmocka_unit_test(test_control_bytes_escaped),
         cmocka_unit_test(test_bad_files_exit_1), cmocka_unit_test(test_scene_sniffed),
         cmocka_unit_test(test_usage_exit_2),
