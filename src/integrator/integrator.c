@@ -70,7 +70,7 @@ static hz_status stand_in_settings(scene_desc *sd, size_t k, FILE *warn, volpath
                           "Integrator \"%s\" with media: pbrt-v4's %s integrator ignores media, "
                           "haze does not render them away; use \"volpath\"",
                           type, type);
-    *out = (volpath_settings){.light_sampler = LIGHT_SAMPLER_BVH};
+    *out = (volpath_settings){.light_sampler = LIGHT_SAMPLER_BVH, .medium_splits = 1};
     out->max_depth = params_int(pl, "maxdepth", 5);
     if (out->max_depth < 0)
         params_reject(pl, "maxdepth", "\"maxdepth\" must be >= 0");

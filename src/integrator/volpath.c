@@ -167,8 +167,8 @@ typedef struct {
     double eq_len;
     rgb eq_r_u;
     /* "mediumsplits" > 1: where the path's first scattering point in a
-     * medium is saved for its other continuations (volpath_li); NULL once
-     * taken, and without splitting. */
+     * medium is to be saved for its other continuations (volpath_li); NULL
+     * once saved, and without splitting. */
     struct path_split *split;
 } path;
 
@@ -176,7 +176,6 @@ typedef struct {
  * light sample there and before the phase function's direction: each
  * continuation starts from here with its own sampler scramble. */
 typedef struct path_split {
-    bool taken;
     path at;
     sampler_state st;
     vec3 x, wo;
@@ -484,7 +483,7 @@ static void scatter(path *pa, const volpath_event *ev)
     if (pa->split) {
         path_split *sp = pa->split;
         pa->split = NULL;
-        *sp = (path_split){true, *pa, *pa->st, x, wo, m->g};
+        *sp = (path_split){*pa, *pa->st, x, wo, m->g};
     }
     scatter_on(pa, x, wo, m->g);
 }
@@ -971,14 +970,12 @@ rgb volpath_li(const volpath_scene *sc, const ray_differential *rd, const spectr
     }
     int splits = media ? sc->settings.medium_splits : 1;
     path_split split;
-    if (splits > 1) {
-        split.taken = false;
+    if (splits > 1)
         pa.split = &split;
-    }
     trace(&pa, rd, true, seed_dim, depth, vs);
     add_walk_counters(counters, &pa.walk);
     rgb L = path_radiance(&pa);
-    if (!(splits > 1 && split.taken))
+    if (splits <= 1 || pa.split) /* no splitting, or no scattering in a medium */
         return L;
     /* The other continuations from the first scattering point in a medium,
      * each from its own scramble of the sampler's later dimensions and its
